@@ -1,0 +1,1 @@
+"""gliderplan.cli: the `gliderplan` command; each subcommand lives in its own module."""

@@ -1,0 +1,59 @@
+"""Entry point of the `gliderplan` command.
+
+Each subcommand is a module in this package with ``add_arguments(parser)`` and
+``run(args) -> int``. Subcommand modules import heavy libraries (cvxpy, pandas)
+inside ``run`` only, so that ``gliderplan check`` starts fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from gliderplan.cli.errors import CliError
+
+# name -> (module, one-line help). Order is the order shown in --help.
+SUBCOMMANDS: dict[str, tuple[str, str]] = {
+    "check": ("gliderplan.cli.check", "check a mission and report every problem"),
+    "fmt": ("gliderplan.cli.fmt", "pretty-print a mission"),
+}
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but usage errors exit 2 through the same path as ours."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        print(f"{self.prog}: error: {message}", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="gliderplan", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for name, (module_name, help_text) in SUBCOMMANDS.items():
+        module = importlib.import_module(module_name)
+        sub_parser = sub.add_parser(name, help=help_text, description=help_text)
+        module.add_arguments(sub_parser)
+        sub_parser.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the CLI; return the exit code (0 ok, 1 bad input, 2 bad usage)."""
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args._run(args))
+    except CliError as err:
+        print(f"gliderplan {args.command}: error: {err}", file=sys.stderr)
+        return err.exit_code
+    except KeyboardInterrupt:
+        print(f"gliderplan {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def entry() -> None:
+    sys.exit(main())

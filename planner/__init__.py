@@ -1,0 +1,1 @@
+"""gliderplan.planner"""

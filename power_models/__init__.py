@@ -1,0 +1,1 @@
+"""gliderplan.power_models"""
