@@ -1,0 +1,310 @@
+"""Fitting a vehicle's energy figures to a real flight log, and checking them on held-out data.
+
+The fit uses the current sensor (I x V, integrated per sample interval) phase by phase:
+
+- hotel, surface and Iridium power: energy over time of each phase;
+- pump energy per inflection: each pump run's energy above the hotel load, regressed on
+  the pumped volume V and V x depth for pump-out (E = a V + b V z) and on V for pump-in;
+  `b` is only fitted when the pump-out depths span at least MIN_DEPTH_SPREAD_M, otherwise
+  it is kept from the base vehicle (a log at one depth cannot separate a from b);
+- pitch energy: battery moves outside pump runs, spread over the inflections.
+
+Validation predicts the energy of another part of the record from its own depth, pump
+and phase timeline and compares it with the coulomb counter (m_coulomb_amphr_total x
+m_battery), which the fit never sees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from gliderplan.power_models import segments as seg
+from gliderplan.power_models.slocum_log import FlightLog
+from gliderplan.power_models.vehicle import Vehicle
+
+MIN_DEPTH_SPREAD_M = 10.0
+MIN_PHASE_S = 30.0  # less time than this in a phase is too little to fit its power
+
+
+@dataclass(frozen=True)
+class Coefficient:
+    """One fitted (or kept) figure with the evidence behind it."""
+
+    key: str  # key in the vehicle data file
+    value: float
+    unit: str
+    fitted: bool  # False: too little data, kept from the base vehicle
+    basis: str  # what it was fitted from, or why it was kept
+
+
+@dataclass(frozen=True)
+class EnergyFit:
+    vehicle: Vehicle
+    coefficients: tuple[Coefficient, ...]
+    pump_rms_j: float  # RMS error of the pump model over the pump runs
+    pump_events: int
+
+
+def _phase_power(energy: np.ndarray, dt: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
+    """(mean power [W], time [s]) of the intervals in `mask`."""
+    time = float(dt[mask].sum())
+    return (float(energy[mask].sum()) / time if time > 0 else float("nan")), time
+
+
+def _event_excess_j(
+    energy: np.ndarray, dt: np.ndarray, start: int, stop: int, hotel_w: float
+) -> float:
+    return float(energy[start : stop - 1].sum() - hotel_w * dt[start : stop - 1].sum())
+
+
+def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
+    """Fit the vehicle's energy figures to `log`; what the log cannot support stays as in `base`."""
+    parts = seg.segment(log)
+    energy = seg.interval_energy_j(log)
+    dt = np.diff(log.t_s)
+    coeffs: list[Coefficient] = []
+
+    def phase_coefficient(key: str, phase: int, kept: float) -> float:
+        power, time = _phase_power(energy, dt, parts.phase == phase)
+        name = seg.PHASE_NAMES[phase]
+        if time >= MIN_PHASE_S:
+            coeffs.append(Coefficient(key, power, "W", True, f"{time:.0f} s of {name}"))
+            return power
+        coeffs.append(Coefficient(key, kept, "W", False, f"only {time:.0f} s of {name}; kept"))
+        return kept
+
+    hotel = phase_coefficient("hotel_power", seg.GLIDE, base.hotel_w)
+    surface = phase_coefficient("surface_power", seg.SURFACE, base.surface_w)
+    iridium = phase_coefficient("iridium_power", seg.IRIDIUM, base.iridium_w)
+
+    outward = [e for e in parts.pump_events if e.outward]
+    inward = [e for e in parts.pump_events if not e.outward]
+    excess_out = np.array([_event_excess_j(energy, dt, e.start, e.stop, hotel) for e in outward])
+    volume_out = np.array([e.volume_cc for e in outward])
+    depth_out = np.array([e.depth_m for e in outward])
+    a_out, b_out = base.pump_out_j_per_cc, base.pump_out_j_per_cc_m
+    if outward and np.ptp(depth_out) >= MIN_DEPTH_SPREAD_M and len(outward) >= 3:
+        design = np.column_stack([volume_out, volume_out * depth_out])
+        (a_out, b_out), *_ = np.linalg.lstsq(design, excess_out, rcond=None)
+        basis = f"{len(outward)} pump-out runs at {depth_out.min():.0f}-{depth_out.max():.0f} m"
+        coeffs.append(Coefficient("pump_out_energy_per_volume", a_out, "J/cc", True, basis))
+        coeffs.append(
+            Coefficient("pump_out_energy_per_volume_depth", b_out, "J/(cc m)", True, basis)
+        )
+    elif outward:
+        a_out = float(np.sum(excess_out - b_out * volume_out * depth_out) / volume_out.sum())
+        span = f"{depth_out.min():.1f}-{depth_out.max():.1f} m"
+        coeffs.append(
+            Coefficient(
+                "pump_out_energy_per_volume",
+                a_out,
+                "J/cc",
+                True,
+                f"{len(outward)} pump-out runs at {span}, depth term kept",
+            )
+        )
+        coeffs.append(
+            Coefficient(
+                "pump_out_energy_per_volume_depth",
+                b_out,
+                "J/(cc m)",
+                False,
+                f"pump-out depths span only {span}; kept",
+            )
+        )
+    else:
+        for key, value, unit in (
+            ("pump_out_energy_per_volume", a_out, "J/cc"),
+            ("pump_out_energy_per_volume_depth", b_out, "J/(cc m)"),
+        ):
+            coeffs.append(Coefficient(key, value, unit, False, "no pump-out runs; kept"))
+
+    a_in = base.pump_in_j_per_cc
+    if inward:
+        excess_in = [_event_excess_j(energy, dt, e.start, e.stop, hotel) for e in inward]
+        a_in = max(sum(excess_in) / sum(e.volume_cc for e in inward), 0.0)
+        coeffs.append(
+            Coefficient(
+                "pump_in_energy_per_volume", a_in, "J/cc", True, f"{len(inward)} pump-in runs"
+            )
+        )
+    else:
+        coeffs.append(
+            Coefficient("pump_in_energy_per_volume", a_in, "J/cc", False, "no pump-in runs; kept")
+        )
+
+    pitch = base.pitch_energy_j
+    inflections = len(parts.pump_events)
+    if inflections:
+        moves = sum(
+            max(_event_excess_j(energy, dt, s, e, hotel), 0.0) for s, e in parts.pitch_events
+        )
+        pitch = moves / inflections
+        coeffs.append(
+            Coefficient(
+                "pitch_energy",
+                pitch,
+                "J",
+                True,
+                f"{len(parts.pitch_events)} battery moves outside pump runs "
+                f"over {inflections} inflections",
+            )
+        )
+    else:
+        coeffs.append(Coefficient("pitch_energy", pitch, "J", False, "no inflections; kept"))
+
+    vehicle = replace(
+        base,
+        hotel_w=hotel,
+        surface_w=surface,
+        iridium_w=iridium,
+        pump_out_j_per_cc=float(a_out),
+        pump_out_j_per_cc_m=float(b_out),
+        pump_in_j_per_cc=float(a_in),
+        pitch_energy_j=float(pitch),
+    )
+    predicted = [_pump_model_j(vehicle, e) for e in parts.pump_events]
+    measured = [_event_excess_j(energy, dt, e.start, e.stop, hotel) for e in parts.pump_events]
+    rms = (
+        float(np.sqrt(np.mean(np.subtract(predicted, measured) ** 2))) if measured else float("nan")
+    )
+    return EnergyFit(vehicle, tuple(coeffs), rms, len(parts.pump_events))
+
+
+def _pump_model_j(vehicle: Vehicle, event: seg.PumpEvent) -> float:
+    if event.outward:
+        return float(vehicle.pump_energy_j(event.depth_m, event.volume_cc))
+    return float(vehicle.pump_in_energy_j(event.volume_cc))
+
+
+def predict_energy_j(log: FlightLog, vehicle: Vehicle) -> dict[str, float]:
+    """Energy [J] per component the vehicle model predicts for the log's own timeline."""
+    parts = seg.segment(log)
+    dt = np.diff(log.t_s)
+    time = {name: float(dt[parts.phase == code].sum()) for code, name in enumerate(seg.PHASE_NAMES)}
+    return {
+        "hotel": vehicle.hotel_w * (time["glide"] + time["pump"] + time["pitch"]),
+        "surface": vehicle.surface_w * time["surface"],
+        "iridium": vehicle.iridium_w * time["iridium"],
+        "pump": sum(_pump_model_j(vehicle, e) for e in parts.pump_events),
+        "pitch": vehicle.pitch_energy_j * len(parts.pump_events),
+    }
+
+
+def _phase_kinds(log: FlightLog) -> set[str]:
+    parts = seg.segment(log)
+    dt = np.diff(log.t_s)
+    kinds = {
+        seg.PHASE_NAMES[c]
+        for c in (seg.GLIDE, seg.SURFACE, seg.IRIDIUM)
+        if dt[parts.phase == c].sum() >= MIN_PHASE_S
+    }
+    kinds |= {"pump_out" if e.outward else "pump_in" for e in parts.pump_events}
+    return kinds
+
+
+@dataclass(frozen=True)
+class Split:
+    fit: FlightLog
+    validate: FlightLog
+    description: str
+
+
+def split_record(log: FlightLog) -> Split:
+    """Cut the record at the inflection nearest its middle; fit on the part that shows
+    every kind of activity the other part has (so no validated figure goes unfitted),
+    the later part if both do."""
+    events = seg.segment(log).pump_events
+    if len(events) < 2:
+        raise ValueError("the record needs at least two inflections to split it for validation")
+    middle = log.t_s[-1] / 2.0
+    cut = min((e.start for e in events[1:]), key=lambda i: abs(log.t_s[i] - middle))
+    early, late = log.slice(0, cut + 1), log.slice(cut, log.t_s.size)
+    early_kinds, late_kinds = _phase_kinds(early), _phase_kinds(late)
+    at = f"{log.t_s[cut]:.0f} s"
+    if late_kinds >= early_kinds or not early_kinds >= late_kinds:
+        return Split(late, early, f"fit on {at}-end, validate on 0-{at}")
+    return Split(early, late, f"fit on 0-{at}, validate on {at}-end")
+
+
+@dataclass(frozen=True)
+class Validation:
+    split: str
+    fit: EnergyFit
+    predicted_j: dict[str, float]
+    measured_j: float  # coulomb counter over the validation part
+    duration_s: float
+
+    @property
+    def relative_error(self) -> float:
+        """(predicted - measured) / measured [1], signed."""
+        return (sum(self.predicted_j.values()) - self.measured_j) / self.measured_j
+
+
+def validate(log: FlightLog, base: Vehicle) -> Validation:
+    """Fit on one part of the record, predict the other, compare with its coulomb counter."""
+    split = split_record(log)
+    fit = fit_energy(split.fit, base)
+    return Validation(
+        split=split.description,
+        fit=fit,
+        predicted_j=predict_energy_j(split.validate, fit.vehicle),
+        measured_j=seg.counter_energy_j(split.validate),
+        duration_s=float(split.validate.t_s[-1] - split.validate.t_s[0]),
+    )
+
+
+@dataclass(frozen=True)
+class SpeedComparison:
+    """Vertical speed of the log against the flight model, for dives or for climbs."""
+
+    direction: str  # "dive" or "climb"
+    samples: int
+    log_w_mps: float  # mean |dz/dt| of steady glide
+    model_w_mps: float  # mean model w at the log's own pitch and pumped volume
+    pitch_rad: float
+    ballast_cc: float
+
+    @property
+    def relative_error(self) -> float:
+        return (self.model_w_mps - self.log_w_mps) / self.log_w_mps
+
+
+STEADY_MIN_DEPTH_M = 3.0  # below the surface layer
+STEADY_MIN_PITCH_RAD = 0.2  # flying, not turning over at an inflection
+
+
+def compare_vertical_speeds(log: FlightLog, vehicle: Vehicle) -> list[SpeedComparison]:
+    """Vertical speed of steady glides in the log vs the flight model at the same pitch and
+    pumped volume, split into dives and climbs."""
+    parts = seg.segment(log)
+    dt = np.diff(log.t_s)
+    w_log = np.diff(log.depth_m) / dt  # positive down
+    pitch = 0.5 * (log.pitch_rad[1:] + log.pitch_rad[:-1])
+    ballast = 0.5 * (log.ballast_cc[1:] + log.ballast_cc[:-1])
+    depth = np.minimum(log.depth_m[1:], log.depth_m[:-1])
+    steady = (parts.phase == seg.GLIDE) & (depth > STEADY_MIN_DEPTH_M) & (dt > 0)
+    rows = []
+    for name, sign in (("dive", -1.0), ("climb", 1.0)):
+        mask = (
+            steady
+            & (np.sign(pitch) == sign)
+            & (np.sign(ballast) == sign)
+            & (np.abs(pitch) > STEADY_MIN_PITCH_RAD)
+            & (np.sign(w_log) == -sign)
+        )
+        if not mask.any():
+            continue
+        _, w_model = vehicle.glide(np.abs(pitch[mask]), np.abs(ballast[mask]))
+        rows.append(
+            SpeedComparison(
+                name,
+                int(mask.sum()),
+                float(np.mean(np.abs(w_log[mask]))),
+                float(np.mean(w_model)),
+                float(np.mean(np.abs(pitch[mask]))),
+                float(np.mean(np.abs(ballast[mask]))),
+            )
+        )
+    return rows

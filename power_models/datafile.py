@@ -1,0 +1,168 @@
+"""Reading model data files: TOML where every number is `{ value, unit, source }`.
+
+A file looks like
+
+    kind = "board"
+    name = "ts5500"
+    active_power = { value = 2.7, unit = "W", source = "Woithe & Kremer, Table I" }
+
+The reader checks the kind, converts each number to the model's unit and rejects a
+missing key, a unit of the wrong dimension, a missing source or a negative value with a
+`ModelFileError` that names the file and the key (`ts5500.toml: active_power: ...`).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from gliderplan.power_models.errors import ModelFileError
+from gliderplan.power_models.units import UNITS, accepted_units, to_model_unit
+
+
+@dataclass(frozen=True)
+class Table:
+    """One TOML table of a model file, with where it came from for error messages."""
+
+    path: str
+    prefix: str  # dotted key of this table in the file ("" for the top level)
+    data: dict[str, Any]
+    used: set[str] = field(default_factory=set, compare=False)
+
+    def finish(self) -> None:
+        """Refuse keys the model never read: most often a misspelt key."""
+        for name in self.data:
+            if name not in self.used:
+                close = difflib.get_close_matches(name, sorted(self.used), n=1)
+                hint = f"; did you mean {close[0]!r}?" if close else ""
+                raise self.error(name, f"unknown key{hint}")
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}.{name}" if self.prefix else name
+
+    def error(self, name: str | None, message: str) -> ModelFileError:
+        return ModelFileError(self.path, self.key(name) if name else self.prefix or None, message)
+
+    def has(self, name: str) -> bool:
+        self.used.add(name)
+        return name in self.data
+
+    def text(self, name: str, default: str | None = None) -> str:
+        """A string field; `default` None means required."""
+        self.used.add(name)
+        if name not in self.data:
+            if default is None:
+                raise self.error(name, "missing (a text value is required)")
+            return default
+        value = self.data[name]
+        if not isinstance(value, str) or not value.strip():
+            raise self.error(name, f"expected a non-empty text value, got {value!r}")
+        return value
+
+    def quantity(
+        self,
+        name: str,
+        dimension: str,
+        default: float | None = None,
+        *,
+        minimum: float = 0.0,
+        maximum: float = math.inf,
+        positive: bool = False,
+    ) -> float:
+        """A number in the model's unit of `dimension`; `default` None means required.
+
+        Values below `minimum` (0 unless told: powers, times and energies are never
+        negative) or above `maximum` are refused; `positive` also refuses zero.
+        """
+        self.used.add(name)
+        if name not in self.data:
+            if default is None:
+                raise self.error(
+                    name,
+                    f"missing (expected {{ value = ..., unit = ..., source = ... }} "
+                    f"with a unit of {dimension}: {accepted_units(dimension)})",
+                )
+            return default
+        entry = self.data[name]
+        if not isinstance(entry, dict):
+            raise self.error(
+                name, f"expected {{ value = ..., unit = ..., source = ... }}, got {entry!r}"
+            )
+        unknown = set(entry) - {"value", "unit", "source", "note"}
+        if unknown:
+            raise self.error(name, f"unknown field(s) {sorted(unknown)}")
+        for part in ("value", "unit", "source"):
+            if part not in entry:
+                raise self.error(name, f"missing {part!r}")
+        value, unit, source = entry["value"], entry["unit"], entry["source"]
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+        ):
+            raise self.error(name, f"value must be a finite number, got {value!r}")
+        if not isinstance(source, str) or not source.strip():
+            raise self.error(name, "source must say where the number comes from")
+        if not isinstance(unit, str) or unit not in UNITS[dimension]:
+            raise self.error(
+                name,
+                f"unit {unit!r} is not a unit of {dimension} "
+                f"(use one of {accepted_units(dimension)})",
+            )
+        converted = to_model_unit(float(value), unit, dimension)
+        if converted < minimum or (positive and converted <= 0.0):
+            bound = (
+                "> 0" if positive and minimum <= 0.0 else f">= {value_in(minimum, unit, dimension)}"
+            )
+            raise self.error(name, f"must be {bound} {unit}, got {value} {unit}")
+        if converted > maximum:
+            raise self.error(
+                name, f"must be <= {value_in(maximum, unit, dimension)} {unit}, got {value} {unit}"
+            )
+        return converted
+
+    def tables(self, name: str) -> list[Table]:
+        """An array of tables (`[[name]]`), at least one."""
+        self.used.add(name)
+        items = self.data.get(name)
+        if not isinstance(items, list) or not items or not all(isinstance(i, dict) for i in items):
+            raise self.error(name, f"expected at least one [[{self.key(name)}]] table")
+        return [Table(self.path, f"{self.key(name)}[{i}]", item) for i, item in enumerate(items)]
+
+    def table(self, name: str) -> Table:
+        """A sub-table (`[name]`)."""
+        self.used.add(name)
+        item = self.data.get(name)
+        if not isinstance(item, dict):
+            raise self.error(name, f"expected a [{self.key(name)}] table")
+        return Table(self.path, self.key(name), item)
+
+
+def value_in(model_value: float, unit: str, dimension: str) -> float:
+    """`model_value` expressed in `unit` (for messages that quote the user's unit)."""
+    return round(model_value / UNITS[dimension][unit], 9)
+
+
+def read_model_file(path: Path, kind: str) -> Table:
+    """Parse a model file and check that it describes a `kind` ("board", "vehicle", ...)."""
+    shown = str(path)
+    try:
+        with open(path, "rb") as handle:
+            data = tomllib.load(handle)
+    except FileNotFoundError:
+        raise ModelFileError(shown, None, "no such file") from None
+    except OSError as err:
+        raise ModelFileError(shown, None, f"cannot read: {err.strerror}") from None
+    except tomllib.TOMLDecodeError as err:
+        raise ModelFileError(shown, None, f"not valid TOML: {err}") from None
+    top = Table(shown, "", data)
+    top.text("description", "")
+    found = top.text("kind")
+    if found != kind:
+        raise top.error("kind", f"this file describes a {found!r}, expected a {kind!r}")
+    top.text("name")
+    return top
