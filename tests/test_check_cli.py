@@ -43,12 +43,12 @@ def test_directory_is_bad_usage(tmp_path, capsys):
 
 
 def test_console_script_runs_without_traceback(tmp_path):
-    bad = tmp_path / "bad.mission"
+    bad = tmp_path / ""
     bad.write_text("mission m\nstate s begin flightprofile yo(5, 20, .454, .454)\n"
                    " events case depht > 3 exit\nend\n")
     proc = subprocess.run([sys.executable, "-m", "gliderplan.cli", "check", str(bad)],
                           capture_output=True, text=True)
     assert proc.returncode == 1
-    assert f"{bad}:3:12: error: unknown sensor or variable 'depht'" in proc.stderr
+    assert f"{bad}:3:14: error: unknown sensor or variable 'depht'" in proc.stderr
     assert "did you mean 'depth'?" in proc.stderr
     assert "Traceback" not in proc.stderr
