@@ -43,7 +43,7 @@ def test_directory_is_bad_usage(tmp_path, capsys):
 
 
 def test_console_script_runs_without_traceback(tmp_path):
-    bad = tmp_path / ""
+    bad = tmp_path / "bad.mission"
     bad.write_text("mission m\nstate s begin flightprofile yo(5, 20, .454, .454)\n"
                    " events case depht > 3 exit\nend\n")
     proc = subprocess.run([sys.executable, "-m", "gliderplan.cli", "check", str(bad)],
