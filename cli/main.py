@@ -9,15 +9,17 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
 from gliderplan.cli.errors import CliError
 
+INTERNAL_ERROR = 3
+
 # name -> (module, one-line help). Order is the order shown in --help.
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "check": ("gliderplan.cli.check", "check a mission and report every problem"),
-    "fmt": ("gliderplan.cli.fmt", "pretty-print a mission"),
 }
 
 
@@ -53,6 +55,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"gliderplan {args.command}: interrupted", file=sys.stderr)
         return 130
+    except Exception as err:  # a bug: say so plainly; the traceback only on request
+        if os.environ.get("GLIDERPLAN_DEBUG"):
+            raise
+        print(f"gliderplan {args.command}: internal error: {type(err).__name__}: {err}\n"
+              "  (this is a bug in gliderplan; rerun with GLIDERPLAN_DEBUG=1 for details)",
+              file=sys.stderr)
+        return INTERNAL_ERROR
 
 
 def entry() -> None:

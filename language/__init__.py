@@ -1,1 +1,41 @@
-"""gliderplan.language"""
+"""gliderplan.language: the mission language's grammar, checker, formatter and code generator.
+
+`check_source` is the front end in one call: text in, checked mission and
+diagnostics out. It never raises on bad input.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, render_all
+from gliderplan.language.ir import CheckedMission
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    filename: str
+    source: str
+    mission: CheckedMission | None  # None when there are errors
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return self.mission is not None
+
+    def render(self) -> str:
+        return render_all(self.diagnostics, self.filename, self.source)
+
+
+def check_source(source: str, filename: str = "<mission>",
+                 stack_depth: int | None = None) -> CheckResult:
+    """Parse and check mission text."""
+    from gliderplan.language.checker import check
+    from gliderplan.language.parser import parse
+
+    try:
+        syntax = parse(source)
+    except MissionSyntaxError as err:
+        return CheckResult(filename, source, None, err.diagnostics)
+    mission, diagnostics = check(syntax, stack_depth)
+    return CheckResult(filename, source, mission, diagnostics)

@@ -1,0 +1,547 @@
+"""Semantic checks of a parsed mission and its lowering to the checked-mission IR.
+
+Passes run in order; the flow analysis runs only when names resolved, since it
+needs them. Every pass reports all it finds, never just the first problem.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+from gliderplan.language import ast, ir
+from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
+from gliderplan.language.flow import check_flow
+from gliderplan.language.registry import (
+    FUNCTIONS,
+    PROFILES,
+    ROUTES,
+    SENSOR_BY_NAME,
+    ParamSpec,
+)
+from gliderplan.language.units import UnitProblem, to_si
+
+MAX_STACK_DEPTH = 64
+
+
+class _Checker:
+    def __init__(self, mission: ast.Mission, stack_depth: int | None):
+        self.mission = mission
+        self.stack_depth_override = stack_depth
+        self.diagnostics: list[Diagnostic] = []
+        self.variables: dict[str, ast.VarDecl] = {}
+        self.state_names = {s.name.text for s in mission.states}
+
+    # ---- reporting helpers
+    def error(self, message: str, span: ast.Span, hint: str | None = None) -> None:
+        self.diagnostics.append(error(message, span, hint))
+
+    def warning(self, message: str, span: ast.Span, hint: str | None = None) -> None:
+        self.diagnostics.append(warning(message, span, hint))
+
+    def error_count(self) -> int:
+        return sum(d.is_error for d in self.diagnostics)
+
+    def si(self, quantity: ast.Quantity, *dimensions: str) -> tuple[float, str] | None:
+        try:
+            return to_si(quantity.value, quantity.unit.text if quantity.unit else None,
+                         dimensions)
+        except UnitProblem as problem:
+            span = quantity.unit.span if quantity.unit else quantity.span
+            self.error(problem.message, span, problem.hint)
+            return None
+
+    # ---- the whole mission
+    def run(self) -> ir.CheckedMission | None:
+        fields = self.declarations()
+        states = self.states()
+        if self.error_count():
+            return None
+        mission = ir.CheckedMission(name=self.mission.name.text, states=tuple(states), **fields)
+        spans = {s.name.text: s for s in self.mission.states}
+        self.diagnostics.extend(check_flow(mission, spans))
+        if self.error_count():
+            return None
+        return mission
+
+    # ---- mission-level declarations
+    def declarations(self) -> dict:
+        fields: dict = {}
+        seen: dict[type, ast.Declaration] = {}
+        prefs: list[ir.SensorPreference] = []
+        variables: list[ir.Variable] = []
+        for decl in self.mission.declarations:
+            if not isinstance(decl, ast.SensorDecl | ast.VarDecl):
+                if type(decl) in seen:
+                    first = seen[type(decl)].span.line
+                    self.error(f"'{_keyword(decl)}' is declared twice", decl.span,
+                               f"the first declaration is on line {first}")
+                    continue
+                seen[type(decl)] = decl
+            match decl:
+                case ast.VehicleDecl():
+                    self.preset_known("vehicle", decl.preset, decl.is_file)
+                    fields["vehicle"] = decl.preset.text
+                case ast.ComputerDecl():
+                    self.preset_known("board", decl.board, decl.is_file)
+                    clock_mhz = None
+                    if decl.clock is not None and (hz := self.si(decl.clock, "frequency")):
+                        clock_mhz = hz[0] / 1e6
+                        if clock_mhz <= 0:
+                            self.error("clock must be positive", decl.clock.span)
+                    fields["computer"] = ir.Computer(decl.board.text, clock_mhz)
+                case ast.BatteryDecl():
+                    if (battery := self.battery(decl)) is not None:
+                        fields["battery"] = battery
+                case ast.HorizonDecl():
+                    if (horizon := self.si(decl.duration, "time")) is not None:
+                        if horizon[0] <= 0:
+                            self.error("horizon must be positive", decl.duration.span)
+                        fields["horizon_s"] = horizon[0]
+                case ast.ObjectiveDecl():
+                    fields["objective"] = self.objective(decl)
+                case ast.SensorDecl():
+                    if (pref := self.sensor_preference(decl, prefs)) is not None:
+                        prefs.append(pref)
+                case ast.VarDecl():
+                    if (var := self.variable(decl)) is not None:
+                        variables.append(var)
+                case ast.StackDecl():
+                    depth = decl.depth.value
+                    if depth != int(depth) or not 1 <= depth <= MAX_STACK_DEPTH:
+                        self.error(f"stack depth must be a whole number from 1 to "
+                                   f"{MAX_STACK_DEPTH}", decl.depth.span)
+                    else:
+                        fields["stack_depth"] = int(depth)
+        if self.stack_depth_override is not None:
+            fields["stack_depth"] = self.stack_depth_override
+        fields["sensor_preferences"] = tuple(prefs)
+        fields["variables"] = tuple(variables)
+        fields["defaults_used"] = tuple(
+            name for name, kind in (("vehicle", ast.VehicleDecl), ("computer", ast.ComputerDecl),
+                                    ("battery", ast.BatteryDecl))
+            if kind not in seen
+        )
+        return fields
+
+    def preset_known(self, kind: str, name: ast.Ident, is_file: bool) -> None:
+        if is_file:
+            return  # a user file: loaded and validated by the power models
+        from gliderplan.power_models.catalog import preset_names
+
+        names = preset_names(kind)
+        if name.text not in names:
+            hint = did_you_mean(name.text, names) or f"presets: {', '.join(names)}"
+            self.error(f"unknown {kind} preset '{name.text}'", name.span,
+                       f"{hint}; or give a file as \"path/to/{kind}.toml\"")
+
+    def battery(self, decl: ast.BatteryDecl) -> ir.Battery | None:
+        capacity = self.si(decl.capacity, "energy", "charge")
+        reserve = 0.0
+        if decl.reserve is not None and (fraction := self.si(decl.reserve, "fraction")):
+            reserve = fraction[0]
+            if not 0 <= reserve < 1:
+                self.error("reserve must be at least 0 % and below 100 %", decl.reserve.span,
+                           "the reserve is the part of the battery the plan must not use")
+        if capacity is None:
+            return None
+        energy_j, dimension = capacity
+        if dimension == "charge":
+            if decl.voltage is None:
+                self.error("a charge needs a voltage to become energy", decl.capacity.span,
+                           f"write e.g. '{decl.capacity.text} {decl.capacity.unit.text} "
+                           "at 14.4 V'")
+                return None
+            if (volts := self.si(decl.voltage, "voltage")) is None:
+                return None
+            energy_j *= volts[0]
+        elif decl.voltage is not None:
+            self.error("a voltage only applies to a charge (Ah)", decl.voltage.span)
+        if energy_j <= 0:
+            self.error("battery capacity must be positive", decl.capacity.span)
+            return None
+        return ir.Battery(energy_j, reserve)
+
+    def objective(self, decl: ast.ObjectiveDecl) -> ir.Objective:
+        wanted = {("maximize", "quality"), ("minimize", "energy")}
+        pair = (decl.sense.text, decl.target.text)
+        if pair not in wanted:
+            self.error(f"cannot {pair[0]} '{pair[1]}'", decl.target.span,
+                       "write 'objective maximize quality' or "
+                       "'objective minimize energy quality >= N'")
+            return ir.Objective()
+        floor = decl.quality_floor.value if decl.quality_floor else 0.0
+        if floor < 0:
+            self.error("a quality floor cannot be negative", decl.quality_floor.span)
+        if pair == ("maximize", "quality"):
+            if decl.quality_floor is not None:
+                self.warning("a quality floor has no effect when maximizing quality",
+                             decl.quality_floor.span)
+            return ir.Objective("maximize_quality", 0.0)
+        return ir.Objective("minimize_energy", floor)
+
+    def sensor_preference(self, decl: ast.SensorDecl,
+                          earlier: list[ir.SensorPreference]) -> ir.SensorPreference | None:
+        if not self.sensor_known(decl.sensor):
+            return None
+        if any(p.sensor == decl.sensor.text for p in earlier):
+            self.error(f"sensor '{decl.sensor.text}' is annotated twice", decl.sensor.span)
+            return None
+        weight = 1.0
+        for bound in decl.bounds:
+            if bound.kind == "weight":
+                weight = bound.value.value
+                if weight < 0:
+                    self.error("a weight cannot be negative", bound.value.span)
+        duty_min, duty_max, quality_min = self.bounds(decl.bounds, decl.sensor.text)
+        return ir.SensorPreference(decl.sensor.text, weight, duty_min, duty_max, quality_min)
+
+    def bounds(self, bounds: Iterable[ast.Bound], sensor: str) -> tuple[float, float, float]:
+        """(duty_min, duty_max, quality_min) from duty and quality bounds; checks consistency."""
+        duty_min, duty_max, quality_min = 0.0, 1.0, 0.0
+        for bound in bounds:
+            value = bound.value.value
+            if bound.kind == "weight":
+                continue
+            if not 0 <= value <= 1:
+                self.error(f"{bound.kind} must lie between 0 and 1", bound.value.span,
+                           f"a {bound.kind} is a fraction: write e.g. 0.25 for a quarter")
+                continue
+            if bound.kind == "quality":
+                quality_min = max(quality_min, value)
+            elif bound.op in (">=", ">"):
+                duty_min = max(duty_min, value)
+            elif bound.op in ("<=", "<"):
+                duty_max = min(duty_max, value)
+            elif bound.op == "==":
+                duty_min, duty_max = max(duty_min, value), min(duty_max, value)
+            else:
+                self.error(f"'duty {bound.op}' is not a bound", bound.span,
+                           "use >=, <= or ==")
+        if duty_min > duty_max:
+            span = next(iter(bounds)).span if bounds else ast.NO_SPAN
+            self.error(f"duty bounds of '{sensor}' contradict each other: at least "
+                       f"{duty_min:g} but at most {duty_max:g}", span)
+        return duty_min, duty_max, quality_min
+
+    def variable(self, decl: ast.VarDecl) -> ir.Variable | None:
+        name = decl.name.text
+        if name in SENSOR_BY_NAME:
+            self.error(f"variable '{name}' has the name of a sensor", decl.name.span,
+                       "choose another name")
+            return None
+        if name in self.variables:
+            self.error(f"variable '{name}' is declared twice", decl.name.span,
+                       f"the first declaration is on line {self.variables[name].span.line}")
+            return None
+        self.variables[name] = decl
+        value = self.constant(decl.initial, "an initial value")
+        return None if value is None else ir.Variable(name, value)
+
+    # ---- states
+    def states(self) -> list[ir.State]:
+        if not self.mission.states:
+            self.error("the mission has no states", self.mission.name.span,
+                       "add 'state NAME begin ... end'; the first state is the start state")
+        seen: dict[str, ast.State] = {}
+        lowered = []
+        for state in self.mission.states:
+            if state.name.text in seen:
+                self.error(f"state '{state.name.text}' is defined twice", state.name.span,
+                           f"the first definition is on line {seen[state.name.text].span.line}")
+                continue
+            seen[state.name.text] = state
+            if (result := self.state(state)) is not None:
+                lowered.append(result)
+        return lowered
+
+    def state(self, state: ast.State) -> ir.State | None:
+        errors_before = self.error_count()
+        items: dict[type, ast.StateItem] = {}
+        requirements = []
+        for item in state.items:
+            if isinstance(item, ast.RequireItem):
+                requirements.append(item)
+                continue
+            if type(item) in items:
+                self.error(f"state '{state.name.text}' has two '{_keyword(item)}' sections",
+                           item.span, f"the first is on line {items[type(item)].span.line}")
+                continue
+            items[type(item)] = item
+        if ast.ProfileItem not in items:
+            self.error(f"state '{state.name.text}' has no flightprofile", state.name.span,
+                       "add e.g. 'flightprofile yo(5, 20, .454, .454)'")
+            return None
+        route_item = items.get(ast.RouteItem)
+        route = self.route(route_item.route) if route_item else ir.Route("noheading")
+        profiles = [self.profile(p) for p in items[ast.ProfileItem].alternatives]
+        sensors_item = items.get(ast.SensorsItem)
+        sensors = self.sensor_uses(sensors_item) if sensors_item else []
+        events_item = items.get(ast.EventsItem)
+        events = [self.event(e) for e in events_item.events] if events_item else []
+        expect_item = items.get(ast.ExpectItem)
+        expect = self.expect(expect_item) if expect_item else None
+        logged = {s.name for s in sensors if s is not None}
+        reqs = [self.requirement(r, logged) for r in requirements]
+        if self.error_count() > errors_before:
+            return None
+        return ir.State(
+            name=state.name.text,
+            route=route,
+            profiles=tuple(profiles),
+            sensors=tuple(sensors),
+            events=tuple(events),
+            expect_s=expect,
+            requirements=tuple(reqs),
+        )
+
+    def route(self, invocation: ast.Invocation) -> ir.Route | None:
+        name = invocation.name.text
+        info = ROUTES.get(name)
+        if info is None:
+            self.error(f"unknown flight route '{name}'", invocation.name.span,
+                       did_you_mean(name, ROUTES) or f"routes: {', '.join(ROUTES)}")
+            return None
+        scalars = [a for a in invocation.args if not isinstance(a, ast.Point)]
+        points = [a for a in invocation.args if isinstance(a, ast.Point)]
+        order_ok = all(not isinstance(a, ast.Point) for a in invocation.args[: len(scalars)])
+        count_ok = len(scalars) == len(info.params) and (
+            info.min_points <= len(points) <= info.max_points)
+        if not (order_ok and count_ok):
+            signature = _signature(info.params, info.min_points, info.max_points)
+            self.error(f"'{name}' takes {signature}", invocation.span,
+                       f"got {len(scalars)} number(s) and {len(points)} point(s)")
+            return None
+        params = [self.ranged_constant(a, spec, name)
+                  for a, spec in zip(scalars, info.params, strict=True)]
+        coords = []
+        for point in points:
+            lat = self.ranged_constant(point.lat, ROUTES["nav"].params[0], name)
+            lon = self.ranged_constant(point.lon, ROUTES["nav"].params[1], name)
+            coords.append((lat, lon))
+        if None in params or any(None in c for c in coords):
+            return None
+        return ir.Route(name, tuple(params), tuple(coords))
+
+    def profile(self, invocation: ast.Invocation) -> ir.Profile | None:
+        name = invocation.name.text
+        info = PROFILES.get(name)
+        if info is None:
+            self.error(f"unknown flight profile '{name}'", invocation.name.span,
+                       did_you_mean(name, PROFILES) or f"profiles: {', '.join(PROFILES)}")
+            return None
+        if len(invocation.args) != len(info.params) or any(
+                isinstance(a, ast.Point) for a in invocation.args):
+            self.error(f"'{name}' takes {len(info.params)} argument(s), "
+                       f"got {len(invocation.args)}", invocation.span,
+                       f"{name}({', '.join(p.name + ' [' + p.unit + ']' for p in info.params)})")
+            return None
+        args = [self.expression(a, allow_sensors=False) for a in invocation.args]
+        if None in args:
+            return None
+        values = {}
+        for arg, node, spec in zip(args, invocation.args, info.params, strict=True):
+            if not ir.variables_read(arg):
+                value = ir.evaluate(arg, {}, {})
+                if self.in_range(value, spec, name, node.span):
+                    values[spec.name] = value
+        if "min_depth" in values and "max_depth" in values and (
+                values["min_depth"] >= values["max_depth"]):
+            self.error(f"min depth {values['min_depth']:g} m is not above max depth "
+                       f"{values['max_depth']:g} m", invocation.span,
+                       f"{name}(min_depth, max_depth, ...): the glider turns at min_depth "
+                       "on the way up and at max_depth on the way down")
+        return ir.Profile(name, tuple(args))
+
+    def sensor_uses(self, item: ast.SensorsItem) -> list[ir.SensorUse | None]:
+        uses: list[ir.SensorUse | None] = []
+        seen: set[str] = set()
+        for use in item.sensors:
+            name = use.sensor.text
+            if not self.sensor_known(use.sensor):
+                uses.append(None)
+                continue
+            if name in seen:
+                self.error(f"sensor '{name}' is listed twice", use.sensor.span)
+                continue
+            seen.add(name)
+            duty: float | str | None = None
+            if isinstance(use.duty, ast.Ident):
+                duty = "auto"
+            elif isinstance(use.duty, ast.Number):
+                duty = use.duty.value
+                if not 0 <= duty <= 1:
+                    self.error("duty must lie between 0 and 1", use.duty.span,
+                               "a duty is the fraction of time the sensor is on")
+            if duty is not None and SENSOR_BY_NAME[name].device is None:
+                self.error(f"'{name}' is a flight sensor, always on: it has no duty",
+                           use.duty.span, "duty applies to science sensors such as temp")
+            uses.append(ir.SensorUse(name, duty))
+        return uses
+
+    def expect(self, item: ast.ExpectItem) -> tuple[float, float] | None:
+        low, high = self.si(item.low, "time"), self.si(item.high, "time")
+        if low is None or high is None:
+            return None
+        if not 0 <= low[0] <= high[0]:
+            self.error("expected time must be a range 'low .. high' with 0 <= low <= high",
+                       item.span)
+            return None
+        return low[0], high[0]
+
+    def requirement(self, item: ast.RequireItem, logged: set[str]) -> ir.Requirement | None:
+        if not self.sensor_known(item.sensor):
+            return None
+        if item.sensor.text not in logged:
+            self.error(f"requirement on '{item.sensor.text}', which this state does not log",
+                       item.sensor.span, f"add '{item.sensor.text}' to the state's sensors")
+        if any(b.kind == "weight" for b in item.bounds):
+            self.error("a weight is mission-wide: put it on a 'sensor' line", item.span)
+        duty_min, duty_max, quality_min = self.bounds(item.bounds, item.sensor.text)
+        return ir.Requirement(item.sensor.text, duty_min, duty_max, quality_min)
+
+    def event(self, event: ast.Event) -> ir.Event | None:
+        condition = self.expression(event.condition, allow_sensors=True)
+        assignments = []
+        for assignment in event.assignments:
+            target = assignment.target.text
+            value = self.expression(assignment.value, allow_sensors=True)
+            if target not in self.variables:
+                hint = ("sensors are read-only; assign to a variable"
+                        if target in SENSOR_BY_NAME else
+                        did_you_mean(target, self.variables) or
+                        f"declare it first: 'var {target} = 0'")
+                self.error(f"unknown variable '{target}'", assignment.target.span, hint)
+            elif value is not None:
+                assignments.append(ir.Assign(target, value))
+        action = event.action
+        if action is None and not event.assignments:
+            self.error("this event does nothing", event.span,
+                       "add 'set VAR = EXPR' or an action: goto, call, return, exit")
+        if action is not None and action.target is not None:
+            if action.target.text not in self.state_names:
+                self.error(f"unknown state '{action.target.text}'", action.target.span,
+                           did_you_mean(action.target.text, self.state_names))
+        if condition is None or len(assignments) != len(event.assignments):
+            return None
+        return ir.Event(condition, tuple(assignments), action.kind if action else None,
+                        action.target.text if action and action.target else None)
+
+    # ---- expressions
+    def expression(self, node: ast.Expr, allow_sensors: bool) -> ir.Expr | None:
+        """Lower an expression, reporting every unknown name or misuse in it."""
+        match node:
+            case ast.Number(value):
+                return ir.Const(value)
+            case ast.Name(name):
+                if name in self.variables:
+                    return ir.VarRef(name)
+                if name in SENSOR_BY_NAME:
+                    if allow_sensors:
+                        return ir.SensorRef(name)
+                    self.error(f"sensor '{name}' cannot be used here", node.span,
+                               "profile arguments and initial values read variables only; "
+                               "copy the reading into a variable with 'set'")
+                    return None
+                hint = did_you_mean(name, [*self.variables, *SENSOR_BY_NAME])
+                self.error(f"unknown sensor or variable '{name}'", node.span,
+                           hint or "declare a variable with 'var NAME = VALUE'")
+                return None
+            case ast.Unary(op, operand):
+                inner = self.expression(operand, allow_sensors)
+                return None if inner is None else ir.UnaryOp(op, inner)
+            case ast.Binary(op, left, right):
+                lhs = self.expression(left, allow_sensors)
+                rhs = self.expression(right, allow_sensors)
+                return None if lhs is None or rhs is None else ir.BinaryOp(op, lhs, rhs)
+            case ast.Call(function, args):
+                lowered = [self.expression(a, allow_sensors) for a in args]
+                if function.text not in FUNCTIONS:
+                    self.error(f"unknown function '{function.text}'", function.span,
+                               did_you_mean(function.text, FUNCTIONS)
+                               or f"functions: {', '.join(FUNCTIONS)}")
+                    return None
+                if len(args) != FUNCTIONS[function.text]:
+                    self.error(f"'{function.text}' takes {FUNCTIONS[function.text]} "
+                               f"argument(s), got {len(args)}", node.span)
+                    return None
+                if None in lowered:
+                    return None
+                return ir.FuncCall(function.text, tuple(lowered))
+        raise TypeError(f"not an expression: {node!r}")
+
+    def constant(self, node: ast.Expr, what: str) -> float | None:
+        lowered = self.expression(node, allow_sensors=False)
+        if lowered is None:
+            return None
+        if ir.variables_read(lowered):
+            self.error(f"{what} must be a constant", node.span)
+            return None
+        value = ir.evaluate(lowered, {}, {})
+        if not math.isfinite(value):
+            self.error(f"{what} is not a finite number", node.span)
+            return None
+        return value
+
+    def ranged_constant(self, node: ast.Expr, spec: ParamSpec, owner: str) -> float | None:
+        value = self.constant(node, f"argument '{spec.name}' of '{owner}'")
+        if value is None or not self.in_range(value, spec, owner, node.span):
+            return None
+        if spec.unit == "DDMM.MMMM" and abs(value) % 100 >= 60:
+            self.error(f"{value:g} is not DDMM.MMMM: the minutes must be below 60",
+                       node.span, "Slocum writes 39 deg 10.5 min as 3910.5")
+            return None
+        return value
+
+    def in_range(self, value: float, spec: ParamSpec, owner: str, span: ast.Span) -> bool:
+        too_low = value < spec.low or (spec.low_open and value == spec.low)
+        too_high = value > spec.high or (spec.high_open and value == spec.high)
+        if too_low or too_high:
+            self.error(f"{spec.name} of '{owner}' is {value:g} {spec.unit}, outside "
+                       f"{_interval(spec)}", span, _range_hint(spec))
+            return False
+        return True
+
+    def sensor_known(self, ident: ast.Ident) -> bool:
+        if ident.text in SENSOR_BY_NAME:
+            return True
+        self.error(f"unknown sensor '{ident.text}'", ident.span,
+                   did_you_mean(ident.text, SENSOR_BY_NAME)
+                   or f"sensors: {', '.join(SENSOR_BY_NAME)}")
+        return False
+
+
+def _keyword(node: object) -> str:
+    name = type(node).__name__
+    for suffix in ("Decl", "Item"):
+        name = name.removesuffix(suffix)
+    return {"Route": "flightroute", "Profile": "flightprofile"}.get(name, name.lower())
+
+
+def _interval(spec: ParamSpec) -> str:
+    low = "(" if spec.low_open else "["
+    high = ")" if spec.high_open else "]"
+    return f"{low}{spec.low:g}, {spec.high:g}{high}"
+
+
+def _range_hint(spec: ParamSpec) -> str | None:
+    if spec.unit == "rad":
+        return "pitch is in radians: 26 degrees is 0.454"
+    if spec.unit == "m":
+        return "depths are metres below the surface, 0 or more"
+    return None
+
+
+def _signature(params: tuple[ParamSpec, ...], min_points: int, max_points: int) -> str:
+    parts = [f"{p.name} [{p.unit}]" for p in params]
+    if max_points:
+        parts.append(f"{min_points} to {max_points} (lat, lon) points")
+    return ", ".join(parts) if parts else "no arguments"
+
+
+def check(mission: ast.Mission, stack_depth: int | None = None
+          ) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
+    """Check a parsed mission; the IR is None when there are errors."""
+    checker = _Checker(mission, stack_depth)
+    checked = checker.run()
+    return checked, sorted(checker.diagnostics, key=lambda d: (d.span.line, d.span.column))

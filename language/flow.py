@@ -1,0 +1,234 @@
+"""Flow analysis of a checked mission: what the state machine can and cannot do.
+
+The stack only grows through `call` (goto clears it, return pops), so a state can
+run with an empty stack exactly when it is the start state or a goto target, and
+the deepest stack is the longest chain of call edges.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+from gliderplan.language import ast, ir
+from gliderplan.language.diagnostics import Diagnostic, error, warning
+
+# Physical range of flight sensors, for conditions that can never hold.
+_SENSOR_RANGE = {
+    "missiontime": (0.0, math.inf),
+    "depth": (0.0, math.inf),
+    "altitude": (0.0, math.inf),
+    "pitch": (-math.pi / 2, math.pi / 2),
+    "roll": (-math.pi, math.pi),
+}
+
+
+def _ast_events(state: ast.State) -> list[ast.Event]:
+    for item in state.items:
+        if isinstance(item, ast.EventsItem):
+            return list(item.events)
+    return []
+
+
+def _edges(mission: ir.CheckedMission, kind: str) -> dict[str, list[str]]:
+    return {s.name: [e.target for e in s.events if e.action == kind and e.target]
+            for s in mission.states}
+
+
+def reachable_states(mission: ir.CheckedMission) -> set[str]:
+    """States the start state can lead to through goto and call (return goes back)."""
+    seen = {mission.states[0].name}
+    todo = [mission.states[0].name]
+    while todo:
+        state = mission.state(todo.pop())
+        for event in state.events:
+            if event.target and event.target not in seen:
+                seen.add(event.target)
+                todo.append(event.target)
+    return seen
+
+
+def _call_cycle(calls: Mapping[str, list[str]], roots: set[str]) -> list[str] | None:
+    """A cycle of call edges among states reachable from roots, as a path, or None."""
+    colour: dict[str, int] = {}  # 1 on the DFS path, 2 done
+    path: list[str] = []
+
+    def visit(state: str) -> list[str] | None:
+        colour[state] = 1
+        path.append(state)
+        for target in calls[state]:
+            if colour.get(target) == 1:
+                return path[path.index(target):] + [target]
+            if target not in colour and (found := visit(target)):
+                return found
+        path.pop()
+        colour[state] = 2
+        return None
+
+    for root in sorted(roots):
+        if root not in colour and (found := visit(root)):
+            return found
+    return None
+
+
+def _deepest_call_chain(calls: Mapping[str, list[str]], roots: set[str]) -> list[str]:
+    """Longest path of call edges (the call graph is acyclic here)."""
+    longest: dict[str, list[str]] = {}
+
+    def chain(state: str) -> list[str]:
+        if state not in longest:
+            tails = [chain(t) for t in calls[state]]
+            longest[state] = [state] + max(tails, key=len, default=[])
+        return longest[state]
+
+    return max((chain(r) for r in sorted(roots)), key=len, default=[])
+
+
+def _intervals(expr: ir.Expr) -> dict[str, tuple[float, float]] | None:
+    """Per-sensor closed bounds implied by a conjunction of `sensor CMP constant`.
+
+    Returns None when the expression is not such a conjunction (nothing is decided).
+    Strict and non-strict comparisons are treated alike: good enough to find
+    contradictions such as `missiontime < 100 && missiontime > 200`.
+    """
+    match expr:
+        case ir.BinaryOp("&&", left, right):
+            a, b = _intervals(left), _intervals(right)
+            if a is None or b is None:
+                return a or b
+            merged = dict(a)
+            for name, (lo, hi) in b.items():
+                old_lo, old_hi = merged.get(name, (-math.inf, math.inf))
+                merged[name] = (max(lo, old_lo), min(hi, old_hi))
+            return merged
+        case ir.BinaryOp(op, ir.SensorRef(name), ir.Const(value)) if op in _FLIP:
+            return {name: _bound(op, value)}
+        case ir.BinaryOp(op, ir.Const(value), ir.SensorRef(name)) if op in _FLIP:
+            return {name: _bound(_FLIP[op], value)}
+    return None
+
+
+_FLIP = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "=="}
+
+
+def _bound(op: str, value: float) -> tuple[float, float]:
+    if op in ("<", "<="):
+        return (-math.inf, value)
+    if op in (">", ">="):
+        return (value, math.inf)
+    return (value, value)
+
+
+def never_true(condition: ir.Expr) -> bool:
+    """True when the condition is statically false (constant, or contradictory bounds)."""
+    if not ir.sensors_read(condition) and not ir.variables_read(condition):
+        return ir.evaluate(condition, {}, {}) == 0.0
+    if isinstance(condition, ir.BinaryOp) and condition.op == "||":
+        return never_true(condition.left) and never_true(condition.right)
+    bounds = _intervals(condition)
+    if not bounds:
+        return False
+    for name, (lo, hi) in bounds.items():
+        phys_lo, phys_hi = _SENSOR_RANGE.get(name, (-math.inf, math.inf))
+        if max(lo, phys_lo) > min(hi, phys_hi):
+            return True
+    return False
+
+
+def _always_true(condition: ir.Expr) -> bool:
+    return (not ir.sensors_read(condition) and not ir.variables_read(condition)
+            and ir.evaluate(condition, {}, {}) != 0.0)
+
+
+def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> list[Diagnostic]:
+    """All flow diagnostics; `states` maps names to their syntax (for locations)."""
+    found: list[Diagnostic] = []
+    reachable = reachable_states(mission)
+    calls = _edges(mission, "call")
+    gotos = _edges(mission, "goto")
+    start = mission.states[0].name
+    empty_stack = {start} | {t for s in reachable for t in gotos[s]}
+
+    for state in mission.states:
+        syntax = states[state.name]
+        if state.name not in reachable:
+            found.append(warning(f"state '{state.name}' is never entered", syntax.name.span,
+                                 "no goto or call leads to it from the start state "
+                                 f"'{start}'"))
+            continue
+        logged = {s.name for s in state.sensors}
+        fired_always_at: int | None = None
+        for event, node in zip(state.events, _ast_events(syntax), strict=True):
+            if fired_always_at is not None and event.action:
+                found.append(warning("this event can never fire", node.span,
+                                     f"the event on line {fired_always_at} is always true "
+                                     "and fires first"))
+            for sensor in sorted(ir.sensors_read(event.condition) - logged):
+                found.append(warning(
+                    f"event reads '{sensor}', which state '{state.name}' does not log",
+                    node.condition.span, f"add '{sensor}' to the sensors of '{state.name}'"))
+            if never_true(event.condition):
+                found.append(warning("this condition can never be true", node.condition.span))
+            elif _always_true(event.condition) and event.action and fired_always_at is None:
+                fired_always_at = node.span.line
+            if event.action == "return" and state.name in empty_stack:
+                how = ("it is the start state" if state.name == start
+                       else "it is entered by 'goto', which empties the stack")
+                found.append(error(
+                    f"'return' in state '{state.name}' can run with an empty stack",
+                    node.action.span, f"{how}; enter it with 'call', or leave it with 'goto'"))
+
+    cycle = _call_cycle(calls, reachable)
+    if cycle:
+        first = states[cycle[0]]
+        call_span = next(n.action.span for n, e in zip(_ast_events(first),
+                                                        mission.state(cycle[0]).events,
+                                                        strict=True)
+                         if e.action == "call" and e.target == cycle[1])
+        found.append(error(
+            f"call cycle {' -> '.join(cycle)} makes the state stack grow without bound",
+            call_span,
+            f"the runtime's stack holds {mission.stack_depth} states; break the cycle with "
+            "'return' or 'goto'"))
+    else:
+        chain = _deepest_call_chain(calls, empty_stack & reachable)
+        depth = len(chain) - 1
+        if depth > mission.stack_depth:
+            found.append(error(
+                f"calls nest {depth} deep ({' -> '.join(chain)}), deeper than the runtime "
+                f"stack of {mission.stack_depth}", states[chain[0]].name.span,
+                f"raise the bound with 'stack {depth}' or flatten the calls"))
+
+    found.extend(_exit_warnings(mission, reachable, calls, gotos, states))
+    return found
+
+
+def _exit_warnings(mission: ir.CheckedMission, reachable: set[str],
+                   calls: Mapping[str, list[str]], gotos: Mapping[str, list[str]],
+                   states: Mapping[str, ast.State]) -> list[Diagnostic]:
+    """States from which no sequence of transitions reaches `exit`."""
+    exits = {s.name for s in mission.states if any(e.action == "exit" for e in s.events)}
+    if not exits:
+        return [warning(f"mission '{mission.name}' never exits", ast.NO_SPAN,
+                        "add 'case ... exit' to a state; until then the mission runs until "
+                        "the battery is flat")]
+    callers = {s.name: [c for c in calls if s.name in calls[c]] for s in mission.states}
+    successors = {
+        s.name: gotos[s.name] + calls[s.name]
+        + (callers[s.name] if any(e.action == "return" for e in s.events) else [])
+        for s in mission.states
+    }
+    can_exit = set(exits)
+    changed = True
+    while changed:
+        changed = False
+        for name, nexts in successors.items():
+            if name not in can_exit and any(n in can_exit for n in nexts):
+                can_exit.add(name)
+                changed = True
+    return [
+        warning(f"state '{s.name}' can never reach 'exit'", states[s.name].name.span,
+                "once here, the mission runs until the battery is flat")
+        for s in mission.states
+        if s.name in reachable and s.name not in can_exit
+    ]

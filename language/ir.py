@@ -1,0 +1,308 @@
+"""The checked mission: what every later stage (planner, codegen, simulator) consumes.
+
+Names are resolved (a sensor or a variable), units are SI, defaults are filled in and
+recorded, and the whole thing has a canonical JSON form whose SHA-256 is the mission
+hash that plans and compiled runtimes carry.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, is_dataclass
+from functools import cached_property
+
+from gliderplan.language.registry import DEFAULT_STACK_DEPTH
+
+# ---- expressions (no spans: the checker has reported everything by now) ----------
+
+
+@dataclass(frozen=True)
+class Const:
+    value: float
+
+
+@dataclass(frozen=True)
+class SensorRef:
+    name: str
+
+
+@dataclass(frozen=True)
+class VarRef:
+    name: str
+
+
+@dataclass(frozen=True)
+class UnaryOp:
+    op: str  # "-" or "!"
+    operand: Expr
+
+
+@dataclass(frozen=True)
+class BinaryOp:
+    op: str  # + - * / < <= > >= == != && ||
+    left: Expr
+    right: Expr
+
+
+@dataclass(frozen=True)
+class FuncCall:
+    function: str  # abs | min | max
+    args: tuple[Expr, ...]
+
+
+Expr = Const | SensorRef | VarRef | UnaryOp | BinaryOp | FuncCall
+
+
+def _divide(a: float, b: float) -> float:
+    """IEEE-754 division, as the C runtime computes it."""
+    if b != 0.0:
+        return a / b
+    if a == 0.0 or math.isnan(a):
+        return math.nan
+    return math.copysign(math.inf, a) * math.copysign(1.0, b)
+
+
+_ARITHMETIC = {
+    "+": lambda a, b: a + b,
+    "-": lambda a, b: a - b,
+    "*": lambda a, b: a * b,
+    "/": _divide,
+}
+_COMPARISONS = {
+    "<": lambda a, b: a < b,
+    "<=": lambda a, b: a <= b,
+    ">": lambda a, b: a > b,
+    ">=": lambda a, b: a >= b,
+    "==": lambda a, b: a == b,
+    "!=": lambda a, b: a != b,
+}
+_FUNCTIONS = {"abs": abs, "min": min, "max": max}
+
+
+def evaluate(expr: Expr, sensors: Mapping[str, float], variables: Mapping[str, float]) -> float:
+    """Value of an expression with C semantics: true is 1.0, false 0.0, && and || short-circuit."""
+    match expr:
+        case Const(value):
+            return value
+        case SensorRef(name):
+            return sensors[name]
+        case VarRef(name):
+            return variables[name]
+        case UnaryOp("-", operand):
+            return -evaluate(operand, sensors, variables)
+        case UnaryOp("!", operand):
+            return float(evaluate(operand, sensors, variables) == 0.0)
+        case BinaryOp("&&", left, right):
+            return float(evaluate(left, sensors, variables) != 0.0
+                         and evaluate(right, sensors, variables) != 0.0)
+        case BinaryOp("||", left, right):
+            return float(evaluate(left, sensors, variables) != 0.0
+                         or evaluate(right, sensors, variables) != 0.0)
+        case BinaryOp(op, left, right) if op in _COMPARISONS:
+            a, b = evaluate(left, sensors, variables), evaluate(right, sensors, variables)
+            return float(_COMPARISONS[op](a, b))
+        case BinaryOp(op, left, right):
+            a, b = evaluate(left, sensors, variables), evaluate(right, sensors, variables)
+            return _ARITHMETIC[op](a, b)
+        case FuncCall(function, args):
+            return float(_FUNCTIONS[function](*(evaluate(a, sensors, variables) for a in args)))
+    raise TypeError(f"not an expression: {expr!r}")
+
+
+def sensors_read(expr: Expr) -> frozenset[str]:
+    """Names of the sensors an expression reads."""
+    match expr:
+        case SensorRef(name):
+            return frozenset({name})
+        case UnaryOp(_, operand):
+            return sensors_read(operand)
+        case BinaryOp(_, left, right):
+            return sensors_read(left) | sensors_read(right)
+        case FuncCall(_, args):
+            return frozenset().union(*(sensors_read(a) for a in args))
+    return frozenset()
+
+
+def variables_read(expr: Expr) -> frozenset[str]:
+    """Names of the variables an expression reads."""
+    match expr:
+        case VarRef(name):
+            return frozenset({name})
+        case UnaryOp(_, operand):
+            return variables_read(operand)
+        case BinaryOp(_, left, right):
+            return variables_read(left) | variables_read(right)
+        case FuncCall(_, args):
+            return frozenset().union(*(variables_read(a) for a in args))
+    return frozenset()
+
+
+# ---- mission structure -------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Route:
+    """`kind` from the route registry; params SI/DDMM.MMMM as the registry says."""
+
+    kind: str  # nav | noheading | waypoints | sweep
+    params: tuple[float, ...] = ()
+    points: tuple[tuple[float, float], ...] = ()  # (lat, lon) DDMM.MMMM
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A flight profile alternative; args may read variables, so they stay expressions."""
+
+    kind: str  # yo | thermotrackyo | surface | hover
+    args: tuple[Expr, ...]
+
+    def constant_args(self) -> tuple[float, ...] | None:
+        """Argument values when none reads a variable or sensor, else None."""
+        if any(sensors_read(a) or variables_read(a) for a in self.args):
+            return None
+        return tuple(evaluate(a, {}, {}) for a in self.args)
+
+
+@dataclass(frozen=True)
+class SensorUse:
+    """A sensor a state logs. duty: None = always on; "auto" = the planner picks; else fixed."""
+
+    name: str
+    duty: float | str | None = None
+
+
+@dataclass(frozen=True)
+class Requirement:
+    """Per-state bound on one sensor (duty in [0, 1], quality utility in [0, 1])."""
+
+    sensor: str
+    duty_min: float = 0.0
+    duty_max: float = 1.0
+    quality_min: float = 0.0
+
+
+@dataclass(frozen=True)
+class Assign:
+    variable: str
+    value: Expr
+
+
+@dataclass(frozen=True)
+class Event:
+    condition: Expr
+    assignments: tuple[Assign, ...] = ()
+    action: str | None = None  # goto | call | return | exit | None (assignments only)
+    target: str | None = None  # state name for goto and call
+
+
+@dataclass(frozen=True)
+class State:
+    name: str
+    route: Route
+    profiles: tuple[Profile, ...]  # alternatives; the planner splits time between them
+    sensors: tuple[SensorUse, ...]
+    events: tuple[Event, ...]
+    expect_s: tuple[float, float] | None = None  # bounds on time spent per visit [s]
+    requirements: tuple[Requirement, ...] = ()
+
+
+@dataclass(frozen=True)
+class Variable:
+    name: str
+    initial: float
+
+
+@dataclass(frozen=True)
+class SensorPreference:
+    """Mission-wide tradeoff annotation of a sensor: weight in the quality objective, bounds."""
+
+    sensor: str
+    weight: float = 1.0
+    duty_min: float = 0.0
+    duty_max: float = 1.0
+    quality_min: float = 0.0
+
+
+@dataclass(frozen=True)
+class Computer:
+    board: str  # preset name or path to a board file
+    clock_mhz: float | None = None  # None: the board's default (or the planner picks)
+
+
+@dataclass(frozen=True)
+class Battery:
+    energy_j: float
+    reserve_fraction: float = 0.0
+
+
+@dataclass(frozen=True)
+class Objective:
+    sense: str = "maximize_quality"  # or "minimize_energy"
+    quality_floor: float = 0.0
+
+
+# Defaults for a mission without annotations (the paper's Fig. 2 as is).
+DEFAULT_VEHICLE = "slocum_g2_shallow"
+DEFAULT_COMPUTER = Computer("ts7800", 300.0)
+DEFAULT_BATTERY = Battery(energy_j=7.8e6, reserve_fraction=0.15)  # Slocum alkaline pack
+
+
+@dataclass(frozen=True)
+class CheckedMission:
+    name: str
+    states: tuple[State, ...]  # states[0] is the start state
+    variables: tuple[Variable, ...] = ()
+    vehicle: str = DEFAULT_VEHICLE
+    computer: Computer = DEFAULT_COMPUTER
+    battery: Battery = DEFAULT_BATTERY
+    horizon_s: float | None = None
+    objective: Objective = field(default_factory=Objective)
+    sensor_preferences: tuple[SensorPreference, ...] = ()
+    stack_depth: int = DEFAULT_STACK_DEPTH
+    defaults_used: tuple[str, ...] = ()  # which annotations were defaulted, for reports
+
+    def state(self, name: str) -> State:
+        return self.states[self.state_index[name]]
+
+    @cached_property
+    def state_index(self) -> dict[str, int]:
+        return {s.name: i for i, s in enumerate(self.states)}
+
+    def preference(self, sensor: str) -> SensorPreference:
+        for pref in self.sensor_preferences:
+            if pref.sensor == sensor:
+                return pref
+        return SensorPreference(sensor)
+
+    def to_json(self) -> dict:
+        """Plain JSON-able form; expression nodes carry an "expr" tag naming their kind."""
+        data = _encode(self)
+        data["hash"] = self.hash
+        return data
+
+    @cached_property
+    def hash(self) -> str:
+        """SHA-256 (hex) of the canonical JSON, excluding `defaults_used` (not semantic)."""
+        data = _encode(self)
+        data.pop("defaults_used")
+        canonical = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        return hashlib.sha256(canonical.encode()).hexdigest()
+
+
+_EXPRESSIONS = (Const, SensorRef, VarRef, UnaryOp, BinaryOp, FuncCall)
+
+
+def _encode(value: object) -> object:
+    if is_dataclass(value):
+        data = {f.name: _encode(getattr(value, f.name)) for f in fields(value)}
+        if isinstance(value, _EXPRESSIONS):
+            data = {"expr": type(value).__name__, **data}
+        return data
+    if isinstance(value, tuple | list):
+        return [_encode(v) for v in value]
+    if isinstance(value, float) and math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return value

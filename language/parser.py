@@ -1,0 +1,300 @@
+"""Mission text -> typed syntax tree (gliderplan.language.ast), or syntax diagnostics."""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+from lark import Lark, Token, Transformer, UnexpectedInput, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
+
+from gliderplan.language import ast
+from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, error
+
+GRAMMAR = Path(__file__).with_name("mission.lark")
+
+# How expected terminals read in a message.
+_TERMINAL_WORDS = {
+    "NAME": "a name",
+    "NUMBER": "a number",
+    "STRING": 'a quoted file name',
+    "COMPARE": "a comparison (>=, <, ==, ...)",
+    "ADD_OP": "'+' or '-'",
+    "MUL_OP": "'*' or '/'",
+    "PERCENT": "'%'",
+    "AUTO": "'auto'",
+    "OBJECTIVE_SENSE": "'maximize' or 'minimize'",
+    "$END": "end of file",
+}
+
+
+@cache
+def _lark() -> Lark:
+    return Lark.open(
+        str(GRAMMAR),
+        parser="lalr",
+        lexer="contextual",
+        propagate_positions=True,
+        maybe_placeholders=True,
+        cache=True,
+    )
+
+
+def _span_of(item: Token | object) -> ast.Span:
+    meta = getattr(item, "meta", item)
+    if getattr(meta, "empty", False):
+        return ast.NO_SPAN
+    return ast.Span(meta.line, meta.column, meta.end_line, meta.end_column)
+
+
+def _ident(token: Token) -> ast.Ident:
+    return ast.Ident(str(token), _span_of(token))
+
+
+def _number_token(token: Token) -> ast.Number:
+    return ast.Number(float(token), str(token), _span_of(token))
+
+
+@v_args(meta=True)
+class _ToAst(Transformer):
+    """One method per grammar rule; each returns the matching ast node."""
+
+    def start(self, meta, children):
+        header, *rest = children
+        declarations = tuple(c for c in rest if not isinstance(c, ast.State))
+        states = tuple(c for c in rest if isinstance(c, ast.State))
+        return ast.Mission(header, declarations, states, _span_of(meta))
+
+    def mission_header(self, meta, children):
+        return _ident(children[0])
+
+    # ---- declarations
+    def vehicle_decl(self, meta, children):
+        return ast.VehicleDecl(*_preset(children[0]), _span_of(meta))
+
+    def computer_decl(self, meta, children):
+        board, clock = children
+        return ast.ComputerDecl(*_preset(board), clock, _span_of(meta))
+
+    def battery_decl(self, meta, children):
+        capacity, voltage, reserve = children
+        return ast.BatteryDecl(capacity, voltage, reserve, _span_of(meta))
+
+    def voltage(self, meta, children):
+        return children[0]
+
+    reserve = voltage
+
+    def horizon_decl(self, meta, children):
+        return ast.HorizonDecl(children[0], _span_of(meta))
+
+    def objective_decl(self, meta, children):
+        sense, target, floor = children
+        return ast.ObjectiveDecl(_ident(sense), _ident(target), floor, _span_of(meta))
+
+    def quality_floor(self, meta, children):
+        return children[0]
+
+    def sensor_decl(self, meta, children):
+        sensor, *bounds = children
+        return ast.SensorDecl(_ident(sensor), tuple(bounds), _span_of(meta))
+
+    def var_decl(self, meta, children):
+        name, value = children
+        return ast.VarDecl(_ident(name), value, _span_of(meta))
+
+    def stack_decl(self, meta, children):
+        return ast.StackDecl(children[0], _span_of(meta))
+
+    def weight(self, meta, children):
+        return ast.Bound("weight", "=", children[0], _span_of(meta))
+
+    def duty_bound(self, meta, children):
+        op, value = children
+        return ast.Bound("duty", str(op), value, _span_of(meta))
+
+    def quality_bound(self, meta, children):
+        return ast.Bound("quality", ">=", children[0], _span_of(meta))
+
+    def quantity(self, meta, children):
+        number, unit = children
+        return ast.Quantity(number.value, number.text, _ident(unit) if unit else None,
+                            _span_of(meta))
+
+    def number(self, meta, children):
+        return _number_token(children[0])
+
+    def negative(self, meta, children):
+        token = children[0]
+        return ast.Number(-float(token), f"-{token}", _span_of(meta))
+
+    # ---- states
+    def state(self, meta, children):
+        name, *items = children
+        return ast.State(_ident(name), tuple(items), _span_of(meta))
+
+    def route_item(self, meta, children):
+        return ast.RouteItem(children[0], _span_of(meta))
+
+    def profile_item(self, meta, children):
+        return ast.ProfileItem(tuple(children), _span_of(meta))
+
+    def sensors_item(self, meta, children):
+        return ast.SensorsItem(tuple(children), _span_of(meta))
+
+    def sensor_use(self, meta, children):
+        sensor, duty = children
+        if isinstance(duty, Token):
+            duty = _ident(duty)
+        return ast.SensorUse(_ident(sensor), duty, _span_of(meta))
+
+    def expect_item(self, meta, children):
+        return ast.ExpectItem(children[0], children[1], _span_of(meta))
+
+    def require_item(self, meta, children):
+        sensor, *bounds = children
+        return ast.RequireItem(_ident(sensor), tuple(bounds), _span_of(meta))
+
+    def events_item(self, meta, children):
+        return ast.EventsItem(tuple(children), _span_of(meta))
+
+    def invocation(self, meta, children):
+        name, *args = children
+        has_parens = bool(args)  # maybe_placeholders gives [None] for "()"
+        args = tuple(a for a in args if a is not None)
+        return ast.Invocation(_ident(name), args, has_parens, _span_of(meta))
+
+    def point(self, meta, children):
+        return ast.Point(children[0], children[1], _span_of(meta))
+
+    def event(self, meta, children):
+        condition, assignments, action = children
+        return ast.Event(condition, assignments or (), action, _span_of(meta))
+
+    def assignments(self, meta, children):
+        return tuple(children)
+
+    def assignment(self, meta, children):
+        return ast.Assignment(_ident(children[0]), children[1], _span_of(meta))
+
+    def goto(self, meta, children):
+        return ast.Action("goto", _ident(children[0]), _span_of(meta))
+
+    def call(self, meta, children):
+        return ast.Action("call", _ident(children[0]), _span_of(meta))
+
+    def return_(self, meta, children):
+        return ast.Action("return", None, _span_of(meta))
+
+    def exit(self, meta, children):
+        return ast.Action("exit", None, _span_of(meta))
+
+    # ---- expressions
+    def literal(self, meta, children):
+        return _number_token(children[0])
+
+    def name(self, meta, children):
+        return ast.Name(str(children[0]), _span_of(meta))
+
+    def function_call(self, meta, children):
+        name, *args = children
+        return ast.Call(_ident(name), tuple(a for a in args if a is not None), _span_of(meta))
+
+    def neg(self, meta, children):
+        return ast.Unary("-", children[0], _span_of(meta))
+
+    def not_(self, meta, children):
+        return ast.Unary("!", children[0], _span_of(meta))
+
+    def comparison(self, meta, children):
+        left, op, right = children
+        return ast.Binary(str(op), left, right, _span_of(meta))
+
+    def or_expr(self, meta, children):
+        return _fold(children, "||")
+
+    def and_expr(self, meta, children):
+        return _fold(children, "&&")
+
+    def sum(self, meta, children):
+        return _fold_with_ops(children)
+
+    product = sum
+
+
+def _preset(token: Token) -> tuple[ast.Ident, bool]:
+    """A preset name, or a "file path" (quotes removed)."""
+    if token.type == "STRING":
+        return ast.Ident(str(token)[1:-1], _span_of(token)), True
+    return _ident(token), False
+
+
+def _join(left: ast.Span, right: ast.Span) -> ast.Span:
+    return ast.Span(left.line, left.column, right.end_line, right.end_column)
+
+
+def _fold(operands: list, op: str) -> ast.Expr:
+    result = operands[0]
+    for right in operands[1:]:
+        result = ast.Binary(op, result, right, _join(result.span, right.span))
+    return result
+
+
+def _fold_with_ops(children: list) -> ast.Expr:
+    """Left-associative fold of [operand, op, operand, op, operand, ...]."""
+    result = children[0]
+    for op, right in zip(children[1::2], children[2::2], strict=True):
+        result = ast.Binary(str(op), result, right, _join(result.span, right.span))
+    return result
+
+
+def _describe_expected(expected: set[str]) -> str:
+    words = sorted({_TERMINAL_WORDS.get(t, _literal_of(t)) for t in expected})
+    if len(words) > 6:
+        words = words[:6] + ["..."]
+    return ", ".join(words)
+
+
+def _literal_of(terminal: str) -> str:
+    """Lark names anonymous keyword terminals after their text, e.g. GOTO or LPAR."""
+    try:
+        pattern = _lark().get_terminal(terminal).pattern
+    except KeyError:
+        return terminal
+    return f"'{pattern.value}'" if pattern.type == "str" else terminal
+
+
+def _syntax_diagnostic(err: UnexpectedInput, text: str) -> Diagnostic:
+    line, column = max(err.line, 1), max(err.column, 1)
+    if isinstance(err, UnexpectedCharacters):
+        char = text[err.pos_in_stream] if err.pos_in_stream < len(text) else "?"
+        shown = repr(char) if not char.isprintable() or char in "'\"" else f"'{char}'"
+        span = ast.Span(line, column, line, column + 1)
+        return error(f"unexpected character {shown}", span)
+    if isinstance(err, UnexpectedEOF) or (
+        isinstance(err, UnexpectedToken) and err.token.type == "$END"
+    ):
+        last_line = text.count("\n") + 1
+        return error(
+            "unexpected end of file",
+            ast.Span(last_line, 1, last_line, 1) if not isinstance(err, UnexpectedToken)
+            else ast.Span(line, column, line, column + 1),
+            hint=f"expected {_describe_expected(set(err.expected))}",
+        )
+    token = err.token
+    span = ast.Span(token.line, token.column, token.end_line or token.line,
+                    token.end_column or token.column + 1)
+    return error(
+        f"unexpected '{token}'",
+        span,
+        hint=f"expected {_describe_expected(set(err.expected))}",
+    )
+
+
+def parse(text: str) -> ast.Mission:
+    """Parse mission source; raise MissionSyntaxError with diagnostics on bad syntax."""
+    try:
+        tree = _lark().parse(text)
+    except UnexpectedInput as err:
+        raise MissionSyntaxError([_syntax_diagnostic(err, text)]) from None
+    return _ToAst().transform(tree)
