@@ -20,6 +20,8 @@ INTERNAL_ERROR = 3
 # name -> (module, one-line help). Order is the order shown in --help.
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "check": ("gliderplan.cli.check", "check a mission and report every problem"),
+    "calibrate": ("gliderplan.cli.calibrate", "fit a vehicle's energy figures to real Slocum logs"),
+    "power": ("gliderplan.cli.power", "show power models, energy per km and optimal speed"),
 }
 
 

@@ -71,7 +71,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
         if time >= MIN_PHASE_S:
             coeffs.append(Coefficient(key, power, "W", True, f"{time:.0f} s of {name}"))
             return power
-        coeffs.append(Coefficient(key, kept, "W", False, f"only {time:.0f} s of {name}; kept"))
+        coeffs.append(Coefficient(key, kept, "W", False, f"only {time:.0f} s of {name}"))
         return kept
 
     hotel = phase_coefficient("hotel_power", seg.GLIDE, base.hotel_w)
@@ -101,7 +101,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
                 a_out,
                 "J/cc",
                 True,
-                f"{len(outward)} pump-out runs at {span}, depth term kept",
+                f"{len(outward)} pump-out runs at {span}, depth term from the base",
             )
         )
         coeffs.append(
@@ -110,7 +110,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
                 b_out,
                 "J/(cc m)",
                 False,
-                f"pump-out depths span only {span}; kept",
+                f"pump-out depths span only {span}",
             )
         )
     else:
@@ -118,7 +118,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
             ("pump_out_energy_per_volume", a_out, "J/cc"),
             ("pump_out_energy_per_volume_depth", b_out, "J/(cc m)"),
         ):
-            coeffs.append(Coefficient(key, value, unit, False, "no pump-out runs; kept"))
+            coeffs.append(Coefficient(key, value, unit, False, "no pump-out runs"))
 
     a_in = base.pump_in_j_per_cc
     if inward:
@@ -131,7 +131,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
         )
     else:
         coeffs.append(
-            Coefficient("pump_in_energy_per_volume", a_in, "J/cc", False, "no pump-in runs; kept")
+            Coefficient("pump_in_energy_per_volume", a_in, "J/cc", False, "no pump-in runs")
         )
 
     pitch = base.pitch_energy_j
@@ -152,7 +152,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
             )
         )
     else:
-        coeffs.append(Coefficient("pitch_energy", pitch, "J", False, "no inflections; kept"))
+        coeffs.append(Coefficient("pitch_energy", pitch, "J", False, "no inflections"))
 
     vehicle = replace(
         base,

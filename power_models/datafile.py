@@ -166,3 +166,28 @@ def read_model_file(path: Path, kind: str) -> Table:
         raise top.error("kind", f"this file describes a {found!r}, expected a {kind!r}")
     top.text("name")
     return top
+
+
+def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
+    """Every number of a model file as (dotted key, value, unit, source), as written.
+
+    For display (`gliderplan power show`); call after the file has loaded, so its shape is
+    known to be valid.
+    """
+    with open(path, "rb") as handle:
+        data = tomllib.load(handle)
+    rows: list[tuple[str, float, str, str]] = []
+
+    def walk(prefix: str, table: dict[str, Any]) -> None:
+        for key, item in table.items():
+            dotted = f"{prefix}.{key}" if prefix else key
+            if isinstance(item, dict) and "value" in item:
+                rows.append((dotted, item["value"], item["unit"], item["source"]))
+            elif isinstance(item, dict):
+                walk(dotted, item)
+            elif isinstance(item, list):
+                for index, sub in enumerate(item):
+                    walk(f"{dotted}[{index}]", sub)
+
+    walk("", data)
+    return rows

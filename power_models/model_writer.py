@@ -1,4 +1,4 @@
-"""Writing a model data file (the inverse of `datafile`), atomically.
+"""Writing a model data file (the inverse of `datafile`).
 
 Used by `gliderplan calibrate -o`: the base vehicle's file is re-written with the fitted
 figures replaced, each with a source that says what it was fitted from.
@@ -7,9 +7,6 @@ figures replaced, each with a source that says what it was fitted from.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
-from pathlib import Path
 from typing import Any
 
 
@@ -37,16 +34,3 @@ def to_toml(data: dict[str, Any], header: str = "") -> str:
         lines.append(f"[{name}]")
         lines.extend(f"{k} = {_toml_value(v)}" for k, v in table.items())
     return "\n".join(lines) + "\n"
-
-
-def write_atomically(path: Path, text: str) -> None:
-    """Write `text` to `path` through a temporary file and a rename (never half a file)."""
-    path = Path(path)
-    handle, temporary = tempfile.mkstemp(dir=path.parent or Path("."), prefix=f".{path.name}.")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(temporary, path)
-    except BaseException:
-        os.unlink(temporary)
-        raise
