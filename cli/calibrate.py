@@ -128,9 +128,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _write_vehicle(args: argparse.Namespace, fit, files: tuple[str, ...]) -> str:  # noqa: ANN001
     """Write the base vehicle's file with the fitted figures replaced; returns the path."""
+    from gliderplan.cli.common import write_atomically
     from gliderplan.power_models.catalog import resolve
     from gliderplan.power_models.errors import ModelFileError
-    from gliderplan.cli.common import write_atomically
     from gliderplan.power_models.model_writer import to_toml
     from gliderplan.power_models.vehicle import read_vehicle_file
 

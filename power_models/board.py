@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+
 from gliderplan.power_models.catalog import is_path_spec, resolve
 from gliderplan.power_models.datafile import read_model_file
 from gliderplan.power_models.errors import ModelFileError

@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.slocum_log import FlightLog
 from gliderplan.power_models.vehicle import Vehicle

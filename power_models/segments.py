@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from gliderplan.power_models.slocum_log import FlightLog
 
 GLIDE, SURFACE, IRIDIUM, PUMP, PITCH = range(5)

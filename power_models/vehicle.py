@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import resolve
 from gliderplan.power_models.datafile import read_model_file
