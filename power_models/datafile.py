@@ -47,6 +47,12 @@ class Table:
     def error(self, name: str | None, message: str) -> ModelFileError:
         return ModelFileError(self.path, self.key(name) if name else self.prefix or None, message)
 
+    def missing(self, name: str, expected: str) -> ModelFileError:
+        """The error for a required key that is absent, pointing at a likely misspelling."""
+        close = difflib.get_close_matches(name, [k for k in self.data if k not in self.used], n=1)
+        hint = f"; is {close[0]!r} a misspelling of it?" if close else ""
+        return self.error(name, f"missing ({expected}){hint}")
+
     def has(self, name: str) -> bool:
         self.used.add(name)
         return name in self.data
@@ -56,7 +62,7 @@ class Table:
         self.used.add(name)
         if name not in self.data:
             if default is None:
-                raise self.error(name, "missing (a text value is required)")
+                raise self.missing(name, "a text value is required")
             return default
         value = self.data[name]
         if not isinstance(value, str) or not value.strip():
@@ -81,10 +87,10 @@ class Table:
         self.used.add(name)
         if name not in self.data:
             if default is None:
-                raise self.error(
+                raise self.missing(
                     name,
-                    f"missing (expected {{ value = ..., unit = ..., source = ... }} "
-                    f"with a unit of {dimension}: {accepted_units(dimension)})",
+                    f"expected {{ value = ..., unit = ..., source = ... }} "
+                    f"with a unit of {dimension}: {accepted_units(dimension)}",
                 )
             return default
         entry = self.data[name]

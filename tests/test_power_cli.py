@@ -1,0 +1,108 @@
+"""`gliderplan power` as a user runs it: tables, JSON, and clear errors for bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from gliderplan.cli.main import main
+from gliderplan.power_models import load_vehicle
+
+
+def _json(capsys, argv):
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_list_names_every_kind(capsys):
+    data = _json(capsys, ["power", "list", "--json"])
+    assert data["board"] == ["ts5500", "ts7800"]
+    assert "slocum_g2_shallow" in data["vehicle"]
+
+
+def test_show_board_gives_each_figure_with_unit_and_source(capsys):
+    data = _json(capsys, ["power", "show", "board", "ts7800@500", "--json"])
+    actives = {r["key"]: r["value"] for r in data["figures"] if r["key"].endswith("active_power")}
+    assert sorted(actives.values()) == [3.42, 4.14]
+    assert all(r["source"] and r["unit"] for r in data["figures"])
+    assert main(["power", "show", "board", "ts5500"]) == 0
+    assert "Woithe & Kremer, Table I" in capsys.readouterr().out
+
+
+def test_show_vehicle_text_table(capsys):
+    assert main(["power", "show", "vehicle", "slocum_g3"]) == 0
+    out = capsys.readouterr().out
+    assert "pump_out_energy_per_volume" in out and "J/(cc m)" in out and "optimal speed" in out
+
+
+def test_energy_table_matches_the_model(capsys):
+    data = _json(
+        capsys,
+        [
+            "power",
+            "energy",
+            "--vehicle",
+            "slocum_g3",
+            "--min-depth",
+            "5",
+            "--max-depth",
+            "20,100",
+            "--speed",
+            "0.2,0.3",
+            "--json",
+        ],
+    )
+    vehicle = load_vehicle("slocum_g3")
+    pitch = data["pitch_rad"]
+    ballast = vehicle.ballast_for_speed(0.3, pitch)
+    expected = vehicle.energy_per_km_j(5, 100, pitch, ballast) / 1e3
+    assert data["energy_per_km_kj"][1][1] == pytest.approx(float(expected))
+    assert data["energy_per_km_kj"][0][0] > data["energy_per_km_kj"][1][0]
+
+
+def test_energy_marks_speeds_beyond_the_pump(capsys):
+    data = _json(capsys, ["power", "energy", "--speed", "0.2,0.6", "--json"])
+    assert all(row[1] is None for row in data["energy_per_km_kj"])
+    assert all(row[0] is not None for row in data["energy_per_km_kj"])
+
+
+def test_optimal_speed_grows_with_hotel_load(capsys):
+    data = _json(
+        capsys,
+        [
+            "power",
+            "speed",
+            "--vehicle",
+            "slocum_g3",
+            "--hotel-w",
+            "0.5,1,2",
+            "--max-depth",
+            "200",
+            "--json",
+        ],
+    )
+    speeds = [r["speed_mps"] for r in data["rows"]]
+    assert speeds == sorted(speeds) and speeds[0] < speeds[-1]
+
+
+@pytest.mark.parametrize(
+    ("argv", "code", "message"),
+    [
+        (["power", "show", "vehicle", "nosuch"], 1, "unknown vehicle preset"),
+        (["power", "show", "board", "ts7800@400"], 1, "no 400 MHz clock"),
+        (["power", "show", "vehicle", "missing.toml"], 1, "missing.toml: no such file"),
+        (["power", "energy", "--min-depth", "30", "--max-depth", "20"], 2, "deeper than"),
+        (["power", "energy", "--speed", "fast"], 2, "expected numbers"),
+        (["power", "speed", "--hotel-w", "-1"], 2, "--hotel-w"),
+        (["power", "show", "sensor", "ctd", "--clock", "300"], 2, "--clock only applies"),
+    ],
+)
+def test_bad_input_is_a_clear_error(capsys, argv, code, message):
+    try:
+        result = main(argv)
+    except SystemExit as exit_:  # argparse rejects a malformed value before run()
+        result = exit_.code
+    assert result == code
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err

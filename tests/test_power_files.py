@@ -1,0 +1,133 @@
+"""A user's own model file loads like a preset, and every mistake names the file and the key."""
+
+from __future__ import annotations
+
+import pytest
+
+from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
+from gliderplan.power_models.catalog import preset_path
+from gliderplan.power_models.errors import ModelFileError
+
+
+def _copy_with(tmp_path, kind, preset, old, new, name="mine.toml"):
+    text = preset_path(kind, preset).read_text()
+    assert old in text, old
+    path = tmp_path / name
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def test_a_users_vehicle_file_loads_like_the_preset(tmp_path):
+    path = _copy_with(tmp_path, "vehicle", "slocum_g3", 'name = "slocum_g3"', 'name = "my_g3"')
+    mine, preset = load_vehicle(str(path)), load_vehicle("slocum_g3")
+    assert mine.name == "my_g3"
+    assert mine.pump_energy_j(50.0, 300.0) == preset.pump_energy_j(50.0, 300.0)
+
+
+def test_units_are_converted(tmp_path):
+    path = _copy_with(
+        tmp_path, "sensor", "ctd", 'value = 240, unit = "mW"', 'value = 0.24, unit = "W"'
+    )
+    assert load_sensor(str(path)).on_power_w == load_sensor("ctd").on_power_w
+    path = _copy_with(
+        tmp_path,
+        "vehicle",
+        "slocum_g3",
+        'value = 26, unit = "deg"',
+        'value = 0.4537856, unit = "rad"',
+    )
+    assert load_vehicle(str(path)).nominal_pitch_rad == pytest.approx(0.4537856)
+
+
+@pytest.mark.parametrize(
+    ("kind", "preset", "old", "new", "key", "message"),
+    [
+        ("vehicle", "slocum_g3", "hotel_power = ", "hotel_powr = ", "hotel_power", "missing"),
+        (
+            "vehicle",
+            "slocum_g3",
+            'value = 1.155, unit = "W"',
+            'value = 1.155, unit = "Wh"',
+            "hotel_power",
+            "not a unit of power",
+        ),
+        (
+            "vehicle",
+            "slocum_g3",
+            'value = 1.155, unit = "W"',
+            'value = -1.155, unit = "W"',
+            "hotel_power",
+            "must be >= 0",
+        ),
+        (
+            "vehicle",
+            "slocum_g3",
+            'value = 0.15, unit = "1", source = "Merckelbach et al. 2019: 0.15-0.17" ',
+            'value = 0.15, unit = "1" ',
+            "flight.drag_cd0",
+            "missing 'source'",
+        ),
+        (
+            "board",
+            "ts5500",
+            'value = 2.7, unit = "W"',
+            'value = "2.7", unit = "W"',
+            "mode[0].active_power",
+            "finite number",
+        ),
+        (
+            "board",
+            "ts5500",
+            'value = 2.2, unit = "W"',
+            'value = 3.2, unit = "W"',
+            "mode[0].idle_power",
+            "must not exceed active_power",
+        ),
+        (
+            "battery",
+            "alkaline",
+            'value = 85, unit = "%"',
+            'value = 120, unit = "%"',
+            "usable_fraction",
+            "must be <= 100",
+        ),
+        (
+            "sensor",
+            "ctd",
+            'kind = "sensor"',
+            'kind = "sensor"\nsample_hz = 3',
+            "sample_hz",
+            "unknown key",
+        ),
+        ("sensor", "ctd", 'kind = "sensor"', 'kind = "board"', "kind", "expected a 'sensor'"),
+    ],
+)
+def test_mistakes_name_the_file_and_the_key(tmp_path, kind, preset, old, new, key, message):
+    path = _copy_with(tmp_path, kind, preset, old, new)
+    loader = {
+        "vehicle": load_vehicle,
+        "board": load_board,
+        "battery": load_battery,
+        "sensor": load_sensor,
+    }[kind]
+    with pytest.raises(ModelFileError) as caught:
+        loader(str(path))
+    assert str(caught.value).startswith(f"{path}: {key}: ")
+    assert message in str(caught.value)
+
+
+def test_unknown_key_suggests_the_right_one(tmp_path):
+    path = _copy_with(tmp_path, "vehicle", "slocum_g3", "pump_rate = ", "pump_rat = ")
+    with pytest.raises(ModelFileError, match="pump_rate: missing .*'pump_rat' a misspelling"):
+        load_vehicle(str(path))
+
+
+def test_broken_or_missing_files(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("kind = \n")
+    with pytest.raises(ModelFileError, match=r"bad\.toml: not valid TOML"):
+        load_vehicle(str(bad))
+    with pytest.raises(ModelFileError, match=r"nowhere\.toml: no such file"):
+        load_board(str(tmp_path / "nowhere.toml"))
+    with pytest.raises(ModelFileError, match="unknown vehicle preset"):
+        load_vehicle("slocum_g9")

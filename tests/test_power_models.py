@@ -1,0 +1,124 @@
+"""Boards, sensors, batteries and the preset catalog, as the planner and checker use them."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gliderplan.power_models import load_battery, load_board, load_sensor
+from gliderplan.power_models.battery import (
+    ah_to_j,
+    energy_to_j,
+    j_to_ah,
+    kwh_to_j,
+    mj_to_j,
+    wh_to_j,
+)
+from gliderplan.power_models.catalog import preset_names
+from gliderplan.power_models.errors import ModelFileError
+
+
+def test_catalog_lists_the_presets_the_language_names():
+    assert preset_names("board") == ["ts5500", "ts7800"]
+    assert {"slocum_g2_shallow", "slocum_g3"} <= set(preset_names("vehicle"))
+    assert {"ctd", "optode", "optics", "adcp", "modem"} <= set(preset_names("sensor"))
+    assert {"alkaline", "lithium_primary", "rechargeable"} <= set(preset_names("battery"))
+    with pytest.raises(ValueError, match="unknown model kind"):
+        preset_names("boat")
+
+
+def test_catalog_does_not_import_numpy():
+    code = (
+        "import sys; from gliderplan.power_models.catalog import preset_names; "
+        "preset_names('vehicle'); print('numpy' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize(
+    ("spec", "clock", "active_w"),
+    [
+        ("ts5500", None, 2.7),
+        ("ts7800", 300, 3.42),
+        ("ts7800@500", None, 4.14),
+        ("ts7800 @ 500 MHz", None, 4.14),
+        ("ts7800", 500, 4.14),
+        ("ts7800@500", 300, 3.42),
+    ],
+)
+def test_board_powers_are_table_one_exactly(spec, clock, active_w):
+    assert load_board(spec, clock).active_w == active_w
+
+
+def test_board_modes_cover_every_clock():
+    assert [(b.clock_mhz, b.active_w) for b in load_board("ts7800").modes()] == [
+        (300.0, 3.42),
+        (500.0, 4.14),
+    ]
+    assert [b.clock_mhz for b in load_board("ts5500").modes()] == [133.0]
+
+
+def test_board_without_that_clock_is_refused():
+    with pytest.raises(ModelFileError, match="no 400 MHz clock"):
+        load_board("ts7800@400")
+    with pytest.raises(ModelFileError, match="did you mean 'ts7800'"):
+        load_board("ts7880")
+
+
+def test_workload_becomes_busy_time_and_power():
+    board = load_board("ts7800@300")
+    busy = board.busy_fraction(np.array([0.0, 1.5e6, 3e6]), 100.0)  # cycles/tick x ticks/s
+    assert busy == pytest.approx([0.0, 0.5, 1.0])
+    power = board.power_w(busy)
+    assert power[0] == board.idle_w and power[-1] == board.active_w
+    assert power[1] == pytest.approx((board.idle_w + board.active_w) / 2)
+    # the faster clock finishes the same work sooner
+    assert load_board("ts7800@500").busy_fraction(1.5e6, 100.0) < busy[1]
+
+
+def test_boot_energy_follows_the_clock():
+    slow, fast = load_board("ts7800").modes()
+    assert fast.boot_j / slow.boot_j == pytest.approx(4.14 / 3.42)
+
+
+@pytest.mark.parametrize("name", ["ctd", "optode", "optics", "adcp", "modem"])
+def test_sensor_quality_is_concave_from_zero_to_one(name):
+    sensor = load_sensor(name)
+    duty = np.linspace(0.0, 1.0, 101)
+    quality = sensor.utility(duty)
+    assert quality[0] == 0.0 and quality[-1] == pytest.approx(1.0)
+    assert np.all(np.diff(quality) > 0)
+    assert np.all(np.diff(quality, 2) <= 1e-12)  # diminishing returns
+
+
+def test_ctd_is_the_sea_bird_figure():
+    ctd = load_sensor("ctd")
+    assert ctd.on_power_w == pytest.approx(0.24) and ctd.sample_hz == 0.5
+
+
+def test_cycling_a_sensor_costs_its_warm_up():
+    optode = load_sensor("optode")
+    always = optode.mean_power_w(np.array([0.0, 1.0]), 60.0)
+    assert always.tolist() == pytest.approx([0.0, optode.on_power_w])
+    half = optode.mean_power_w(0.5, 60.0)
+    assert half == pytest.approx(0.5 * optode.on_power_w + optode.warmup_j / 60.0)
+
+
+def test_battery_presets_and_conversions():
+    alkaline = load_battery("alkaline")
+    assert alkaline.energy_j == pytest.approx(7.8e6)
+    assert 0 < alkaline.usable_fraction <= 1
+    assert load_battery("lithium_primary").energy_wh == pytest.approx(3381)
+    assert wh_to_j(1.0) == 3600.0 and kwh_to_j(1.2) == pytest.approx(4.32e6)
+    assert mj_to_j(7.8) == 7.8e6
+    assert j_to_ah(ah_to_j(10.0, 14.0), 14.0) == pytest.approx(10.0)
+    assert energy_to_j(1.2, "kWh") == pytest.approx(4.32e6)
+    assert energy_to_j(100, "Ah", 15.0) == pytest.approx(5.4e6)
+    with pytest.raises(ValueError, match="needs a positive voltage"):
+        energy_to_j(100, "Ah")
+    with pytest.raises(ValueError, match="not an energy or a charge"):
+        energy_to_j(1.0, "W")
