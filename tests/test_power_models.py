@@ -122,3 +122,33 @@ def test_battery_presets_and_conversions():
         energy_to_j(100, "Ah")
     with pytest.raises(ValueError, match="not an energy or a charge"):
         energy_to_j(1.0, "W")
+
+
+def test_timeline_energy_adds_up_every_component():
+    from gliderplan.power_models import load_vehicle
+    from gliderplan.power_models.segments import GLIDE, IRIDIUM, SURFACE
+    from gliderplan.power_models.timeline import Timeline, energy_per_step_j
+
+    vehicle, board = load_vehicle("slocum_g3"), load_board("ts7800@500")
+    ctd = load_sensor("ctd")
+    n = 6
+    timeline = Timeline(
+        dt_s=2.0,
+        phase=np.array([SURFACE, IRIDIUM, GLIDE, GLIDE, GLIDE, GLIDE], np.int8),
+        depth_m=np.array([0, 0, 10, 50, 50, 20.0]),
+        pumped_out_cc=np.array([0, 0, 0, 400, 0, 0.0]),
+        pumped_in_cc=np.array([0, 0, 400, 0, 0, 0.0]),
+        inflection=np.array([0, 0, 1, 1, 0, 0], bool),
+        board_busy=np.array([0, 0, 0, 1, 1, 0.5]),
+        sensor_on=np.array([[0, 1, 1, 0, 1, 1]], bool),
+    )
+    energy = energy_per_step_j(timeline, vehicle, board, [ctd])
+    assert energy.shape == (n,)
+    expected_total = (
+        2.0 * (vehicle.surface_w + vehicle.iridium_w + 4 * vehicle.hotel_w)
+        + 2.0 * (3 * board.idle_w + 2 * board.active_w + 0.5 * (board.idle_w + board.active_w))
+        + float(vehicle.pump_energy_j(50.0, 400.0)) + float(vehicle.pump_in_energy_j(400.0))
+        + 2 * vehicle.pitch_energy_j
+        + 4 * 2.0 * ctd.on_power_w + 2 * ctd.warmup_j  # on four steps, switched on twice
+    )
+    assert energy.sum() == pytest.approx(expected_total)
