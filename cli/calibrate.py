@@ -91,8 +91,8 @@ def run(args: argparse.Namespace) -> int:
             result = calibration.validate(log, base)
         except ValueError as err:
             raise CliError(f"cannot validate: {err}") from None
-        held_out = calibration.split_record(log).validate
-        speeds = calibration.compare_vertical_speeds(held_out, result.fit.vehicle)
+        split = result.parts
+        trim_cc = calibration.fit_trim_offset_cc(split.fit, result.fit.vehicle)
         report["relative_error"] = result.relative_error
         report["validation"] = {
             "split": result.split,
@@ -102,18 +102,9 @@ def run(args: argparse.Namespace) -> int:
             "measured_j": result.measured_j,
             "relative_error": result.relative_error,
         }
-        report["vertical_speed"] = [
-            {
-                "direction": s.direction,
-                "samples": s.samples,
-                "log_w_mps": s.log_w_mps,
-                "model_w_mps": s.model_w_mps,
-                "relative_error": s.relative_error,
-                "pitch_rad": s.pitch_rad,
-                "ballast_cc": s.ballast_cc,
-            }
-            for s in speeds
-        ]
+        report["vertical_speed"] = _speed_rows(split.validate, result.fit.vehicle, 0.0)
+        report["trim_offset_cc"] = trim_cc
+        report["vertical_speed_trimmed"] = _speed_rows(split.validate, result.fit.vehicle, trim_cc)
         failed = args.max_error is not None and abs(result.relative_error) > args.max_error
     if args.output:
         report["output"] = _write_vehicle(args, fit, log.files)
@@ -124,6 +115,23 @@ def run(args: argparse.Namespace) -> int:
             f"{args.max_error:.1%}"
         )
     return 0
+
+
+def _speed_rows(log, vehicle, trim_cc: float) -> list[dict]:  # noqa: ANN001
+    from gliderplan.power_models import calibration
+
+    return [
+        {
+            "direction": s.direction,
+            "samples": s.samples,
+            "log_w_mps": s.log_w_mps,
+            "model_w_mps": s.model_w_mps,
+            "relative_error": s.relative_error,
+            "pitch_rad": s.pitch_rad,
+            "ballast_cc": s.ballast_cc,
+        }
+        for s in calibration.compare_vertical_speeds(log, vehicle, trim_cc)
+    ]
 
 
 def _write_vehicle(args: argparse.Namespace, fit, files: tuple[str, ...]) -> str:  # noqa: ANN001
@@ -163,6 +171,14 @@ def _write_vehicle(args: argparse.Namespace, fit, files: tuple[str, ...]) -> str
     return str(output)
 
 
+def _speed_lines(rows: list[dict]) -> list[str]:
+    return [
+        f"  {s['direction']:5s} log {s['log_w_mps']:.3f} m/s  model {s['model_w_mps']:.3f} m/s  "
+        f"({s['relative_error']:+.1%}, {s['samples']} samples)"
+        for s in rows
+    ]
+
+
 def _text(report: dict) -> str:
     lines = [
         f"logs: {', '.join(report['logs'])} ({report['duration_s']:.0f} s)",
@@ -191,12 +207,12 @@ def _text(report: dict) -> str:
             "",
             "vertical speed, held-out part (flight model at the log's pitch and volume):",
         ]
-        for s in report["vertical_speed"]:
-            lines.append(
-                f"  {s['direction']:5s} log {s['log_w_mps']:.3f} m/s  model "
-                f"{s['model_w_mps']:.3f} m/s  ({s['relative_error']:+.1%}, "
-                f"{s['samples']} samples)"
-            )
+        lines += _speed_lines(report["vertical_speed"])
+        lines += [
+            f"  with a trim of {report['trim_offset_cc']:+.1f} cc (positive: light), "
+            "fitted on the fit part:"
+        ]
+        lines += _speed_lines(report["vertical_speed_trimmed"])
     if "output" in report:
         lines += ["", f"wrote {report['output']}"]
     return "\n".join(lines)

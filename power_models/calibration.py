@@ -232,6 +232,7 @@ def split_record(log: FlightLog) -> Split:
 @dataclass(frozen=True)
 class Validation:
     split: str
+    parts: Split
     fit: EnergyFit
     predicted_j: dict[str, float]
     measured_j: float  # coulomb counter over the validation part
@@ -249,6 +250,7 @@ def validate(log: FlightLog, base: Vehicle) -> Validation:
     fit = fit_energy(split.fit, base)
     return Validation(
         split=split.description,
+        parts=split,
         fit=fit,
         predicted_j=predict_energy_j(split.validate, fit.vehicle),
         measured_j=seg.counter_energy_j(split.validate),
@@ -276,36 +278,76 @@ STEADY_MIN_DEPTH_M = 3.0  # below the surface layer
 STEADY_MIN_PITCH_RAD = 0.2  # flying, not turning over at an inflection
 
 
-def compare_vertical_speeds(log: FlightLog, vehicle: Vehicle) -> list[SpeedComparison]:
-    """Vertical speed of steady glides in the log vs the flight model at the same pitch and
-    pumped volume, split into dives and climbs."""
+def _steady_glides(log: FlightLog) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Steady-glide intervals of the log: |pitch| [rad], |pumped volume| [cc], |w| [m s-1]
+    and direction (+1 climb, -1 dive), one entry per interval."""
     parts = seg.segment(log)
     dt = np.diff(log.t_s)
-    w_log = np.diff(log.depth_m) / dt  # positive down
+    w_log = np.diff(log.depth_m) / np.where(dt > 0, dt, np.nan)  # positive down
     pitch = 0.5 * (log.pitch_rad[1:] + log.pitch_rad[:-1])
     ballast = 0.5 * (log.ballast_cc[1:] + log.ballast_cc[:-1])
     depth = np.minimum(log.depth_m[1:], log.depth_m[:-1])
-    steady = (parts.phase == seg.GLIDE) & (depth > STEADY_MIN_DEPTH_M) & (dt > 0)
+    direction = np.sign(pitch)
+    steady = (
+        (parts.phase == seg.GLIDE)
+        & (depth > STEADY_MIN_DEPTH_M)
+        & (dt > 0)
+        & (np.abs(pitch) > STEADY_MIN_PITCH_RAD)
+        & (np.sign(ballast) == direction)
+        & (np.sign(w_log) == -direction)  # climbing means depth decreasing
+    )
+    return (
+        np.abs(pitch[steady]),
+        np.abs(ballast[steady]),
+        np.abs(w_log[steady]),
+        direction[steady],
+    )
+
+
+def _effective_volume_cc(volume: np.ndarray, direction: np.ndarray, trim_cc: float) -> np.ndarray:
+    """Buoyancy volume with a trim offset: a glider `trim_cc` light climbs on more buoyancy
+    and dives on less."""
+    return np.maximum(volume + direction * trim_cc, 0.0)
+
+
+def fit_trim_offset_cc(log: FlightLog, vehicle: Vehicle) -> float:
+    """Buoyancy trim [cc] (positive: light) that best matches the log's vertical speeds.
+
+    The flight model assumes a glider neutral at zero pumped volume; a real one is trimmed
+    a little light or heavy, which makes its dives and climbs differ. Least squares over
+    a 0.5 cc grid within half the largest pumped volume.
+    """
+    pitch, volume, w_log, direction = _steady_glides(log)
+    if pitch.size == 0:
+        return 0.0
+    grid = np.arange(-vehicle.max_ballast_cc / 2, vehicle.max_ballast_cc / 2 + 0.25, 0.5)
+    volumes = _effective_volume_cc(volume[None, :], direction[None, :], grid[:, None])
+    _, w_model = vehicle.glide(pitch[None, :], volumes)
+    return float(grid[np.argmin(np.sum((w_model - w_log) ** 2, axis=1))])
+
+
+def compare_vertical_speeds(
+    log: FlightLog, vehicle: Vehicle, trim_cc: float = 0.0
+) -> list[SpeedComparison]:
+    """Vertical speed of steady glides in the log vs the flight model at the same pitch and
+    pumped volume (plus a trim offset [cc], positive light), for dives and for climbs."""
+    pitch, volume, w_log, direction = _steady_glides(log)
     rows = []
     for name, sign in (("dive", -1.0), ("climb", 1.0)):
-        mask = (
-            steady
-            & (np.sign(pitch) == sign)
-            & (np.sign(ballast) == sign)
-            & (np.abs(pitch) > STEADY_MIN_PITCH_RAD)
-            & (np.sign(w_log) == -sign)
-        )
+        mask = direction == sign
         if not mask.any():
             continue
-        _, w_model = vehicle.glide(np.abs(pitch[mask]), np.abs(ballast[mask]))
+        _, w_model = vehicle.glide(
+            pitch[mask], _effective_volume_cc(volume[mask], direction[mask], trim_cc)
+        )
         rows.append(
             SpeedComparison(
                 name,
                 int(mask.sum()),
-                float(np.mean(np.abs(w_log[mask]))),
+                float(np.mean(w_log[mask])),
                 float(np.mean(w_model)),
-                float(np.mean(np.abs(pitch[mask]))),
-                float(np.mean(np.abs(ballast[mask]))),
+                float(np.mean(pitch[mask])),
+                float(np.mean(volume[mask])),
             )
         )
     return rows

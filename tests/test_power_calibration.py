@@ -145,6 +145,10 @@ def test_real_log_flight_model_vertical_speeds(capsys):
     # The symmetric model cannot see the glider's trim (it dives slower than it climbs),
     # but its mean vertical speed must match the log's.
     assert model_mean == pytest.approx(log_mean, rel=0.10)
+    # With the trim fitted on the other part of the record, each direction must match.
+    assert report["trim_offset_cc"] > 0  # light: climbs faster than it dives
+    for row in report["vertical_speed_trimmed"]:
+        assert row["model_w_mps"] == pytest.approx(row["log_w_mps"], rel=0.10), row["direction"]
 
 
 @needs_logs
