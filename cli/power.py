@@ -114,6 +114,7 @@ def _list(args: argparse.Namespace) -> tuple[str, dict]:
 
 def _show(args: argparse.Namespace) -> tuple[str, dict]:
     from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
+    from gliderplan.power_models.board import board_spec
     from gliderplan.power_models.catalog import resolve
     from gliderplan.power_models.datafile import file_entries
 
@@ -121,7 +122,7 @@ def _show(args: argparse.Namespace) -> tuple[str, dict]:
         raise UsageError("--clock only applies to a board")
     if args.kind == "board":
         model = load_board(args.spec, args.clock)
-        path = resolve("board", args.spec.split("@")[0].strip() if "@" in args.spec else args.spec)
+        path, _ = board_spec(args.spec)
     else:
         loader = {"sensor": load_sensor, "vehicle": load_vehicle, "battery": load_battery}
         model = loader[args.kind](args.spec)

@@ -80,30 +80,39 @@ class Board:
         return self.idle_w + (self.active_w - self.idle_w) * busy
 
 
-_SPEC = re.compile(r"^\s*(?P<name>[^@]+?)\s*(?:@\s*(?P<clock>[0-9.]+)\s*(?:MHz)?)?\s*$", re.I)
+_SPEC = re.compile(
+    r"^\s*(?P<name>[^@]+?)\s*(?:@\s*(?P<clock>[0-9]+(?:\.[0-9]+)?)\s*(?:MHz)?)?\s*$", re.I
+)
+
+
+def board_spec(spec: str) -> tuple[Path, float | None]:
+    """The file and the clock [MHz] (None: not given) of a spec such as "ts7800@500",
+    "ts7800 @ 500 MHz", "ts5500" or "boards/mine.toml"."""
+    if is_path_spec(spec):
+        return resolve("board", spec), None
+    match = _SPEC.match(spec)
+    if match is None:
+        raise ModelFileError(spec, None, "expected NAME, NAME@CLOCK_MHZ or a path to a .toml file")
+    clock = float(match["clock"]) if match["clock"] else None
+    return resolve("board", match["name"]), clock
 
 
 def load_board(spec: str, clock_mhz: float | None = None) -> Board:
     """Load a board: a preset name, "ts7800@500" (clock in MHz) or a path to a .toml file.
 
-    Without a clock the board runs at its file's `default_clock`. Raises ModelFileError
-    (naming the file and key) for a bad file, an unknown preset or an unavailable clock.
+    `clock_mhz` overrides a clock in the spec; without either the board runs at its file's
+    `default_clock`. Raises ModelFileError (naming the file and key) for a bad file, an
+    unknown preset or an unavailable clock.
     """
-    name, spec_clock = spec, None
-    if not is_path_spec(spec):
-        match = _SPEC.match(spec)
-        if match is None:
-            raise ModelFileError(spec, None, "expected NAME or NAME@CLOCK_MHZ")
-        name = match["name"]
-        spec_clock = float(match["clock"]) if match["clock"] else None
-    board = read_board_file(resolve("board", name))
+    path, spec_clock = board_spec(spec)
+    board = read_board_file(path)
     wanted = clock_mhz if clock_mhz is not None else spec_clock
     if wanted is None:
         return board
     try:
         return board.at_clock(wanted)
     except ValueError as err:
-        raise ModelFileError(str(resolve("board", name)), "mode", str(err)) from None
+        raise ModelFileError(str(path), "mode", str(err)) from None
 
 
 def read_board_file(path: Path) -> Board:

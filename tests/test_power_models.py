@@ -67,6 +67,8 @@ def test_board_without_that_clock_is_refused():
         load_board("ts7800@400")
     with pytest.raises(ModelFileError, match="did you mean 'ts7800'"):
         load_board("ts7880")
+    with pytest.raises(ModelFileError, match="expected NAME"):
+        load_board("ts7800@5.0.0")
 
 
 def test_workload_becomes_busy_time_and_power():
@@ -147,8 +149,10 @@ def test_timeline_energy_adds_up_every_component():
     expected_total = (
         2.0 * (vehicle.surface_w + vehicle.iridium_w + 4 * vehicle.hotel_w)
         + 2.0 * (3 * board.idle_w + 2 * board.active_w + 0.5 * (board.idle_w + board.active_w))
-        + float(vehicle.pump_energy_j(50.0, 400.0)) + float(vehicle.pump_in_energy_j(400.0))
+        + float(vehicle.pump_energy_j(50.0, 400.0))
+        + float(vehicle.pump_in_energy_j(400.0))
         + 2 * vehicle.pitch_energy_j
-        + 4 * 2.0 * ctd.on_power_w + 2 * ctd.warmup_j  # on four steps, switched on twice
+        + 4 * 2.0 * ctd.on_power_w
+        + 2 * ctd.warmup_j  # on four steps, switched on twice
     )
     assert energy.sum() == pytest.approx(expected_total)
