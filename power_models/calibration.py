@@ -22,6 +22,7 @@ import numpy as np
 
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.slocum_log import FlightLog
+from gliderplan.power_models.timeline import Timeline, energy_by_component_j
 from gliderplan.power_models.vehicle import Vehicle
 
 MIN_DEPTH_SPREAD_M = 10.0
@@ -165,7 +166,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
         pump_in_j_per_cc=float(a_in),
         pitch_energy_j=float(pitch),
     )
-    predicted = [_pump_model_j(vehicle, e) for e in parts.pump_events]
+    predicted = [_pump_model_j(vehicle, e) for e in parts.pump_events]  # per run, for the RMS
     measured = [_event_excess_j(energy, dt, e.start, e.stop, hotel) for e in parts.pump_events]
     rms = (
         float(np.sqrt(np.mean(np.subtract(predicted, measured) ** 2))) if measured else float("nan")
@@ -179,18 +180,25 @@ def _pump_model_j(vehicle: Vehicle, event: seg.PumpEvent) -> float:
     return float(vehicle.pump_in_energy_j(event.volume_cc))
 
 
+def log_timeline(log: FlightLog) -> Timeline:
+    """The log as a timeline of its sample intervals: phases, and each pump run's volume
+    at its depth in the run's first interval, which is also when the battery shifts."""
+    parts = seg.segment(log)
+    steps = parts.phase.size
+    depth = 0.5 * (log.depth_m[1:] + log.depth_m[:-1])
+    pumped_out, pumped_in = np.zeros(steps), np.zeros(steps)
+    inflection = np.zeros(steps, bool)
+    for event in parts.pump_events:
+        depth[event.start] = event.depth_m
+        (pumped_out if event.outward else pumped_in)[event.start] = event.volume_cc
+        inflection[event.start] = True
+    return Timeline(np.diff(log.t_s), parts.phase, depth, pumped_out, pumped_in, inflection)
+
+
 def predict_energy_j(log: FlightLog, vehicle: Vehicle) -> dict[str, float]:
     """Energy [J] per component the vehicle model predicts for the log's own timeline."""
-    parts = seg.segment(log)
-    dt = np.diff(log.t_s)
-    time = {name: float(dt[parts.phase == code].sum()) for code, name in enumerate(seg.PHASE_NAMES)}
-    return {
-        "hotel": vehicle.hotel_w * (time["glide"] + time["pump"] + time["pitch"]),
-        "surface": vehicle.surface_w * time["surface"],
-        "iridium": vehicle.iridium_w * time["iridium"],
-        "pump": sum(_pump_model_j(vehicle, e) for e in parts.pump_events),
-        "pitch": vehicle.pitch_energy_j * len(parts.pump_events),
-    }
+    parts = energy_by_component_j(log_timeline(log), vehicle)
+    return {name: float(energy.sum()) for name, energy in parts.items()}
 
 
 def _phase_kinds(log: FlightLog) -> set[str]:

@@ -1,8 +1,8 @@
 """Energy of a sampled mission timeline: every component at every step, vectorised.
 
-The simulator and the calibration describe what the glider did as arrays over time steps;
-this module turns them into energy per step with the power models, in one pass of numpy
-operations (a 30-day timeline at 1 s is 2.6 million steps).
+The simulator, the calibration and the benchmark describe what the glider did as arrays
+over time steps; this module turns them into energy per step with the power models, in
+one pass of numpy operations (a 30-day timeline at 1 s is 2.6 million steps).
 """
 
 from __future__ import annotations
@@ -19,36 +19,54 @@ from gliderplan.power_models.vehicle import Vehicle
 
 @dataclass(frozen=True)
 class Timeline:
-    """What the glider does at each of n steps of `dt_s` seconds."""
+    """What the glider does during each of n steps."""
 
-    dt_s: float
+    dt_s: np.ndarray | float  # (n,) or scalar [s] step lengths
     phase: np.ndarray  # (n,) int8: segments.GLIDE, SURFACE, IRIDIUM, PUMP or PITCH
     depth_m: np.ndarray  # (n,) [m]
     pumped_out_cc: np.ndarray  # (n,) [cc] pumped out during the step (0 if none)
     pumped_in_cc: np.ndarray  # (n,) [cc] pumped in during the step
     inflection: np.ndarray  # (n,) bool: the battery shifts for an inflection in this step
-    board_busy: np.ndarray  # (n,) [1] busy fraction of the computer
-    sensor_on: np.ndarray  # (k, n) bool: sensor k powered during the step
+    board_busy: np.ndarray | None = None  # (n,) [1] busy fraction of the computer
+    sensor_on: np.ndarray | None = None  # (k, n) bool: sensor k powered during the step
 
 
-def energy_per_step_j(
-    timeline: Timeline, vehicle: Vehicle, board: Board, sensors: list[Sensor]
-) -> np.ndarray:
-    """Energy [J] drawn in each step: base load of the phase, computer, sensors (with a
-    warm-up at every switch-on), pump runs and battery shifts."""
-    base_w = np.zeros(5)
-    base_w[[GLIDE, PUMP, PITCH]] = vehicle.hotel_w  # actuator energy is added per event
-    base_w[SURFACE] = vehicle.surface_w
-    base_w[IRIDIUM] = vehicle.iridium_w
-    power = base_w[timeline.phase] + board.power_w(timeline.board_busy)
-    energy = power * timeline.dt_s
-    energy += vehicle.pump_energy_j(timeline.depth_m, timeline.pumped_out_cc)
-    energy += vehicle.pump_in_energy_j(timeline.pumped_in_cc)
-    energy += np.where(timeline.inflection, vehicle.pitch_energy_j, 0.0)
+def energy_by_component_j(
+    timeline: Timeline,
+    vehicle: Vehicle,
+    board: Board | None = None,
+    sensors: list[Sensor] | tuple[Sensor, ...] = (),
+) -> dict[str, np.ndarray]:
+    """Energy [J] per step of each component: the vehicle's base load by phase (hotel,
+    surface, Iridium), pump runs, battery shifts, the computer and the sensors (with a
+    warm-up at every switch-on). A missing board or sensor list contributes nothing."""
+    phase, dt = timeline.phase, timeline.dt_s
+    gliding = (phase == GLIDE) | (phase == PUMP) | (phase == PITCH)
+    parts = {
+        "hotel": np.where(gliding, vehicle.hotel_w * dt, 0.0),
+        "surface": np.where(phase == SURFACE, vehicle.surface_w * dt, 0.0),
+        "iridium": np.where(phase == IRIDIUM, vehicle.iridium_w * dt, 0.0),
+        "pump": vehicle.pump_energy_j(timeline.depth_m, timeline.pumped_out_cc)
+        + vehicle.pump_in_energy_j(timeline.pumped_in_cc),
+        "pitch": np.where(timeline.inflection, vehicle.pitch_energy_j, 0.0),
+    }
+    if board is not None:
+        busy = np.zeros(phase.shape) if timeline.board_busy is None else timeline.board_busy
+        parts["computer"] = board.power_w(busy) * dt
     if sensors:
         on = timeline.sensor_on
         on_w = np.array([s.on_power_w for s in sensors])[:, None]
         warmup_j = np.array([s.warmup_j for s in sensors])[:, None]
-        switched_on = on & ~np.concatenate([np.zeros((on.shape[0], 1), bool), on[:, :-1]], axis=1)
-        energy += (on * on_w * timeline.dt_s + switched_on * warmup_j).sum(axis=0)
-    return energy
+        before = np.concatenate([np.zeros((on.shape[0], 1), bool), on[:, :-1]], axis=1)
+        parts["sensors"] = (on * on_w * dt + (on & ~before) * warmup_j).sum(axis=0)
+    return parts
+
+
+def energy_per_step_j(
+    timeline: Timeline,
+    vehicle: Vehicle,
+    board: Board | None = None,
+    sensors: list[Sensor] | tuple[Sensor, ...] = (),
+) -> np.ndarray:
+    """Total energy [J] drawn in each step (the sum of `energy_by_component_j`)."""
+    return sum(energy_by_component_j(timeline, vehicle, board, sensors).values())
