@@ -15,6 +15,8 @@ from pathlib import Path
 
 from gliderplan.cli.errors import CliError, UsageError
 
+ORDER = 90
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(

@@ -9,6 +9,8 @@ import sys
 from gliderplan.cli.common import check_file
 from gliderplan.cli.errors import CliError
 
+ORDER = 10
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("missions", nargs="+", metavar="MISSION", help="mission file(s)")

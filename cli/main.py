@@ -1,8 +1,9 @@
 """Entry point of the `gliderplan` command.
 
-Each subcommand is a module in this package with ``add_arguments(parser)`` and
-``run(args) -> int``. Subcommand modules import heavy libraries (cvxpy, pandas)
-inside ``run`` only, so that ``gliderplan check`` starts fast.
+Each subcommand is a module in this package named after it, with ``ORDER`` (its
+place in --help), ``add_arguments(parser)`` and ``run(args) -> int``; the first line
+of its docstring is its help. Subcommand modules import heavy libraries (cvxpy,
+pandas) inside ``run`` only, so that ``gliderplan check`` starts fast.
 """
 
 from __future__ import annotations
@@ -10,19 +11,24 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import pkgutil
 import sys
 from collections.abc import Sequence
+from types import ModuleType
 
+import gliderplan.cli
 from gliderplan.cli.errors import CliError
 
 INTERNAL_ERROR = 3
 
-# name -> (module, one-line help). Order is the order shown in --help.
-SUBCOMMANDS: dict[str, tuple[str, str]] = {
-    "check": ("gliderplan.cli.check", "check a mission and report every problem"),
-    "calibrate": ("gliderplan.cli.calibrate", "fit a vehicle's energy figures to real Slocum logs"),
-    "power": ("gliderplan.cli.power", "show power models, energy per km and optimal speed"),
-}
+
+def subcommands() -> dict[str, ModuleType]:
+    """Subcommand name -> module, in --help order."""
+    modules = (importlib.import_module(f"gliderplan.cli.{info.name}")
+               for info in pkgutil.iter_modules(gliderplan.cli.__path__)
+               if not info.name.startswith("_"))
+    found = [m for m in modules if hasattr(m, "ORDER") and hasattr(m, "run")]
+    return {m.__name__.rsplit(".", 1)[1]: m for m in sorted(found, key=lambda m: m.ORDER)}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -35,11 +41,12 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="gliderplan", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="gliderplan", description="Mission language, power-aware planner, "
+                     "C runtime and simulator for Slocum-class underwater gliders.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name, (module_name, help_text) in SUBCOMMANDS.items():
-        module = importlib.import_module(module_name)
+    for name, module in subcommands().items():
+        help_text = module.__doc__.splitlines()[0].split(": ", 1)[-1]
         sub_parser = sub.add_parser(name, help=help_text, description=help_text)
         module.add_arguments(sub_parser)
         sub_parser.set_defaults(_run=module.run)

@@ -54,6 +54,9 @@ def _profile_arguments(parser: argparse.ArgumentParser, max_depth_help: str) -> 
     parser.add_argument("--json", action="store_true", help="print JSON")
 
 
+ORDER = 80
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     forms = parser.add_subparsers(dest="power_command", metavar="FORM")
     forms.required = True
