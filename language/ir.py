@@ -49,7 +49,7 @@ class BinaryOp:
 
 @dataclass(frozen=True)
 class FuncCall:
-    function: str  # abs | min | max
+    function: str  # abs | min | max, as C's fabs, fmin, fmax (min/max ignore a NaN)
     args: tuple[Expr, ...]
 
 
@@ -79,11 +79,36 @@ _COMPARISONS = {
     "==": lambda a, b: a == b,
     "!=": lambda a, b: a != b,
 }
-_FUNCTIONS = {"abs": abs, "min": min, "max": max}
+
+
+def _fmin(a: float, b: float) -> float:
+    """C's fmin: a NaN argument is ignored (the other is returned); NaN only if both are."""
+    if math.isnan(a):
+        return b
+    if math.isnan(b):
+        return a
+    return min(a, b)
+
+
+def _fmax(a: float, b: float) -> float:
+    """C's fmax: a NaN argument is ignored (the other is returned); NaN only if both are."""
+    if math.isnan(a):
+        return b
+    if math.isnan(b):
+        return a
+    return max(a, b)
+
+
+# The generated C calls fabs, fmin and fmax; these must agree with them, NaN included.
+_FUNCTIONS = {"abs": abs, "min": _fmin, "max": _fmax}
 
 
 def evaluate(expr: Expr, sensors: Mapping[str, float], variables: Mapping[str, float]) -> float:
-    """Value of an expression with C semantics: true is 1.0, false 0.0, && and || short-circuit."""
+    """Value of an expression with C semantics: true is 1.0, false 0.0, && and || short-circuit.
+
+    `min` and `max` are C's fmin and fmax: a NaN argument (a sensor with no reading) is
+    ignored, so `max(depth, 0)` is 0 when depth is NaN; only both NaN gives NaN.
+    """
     match expr:
         case Const(value):
             return value
