@@ -22,6 +22,7 @@ from gliderplan.language.registry import (
 from gliderplan.language.units import UnitProblem, to_si
 
 MAX_STACK_DEPTH = 64
+_ACTIONS = ("goto", "call", "return", "exit")
 
 
 class _Checker:
@@ -43,6 +44,9 @@ class _Checker:
         return sum(d.is_error for d in self.diagnostics)
 
     def si(self, quantity: ast.Quantity, *dimensions: str) -> tuple[float, str] | None:
+        if not math.isfinite(quantity.value):
+            self.error(f"{quantity.text} is too large for a number", quantity.span)
+            return None
         try:
             return to_si(quantity.value, quantity.unit.text if quantity.unit else None,
                          dimensions)
@@ -191,8 +195,8 @@ class _Checker:
         for bound in decl.bounds:
             if bound.kind == "weight":
                 weight = bound.value.value
-                if weight < 0:
-                    self.error("a weight cannot be negative", bound.value.span)
+                if not 0 <= weight < math.inf:
+                    self.error("a weight must be a finite number, 0 or more", bound.value.span)
         duty_min, duty_max, quality_min = self.bounds(decl.bounds, decl.sensor.text)
         return ir.SensorPreference(decl.sensor.text, weight, duty_min, duty_max, quality_min)
 
@@ -401,6 +405,13 @@ class _Checker:
         return ir.Requirement(item.sensor.text, duty_min, duty_max, quality_min)
 
     def event(self, event: ast.Event) -> ir.Event | None:
+        bare = event.condition
+        if (isinstance(bare, ast.Name) and bare.name in _ACTIONS and event.action is None
+                and not event.assignments):
+            # `case exit`: the action word was read as the condition.
+            self.error(f"'case' needs a condition before '{bare.name}'", bare.span,
+                       f"write e.g. 'case missiontime >= 500 {bare.name}'")
+            return None
         condition = self.expression(event.condition, allow_sensors=True)
         assignments = []
         for assignment in event.assignments:
@@ -432,6 +443,10 @@ class _Checker:
         """Lower an expression, reporting every unknown name or misuse in it."""
         match node:
             case ast.Number(value):
+                if not math.isfinite(value):
+                    self.error(f"{node.text} is too large for a number", node.span,
+                               "numbers are 64-bit floats: at most about 1.8e308")
+                    return None
                 return ir.Const(value)
             case ast.Name(name):
                 if name in self.variables:
@@ -444,6 +459,8 @@ class _Checker:
                                "copy the reading into a variable with 'set'")
                     return None
                 hint = did_you_mean(name, [*self.variables, *SENSOR_BY_NAME])
+                if name in _ACTIONS:
+                    hint = f"'case' needs a condition before '{name}'"
                 self.error(f"unknown sensor or variable '{name}'", node.span,
                            hint or "declare a variable with 'var NAME = VALUE'")
                 return None

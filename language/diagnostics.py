@@ -29,10 +29,42 @@ def warning(message: str, span: Span = NO_SPAN, hint: str | None = None) -> Diag
     return Diagnostic("warning", message, span, hint)
 
 
+def closest(word: str, candidates: Iterable[str]) -> str | None:
+    """The candidate the writer most likely meant, or None when nothing is close.
+
+    In order: the same word in another case (`Depth`), a candidate that is a prefix
+    of the word or the word a prefix of it (`temperature` for `temp`, `miss` for
+    `missiontime`), one containing the other (`watertemp`), then spelling
+    similarity (`dpeth`). Prefix and substring matches need 3 letters in common so
+    that `s` does not suggest every state starting with s.
+    """
+    pool = sorted(set(candidates))
+    lowered = word.lower()
+    for candidate in pool:
+        if candidate.lower() == lowered:
+            return candidate
+    for related in (_prefix_related, _substring_related):
+        matches = [c for c in pool if related(lowered, c.lower())]
+        if matches:
+            return min(matches, key=lambda c: (abs(len(c) - len(word)), c))
+    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.6)
+    return close[0] if close else None
+
+
+def _prefix_related(word: str, candidate: str) -> bool:
+    shorter = min(len(word), len(candidate))
+    return shorter >= 3 and (word.startswith(candidate) or candidate.startswith(word))
+
+
+def _substring_related(word: str, candidate: str) -> bool:
+    shorter = min(len(word), len(candidate))
+    return shorter >= 3 and (word in candidate or candidate in word)
+
+
 def did_you_mean(word: str, candidates: Iterable[str]) -> str | None:
     """A hint naming the closest candidate, or None when nothing is close."""
-    close = difflib.get_close_matches(word, sorted(set(candidates)), n=1, cutoff=0.6)
-    return f"did you mean '{close[0]}'?" if close else None
+    match = closest(word, candidates)
+    return f"did you mean '{match}'?" if match else None
 
 
 class MissionSyntaxError(Exception):

@@ -2,30 +2,23 @@
 
 from __future__ import annotations
 
+import re
 from functools import cache
 from pathlib import Path
 
 from lark import Lark, Token, Transformer, UnexpectedInput, v_args
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from gliderplan.language import ast
-from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, error
+from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError
+from gliderplan.language.syntax_errors import describe, empty_file, error_position, is_blank
 
 GRAMMAR = Path(__file__).with_name("mission.lark")
 
-# How expected terminals read in a message.
-_TERMINAL_WORDS = {
-    "NAME": "a name",
-    "NUMBER": "a number",
-    "STRING": 'a quoted file name',
-    "COMPARE": "a comparison (>=, <, ==, ...)",
-    "ADD_OP": "'+' or '-'",
-    "MUL_OP": "'*' or '/'",
-    "PERCENT": "'%'",
-    "AUTO": "'auto'",
-    "OBJECTIVE_SENSE": "'maximize' or 'minimize'",
-    "$END": "end of file",
-}
+# A syntax error hides the rest of its state; the parser resumes at the next line that
+# starts a state (or, before the first state, a declaration), up to this many errors.
+MAX_SYNTAX_ERRORS = 20
+_RESUME_AT = re.compile(r"^[ \t]*(state|vehicle|computer|battery|horizon|objective|sensor|var"
+                        r"|stack)\b", re.MULTILINE)
 
 
 @cache
@@ -37,6 +30,7 @@ def _lark() -> Lark:
         propagate_positions=True,
         maybe_placeholders=True,
         cache=True,
+        start=["start", "recovery"],
     )
 
 
@@ -248,53 +242,57 @@ def _fold_with_ops(children: list) -> ast.Expr:
     return result
 
 
-def _describe_expected(expected: set[str]) -> str:
-    words = sorted({_TERMINAL_WORDS.get(t, _literal_of(t)) for t in expected})
-    if len(words) > 6:
-        words = words[:6] + ["..."]
-    return ", ".join(words)
+@cache
+def _keyword_literals() -> dict[str, str]:
+    """Terminal name -> text, for terminals that are fixed strings ('end', '(', ...)."""
+    return {t.name: t.pattern.value for t in _lark().terminals if t.pattern.type == "str"}
 
 
-def _literal_of(terminal: str) -> str:
-    """Lark names anonymous keyword terminals after their text, e.g. GOTO or LPAR."""
-    try:
-        pattern = _lark().get_terminal(terminal).pattern
-    except KeyError:
-        return terminal
-    return f"'{pattern.value}'" if pattern.type == "str" else terminal
+def _resume_point(text: str, error_at: int, after: int) -> int | None:
+    """Where to parse again after an error at offset error_at: a line starting a state,
+    or a declaration line before the first state; always beyond offset `after`."""
+    first_state = None
+    for match in _RESUME_AT.finditer(text):
+        keyword = match.group(1)
+        if keyword == "state" and first_state is None:
+            first_state = match.start(1)
+        if keyword != "state" and first_state is not None:
+            continue
+        if match.start(1) >= error_at and match.start(1) > after:
+            return match.start(1)
+    return None
 
 
-def _syntax_diagnostic(err: UnexpectedInput, text: str) -> Diagnostic:
-    line, column = max(err.line, 1), max(err.column, 1)
-    if isinstance(err, UnexpectedCharacters):
-        char = text[err.pos_in_stream] if err.pos_in_stream < len(text) else "?"
-        shown = repr(char) if not char.isprintable() or char in "'\"" else f"'{char}'"
-        span = ast.Span(line, column, line, column + 1)
-        return error(f"unexpected character {shown}", span)
-    if isinstance(err, UnexpectedEOF) or (
-        isinstance(err, UnexpectedToken) and err.token.type == "$END"
-    ):
-        last_line = text.count("\n") + 1
-        return error(
-            "unexpected end of file",
-            ast.Span(last_line, 1, last_line, 1) if not isinstance(err, UnexpectedToken)
-            else ast.Span(line, column, line, column + 1),
-            hint=f"expected {_describe_expected(set(err.expected))}",
-        )
-    token = err.token
-    span = ast.Span(token.line, token.column, token.end_line or token.line,
-                    token.end_column or token.column + 1)
-    return error(
-        f"unexpected '{token}'",
-        span,
-        hint=f"expected {_describe_expected(set(err.expected))}",
-    )
+def _blank_before(text: str, offset: int) -> str:
+    """The text with everything before offset turned to spaces (lines and columns kept)."""
+    head = text[:offset]
+    return re.sub(r"[^\n]", " ", head) + text[offset:]
 
 
 def parse(text: str) -> ast.Mission:
-    """Parse mission source; raise MissionSyntaxError with diagnostics on bad syntax."""
+    """Parse mission source; raise MissionSyntaxError with every syntax error found."""
+    if is_blank(text):
+        raise MissionSyntaxError([empty_file(text)])
     try:
-        tree = _lark().parse(text)
+        tree = _lark().parse(text, start="start")
     except UnexpectedInput as err:
-        raise MissionSyntaxError([_syntax_diagnostic(err, text)]) from None
+        raise MissionSyntaxError(_all_syntax_errors(err, text)) from None
     return _ToAst().transform(tree)
+
+
+def _all_syntax_errors(first: UnexpectedInput, text: str) -> list[Diagnostic]:
+    """The first error, then those found by parsing again from each resume point."""
+    literals = _keyword_literals()
+    found = [describe(first, text, literals)]
+    error_at, resumed_at = error_position(first), -1
+    while len(found) < MAX_SYNTAX_ERRORS:
+        resume = _resume_point(text, error_at, resumed_at)
+        if resume is None:
+            break
+        try:
+            _lark().parse(_blank_before(text, resume), start="recovery")
+            break
+        except UnexpectedInput as err:
+            found.append(describe(err, text, literals))
+            error_at, resumed_at = error_position(err), resume
+    return found

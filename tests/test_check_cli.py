@@ -22,7 +22,7 @@ def test_fig2_checks_clean(capsys):
     ("content", "expected_code", "message"),
     [
         (None, 2, "no such file"),
-        (b"", 1, "unexpected end of file"),
+        (b"", 1, "the file is empty"),
         (b"mission \xff\n", 1, "not UTF-8"),
         (b"\x7fELF\x00\x01", 1, "binary file"),
     ],
