@@ -1,0 +1,39 @@
+/**
+ * @file gp_link.h
+ * @brief The runtime program: command line, start-up (plan, checkpoint), and the
+ *        link session with the science computer (HELLO, SENSORS -> COMMAND, NAK,
+ *        PLAN, watchdog RELEASE).
+ */
+#ifndef GP_LINK_H
+#define GP_LINK_H
+
+#include <stddef.h>
+
+/** Exit statuses of the program. */
+enum {
+    GP_EXIT_DONE = 0,         /**< mission exited */
+    GP_EXIT_BAD_INPUT = 1,    /**< bad arguments, plan or checkpoint */
+    GP_EXIT_LINK_LOST = 3,    /**< watchdog: link silent */
+    GP_EXIT_INTERNAL = 4,     /**< internal error (mission fault, I/O) */
+};
+
+typedef struct {
+    const char *device;
+    const char *plan_path;       /**< NULL: no plan */
+    const char *state_dir;       /**< NULL: no checkpoint, no event log */
+    double link_timeout_s;       /**< default 10 */
+    int retransmit_ms;           /**< default 200 */
+    int naive_tracker;
+} gp_args;
+
+/**
+ * @brief Parse the command line.
+ * @param error on failure, a one-line message (capacity `cap`)
+ * @return 0, or -1
+ */
+int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap);
+
+/** @brief Run the program; @return its exit status. */
+int gp_main(int argc, char **argv);
+
+#endif /* GP_LINK_H */

@@ -1,0 +1,64 @@
+/**
+ * @file gp_pilot.h
+ * @brief Flight profiles as docs/pilot.md specifies them: yo, thermotrackyo (robust
+ *        and naive thermocline trackers), surface, hover. Pure state machines over
+ *        depth and temperature readings; no I/O.
+ */
+#ifndef GP_PILOT_H
+#define GP_PILOT_H
+
+#include <stdint.h>
+
+#include "gp_mission.h"
+
+#define GP_TRACK_WINDOW 64       /**< (depth, temp) readings a leg keeps */
+#define GP_SURFACE_PITCH_RAD 0.454
+
+typedef enum { GP_LEG_DIVE = 0, GP_LEG_CLIMB = 1 } gp_leg;
+
+typedef struct {
+    double depth_m, temp_c;
+} gp_reading;
+
+/** What the pilot remembers while flying one profile (reset on entry). */
+typedef struct {
+    uint8_t leg;                 /**< gp_leg */
+    uint8_t detected;            /**< thermocline detected on this leg */
+    uint8_t n_window;
+    uint8_t n_recent;            /**< raw temperatures of the leg for the median (<= 3) */
+    double lo_m, hi_m;           /**< tracked band (thermotrackyo), else min/max */
+    double recent_c[3];          /**< last raw temperatures of the leg, oldest first */
+    double previous_c;           /**< naive: previous raw temperature of the leg */
+    gp_reading window[GP_TRACK_WINDOW];  /**< oldest first */
+} gp_pilot;
+
+/** The vertical part of a COMMAND. */
+typedef struct {
+    double depth_target_m, pitch_rad, ballast_cc;
+    uint8_t flags;               /**< GP_FLAG_SURFACE, GP_FLAG_CLIMBING */
+} gp_pilot_command;
+
+/** Profile inputs for one tick. */
+typedef struct {
+    uint8_t kind;                /**< gp_profile_kind */
+    double args[GP_MAX_PROFILE_ARGS];
+    double plan_pitch_rad;       /**< NaN: the profile's own pitch arguments */
+    double ballast_cc;           /**< B: the plan's, or the mission's default */
+    uint8_t naive;               /**< thermotrackyo: the paper's first, naive tracker */
+} gp_profile_input;
+
+/** What changed in the pilot's memory this tick (the runtime checkpoints on it). */
+enum { GP_PILOT_TURNED = 1, GP_PILOT_DETECTED = 2 };
+
+/** @brief Enter a profile: band = [min, max], window empty, leg from the depth. */
+void gp_pilot_enter(gp_pilot *pilot, const gp_profile_input *in, double depth_m);
+
+/**
+ * @brief One tick of the profile: turn the leg if due, track the thermocline,
+ *        command depth target, pitch and ballast.
+ * @return GP_PILOT_TURNED | GP_PILOT_DETECTED bits
+ */
+int gp_pilot_step(gp_pilot *pilot, const gp_profile_input *in, double depth_m, double temp_c,
+                  gp_pilot_command *out);
+
+#endif /* GP_PILOT_H */

@@ -1,0 +1,69 @@
+/**
+ * @file gp_plan.h
+ * @brief The plan file (docs/plan-format.md), read strictly, and the schedule it sets
+ *        inside a state (docs/pilot.md): sensor power windows, profile alternation,
+ *        planned pitch and ballast.
+ */
+#ifndef GP_PLAN_H
+#define GP_PLAN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "gp_mission.h"
+
+#define GP_PLAN_MAX_BYTES 65536
+#define GP_PLAN_MAX_LINE 255        /**< bytes including the LF */
+#define GP_PLAN_MAX_SENSORS 16      /**< sensor lines per state */
+#define GP_PLAN_ERROR_LEN 160
+/** Sensors without a device (registry indices 0..8): always powered when logged. */
+#define GP_FLIGHT_SENSORS_MASK 0x1FFu
+
+typedef struct {
+    uint8_t sensor;                  /**< registry index */
+    double period_s, on_s;
+} gp_plan_sensor;
+
+typedef struct {
+    double share, pitch_rad, ballast_cc, speed_mps;
+} gp_plan_profile;
+
+typedef struct {
+    double clock_mhz, cycle_s;
+    uint8_t n_sensors, n_profiles;
+    gp_plan_sensor sensors[GP_PLAN_MAX_SENSORS];
+    gp_plan_profile profiles[GP_MAX_PROFILES];
+} gp_plan_state;
+
+typedef struct {
+    char computer[33];
+    double clock_mhz, budget_j, predicted_j;
+    uint8_t n_states;
+    gp_plan_state states[GP_MAX_STATES];
+} gp_plan;
+
+/**
+ * @brief Read a plan file strictly against the compiled mission.
+ * @param out  filled only on success
+ * @param error on failure: "line N: what is wrong" (NUL-terminated, GP_PLAN_ERROR_LEN)
+ * @return 0 accepted, -1 rejected
+ */
+int gp_plan_read(const char *text, size_t len, const gp_mission *mission, gp_plan *out,
+                 char error[GP_PLAN_ERROR_LEN]);
+
+/** What the schedule sets at time `t_in_s` in a state. */
+typedef struct {
+    uint8_t profile;            /**< alternative flown */
+    uint32_t sensor_power;      /**< bit i: power sensor i */
+    double pitch_rad;           /**< planned pitch, NaN: the profile's own */
+    double ballast_cc;          /**< B */
+} gp_schedule_now;
+
+/**
+ * @brief The schedule of `state` (plan entry `ps`, NULL without a plan) at `t_in_s`
+ *        seconds after entry.
+ */
+void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
+                 double default_ballast_cc, gp_schedule_now *out);
+
+#endif /* GP_PLAN_H */

@@ -1,0 +1,52 @@
+/**
+ * @file gp_route.h
+ * @brief Flight routes (docs/pilot.md): nav, noheading, waypoints, and the area sweep
+ *        of a convex hull turned into lawn-mower waypoints.
+ */
+#ifndef GP_ROUTE_H
+#define GP_ROUTE_H
+
+#include <stdint.h>
+
+#include "gp_mission.h"
+
+#define GP_MAX_WAYPOINTS 256      /**< sweep waypoints at most */
+#define GP_WAYPOINT_RADIUS_M 50.0
+#define GP_EARTH_RADIUS_M 6371000.0
+
+/** Where the route is: its waypoints in decimal degrees and the one flown to. */
+typedef struct {
+    double waypoints[GP_MAX_WAYPOINTS][2];  /**< (lat, lon) [deg] */
+    uint16_t n_waypoints;
+    uint16_t next;                          /**< index of the waypoint flown to */
+} gp_route_state;
+
+/** @brief Slocum DDMM.MMMM to decimal degrees. */
+double gp_ddmm_to_deg(double ddmm);
+
+/**
+ * @brief Equirectangular offset of `to` from `from` about `from` [m north, m east].
+ * @param from, to (lat, lon) [deg]
+ */
+void gp_offset_m(const double from[2], const double to[2], double *north_m, double *east_m);
+
+/** @brief Enter a route: waypoints from its points (sweep: the lawn-mower). */
+void gp_route_enter(gp_route_state *rs, const gp_route *route);
+
+/**
+ * @brief Heading to fly from the current position (DDMM.MMMM readings).
+ * @param heading_rad true heading, clockwise from north, [0, 2 pi)
+ * @return 1 if the heading is valid, 0 (noheading, no position fix)
+ */
+int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, double lon_ddmm,
+                  double *heading_rad);
+
+/**
+ * @brief Lawn-mower waypoints covering the convex hull of `corners` (DDMM.MMMM).
+ * @param out (lat, lon) [deg], at most GP_MAX_WAYPOINTS
+ * @return number of waypoints
+ */
+uint16_t gp_sweep_waypoints(const double (*corners)[2], uint8_t n_corners, double spacing_m,
+                            double (*out)[2]);
+
+#endif /* GP_ROUTE_H */

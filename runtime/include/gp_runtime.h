@@ -1,0 +1,59 @@
+/**
+ * @file gp_runtime.h
+ * @brief One tick of the mission: the event system, the plan's schedule, the pilot
+ *        and the route together turn one SENSORS reading into one COMMAND.
+ *        No I/O: the link (gp_link.h) feeds it and stores what it reports.
+ */
+#ifndef GP_RUNTIME_H
+#define GP_RUNTIME_H
+
+#include <stdint.h>
+
+#include "gp_frame.h"
+#include "gp_machine.h"
+#include "gp_mission.h"
+#include "gp_pilot.h"
+#include "gp_plan.h"
+#include "gp_route.h"
+
+#define GP_NO_PROFILE 0xFFu
+
+/** Everything a restarted runtime needs to resume: the checkpoint's content. */
+typedef struct {
+    gp_machine machine;
+    double sensors[GP_N_SENSORS];   /**< last value of each sensor, NaN before the first */
+    double entry_time_s;            /**< missiontime at the last entry into the state */
+    uint8_t started;
+    uint8_t profile;                /**< alternative flown, GP_NO_PROFILE: enter on next tick */
+    uint8_t has_command;            /**< last_command is valid */
+    gp_pilot pilot;
+    gp_route_state route;
+    gp_command last_command;        /**< the last tick answered (resent for the same tick) */
+} gp_runtime;
+
+/** What happened in one tick, for the event log and the checkpoint. */
+typedef struct {
+    gp_transition transitions[2];   /**< start and an event can share tick 0 */
+    uint8_t n_transitions;
+    uint8_t fault;                  /**< gp_step_result of a refused event, 0: none */
+    gp_transition refused;          /**< the refused transition when `fault` */
+    uint8_t changed;                /**< machine, profile or pilot memory changed */
+} gp_tick_report;
+
+/** Options of a run. */
+typedef struct {
+    const gp_plan *plan;            /**< NULL: no plan */
+    uint8_t naive_tracker;
+} gp_run_options;
+
+/** @brief A runtime before its first tick (sensors NaN). */
+void gp_runtime_init(gp_runtime *rt);
+
+/**
+ * @brief One tick on `rt->sensors` (already updated from SENSORS).
+ * @param cmd the COMMAND answering tick `tick` (also kept in rt->last_command)
+ */
+void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
+                     uint32_t tick, gp_command *cmd, gp_tick_report *report);
+
+#endif /* GP_RUNTIME_H */

@@ -1,0 +1,27 @@
+/**
+ * @file gp_serial.h
+ * @brief The serial line: termios raw 115200 8N1 without flow control, and a
+ *        monotonic clock for the watchdog and retransmissions.
+ */
+#ifndef GP_SERIAL_H
+#define GP_SERIAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/** @brief Open `path` read-write in raw 115200 8N1; @return fd, or -1 with errno. */
+int gp_serial_open(const char *path);
+
+/** @brief Write all bytes (bounded retries); @return 0, or -1. */
+int gp_serial_write(int fd, const uint8_t *data, size_t len);
+
+/**
+ * @brief Wait up to `timeout_ms` for bytes and read at most `cap`.
+ * @return bytes read (0: none within the timeout or the peer hung up), -1 on error
+ */
+long gp_serial_read(int fd, uint8_t *buf, size_t cap, int timeout_ms);
+
+/** @brief Monotonic time [s]. */
+double gp_now_s(void);
+
+#endif /* GP_SERIAL_H */

@@ -1,0 +1,73 @@
+/* Command line of the runtime program. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gp_link.h"
+
+#define USAGE "usage: PROG --device PATH [--plan FILE] [--state-dir DIR] " \
+              "[--link-timeout-s S] [--retransmit-ms MS] [--naive-tracker]"
+
+static int number(const char *text, double low, double high, double *out)
+{
+    char *end;
+    double value = strtod(text, &end);
+    if (end == text || *end != '\0' || !isfinite(value) || value < low || value > high) {
+        return -1;
+    }
+    *out = value;
+    return 0;
+}
+
+int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
+{
+    *out = (gp_args){.link_timeout_s = 10.0, .retransmit_ms = 200};
+    for (int i = 1; i < argc; i++) {
+        const char *option = argv[i];
+        const char *value = i + 1 < argc ? argv[i + 1] : NULL;
+        double number_value;
+        if (strcmp(option, "--naive-tracker") == 0) {
+            out->naive_tracker = 1;
+            continue;
+        }
+        int takes_value = strcmp(option, "--device") == 0 || strcmp(option, "--plan") == 0
+            || strcmp(option, "--state-dir") == 0 || strcmp(option, "--link-timeout-s") == 0
+            || strcmp(option, "--retransmit-ms") == 0;
+        if (!takes_value) {
+            snprintf(error, cap, "unknown argument '%.64s'; " USAGE, option);
+            return -1;
+        }
+        if (value == NULL) {
+            snprintf(error, cap, "%s needs a value; " USAGE, option);
+            return -1;
+        }
+        i++;
+        if (strcmp(option, "--device") == 0) {
+            out->device = value;
+        } else if (strcmp(option, "--plan") == 0) {
+            out->plan_path = value;
+        } else if (strcmp(option, "--state-dir") == 0) {
+            out->state_dir = value;
+        } else if (strcmp(option, "--link-timeout-s") == 0) {
+            if (number(value, 0.001, 86400.0, &number_value) < 0) {
+                snprintf(error, cap, "--link-timeout-s '%.32s' is not a number of seconds in "
+                                     "0.001..86400", value);
+                return -1;
+            }
+            out->link_timeout_s = number_value;
+        } else {
+            if (number(value, 1, 60000, &number_value) < 0 || number_value != floor(number_value)) {
+                snprintf(error, cap, "--retransmit-ms '%.32s' is not a whole number of "
+                                     "milliseconds in 1..60000", value);
+                return -1;
+            }
+            out->retransmit_ms = (int)number_value;
+        }
+    }
+    if (out->device == NULL) {
+        snprintf(error, cap, "--device is required; " USAGE);
+        return -1;
+    }
+    return 0;
+}

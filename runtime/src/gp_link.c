@@ -1,0 +1,357 @@
+/* The runtime program: start-up checks, then one loop that reads the line, answers
+ * each SENSORS with a COMMAND and watches for silence. All buffers are static. */
+#define _POSIX_C_SOURCE 200809L
+#include "gp_link.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include "gp_frame.h"
+#include "gp_mission.h"
+#include "gp_plan.h"
+#include "gp_runtime.h"
+#include "gp_serial.h"
+#include "gp_store.h"
+
+#define READ_CHUNK 256
+#define ERROR_LEN 512
+
+typedef struct {
+    const gp_mission *mission;
+    const gp_args *args;
+    const char *prog;
+    int fd;                          /* the serial line */
+    int events_fd;                   /* events.log, -1 without a state directory */
+    gp_frame_reader reader;
+    uint8_t seq;                     /* our last frame's seq */
+    uint8_t ack;                     /* seq of the last valid frame received */
+    uint8_t last_wire[GP_MAX_FRAME]; /* our last frame, re-sent on NAK */
+    size_t last_len;
+    int answered;                    /* a SENSORS frame was answered ... */
+    uint8_t answered_seq;            /* ... with this seq */
+    double last_valid_s;             /* when the last valid frame arrived */
+    double hello_due_s;              /* next HELLO, before the first SENSORS */
+    int has_plan;
+    uint16_t plan_total, plan_received;
+    uint32_t dropped;                /* frames dropped (bad CRC, COBS, ...) */
+} session;
+
+static gp_runtime runtime;
+static gp_plan plan;
+static char plan_text[GP_PLAN_MAX_BYTES + 1];
+static uint8_t checkpoint_buf[GP_CHECKPOINT_SIZE];
+
+static void say(const session *s, const char *message)
+{
+    fprintf(stderr, "%s: %s\n", s->prog, message);
+}
+
+static int send_frame(session *s, uint8_t type, const uint8_t *payload, size_t len)
+{
+    s->seq = (uint8_t)(s->seq + 1);
+    s->last_len = gp_frame_build(type, s->seq, s->ack, payload, len, s->last_wire);
+    return gp_serial_write(s->fd, s->last_wire, s->last_len);
+}
+
+/* Give control back to the glider's own layered control and end with `status`. */
+static int release(session *s, gp_release_reason reason, int status)
+{
+    uint8_t payload = (uint8_t)reason;
+    send_frame(s, GP_MSG_RELEASE, &payload, 1);
+    tcdrain(s->fd);  /* the RELEASE must reach the line before we close it */
+    close(s->fd);
+    if (s->events_fd >= 0) {
+        close(s->events_fd);
+    }
+    return status;
+}
+
+/* ---- start-up ---------------------------------------------------------------- */
+
+static int load_plan(session *s, const char *path, char *message)
+{
+    long len = gp_read_file(path, plan_text, GP_PLAN_MAX_BYTES);
+    if (len < 0) {
+        snprintf(message, ERROR_LEN, "%.200s: cannot read the plan file%s", path,
+                 len == -1 ? " (no such file)" : " (unreadable, or larger than 65536 bytes)");
+        return -1;
+    }
+    char error[GP_PLAN_ERROR_LEN];
+    if (gp_plan_read(plan_text, (size_t)len, s->mission, &plan, error) < 0) {
+        snprintf(message, ERROR_LEN, "%.80s %.170s", path, error);
+        return -1;
+    }
+    s->has_plan = 1;
+    return 0;
+}
+
+/* Resume from the state directory's checkpoint (and its plan) if there is one. */
+static int load_state(session *s, char *message)
+{
+    const char *dir = s->args->state_dir;
+    char path[GP_PATH_MAX];
+    if (mkdir(dir, 0755) < 0 && errno != EEXIST) {
+        snprintf(message, ERROR_LEN, "%.200s: cannot create the state directory: %s", dir,
+                 strerror(errno));
+        return -1;
+    }
+    if (gp_path_join(dir, "checkpoint", path) < 0) {
+        snprintf(message, ERROR_LEN, "state directory path too long");
+        return -1;
+    }
+    long len = gp_read_file(path, checkpoint_buf, sizeof checkpoint_buf);
+    if (len == -1) {
+        return 0;
+    }
+    const char *problem = len < 0 ? "unreadable"
+        : gp_checkpoint_decode(s->mission, checkpoint_buf, (size_t)len, &runtime);
+    if (problem) {
+        snprintf(message, ERROR_LEN, "%.180s: %s; remove it to start the mission afresh", path,
+                 problem);
+        return -1;
+    }
+    char plan_path[GP_PATH_MAX];  /* a plan adopted over the link outlives a restart */
+    if (gp_path_join(dir, "plan", plan_path) == 0 && access(plan_path, F_OK) == 0) {
+        return load_plan(s, plan_path, message);
+    }
+    return 0;
+}
+
+static int open_events(session *s, char *message)
+{
+    char path[GP_PATH_MAX];
+    if (gp_path_join(s->args->state_dir, "events.log", path) < 0) {
+        snprintf(message, ERROR_LEN, "state directory path too long");
+        return -1;
+    }
+    s->events_fd = open(path, O_WRONLY | O_CREAT | O_APPEND, 0644);
+    if (s->events_fd < 0) {
+        snprintf(message, ERROR_LEN, "%.200s: %s", path, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+/* ---- one tick ---------------------------------------------------------------- */
+
+/* Log the tick's transitions and write the checkpoint: before the COMMAND goes out. */
+static int persist(session *s, const gp_tick_report *report)
+{
+    double time_s = runtime.sensors[0];
+    if (s->events_fd >= 0) {
+        for (int i = 0; i < report->n_transitions; i++) {
+            const gp_transition *t = &report->transitions[i];
+            if (gp_events_append(s->events_fd, s->mission, time_s,
+                                 gp_transition_name(t->kind), t->from, t->to, t->depth) < 0) {
+                return -1;
+            }
+        }
+        if (report->fault) {
+            const gp_transition *t = &report->refused;
+            gp_events_append(s->events_fd, s->mission, time_s, "fault", t->from, t->to, t->depth);
+        }
+    }
+    if (s->args->state_dir && report->changed) {
+        gp_checkpoint_encode(s->mission, &runtime, checkpoint_buf);
+        return gp_write_atomically(s->args->state_dir, "checkpoint", checkpoint_buf,
+                                   sizeof checkpoint_buf);
+    }
+    return 0;
+}
+
+static int send_command(session *s, const gp_command *command)
+{
+    uint8_t payload[GP_COMMAND_SIZE];
+    gp_command_pack(command, payload);
+    return send_frame(s, GP_MSG_COMMAND, payload, sizeof payload);
+}
+
+/* @return -1 to go on, else the exit status */
+static int on_sensors(session *s, const gp_frame *frame)
+{
+    uint32_t tick;
+    double readings[GP_N_SENSORS];
+    memcpy(readings, runtime.sensors, sizeof readings);
+    if (gp_sensors_unpack(frame, &tick, readings) != GP_FRAME_OK) {
+        s->dropped++;
+        send_frame(s, GP_MSG_NAK, NULL, 0);
+        return -1;
+    }
+    /* A re-sent SENSORS (same seq), or the tick a checkpoint already answered. */
+    if ((s->answered && frame->seq == s->answered_seq)
+        || (runtime.has_command && tick == runtime.last_command.tick)) {
+        s->answered = 1;
+        s->answered_seq = frame->seq;
+        send_command(s, &runtime.last_command);
+        return -1;
+    }
+    memcpy(runtime.sensors, readings, sizeof readings);
+    gp_run_options options = {s->has_plan ? &plan : NULL, (uint8_t)s->args->naive_tracker};
+    gp_command command;
+    gp_tick_report report;
+    gp_runtime_tick(&runtime, s->mission, &options, tick, &command, &report);
+    if (persist(s, &report) < 0) {
+        say(s, "cannot write the checkpoint or event log; releasing control");
+        return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+    }
+    if (report.fault) {
+        char message[ERROR_LEN];
+        snprintf(message, sizeof message, "mission fault at missiontime %g s in state %.64s: %s; "
+                 "releasing control", runtime.sensors[0],
+                 s->mission->states[report.refused.from].name,
+                 report.fault == GP_STEP_OVERFLOW ? "call overflows the state stack"
+                 : report.fault == GP_STEP_UNDERFLOW ? "return with an empty stack"
+                 : "event targets no state");
+        say(s, message);
+        return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+    }
+    s->answered = 1;
+    s->answered_seq = frame->seq;
+    send_command(s, &command);
+    if (runtime.machine.state == GP_EXITED) {
+        return release(s, GP_RELEASE_EXITED, GP_EXIT_DONE);
+    }
+    return -1;
+}
+
+/* Assemble PLAN pieces sent in order from offset 0; read the plan when complete. */
+static void on_plan(session *s, const gp_frame *frame)
+{
+    uint16_t offset, total, len;
+    const uint8_t *data;
+    if (gp_plan_piece_unpack(frame, &offset, &total, &data, &len) != GP_FRAME_OK) {
+        s->dropped++;
+        send_frame(s, GP_MSG_NAK, NULL, 0);
+        return;
+    }
+    if (offset == 0) {
+        s->plan_total = total;
+        s->plan_received = 0;
+    }
+    if (total == 0 || total != s->plan_total || offset != s->plan_received
+        || (uint32_t)offset + len > total) {
+        return;  /* out of order: the science computer re-sends the whole plan */
+    }
+    memcpy(plan_text + offset, data, len);
+    s->plan_received = (uint16_t)(offset + len);
+    if (s->plan_received < total) {
+        return;
+    }
+    s->plan_received = 0;
+    char error[GP_PLAN_ERROR_LEN], status[GP_MAX_PAYLOAD];
+    int accepted = gp_plan_read(plan_text, total, s->mission, &plan, error) == 0;
+    if (accepted) {
+        s->has_plan = 1;
+        if (s->args->state_dir
+            && gp_write_atomically(s->args->state_dir, "plan", plan_text, total) < 0) {
+            say(s, "warning: cannot store the new plan in the state directory");
+        }
+    }
+    snprintf(status, sizeof status, "%s", accepted ? "ok" : error);
+    uint8_t payload[GP_MAX_PAYLOAD];
+    size_t n = gp_plan_status_pack(accepted, status, payload);
+    send_frame(s, GP_MSG_PLAN_STATUS, payload, n);
+}
+
+/* @return -1 to go on, else the exit status */
+static int on_frame(session *s, const gp_frame *frame)
+{
+    s->ack = frame->seq;
+    s->last_valid_s = gp_now_s();
+    switch (frame->type) {
+    case GP_MSG_SENSORS:
+        return on_sensors(s, frame);
+    case GP_MSG_NAK:
+        gp_serial_write(s->fd, s->last_wire, s->last_len);
+        return -1;
+    case GP_MSG_PLAN:
+        on_plan(s, frame);
+        return -1;
+    default:  /* messages the runtime sends, not receives: ignore */
+        return -1;
+    }
+}
+
+static int run_link(session *s)
+{
+    static uint8_t chunk[READ_CHUNK];
+    uint8_t hello[GP_MAX_PAYLOAD];
+    size_t hello_len = gp_hello_pack(s->mission, hello);
+    double retransmit_s = s->args->retransmit_ms / 1000.0;
+    s->last_valid_s = gp_now_s();
+    s->hello_due_s = s->last_valid_s;
+    for (;;) {
+        double now = gp_now_s();
+        if (now - s->last_valid_s >= s->args->link_timeout_s) {
+            say(s, "link silent past its timeout; releasing control");
+            return release(s, GP_RELEASE_LINK_SILENT, GP_EXIT_LINK_LOST);
+        }
+        if (!s->answered && now >= s->hello_due_s) {
+            send_frame(s, GP_MSG_HELLO, hello, hello_len);
+            s->hello_due_s = now + retransmit_s;
+        }
+        double wait_s = s->last_valid_s + s->args->link_timeout_s - now;
+        if (!s->answered && s->hello_due_s - now < wait_s) {
+            wait_s = s->hello_due_s - now;
+        }
+        long n = gp_serial_read(s->fd, chunk, sizeof chunk, (int)ceil(fmax(wait_s, 0) * 1000));
+        if (n < 0) {
+            say(s, "serial read failed; releasing control");
+            return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+        }
+        for (long i = 0; i < n; i++) {
+            gp_frame frame;
+            int result = gp_frame_reader_push(&s->reader, chunk[i], &frame);
+            if (result == GP_FRAME_OK) {
+                int status = on_frame(s, &frame);
+                if (status >= 0) {
+                    return status;
+                }
+            } else if (result > 0) {
+                s->dropped++;
+                send_frame(s, GP_MSG_NAK, NULL, 0);
+            }
+        }
+    }
+}
+
+int gp_main(int argc, char **argv)
+{
+    static gp_args args;
+    static session s;
+    char message[ERROR_LEN];
+    const char *slash = argc > 0 ? strrchr(argv[0], '/') : NULL;
+    s = (session){.mission = &gp_mission_table, .args = &args, .fd = -1, .events_fd = -1,
+                  .prog = slash ? slash + 1 : (argc > 0 ? argv[0] : "gliderplan-runtime")};
+    const char *table_problem = gp_mission_check(s.mission);
+    if (table_problem) {
+        snprintf(message, sizeof message, "compiled mission table: %s", table_problem);
+        say(&s, message);
+        return GP_EXIT_INTERNAL;
+    }
+    gp_runtime_init(&runtime);
+    if (gp_args_parse(argc, argv, &args, message, sizeof message) < 0
+        || (args.plan_path && load_plan(&s, args.plan_path, message) < 0)
+        || (args.state_dir && (load_state(&s, message) < 0 || open_events(&s, message) < 0))) {
+        say(&s, message);
+        return GP_EXIT_BAD_INPUT;
+    }
+    s.fd = gp_serial_open(args.device);
+    if (s.fd < 0) {
+        snprintf(message, sizeof message, "%.200s: cannot open the serial line: %s", args.device,
+                 strerror(errno));
+        say(&s, message);
+        return GP_EXIT_BAD_INPUT;
+    }
+    if (runtime.started && runtime.machine.state == GP_EXITED) {
+        say(&s, "the checkpoint says the mission already exited");
+        return release(&s, GP_RELEASE_EXITED, GP_EXIT_DONE);
+    }
+    return run_link(&s);
+}

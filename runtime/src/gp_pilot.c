@@ -1,0 +1,178 @@
+/* Flight profiles (docs/pilot.md). The thermocline tracker is the part the paper's
+ * first sea trial got wrong: the robust one filters and never resets on noise. */
+#include "gp_pilot.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "gp_frame.h"
+
+static void start_leg(gp_pilot *pilot, uint8_t leg)
+{
+    pilot->leg = leg;
+    pilot->detected = 0;
+    pilot->n_window = 0;
+    pilot->n_recent = 0;
+    pilot->previous_c = NAN;
+}
+
+void gp_pilot_enter(gp_pilot *pilot, const gp_profile_input *in, double depth_m)
+{
+    memset(pilot, 0, sizeof *pilot);
+    pilot->lo_m = in->args[0];
+    pilot->hi_m = in->args[1];
+    start_leg(pilot, depth_m < in->args[1] ? GP_LEG_DIVE : GP_LEG_CLIMB);
+}
+
+static double median_of_recent(const gp_pilot *pilot)
+{
+    const double *r = pilot->recent_c;
+    if (pilot->n_recent == 1) {
+        return r[0];
+    }
+    if (pilot->n_recent == 2) {
+        return (r[0] + r[1]) / 2.0;
+    }
+    double a = r[0], b = r[1], c = r[2];
+    return fmax(fmin(a, b), fmin(fmax(a, b), c));
+}
+
+static void window_append(gp_pilot *pilot, double depth_m, double temp_c)
+{
+    if (pilot->n_window == GP_TRACK_WINDOW) {
+        memmove(pilot->window, pilot->window + 1, (GP_TRACK_WINDOW - 1) * sizeof pilot->window[0]);
+        pilot->n_window--;
+    }
+    pilot->window[pilot->n_window++] = (gp_reading){depth_m, temp_c};
+}
+
+/* Robust: median-filtered temperature; window keeps readings near the current depth.
+ * @return index of the reading `a` that detects the thermocline, or -1 */
+static int robust_detect(gp_pilot *pilot, double depth_m, double *temp_c,
+                         double temp_threshold, double depth_threshold)
+{
+    if (pilot->n_recent == 3) {
+        pilot->recent_c[0] = pilot->recent_c[1];
+        pilot->recent_c[1] = pilot->recent_c[2];
+        pilot->n_recent = 2;
+    }
+    pilot->recent_c[pilot->n_recent++] = *temp_c;
+    *temp_c = median_of_recent(pilot);
+    uint8_t kept = 0;
+    for (uint8_t i = 0; i < pilot->n_window; i++) {
+        if (fabs(pilot->window[i].depth_m - depth_m) <= depth_threshold) {
+            pilot->window[kept++] = pilot->window[i];
+        }
+    }
+    pilot->n_window = kept;
+    int warmest = -1, coldest = -1;
+    for (int i = 0; i < kept; i++) {
+        if (warmest < 0 || pilot->window[i].temp_c > pilot->window[warmest].temp_c) {
+            warmest = i;
+        }
+        if (coldest < 0 || pilot->window[i].temp_c < pilot->window[coldest].temp_c) {
+            coldest = i;
+        }
+    }
+    if (warmest < 0) {
+        return -1;
+    }
+    double warm_diff = fabs(pilot->window[warmest].temp_c - *temp_c);
+    double cold_diff = fabs(pilot->window[coldest].temp_c - *temp_c);
+    int a = cold_diff > warm_diff ? coldest : warmest;
+    return fmax(warm_diff, cold_diff) >= temp_threshold ? a : -1;
+}
+
+/* Naive: raw readings; any reading against the leg's direction empties the window. */
+static int naive_detect(gp_pilot *pilot, double depth_m, double temp_c,
+                        double temp_threshold, double depth_threshold)
+{
+    double previous = pilot->previous_c;
+    pilot->previous_c = temp_c;
+    if (!isnan(previous)
+        && ((pilot->leg == GP_LEG_DIVE && temp_c > previous)
+            || (pilot->leg == GP_LEG_CLIMB && temp_c < previous))) {
+        pilot->n_window = 0;
+    }
+    for (int i = 0; i < pilot->n_window; i++) {
+        if (fabs(pilot->window[i].temp_c - temp_c) >= temp_threshold
+            && fabs(pilot->window[i].depth_m - depth_m) <= depth_threshold) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+static int track_thermocline(gp_pilot *pilot, const gp_profile_input *in, double depth_m,
+                             double temp_c)
+{
+    double min_m = in->args[0], max_m = in->args[1];
+    double temp_threshold = in->args[4], depth_threshold = in->args[5];
+    if (!isfinite(depth_m) || !isfinite(temp_c)) {
+        return 0;  /* no reading this tick: nothing to learn from */
+    }
+    int a = in->naive ? naive_detect(pilot, depth_m, temp_c, temp_threshold, depth_threshold)
+                      : robust_detect(pilot, depth_m, &temp_c, temp_threshold, depth_threshold);
+    if (a < 0) {
+        window_append(pilot, depth_m, temp_c);
+        return 0;
+    }
+    double z = (pilot->window[a].depth_m + depth_m) / 2.0;
+    pilot->lo_m = fmax(min_m, z - depth_threshold / 2.0);
+    pilot->hi_m = fmin(max_m, z + depth_threshold / 2.0);
+    pilot->n_window = 0;
+    pilot->detected = 1;
+    return GP_PILOT_DETECTED;
+}
+
+static int fly_yo(gp_pilot *pilot, const gp_profile_input *in, double depth_m, double temp_c,
+                  gp_pilot_command *out)
+{
+    int tracking = in->kind == GP_PROFILE_THERMOTRACKYO;
+    int changed = 0;
+    if (!tracking) {
+        pilot->lo_m = in->args[0];
+        pilot->hi_m = in->args[1];
+    }
+    uint8_t leg = pilot->leg;
+    if (leg == GP_LEG_DIVE && depth_m >= pilot->hi_m) {
+        leg = GP_LEG_CLIMB;
+    } else if (leg == GP_LEG_CLIMB && depth_m <= pilot->lo_m) {
+        leg = GP_LEG_DIVE;
+    }
+    if (leg != pilot->leg) {
+        if (tracking && !pilot->detected) {  /* thermocline lost: search the whole range */
+            pilot->lo_m = in->args[0];
+            pilot->hi_m = in->args[1];
+        }
+        start_leg(pilot, leg);
+        changed |= GP_PILOT_TURNED;
+    }
+    if (tracking) {
+        changed |= track_thermocline(pilot, in, depth_m, temp_c);
+    }
+    int climbing = pilot->leg == GP_LEG_CLIMB;
+    double pitch = isnan(in->plan_pitch_rad) ? in->args[climbing ? 3 : 2] : in->plan_pitch_rad;
+    out->depth_target_m = climbing ? pilot->lo_m : pilot->hi_m;
+    out->pitch_rad = climbing ? pitch : -pitch;
+    out->ballast_cc = climbing ? in->ballast_cc : -in->ballast_cc;
+    out->flags = climbing ? GP_FLAG_CLIMBING : 0;
+    return changed;
+}
+
+int gp_pilot_step(gp_pilot *pilot, const gp_profile_input *in, double depth_m, double temp_c,
+                  gp_pilot_command *out)
+{
+    switch (in->kind) {
+    case GP_PROFILE_YO:
+    case GP_PROFILE_THERMOTRACKYO:
+        return fly_yo(pilot, in, depth_m, temp_c, out);
+    case GP_PROFILE_SURFACE:
+        *out = (gp_pilot_command){0.0, GP_SURFACE_PITCH_RAD, in->ballast_cc,
+                                  GP_FLAG_SURFACE | GP_FLAG_CLIMBING};
+        return 0;
+    default:  /* hover */
+        *out = (gp_pilot_command){in->args[0], 0.0, 0.0, 0};
+        return 0;
+    }
+}

@@ -1,0 +1,491 @@
+/* Strict reader of the plan file (docs/plan-format.md) and the schedule it sets.
+ * One pass over the bytes, then one line at a time with a fixed field array; the
+ * first rule broken rejects the whole file and names its line. */
+#include "gp_plan.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gp_crc.h"
+
+#define MAX_FIELDS 8
+#define SHARE_TOLERANCE 1e-6
+#define HALF_PI 1.57079632679489661923
+
+typedef struct {
+    const char *start;
+    size_t len;
+} field;
+
+typedef struct {
+    const char *text;
+    size_t len, pos;      /* pos: start of the next line */
+    int line_no;          /* number of the line in `fields` */
+    field fields[MAX_FIELDS];
+    int n_fields;
+    char *error;
+} reader;
+
+static int fail(reader *r, const char *format, ...)
+{
+    int n = snprintf(r->error, GP_PLAN_ERROR_LEN, "line %d: ", r->line_no);
+    va_list args;
+    va_start(args, format);
+    vsnprintf(r->error + n, (size_t)(GP_PLAN_ERROR_LEN - n), format, args);
+    va_end(args);
+    return -1;
+}
+
+/* Split the next line into fields; the byte rules were checked before. */
+static int next_line(reader *r)
+{
+    r->line_no++;
+    const char *line = r->text + r->pos;
+    const char *end = memchr(line, '\n', r->len - r->pos);
+    size_t line_len = (size_t)(end - line);
+    r->pos += line_len + 1;
+    r->n_fields = 0;
+    if (line_len == 0) {
+        return fail(r, "empty line");
+    }
+    size_t i = 0;
+    while (i <= line_len) {
+        size_t j = i;
+        while (j < line_len && line[j] != ' ') {
+            j++;
+        }
+        if (j == i) {
+            return fail(r, "fields must be separated by exactly one space, without "
+                           "leading or trailing spaces");
+        }
+        if (r->n_fields == MAX_FIELDS) {
+            return fail(r, "too many fields");
+        }
+        r->fields[r->n_fields++] = (field){line + i, j - i};
+        i = j + 1;
+    }
+    return 0;
+}
+
+static int field_is(const field *f, const char *word)
+{
+    return f->len == strlen(word) && memcmp(f->start, word, f->len) == 0;
+}
+
+/* Next line must be `keyword` with n_fields fields in all. */
+static int expect(reader *r, const char *keyword, int n_fields)
+{
+    if (r->pos >= r->len) {
+        r->line_no++;
+        return fail(r, "missing '%s' line (truncated file)", keyword);
+    }
+    if (next_line(r) < 0) {
+        return -1;
+    }
+    if (!field_is(&r->fields[0], keyword)) {
+        return fail(r, "expected a '%s' line, found '%.32s'", keyword, r->fields[0].start);
+    }
+    if (r->n_fields != n_fields) {
+        return fail(r, "'%s' takes %d fields, found %d", keyword, n_fields - 1, r->n_fields - 1);
+    }
+    return 0;
+}
+
+static int is_name(const field *f)
+{
+    if (f->len < 1 || f->len > 32) {
+        return 0;
+    }
+    for (size_t i = 0; i < f->len; i++) {
+        char c = f->start[i];
+        int alpha = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_';
+        if (!alpha && !(i > 0 && c >= '0' && c <= '9')) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static int name_field(reader *r, int index, const char *what)
+{
+    if (!is_name(&r->fields[index])) {
+        return fail(r, "%s is not a NAME", what);
+    }
+    return 0;
+}
+
+static size_t digits(const char *s, size_t i, size_t len)
+{
+    size_t j = i;
+    while (j < len && s[j] >= '0' && s[j] <= '9') {
+        j++;
+    }
+    return j - i;
+}
+
+/* NUMBER: -?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?, finite. */
+static int number_field(reader *r, int index, const char *what, double *out)
+{
+    const field *f = &r->fields[index];
+    const char *s = f->start;
+    size_t i = (f->len > 0 && s[0] == '-') ? 1 : 0, n;
+    int ok = (n = digits(s, i, f->len)) > 0;
+    i += n;
+    if (ok && i < f->len && s[i] == '.') {
+        ok = (n = digits(s, i + 1, f->len)) > 0;
+        i += 1 + n;
+    }
+    if (ok && i < f->len && (s[i] == 'e' || s[i] == 'E')) {
+        i++;
+        if (i < f->len && (s[i] == '+' || s[i] == '-')) {
+            i++;
+        }
+        ok = (n = digits(s, i, f->len)) > 0;
+        i += n;
+    }
+    if (!ok || i != f->len) {
+        return fail(r, "%s '%.32s' is not a NUMBER", what, s);
+    }
+    char buf[GP_PLAN_MAX_LINE + 1];
+    memcpy(buf, s, f->len);
+    buf[f->len] = '\0';
+    *out = strtod(buf, NULL);
+    if (!isfinite(*out)) {
+        return fail(r, "%s %s is not finite", what, buf);
+    }
+    return 0;
+}
+
+static int count_field(reader *r, int index, const char *what, int low, int high, int *out)
+{
+    const field *f = &r->fields[index];
+    if (f->len == 0 || f->len > 9 || digits(f->start, 0, f->len) != f->len) {
+        return fail(r, "%s '%.32s' is not a COUNT", what, f->start);
+    }
+    int value = 0;
+    for (size_t i = 0; i < f->len; i++) {
+        value = value * 10 + (f->start[i] - '0');
+    }
+    if (value < low || value > high) {
+        return fail(r, "%s %d outside %d..%d", what, value, low, high);
+    }
+    *out = value;
+    return 0;
+}
+
+static int hex_field(reader *r, int index, size_t n_digits, const char *what)
+{
+    const field *f = &r->fields[index];
+    int ok = f->len == n_digits;
+    for (size_t i = 0; ok && i < f->len; i++) {
+        char c = f->start[i];
+        ok = (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+    }
+    if (!ok) {
+        return fail(r, "%s needs %zu lowercase hex digits", what, n_digits);
+    }
+    return 0;
+}
+
+static int matches(const field *f, const char *name)
+{
+    return name != NULL && field_is(f, name);
+}
+
+/* ---- the file ---------------------------------------------------------------- */
+
+/* Bytes, line lengths, final LF, final crc32 line and the checksum. */
+static int check_bytes(reader *r, size_t *crc_line_start)
+{
+    r->line_no = 1;
+    if (r->len == 0) {
+        return fail(r, "empty file (truncated)");
+    }
+    if (r->len > GP_PLAN_MAX_BYTES) {
+        return fail(r, "file of %zu bytes exceeds %d", r->len, GP_PLAN_MAX_BYTES);
+    }
+    size_t line_start = 0, last_line_start = 0;
+    for (size_t i = 0; i < r->len; i++) {
+        unsigned char c = (unsigned char)r->text[i];
+        if (c != '\n' && (c < 0x20 || c > 0x7E)) {
+            return fail(r, "byte 0x%02x is not allowed (printable ASCII and LF only)", c);
+        }
+        if (i - line_start + 1 > GP_PLAN_MAX_LINE) {
+            return fail(r, "longer than %d bytes", GP_PLAN_MAX_LINE);
+        }
+        if (c == '\n') {
+            last_line_start = line_start;
+            line_start = i + 1;
+            if (i + 1 < r->len) {
+                r->line_no++;
+            }
+        }
+    }
+    if (r->text[r->len - 1] != '\n') {
+        return fail(r, "no final LF (truncated file)");
+    }
+    const char *last = r->text + last_line_start;
+    size_t last_len = r->len - last_line_start - 1;
+    if (last_len != 6 + 8 || memcmp(last, "crc32 ", 6) != 0) {
+        return fail(r, "the last line is not 'crc32 HEX8' (truncated file)");
+    }
+    r->fields[0] = (field){last + 6, 8};
+    if (hex_field(r, 0, 8, "crc32") < 0) {
+        return -1;
+    }
+    uint32_t stated = 0;
+    for (int i = 6; i < 14; i++) {
+        stated = stated << 4 | (uint32_t)(last[i] <= '9' ? last[i] - '0' : last[i] - 'a' + 10);
+    }
+    uint32_t computed = gp_crc32(0, (const uint8_t *)r->text, last_line_start);
+    if (stated != computed) {
+        return fail(r, "checksum mismatch: the file says %08x, its bytes give %08x", stated,
+                    (unsigned)computed);
+    }
+    *crc_line_start = last_line_start;
+    return 0;
+}
+
+static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
+{
+    int count;
+    if (next_line(r) < 0) {
+        return -1;
+    }
+    if (r->n_fields != 2 || !field_is(&r->fields[0], "GPPLAN")) {
+        return fail(r, "expected 'GPPLAN 1': not a plan file");
+    }
+    if (!field_is(&r->fields[1], "1")) {
+        return fail(r, "plan format version '%.16s', this runtime reads version 1",
+                    r->fields[1].start);
+    }
+    if (expect(r, "mission", 2) < 0 || name_field(r, 1, "mission name") < 0) {
+        return -1;
+    }
+    if (!matches(&r->fields[1], mission->name)) {
+        return fail(r, "plan is for mission '%.*s', this runtime runs '%.32s'",
+                    (int)r->fields[1].len, r->fields[1].start, mission->name);
+    }
+    if (expect(r, "hash", 2) < 0 || hex_field(r, 1, 64, "hash") < 0) {
+        return -1;
+    }
+    if (!matches(&r->fields[1], mission->hash)) {
+        return fail(r, "hash does not match the compiled mission (plan made for another "
+                       "version of '%.32s')", mission->name);
+    }
+    if (expect(r, "computer", 3) < 0 || name_field(r, 1, "computer") < 0
+        || number_field(r, 2, "clock", &plan->clock_mhz) < 0) {
+        return -1;
+    }
+    memcpy(plan->computer, r->fields[1].start, r->fields[1].len);
+    plan->computer[r->fields[1].len] = '\0';
+    if (!(plan->clock_mhz > 0)) {
+        return fail(r, "clock must be > 0 MHz");
+    }
+    if (expect(r, "budget_j", 2) < 0 || number_field(r, 1, "budget_j", &plan->budget_j) < 0
+        || expect(r, "predicted_j", 2) < 0
+        || number_field(r, 1, "predicted_j", &plan->predicted_j) < 0
+        || expect(r, "states", 2) < 0
+        || count_field(r, 1, "states", 1, GP_MAX_STATES, &count) < 0) {
+        return -1;
+    }
+    if (count != mission->n_states) {
+        return fail(r, "plan has %d states, mission '%.32s' has %d", count, mission->name,
+                    mission->n_states);
+    }
+    plan->n_states = (uint8_t)count;
+    return 0;
+}
+
+static int sensor_index(const gp_mission *mission, const field *f)
+{
+    for (int i = 0; i < GP_N_SENSORS; i++) {
+        if (mission->sensor_names && matches(f, mission->sensor_names[i])) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+static int read_sensor(reader *r, const gp_mission *mission, const gp_state *state,
+                       int *logged_from, gp_plan_sensor *out)
+{
+    if (expect(r, "sensor", 4) < 0 || name_field(r, 1, "sensor") < 0) {
+        return -1;
+    }
+    int index = sensor_index(mission, &r->fields[1]);
+    int position = -1;
+    for (int i = *logged_from; index >= 0 && i < state->n_sensors; i++) {
+        if (state->sensors[i] == index) {
+            position = i;
+            break;
+        }
+    }
+    if (position < 0) {
+        return fail(r, "sensor '%.*s' is not logged by state '%.32s' (or out of order)",
+                    (int)r->fields[1].len, r->fields[1].start, state->name);
+    }
+    *logged_from = position + 1;
+    out->sensor = (uint8_t)index;
+    if (number_field(r, 2, "PERIOD_S", &out->period_s) < 0
+        || number_field(r, 3, "ON_S", &out->on_s) < 0) {
+        return -1;
+    }
+    if (!(out->period_s > 0) || out->on_s < 0 || out->on_s > out->period_s) {
+        return fail(r, "need PERIOD_S > 0 and 0 <= ON_S <= PERIOD_S");
+    }
+    return 0;
+}
+
+static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
+{
+    int index;
+    if (expect(r, "profile", 6) < 0
+        || count_field(r, 1, "profile INDEX", 0, GP_MAX_PROFILES - 1, &index) < 0) {
+        return -1;
+    }
+    if (index != expected_index) {
+        return fail(r, "profile INDEX %d out of order, expected %d", index, expected_index);
+    }
+    if (number_field(r, 2, "SHARE", &out->share) < 0
+        || number_field(r, 3, "PITCH_RAD", &out->pitch_rad) < 0
+        || number_field(r, 4, "BALLAST_CC", &out->ballast_cc) < 0
+        || number_field(r, 5, "SPEED_MPS", &out->speed_mps) < 0) {
+        return -1;
+    }
+    if (out->share < 0 || out->share > 1) {
+        return fail(r, "SHARE %g outside [0, 1]", out->share);
+    }
+    if (!(out->pitch_rad > 0 && out->pitch_rad < HALF_PI)) {
+        return fail(r, "PITCH_RAD %g outside (0, pi/2)", out->pitch_rad);
+    }
+    if (!(out->ballast_cc > 0) || !(out->speed_mps > 0)) {
+        return fail(r, "BALLAST_CC and SPEED_MPS must be > 0");
+    }
+    return 0;
+}
+
+static int read_state(reader *r, const gp_mission *mission, int s, gp_plan_state *out)
+{
+    const gp_state *state = &mission->states[s];
+    int n_sensors, n_profiles, logged_from = 0;
+    if (expect(r, "state", 6) < 0 || name_field(r, 1, "state name") < 0) {
+        return -1;
+    }
+    if (!matches(&r->fields[1], state->name)) {
+        return fail(r, "state '%.*s' where the mission has '%.32s'", (int)r->fields[1].len,
+                    r->fields[1].start, state->name);
+    }
+    if (number_field(r, 2, "CLOCK_MHZ", &out->clock_mhz) < 0
+        || number_field(r, 3, "CYCLE_S", &out->cycle_s) < 0
+        || count_field(r, 4, "N_SENSORS", 0, GP_PLAN_MAX_SENSORS, &n_sensors) < 0
+        || count_field(r, 5, "N_PROFILES", 1, GP_MAX_PROFILES, &n_profiles) < 0) {
+        return -1;
+    }
+    if (!(out->clock_mhz > 0) || !(out->cycle_s > 0)) {
+        return fail(r, "CLOCK_MHZ and CYCLE_S must be > 0");
+    }
+    if (n_profiles != state->n_profiles) {
+        return fail(r, "%d profiles, state '%.32s' has %d", n_profiles, state->name,
+                    state->n_profiles);
+    }
+    out->n_sensors = (uint8_t)n_sensors;
+    out->n_profiles = (uint8_t)n_profiles;
+    for (int i = 0; i < n_sensors; i++) {
+        if (read_sensor(r, mission, state, &logged_from, &out->sensors[i]) < 0) {
+            return -1;
+        }
+    }
+    double total = 0;
+    for (int i = 0; i < n_profiles; i++) {
+        if (read_profile(r, i, &out->profiles[i]) < 0) {
+            return -1;
+        }
+        total += out->profiles[i].share;
+    }
+    if (expect(r, "end", 1) < 0) {
+        return -1;
+    }
+    if (fabs(total - 1.0) > SHARE_TOLERANCE) {
+        return fail(r, "shares of state '%.32s' sum to %.9g, not 1", state->name, total);
+    }
+    return 0;
+}
+
+int gp_plan_read(const char *text, size_t len, const gp_mission *mission, gp_plan *out,
+                 char error[GP_PLAN_ERROR_LEN])
+{
+    /* Static: a plan is ~40 KiB, too big for a small board's stack. Not reentrant. */
+    static gp_plan plan;
+    reader r = {.text = text, .len = len, .error = error};
+    size_t crc_line_start = 0;
+    error[0] = '\0';
+    memset(&plan, 0, sizeof plan);
+    if (check_bytes(&r, &crc_line_start) < 0) {
+        return -1;
+    }
+    r.line_no = 0;
+    r.len = crc_line_start;  /* the crc32 line was checked: read up to it */
+    if (read_header(&r, mission, &plan) < 0) {
+        return -1;
+    }
+    for (int s = 0; s < plan.n_states; s++) {
+        if (read_state(&r, mission, s, &plan.states[s]) < 0) {
+            return -1;
+        }
+    }
+    if (r.pos < r.len) {
+        next_line(&r);
+        return fail(&r, "extra line after the last state block");
+    }
+    *out = plan;
+    return 0;
+}
+
+/* ---- schedule ---------------------------------------------------------------- */
+
+static uint32_t logged_mask(const gp_state *state)
+{
+    uint32_t mask = 0;
+    for (int i = 0; i < state->n_sensors; i++) {
+        mask |= 1u << state->sensors[i];
+    }
+    return mask;
+}
+
+void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
+                 double default_ballast_cc, gp_schedule_now *out)
+{
+    out->sensor_power = logged_mask(state);
+    out->profile = 0;
+    out->pitch_rad = NAN;
+    out->ballast_cc = default_ballast_cc;
+    if (ps == NULL) {
+        return;
+    }
+    for (int i = 0; i < ps->n_sensors; i++) {
+        const gp_plan_sensor *sensor = &ps->sensors[i];
+        uint32_t bit = 1u << sensor->sensor;
+        if (!(bit & GP_FLIGHT_SENSORS_MASK) && !(fmod(t_in_s, sensor->period_s) < sensor->on_s)) {
+            out->sensor_power &= ~bit;
+        }
+    }
+    double c = fmod(t_in_s, ps->cycle_s), start = 0;
+    int chosen = -1, last_nonzero = 0;
+    for (int i = 0; i < ps->n_profiles; i++) {
+        double length = ps->profiles[i].share * ps->cycle_s;
+        if (ps->profiles[i].share > 0) {
+            last_nonzero = i;
+            if (chosen < 0 && c >= start && c < start + length) {
+                chosen = i;
+            }
+        }
+        start += length;
+    }
+    out->profile = (uint8_t)(chosen < 0 ? last_nonzero : chosen);
+    out->pitch_rad = ps->profiles[out->profile].pitch_rad;
+    out->ballast_cc = ps->profiles[out->profile].ballast_cc;
+}

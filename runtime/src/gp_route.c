@@ -1,0 +1,183 @@
+/* Routes and the sweep planner. Local geometry is equirectangular about one point:
+ * gliders sweep areas of a few kilometres, where the error is far below GPS noise. */
+#include "gp_route.h"
+
+#include <math.h>
+
+#define GP_PI 3.14159265358979323846
+
+double gp_ddmm_to_deg(double ddmm)
+{
+    double magnitude = fabs(ddmm);
+    double deg = floor(magnitude / 100.0) + fmod(magnitude, 100.0) / 60.0;
+    return ddmm < 0 ? -deg : deg;
+}
+
+void gp_offset_m(const double from[2], const double to[2], double *north_m, double *east_m)
+{
+    double scale = GP_EARTH_RADIUS_M * GP_PI / 180.0;
+    *north_m = (to[0] - from[0]) * scale;
+    *east_m = (to[1] - from[1]) * scale * cos(from[0] * GP_PI / 180.0);
+}
+
+static double heading_to(const double from[2], const double to[2], double *distance_m)
+{
+    double north, east;
+    gp_offset_m(from, to, &north, &east);
+    *distance_m = hypot(north, east);
+    double heading = atan2(east, north);
+    return heading < 0 ? heading + 2.0 * GP_PI : heading;
+}
+
+/* ---- sweep ------------------------------------------------------------------- */
+
+typedef struct {
+    double x, y;  /* east, north [m] */
+} point;
+
+static double cross(point o, point a, point b)
+{
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+}
+
+/* Andrew's monotone chain; `p` sorted in place; hull counter-clockwise in `hull`. */
+static int convex_hull(point *p, int n, point *hull)
+{
+    for (int i = 1; i < n; i++) {  /* insertion sort by (x, y): n <= GP_MAX_POINTS */
+        point key = p[i];
+        int j = i - 1;
+        while (j >= 0 && (p[j].x > key.x || (p[j].x == key.x && p[j].y > key.y))) {
+            p[j + 1] = p[j];
+            j--;
+        }
+        p[j + 1] = key;
+    }
+    if (n < 3) {
+        for (int i = 0; i < n; i++) {
+            hull[i] = p[i];
+        }
+        return n;
+    }
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) {
+            k--;
+        }
+        hull[k++] = p[i];
+    }
+    for (int i = n - 2, lower = k + 1; i >= 0; i--) {
+        while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) {
+            k--;
+        }
+        hull[k++] = p[i];
+    }
+    return k - 1;
+}
+
+/* West and east ends of the hull's cut at northing y. @return 0 if it misses. */
+static int clip_line(const point *hull, int n, double y, double *west, double *east)
+{
+    int hit = 0;
+    for (int i = 0; i < n; i++) {
+        point a = hull[i], b = hull[(i + 1) % n];
+        double x;
+        if (a.y == b.y) {
+            if (a.y != y) {
+                continue;
+            }
+            x = fmin(a.x, b.x);
+            *west = hit ? fmin(*west, x) : x;
+            *east = hit ? fmax(*east, fmax(a.x, b.x)) : fmax(a.x, b.x);
+            hit = 1;
+            continue;
+        }
+        if (y < fmin(a.y, b.y) || y > fmax(a.y, b.y)) {
+            continue;
+        }
+        x = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
+        *west = hit ? fmin(*west, x) : x;
+        *east = hit ? fmax(*east, x) : x;
+        hit = 1;
+    }
+    return hit;
+}
+
+uint16_t gp_sweep_waypoints(const double (*corners)[2], uint8_t n_corners, double spacing_m,
+                            double (*out)[2])
+{
+    point p[GP_MAX_POINTS], hull[2 * GP_MAX_POINTS];
+    int n = n_corners > GP_MAX_POINTS ? GP_MAX_POINTS : n_corners;
+    if (n == 0 || !(spacing_m > 0)) {
+        return 0;
+    }
+    double origin[2] = {gp_ddmm_to_deg(corners[0][0]), gp_ddmm_to_deg(corners[0][1])};
+    for (int i = 0; i < n; i++) {
+        double corner[2] = {gp_ddmm_to_deg(corners[i][0]), gp_ddmm_to_deg(corners[i][1])};
+        gp_offset_m(origin, corner, &p[i].y, &p[i].x);
+    }
+    int h = convex_hull(p, n, hull);
+    double south = hull[0].y, north = hull[0].y;
+    for (int i = 1; i < h; i++) {
+        south = fmin(south, hull[i].y);
+        north = fmax(north, hull[i].y);
+    }
+    double scale = GP_EARTH_RADIUS_M * GP_PI / 180.0;
+    double east_scale = scale * cos(origin[0] * GP_PI / 180.0);
+    uint16_t count = 0;
+    for (int line = 0; count + 2 <= GP_MAX_WAYPOINTS; line++) {
+        double y = south + spacing_m / 2.0 + line * spacing_m;
+        double west, east;
+        if (y > north || !clip_line(hull, h, y, &west, &east)) {
+            break;
+        }
+        double first = (line % 2 == 0) ? west : east, second = (line % 2 == 0) ? east : west;
+        double lat = origin[0] + y / scale;
+        out[count][0] = lat;
+        out[count++][1] = origin[1] + first / east_scale;
+        out[count][0] = lat;
+        out[count++][1] = origin[1] + second / east_scale;
+    }
+    return count;
+}
+
+/* ---- routes ------------------------------------------------------------------ */
+
+void gp_route_enter(gp_route_state *rs, const gp_route *route)
+{
+    rs->next = 0;
+    rs->n_waypoints = 0;
+    if (route->kind == GP_ROUTE_SWEEP) {
+        rs->n_waypoints = gp_sweep_waypoints(route->points, route->n_points, route->param,
+                                             rs->waypoints);
+        return;
+    }
+    if (route->kind == GP_ROUTE_NOHEADING) {
+        return;
+    }
+    for (int i = 0; i < route->n_points && i < GP_MAX_POINTS; i++) {
+        rs->waypoints[i][0] = gp_ddmm_to_deg(route->points[i][0]);
+        rs->waypoints[i][1] = gp_ddmm_to_deg(route->points[i][1]);
+        rs->n_waypoints++;
+    }
+}
+
+int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, double lon_ddmm,
+                  double *heading_rad)
+{
+    *heading_rad = 0.0;
+    if (route->kind == GP_ROUTE_NOHEADING || rs->n_waypoints == 0
+        || !isfinite(lat_ddmm) || !isfinite(lon_ddmm)) {
+        return 0;
+    }
+    double here[2] = {gp_ddmm_to_deg(lat_ddmm), gp_ddmm_to_deg(lon_ddmm)};
+    double distance_m;
+    double heading = heading_to(here, rs->waypoints[rs->next], &distance_m);
+    /* One waypoint per tick at most; after the last, hold the heading to it. */
+    if (route->kind != GP_ROUTE_NAV && distance_m <= GP_WAYPOINT_RADIUS_M
+        && rs->next + 1 < rs->n_waypoints) {
+        rs->next++;
+        heading = heading_to(here, rs->waypoints[rs->next], &distance_m);
+    }
+    *heading_rad = heading;
+    return 1;
+}

@@ -1,0 +1,122 @@
+/* The tick: semantics first (which state), then schedule, pilot and route (what to fly). */
+#include "gp_runtime.h"
+
+#include <math.h>
+#include <string.h>
+
+#define MISSIONTIME 0
+#define DEPTH 1
+#define LAT 6
+#define LON 7
+#define TEMP 9
+
+void gp_runtime_init(gp_runtime *rt)
+{
+    memset(rt, 0, sizeof *rt);
+    for (int i = 0; i < GP_N_SENSORS; i++) {
+        rt->sensors[i] = NAN;
+    }
+    rt->machine.state = GP_EXITED;
+    rt->profile = GP_NO_PROFILE;
+}
+
+static void enter_state(gp_runtime *rt, const gp_mission *mission)
+{
+    rt->entry_time_s = rt->sensors[MISSIONTIME];
+    rt->profile = GP_NO_PROFILE;
+    if (rt->machine.state < mission->n_states) {
+        gp_route_enter(&rt->route, &mission->states[rt->machine.state].route);
+    }
+}
+
+static void record(gp_tick_report *report, gp_transition transition)
+{
+    report->transitions[report->n_transitions++] = transition;
+    report->changed = 1;
+}
+
+/* Vertical and horizontal commands of the current state. */
+static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
+                gp_command *cmd, gp_tick_report *report)
+{
+    const gp_state *state = &mission->states[rt->machine.state];
+    const gp_plan_state *ps = options->plan ? &options->plan->states[rt->machine.state] : NULL;
+    gp_schedule_now now;
+    gp_schedule(state, ps, rt->sensors[MISSIONTIME] - rt->entry_time_s,
+                mission->default_ballast_cc, &now);
+    if (now.profile >= state->n_profiles) {
+        now.profile = 0;
+    }
+    const gp_profile *profile = &state->profiles[now.profile];
+    gp_profile_input in = {.kind = profile->kind, .plan_pitch_rad = now.pitch_rad,
+                           .ballast_cc = now.ballast_cc, .naive = options->naive_tracker};
+    if (profile->args && profile->n_args > 0) {
+        profile->args(rt->sensors, rt->machine.vars, in.args);
+    }
+    if (now.profile != rt->profile) {  /* entering the state or switching alternative */
+        gp_pilot_enter(&rt->pilot, &in, rt->sensors[DEPTH]);
+        rt->profile = now.profile;
+        report->changed = 1;
+    }
+    gp_pilot_command vertical;
+    if (gp_pilot_step(&rt->pilot, &in, rt->sensors[DEPTH], rt->sensors[TEMP], &vertical)) {
+        report->changed = 1;
+    }
+    double heading;
+    int heading_valid = gp_route_step(&rt->route, &state->route, rt->sensors[LAT],
+                                      rt->sensors[LON], &heading);
+    cmd->profile = now.profile;
+    cmd->flags = (uint8_t)(vertical.flags | (heading_valid ? GP_FLAG_HEADING : 0));
+    cmd->depth_target_m = (float)vertical.depth_target_m;
+    cmd->pitch_rad = (float)vertical.pitch_rad;
+    cmd->ballast_cc = (float)vertical.ballast_cc;
+    cmd->heading_rad = (float)heading;
+    cmd->sensor_power = now.sensor_power;
+}
+
+void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
+                     uint32_t tick, gp_command *cmd, gp_tick_report *report)
+{
+    memset(report, 0, sizeof *report);
+    memset(cmd, 0, sizeof *cmd);
+    if (!rt->started) {
+        gp_transition start;
+        gp_machine_start(&rt->machine, mission, &start);
+        rt->started = 1;
+        enter_state(rt, mission);
+        record(report, start);
+    }
+    if (rt->machine.state != GP_EXITED) {
+        gp_transition transition;
+        gp_step_result result = gp_machine_step(&rt->machine, mission, rt->sensors, &transition);
+        if (result == GP_STEP_TRANSITION) {
+            record(report, transition);
+            if (rt->machine.state != GP_EXITED) {
+                enter_state(rt, mission);
+            }
+        } else if (result == GP_STEP_ASSIGNED) {
+            report->changed = 1;
+        } else if (result != GP_STEP_IDLE) {
+            report->fault = (uint8_t)result;
+            report->refused = transition;
+        }
+    }
+    cmd->tick = tick;
+    cmd->state = rt->machine.state;
+    cmd->stack_depth = rt->machine.depth;
+    cmd->event_count = rt->machine.event_count;
+    cmd->from = cmd->to = GP_NO_STATE;
+    if (report->n_transitions > 0) {
+        const gp_transition *last = &report->transitions[report->n_transitions - 1];
+        cmd->transition = last->kind;
+        cmd->from = last->from;
+        cmd->to = last->to;
+    }
+    if (rt->machine.state == GP_EXITED) {
+        cmd->flags = GP_FLAG_DONE;
+    } else {
+        fly(rt, mission, options, cmd, report);
+    }
+    rt->last_command = *cmd;
+    rt->has_command = 1;
+}
