@@ -14,6 +14,8 @@
 #define MAX_FIELDS 8
 #define SHARE_TOLERANCE 1e-6
 #define HALF_PI 1.57079632679489661923
+/* printf arguments for "%.*s" of a field, at most 32 characters of it */
+#define SHOWN(f) (int)((f)->len > 32 ? 32 : (f)->len), (f)->start
 
 typedef struct {
     const char *start;
@@ -86,7 +88,7 @@ static int expect(reader *r, const char *keyword, int n_fields)
         return -1;
     }
     if (!field_is(&r->fields[0], keyword)) {
-        return fail(r, "expected a '%s' line, found '%.32s'", keyword, r->fields[0].start);
+        return fail(r, "expected a '%s' line, found '%.*s'", keyword, SHOWN(&r->fields[0]));
     }
     if (r->n_fields != n_fields) {
         return fail(r, "'%s' takes %d fields, found %d", keyword, n_fields - 1, r->n_fields - 1);
@@ -147,7 +149,7 @@ static int number_field(reader *r, int index, const char *what, double *out)
         i += n;
     }
     if (!ok || i != f->len) {
-        return fail(r, "%s '%.32s' is not a NUMBER", what, s);
+        return fail(r, "%s '%.*s' is not a NUMBER", what, SHOWN(f));
     }
     char buf[GP_PLAN_MAX_LINE + 1];
     memcpy(buf, s, f->len);
@@ -163,7 +165,7 @@ static int count_field(reader *r, int index, const char *what, int low, int high
 {
     const field *f = &r->fields[index];
     if (f->len == 0 || f->len > 9 || digits(f->start, 0, f->len) != f->len) {
-        return fail(r, "%s '%.32s' is not a COUNT", what, f->start);
+        return fail(r, "%s '%.*s' is not a COUNT", what, SHOWN(f));
     }
     int value = 0;
     for (size_t i = 0; i < f->len; i++) {
@@ -259,15 +261,15 @@ static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
         return fail(r, "expected 'GPPLAN 1': not a plan file");
     }
     if (!field_is(&r->fields[1], "1")) {
-        return fail(r, "plan format version '%.16s', this runtime reads version 1",
-                    r->fields[1].start);
+        return fail(r, "plan format version '%.*s', this runtime reads version 1",
+                    SHOWN(&r->fields[1]));
     }
     if (expect(r, "mission", 2) < 0 || name_field(r, 1, "mission name") < 0) {
         return -1;
     }
     if (!matches(&r->fields[1], mission->name)) {
         return fail(r, "plan is for mission '%.*s', this runtime runs '%.32s'",
-                    (int)r->fields[1].len, r->fields[1].start, mission->name);
+                    SHOWN(&r->fields[1]), mission->name);
     }
     if (expect(r, "hash", 2) < 0 || hex_field(r, 1, 64, "hash") < 0) {
         return -1;
@@ -326,7 +328,7 @@ static int read_sensor(reader *r, const gp_mission *mission, const gp_state *sta
     }
     if (position < 0) {
         return fail(r, "sensor '%.*s' is not logged by state '%.32s' (or out of order)",
-                    (int)r->fields[1].len, r->fields[1].start, state->name);
+                    SHOWN(&r->fields[1]), state->name);
     }
     *logged_from = position + 1;
     out->sensor = (uint8_t)index;

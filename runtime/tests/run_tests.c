@@ -1,0 +1,85 @@
+/* Runs every C unit test and prints "N passed, N failed"; exit 1 if any failed. */
+#include <stdio.h>
+
+#define TESTS(X)                                                            \
+    X(test_machine_should_follow_fig2)                                      \
+    X(test_machine_should_run_assignments_in_order)                         \
+    X(test_machine_should_refuse_a_call_past_the_stack_depth)               \
+    X(test_machine_should_refuse_return_with_an_empty_stack)                \
+    X(test_machine_should_refuse_a_target_outside_the_table)                \
+    X(test_machine_goto_should_clear_the_stack)                             \
+    X(test_mission_check_should_accept_fig2_and_reject_bad_tables)          \
+    X(test_yo_should_turn_at_its_depths)                                    \
+    X(test_yo_should_start_climbing_below_max_and_use_planned_pitch)        \
+    X(test_surface_and_hover_should_command_fixed_attitudes)                \
+    X(test_naive_tracker_should_detect_a_clean_cast)                        \
+    X(test_naive_tracker_should_never_detect_a_noisy_cast)                  \
+    X(test_robust_tracker_should_detect_clean_and_noisy_casts)              \
+    X(test_tracker_should_turn_at_the_band_and_reset_a_lost_band)           \
+    X(test_tracker_should_ignore_missing_readings)                          \
+    X(test_ddmm_should_convert_to_degrees)                                  \
+    X(test_nav_should_head_to_its_point)                                    \
+    X(test_noheading_and_missing_fix_should_give_no_heading)                \
+    X(test_waypoints_should_advance_within_50_m_and_hold_the_last)          \
+    X(test_sweep_should_mow_a_square_in_alternating_lines)                  \
+    X(test_sweep_should_clip_lines_to_a_triangle)                           \
+    X(test_sweep_should_stop_at_256_waypoints)                              \
+    X(test_plan_should_accept_a_good_plan)                                  \
+    X(test_plan_should_reject_bad_files_naming_the_line)                    \
+    X(test_plan_should_reject_an_overlong_line)                             \
+    X(test_plan_should_reject_truncated_and_corrupted_files)                \
+    X(test_plan_should_reject_a_file_over_64_kib)                           \
+    X(test_plan_should_keep_the_last_good_plan_on_rejection)                \
+    X(test_random_bytes_should_never_crash_the_plan_reader)                 \
+    X(test_schedule_without_a_plan_should_power_every_logged_sensor)        \
+    X(test_schedule_should_alternate_profiles_and_power_windows)            \
+    X(test_schedule_should_give_the_remainder_to_the_last_nonzero_share)    \
+    X(test_crc_should_match_catalogue_check_values)                         \
+    X(test_cobs_should_encode_the_reference_examples)                       \
+    X(test_command_should_round_trip_through_a_frame)                       \
+    X(test_sensors_should_update_only_the_masked_values)                    \
+    X(test_bad_frames_should_be_dropped_with_their_reason)                  \
+    X(test_reader_should_resynchronise_after_garbage)                       \
+    X(test_random_bytes_should_never_crash_the_reader)                      \
+    X(test_hello_should_carry_the_raw_mission_hash)                         \
+    X(test_checkpoint_should_round_trip)                                    \
+    X(test_checkpoint_should_refuse_damaged_and_foreign_files)              \
+    X(test_atomic_write_should_replace_the_file_whole)                      \
+    X(test_event_log_should_append_one_line_per_transition)                 \
+    X(test_runtime_should_fly_fig2_and_report_each_transition)              \
+    X(test_runtime_should_follow_the_plan_schedule)                         \
+    X(test_runtime_should_resume_from_a_checkpoint_with_the_same_trace)     \
+    X(test_runtime_should_report_start_and_event_on_tick_0_and_refuse_overflow) \
+    X(test_args_should_parse_every_option)                                  \
+    X(test_args_should_refuse_bad_command_lines)
+
+#define DECLARE(name) void name(void);
+TESTS(DECLARE)
+
+static int failures;
+static const char *current;
+
+void gp_test_fail(const char *file, int line, const char *what)
+{
+    failures++;
+    printf("FAIL %s: %s:%d: %s\n", current, file, line, what);
+}
+
+int main(void)
+{
+    int passed = 0, failed = 0;
+#define RUN(name)                     \
+    {                                 \
+        int before = failures;        \
+        current = #name;              \
+        name();                       \
+        if (failures == before) {     \
+            passed++;                 \
+        } else {                      \
+            failed++;                 \
+        }                             \
+    }
+    TESTS(RUN)
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed == 0 ? 0 : 1;
+}

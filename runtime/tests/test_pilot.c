@@ -1,0 +1,187 @@
+/* Flight profiles of docs/pilot.md: yo leg turns as a trace table, and the
+ * thermocline trackers on clean and noisy casts.
+ *
+ *   yo:    DIVE --(depth >= max)--> CLIMB --(depth <= min)--> DIVE
+ *   cast:  20 degC above 15 m, 10 degC below 21 m, linear in between
+ */
+#include <math.h>
+
+#include "gp_frame.h"
+#include "gp_pilot.h"
+#include "gp_test.h"
+
+static gp_profile_input yo_input(double min, double max)
+{
+    return (gp_profile_input){.kind = GP_PROFILE_YO, .args = {min, max, 0.4, 0.5},
+                              .plan_pitch_rad = NAN, .ballast_cc = 230};
+}
+
+void test_yo_should_turn_at_its_depths(void)
+{
+    static const struct {
+        double depth;
+        double target, pitch, ballast;
+        uint8_t flags;
+    } rows[] = {
+        {3.0, 10, -0.4, -230, 0},
+        {9.9, 10, -0.4, -230, 0},
+        {10.0, 5, 0.5, 230, GP_FLAG_CLIMBING},
+        {7.0, 5, 0.5, 230, GP_FLAG_CLIMBING},
+        {11.0, 5, 0.5, 230, GP_FLAG_CLIMBING},  /* climbing leg ignores max */
+        {5.0, 10, -0.4, -230, 0},
+        {4.0, 10, -0.4, -230, 0},               /* diving leg ignores min */
+    };
+    gp_profile_input in = yo_input(5, 10);
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, rows[0].depth);
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        gp_pilot_step(&pilot, &in, rows[i].depth, NAN, &out);
+        CHECK_NEAR(out.depth_target_m, rows[i].target, 0);
+        CHECK_NEAR(out.pitch_rad, rows[i].pitch, 1e-12);
+        CHECK_NEAR(out.ballast_cc, rows[i].ballast, 0);
+        CHECK_INT(out.flags, rows[i].flags);
+    }
+}
+
+void test_yo_should_start_climbing_below_max_and_use_planned_pitch(void)
+{
+    gp_profile_input in = yo_input(5, 10);
+    in.plan_pitch_rad = 0.3;
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, 12.0);
+    CHECK_INT(pilot.leg, GP_LEG_CLIMB);
+    gp_pilot_step(&pilot, &in, 12.0, NAN, &out);
+    CHECK_NEAR(out.pitch_rad, 0.3, 0);
+    gp_pilot_step(&pilot, &in, 5.0, NAN, &out);
+    CHECK_NEAR(out.pitch_rad, -0.3, 0);
+}
+
+void test_surface_and_hover_should_command_fixed_attitudes(void)
+{
+    gp_profile_input surface = {.kind = GP_PROFILE_SURFACE, .plan_pitch_rad = NAN,
+                                .ballast_cc = 200};
+    gp_profile_input hover = {.kind = GP_PROFILE_HOVER, .args = {12.5}, .plan_pitch_rad = NAN,
+                              .ballast_cc = 200};
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &surface, 3);
+    gp_pilot_step(&pilot, &surface, 3, NAN, &out);
+    CHECK_NEAR(out.depth_target_m, 0, 0);
+    CHECK_NEAR(out.pitch_rad, GP_SURFACE_PITCH_RAD, 0);
+    CHECK_NEAR(out.ballast_cc, 200, 0);
+    CHECK(out.flags & GP_FLAG_SURFACE);
+    gp_pilot_enter(&pilot, &hover, 3);
+    gp_pilot_step(&pilot, &hover, 3, NAN, &out);
+    CHECK_NEAR(out.depth_target_m, 12.5, 0);
+    CHECK_NEAR(out.pitch_rad, 0, 0);
+    CHECK_NEAR(out.ballast_cc, 0, 0);
+}
+
+/* ---- thermocline tracking ------------------------------------------------------ */
+
+static double cast_temp(double depth)
+{
+    if (depth <= 15) {
+        return 20;
+    }
+    if (depth >= 21) {
+        return 10;
+    }
+    return 20 - (depth - 15) * 10.0 / 6.0;
+}
+
+typedef struct {
+    int detections;
+    double lo, hi;      /* band after the dive */
+} dive_result;
+
+/* Dive 0 -> 39 m at 0.25 m per tick; noise_c: alternating +-noise plus jitter. */
+static dive_result dive(int naive, double noise_c)
+{
+    gp_profile_input in = {.kind = GP_PROFILE_THERMOTRACKYO, .args = {5, 40, 0.4, 0.4, 3, 4},
+                           .plan_pitch_rad = NAN, .ballast_cc = 230, .naive = (uint8_t)naive};
+    gp_pilot pilot;
+    gp_pilot_command out;
+    dive_result result = {0, 0, 0};
+    unsigned seed = 12345;
+    gp_pilot_enter(&pilot, &in, 0);
+    for (int i = 0; i < 156; i++) {
+        double depth = 0.25 * i;
+        double jitter = ((double)(gp_test_random(&seed) % 1000) / 1000.0 - 0.5) * 0.2 * noise_c;
+        double temp = cast_temp(depth) + (i % 2 ? noise_c : -noise_c) + jitter;
+        if (gp_pilot_step(&pilot, &in, depth, temp, &out) & GP_PILOT_DETECTED) {
+            result.detections++;
+            result.lo = pilot.lo_m;
+            result.hi = pilot.hi_m;
+        }
+        if (pilot.leg != GP_LEG_DIVE) {
+            break;
+        }
+    }
+    return result;
+}
+
+void test_naive_tracker_should_detect_a_clean_cast(void)
+{
+    dive_result r = dive(1, 0.0);
+    CHECK(r.detections >= 1);
+    CHECK(r.lo >= 13 && r.hi <= 23);
+}
+
+void test_naive_tracker_should_never_detect_a_noisy_cast(void)
+{
+    /* the paper's first sea trial: noise resets the window on every other reading */
+    CHECK_INT(dive(1, 0.5).detections, 0);
+}
+
+void test_robust_tracker_should_detect_clean_and_noisy_casts(void)
+{
+    static const double noise[] = {0.0, 0.5, 0.8};
+    for (int i = 0; i < 3; i++) {
+        dive_result r = dive(0, noise[i]);
+        CHECK(r.detections >= 1);
+        double middle = (r.lo + r.hi) / 2;
+        CHECK(middle >= 14 && middle <= 22);  /* the band sits on the thermocline */
+        CHECK_NEAR(r.hi - r.lo, 4.0, 1e-9);   /* depth_threshold wide */
+    }
+}
+
+void test_tracker_should_turn_at_the_band_and_reset_a_lost_band(void)
+{
+    gp_profile_input in = {.kind = GP_PROFILE_THERMOTRACKYO, .args = {5, 40, 0.4, 0.4, 3, 4},
+                           .plan_pitch_rad = NAN, .ballast_cc = 230};
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, 0);
+    double depth = 0;
+    for (int i = 0; i < 200 && pilot.leg == GP_LEG_DIVE; i++, depth += 0.25) {
+        gp_pilot_step(&pilot, &in, depth, cast_temp(depth), &out);
+    }
+    CHECK_INT(pilot.leg, GP_LEG_CLIMB);
+    CHECK(depth < 25);           /* turned at the band's bottom, not at 40 m */
+    double hi = pilot.hi_m;
+    CHECK(hi < 40);
+    /* climb through water of one temperature: no detection; the turn forgets the band */
+    for (int i = 0; i < 400 && pilot.leg == GP_LEG_CLIMB; i++, depth -= 0.25) {
+        gp_pilot_step(&pilot, &in, depth, 15.0, &out);
+    }
+    CHECK_INT(pilot.leg, GP_LEG_DIVE);
+    CHECK_NEAR(pilot.lo_m, 5, 0);
+    CHECK_NEAR(pilot.hi_m, 40, 0);
+    CHECK_NEAR(out.depth_target_m, 40, 0);
+}
+
+void test_tracker_should_ignore_missing_readings(void)
+{
+    gp_profile_input in = {.kind = GP_PROFILE_THERMOTRACKYO, .args = {5, 40, 0.4, 0.4, 3, 4},
+                           .plan_pitch_rad = NAN, .ballast_cc = 230};
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, 0);
+    for (int i = 0; i < 100; i++) {
+        CHECK_INT(gp_pilot_step(&pilot, &in, 1.0, NAN, &out), 0);
+    }
+    CHECK_INT(pilot.n_window, 0);
+}

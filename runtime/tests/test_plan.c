@@ -1,0 +1,265 @@
+/* The strict plan reader (docs/plan-format.md) on Fig. 2 and the schedule a plan sets.
+ * Each bad plan is the good one with one change; the reader must name the line. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "gp_crc.h"
+#include "gp_plan.h"
+#include "gp_test.h"
+
+#define GOOD_BODY                                                                   \
+    "GPPLAN 1\n"                                                                    \
+    "mission sampleMission\n"                                                       \
+    "hash 5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9\n"       \
+    "computer ts7800 300\n"                                                         \
+    "budget_j 180000\n"                                                             \
+    "predicted_j 9876.5\n"                                                          \
+    "states 3\n"                                                                    \
+    "state s1 300 600 0 1\n"                                                        \
+    "profile 0 1 0.454 230 0.31\n"                                                  \
+    "end\n"                                                                         \
+    "state s2 200 600 2 1\n"                                                        \
+    "sensor depth 60 0\n"                                                           \
+    "sensor temp 60 15\n"                                                           \
+    "profile 0 1 0.4 200 0.3\n"                                                     \
+    "end\n"                                                                         \
+    "state s3 300 600 0 1\n"                                                        \
+    "profile 0 1 0.454 230 0.31\n"                                                  \
+    "end\n"
+
+static char text[GP_PLAN_MAX_BYTES + 512];
+
+/* `body` with its crc32 line appended, into `text`; @return length. */
+static size_t with_crc(const char *body)
+{
+    size_t len = strlen(body);
+    memcpy(text, body, len);
+    uint32_t crc = gp_crc32(0, (const uint8_t *)body, len);
+    return len + (size_t)sprintf(text + len, "crc32 %08x\n", (unsigned)crc);
+}
+
+/* The good body with the first `from` replaced by `to`, checksummed. */
+static size_t variant(const char *from, const char *to)
+{
+    static char body[GP_PLAN_MAX_BYTES];
+    const char *at = strstr(GOOD_BODY, from);
+    if (at == NULL) {
+        gp_test_fail(__FILE__, __LINE__, from);
+        return with_crc(GOOD_BODY);
+    }
+    size_t head = (size_t)(at - GOOD_BODY);
+    snprintf(body, sizeof body, "%.*s%s%s", (int)head, GOOD_BODY, to, at + strlen(from));
+    return with_crc(body);
+}
+
+static int read_text(size_t len, char *error)
+{
+    static gp_plan plan;
+    return gp_plan_read(text, len, &gp_mission_table, &plan, error);
+}
+
+void test_plan_should_accept_a_good_plan(void)
+{
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    size_t len = with_crc(GOOD_BODY);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &plan, error), 0);
+    CHECK_INT(error[0], 0);
+    CHECK_INT(plan.n_states, 3);
+    CHECK(strcmp(plan.computer, "ts7800") == 0);
+    CHECK_NEAR(plan.budget_j, 180000, 0);
+    CHECK_NEAR(plan.states[1].clock_mhz, 200, 0);
+    CHECK_INT(plan.states[1].n_sensors, 2);
+    CHECK_INT(plan.states[1].sensors[1].sensor, 9);
+    CHECK_NEAR(plan.states[1].sensors[1].on_s, 15, 0);
+    CHECK_NEAR(plan.states[1].profiles[0].pitch_rad, 0.4, 0);
+}
+
+void test_plan_should_reject_bad_files_naming_the_line(void)
+{
+    static const struct {
+        const char *from, *to, *message;
+    } rows[] = {
+        {"GPPLAN 1", "GPPLAN 2", "line 1: plan format version '2'"},
+        {"GPPLAN 1", "GPPLAN", "line 1: expected 'GPPLAN 1'"},
+        {"mission sampleMission", "mission other", "line 2: plan is for mission 'other'"},
+        {"mission sampleMission", "mission 9lives", "line 2: mission name is not a NAME"},
+        {"hash 5db9", "hash 6db9", "line 3: hash does not match"},
+        {"hash 5db9", "hash 5DB9", "line 3: hash needs 64 lowercase hex digits"},
+        {"computer ts7800 300", "computer ts7800 0", "line 4: clock must be > 0"},
+        {"budget_j 180000", "budget_j 1.5e", "line 5: budget_j '1.5e' is not a NUMBER"},
+        {"budget_j 180000", "budget_j .5", "line 5: budget_j '.5' is not a NUMBER"},
+        {"budget_j 180000", "budget_j +5", "line 5: budget_j '+5' is not a NUMBER"},
+        {"budget_j 180000", "budget_j 1e999", "line 5: budget_j 1e999 is not finite"},
+        {"budget_j 180000", "budget_j 0x10", "line 5: budget_j '0x10' is not a NUMBER"},
+        {"predicted_j 9876.5\n", "", "line 6: expected a 'predicted_j' line, found 'states'"},
+        {"states 3", "states 4", "line 7: plan has 4 states, mission 'sampleMission' has 3"},
+        {"states 3", "states 65", "line 7: states 65 outside 1..64"},
+        {"states 3", "states -3", "line 7: states '-3' is not a COUNT"},
+        {"state s1 300 600 0 1", "state s1 300 600 0 2", "line 8: 2 profiles, state 's1' has 1"},
+        {"state s1 300 600 0 1", "state s1 300 0 0 1", "line 8: CLOCK_MHZ and CYCLE_S"},
+        {"state s1 300 600 0 1", "state s1 300 600 0", "line 8: 'state' takes 5 fields, found 4"},
+        {"profile 0 1 0.454", "profile 0 0.9 0.454", "line 10: shares of state 's1' sum to 0.9"},
+        {"profile 0 1 0.454", "profile 1 1 0.454", "line 9: profile INDEX 1 out of order"},
+        {"profile 0 1 0.454", "profile 0 1 1.6", "line 9: PITCH_RAD 1.6 outside (0, pi/2)"},
+        {"profile 0 1 0.454 230", "profile 0 1 0.454 0", "line 9: BALLAST_CC and SPEED_MPS"},
+        {"profile 0 1 0.454", "profile 0 1.5 0.454", "line 9: SHARE 1.5 outside [0, 1]"},
+        {"state s2", "state s9", "line 11: state 's9' where the mission has 's2'"},
+        {"sensor temp 60 15", "sensor oxygen 60 15", "line 13: sensor 'oxygen' is not logged"},
+        {"sensor depth 60 0\nsensor temp", "sensor temp 60 15\nsensor depth",
+         "line 13: sensor 'depth' is not logged by state 's2' (or out of order)"},
+        {"sensor temp 60 15", "sensor temp 60 61", "line 13: need PERIOD_S > 0"},
+        {"sensor temp 60 15", "sensor temp 0 0", "line 13: need PERIOD_S > 0"},
+        {"end\nstate s3", "ende\nstate s3", "line 15: expected a 'end' line, found 'ende'"},
+        {"end\nstate s3", "end x\nstate s3", "line 15: 'end' takes 0 fields, found 1"},
+        {"budget_j 180000", "budget_j  180000", "line 5: fields must be separated by exactly"},
+        {"budget_j 180000", "budget_j 180000 ", "line 5: fields must be separated by exactly"},
+        {"budget_j 180000\n", "budget_j 180000\n\n", "line 6: empty line"},
+        {"budget_j 180000\n", "budget_j 180000\r\n", "line 5: byte 0x0d is not allowed"},
+        {"budget_j 180000", "budget_j\t180000", "line 5: byte 0x09 is not allowed"},
+        {"budget_j 180000", "budget_j 18\xe9", "line 5: byte 0xe9 is not allowed"},
+        {"state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n",
+         "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\nend\n",
+         "line 19: extra line after the last state block"},
+        {"state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n", "state s3 300 600 0 1\n",
+         "line 17: missing 'profile' line (truncated file)"},
+    };
+    char error[GP_PLAN_ERROR_LEN];
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        size_t len = variant(rows[i].from, rows[i].to);
+        CHECK_INT(read_text(len, error), -1);
+        CHECK_CONTAINS(error, rows[i].message);
+    }
+}
+
+void test_plan_should_reject_an_overlong_line(void)
+{
+    char long_name[300];
+    memset(long_name, 'x', 260);
+    memcpy(long_name, "computer ", 9);
+    long_name[260] = '\0';
+    char error[GP_PLAN_ERROR_LEN];
+    CHECK_INT(read_text(variant("computer ts7800 300", long_name), error), -1);
+    CHECK_CONTAINS(error, "line 4: longer than 255 bytes");
+}
+
+void test_plan_should_reject_truncated_and_corrupted_files(void)
+{
+    char error[GP_PLAN_ERROR_LEN];
+    size_t len = with_crc(GOOD_BODY);
+    CHECK_INT(read_text(len - 1, error), -1);   /* final LF missing */
+    CHECK_CONTAINS(error, "no final LF (truncated file)");
+    CHECK_INT(read_text(strlen(GOOD_BODY), error), -1);  /* crc32 line lost */
+    CHECK_CONTAINS(error, "line 18: the last line is not 'crc32 HEX8' (truncated file)");
+    CHECK_INT(read_text(0, error), -1);
+    CHECK_CONTAINS(error, "empty file");
+    for (size_t cut = 1; cut < len; cut += 7) {  /* every cut is refused, none crashes */
+        CHECK_INT(read_text(cut, error), -1);
+    }
+    text[20] = 'X';  /* a changed byte the checksum catches */
+    CHECK_INT(read_text(len, error), -1);
+    CHECK_CONTAINS(error, "line 19: checksum mismatch");
+    len = with_crc(GOOD_BODY);
+    text[len - 2] = 'g';
+    CHECK_INT(read_text(len, error), -1);
+    CHECK_CONTAINS(error, "crc32 needs 8 lowercase hex digits");
+}
+
+void test_plan_should_reject_a_file_over_64_kib(void)
+{
+    static char big[GP_PLAN_MAX_BYTES + 2];
+    char error[GP_PLAN_ERROR_LEN];
+    static gp_plan plan;
+    memset(big, 'a', sizeof big);
+    CHECK_INT(gp_plan_read(big, sizeof big, &gp_mission_table, &plan, error), -1);
+    CHECK_CONTAINS(error, "exceeds 65536");
+}
+
+void test_plan_should_keep_the_last_good_plan_on_rejection(void)
+{
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    CHECK_INT(gp_plan_read(text, with_crc(GOOD_BODY), &gp_mission_table, &plan, error), 0);
+    size_t len = variant("budget_j 180000", "budget_j 1");
+    text[30] ^= 1;  /* and break its checksum */
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &plan, error), -1);
+    CHECK_NEAR(plan.budget_j, 180000, 0);
+}
+
+void test_random_bytes_should_never_crash_the_plan_reader(void)
+{
+    static gp_plan plan;
+    static char body[sizeof GOOD_BODY];
+    char error[GP_PLAN_ERROR_LEN];
+    unsigned seed = 2024;
+    for (int round = 0; round < 3000; round++) {
+        memcpy(body, GOOD_BODY, sizeof GOOD_BODY);
+        int flips = 1 + (int)(gp_test_random(&seed) % 4);
+        for (int i = 0; i < flips; i++) {
+            char byte = (char)(gp_test_random(&seed) & 0xFF);
+            body[gp_test_random(&seed) % (sizeof GOOD_BODY - 1)] = byte ? byte : '\n';
+        }
+        /* Damage under a valid checksum reaches the line rules; without, the checksum. */
+        size_t len = with_crc(round % 2 ? body : GOOD_BODY);
+        if (round % 2 == 0) {
+            memcpy(text, body, sizeof GOOD_BODY - 1);
+        }
+        int result = gp_plan_read(text, len, &gp_mission_table, &plan, error);
+        CHECK(result == 0 || strncmp(error, "line ", 5) == 0);
+    }
+}
+
+/* ---- schedule ------------------------------------------------------------------ */
+
+static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL}, {GP_PROFILE_HOVER, 0, NULL}};
+static const uint8_t logged[] = {0, 1, 9, 12};  /* missiontime, depth, temp, oxygen */
+static const gp_state scheduled = {
+    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0,
+};
+
+void test_schedule_without_a_plan_should_power_every_logged_sensor(void)
+{
+    gp_schedule_now now;
+    gp_schedule(&scheduled, NULL, 1234, 230, &now);
+    CHECK_INT(now.profile, 0);
+    CHECK_INT(now.sensor_power, (1u << 0) | (1u << 1) | (1u << 9) | (1u << 12));
+    CHECK(isnan(now.pitch_rad));
+    CHECK_NEAR(now.ballast_cc, 230, 0);
+}
+
+void test_schedule_should_alternate_profiles_and_power_windows(void)
+{
+    gp_plan_state ps = {
+        .clock_mhz = 300, .cycle_s = 600, .n_sensors = 2, .n_profiles = 2,
+        .sensors = {{1, 60, 0}, {9, 60, 15}},   /* depth "off": no device, stays on */
+        .profiles = {{0.75, 0.4, 200, 0.3}, {0.25, 0.3, 150, 0.25}},
+    };
+    static const struct { double t_in; int profile; int temp_on; double pitch; } rows[] = {
+        {0, 0, 1, 0.4}, {14.9, 0, 1, 0.4}, {15, 0, 0, 0.4}, {59.9, 0, 0, 0.4},
+        {60, 0, 1, 0.4}, {449.9, 0, 0, 0.4}, {450, 1, 0, 0.3}, {599.9, 1, 0, 0.3},
+        {600, 0, 1, 0.4}, {1050, 1, 0, 0.3}, {1080, 1, 1, 0.3},
+    };
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        gp_schedule_now now;
+        gp_schedule(&scheduled, &ps, rows[i].t_in, 230, &now);
+        CHECK_INT(now.profile, rows[i].profile);
+        CHECK_INT((now.sensor_power >> 9) & 1u, rows[i].temp_on);
+        CHECK_INT(now.sensor_power & 0x1003u, 0x1003u);  /* missiontime, depth, oxygen */
+        CHECK_NEAR(now.pitch_rad, rows[i].pitch, 0);
+        CHECK_NEAR(now.ballast_cc, rows[i].profile ? 150 : 200, 0);
+    }
+}
+
+void test_schedule_should_give_the_remainder_to_the_last_nonzero_share(void)
+{
+    gp_plan_state ps = {.cycle_s = 100, .n_profiles = 2,
+                        .profiles = {{0.5, 0.4, 200, 0.3}, {0.4999999, 0.3, 150, 0.25}}};
+    gp_schedule_now now;
+    gp_schedule(&scheduled, &ps, 99.99999, 230, &now);
+    CHECK_INT(now.profile, 1);
+    gp_plan_state only_second = {.cycle_s = 100, .n_profiles = 2,
+                                 .profiles = {{0, 0.4, 200, 0.3}, {1, 0.3, 150, 0.25}}};
+    gp_schedule(&scheduled, &only_second, 0, 230, &now);
+    CHECK_INT(now.profile, 1);
+}

@@ -1,0 +1,144 @@
+/* Routes of docs/pilot.md: positions, headings, waypoint advance, and the sweep.
+ *
+ *   sweep of a 1000 m square, spacing 200 m, north up: lines at 100, 300, ... 900 m,
+ *   the first west to east, the next east to west (a lawn-mower).
+ */
+#include <math.h>
+
+#include "gp_route.h"
+#include "gp_test.h"
+
+#define PI 3.14159265358979323846
+
+static double deg_to_ddmm(double deg)
+{
+    double magnitude = fabs(deg);
+    double whole = floor(magnitude);
+    double ddmm = whole * 100 + (magnitude - whole) * 60;
+    return deg < 0 ? -ddmm : ddmm;
+}
+
+/* A point `north_m`, `east_m` from (lat0, lon0) [deg], in DDMM.MMMM. */
+static void local_point(double lat0, double lon0, double north_m, double east_m, double out[2])
+{
+    double scale = GP_EARTH_RADIUS_M * PI / 180.0;
+    out[0] = deg_to_ddmm(lat0 + north_m / scale);
+    out[1] = deg_to_ddmm(lon0 + east_m / (scale * cos(lat0 * PI / 180.0)));
+}
+
+void test_ddmm_should_convert_to_degrees(void)
+{
+    CHECK_NEAR(gp_ddmm_to_deg(3910.5), 39.175, 1e-12);
+    CHECK_NEAR(gp_ddmm_to_deg(-7349.8058), -(73 + 49.8058 / 60), 1e-12);
+    CHECK_NEAR(gp_ddmm_to_deg(0.0), 0.0, 0);
+}
+
+void test_nav_should_head_to_its_point(void)
+{
+    static const struct { double north, east, heading; } rows[] = {
+        {1000, 0, 0}, {0, 1000, PI / 2}, {-1000, 0, PI}, {0, -1000, 3 * PI / 2},
+        {1000, 1000, PI / 4},
+    };
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        double target[1][2];
+        local_point(44.0, -63.0, rows[i].north, rows[i].east, target[0]);
+        gp_route route = {GP_ROUTE_NAV, 1, 0, (const double(*)[2])target};
+        gp_route_state rs;
+        double heading;
+        gp_route_enter(&rs, &route);
+        CHECK_INT(gp_route_step(&rs, &route, deg_to_ddmm(44.0), deg_to_ddmm(-63.0), &heading), 1);
+        CHECK_NEAR(heading, rows[i].heading, 1e-3);
+    }
+}
+
+void test_noheading_and_missing_fix_should_give_no_heading(void)
+{
+    double point[1][2] = {{4400, -6300}};
+    gp_route nav = {GP_ROUTE_NAV, 1, 0, (const double(*)[2])point};
+    gp_route none = {GP_ROUTE_NOHEADING, 0, 0, NULL};
+    gp_route_state rs;
+    double heading;
+    gp_route_enter(&rs, &none);
+    CHECK_INT(gp_route_step(&rs, &none, 4400, -6300, &heading), 0);
+    gp_route_enter(&rs, &nav);
+    CHECK_INT(gp_route_step(&rs, &nav, NAN, -6300, &heading), 0);
+}
+
+void test_waypoints_should_advance_within_50_m_and_hold_the_last(void)
+{
+    double points[2][2];
+    local_point(44.0, -63.0, 0, 1000, points[0]);     /* east */
+    local_point(44.0, -63.0, 1000, 1000, points[1]);  /* then north-east */
+    gp_route route = {GP_ROUTE_WAYPOINTS, 2, 0, (const double(*)[2])points};
+    gp_route_state rs;
+    double heading, here[2];
+    gp_route_enter(&rs, &route);
+    static const struct { double north, east, heading; int next; } rows[] = {
+        {0, 0, PI / 2, 0},        /* toward p1 */
+        {0, 960, 0, 1},           /* within 50 m of p1: toward p2, due north */
+        {0, 500, 0.463648, 1},   /* never back to p1: atan2(500, 1000) */
+        {1020, 1000, PI, 1},      /* past the last: hold toward it */
+    };
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        local_point(44.0, -63.0, rows[i].north, rows[i].east, here);
+        CHECK_INT(gp_route_step(&rs, &route, here[0], here[1], &heading), 1);
+        CHECK_NEAR(heading, rows[i].heading, 0.05);
+        CHECK_INT(rs.next, rows[i].next);
+    }
+}
+
+static void to_local(const double origin[2], const double wp[2], double *north, double *east)
+{
+    gp_offset_m(origin, wp, north, east);
+}
+
+void test_sweep_should_mow_a_square_in_alternating_lines(void)
+{
+    double corners[5][2];
+    local_point(44.0, -63.0, 0, 0, corners[0]);
+    local_point(44.0, -63.0, 1000, 1000, corners[1]);  /* out of order on purpose */
+    local_point(44.0, -63.0, 0, 1000, corners[2]);
+    local_point(44.0, -63.0, 500, 500, corners[3]);    /* inside: not a hull vertex */
+    local_point(44.0, -63.0, 1000, 0, corners[4]);
+    static double out[GP_MAX_WAYPOINTS][2];
+    uint16_t n = gp_sweep_waypoints((const double(*)[2])corners, 5, 200, out);
+    CHECK_INT(n, 10);
+    double origin[2] = {gp_ddmm_to_deg(corners[0][0]), gp_ddmm_to_deg(corners[0][1])};
+    for (int line = 0; line < 5 && 2 * line + 1 < n; line++) {
+        double n0, e0, n1, e1;
+        to_local(origin, out[2 * line], &n0, &e0);
+        to_local(origin, out[2 * line + 1], &n1, &e1);
+        CHECK_NEAR(n0, 100 + 200 * line, 0.01);
+        CHECK_NEAR(n1, 100 + 200 * line, 0.01);
+        CHECK_NEAR(e0, line % 2 ? 1000 : 0, 0.01);
+        CHECK_NEAR(e1, line % 2 ? 0 : 1000, 0.01);
+    }
+}
+
+void test_sweep_should_clip_lines_to_a_triangle(void)
+{
+    double corners[3][2];
+    local_point(44.0, -63.0, 0, 0, corners[0]);
+    local_point(44.0, -63.0, 0, 1000, corners[1]);
+    local_point(44.0, -63.0, 1000, 0, corners[2]);
+    static double out[GP_MAX_WAYPOINTS][2];
+    uint16_t n = gp_sweep_waypoints((const double(*)[2])corners, 3, 500, out);
+    CHECK_INT(n, 4);  /* lines at 250 m and 750 m */
+    double origin[2] = {gp_ddmm_to_deg(corners[0][0]), gp_ddmm_to_deg(corners[0][1])};
+    double north, east;
+    to_local(origin, out[1], &north, &east);
+    CHECK_NEAR(east, 750, 0.05);   /* the hypotenuse x + y = 1000 at y = 250 */
+    to_local(origin, out[2], &north, &east);
+    CHECK_NEAR(east, 250, 0.05);   /* second line starts in the east */
+}
+
+void test_sweep_should_stop_at_256_waypoints(void)
+{
+    double corners[3][2];
+    local_point(44.0, -63.0, 0, 0, corners[0]);
+    local_point(44.0, -63.0, 0, 5000, corners[1]);
+    local_point(44.0, -63.0, 5000, 0, corners[2]);
+    static double out[GP_MAX_WAYPOINTS][2];
+    CHECK_INT(gp_sweep_waypoints((const double(*)[2])corners, 3, 1.0, out), GP_MAX_WAYPOINTS);
+    CHECK_INT(gp_sweep_waypoints((const double(*)[2])corners, 3, 0.0, out), 0);
+}
