@@ -1,0 +1,227 @@
+"""The runtime binary (hand-written Fig. 2 table) against protocol.Link over a pty pair:
+the paper's trace, kill and resume from the checkpoint, corrupted frames, plans over
+the link, link silence."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import tty
+import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from gliderplan.runtime import protocol as p
+
+RUNTIME = Path(__file__).resolve().parents[1] / "runtime"
+FIG2_HASH = "5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9"
+FIG2_TRACE = ["0 start - s1 0", "500 call s1 s2 1", "1500 return s2 s1 0",
+              "2000 goto s1 s3 0", "2500 exit s3 - 0"]
+NAMES = {0: "s1", 1: "s2", 2: "s3", p.NO_STATE: "-"}
+
+pytestmark = pytest.mark.skipif(
+    shutil.which("gcc") is None or shutil.which("make") is None,
+    reason="gcc and make are needed to build the C runtime (apt-get install gcc make)",
+)
+
+
+@pytest.fixture(scope="module")
+def binary(tmp_path_factory) -> Path:
+    build = tmp_path_factory.mktemp("build")
+    subprocess.run(["make", "-C", str(RUNTIME), "fig2", f"BUILD={build}", "CC=gcc"],
+                   check=True, capture_output=True, timeout=300)
+    return build / "fig2-runtime"
+
+
+@dataclass
+class Glider:
+    """The science computer's end of a pty pair, and the runtime process on the other."""
+
+    master: int
+    slave: int
+    device: str
+    process: subprocess.Popen | None = None
+
+    def start(self, binary: Path, *args: str) -> subprocess.Popen:
+        self.process = subprocess.Popen([str(binary), "--device", self.device, *args],
+                                        stderr=subprocess.PIPE, text=True)
+        return self.process
+
+    def link(self) -> p.Link:
+        return p.Link(p.FdPort(self.master), retransmit_s=0.2, max_retries=20)
+
+
+@pytest.fixture
+def glider() -> Iterator[Glider]:
+    master, slave = os.openpty()
+    tty.setraw(slave)  # keep the slave open: a restarted runtime finds the line as it was
+    g = Glider(master, slave, os.ttyname(slave))
+    yield g
+    if g.process and g.process.poll() is None:
+        g.process.kill()
+        g.process.wait(5)
+    os.close(master)
+    os.close(slave)
+
+
+def readings(tick: int) -> dict[int, float]:
+    """Sensors of one 10-second tick: missiontime, depth, lat, lon, temp."""
+    return {0: tick * 10.0, 1: 5.0 + tick % 20, 6: 3910.0, 7: -7349.0, 9: 15.0}
+
+
+def fly(link: p.Link, first_tick: int, last_tick: int) -> list[p.Command]:
+    commands = []
+    for tick in range(first_tick, last_tick + 1):
+        command = link.step(tick, readings(tick))
+        commands.append(command)
+        if command.done:
+            break
+    return commands
+
+
+def transitions(commands: list[p.Command]) -> list[str]:
+    names = {1: "start", 2: "goto", 3: "call", 4: "return", 5: "exit"}
+    return [f"{c.tick * 10} {names[c.transition]} {NAMES[c.from_state]} {NAMES[c.to_state]} "
+            f"{c.stack_depth}" for c in commands if c.transition]
+
+
+def make_plan(s2_temp_on_s: float = 15, hash_: str = FIG2_HASH) -> bytes:
+    body = (f"GPPLAN 1\nmission sampleMission\nhash {hash_}\ncomputer ts7800 300\n"
+            "budget_j 180000\npredicted_j 9876.5\nstates 3\n"
+            "state s1 300 600 0 1\nprofile 0 1 0.3 150 0.31\nend\n"
+            f"state s2 300 600 1 1\nsensor temp 60 {s2_temp_on_s:g}\n"
+            "profile 0 1 0.4 200 0.3\nend\n"
+            "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n").encode()
+    return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
+
+
+def test_fig2_over_the_serial_link_gives_the_papers_trace(binary, glider, tmp_path):
+    process = glider.start(binary, "--state-dir", str(tmp_path))
+    link = glider.link()
+    hello = link.wait_hello()
+    assert (hello.name, hello.mission_hash.hex(), hello.n_sensors) == (
+        "sampleMission", FIG2_HASH, 17)
+    commands = fly(link, 0, 400)
+    assert transitions(commands) == FIG2_TRACE
+    assert commands[-1].done and commands[-1].state == p.NO_STATE
+    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert process.wait(10) == 0
+    assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE
+
+
+def test_a_killed_runtime_resumes_from_its_checkpoint(binary, glider, tmp_path):
+    glider.start(binary, "--state-dir", str(tmp_path))
+    link = glider.link()
+    link.wait_hello()
+    before = fly(link, 0, 100)  # in s2, called from s1
+    assert before[-1].state == 1 and before[-1].stack_depth == 1
+    glider.process.send_signal(signal.SIGKILL)
+    glider.process.wait(5)
+
+    process = glider.start(binary, "--state-dir", str(tmp_path))
+    link.wait_hello()
+    after = fly(link, 101, 400)
+    assert after[0].state == 1 and after[0].stack_depth == 1  # not a fresh start
+    assert transitions(before + after) == FIG2_TRACE
+    assert process.wait(10) == 0
+    assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE
+
+
+def test_corrupted_frames_are_naked_and_the_trace_survives(binary, glider):
+    process = glider.start(binary)
+    link = glider.link()
+    link.wait_hello()
+    commands = fly(link, 0, 10)
+    os.write(glider.master, b"\x13\x37garbage\x00" + b"\x05" * 600 + b"\x00")
+    wire = bytearray(p.build_frame(p.Frame(p.MessageType.SENSORS, 200, 0,
+                                           p.Sensors(11, readings(11)).pack())))
+    wire[5] ^= 0x10
+    os.write(glider.master, bytes(wire))
+    commands += fly(link, 11, 400)
+    assert transitions(commands) == FIG2_TRACE
+    assert process.wait(10) == 0
+
+
+def test_a_repeated_sensors_frame_gets_the_same_command_without_a_step(binary, glider):
+    glider.start(binary)
+    link = glider.link()
+    link.wait_hello()
+    fly(link, 0, 49)
+    wire = p.build_frame(p.Frame(p.MessageType.SENSORS, 77, 0, p.Sensors(50, readings(50)).pack()))
+    answers = []
+    for _ in range(2):  # tick 50 is the call into s2: stepping twice would call again
+        os.write(glider.master, wire)
+        while (message := link.receive(2.0)) is not None and not isinstance(message, p.Command):
+            pass
+        answers.append(message)
+    assert answers[0] == answers[1]
+    assert answers[0].transition == p.Transition.CALL and answers[0].event_count == 1
+
+
+def test_plans_over_the_link_are_checked_and_a_bad_one_keeps_the_last(binary, glider, tmp_path):
+    plan_file = tmp_path / "fig2.plan"
+    plan_file.write_bytes(make_plan(s2_temp_on_s=15))
+    process = glider.start(binary, "--plan", str(plan_file))
+    link = glider.link()
+    link.wait_hello()
+    commands = fly(link, 0, 50)
+    assert abs(commands[0].pitch_rad) == pytest.approx(0.3)  # the plan's pitch in s1
+
+    damaged = bytearray(make_plan(s2_temp_on_s=30))
+    damaged[40] ^= 1
+    status = link.send_plan(bytes(damaged))
+    assert not status.accepted and "checksum mismatch" in status.message
+    status = link.send_plan(make_plan(hash_="0" * 64))
+    assert not status.accepted and "line 3: hash does not match" in status.message
+    commands += fly(link, 51, 53)  # s2 entered at 500 s: temp on for 15 s of 60 s
+    assert [c.sensor_power >> 9 & 1 for c in commands[50:54]] == [1, 1, 0, 0]
+
+    status = link.send_plan(make_plan(s2_temp_on_s=30))
+    assert status.accepted and status.message == "ok"
+    commands += fly(link, 54, 400)  # the new window, from t_in 40 s: 30 s of every 60 s
+    assert [c.sensor_power >> 9 & 1 for c in commands[54:59]] == [0, 0, 1, 1, 1]
+    assert transitions(commands) == FIG2_TRACE
+    assert process.wait(10) == 0
+
+
+@pytest.mark.parametrize(
+    ("plan", "message"),
+    [
+        (make_plan(hash_="1" * 64), "fig2.plan line 3: hash does not match the compiled mission"),
+        (make_plan()[:-1], "fig2.plan line 18: no final LF (truncated file)"),
+        (make_plan().replace(b"GPPLAN 1", b"GPPLAN 2"), "line 18: checksum mismatch"),
+        (None, "fig2.plan: cannot read the plan file (no such file)"),
+    ],
+    ids=["wrong-hash", "truncated", "edited", "missing"],
+)
+def test_a_bad_plan_file_refuses_to_start(binary, glider, tmp_path, plan, message):
+    plan_file = tmp_path / "fig2.plan"
+    if plan is not None:
+        plan_file.write_bytes(plan)
+    process = glider.start(binary, "--plan", str(plan_file))
+    _, err = process.communicate(timeout=10)
+    assert process.returncode == 1
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_bad_arguments_are_a_one_line_error(binary, glider):
+    process = glider.start(binary, "--link-timeout-s", "soon")
+    _, err = process.communicate(timeout=10)
+    assert process.returncode == 1
+    assert "--link-timeout-s 'soon'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_link_silence_releases_control_and_exits_3(binary, glider, tmp_path):
+    process = glider.start(binary, "--link-timeout-s", "0.5", "--state-dir", str(tmp_path))
+    link = glider.link()
+    link.wait_hello()
+    fly(link, 0, 60)  # into s2; then the science computer falls silent
+    assert link.wait_release(timeout_s=10) == p.ReleaseReason.LINK_SILENT
+    assert process.wait(10) == 3
+    assert "link silent" in process.stderr.read()
+    assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE[:2]
