@@ -1,0 +1,171 @@
+"""`gliderplan sim`: fly a mission (and its plan) on the simulated glider and check its energy.
+
+Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.png.
+Without --plan every sensor a state logs is always on. Exit status 3: the run spent
+more than the plan's budget (a plan violation; summary.json names the cause).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import re
+import sys
+from pathlib import Path
+
+from gliderplan.cli.common import add_mission_argument, load_mission, write_atomically
+from gliderplan.cli.errors import CliError, UsageError
+
+ORDER = 60
+EXIT_PLAN_VIOLATION = 3
+_DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(s|min|h|d)\s*$")
+_DURATION_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
+LONG_RUN_TICKS = 100_000  # progress on stderr for runs longer than this
+
+
+def parse_duration_s(text: str) -> float:
+    """'3600s', '90min', '6h', '30d' -> seconds; UsageError otherwise."""
+    match = _DURATION.match(text)
+    if match is None:
+        raise UsageError(f"--duration {text!r}: expected a number with a unit: "
+                         "s, min, h or d (e.g. 3600s, 90min, 6h, 30d)")
+    seconds = float(match[1]) * _DURATION_UNITS[match[2]]
+    if not math.isfinite(seconds) or seconds <= 0.0:
+        raise UsageError(f"--duration {text!r}: must be a positive time")
+    return seconds
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_mission_argument(parser)
+    parser.add_argument("--plan", metavar="PLANFILE",
+                        help="plan file (its report PLANFILE.json gives the prediction)")
+    parser.add_argument("--runtime", choices=("python", "c"), default="python",
+                        help="python: the reference executor (default); c: the compiled "
+                             "runtime over a pseudo-terminal")
+    parser.add_argument("--ocean", default="bench", metavar="FILE|PRESET",
+                        help="bench (default), sea-trial, north-sea, uniform, or a CSV file "
+                             "depth_m,temperature_c[,salinity_psu][,time_s]")
+    parser.add_argument("--ocean-logs", metavar="DIR",
+                        default=os.environ.get("GLIDERPLAN_SLOCUM_LOGS"),
+                        help="Slocum logs (*.ebd) for --ocean north-sea "
+                             "(default: $GLIDERPLAN_SLOCUM_LOGS)")
+    parser.add_argument("--noise", choices=("none", "ctd", "nonmonotonic"), default="ctd",
+                        help="sensor noise: ctd (default), none, or nonmonotonic (the "
+                             "fluctuations of the paper's first sea trial)")
+    parser.add_argument("--tracker", choices=("robust", "naive"), default="robust",
+                        help="thermocline detection (default robust; naive: the paper's first)")
+    parser.add_argument("--current", metavar="N,E", default="0,0",
+                        help="depth-averaged current toward north and east [m/s]")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--tick", type=float, default=4.0, metavar="S",
+                        help="sensor-array period [s] (default 4)")
+    parser.add_argument("--duration", metavar="T",
+                        help="end the run here if the mission has not exited (3600s, 90min, "
+                             "6h, 30d; default: the mission's horizon, else 30d)")
+    parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
+                        help="directory for the run's files")
+
+
+def _current(text: str):
+    from gliderplan.sim.vehicle import Current
+
+    try:
+        north, east = (float(x) for x in text.split(","))
+    except ValueError:
+        raise UsageError(f"--current {text!r}: expected two numbers N,E [m/s]") from None
+    if not (math.isfinite(north) and math.isfinite(east)):
+        raise UsageError(f"--current {text!r}: must be finite")
+    return Current(north, east)
+
+
+def run(args: argparse.Namespace) -> int:
+    from gliderplan.power_models import ModelFileError, load_vehicle
+    from gliderplan.sim import energy as accounting
+    from gliderplan.sim import outputs, plots
+    from gliderplan.sim.emulator import EmulatorError
+    from gliderplan.sim.loop import RunConfig
+    from gliderplan.sim.ocean import OceanFileError, load_ocean
+    from gliderplan.sim.planfile import PlanFileError, read_plan
+    from gliderplan.sim.science import NOISE_PRESETS
+    from gliderplan.sim.session import fly
+
+    mission = load_mission(args)
+    if not (math.isfinite(args.tick) and 0.1 <= args.tick <= 60.0):
+        raise UsageError(f"--tick {args.tick:g}: must lie between 0.1 and 60 s")
+    duration_s = parse_duration_s(args.duration) if args.duration else (
+        mission.horizon_s or 30 * 86400.0)
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: not a directory")
+    config = RunConfig(tick_s=args.tick, duration_s=duration_s, seed=args.seed,
+                       noise=NOISE_PRESETS[args.noise], current=_current(args.current))
+    try:
+        vehicle = load_vehicle(mission.vehicle)
+    except ModelFileError as err:
+        raise CliError(f"{args.mission}: vehicle: {err}") from None
+    try:
+        ocean = load_ocean(args.ocean, Path(args.ocean_logs) if args.ocean_logs else None)
+    except OceanFileError as err:
+        raise CliError(f"--ocean: {err}") from None
+    plan = predictions = None
+    if args.plan:
+        if not Path(args.plan).is_file():
+            raise UsageError(f"--plan {args.plan}: no such file")
+        try:
+            plan = read_plan(args.plan, mission)
+        except PlanFileError as err:
+            raise CliError(f"plan rejected: {err}") from None
+        report = Path(f"{args.plan}.json")
+        if report.is_file():
+            try:
+                predictions = accounting.read_plan_report(report)
+            except accounting.PlanReportError as err:
+                raise CliError(str(err)) from None
+
+    progress = _Progress() if duration_s / args.tick > LONG_RUN_TICKS else None
+    try:
+        record = fly(mission, ocean, config, vehicle, plan, args.plan, args.runtime,
+                     robust_tracker=args.tracker == "robust", progress=progress)
+    except EmulatorError as err:
+        raise CliError(f"--runtime c: {err}") from None
+    finally:
+        if progress is not None:
+            progress.finish()
+    used = accounting.account(record, mission, vehicle, plan)
+    check = accounting.check_plan(used, plan, predictions)
+    meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": args.runtime,
+            "ocean": args.ocean, "noise": args.noise, "tracker": args.tracker,
+            "seed": args.seed, "tick_s": args.tick, "plan": args.plan}
+    write_atomically(out / "trace.csv", outputs.trace_csv(record.trace))
+    table = outputs.timeseries_table(record, used, mission.battery.energy_j)
+    write_atomically(out / "timeseries.parquet", outputs.parquet_bytes(table))
+    write_atomically(out / "summary.json", outputs.summary(record, used, check, predictions, meta))
+    write_atomically(out / "depth.png", plots.depth_png(record))
+    write_atomically(out / "energy.png", plots.energy_png(
+        record, used, predictions, plan.budget_j if plan else None))
+    print(f"{mission.name}: {record.ended} after {record.columns['time_s'][-1]:g} s, "
+          f"{len(record.trace)} transitions, {used.total_j / 1e3:.1f} kJ; "
+          f"plan check: {check.verdict}", file=sys.stderr)
+    for cause in check.causes:
+        print(f"  {cause}", file=sys.stderr)
+    return EXIT_PLAN_VIOLATION if check.verdict == "violation" else 0
+
+
+class _Progress:
+    """A progress bar on stderr, for runs of many ticks."""
+
+    WIDTH = 30
+
+    def __init__(self) -> None:
+        self.shown = False
+
+    def __call__(self, done_s: float, total_s: float) -> None:
+        filled = int(self.WIDTH * done_s / total_s) if total_s else self.WIDTH
+        print(f"\r[{'#' * filled}{'.' * (self.WIDTH - filled)}] {done_s / 86400:.2f} of "
+              f"{total_s / 86400:.2f} d simulated", end="", file=sys.stderr, flush=True)
+        self.shown = True
+
+    def finish(self) -> None:
+        if self.shown:
+            print(file=sys.stderr)

@@ -1,0 +1,200 @@
+"""Energy of a simulated run, component by component, and the check of the plan.
+
+Every component is integrated over the run's ticks with `power_models.timeline` (one
+vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
+pitch motor, the surface and Iridium phases, the computer at the clock of each state
+from its workload per tick, and each sensor device from its on/off timeline (with a
+warm-up at every switch-on). The plan check compares the run with the planner's report
+(`<plan>.json`: per state `energy_by_component_j`, `inflections`, `time_s`).
+
+A run that spends more than the plan's budget by more than `PLAN_TOLERANCE` violates the
+plan; the states that overran their prediction are named as the cause.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gliderplan.language import ir
+from gliderplan.language.registry import SENSORS
+from gliderplan.power_models import load_board, load_sensor
+from gliderplan.power_models.timeline import Timeline, energy_by_component_j
+from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.sim.loop import RunRecord
+from gliderplan.sim.planfile import Plan
+
+PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
+# Runtime work per tick: decode a frame, check events, run the library routine, encode the
+# COMMAND and append to the event log; assumption: ~200k cycles (an interpreted-free C loop
+# plus Linux serial I/O), i.e. under 0.1 % busy at 300 MHz and a 4 s tick.
+RUNTIME_CYCLES_PER_TICK = 200_000.0
+DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
+DEVICE_BITS = {d: sum(1 << s.index for s in SENSORS if s.device == d) for d in DEVICES}
+
+
+class PlanReportError(ValueError):
+    """An unreadable planner report; the message names the file and key."""
+
+
+@dataclass(frozen=True)
+class RunEnergy:
+    """Per-tick energy [J] of each component and the run's totals."""
+
+    per_tick_j: dict[str, np.ndarray]  # component -> (n,) energy in each tick
+    by_state_j: dict[str, dict[str, float]]  # state -> component -> energy
+    inflections_by_state: dict[str, int]
+    time_by_state_s: dict[str, float]
+
+    @property
+    def total_j(self) -> float:
+        return float(sum(v.sum() for v in self.per_tick_j.values()))
+
+    def by_component_j(self) -> dict[str, float]:
+        return {k: float(v.sum()) for k, v in self.per_tick_j.items()}
+
+
+def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
+            plan: Plan | None) -> RunEnergy:
+    """Energy of every component in every tick of the run."""
+    c = record.columns
+    dt = record.tick_s
+    state = c["state"].astype(int)
+    timeline = Timeline(dt_s=dt, phase=c["phase"].astype(np.int8), depth_m=c["depth_m"],
+                        pumped_out_cc=c["pumped_out_cc"], pumped_in_cc=c["pumped_in_cc"],
+                        inflection=c["inflection"].astype(bool))
+    parts = energy_by_component_j(timeline, vehicle)
+    parts["computer"] = _computer_j(state, dt, mission, plan)
+    power = c["sensor_power"].astype(np.int64)
+    for device in DEVICES:
+        on = (power & DEVICE_BITS[device]) != 0
+        if on.any():
+            device_timeline = Timeline(dt, timeline.phase, timeline.depth_m, np.zeros(len(on)),
+                                       np.zeros(len(on)), np.zeros(len(on), bool),
+                                       sensor_on=on[None, :])
+            parts[device] = energy_by_component_j(device_timeline, vehicle,
+                                                  sensors=[load_sensor(device)])["sensors"]
+    flying = state < len(mission.states)  # the row of the exit is the run's end: no energy
+    parts = {k: np.where(flying, v, 0.0) for k, v in parts.items()}
+    names = record.state_names
+    by_state: dict[str, dict[str, float]] = {}
+    inflections: dict[str, int] = {}
+    times: dict[str, float] = {}
+    for i, name in enumerate(names):
+        mine = state == i
+        if not mine.any():
+            continue
+        by_state[name] = {k: float(v[mine].sum()) for k, v in parts.items()}
+        inflections[name] = int(c["inflection"][mine].sum())
+        times[name] = float(mine.sum() * dt)
+    return RunEnergy(parts, by_state, inflections, times)
+
+
+def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
+                plan: Plan | None) -> np.ndarray:
+    """The board's energy per tick at the clock each state runs at."""
+    board = load_board(mission.computer.board, mission.computer.clock_mhz)
+
+    def power_w(at) -> float:
+        return float(at.power_w(at.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / dt)))
+
+    per_state = np.array([power_w(board.at_clock(plan.states[i].clock_mhz) if plan else board)
+                          for i in range(len(mission.states))])
+    return per_state[np.minimum(state, len(per_state) - 1)] * dt
+
+
+# ---- the plan's prediction -------------------------------------------------------------
+
+@dataclass(frozen=True)
+class StatePrediction:
+    energy_by_component_j: dict[str, float]
+    inflections: float | None
+    time_s: float | None
+
+    @property
+    def energy_j(self) -> float:
+        return float(sum(self.energy_by_component_j.values()))
+
+
+def read_plan_report(path: str | Path) -> dict[str, StatePrediction]:
+    """Per-state predictions from the planner's JSON report beside a plan."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as err:
+        raise PlanReportError(f"{path}: cannot read the plan's report: {err}") from None
+    except json.JSONDecodeError as err:
+        raise PlanReportError(f"{path}:{err.lineno}: not JSON: {err.msg}") from None
+    states = data.get("states") if isinstance(data, dict) else None
+    if isinstance(states, dict):
+        items = list(states.items())
+    elif isinstance(states, list):
+        items = [(s.get("name", s.get("state")), s) for s in states if isinstance(s, dict)]
+    else:
+        raise PlanReportError(f"{path}: states: missing (expected per-state predictions)")
+    predictions = {}
+    for name, entry in items:
+        components = entry.get("energy_by_component_j") if isinstance(entry, dict) else None
+        if not isinstance(name, str) or not isinstance(components, dict):
+            raise PlanReportError(f"{path}: states.{name}: energy_by_component_j missing")
+        try:
+            energy = {str(k): float(v) for k, v in components.items()}
+        except (TypeError, ValueError):
+            raise PlanReportError(f"{path}: states.{name}.energy_by_component_j: "
+                                  "values must be numbers") from None
+        predictions[name] = StatePrediction(energy, _number(entry.get("inflections")),
+                                            _number(entry.get("time_s")))
+    return predictions
+
+
+def _number(value: object) -> float | None:
+    return float(value) if isinstance(value, int | float) else None
+
+
+@dataclass(frozen=True)
+class PlanCheck:
+    verdict: str  # "pass", "violation" or "no plan"
+    budget_j: float | None
+    predicted_j: float | None
+    simulated_j: float
+    tolerance: float
+    causes: tuple[str, ...]  # why it overran (or what overran the prediction)
+
+    def to_json(self) -> dict:
+        return {"verdict": self.verdict, "budget_j": self.budget_j,
+                "predicted_j": self.predicted_j, "simulated_j": self.simulated_j,
+                "tolerance": self.tolerance, "causes": list(self.causes)}
+
+
+def check_plan(energy: RunEnergy, plan: Plan | None,
+               predictions: dict[str, StatePrediction] | None,
+               tolerance: float = PLAN_TOLERANCE) -> PlanCheck:
+    """Did the run stay within the plan's budget? Causes: states that overran their
+    predicted energy, with inflections and time planned against flown."""
+    simulated = energy.total_j
+    if plan is None:
+        return PlanCheck("no plan", None, None, simulated, tolerance, ())
+    causes = []
+    for name, used in energy.by_state_j.items():
+        predicted = (predictions or {}).get(name)
+        if predicted is None:
+            continue
+        flown = sum(used.values())
+        if flown <= predicted.energy_j * (1.0 + tolerance):
+            continue
+        detail = [f"{name}: {flown / 1e3:.1f} kJ spent, {predicted.energy_j / 1e3:.1f} kJ planned"]
+        if predicted.inflections is not None and \
+                energy.inflections_by_state[name] > predicted.inflections * (1.0 + tolerance):
+            detail.append(f"{predicted.inflections:.0f} inflections planned, "
+                          f"{energy.inflections_by_state[name]} flown")
+        if predicted.time_s is not None and \
+                energy.time_by_state_s[name] > predicted.time_s * (1.0 + tolerance):
+            detail.append(f"{predicted.time_s / 3600:.2f} h planned, "
+                          f"{energy.time_by_state_s[name] / 3600:.2f} h flown")
+        causes.append((flown - predicted.energy_j, "; ".join(detail)))
+    causes.sort(reverse=True)
+    over_budget = simulated > plan.budget_j * (1.0 + tolerance)
+    return PlanCheck("violation" if over_budget else "pass", plan.budget_j, plan.predicted_j,
+                     simulated, tolerance, tuple(text for _, text in causes))

@@ -1,0 +1,155 @@
+"""The Python reference executor: what the C runtime does with one SENSORS frame.
+
+Transitions come from `language.semantics.step` (the reference semantics); the events
+of the current state are first screened by a compiled checker (sim/compiled.py), so
+that the ticks on which nothing fires (almost all of them) cost one function call.
+Commands come from the library routines of docs/pilot.md (sim/pilot.py). Sensor
+values arrive as the link carries them: IEEE binary32, widened to double.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import struct
+from typing import NamedTuple
+
+from gliderplan.language import ir, semantics
+from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
+from gliderplan.sim import compiled, pilot
+from gliderplan.sim.planfile import Plan
+
+N_SENSORS = len(SENSORS)
+NONE = 0xFF  # state index of "no state" (exited, or no transition)
+TRANSITION_CODES = {"start": 1, "goto": 2, "call": 3, "return": 4, "exit": 5}
+_F32 = struct.Struct(f"<{N_SENSORS}f")
+_DEPTH, _LAT, _LON, _TEMP = (SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp"))
+
+
+@functools.cache
+def _runs(mask: int) -> tuple[tuple[int, int], ...]:
+    """The set bits of a sensor mask as (first, stop) index ranges."""
+    runs: list[tuple[int, int]] = []
+    for i in range(N_SENSORS):
+        if mask >> i & 1:
+            if runs and runs[-1][1] == i:
+                runs[-1] = (runs[-1][0], i + 1)
+            else:
+                runs.append((i, i + 1))
+    return tuple(runs)
+
+
+class Command(NamedTuple):
+    """A COMMAND frame's fields (docs/protocol.md)."""
+
+    tick: int
+    state: int  # 0xFF once exited
+    stack_depth: int
+    transition: int  # 0 none, 1 start, 2 goto, 3 call, 4 return, 5 exit
+    from_state: int
+    to_state: int
+    profile: int
+    flags: int  # bit 0 surface, 1 mission done, 2 climbing, 3 heading valid
+    depth_target_m: float
+    pitch_rad: float
+    ballast_cc: float
+    heading_rad: float
+    sensor_power: int
+    event_count: int
+
+
+class PythonRuntime:
+    """A mission (and optional plan) executing tick by tick, like the compiled runtime."""
+
+    def __init__(self, mission: ir.CheckedMission, plan: Plan | None, default_ballast_cc: float,
+                 robust_tracker: bool = True) -> None:
+        self.mission, self.plan = mission, plan
+        self.default_ballast_cc = default_ballast_cc
+        self.robust = robust_tracker
+        self.index = mission.state_index
+        self.checkers = [compiled.event_checker(s) for s in mission.states]
+        self.argument_fns = [[compiled.arguments(p) for p in s.profiles] for s in mission.states]
+        self.power_tables = [self._power_table(i, s) for i, s in enumerate(mission.states)]
+        self.s = [math.nan] * N_SENSORS
+        self.machine: semantics.Machine | None = None
+        self.event_count = 0
+
+    def _power_table(self, i: int, state: ir.State) -> tuple[tuple[int, float, float], ...]:
+        """(sensor index, period [s], on [s]) per logged sensor; period 0: always on."""
+        scheduled = {}
+        if self.plan is not None:
+            scheduled = {s.sensor: (s.period_s, s.on_s) for s in self.plan.states[i].sensors}
+        table = []
+        for use in state.sensors:
+            info = SENSOR_BY_NAME[use.name]
+            period, on = scheduled.get(use.name, (0.0, 0.0)) if info.device else (0.0, 0.0)
+            table.append((info.index, period, on))
+        return tuple(table)
+
+    def _enter(self, state: str) -> None:
+        i = self.index[state]
+        self.state_i = i
+        self.state = self.mission.states[i]
+        self.entry_time_s = self.s[0]
+        self.profile_k = -1
+        self.routine = None
+        route = self.state.route
+        self.route = pilot.ROUTE_ROUTINES[route.kind](route.params, route.points)
+
+    def step(self, tick: int, mask: int, values: list[float]) -> Command:
+        """Answer one SENSORS frame: `values` holds all sensors [registry units], of which
+        those in `mask` arrive, through binary32 as on the link."""
+        s = self.s
+        carried = _F32.unpack(_F32.pack(*values))
+        for first, stop in _runs(mask):
+            s[first:stop] = carried[first:stop]
+        transition: semantics.Transition | None = None
+        if self.machine is None:
+            self.machine, transition = semantics.start(self.mission, s[0])
+            self._enter(self.machine.state)
+        machine = self.machine
+        if machine.state is not None and self.checkers[self.state_i](s, machine.variables) >= 0:
+            named = {info.name: s[info.index] for info in SENSORS}
+            after, fired = semantics.step(self.mission, machine, named, s[0])
+            self.machine = after
+            self.event_count += 1
+            if fired is not None:
+                transition = fired
+                if after.state is not None:
+                    self._enter(after.state)
+        return self._command(tick, transition)
+
+    def _command(self, tick: int, transition: semantics.Transition | None) -> Command:
+        kind, src, dst = 0, NONE, NONE
+        if transition is not None:
+            kind = TRANSITION_CODES[transition.kind]
+            src = self.index[transition.from_state] if transition.from_state else NONE
+            dst = self.index[transition.to_state] if transition.to_state else NONE
+        machine = self.machine
+        if machine.state is None:
+            return Command(tick, NONE, 0, kind, src, dst, 0, 2, 0.0, 0.0, 0.0, 0.0, 0,
+                           self.event_count)
+        s, i = self.s, self.state_i
+        t_in = s[0] - self.entry_time_s
+        state_plan = self.plan.states[i] if self.plan is not None else None
+        k = pilot.profile_index(state_plan, t_in)
+        args = self.argument_fns[i][k](s, machine.variables)
+        profile = self.state.profiles[k]
+        depth = s[_DEPTH]
+        if k != self.profile_k:
+            self.profile_k = k
+            routine = pilot.PROFILE_ROUTINES[profile.kind]
+            self.routine = routine(depth, args, self.robust) if profile.kind == "thermotrackyo" \
+                else routine(depth, args)
+        if state_plan is not None:
+            planned = state_plan.profiles[k]
+            pitch, ballast = planned.pitch_rad, planned.ballast_cc
+        else:
+            pitch, ballast = None, self.default_ballast_cc
+        target, pitch_cmd, ballast_cmd, surface = self.routine.command(
+            depth, s[_TEMP], args, pitch, ballast)
+        heading, valid = self.route.heading(s[_LAT], s[_LON])
+        flags = (1 if surface else 0) | (4 if ballast_cmd > 0.0 else 0) | (8 if valid else 0)
+        power = pilot.sensor_power_mask(self.power_tables[i], t_in)
+        return Command(tick, i, len(machine.stack), kind, src, dst, k, flags, target, pitch_cmd,
+                       ballast_cmd, heading, power, self.event_count)

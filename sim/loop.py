@@ -1,0 +1,153 @@
+"""The closed loop: the science computer sends a SENSORS frame, a runtime (the Python
+executor, or the compiled C runtime behind the pty) answers a COMMAND, the glider flies
+it for one tick. The simulator owns the clock, so a run is lock-step and deterministic
+for its seed. Records the transition trace and one row per tick."""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from gliderplan.language import ir
+from gliderplan.language.semantics import MissionFault, Transition
+from gliderplan.sim.executor import NONE, Command
+from gliderplan.sim.ocean import Ocean
+from gliderplan.sim.science import ScienceComputer, SensorNoise
+from gliderplan.sim.vehicle import Current, GliderSim
+
+TRANSITION_KINDS = {2: "goto", 3: "call", 4: "return", 5: "exit"}
+_COMMAND_F32 = struct.Struct("<4f")
+PROGRESS_TICKS = 50_000  # report progress this often on long runs
+
+
+class Runtime(Protocol):
+    def step(self, tick: int, mask: int, values: list[float]) -> Command: ...
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    tick_s: float = 4.0  # the science computer writes the sensor array every 2-4 s
+    duration_s: float = 30 * 86400.0  # the run ends here if the mission has not exited
+    seed: int = 0
+    noise: SensorNoise = SensorNoise()
+    current: Current = Current()
+    start_lat_deg: float | None = None  # None: 500 m south of the mission's first point
+    start_lon_deg: float | None = None
+
+
+@dataclass
+class RunRecord:
+    """What happened: the trace, per-tick columns, how the run ended."""
+
+    trace: list[Transition]
+    columns: dict[str, np.ndarray]
+    state_names: tuple[str, ...]
+    tick_s: float
+    ended: str  # "exit", "duration" or "fault: ..."
+    surfacings: int
+    extra: dict = field(default_factory=dict)
+
+
+def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float, float]:
+    """Where the glider is put in the water [deg]."""
+    from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
+
+    if config.start_lat_deg is not None and config.start_lon_deg is not None:
+        return config.start_lat_deg, config.start_lon_deg
+    for state in mission.states:
+        route = state.route
+        point = (route.params[0], route.params[1]) if route.kind == "nav" else \
+            (route.points[0] if route.points else None)
+        if point is not None:
+            return move_degrees(ddmm_to_degrees(point[0]), ddmm_to_degrees(point[1]), -500.0,
+                                0.0)
+    return 0.0, 0.0
+
+
+def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceComputer,
+             config: RunConfig,
+             progress: Callable[[float, float], None] | None = None) -> RunRecord:
+    """Run the loop until the mission exits, the runtime faults or the duration ends."""
+    names = tuple(s.name for s in mission.states)
+    glider = science.glider
+    tick_s = config.tick_s
+    last_tick = int(math.floor(config.duration_s / tick_s + 1e-9))
+    trace: list[Transition] = []
+    cols: dict[str, list] = {k: [] for k in (
+        "depth_m", "pitch_rad", "temperature_c", "state", "stack_depth", "profile",
+        "sensor_power", "phase", "pumped_out_cc", "pumped_in_cc", "inflection", "lat_deg",
+        "lon_deg")}
+    depth_c, pitch_c, temp_c = cols["depth_m"], cols["pitch_rad"], cols["temperature_c"]
+    state_c, stack_c, profile_c = cols["state"], cols["stack_depth"], cols["profile"]
+    power_c, phase_c = cols["sensor_power"], cols["phase"]
+    out_c, in_c, infl_c = cols["pumped_out_cc"], cols["pumped_in_cc"], cols["inflection"]
+    lat_c, lon_c = cols["lat_deg"], cols["lon_deg"]
+    ended = "duration"
+    pack, unpack = _COMMAND_F32.pack, _COMMAND_F32.unpack
+    for tick in range(last_tick + 1):
+        mask, values = science.readings(tick)
+        depth_c.append(glider.depth_m)
+        pitch_c.append(glider.pitch_rad)
+        temp_c.append(science.water_temperature_c)
+        lat_c.append(glider.lat_deg)
+        lon_c.append(glider.lon_deg)
+        try:
+            cmd = runtime.step(tick, mask, values)
+        except MissionFault as fault:
+            ended = f"fault: {fault}"
+            _close_row(cols, state_c[-1] if state_c else NONE)
+            break
+        time_s = tick * tick_s
+        if tick == 0:
+            trace.append(Transition(time_s, "start", "", names[0], 0))
+        if cmd.transition >= 2:
+            kind = TRANSITION_KINDS[cmd.transition]
+            trace.append(Transition(
+                time_s, kind, names[cmd.from_state],
+                "" if cmd.to_state == NONE else names[cmd.to_state], cmd.stack_depth))
+        state_c.append(cmd.state)
+        stack_c.append(cmd.stack_depth)
+        profile_c.append(cmd.profile)
+        power_c.append(cmd.sensor_power)
+        if cmd.state == NONE:
+            ended = "exit"
+            phase_c.append(glider.phase)
+            out_c.append(0.0)
+            in_c.append(0.0)
+            infl_c.append(False)
+            break
+        target, pitch, ballast, heading = unpack(pack(
+            cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad))
+        science.apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power)
+        phase_c.append(glider.phase)
+        out_c.append(glider.pumped_out_cc)
+        in_c.append(glider.pumped_in_cc)
+        infl_c.append(glider.inflection)
+        if progress is not None and tick % PROGRESS_TICKS == 0 and tick:
+            progress(time_s, last_tick * tick_s)
+    n = len(state_c)
+    columns = {
+        "time_s": np.arange(n, dtype=float) * tick_s,
+        **{k: np.asarray(v[:n]) for k, v in cols.items()},
+    }
+    return RunRecord(trace, columns, names, tick_s, ended, glider.surfacings)
+
+
+def _close_row(cols: dict[str, list], state: int) -> None:
+    """Complete the row of a tick whose runtime faulted (the glider's own control flies on)."""
+    for key, value in (("state", state), ("stack_depth", 0), ("profile", 0),
+                       ("sensor_power", 0), ("phase", 0), ("pumped_out_cc", 0.0),
+                       ("pumped_in_cc", 0.0), ("inflection", False)):
+        cols[key].append(value)
+
+
+def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
+                 vehicle) -> ScienceComputer:
+    lat, lon = start_position(mission, config)
+    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current)
+    return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s)

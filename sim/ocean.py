@@ -1,0 +1,274 @@
+"""The simulated ocean: water temperature and salinity against depth and time.
+
+Two kinds of water column share one interface (`temperature_c(depth_m, time_s)` and
+`salinity_psu(depth_m, time_s)`, each on floats or numpy arrays):
+
+- `Thermocline`: warm surface water over cold deep water with a tanh-shaped
+  thermocline whose centre rides up and down on internal waves;
+- `MeasuredProfile`: a measured profile (a CSV file or a Slocum science log),
+  interpolated linearly in depth (and in time when it has several casts).
+
+Presets: `bench` (the paper's Fig. 5 bench case: 24 C over 7 C, one internal wave),
+`sea-trial` (its Atlantic deployment: thermocline at 10-18 m), `north-sea` (the real
+sebastian 2014 Slocum log: 20 C over 15 C at 5-20 m) and `uniform`.
+
+Notes
+-----
+Thermocline: T(z, t) = T_deep + (T_surf - T_deep) (1 - tanh((z - zc(t)) / h)) / 2 with
+h = thickness / 4, so that 96 % of the change happens across `thickness_m`, and
+zc(t) = depth_m + sum_k a_k sin(2 pi t / P_k + phase_k).
+"""
+
+from __future__ import annotations
+
+import bisect
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+Number = float | np.ndarray
+
+
+class OceanFileError(ValueError):
+    """A bad ocean profile file; the message starts with `FILE:LINE:`."""
+
+
+@dataclass(frozen=True)
+class InternalWave:
+    amplitude_m: float  # vertical displacement of the thermocline
+    period_s: float
+    phase_rad: float = 0.0
+
+
+@dataclass(frozen=True)
+class Thermocline:
+    """A two-layer water column with a thermocline. Depths [m] positive down, temperatures
+    [degC], salinities [PSU]; `waves` move the thermocline's centre with time."""
+
+    surface_c: float
+    deep_c: float
+    depth_m: float  # centre of the thermocline
+    thickness_m: float
+    waves: tuple[InternalWave, ...] = ()
+    surface_psu: float = 35.0
+    deep_psu: float = 35.0
+
+    def thermocline_depth_m(self, time_s: Number) -> Number:
+        """Depth [m] of the thermocline's centre at `time_s` [s]."""
+        xp = np if isinstance(time_s, np.ndarray) else math
+        depth = self.depth_m
+        for wave in self.waves:
+            depth = depth + wave.amplitude_m * xp.sin(
+                2.0 * math.pi * time_s / wave.period_s + wave.phase_rad)
+        return depth
+
+    def _warm_fraction(self, depth_m: Number, time_s: Number) -> Number:
+        """1 in the surface layer, 0 in the deep layer, tanh-shaped between."""
+        array = isinstance(depth_m, np.ndarray) or isinstance(time_s, np.ndarray)
+        xp = np if array else math
+        half_width = max(self.thickness_m, 1e-6) / 4.0
+        centre = self.thermocline_depth_m(np.asarray(time_s, float) if array else time_s)
+        return 0.5 * (1.0 - xp.tanh((depth_m - centre) / half_width))
+
+    def temperature_c(self, depth_m: Number, time_s: Number = 0.0) -> Number:
+        """Water temperature [degC] at `depth_m` [m] and `time_s` [s]."""
+        return self.deep_c + (self.surface_c - self.deep_c) * self._warm_fraction(depth_m, time_s)
+
+    def salinity_psu(self, depth_m: Number, time_s: Number = 0.0) -> Number:
+        """Practical salinity [PSU] at `depth_m` [m] and `time_s` [s]."""
+        return self.deep_psu + (self.surface_psu - self.deep_psu) * self._warm_fraction(
+            depth_m, time_s)
+
+    def water_at(self, depth_m: float, time_s: float) -> tuple[float, float]:
+        """(temperature [degC], salinity [PSU]) at one depth [m] and time [s]."""
+        warm = self._warm_fraction(depth_m, time_s)
+        return (self.deep_c + (self.surface_c - self.deep_c) * warm,
+                self.deep_psu + (self.surface_psu - self.deep_psu) * warm)
+
+
+@dataclass(frozen=True)
+class MeasuredProfile:
+    """Casts of (depth, temperature, salinity), interpolated linearly in depth and time,
+    held constant beyond the shallowest and deepest samples and the first and last cast."""
+
+    depths_m: tuple[float, ...]  # strictly increasing
+    casts_s: tuple[float, ...]  # cast times [s], strictly increasing (one cast: static)
+    temperatures_c: tuple[tuple[float, ...], ...]  # [cast][depth]
+    salinities_psu: tuple[tuple[float, ...], ...]
+
+    def temperature_c(self, depth_m: Number, time_s: Number = 0.0) -> Number:
+        return self._interpolate(self.temperatures_c, depth_m, time_s)
+
+    def salinity_psu(self, depth_m: Number, time_s: Number = 0.0) -> Number:
+        return self._interpolate(self.salinities_psu, depth_m, time_s)
+
+    def water_at(self, depth_m: float, time_s: float) -> tuple[float, float]:
+        """(temperature [degC], salinity [PSU]) at one depth [m] and time [s]."""
+        return (self._interpolate(self.temperatures_c, depth_m, time_s),
+                self._interpolate(self.salinities_psu, depth_m, time_s))
+
+    def _interpolate(self, table: tuple[tuple[float, ...], ...], depth_m: Number,
+                     time_s: Number) -> Number:
+        if isinstance(depth_m, np.ndarray) or isinstance(time_s, np.ndarray):
+            depth = np.asarray(depth_m, float)
+            casts = np.array([np.interp(depth, self.depths_m, row) for row in table])
+            if len(self.casts_s) == 1:
+                return casts[0]
+            time = np.broadcast_to(np.asarray(time_s, float), depth.shape)
+            k = np.clip(np.searchsorted(self.casts_s, time) - 1, 0, len(self.casts_s) - 2)
+            t0, t1 = np.asarray(self.casts_s)[k], np.asarray(self.casts_s)[k + 1]
+            w = np.clip((time - t0) / (t1 - t0), 0.0, 1.0)
+            index = np.arange(depth.size).reshape(depth.shape)
+            return casts[k, index] * (1.0 - w) + casts[k + 1, index] * w
+        # one reading per tick: plain floats are ~10x faster than numpy scalars
+        if len(self.casts_s) == 1:
+            return _interp_scalar(self.depths_m, table[0], depth_m)
+        k = min(max(bisect.bisect_left(self.casts_s, time_s) - 1, 0), len(self.casts_s) - 2)
+        t0, t1 = self.casts_s[k], self.casts_s[k + 1]
+        w = min(max((time_s - t0) / (t1 - t0), 0.0), 1.0)
+        a = _interp_scalar(self.depths_m, table[k], depth_m)
+        b = _interp_scalar(self.depths_m, table[k + 1], depth_m)
+        return a * (1.0 - w) + b * w
+
+
+def _interp_scalar(xs: tuple[float, ...], ys: tuple[float, ...], x: float) -> float:
+    """np.interp for one float."""
+    i = bisect.bisect_right(xs, x)
+    if i == 0:
+        return ys[0]
+    if i == len(xs):
+        return ys[-1]
+    x0, x1 = xs[i - 1], xs[i]
+    return ys[i - 1] + (ys[i] - ys[i - 1]) * (x - x0) / (x1 - x0)
+
+
+Ocean = Thermocline | MeasuredProfile
+
+
+# ---- presets -----------------------------------------------------------------------
+
+def bench() -> Thermocline:
+    """The paper's Fig. 5 bench case: 24 C surface, 7 C deep, one internal wave
+    (thermocline depth and wave assumed: 11 m +- 3 m over 20 min)."""
+    return Thermocline(24.0, 7.0, depth_m=11.0, thickness_m=4.0,
+                       waves=(InternalWave(3.0, 1200.0),), surface_psu=31.5, deep_psu=32.5)
+
+
+def sea_trial() -> Thermocline:
+    """The paper's Atlantic deployment (Fig. 6a): thermocline at 10-18 m off New Jersey
+    (temperatures assumed from a typical summer profile there: 22 C over 10 C)."""
+    return Thermocline(22.0, 10.0, depth_m=14.0, thickness_m=8.0,
+                       waves=(InternalWave(1.0, 1800.0),), surface_psu=31.0, deep_psu=32.5)
+
+
+def uniform(temperature_c: float = 15.0, salinity_psu: float = 35.0) -> Thermocline:
+    """A mixed water column: the same water at every depth."""
+    return Thermocline(temperature_c, temperature_c, 0.0, 1.0, (), salinity_psu, salinity_psu)
+
+
+def north_sea(logs_dir: Path, cache_dir: Path | None = None, bin_m: float = 1.0) -> MeasuredProfile:
+    """The sebastian 2014 North Sea profile from its Slocum science logs (*.ebd): CTD
+    temperature binned by depth (pressure [bar] x 10 m bar-1), 20 C over 15 C at 5-20 m."""
+    import dbdreader
+
+    files = sorted(str(p) for p in Path(logs_dir).glob("*.ebd"))
+    if not files:
+        raise OceanFileError(f"{logs_dir}: no Slocum science logs (*.ebd)")
+    cache = str(cache_dir if cache_dir is not None else Path(logs_dir) / "cac")
+    logs = dbdreader.MultiDBD(filenames=files, cacheDir=cache)
+    _, temp, pressure, conductivity = logs.get_sync(
+        "sci_water_temp", "sci_water_pressure", "sci_water_cond")
+    valid = (temp > 0.0) & (pressure > 0.0) & (conductivity > 0.0)
+    depth = pressure[valid] * 10.0
+    bins = np.floor(depth / bin_m).astype(int)
+    used = np.unique(bins)
+    temps = [float(np.mean(temp[valid][bins == b])) for b in used]
+    salinity = [35.0] * len(used)  # salinity needs a full EOS; the tracker reads temperature
+    return MeasuredProfile(tuple(float((b + 0.5) * bin_m) for b in used), (0.0,),
+                           (tuple(temps),), (tuple(salinity),))
+
+
+def read_profile_csv(path: str | Path) -> MeasuredProfile:
+    """A profile file: header `depth_m,temperature_c[,salinity_psu][,time_s]`, one sample
+    a row; rows of one cast share `time_s`. Errors name the file and line."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise OceanFileError(f"{path}: cannot read ocean file: {err}") from None
+    rows = list(csv.reader(text.splitlines()))
+    if not rows:
+        raise OceanFileError(f"{path}:1: empty ocean file; expected the header "
+                             "depth_m,temperature_c[,salinity_psu][,time_s]")
+    header = [h.strip() for h in rows[0]]
+    allowed = ("depth_m", "temperature_c", "salinity_psu", "time_s")
+    if header[:2] != ["depth_m", "temperature_c"] or any(h not in allowed for h in header) \
+            or len(set(header)) != len(header):
+        raise OceanFileError(f"{path}:1: header {','.join(header)!r}: expected "
+                             "depth_m,temperature_c[,salinity_psu][,time_s]")
+    casts: dict[float, list[tuple[float, float, float]]] = {}
+    for line_no, row in enumerate(rows[1:], start=2):
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        if len(row) != len(header):
+            raise OceanFileError(f"{path}:{line_no}: expected {len(header)} fields, "
+                                 f"got {len(row)}")
+        try:
+            values = dict(zip(header, (float(cell) for cell in row), strict=True))
+        except ValueError:
+            raise OceanFileError(f"{path}:{line_no}: not a number in {','.join(row)!r}") from None
+        if not all(math.isfinite(v) for v in values.values()):
+            raise OceanFileError(f"{path}:{line_no}: values must be finite")
+        if values["depth_m"] < 0.0:
+            raise OceanFileError(f"{path}:{line_no}: depth_m must be >= 0 (positive down)")
+        if not -5.0 <= values["temperature_c"] <= 50.0:
+            raise OceanFileError(f"{path}:{line_no}: temperature_c "
+                                 f"{values['temperature_c']:g} is not sea water (-5..50 C)")
+        cast = casts.setdefault(values.get("time_s", 0.0), [])
+        if cast and values["depth_m"] <= cast[-1][0]:
+            raise OceanFileError(f"{path}:{line_no}: depths of a cast must increase")
+        cast.append((values["depth_m"], values["temperature_c"],
+                     values.get("salinity_psu", 35.0)))
+    if not casts:
+        raise OceanFileError(f"{path}:2: no samples")
+    depths = sorted({d for cast in casts.values() for d, _, _ in cast})
+    times = sorted(casts)
+    temperatures, salinities = [], []
+    for t in times:
+        cast_depths = [d for d, _, _ in casts[t]]
+        temperatures.append(tuple(np.interp(depths, cast_depths, [c[1] for c in casts[t]])))
+        salinities.append(tuple(np.interp(depths, cast_depths, [c[2] for c in casts[t]])))
+    return MeasuredProfile(tuple(depths), tuple(times), tuple(map(_floats, temperatures)),
+                           tuple(map(_floats, salinities)))
+
+
+def _floats(values: tuple) -> tuple[float, ...]:
+    return tuple(float(v) for v in values)
+
+
+PRESETS = ("bench", "sea-trial", "north-sea", "uniform")
+
+
+def load_ocean(spec: str, data_dir: Path | None = None) -> Ocean:
+    """A preset name or a CSV profile file. `north-sea` reads the Slocum logs in
+    `data_dir` (a directory holding *.ebd files)."""
+    match spec:
+        case "bench":
+            return bench()
+        case "sea-trial":
+            return sea_trial()
+        case "uniform":
+            return uniform()
+        case "north-sea":
+            if data_dir is None:
+                raise OceanFileError("north-sea: needs the Slocum logs directory "
+                                     "(GLIDERPLAN_SLOCUM_LOGS or --ocean-logs)")
+            return north_sea(data_dir)
+    path = Path(spec)
+    if not path.exists():
+        raise OceanFileError(f"{spec}: no such ocean file or preset "
+                             f"(presets: {', '.join(PRESETS)})")
+    return read_profile_csv(path)

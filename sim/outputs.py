@@ -1,0 +1,100 @@
+"""The files of a simulated run: trace.csv, timeseries.parquet, summary.json (the plots
+are in plots.py). Each is produced as bytes so that the caller writes it atomically."""
+
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+
+from gliderplan.language.registry import SENSORS
+from gliderplan.language.semantics import Transition
+from gliderplan.sim.energy import PlanCheck, RunEnergy, StatePrediction
+from gliderplan.sim.executor import NONE
+from gliderplan.sim.loop import RunRecord
+
+TRACE_HEADER = "time_s,kind,from_state,to_state,stack_depth"
+
+
+def trace_csv(trace: list[Transition]) -> str:
+    """One row per transition; times in seconds as %g (ticks are whole seconds or halves)."""
+    rows = [TRACE_HEADER] + [f"{t.time_s:g},{t.kind},{t.from_state},{t.to_state},"
+                             f"{t.stack_depth}" for t in trace]
+    return "\n".join(rows) + "\n"
+
+
+def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
+    """One row per tick: time, depth, pitch, water temperature, state, stack depth, each
+    logged sensor's power, power per component [W], battery remaining [J]."""
+    import pyarrow as pa
+
+    c = record.columns
+    names = np.array(list(record.state_names) + [""], dtype=object)
+    state = c["state"].astype(int)
+    columns = {
+        "time_s": c["time_s"],
+        "depth_m": c["depth_m"],
+        "pitch_rad": c["pitch_rad"],
+        "temperature_c": c["temperature_c"],
+        "state": names[np.where(state == NONE, len(record.state_names), state)],
+        "stack_depth": c["stack_depth"].astype(np.int16),
+        "profile": c["profile"].astype(np.int16),
+        "lat_deg": c["lat_deg"],
+        "lon_deg": c["lon_deg"],
+    }
+    power = c["sensor_power"].astype(np.int64)
+    for sensor in SENSORS:
+        if sensor.device is not None:
+            columns[f"{sensor.name}_on"] = (power >> sensor.index & 1).astype(bool)
+    total = np.zeros(len(state))
+    for component, joules in energy.per_tick_j.items():
+        columns[f"power_{component}_w"] = joules / record.tick_s
+        total = total + joules
+    columns["power_total_w"] = total / record.tick_s
+    columns["battery_remaining_j"] = battery_j - np.cumsum(total)
+    return pa.table(columns)
+
+
+def parquet_bytes(table) -> bytes:
+    import pyarrow.parquet as pq
+
+    sink = io.BytesIO()
+    pq.write_table(table, sink)
+    return sink.getvalue()
+
+
+def summary(record: RunRecord, energy: RunEnergy, check: PlanCheck,
+            predictions: dict[str, StatePrediction] | None, meta: dict) -> str:
+    """Energy by component and by state, predicted against simulated, the verdict."""
+    states = {}
+    for name in record.state_names:
+        simulated = energy.by_state_j.get(name)
+        predicted = (predictions or {}).get(name)
+        if simulated is None and predicted is None:
+            continue
+        entry: dict = {
+            "time_s": energy.time_by_state_s.get(name, 0.0),
+            "inflections": energy.inflections_by_state.get(name, 0),
+            "simulated_j": sum((simulated or {}).values()),
+            "simulated_by_component_j": simulated or {},
+        }
+        if predicted is not None:
+            entry.update(predicted_j=predicted.energy_j,
+                         predicted_by_component_j=predicted.energy_by_component_j,
+                         predicted_time_s=predicted.time_s,
+                         predicted_inflections=predicted.inflections)
+        states[name] = entry
+    data = {
+        **meta,
+        "ended": record.ended,
+        "simulated_s": float(record.columns["time_s"][-1]) if len(record.columns["time_s"])
+        else 0.0,
+        "transitions": len(record.trace),
+        "surfacings": record.surfacings,
+        "energy_j": energy.total_j,
+        "energy_by_component_j": energy.by_component_j(),
+        "states": states,
+        "plan_check": check.to_json(),
+    }
+    return json.dumps(data, indent=2, sort_keys=False, allow_nan=False) + "\n"

@@ -1,0 +1,292 @@
+"""The runtime's library routines in Python, exactly as docs/pilot.md specifies them:
+flight profiles (yo, thermotrackyo, surface, hover), routes (nav, noheading,
+waypoints, sweep) and the plan's schedule (sensor power windows, profile alternation).
+
+Each routine is a small object with the pilot's memory (leg, tracked band, waypoint
+index) that is re-created on entry, and a per-tick method on plain floats: the
+simulator calls it 650 000 times in a 30-day run.
+"""
+
+from __future__ import annotations
+
+import math
+
+from gliderplan.sim.geo import EARTH_RADIUS_M, bearing_rad, ddmm_to_degrees, offset_m
+from gliderplan.sim.planfile import StatePlan
+
+DIVE, CLIMB = 0, 1
+SURFACE_PITCH_RAD = 0.454  # docs/pilot.md: surface climbs at +0.454 rad
+TRACK_WINDOW = 64  # robust tracker: at most this many readings in the window
+WAYPOINT_RADIUS_M = 50.0
+MAX_SWEEP_WAYPOINTS = 256
+
+
+# ---- flight profiles -----------------------------------------------------------------
+# command(d, temp, args, pitch, ballast) -> (depth_target_m, pitch_rad, ballast_cc,
+# surface); `pitch` replaces the profile's own pitch arguments when a plan gives one.
+
+class Yo:
+    """yo(min, max, dive_pitch, climb_pitch)."""
+
+    def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
+        self.leg = DIVE if depth_m < args[1] else CLIMB
+
+    def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
+                ballast: float) -> tuple[float, float, float, bool]:
+        low, high = args[0], args[1]
+        if self.leg == DIVE and d >= high:
+            self.leg = CLIMB
+        elif self.leg == CLIMB and d <= low:
+            self.leg = DIVE
+        return _yo_command(self.leg, low, high, args, pitch, ballast)
+
+
+def _yo_command(leg: int, low: float, high: float, args: tuple[float, ...],
+                pitch: float | None, ballast: float) -> tuple[float, float, float, bool]:
+    if leg == DIVE:
+        return high, -(args[2] if pitch is None else pitch), -ballast, False
+    return low, (args[3] if pitch is None else pitch), ballast, False
+
+
+class ThermoTrackYo:
+    """thermotrackyo(min, max, dive_pitch, climb_pitch, temp_threshold, depth_threshold):
+    a yo whose band follows the thermocline (robust or naive detection).
+
+    Each tick: first the leg turns at the band's edge (a leg that turns without a
+    detection resets the band), then the reading, which belongs to the leg now flown,
+    is compared with the leg's window and, if it detects nothing, joins the window.
+    """
+
+    def __init__(self, depth_m: float, args: tuple[float, ...], robust: bool = True) -> None:
+        self.robust = robust
+        self.low, self.high = args[0], args[1]
+        self._new_leg(DIVE if depth_m < args[1] else CLIMB)
+
+    def _new_leg(self, leg: int) -> None:
+        self.leg = leg
+        self.window: list[tuple[float, float]] = []  # (depth [m], temperature [degC])
+        self.recent: list[float] = []  # robust: the leg's last 3 raw temperatures
+        self.previous = math.nan  # naive: the leg's previous raw temperature
+        self.detected = False
+
+    def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
+                ballast: float) -> tuple[float, float, float, bool]:
+        leg = self.leg
+        if leg == DIVE and d >= self.high:
+            leg = CLIMB
+        elif leg == CLIMB and d <= self.low:
+            leg = DIVE
+        if leg != self.leg:
+            if not self.detected:  # the thermocline was lost: search the whole range
+                self.low, self.high = args[0], args[1]
+            self._new_leg(leg)
+        if math.isfinite(d) and math.isfinite(temp):  # no reading: nothing to learn from
+            self._track(d, temp, args)
+        return _yo_command(self.leg, self.low, self.high, args, pitch, ballast)
+
+    def _track(self, d: float, temp: float, args: tuple[float, ...]) -> None:
+        if self.robust:
+            temp, a = self._detect_robust(d, temp, args)
+        else:
+            a = self._detect_naive(d, temp, args)
+        if a is None:
+            if len(self.window) == TRACK_WINDOW:
+                del self.window[0]
+            self.window.append((d, temp))
+            return
+        z = (a[0] + d) / 2.0
+        half = args[5] / 2.0
+        self.low, self.high = max(args[0], z - half), min(args[1], z + half)
+        self.window = []
+        self.detected = True
+
+    def _detect_robust(self, d: float, temp: float, args: tuple[float, ...]
+                       ) -> tuple[float, tuple[float, float] | None]:
+        """(median-filtered temperature, the window's reading that detects, or None)."""
+        recent = self.recent
+        if len(recent) == 3:
+            del recent[0]
+        recent.append(temp)
+        if len(recent) == 3:
+            filtered = sorted(recent)[1]
+        elif len(recent) == 2:
+            filtered = (recent[0] + recent[1]) / 2.0
+        else:
+            filtered = temp
+        self.window = window = [r for r in self.window if abs(r[0] - d) <= args[5]]
+        if not window:
+            return filtered, None
+        warmest = max(window, key=lambda r: r[1])
+        coldest = min(window, key=lambda r: r[1])
+        warm_diff, cold_diff = abs(warmest[1] - filtered), abs(coldest[1] - filtered)
+        a = coldest if cold_diff > warm_diff else warmest
+        return filtered, (a if max(warm_diff, cold_diff) >= args[4] else None)
+
+    def _detect_naive(self, d: float, temp: float, args: tuple[float, ...]
+                      ) -> tuple[float, float] | None:
+        previous, self.previous = self.previous, temp
+        if previous == previous and (temp > previous if self.leg == DIVE else temp < previous):
+            self.window = []
+        for a in self.window:
+            if abs(a[1] - temp) >= args[4] and abs(a[0] - d) <= args[5]:
+                return a
+        return None
+
+
+class Surface:
+    def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
+        pass
+
+    def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
+                ballast: float) -> tuple[float, float, float, bool]:
+        return 0.0, SURFACE_PITCH_RAD, ballast, True
+
+
+class Hover:
+    def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
+        pass
+
+    def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
+                ballast: float) -> tuple[float, float, float, bool]:
+        return args[0], 0.0, 0.0, False
+
+
+PROFILE_ROUTINES = {"yo": Yo, "thermotrackyo": ThermoTrackYo, "surface": Surface,
+                    "hover": Hover}
+
+
+# ---- routes ----------------------------------------------------------------------------
+
+class NoHeading:
+    def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
+        pass
+
+    def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
+        return 0.0, False
+
+
+class Waypoints:
+    """Toward points[k]; k advances (one per tick) within 50 m; after the last, hold."""
+
+    def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
+        self.points = [(ddmm_to_degrees(a), ddmm_to_degrees(b)) for a, b in points]
+        self.k = 0
+
+    def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
+        if not (math.isfinite(lat_ddmm) and math.isfinite(lon_ddmm)):
+            return 0.0, False
+        lat, lon = ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm)
+        north, east = offset_m(lat, lon, *self.points[self.k])
+        if math.hypot(north, east) <= WAYPOINT_RADIUS_M and self.k + 1 < len(self.points):
+            self.k += 1
+            north, east = offset_m(lat, lon, *self.points[self.k])
+        return bearing_rad(north, east), True
+
+
+class Nav(Waypoints):
+    def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
+        super().__init__((), ((params[0], params[1]),))
+
+
+class Sweep(Waypoints):
+    """Lawn-mower over the convex hull of the corners, flown as waypoints."""
+
+    def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
+        self.points = sweep_waypoints(params[0], points)
+        self.k = 0
+
+
+def _hull(points: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """Convex hull (Andrew's monotone chain), counter-clockwise."""
+    pts = sorted(points)
+    if len(pts) < 3:
+        return pts
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[tuple[float, float]] = []
+    upper: list[tuple[float, float]] = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return lower[:-1] + upper[:-1]
+
+
+def sweep_waypoints(spacing_m: float,
+                    corners: tuple[tuple[float, float], ...]) -> list[tuple[float, float]]:
+    """Waypoints [deg] of east-west lines `spacing_m` apart across the corners' hull."""
+    lat0, lon0 = ddmm_to_degrees(corners[0][0]), ddmm_to_degrees(corners[0][1])
+    local = []
+    for lat_ddmm, lon_ddmm in corners:
+        north, east = offset_m(lat0, lon0, ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm))
+        local.append((east, north))
+    hull = _hull(local)
+    south = min(p[1] for p in hull)
+    north_edge = max(p[1] for p in hull)
+    scale = EARTH_RADIUS_M * math.pi / 180.0
+    east_scale = scale * math.cos(lat0 * math.pi / 180.0)
+    waypoints: list[tuple[float, float]] = []
+    line = 0
+    while len(waypoints) + 2 <= MAX_SWEEP_WAYPOINTS:
+        y = south + spacing_m / 2.0 + line * spacing_m
+        ends = _clip(hull, y)
+        if y > north_edge or ends is None:
+            break
+        west, east = ends
+        first, second = (west, east) if line % 2 == 0 else (east, west)
+        lat = lat0 + y / scale
+        waypoints += [(lat, lon0 + first / east_scale), (lat, lon0 + second / east_scale)]
+        line += 1
+    return waypoints
+
+
+def _clip(hull: list[tuple[float, float]], y: float) -> tuple[float, float] | None:
+    """West and east ends [m] of the hull's cut at northing `y` [m], or None."""
+    xs: list[float] = []
+    for i, a in enumerate(hull):
+        b = hull[(i + 1) % len(hull)]
+        if a[1] == b[1]:
+            if a[1] == y:
+                xs += [a[0], b[0]]
+        elif min(a[1], b[1]) <= y <= max(a[1], b[1]):
+            xs.append(a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]))
+    return (min(xs), max(xs)) if xs else None
+
+
+ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "waypoints": Waypoints, "sweep": Sweep}
+
+
+# ---- the plan's schedule ---------------------------------------------------------------
+
+def profile_index(state_plan: StatePlan | None, t_in_s: float) -> int:
+    """Alternative flown `t_in_s` [s] after entry: shares of the cycle in index order;
+    the last alternative with a non-zero share takes any rounding remainder."""
+    if state_plan is None:
+        return 0
+    cycle = state_plan.cycle_s
+    c = math.fmod(t_in_s, cycle)
+    start = 0.0
+    last = 0
+    for i, p in enumerate(state_plan.profiles):
+        if p.share > 0.0:
+            last = i
+            if start <= c < start + p.share * cycle:
+                return i
+        start += p.share * cycle
+    return last
+
+
+def sensor_power_mask(logged: tuple[tuple[int, float, float], ...], t_in_s: float) -> int:
+    """Bit i set if sensor i's device is powered: `logged` holds (index, period, on) with
+    period 0 for sensors always on (unscheduled or without a device)."""
+    mask = 0
+    for index, period_s, on_s in logged:
+        if period_s == 0.0 or math.fmod(t_in_s, period_s) < on_s:
+            mask |= 1 << index
+    return mask

@@ -1,0 +1,99 @@
+"""Plots of a simulated run: the depth profile coloured by water temperature with the
+states as bands (the paper's Fig. 5), and energy over time against the plan."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from gliderplan.sim.energy import RunEnergy, StatePrediction
+from gliderplan.sim.executor import NONE
+from gliderplan.sim.loop import RunRecord
+
+
+def _figure():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _time_axis(time_s: np.ndarray) -> tuple[np.ndarray, str]:
+    span = float(time_s[-1]) if len(time_s) else 0.0
+    for unit, factor in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if span >= 3 * factor:
+            return time_s / factor, unit
+    return time_s, "s"
+
+
+def _state_runs(state: np.ndarray) -> list[tuple[int, int, int]]:
+    """(state, first tick, stop tick) of each stretch in one state."""
+    if len(state) == 0:
+        return []
+    edges = np.flatnonzero(np.diff(state)) + 1
+    starts = np.concatenate([[0], edges])
+    stops = np.concatenate([edges, [len(state)]])
+    return [(int(state[a]), int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
+
+
+def depth_png(record: RunRecord) -> bytes:
+    plt = _figure()
+    c = record.columns
+    t, unit = _time_axis(c["time_s"])
+    fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
+    colours = plt.get_cmap("tab10")
+    state = c["state"].astype(int)
+    for index, a, b in _state_runs(state):
+        if index == NONE:
+            continue
+        end = t[b] if b < len(t) else t[-1]
+        ax.axvspan(t[a], end, color=colours(index % 10), alpha=0.12, lw=0)
+        ax.text((t[a] + end) / 2, 0.02, record.state_names[index], ha="center", va="bottom",
+                fontsize=8, transform=ax.get_xaxis_transform())
+    points = ax.scatter(t, c["depth_m"], c=c["temperature_c"], s=4, cmap="coolwarm")
+    fig.colorbar(points, ax=ax, label="water temperature [degC]")
+    ax.invert_yaxis()
+    ax.set_xlabel(f"mission time [{unit}]")
+    ax.set_ylabel("depth [m]")
+    ax.set_title("depth profile; bands: mission states")
+    return _png(fig, plt)
+
+
+def energy_png(record: RunRecord, energy: RunEnergy,
+               predictions: dict[str, StatePrediction] | None, budget_j: float | None) -> bytes:
+    """Cumulative energy by component; the plan's line spends each state's predicted
+    energy at its planned rate (predicted J / planned s) along the simulated states."""
+    plt = _figure()
+    c = record.columns
+    t, unit = _time_axis(c["time_s"])
+    fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
+    parts = sorted(energy.per_tick_j.items(), key=lambda kv: -kv[1].sum())
+    ax.stackplot(t, *[np.cumsum(v) / 1e3 for _, v in parts], labels=[k for k, _ in parts],
+                 alpha=0.8)
+    if predictions:
+        rate = np.zeros(len(record.state_names) + 1)
+        for i, name in enumerate(record.state_names):
+            p = predictions.get(name)
+            if p is not None and p.time_s:
+                rate[i] = p.energy_j / p.time_s
+        state = c["state"].astype(int)
+        planned = np.cumsum(rate[np.minimum(state, len(rate) - 1)] * record.tick_s)
+        ax.plot(t, planned / 1e3, "k--", lw=1.5, label="plan (predicted rate per state)")
+    if budget_j is not None:
+        ax.axhline(budget_j / 1e3, color="red", lw=1, label="plan budget")
+    ax.set_xlabel(f"mission time [{unit}]")
+    ax.set_ylabel("energy [kJ]")
+    ax.legend(loc="upper left", fontsize=8)
+    ax.set_title("energy over time")
+    return _png(fig, plt)
+
+
+def _png(fig, plt) -> bytes:
+    sink = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(sink, format="png")
+    plt.close(fig)
+    return sink.getvalue()

@@ -1,0 +1,41 @@
+"""One simulated run of a checked mission: the glider and its science computer in an
+ocean, flown by the Python executor or by the compiled C runtime over a pty."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from gliderplan.language import ir
+from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
+from gliderplan.sim.ocean import Ocean
+from gliderplan.sim.planfile import Plan
+
+RUNTIMES = ("python", "c")
+
+
+def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Vehicle,
+        plan: Plan | None = None, plan_path: str | None = None, runtime: str = "python",
+        robust_tracker: bool = True,
+        progress: Callable[[float, float], None] | None = None) -> RunRecord:
+    """Fly the mission until it exits or `config.duration_s` ends.
+
+    The C runtime reads its plan from `plan_path` (the file `plan` was read from);
+    raises emulator.EmulatorError when it cannot be built or started.
+    """
+    science = make_science(mission, ocean, config, vehicle)
+    if runtime == "python":
+        from gliderplan.sim.executor import PythonRuntime
+
+        # without a plan the glider pumps its full stroke, as the compiled runtime does
+        executor = PythonRuntime(mission, plan, vehicle.max_ballast_cc, robust_tracker)
+        return simulate(mission, executor, science, config, progress)
+    if runtime != "c":
+        raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
+    from gliderplan.sim.emulator import start_c_runtime
+
+    c_runtime = start_c_runtime(mission, plan_path, naive_tracker=not robust_tracker)
+    try:
+        return simulate(mission, c_runtime, science, config, progress)
+    finally:
+        c_runtime.close()

@@ -1,0 +1,121 @@
+"""`gliderplan sim` as a user runs it: the files of a run, their columns, and bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from gliderplan.cli.errors import UsageError
+from gliderplan.cli.main import main
+from gliderplan.cli.sim import parse_duration_s
+
+REPO = Path(__file__).resolve().parents[1]
+FIG2 = REPO / "examples" / "fig2.mission"
+FILES = {"trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png"}
+
+
+def test_a_run_writes_every_file(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "--seed", "3", "-o", str(out)]) == 0
+    assert {p.name for p in out.iterdir()} == FILES
+    assert (out / "trace.csv").read_text() == (
+        "time_s,kind,from_state,to_state,stack_depth\n"
+        "0,start,,s1,0\n500,call,s1,s2,1\n1500,return,s2,s1,0\n"
+        "2000,goto,s1,s3,0\n2500,exit,s3,,0\n")
+    for png in ("depth.png", "energy.png"):
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "sampleMission: exit after 2500 s" in capsys.readouterr().err
+
+
+def test_timeseries_columns_and_summary(tmp_path):
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "-o", str(out)]) == 0
+    table = pd.read_parquet(out / "timeseries.parquet")
+    for column in ("time_s", "depth_m", "pitch_rad", "temperature_c", "state", "stack_depth",
+                   "temp_on", "oxygen_on", "power_hotel_w", "power_pump_w",
+                   "power_computer_w", "power_ctd_w", "power_total_w", "battery_remaining_j"):
+        assert column in table.columns, column
+    assert len(table) == 626 and table["time_s"].iloc[-1] == 2500.0
+    flying = table[table["state"] != ""]  # the last row: the tick of the exit
+    assert flying["temp_on"].groupby(flying["state"]).any().to_dict() == {
+        "s1": False, "s2": True, "s3": False}  # only s2 logs temp
+    assert flying["temp_on"][flying["state"] == "s2"].all()
+    assert set(table["stack_depth"][table["state"] == "s2"]) == {1}
+    summary = json.loads((out / "summary.json").read_text())
+    total = summary["energy_j"]
+    assert total == pytest.approx(sum(summary["energy_by_component_j"].values()))
+    assert total == pytest.approx(sum(s["simulated_j"] for s in summary["states"].values()))
+    assert total == pytest.approx((table["power_total_w"] * 4.0).sum())
+    assert table["battery_remaining_j"].iloc[-1] == pytest.approx(7.8e6 - total)
+    assert summary["plan_check"]["verdict"] == "no plan"
+
+
+def test_duration_ends_a_run_that_has_not_exited(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "--duration", "30min", "-o", str(out)]) == 0
+    trace = (out / "trace.csv").read_text().splitlines()
+    assert trace[-1] == "1500,return,s2,s1,0"  # no goto (2000 s) or exit (2500 s)
+    assert pd.read_parquet(out / "timeseries.parquet")["time_s"].iloc[-1] == 1800.0
+    assert json.loads((out / "summary.json").read_text())["ended"] == "duration"
+
+
+@pytest.mark.parametrize("text, seconds", [
+    ("3600s", 3600.0), ("90min", 5400.0), ("6h", 21600.0), ("30d", 2592000.0), ("1.5h", 5400.0)])
+def test_durations_take_units(text, seconds):
+    assert parse_duration_s(text) == seconds
+
+
+@pytest.mark.parametrize("text", ["3600", "6 hours", "-1h", "0s", "h", "1e400s"])
+def test_bad_durations_are_usage_errors(text):
+    with pytest.raises(UsageError, match="--duration"):
+        parse_duration_s(text)
+
+
+@pytest.mark.parametrize("args, code, message", [
+    (["--duration", "soon"], 2, "--duration 'soon': expected a number with a unit"),
+    (["--ocean", "atlantis"], 1, "no such ocean file or preset"),
+    (["--plan", "missing.plan"], 2, "--plan missing.plan: no such file"),
+    (["--current", "north"], 2, "--current 'north'"),
+    (["--tick", "0"], 2, "--tick 0"),
+])
+def test_bad_input_is_a_message_not_a_traceback(tmp_path, capsys, args, code, message):
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), *args, "-o", str(out)]) == code
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not out.exists()  # nothing half-written
+
+
+def test_a_bad_ocean_file_names_file_and_line(tmp_path, capsys):
+    water = tmp_path / "water.csv"
+    water.write_text("depth_m,temperature_c\n0,20\n10,cold\n")
+    assert main(["sim", str(FIG2), "--ocean", str(water), "-o", str(tmp_path / "r")]) == 1
+    assert f"{water}:3: not a number" in capsys.readouterr().err
+
+
+def test_a_bad_plan_file_names_the_line(tmp_path, capsys):
+    plan = tmp_path / "fig2.plan"
+    plan.write_text("GPPLAN 1\nmission sampleMission\n")
+    assert main(["sim", str(FIG2), "--plan", str(plan), "-o", str(tmp_path / "r")]) == 1
+    assert f"plan rejected: {plan}:3: file ends before the 'hash' line" in capsys.readouterr().err
+
+
+def test_a_measured_profile_file_colours_the_run(tmp_path):
+    water = tmp_path / "water.csv"
+    water.write_text("depth_m,temperature_c\n0,18\n8,18\n12,9\n40,9\n")
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "--ocean", str(water), "-o", str(out)]) == 0
+    table = pd.read_parquet(out / "timeseries.parquet")
+    assert table["temperature_c"].max() == pytest.approx(18.0)
+    assert table["temperature_c"][table["depth_m"] > 15].max() == pytest.approx(9.0)
+
+
+def test_rerunning_into_the_same_directory_replaces_the_files(tmp_path):
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "--duration", "10min", "-o", str(out)]) == 0
+    assert main(["sim", str(FIG2), "-o", str(out)]) == 0
+    assert (out / "trace.csv").read_text().endswith("2500,exit,s3,,0\n")
+    assert {p.name for p in out.iterdir()} == FILES  # no temporary files left behind

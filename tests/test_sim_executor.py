@@ -1,0 +1,205 @@
+"""The Python executor: compiled conditions agree with the reference semantics, sensor
+values pass through binary32, the plan's schedule and routes follow docs/pilot.md, and
+plan files are read strictly."""
+
+from __future__ import annotations
+
+import math
+import zlib
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gliderplan.cli.common import check_file
+from gliderplan.language import check_source, ir
+from gliderplan.language.registry import SENSORS
+from gliderplan.sim import compiled, pilot
+from gliderplan.sim.executor import NONE, PythonRuntime
+from gliderplan.sim.geo import ddmm_to_degrees, offset_m
+from gliderplan.sim.planfile import PlanFileError, parse_plan
+from gliderplan.sim.science import DEVICELESS_MASK, powered_mask
+
+REPO = Path(__file__).resolve().parents[1]
+EXAMPLES = sorted((REPO / "examples").glob("*.mission")) + sorted(
+    (REPO / "tests" / "missions").glob("sim_*.mission"))
+ALL_ON = (1 << len(SENSORS)) - 1
+
+
+def mission_from(text: str) -> ir.CheckedMission:
+    result = check_source(text, "test.mission")
+    assert result.mission is not None, result.render()
+    return result.mission
+
+
+def readings(**values: float) -> list[float]:
+    array = [math.nan] * len(SENSORS)
+    for name, value in values.items():
+        array[[s.name for s in SENSORS].index(name)] = value
+    return array
+
+
+sensor_values = st.one_of(st.floats(-50, 3000, allow_nan=False), st.just(math.nan),
+                          st.sampled_from([0.0, 500.0, 1500.0, 2000.0, 2500.0]))
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_compiled_event_checks_agree_with_the_reference_semantics(path, data):
+    mission = check_file(str(path)).mission
+    s = data.draw(st.lists(sensor_values, min_size=len(SENSORS), max_size=len(SENSORS)))
+    v = {var.name: data.draw(sensor_values) for var in mission.variables}
+    named = {info.name: s[info.index] for info in SENSORS}
+    for state in mission.states:
+        expected = next((i for i, e in enumerate(state.events)
+                         if ir.evaluate(e.condition, named, v) != 0.0), -1)
+        assert compiled.event_checker(state)(s, v) == expected
+        for profile in state.profiles:
+            got = compiled.arguments(profile)(s, v)
+            want = tuple(ir.evaluate(a, named, v) for a in profile.args)
+            assert [repr(x) for x in got] == [repr(float(x)) for x in want]
+
+
+def test_sensor_values_reach_conditions_as_binary32():
+    mission = mission_from("""mission f32
+state a
+begin
+  flightroute noheading
+  flightprofile hover(5)
+  sensors missiontime, depth
+  events
+    case depth >= 10.1 exit
+end
+""")
+    # 10.09999995 < 10.1 in double, but the link rounds it to binary32 10.1000004
+    executor = PythonRuntime(mission, None, 200.0)
+    command = executor.step(0, DEVICELESS_MASK, readings(missiontime=0.0, depth=10.09999995))
+    assert command.transition == 5 and command.state == NONE
+
+
+def test_a_sensor_not_sent_keeps_its_last_value():
+    mission = mission_from("""mission stale
+state a
+begin
+  flightroute noheading
+  flightprofile hover(5)
+  sensors missiontime, depth, temp
+  events
+    case temp < 10 exit
+end
+""")
+    executor = PythonRuntime(mission, None, 200.0)
+    mask = powered_mask(ALL_ON)
+    assert executor.step(0, mask, readings(missiontime=0, depth=1, temp=15.0)).transition == 1
+    # the CTD is off this tick: its old 15 C stands, the new 5 C is not seen
+    assert executor.step(1, DEVICELESS_MASK, readings(missiontime=4, temp=5.0)).transition == 0
+    assert executor.step(2, mask, readings(missiontime=8, temp=5.0)).transition == 5
+
+
+PLAN_MISSION = """mission planned
+state a
+begin
+  flightroute noheading
+  flightprofile yo(2, 10, .454, .454) | hover(5)
+  sensors missiontime, depth, temp duty auto, oxygen duty auto
+  events
+    case missiontime >= 100000 exit
+end
+"""
+
+
+def plan_text(mission: ir.CheckedMission, body: str, *, crc: str | None = None) -> bytes:
+    head = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+            f"budget_j 180000\npredicted_j 9876.5\nstates 1\n{body}")
+    data = head.encode()
+    return data + f"crc32 {crc or format(zlib.crc32(data), '08x')}\n".encode()
+
+
+GOOD_BLOCK = ("state a 300 600 2 2\nsensor temp 60 15\nsensor oxygen 100 100\n"
+              "profile 0 0.75 0.4 150 0.3\nprofile 1 0.25 0.454 230 0.31\nend\n")
+
+
+def test_the_plan_schedule_powers_sensors_and_alternates_profiles():
+    mission = mission_from(PLAN_MISSION)
+    plan = parse_plan(plan_text(mission, GOOD_BLOCK), "p.plan", mission)
+    executor = PythonRuntime(mission, plan, 200.0)
+    temp_bit, oxygen_bit = 1 << 9, 1 << 12
+    seen = {}
+    for tick, t in enumerate([0.0, 14.0, 16.0, 61.0, 449.0, 450.0, 599.0, 600.0]):
+        command = executor.step(tick, powered_mask(ALL_ON),
+                                readings(missiontime=t, depth=3.0, temp=15.0, lat=0, lon=0))
+        seen[t] = command
+    assert [bool(seen[t].sensor_power & temp_bit) for t in (0.0, 14.0, 16.0, 61.0)] == \
+        [True, True, False, True]
+    assert all(c.sensor_power & oxygen_bit for c in seen.values())  # ON_S = PERIOD_S
+    assert [seen[t].profile for t in (0.0, 449.0, 450.0, 599.0, 600.0)] == [0, 0, 1, 1, 0]
+    assert seen[0.0].pitch_rad == pytest.approx(-0.4)  # the plan's pitch, diving
+    assert seen[0.0].ballast_cc == -150.0
+    assert seen[450.0].pitch_rad == 0.0 and seen[450.0].depth_target_m == 5.0  # hover
+
+
+def test_without_a_plan_every_logged_sensor_is_on_and_the_default_ballast_flies():
+    mission = mission_from(PLAN_MISSION)
+    executor = PythonRuntime(mission, None, 233.0)
+    command = executor.step(0, powered_mask(0), readings(missiontime=0.0, depth=0.0))
+    logged = sum(1 << i for i in (0, 1, 9, 12))
+    assert command.sensor_power == logged
+    assert command.ballast_cc == -233.0 and command.profile == 0
+
+
+@pytest.mark.parametrize("mutate, line, message", [
+    (lambda d: d.replace(b"GPPLAN 1", b"GPPLAN 2"), 1, "version"),
+    (lambda d: d.replace(b"mission planned", b"mission other"), 2, "not 'planned'"),
+    (lambda d: d.replace(b"hash ", b"hash 0"), 3, "hash differs"),
+    (lambda d: d.replace(b"profile 1 0.25", b"profile 1 0.35"), 12, "do not sum to 1"),
+    (lambda d: d.replace(b"sensor temp 60 15", b"sensor temp 60 75"), 9, "ON_S <= PERIOD_S"),
+    (lambda d: d[:-1], 14, "missing final line feed"),
+    (lambda d: d.replace(b"budget_j 180000", b"budget_j 18e4x"), 5, "not a number"),
+])
+def test_a_bad_plan_is_rejected_naming_the_line(mutate, line, message):
+    mission = mission_from(PLAN_MISSION)
+    data = plan_text(mission, GOOD_BLOCK)
+    bad = mutate(data)
+    if not message.startswith("missing"):  # keep the checksum right to reach the check
+        body = bad[: bad.rindex(b"crc32 ")]
+        bad = body + f"crc32 {zlib.crc32(body):08x}\n".encode()
+    with pytest.raises(PlanFileError) as err:
+        parse_plan(bad, "p.plan", mission)
+    assert str(err.value).startswith(f"p.plan:{line}:") and message in str(err.value)
+
+
+def test_a_plan_with_a_wrong_checksum_is_rejected():
+    mission = mission_from(PLAN_MISSION)
+    with pytest.raises(PlanFileError, match=r"p.plan:14: checksum mismatch"):
+        parse_plan(plan_text(mission, GOOD_BLOCK, crc="00000000"), "p.plan", mission)
+
+
+def test_sweep_flies_east_west_lines_across_the_hull_alternating():
+    corners = ((3910.0, -7350.0), (3910.0, -7349.0), (3911.0, -7349.0), (3911.0, -7350.0))
+    points = pilot.sweep_waypoints(200.0, corners)
+    lat0, lon0 = ddmm_to_degrees(3910.0), ddmm_to_degrees(-7350.0)
+    local = [offset_m(lat0, lon0, lat, lon) for lat, lon in points]  # (north, east)
+    height = offset_m(lat0, lon0, ddmm_to_degrees(3911.0), lon0)[0]  # one minute: ~1853 m
+    width = offset_m(lat0, lon0, lat0, ddmm_to_degrees(-7349.0))[1]
+    assert len(points) == 2 * int((height - 100.0) // 200.0 + 1)
+    assert local[0][0] == pytest.approx(100.0)
+    assert local[2][0] - local[0][0] == pytest.approx(200.0)
+    for line in range(len(points) // 2):
+        west_to_east = line % 2 == 0
+        a, b = local[2 * line], local[2 * line + 1]
+        assert a[0] == pytest.approx(b[0])  # east-west
+        assert (a[1], b[1]) == (pytest.approx(0.0 if west_to_east else width, abs=1e-6),
+                                pytest.approx(width if west_to_east else 0.0, abs=1e-6))
+
+
+def test_waypoints_advance_within_50_m_and_heading_points_at_the_next():
+    route = pilot.Waypoints((), ((3910.0, -7350.0), (3911.0, -7350.0)))
+    heading, valid = route.heading(3909.0, -7350.0)  # south of both: head north
+    assert valid and heading == pytest.approx(0.0) and route.k == 0
+    route.heading(3910.0, -7350.0 + 0.0001)  # at the first point: on to the second
+    assert route.k == 1
+    heading, _ = route.heading(3912.0, -7350.0)  # past the last: turn back south
+    assert heading == pytest.approx(math.pi)
+

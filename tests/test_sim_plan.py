@@ -1,0 +1,105 @@
+"""The plan check: a sound plan passes; a deliberately under-budgeted plan (one that
+believes a three-hour survey lasts one hour) is flagged, with the cause.
+
+The predictions are computed here from the power models, independently of the
+simulator: hotel load, yo pump and pitch power, computer and CTD for the planned time.
+"""
+
+from __future__ import annotations
+
+import json
+import zlib
+from pathlib import Path
+
+import pytest
+
+from gliderplan.cli.common import check_file
+from gliderplan.cli.main import main
+from gliderplan.power_models import load_board, load_sensor, load_vehicle
+from gliderplan.sim.energy import RUNTIME_CYCLES_PER_TICK
+
+MISSION = Path(__file__).resolve().parent / "missions" / "sim_budget.mission"
+PITCH_RAD, BALLAST_CC, TICK_S = 0.454, 233.0, 4.0
+
+
+def predicted_components_j(time_s: float) -> dict[str, float]:
+    """Energy of flying the survey's yo (3-30 m) for `time_s` with the CTD always on."""
+    vehicle = load_vehicle("slocum_g2_shallow")
+    board = load_board("ts7800", 300.0)
+    busy = board.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / TICK_S)
+    return {
+        "hotel": vehicle.hotel_w * time_s,
+        "pump_and_pitch": float(vehicle.profile_power_w(3, 30, PITCH_RAD, BALLAST_CC)) * time_s,
+        "computer": float(board.power_w(busy)) * time_s,
+        "ctd": load_sensor("ctd").on_power_w * time_s,
+    }
+
+
+def write_plan(tmp_path: Path, budget_j: float, planned_s: float) -> Path:
+    """A plan for the survey and its report (`<plan>.json`) predicting `planned_s`."""
+    mission = check_file(str(MISSION)).mission
+    components = predicted_components_j(planned_s)
+    vehicle = load_vehicle("slocum_g2_shallow")
+    inflections = float(vehicle.inflections_per_hour(3, 30, PITCH_RAD, BALLAST_CC)) \
+        * planned_s / 3600
+    predicted = sum(components.values())
+    u = float(vehicle.glide(PITCH_RAD, BALLAST_CC)[0])
+    body = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+            f"budget_j {budget_j:.9g}\npredicted_j {predicted:.9g}\nstates 1\n"
+            f"state survey 300 600 1 1\nsensor temp 600 600\n"
+            f"profile 0 1 {PITCH_RAD} {BALLAST_CC:.9g} {u:.9g}\nend\n").encode()
+    plan = tmp_path / "survey.plan"
+    plan.write_bytes(body + f"crc32 {zlib.crc32(body):08x}\n".encode())
+    report = {"budget_j": budget_j, "predicted_j": predicted,
+              "states": {"survey": {"energy_by_component_j": components,
+                                    "inflections": inflections, "time_s": planned_s}}}
+    (tmp_path / "survey.plan.json").write_text(json.dumps(report))
+    return plan
+
+
+def simulate(tmp_path: Path, plan: Path, capsys) -> tuple[int, dict, str]:
+    code = main(["sim", str(MISSION), "--plan", str(plan), "-o", str(tmp_path / "run")])
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    return code, summary, capsys.readouterr().err
+
+
+def test_a_sound_plan_passes_and_the_simulation_agrees_with_its_prediction(tmp_path, capsys):
+    code, summary, err = simulate(tmp_path, write_plan(tmp_path, 120e3, 10800.0), capsys)
+    assert code == 0, err
+    check = summary["plan_check"]
+    assert check["verdict"] == "pass" and check["causes"] == []
+    survey = summary["states"]["survey"]
+    assert survey["simulated_j"] == pytest.approx(survey["predicted_j"], rel=0.05)
+    assert survey["inflections"] == pytest.approx(survey["predicted_inflections"], rel=0.05)
+    assert "plan check: pass" in err
+
+
+def test_an_under_budgeted_plan_is_a_violation_with_its_cause(tmp_path, capsys):
+    code, summary, err = simulate(tmp_path, write_plan(tmp_path, 40e3, 3600.0), capsys)
+    assert code == 3
+    check = summary["plan_check"]
+    assert check["verdict"] == "violation"
+    assert check["simulated_j"] > check["budget_j"] * (1 + check["tolerance"])
+    (cause,) = check["causes"]
+    assert cause.startswith("survey: ")
+    assert "21 inflections planned, 6" in cause  # ~62 flown in three hours
+    assert "1.00 h planned, 3.00 h flown" in cause
+    assert "plan check: violation" in err and "survey:" in err
+
+
+def test_a_plan_for_another_mission_is_refused(tmp_path, capsys):
+    plan = write_plan(tmp_path, 120e3, 10800.0)
+    other = tmp_path / "other.mission"
+    other.write_text(MISSION.read_text().replace("battery 120 kJ", "battery 121 kJ"))
+    code = main(["sim", str(other), "--plan", str(plan), "-o", str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    assert code == 1 and "plan rejected" in err and "survey.plan:3: mission hash differs" in err
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_broken_plan_report_is_a_clear_error(tmp_path, capsys):
+    plan = write_plan(tmp_path, 120e3, 10800.0)
+    (tmp_path / "survey.plan.json").write_text('{"states": {"survey": {}}}')
+    code = main(["sim", str(MISSION), "--plan", str(plan), "-o", str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    assert code == 1 and "survey.plan.json: states.survey: energy_by_component_j missing" in err
