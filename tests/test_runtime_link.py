@@ -225,3 +225,34 @@ def test_link_silence_releases_control_and_exits_3(binary, glider, tmp_path):
     assert process.wait(10) == 3
     assert "link silent" in process.stderr.read()
     assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE[:2]
+
+
+def test_a_stopped_runtime_releases_control(binary, glider):
+    process = glider.start(binary)
+    link = glider.link()
+    link.wait_hello()
+    fly(link, 0, 5)
+    process.send_signal(signal.SIGTERM)
+    assert link.wait_release(timeout_s=10) == p.ReleaseReason.INTERNAL_ERROR
+    assert process.wait(10) == 4
+
+
+def test_a_plan_adopted_over_the_link_outlives_a_restart(binary, glider, tmp_path):
+    state = tmp_path / "state"
+    glider.start(binary, "--state-dir", str(state))
+    link = glider.link()
+    link.wait_hello()
+    commands = fly(link, 0, 3)
+    assert abs(commands[-1].pitch_rad) == pytest.approx(0.454)  # no plan: the profile's
+    assert link.send_plan(make_plan()).accepted
+    commands = fly(link, 4, 60)
+    assert abs(commands[0].pitch_rad) == pytest.approx(0.3)
+    glider.process.send_signal(signal.SIGKILL)
+    glider.process.wait(5)
+    process = glider.start(binary, "--state-dir", str(state))
+    link.wait_hello()
+    commands = fly(link, 61, 400)
+    # t_in 110, 120, 130, 140, 150 s: the plan powers temp for 15 s of every 60 s
+    assert [c.sensor_power >> 9 & 1 for c in commands[:5]] == [0, 1, 1, 0, 0]
+    assert transitions(commands) == FIG2_TRACE[2:]
+    assert process.wait(10) == 0

@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -43,6 +44,7 @@ typedef struct {
 } session;
 
 static gp_runtime runtime;
+static volatile sig_atomic_t stop_signal;  /* SIGTERM/SIGINT/SIGHUP received */
 static gp_plan plan;
 static char plan_text[GP_PLAN_MAX_BYTES + 1];
 static uint8_t checkpoint_buf[GP_CHECKPOINT_SIZE];
@@ -278,6 +280,24 @@ static int on_frame(session *s, const gp_frame *frame)
     }
 }
 
+static void on_stop_signal(int signal_number)
+{
+    stop_signal = signal_number;
+}
+
+/* An operator stopping the runtime hands the glider back instead of leaving it
+ * waiting for commands that will never come. */
+static void catch_stop_signals(void)
+{
+    struct sigaction action;
+    memset(&action, 0, sizeof action);
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGTERM, &action, NULL);
+    sigaction(SIGINT, &action, NULL);
+    sigaction(SIGHUP, &action, NULL);
+}
+
 static int run_link(session *s)
 {
     static uint8_t chunk[READ_CHUNK];
@@ -286,8 +306,13 @@ static int run_link(session *s)
     double retransmit_s = s->args->retransmit_ms / 1000.0;
     s->last_valid_s = gp_now_s();
     s->hello_due_s = s->last_valid_s;
+    catch_stop_signals();
     for (;;) {
         double now = gp_now_s();
+        if (stop_signal) {
+            say(s, "stopped by a signal; releasing control");
+            return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+        }
         if (now - s->last_valid_s >= s->args->link_timeout_s) {
             say(s, "link silent past its timeout; releasing control");
             return release(s, GP_RELEASE_LINK_SILENT, GP_EXIT_LINK_LOST);
