@@ -223,9 +223,12 @@ class _Checker:
                 self.error(f"'duty {bound.op}' is not a bound", bound.span,
                            "use >=, <= or ==")
         if duty_min > duty_max:
-            span = next(iter(bounds)).span if bounds else ast.NO_SPAN
+            duties = [b.span for b in bounds if b.kind == "duty"]
+            span = ast.Span(duties[0].line, duties[0].column, duties[-1].end_line,
+                            duties[-1].end_column)
             self.error(f"duty bounds of '{sensor}' contradict each other: at least "
-                       f"{duty_min:g} but at most {duty_max:g}", span)
+                       f"{duty_min:g} but at most {duty_max:g}", span,
+                       "no duty satisfies both; drop one bound or swap the numbers")
         return duty_min, duty_max, quality_min
 
     def variable(self, decl: ast.VarDecl) -> ir.Variable | None:
