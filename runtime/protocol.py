@@ -124,21 +124,14 @@ def crc16_ccitt_false(data: bytes) -> int:
 
 def cobs_encode(data: bytes) -> bytes:
     """Consistent Overhead Byte Stuffing: the result holds no zero byte."""
-    out = bytearray([0])
-    code_at, code = 0, 1
-    for byte in data:
-        if byte == 0:
-            out[code_at] = code
-            code_at, code = len(out), 1
-            out.append(0)
-            continue
-        out.append(byte)
-        code += 1
-        if code == 0xFF:
-            out[code_at] = code
-            code_at, code = len(out), 1
-            out.append(0)
-    out[code_at] = code
+    out = bytearray()
+    for block in bytes(data).split(b"\x00"):  # whole blocks at C speed, not byte by byte
+        while len(block) >= 0xFE:
+            out.append(0xFF)
+            out += block[:0xFE]
+            block = block[0xFE:]
+        out.append(len(block) + 1)
+        out += block
     return bytes(out)
 
 
@@ -223,13 +216,18 @@ class FrameReader:
         self._overlong = False
 
     def feed(self, data: bytes) -> Iterator[Frame | ProtocolError]:
-        for byte in data:
-            if byte != 0:
-                if len(self._buffer) < MAX_WIRE:
-                    self._buffer.append(byte)
-                else:
-                    self._overlong = True
-                continue
+        start = 0
+        while True:  # one slice per frame, not one append per byte
+            end = data.find(0, start)
+            chunk = data[start:] if end < 0 else data[start:end]
+            room = MAX_WIRE - len(self._buffer)
+            if len(chunk) > room:
+                self._overlong = True
+                chunk = chunk[:room]
+            self._buffer += chunk
+            if end < 0:
+                return
+            start = end + 1
             wire, overlong = bytes(self._buffer), self._overlong
             self._buffer.clear()
             self._overlong = False
