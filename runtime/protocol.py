@@ -138,20 +138,20 @@ def cobs_encode(data: bytes) -> bytes:
 def cobs_decode(data: bytes) -> bytes:
     """Inverse of cobs_encode; raises CobsError on a zero byte or a block past the end."""
     out = bytearray()
-    i = 0
-    while i < len(data):
+    i, size = 0, len(data)
+    while i < size:
         code = data[i]
         if code == 0:
             raise CobsError("zero byte inside a COBS frame")
         end = i + code
-        if end > len(data):
+        if end > size:
             raise CobsError("COBS block runs past the end of the frame")
         block = data[i + 1:end]
         if 0 in block:
             raise CobsError("zero byte inside a COBS frame")
         out += block
         i = end
-        if code != 0xFF and i < len(data):
+        if code != 0xFF and i < size:
             out.append(0)
     return bytes(out)
 
