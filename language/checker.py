@@ -435,7 +435,8 @@ class _Checker:
         if action is not None and action.target is not None:
             if action.target.text not in self.state_names:
                 self.error(f"unknown state '{action.target.text}'", action.target.span,
-                           did_you_mean(action.target.text, self.state_names))
+                           did_you_mean(action.target.text, self.state_names)
+                           or _listing("states", self.state_names))
         if condition is None or len(assignments) != len(event.assignments):
             return None
         return ir.Event(condition, tuple(assignments), action.kind if action else None,
@@ -529,6 +530,13 @@ class _Checker:
                    did_you_mean(ident.text, SENSOR_BY_NAME)
                    or f"sensors: {', '.join(SENSOR_BY_NAME)}")
         return False
+
+
+def _listing(what: str, names: Iterable[str], limit: int = 12) -> str:
+    """'states: a, b, c' (the first few, sorted), for a hint when nothing is close."""
+    names = sorted(names)
+    shown = ", ".join(names[:limit]) + (", ..." if len(names) > limit else "")
+    return f"{what}: {shown}"
 
 
 def _keyword(node: object) -> str:

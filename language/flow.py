@@ -9,18 +9,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import NamedTuple
 
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, error, warning
-
-# Physical range of flight sensors, for conditions that can never hold.
-_SENSOR_RANGE = {
-    "missiontime": (0.0, math.inf),
-    "depth": (0.0, math.inf),
-    "altitude": (0.0, math.inf),
-    "pitch": (-math.pi / 2, math.pi / 2),
-    "roll": (-math.pi, math.pi),
-}
 
 
 def _ast_events(state: ast.State) -> list[ast.Event]:
@@ -84,12 +76,40 @@ def _deepest_call_chain(calls: Mapping[str, list[str]], roots: set[str]) -> list
     return max((chain(r) for r in sorted(roots)), key=len, default=[])
 
 
-def _intervals(expr: ir.Expr) -> dict[str, tuple[float, float]] | None:
-    """Per-sensor closed bounds implied by a conjunction of `sensor CMP constant`.
+class _Interval(NamedTuple):
+    """Values a sensor may take for a condition to hold; open ends exclude the bound."""
+
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+
+    def meet(self, other: _Interval) -> _Interval:
+        low, low_open = max((self.low, self.low_open), (other.low, other.low_open))
+        high, high_open = min((self.high, not self.high_open), (other.high, not other.high_open))
+        return _Interval(low, high, low_open, not high_open)
+
+    @property
+    def empty(self) -> bool:
+        return self.low > self.high or (self.low == self.high
+                                         and (self.low_open or self.high_open))
+
+
+# Physical range of flight sensors, for conditions that can never hold.
+_SENSOR_RANGE = {
+    "missiontime": _Interval(0.0, math.inf),
+    "depth": _Interval(0.0, math.inf),
+    "altitude": _Interval(0.0, math.inf),
+    "pitch": _Interval(-math.pi / 2, math.pi / 2),
+    "roll": _Interval(-math.pi, math.pi),
+}
+
+
+def _intervals(expr: ir.Expr) -> dict[str, _Interval] | None:
+    """Per-sensor bounds implied by a conjunction of `sensor CMP constant`.
 
     Returns None when the expression is not such a conjunction (nothing is decided).
-    Strict and non-strict comparisons are treated alike: good enough to find
-    contradictions such as `missiontime < 100 && missiontime > 200`.
+    Finds contradictions such as `missiontime < 100 && missiontime > 200` or `depth < 0`.
     """
     match expr:
         case ir.BinaryOp("&&", left, right):
@@ -97,47 +117,48 @@ def _intervals(expr: ir.Expr) -> dict[str, tuple[float, float]] | None:
             if a is None or b is None:
                 return a or b
             merged = dict(a)
-            for name, (lo, hi) in b.items():
-                old_lo, old_hi = merged.get(name, (-math.inf, math.inf))
-                merged[name] = (max(lo, old_lo), min(hi, old_hi))
+            for name, interval in b.items():
+                merged[name] = merged.get(name, _Interval()).meet(interval)
             return merged
-        case ir.BinaryOp(op, ir.SensorRef(name), ir.Const(value)) if op in _FLIP:
-            return {name: _bound(op, value)}
-        case ir.BinaryOp(op, ir.Const(value), ir.SensorRef(name)) if op in _FLIP:
-            return {name: _bound(_FLIP[op], value)}
+        case ir.BinaryOp(op, ir.SensorRef(name), constant) if op in _FLIP and _is_constant(
+                constant):
+            return {name: _bound(op, ir.evaluate(constant, {}, {}))}
+        case ir.BinaryOp(op, constant, ir.SensorRef(name)) if op in _FLIP and _is_constant(
+                constant):
+            return {name: _bound(_FLIP[op], ir.evaluate(constant, {}, {}))}
     return None
+
+
+def _is_constant(expr: ir.Expr) -> bool:
+    return not ir.sensors_read(expr) and not ir.variables_read(expr)
 
 
 _FLIP = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "=="}
 
 
-def _bound(op: str, value: float) -> tuple[float, float]:
+def _bound(op: str, value: float) -> _Interval:
     if op in ("<", "<="):
-        return (-math.inf, value)
+        return _Interval(high=value, high_open=op == "<")
     if op in (">", ">="):
-        return (value, math.inf)
-    return (value, value)
+        return _Interval(low=value, low_open=op == ">")
+    return _Interval(value, value)
 
 
 def never_true(condition: ir.Expr) -> bool:
     """True when the condition is statically false (constant, or contradictory bounds)."""
-    if not ir.sensors_read(condition) and not ir.variables_read(condition):
+    if _is_constant(condition):
         return ir.evaluate(condition, {}, {}) == 0.0
     if isinstance(condition, ir.BinaryOp) and condition.op == "||":
         return never_true(condition.left) and never_true(condition.right)
     bounds = _intervals(condition)
     if not bounds:
         return False
-    for name, (lo, hi) in bounds.items():
-        phys_lo, phys_hi = _SENSOR_RANGE.get(name, (-math.inf, math.inf))
-        if max(lo, phys_lo) > min(hi, phys_hi):
-            return True
-    return False
+    return any(interval.meet(_SENSOR_RANGE.get(name, _Interval())).empty
+               for name, interval in bounds.items())
 
 
 def _always_true(condition: ir.Expr) -> bool:
-    return (not ir.sensors_read(condition) and not ir.variables_read(condition)
-            and ir.evaluate(condition, {}, {}) != 0.0)
+    return _is_constant(condition) and ir.evaluate(condition, {}, {}) != 0.0
 
 
 def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> list[Diagnostic]:
