@@ -151,6 +151,6 @@ def test_all_errors_of_a_pass_at_once():
 
 
 @pytest.mark.parametrize("condition", ["depth <= 0", "depth >= 5 && depth <= 5", "depth < v",
-                                       "pitch < 1.5", "missiontime > 100 || depth < 0"])
+                                       "depth < 1.5", "missiontime > 100 || depth < 0"])
 def test_conditions_that_can_hold_are_not_flagged(condition):
     assert _diagnostics(decl="var v = 1", event=f"case {condition} goto s1") == []
