@@ -14,11 +14,12 @@
 #define GP_WAYPOINT_RADIUS_M 50.0
 #define GP_EARTH_RADIUS_M 6371000.0
 
-/** Where the route is: its waypoints in decimal degrees and the one flown to. */
+/** Where the route is: the waypoint flown to, and the waypoints in decimal degrees.
+ *  The waypoints come last: they follow from the route, so a checkpoint leaves them out. */
 typedef struct {
-    double waypoints[GP_MAX_WAYPOINTS][2];  /**< (lat, lon) [deg] */
-    uint16_t n_waypoints;
     uint16_t next;                          /**< index of the waypoint flown to */
+    uint16_t n_waypoints;
+    double waypoints[GP_MAX_WAYPOINTS][2];  /**< (lat, lon) [deg] */
 } gp_route_state;
 
 /** @brief Slocum DDMM.MMMM to decimal degrees. */
@@ -30,8 +31,11 @@ double gp_ddmm_to_deg(double ddmm);
  */
 void gp_offset_m(const double from[2], const double to[2], double *north_m, double *east_m);
 
-/** @brief Enter a route: waypoints from its points (sweep: the lawn-mower). */
+/** @brief Enter a route: the first waypoint, waypoints from its points (sweep: the lawn-mower). */
 void gp_route_enter(gp_route_state *rs, const gp_route *route);
+
+/** @brief Fill the waypoints of a route, keeping `next` (for a resumed runtime). */
+void gp_route_fill(gp_route_state *rs, const gp_route *route);
 
 /**
  * @brief Heading to fly from the current position (DDMM.MMMM readings).

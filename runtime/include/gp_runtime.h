@@ -27,8 +27,8 @@ typedef struct {
     uint8_t profile;                /**< alternative flown, GP_NO_PROFILE: enter on next tick */
     uint8_t has_command;            /**< last_command is valid */
     gp_pilot pilot;
-    gp_route_state route;
     gp_command last_command;        /**< the last tick answered (resent for the same tick) */
+    gp_route_state route;           /**< last: its waypoints are not checkpointed */
 } gp_runtime;
 
 /** What happened in one tick, for the event log and the checkpoint. */

@@ -15,8 +15,11 @@
 
 #define GP_PATH_MAX 1024
 #define GP_CHECKPOINT_MAGIC "GPCKPT01"
-/** magic, mission hash, payload size, the runtime, CRC-32 */
-#define GP_CHECKPOINT_SIZE (8 + 64 + 4 + sizeof(gp_runtime) + 4)
+/** Bytes of gp_runtime a checkpoint holds: all but the route's waypoints, which
+ *  follow from the mission and are computed again on resume. */
+#define GP_CHECKPOINT_STATE_SIZE (offsetof(gp_runtime, route) + offsetof(gp_route_state, waypoints))
+/** magic, mission hash, state size, the state, CRC-32 */
+#define GP_CHECKPOINT_SIZE (8 + 64 + 4 + GP_CHECKPOINT_STATE_SIZE + 4)
 
 /** @brief Serialise a checkpoint into `buf` (GP_CHECKPOINT_SIZE bytes). */
 void gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uint8_t *buf);

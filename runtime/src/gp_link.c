@@ -61,6 +61,16 @@ static int send_frame(session *s, uint8_t type, const uint8_t *payload, size_t l
     return gp_serial_write(s->fd, s->last_wire, s->last_len);
 }
 
+/* A NAK is not kept as the frame to re-send: NAK answered by NAK would never end. */
+static void send_nak(session *s)
+{
+    uint8_t wire[GP_MAX_FRAME];
+    s->dropped++;
+    s->seq = (uint8_t)(s->seq + 1);
+    size_t n = gp_frame_build(GP_MSG_NAK, s->seq, s->ack, NULL, 0, wire);
+    gp_serial_write(s->fd, wire, n);
+}
+
 /* Give control back to the glider's own layered control and end with `status`. */
 static int release(session *s, gp_release_reason reason, int status)
 {
@@ -181,8 +191,7 @@ static int on_sensors(session *s, const gp_frame *frame)
     double readings[GP_N_SENSORS];
     memcpy(readings, runtime.sensors, sizeof readings);
     if (gp_sensors_unpack(frame, &tick, readings) != GP_FRAME_OK) {
-        s->dropped++;
-        send_frame(s, GP_MSG_NAK, NULL, 0);
+        send_nak(s);
         return -1;
     }
     /* A re-sent SENSORS (same seq), or the tick a checkpoint already answered. */
@@ -228,8 +237,7 @@ static void on_plan(session *s, const gp_frame *frame)
     uint16_t offset, total, len;
     const uint8_t *data;
     if (gp_plan_piece_unpack(frame, &offset, &total, &data, &len) != GP_FRAME_OK) {
-        s->dropped++;
-        send_frame(s, GP_MSG_NAK, NULL, 0);
+        send_nak(s);
         return;
     }
     if (offset == 0) {
@@ -339,8 +347,7 @@ static int run_link(session *s)
                     return status;
                 }
             } else if (result > 0) {
-                s->dropped++;
-                send_frame(s, GP_MSG_NAK, NULL, 0);
+                send_nak(s);
             }
         }
     }

@@ -145,6 +145,11 @@ uint16_t gp_sweep_waypoints(const double (*corners)[2], uint8_t n_corners, doubl
 void gp_route_enter(gp_route_state *rs, const gp_route *route)
 {
     rs->next = 0;
+    gp_route_fill(rs, route);
+}
+
+void gp_route_fill(gp_route_state *rs, const gp_route *route)
+{
     rs->n_waypoints = 0;
     if (route->kind == GP_ROUTE_SWEEP) {
         rs->n_waypoints = gp_sweep_waypoints(route->points, route->n_points, route->param,

@@ -30,20 +30,20 @@ void gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uint8
     if (mission->hash) {
         memcpy(buf + 8, mission->hash, strnlen(mission->hash, 64));
     }
-    put_u32(buf + 72, (uint32_t)sizeof *rt);
-    memcpy(buf + 76, rt, sizeof *rt);
-    size_t body = 76 + sizeof *rt;
+    put_u32(buf + 72, (uint32_t)GP_CHECKPOINT_STATE_SIZE);
+    memcpy(buf + 76, rt, GP_CHECKPOINT_STATE_SIZE);
+    size_t body = 76 + GP_CHECKPOINT_STATE_SIZE;
     put_u32(buf + body, gp_crc32(0, buf, body));
 }
 
 const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *buf, size_t len,
                                  gp_runtime *rt)
 {
-    size_t body = 76 + sizeof *rt;
+    size_t body = 76 + GP_CHECKPOINT_STATE_SIZE;
     if (len < 8 || memcmp(buf, GP_CHECKPOINT_MAGIC, 8) != 0) {
         return "not a checkpoint of this runtime version";
     }
-    if (len != GP_CHECKPOINT_SIZE || get_u32(buf + 72) != sizeof *rt) {
+    if (len != GP_CHECKPOINT_SIZE || get_u32(buf + 72) != GP_CHECKPOINT_STATE_SIZE) {
         return "truncated, or written by another build of the runtime";
     }
     if (gp_crc32(0, buf, body) != get_u32(buf + body)) {
@@ -56,19 +56,27 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *buf, 
     if (memcmp(buf + 8, hash, 64) != 0) {
         return "written by another mission";
     }
-    gp_runtime loaded;
-    memcpy(&loaded, buf + 76, sizeof loaded);
+    static gp_runtime loaded;  /* 5 KiB: static, not on a small board's stack */
+    memset(&loaded, 0, sizeof loaded);
+    memcpy(&loaded, buf + 76, GP_CHECKPOINT_STATE_SIZE);
     if (loaded.machine.state != GP_EXITED && loaded.machine.state >= mission->n_states) {
         return "state index outside the mission";
     }
     if (loaded.machine.depth > mission->stack_depth || loaded.pilot.n_window > GP_TRACK_WINDOW
         || loaded.pilot.n_recent > 3 || loaded.route.n_waypoints > GP_MAX_WAYPOINTS
-        || loaded.route.next >= GP_MAX_WAYPOINTS) {
+        || loaded.route.next >= GP_MAX_WAYPOINTS
+        || (loaded.profile >= GP_MAX_PROFILES && loaded.profile != GP_NO_PROFILE)) {
         return "counts outside their bounds";
     }
     for (int i = 0; i < loaded.machine.depth; i++) {
         if (loaded.machine.stack[i] >= mission->n_states) {
             return "stacked state outside the mission";
+        }
+    }
+    if (loaded.machine.state < mission->n_states) {
+        gp_route_fill(&loaded.route, &mission->states[loaded.machine.state].route);
+        if (loaded.route.next >= loaded.route.n_waypoints && loaded.route.next > 0) {
+            return "waypoint index outside the route";
         }
     }
     *rt = loaded;
