@@ -36,8 +36,8 @@ class CRuntime:
         self.exited = False
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)  # the runtime sets raw mode too; no echo before it does
-        command = [str(binary), "--device", os.ttyname(self.slave),
-                   "--state-dir", str(work_dir / "state")]
+        # no --state-dir: a simulated run needs no checkpoint to resume from
+        command = [str(binary), "--device", os.ttyname(self.slave)]
         if plan_path is not None:
             command += ["--plan", str(Path(plan_path).resolve())]
         if naive_tracker:

@@ -83,8 +83,13 @@ class Thermocline:
             depth_m, time_s)
 
     def water_at(self, depth_m: float, time_s: float) -> tuple[float, float]:
-        """(temperature [degC], salinity [PSU]) at one depth [m] and time [s]."""
-        warm = self._warm_fraction(depth_m, time_s)
+        """(temperature [degC], salinity [PSU]) at one depth [m] and time [s]: the model
+        above on plain floats, the simulator's once-a-tick call."""
+        centre = self.depth_m
+        for wave in self.waves:
+            centre += wave.amplitude_m * math.sin(
+                2.0 * math.pi * time_s / wave.period_s + wave.phase_rad)
+        warm = 0.5 * (1.0 - math.tanh((depth_m - centre) / (max(self.thickness_m, 1e-6) / 4.0)))
         return (self.deep_c + (self.surface_c - self.deep_c) * warm,
                 self.deep_psu + (self.surface_psu - self.deep_psu) * warm)
 
