@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -52,3 +53,80 @@ def test_console_script_runs_without_traceback(tmp_path):
     assert f"{bad}:3:14: error: unknown sensor or variable 'depht'" in proc.stderr
     assert "did you mean 'depth'?" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def _write(tmp_path: Path, text: str) -> str:
+    path = tmp_path / "m.mission"
+    path.write_text(text)
+    return str(path)
+
+
+_WARNS_ONLY = ("mission m\nstate s1 begin flightprofile surface sensors missiontime\n"
+               " events case missiontime < 0 exit case missiontime > 9 exit end\n")
+_HAS_ERROR = "mission m\nstate s1 begin flightprofile yo(5, 20, .454, 2) end\n"
+
+
+@pytest.mark.parametrize(
+    ("text", "flags", "expected_code"),
+    [
+        (_WARNS_ONLY, [], 0),
+        (_WARNS_ONLY, ["--strict"], 1),
+        (_HAS_ERROR, [], 1),
+        (_HAS_ERROR, ["--strict"], 1),
+        (_WARNS_ONLY, ["--max-stack", "0"], 2),
+    ],
+)
+def test_exit_codes(tmp_path, capsys, text, flags, expected_code):
+    assert main(["check", *flags, _write(tmp_path, text)]) == expected_code
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_strict_examples_are_clean(capsys):
+    for path in sorted(EXAMPLES.glob("*.mission")):
+        assert main(["check", "--strict", str(path)]) == 0, capsys.readouterr().err
+
+
+def test_no_mission_argument_is_bad_usage():
+    with pytest.raises(SystemExit) as exit_:
+        main(["check"])
+    assert exit_.value.code == 2
+
+
+def test_one_bad_path_among_several_is_reported_and_fails(tmp_path, capsys):
+    code = main(["check", str(EXAMPLES / "fig2.mission"), str(tmp_path / "none.mission")])
+    assert code == 1
+    assert "none.mission: no such file" in capsys.readouterr().err
+
+
+def test_too_large_file_is_refused_before_reading(tmp_path, capsys):
+    path = tmp_path / "huge.mission"
+    with path.open("wb") as handle:
+        handle.truncate(17 * 1024 * 1024)  # sparse: nothing is actually written
+    assert main(["check", str(path)]) == 1
+    assert "too large for a mission" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text", ["x" * 1_000_000, "mission m\n" + "state (\n" * 50_000,
+                                  "mission m\n" + "(" * 100_000])
+def test_large_garbage_gives_diagnostics_not_a_crash(tmp_path, capsys, text):
+    assert main(["check", _write(tmp_path, text)]) == 1
+    err = capsys.readouterr().err
+    assert "error:" in err
+    assert "internal error" not in err
+
+
+def test_json_dump_of_the_checked_mission(capsys):
+    assert main(["check", "--json", str(EXAMPLES / "fig2.mission")]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [s["name"] for s in data["states"]] == ["s1", "s2", "s3"]
+    assert len(data["hash"]) == 64
+
+
+def test_check_does_not_import_heavy_libraries():
+    probe = ("import sys\n"
+             "from gliderplan.cli.main import main\n"
+             f"code = main(['check', {str(EXAMPLES / 'fig2.mission')!r}])\n"
+             "heavy = {'numpy', 'pandas', 'cvxpy', 'scipy', 'matplotlib', 'clarabel'}\n"
+             "print(code, sorted({m.split('.')[0] for m in sys.modules} & heavy))\n")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert proc.stdout.split("\n")[0] == "0 []", proc.stdout + proc.stderr
