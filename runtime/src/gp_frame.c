@@ -37,6 +37,8 @@ static float get_f32(const uint8_t *p)
     return v;
 }
 
+/* Byte loops: a packet's zeros (small integers, floats) make blocks short, so a
+ * memchr/memcpy per block costs more than it saves. */
 size_t gp_cobs_encode(const uint8_t *in, size_t len, uint8_t *out)
 {
     size_t code_at = 0, n = 1;
@@ -63,12 +65,12 @@ int gp_cobs_decode(const uint8_t *in, size_t len, uint8_t *out, size_t cap)
 {
     size_t i = 0, n = 0;
     while (i < len) {
-        uint8_t code = in[i];
-        if (code == 0 || i + code > len) {
+        size_t code = in[i];
+        if (code == 0 || i + code > len || n + code - 1 > cap) {
             return -1;
         }
         for (size_t j = i + 1; j < i + code; j++) {
-            if (in[j] == 0 || n >= cap) {
+            if (in[j] == 0) {
                 return -1;
             }
             out[n++] = in[j];
@@ -149,16 +151,22 @@ gp_frame_error gp_frame_parse(const uint8_t *wire, size_t len, gp_frame *out)
     return GP_FRAME_OK;
 }
 
-int gp_frame_reader_push(gp_frame_reader *reader, uint8_t byte, gp_frame *out)
+int gp_frame_reader_feed(gp_frame_reader *reader, const uint8_t *data, size_t len,
+                         size_t *used, gp_frame *out)
 {
-    if (byte != 0) {
-        if (reader->len < GP_MAX_WIRE) {
-            reader->buf[reader->len++] = byte;
-        } else {
-            reader->overlong = 1;
-        }
+    const uint8_t *zero = memchr(data, 0, len);
+    size_t run = zero ? (size_t)(zero - data) : len;
+    size_t room = GP_MAX_WIRE - reader->len;
+    if (run > room) {
+        reader->overlong = 1;
+    }
+    memcpy(reader->buf + reader->len, data, run < room ? run : room);
+    reader->len = (uint16_t)(reader->len + (run < room ? run : room));
+    if (!zero) {
+        *used = len;
         return -1;
     }
+    *used = run + 1;
     int result;
     if (reader->overlong) {
         result = GP_FRAME_TOO_LONG;
@@ -170,6 +178,12 @@ int gp_frame_reader_push(gp_frame_reader *reader, uint8_t byte, gp_frame *out)
     reader->len = 0;
     reader->overlong = 0;
     return result;
+}
+
+int gp_frame_reader_push(gp_frame_reader *reader, uint8_t byte, gp_frame *out)
+{
+    size_t used;
+    return gp_frame_reader_feed(reader, &byte, 1, &used, out);
 }
 
 const char *gp_frame_error_name(gp_frame_error error)
@@ -196,15 +210,15 @@ gp_frame_error gp_sensors_unpack(const gp_frame *frame, uint32_t *tick, double *
     }
     uint32_t mask = get_u32(frame->payload + 4);
     unsigned count = 0;
-    for (int i = 0; i < 32; i++) {
-        count += (mask >> i) & 1u;
+    for (uint32_t m = mask; m != 0; m &= m - 1) {  /* one round per set bit */
+        count++;
     }
     if (frame->length != 8 + 4 * count) {
         return GP_FRAME_LENGTH;
     }
     *tick = get_u32(frame->payload);
     const uint8_t *p = frame->payload + 8;
-    for (int i = 0; i < 32; i++) {
+    for (int i = 0; i < 32 && (mask >> i) != 0; i++) {
         if ((mask >> i) & 1u) {
             if (i < GP_N_SENSORS) {
                 sensors[i] = (double)get_f32(p);

@@ -338,9 +338,9 @@ static int run_link(session *s)
             say(s, "serial read failed; releasing control");
             return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
         }
-        for (long i = 0; i < n; i++) {
+        for (size_t i = 0, used; i < (size_t)n; i += used) {
             gp_frame frame;
-            int result = gp_frame_reader_push(&s->reader, chunk[i], &frame);
+            int result = gp_frame_reader_feed(&s->reader, chunk + i, (size_t)n - i, &used, &frame);
             if (result == GP_FRAME_OK) {
                 int status = on_frame(s, &frame);
                 if (status >= 0) {
