@@ -1,0 +1,86 @@
+"""The simulated glider: glide speeds of the flight model, inflections at the pump rate,
+surfacing with GPS fix and Iridium call, hovering, dead reckoning against a current."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from gliderplan.power_models import load_vehicle
+from gliderplan.power_models.segments import GLIDE, IRIDIUM, PUMP, SURFACE
+from gliderplan.sim.geo import offset_m
+from gliderplan.sim.vehicle import Current, GliderSim
+
+VEHICLE = load_vehicle("slocum_g2_shallow")
+PITCH, BALLAST = 0.454, 233.0
+
+
+def glider(tick_s: float = 1.0, current: Current | None = None, depth_m: float = 0.0):
+    return GliderSim(VEHICLE, tick_s, 39.0, -73.0, current or Current(), depth_m)
+
+
+def test_a_dive_sinks_at_the_flight_model_s_vertical_speed_after_pumping():
+    g = glider(depth_m=5.0)
+    pumping_s = 0
+    while True:
+        g.step(30.0, -PITCH, -BALLAST, 0.0, True, False)
+        if g.phase != PUMP:
+            break
+        pumping_s += 1
+    # 233 cc from neutral at 32 cc/s: 7.3 s of pumping (8 ticks), standing still meanwhile
+    assert pumping_s == math.ceil(BALLAST / VEHICLE.pump_rate_cc_s)
+    start = g.depth_m
+    for _ in range(100):
+        g.step(30.0, -PITCH, -BALLAST, 0.0, True, False)
+    u, w = VEHICLE.glide(PITCH, BALLAST)
+    assert (g.depth_m - start) / 100 == pytest.approx(float(w))
+    assert g.pitch_rad == pytest.approx(-PITCH)
+
+
+def test_an_inflection_pumps_twice_the_volume_and_counts_once():
+    g = glider(depth_m=20.0)
+    for _ in range(30):
+        g.step(30.0, -PITCH, -BALLAST, 0.0, True, False)
+    pumped_out, inflections = 0.0, 0
+    for _ in range(30):  # turn: dive -> climb
+        g.step(3.0, PITCH, BALLAST, 0.0, True, False)
+        pumped_out += g.pumped_out_cc
+        inflections += g.inflection
+    assert pumped_out == pytest.approx(2 * BALLAST)
+    assert inflections == 1
+
+
+def test_surfacing_takes_a_fix_then_makes_the_iridium_call():
+    g = glider(tick_s=10.0, depth_m=2.0)
+    phases = []
+    for _ in range(60):
+        g.step(0.0, PITCH, BALLAST, 0.0, False, True)
+        phases.append(g.phase)
+    at_surface = [p for p in phases if p in (SURFACE, IRIDIUM)]
+    assert g.surfacings == 1 and g.depth_m == 0.0
+    assert at_surface.count(IRIDIUM) == VEHICLE.iridium_s / 10.0
+    first_call = at_surface.index(IRIDIUM)
+    assert first_call == VEHICLE.surface_s / 10.0  # the GPS fix comes first
+    assert all(p == SURFACE for p in at_surface[first_call + at_surface.count(IRIDIUM):])
+
+
+def test_hover_moves_slowly_toward_its_depth():
+    g = glider(depth_m=10.0)
+    for _ in range(40):
+        g.step(12.0, 0.0, 0.0, 0.0, False, False)
+    assert g.depth_m == pytest.approx(12.0)
+    assert g.phase == GLIDE
+
+
+def test_a_current_carries_the_glider_away_from_its_dead_reckoning_until_a_fix():
+    g = glider(tick_s=4.0, current=Current(north_mps=0.0, east_mps=0.1), depth_m=5.0)
+    for _ in range(900):  # one hour heading north at depth
+        g.step(30.0 if g.depth_m < 29 else 3.0, -PITCH, -BALLAST, 0.0, True, False)
+    north, east = offset_m(g.dr_lat_deg, g.dr_lon_deg, g.lat_deg, g.lon_deg)
+    assert east == pytest.approx(360.0, rel=0.01) and abs(north) < 1.0
+    while g.phase != IRIDIUM:  # surface: the GPS fix puts the dead reckoning right
+        g.step(0.0, PITCH, BALLAST, 0.0, False, True)
+    north, east = offset_m(g.dr_lat_deg, g.dr_lon_deg, g.lat_deg, g.lon_deg)
+    assert abs(east) <= 2 * 0.1 * 4.0 + 1e-6  # drift of the fix tick and the first call tick
+    assert g.surfacings == 1
