@@ -64,8 +64,8 @@ def depth_png(record: RunRecord) -> bytes:
 
 def energy_png(record: RunRecord, energy: RunEnergy,
                predictions: dict[str, StatePrediction] | None, budget_j: float | None) -> bytes:
-    """Cumulative energy by component; the plan's line spends each state's predicted
-    energy at its planned rate (predicted J / planned s) along the simulated states."""
+    """Cumulative energy by component against the plan: each state's predicted energy
+    spent at its predicted rate along the simulated states, up to its predicted time."""
     plt = _figure()
     c = record.columns
     t, unit = _time_axis(c["time_s"])
@@ -74,14 +74,17 @@ def energy_png(record: RunRecord, energy: RunEnergy,
     ax.stackplot(t, *[np.cumsum(v) / 1e3 for _, v in parts], labels=[k for k, _ in parts],
                  alpha=0.8)
     if predictions:
-        rate = np.zeros(len(record.state_names) + 1)
+        # each state spends its predicted energy at its predicted rate, for no longer
+        # than the time the plan gave it
+        state = c["state"].astype(int)
+        planned = np.zeros(len(state))
         for i, name in enumerate(record.state_names):
             p = predictions.get(name)
-            if p is not None and p.time_s:
-                rate[i] = p.energy_j / p.time_s
-        state = c["state"].astype(int)
-        planned = np.cumsum(rate[np.minimum(state, len(rate) - 1)] * record.tick_s)
-        ax.plot(t, planned / 1e3, "k--", lw=1.5, label="plan (predicted rate per state)")
+            if p is None or not p.time_s:
+                continue
+            time_in_state = np.cumsum(state == i) * record.tick_s
+            planned += p.energy_j / p.time_s * np.minimum(time_in_state, p.time_s)
+        ax.plot(t, planned / 1e3, "k--", lw=1.5, label="plan (each state's prediction)")
     if budget_j is not None:
         ax.axhline(budget_j / 1e3, color="red", lw=1, label="plan budget")
     ax.set_xlabel(f"mission time [{unit}]")
