@@ -41,6 +41,8 @@ def _state_runs(state: np.ndarray) -> list[tuple[int, int, int]]:
 
 def depth_png(record: RunRecord) -> bytes:
     plt = _figure()
+    from matplotlib.patches import Patch
+
     c = record.columns
     t, unit = _time_axis(c["time_s"])
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
@@ -50,15 +52,18 @@ def depth_png(record: RunRecord) -> bytes:
         if index == NONE:
             continue
         end = t[b] if b < len(t) else t[-1]
-        ax.axvspan(t[a], end, color=colours(index % 10), alpha=0.12, lw=0)
-        ax.text((t[a] + end) / 2, 0.02, record.state_names[index], ha="center", va="bottom",
-                fontsize=8, transform=ax.get_xaxis_transform())
+        ax.axvspan(t[a], end, color=colours(index % 10), alpha=0.15, lw=0)
+    flown = sorted(set(state.tolist()) - {NONE})
+    handles = [Patch(color=colours(i % 10), alpha=0.3, label=record.state_names[i])
+               for i in flown]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=8,
+              ncol=min(len(handles), 6), frameon=False)
     points = ax.scatter(t, c["depth_m"], c=c["temperature_c"], s=4, cmap="coolwarm")
     fig.colorbar(points, ax=ax, label="water temperature [degC]")
     ax.invert_yaxis()
     ax.set_xlabel(f"mission time [{unit}]")
     ax.set_ylabel("depth [m]")
-    ax.set_title("depth profile; bands: mission states")
+    ax.set_title("depth profile coloured by water temperature; bands: mission states")
     return _png(fig, plt)
 
 

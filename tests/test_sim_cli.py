@@ -119,3 +119,23 @@ def test_rerunning_into_the_same_directory_replaces_the_files(tmp_path):
     assert main(["sim", str(FIG2), "-o", str(out)]) == 0
     assert (out / "trace.csv").read_text().endswith("2500,exit,s3,,0\n")
     assert {p.name for p in out.iterdir()} == FILES  # no temporary files left behind
+
+
+LOGS = REPO.parent / "shared" / "data" / "slocum-logs"
+
+
+@pytest.mark.skipif(not LOGS.is_dir(), reason="the Slocum sample logs are not present")
+def test_the_north_sea_ocean_comes_from_the_slocum_logs(tmp_path):
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "--ocean", "north-sea", "--ocean-logs", str(LOGS),
+                 "-o", str(out)]) == 0
+    table = pd.read_parquet(out / "timeseries.parquet")
+    assert table["temperature_c"][table["depth_m"] < 3].min() > 19.5
+    assert table["temperature_c"][table["depth_m"] > 19].max() < 15.3
+
+
+def test_a_long_run_shows_progress(tmp_path, capsys):
+    mission = REPO / "tests" / "missions" / "sim_month.mission"
+    assert main(["sim", str(mission), "--duration", "5d", "-o", str(tmp_path / "r")]) == 0
+    err = capsys.readouterr().err
+    assert "\r[" in err and "of 5.00 d simulated" in err
