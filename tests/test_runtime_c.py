@@ -43,3 +43,19 @@ def test_c_unit_tests_pass_under_sanitizers(tmp_path):
     passed, failed = _summary(output)
     assert failed == 0 and passed >= 40
     assert "runtime error" not in output and "AddressSanitizer" not in output
+
+
+@pytest.mark.parametrize(
+    ("compiler", "flags", "emulator"),
+    [("arm-linux-gnueabi-gcc", "-march=armv5te -static", "qemu-arm"),   # TS-7800
+     ("i686-linux-gnu-gcc", "-march=i486 -static", "qemu-i386")],       # TS-5500
+    ids=["ts7800-armv5te", "ts5500-i486"],
+)
+def test_c_unit_tests_pass_on_the_boards_cpus(tmp_path, compiler, flags, emulator):
+    missing = [tool for tool in (compiler, emulator) if shutil.which(tool) is None]
+    if missing:
+        pytest.skip(f"{' and '.join(missing)} not installed (make sysdeps installs them)")
+    output = _make("test", BUILD=str(tmp_path / "build"), CC=compiler, CFLAGS=flags,
+                   RUN=emulator)
+    passed, failed = _summary(output)
+    assert failed == 0 and passed >= 40

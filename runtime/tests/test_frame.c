@@ -66,7 +66,7 @@ void test_command_should_round_trip_through_a_frame(void)
     CHECK_INT(gp_command_unpack(&frame, &back), GP_FRAME_OK);
     CHECK_INT(back.tick, 123456);
     CHECK_INT(back.to, 1);
-    CHECK_NEAR(back.pitch_rad, 0.454f, 0);
+    CHECK_NEAR(back.pitch_rad, 0.454, 1e-6);  /* f32 on the wire */
     CHECK_INT(back.sensor_power, 0x207);
     CHECK_INT(back.event_count, 9);
 }

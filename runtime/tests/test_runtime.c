@@ -99,7 +99,7 @@ void test_runtime_should_fly_fig2_and_report_each_transition(void)
     /* s1 dives first (depth 5 < max 10) with the default ballast */
     CHECK_NEAR(commands[0].depth_target_m, 10, 0);
     CHECK_NEAR(commands[0].ballast_cc, -230, 0);
-    CHECK_NEAR(commands[0].pitch_rad, -0.454f, 0);
+    CHECK_NEAR(commands[0].pitch_rad, -0.454, 1e-6);
 }
 
 void test_runtime_should_follow_the_plan_schedule(void)
@@ -124,7 +124,7 @@ void test_runtime_should_follow_the_plan_schedule(void)
     gp_run_options options = {&plan, 0};
     gp_runtime_init(&rt);
     check_trace(rows, run(&rt, &options, 0, 399, rows, 0, commands));
-    CHECK_NEAR(fabs(commands[0].pitch_rad), 0.3f, 0);   /* planned pitch and ballast in s1 */
+    CHECK_NEAR(fabs(commands[0].pitch_rad), 0.3, 1e-6);   /* planned pitch and ballast in s1 */
     CHECK_NEAR(fabs(commands[0].ballast_cc), 150, 0);
     /* s2 entered at 500 s: temp on for the first 20 s of every 60 s */
     static const struct { uint32_t tick; int temp_on; } windows[] = {
@@ -134,7 +134,7 @@ void test_runtime_should_follow_the_plan_schedule(void)
         CHECK_INT((commands[windows[i].tick].sensor_power >> 9) & 1u, windows[i].temp_on);
         CHECK_INT(commands[windows[i].tick].sensor_power & 0x7u, 0x7u);
     }
-    CHECK_NEAR(fabs(commands[60].pitch_rad), 0.4f, 0);
+    CHECK_NEAR(fabs(commands[60].pitch_rad), 0.4, 1e-6);
 }
 
 void test_runtime_should_resume_from_a_checkpoint_with_the_same_trace(void)
