@@ -1,1 +1,12 @@
-"""gliderplan.sim"""
+"""gliderplan.sim: the glider simulator.
+
+A run is a closed loop, lock-step on the simulator's clock (loop.py): each tick the
+science computer (science.py) fills the sensor array from the simulated glider
+(vehicle.py) in a simulated ocean (ocean.py) and sends it to a runtime, which answers
+with a COMMAND that the glider flies for one tick. The runtime is the Python reference
+executor (executor.py, pilot.py, compiled.py: language/semantics.py plus the library
+routines of docs/pilot.md) or the compiled C runtime over a pseudo-terminal
+(emulator.py). energy.py integrates every component's energy over the run and checks
+it against the plan (planfile.py reads plans); outputs.py and plots.py write a run's
+files; session.py puts one run together for `gliderplan sim` and the tests.
+"""
