@@ -196,5 +196,11 @@ def check_plan(energy: RunEnergy, plan: Plan | None,
         causes.append((flown - predicted.energy_j, "; ".join(detail)))
     causes.sort(reverse=True)
     over_budget = simulated > plan.budget_j * (1.0 + tolerance)
+    if over_budget and not causes:  # no per-state prediction to blame: name the spenders
+        spent = sorted(((sum(v.values()), k) for k, v in energy.by_state_j.items()),
+                       reverse=True)
+        causes = [(0.0, f"{simulated / 1e3:.1f} kJ spent against a budget of "
+                        f"{plan.budget_j / 1e3:.1f} kJ; most in " + ", ".join(
+                            f"{name} ({joules / 1e3:.1f} kJ)" for joules, name in spent[:3]))]
     return PlanCheck("violation" if over_budget else "pass", plan.budget_j, plan.predicted_j,
                      simulated, tolerance, tuple(text for _, text in causes))

@@ -103,3 +103,13 @@ def test_a_broken_plan_report_is_a_clear_error(tmp_path, capsys):
     code = main(["sim", str(MISSION), "--plan", str(plan), "-o", str(tmp_path / "run")])
     err = capsys.readouterr().err
     assert code == 1 and "survey.plan.json: states.survey: energy_by_component_j missing" in err
+
+
+def test_without_a_report_a_violation_names_the_states_that_spent_most(tmp_path, capsys):
+    plan = write_plan(tmp_path, 40e3, 3600.0)
+    (tmp_path / "survey.plan.json").unlink()
+    code, summary, _ = simulate(tmp_path, plan, capsys)
+    assert code == 3
+    (cause,) = summary["plan_check"]["causes"]
+    assert cause.startswith("71.") and "against a budget of 40.0 kJ; most in survey (71." \
+        in cause
