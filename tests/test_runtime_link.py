@@ -31,10 +31,16 @@ pytestmark = pytest.mark.skipif(
 
 
 @pytest.fixture(scope="module")
-def binary(tmp_path_factory) -> Path:
+def build(tmp_path_factory) -> Path:
+    """Runtimes of the hand-written tables: fig2-runtime, stacker-runtime."""
     build = tmp_path_factory.mktemp("build")
     subprocess.run(["make", "-C", str(RUNTIME), "fig2", f"BUILD={build}", "CC=gcc"],
                    check=True, capture_output=True, timeout=300)
+    return build
+
+
+@pytest.fixture(scope="module")
+def binary(build) -> Path:
     return build / "fig2-runtime"
 
 
@@ -256,3 +262,39 @@ def test_a_plan_adopted_over_the_link_outlives_a_restart(binary, glider, tmp_pat
     assert [c.sensor_power >> 9 & 1 for c in commands[:5]] == [0, 1, 1, 0, 0]
     assert transitions(commands) == FIG2_TRACE[2:]
     assert process.wait(10) == 0
+
+
+def test_hello_repeats_until_the_first_sensors(binary, glider):
+    glider.start(binary, "--retransmit-ms", "50")
+    link = glider.link()
+    hellos = [link.wait_hello(), link.wait_hello(), link.wait_hello()]
+    assert len(hellos) == 3 and link.hello.name == "sampleMission"
+    assert fly(link, 0, 0)[0].transition == p.Transition.START
+
+
+def test_plan_pieces_out_of_order_are_ignored(binary, glider):
+    glider.start(binary)
+    link = glider.link()
+    link.wait_hello()
+    fly(link, 0, 2)
+    pieces = p.plan_pieces(make_plan())
+    assert len(pieces) >= 2
+    link.send(pieces[1])  # no piece at offset 0 came first: nothing to continue
+    assert link.receive(0.5) is None
+    assert link.send_plan(make_plan()).accepted
+
+
+def test_a_mission_fault_releases_control_and_is_logged(build, glider, tmp_path):
+    process = glider.start(build / "stacker-runtime", "--state-dir", str(tmp_path))
+    link = glider.link()
+    link.wait_hello()
+    commands = []
+    with pytest.raises(p.LinkReleasedError) as released:
+        for tick in range(100):
+            commands.append(link.step(tick, {0: float(tick)}))
+    assert released.value.reason == p.ReleaseReason.INTERNAL_ERROR
+    assert process.wait(10) == 4
+    assert "call overflows the state stack" in process.stderr.read()
+    assert [c.stack_depth for c in commands if c.transition] == [0, 1, 2]
+    assert (tmp_path / "events.log").read_text().splitlines() == [
+        "0 start - a 0", "10 call a b 1", "20 call b a 2", "21 fault a b 2"]

@@ -1,0 +1,37 @@
+/* A mission the checker would reject, to show the runtime refuses what the checker
+ * missed instead of crashing: `a` and `b` call each other past a stack depth of 2.
+ *
+ *   a --call (missiontime >= 10)--> b --call (>= 20)--> a --call (next tick)--> b: overflow
+ */
+#include <stddef.h>
+
+#include "gp_mission.h"
+
+static const char *const sensor_names[GP_N_SENSORS] = {
+    "missiontime", "depth", "pitch", "roll", "heading", "altitude", "lat", "lon", "battery",
+    "temp", "conductivity", "salinity", "oxygen", "chlorophyll", "backscatter", "current",
+    "modem",
+};
+
+static int after_10(const double *s, const double *v) { (void)v; return s[0] >= 10; }
+static int after_20(const double *s, const double *v) { (void)v; return s[0] >= 20; }
+static void hover_5(const double *s, const double *v, double *a) { (void)s; (void)v; a[0] = 5; }
+
+static const gp_profile hover[] = {{GP_PROFILE_HOVER, 1, hover_5}};
+static const gp_event a_events[] = {{after_10, NULL, GP_ACT_CALL, 1}};
+static const gp_event b_events[] = {{after_20, NULL, GP_ACT_CALL, 0}};
+static const gp_state states[] = {
+    {"a", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, hover, 1, NULL, 0, a_events, 1},
+    {"b", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, hover, 1, NULL, 0, b_events, 1},
+};
+
+const gp_mission gp_mission_table = {
+    .name = "stacker",
+    .hash = "0000000000000000000000000000000000000000000000000000000000000001",
+    .states = states,
+    .n_states = 2,
+    .stack_depth = 2,
+    .read_mask = 1u,
+    .default_ballast_cc = 230.0,
+    .sensor_names = sensor_names,
+};
