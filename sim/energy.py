@@ -22,6 +22,7 @@ import numpy as np
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
 from gliderplan.power_models import load_board, load_sensor
+from gliderplan.power_models.catalog import preset_names
 from gliderplan.power_models.timeline import Timeline, energy_by_component_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunRecord
@@ -95,8 +96,12 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
 
 def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
                 plan: Plan | None) -> np.ndarray:
-    """The board's energy per tick at the clock each state runs at."""
+    """The board's energy per tick at the clock each state runs at: the plan's board
+    (when it names a preset), else the mission's."""
     board = load_board(mission.computer.board, mission.computer.clock_mhz)
+    if plan is not None and plan.computer in preset_names("board") \
+            and plan.computer != board.name:
+        board = load_board(plan.computer, plan.clock_mhz)
 
     def power_w(at) -> float:
         return float(at.power_w(at.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / dt)))

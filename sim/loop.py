@@ -89,15 +89,16 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     lat_c, lon_c = cols["lat_deg"], cols["lon_deg"]
     ended = "duration"
     pack, unpack = _COMMAND_F32.pack, _COMMAND_F32.unpack
+    readings, runtime_step, apply = science.readings, runtime.step, science.apply
     for tick in range(last_tick + 1):
-        mask, values = science.readings(tick)
+        mask, values = readings(tick)
         depth_c.append(glider.depth_m)
         pitch_c.append(glider.pitch_rad)
         temp_c.append(science.water_temperature_c)
         lat_c.append(glider.lat_deg)
         lon_c.append(glider.lon_deg)
         try:
-            cmd = runtime.step(tick, mask, values)
+            cmd = runtime_step(tick, mask, values)
         except MissionFault as fault:
             ended = f"fault: {fault}"
             _close_row(cols, state_c[-1] if state_c else NONE)
@@ -123,7 +124,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
             break
         target, pitch, ballast, heading = unpack(pack(
             cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad))
-        science.apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power)
+        apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power)
         phase_c.append(glider.phase)
         out_c.append(glider.pumped_out_cc)
         in_c.append(glider.pumped_in_cc)

@@ -35,7 +35,8 @@ def predicted_components_j(time_s: float) -> dict[str, float]:
     }
 
 
-def write_plan(tmp_path: Path, budget_j: float, planned_s: float) -> Path:
+def write_plan(tmp_path: Path, budget_j: float, planned_s: float,
+               board: tuple[str, float] = ("ts7800", 300.0)) -> Path:
     """A plan for the survey and its report (`<plan>.json`) predicting `planned_s`."""
     mission = check_file(str(MISSION)).mission
     components = predicted_components_j(planned_s)
@@ -44,9 +45,10 @@ def write_plan(tmp_path: Path, budget_j: float, planned_s: float) -> Path:
         * planned_s / 3600
     predicted = sum(components.values())
     u = float(vehicle.glide(PITCH_RAD, BALLAST_CC)[0])
-    body = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+    name, clock = board
+    body = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer {name} {clock:g}\n"
             f"budget_j {budget_j:.9g}\npredicted_j {predicted:.9g}\nstates 1\n"
-            f"state survey 300 600 1 1\nsensor temp 600 600\n"
+            f"state survey {clock:g} 600 1 1\nsensor temp 600 600\n"
             f"profile 0 1 {PITCH_RAD} {BALLAST_CC:.9g} {u:.9g}\nend\n").encode()
     plan = tmp_path / "survey.plan"
     plan.write_bytes(body + f"crc32 {zlib.crc32(body):08x}\n".encode())
@@ -113,3 +115,13 @@ def test_without_a_report_a_violation_names_the_states_that_spent_most(tmp_path,
     (cause,) = summary["plan_check"]["causes"]
     assert cause.startswith("71.") and "against a budget of 40.0 kJ; most in survey (71." \
         in cause
+
+
+def test_the_computer_draws_the_power_of_the_plan_s_board_and_clock(tmp_path, capsys):
+    plan = write_plan(tmp_path, 120e3, 10800.0, board=("ts5500", 133.0))
+    code, summary, _ = simulate(tmp_path, plan, capsys)
+    assert code == 0
+    board = load_board("ts5500", 133.0)
+    busy = board.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / TICK_S)
+    assert summary["energy_by_component_j"]["computer"] == pytest.approx(
+        float(board.power_w(busy)) * 10800.0)
