@@ -1,0 +1,383 @@
+"""C code generation: the checked mission as the constant tables of runtime/include/gp_mission.h.
+
+One mission becomes one C file, in the spirit of the paper's Fig. 3: per state an
+event table whose rows point to small static functions (a condition, its
+assignments), the flight-profile alternatives with their argument functions, the
+route's points, and one `gp_mission_table` that ties them together. The output is
+deterministic (source order throughout) and clean under
+`-std=c11 -Wall -Wextra -Werror -pedantic`.
+
+Expressions follow `ir.evaluate` exactly: every value is a double, truth is `!= 0.0`,
+&& and || short-circuit, min/max are C's fmin/fmax written out so that ties of signed
+zeros also resolve as the reference does (libm leaves that open), and constants are
+printed with `repr`, which C reads back to the same double, so the runtime and the
+Python reference agree bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+from gliderplan.language import ir
+from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
+
+# Limits of runtime/include/gp_mission.h (the tables use uint8_t counts).
+MAX_STATES = 64
+MAX_VARIABLES = 64
+MAX_PROFILES = 8
+MAX_PROFILE_ARGS = 6
+MAX_POINTS = 64
+MAX_STACK = 32
+MAX_EVENTS = 255
+
+_ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
+            "return": "GP_ACT_RETURN", "exit": "GP_ACT_EXIT"}
+_PROFILE_KINDS = {"yo": "GP_PROFILE_YO", "thermotrackyo": "GP_PROFILE_THERMOTRACKYO",
+                  "surface": "GP_PROFILE_SURFACE", "hover": "GP_PROFILE_HOVER"}
+_ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
+                "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP"}
+_HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep"})
+# Sensors every compiled mission reads: the state timers and the plan's schedule run on
+# missiontime, every profile steers on depth and pitch.
+_ALWAYS_READ = ("missiontime", "depth", "pitch")
+
+
+class CodegenError(Exception):
+    """The mission uses something the C runtime cannot hold (the message says what and where)."""
+
+
+def generate_c(mission: ir.CheckedMission) -> str:
+    """The C source of the mission's tables, ready to compile with the runtime."""
+    _check_limits(mission)
+    return _MissionWriter(mission).write()
+
+
+def read_mask(mission: ir.CheckedMission) -> int:
+    """Bit i set when the runtime reads sensor i (conditions, assignments, profiles, routes)."""
+    names = set(_ALWAYS_READ)
+    for state in mission.states:
+        for event in state.events:
+            names |= ir.sensors_read(event.condition)
+            for assign in event.assignments:
+                names |= ir.sensors_read(assign.value)
+        for profile in state.profiles:
+            for arg in profile.args:
+                names |= ir.sensors_read(arg)
+            if PROFILES[profile.kind].tracks_thermocline:
+                names.add("temp")
+        if state.route.kind in _HEADING_ROUTES:
+            names |= {"lat", "lon"}
+    return sum(1 << SENSOR_BY_NAME[name].index for name in names)
+
+
+def default_ballast_cc(mission: ir.CheckedMission) -> float:
+    """Pumped volume [cc] flown without a plan: the vehicle's full pump stroke.
+
+    The vehicle model's nominal flight (its calibration log, a yo at ~26 deg pitch)
+    pumps the whole stroke either side of neutral, `max_ballast_cc`.
+    """
+    from gliderplan.power_models.vehicle import load_vehicle
+
+    try:
+        return load_vehicle(mission.vehicle).max_ballast_cc
+    except Exception as err:  # a user's vehicle file may be unreadable in many ways
+        raise CodegenError(f"vehicle {mission.vehicle!r}: {err}") from err
+
+
+# ---- expressions -------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ExpressionWriter:
+    """C text of expressions; `value` is a double, `truth` an int (0 or 1)."""
+
+    variable_index: Mapping[str, int]
+
+    def value(self, expr: ir.Expr) -> str:
+        match expr:
+            case ir.Const(number):
+                return c_double(number)
+            case ir.SensorRef(name):
+                return f"s[SENSOR_{name}]"
+            case ir.VarRef(name):
+                return f"v[VAR_{name}]"
+            case ir.UnaryOp("-", operand):
+                return f"(-{self.value(operand)})"
+            case ir.BinaryOp("+" | "-" | "*" | "/" as op, left, right):
+                return f"({self.value(left)} {op} {self.value(right)})"
+            case ir.FuncCall("abs", (arg,)):
+                return f"fabs({self.value(arg)})"
+            case ir.FuncCall("min" | "max" as function, (first, second)):
+                return f"mission_f{function}({self.value(first)}, {self.value(second)})"
+            case ir.UnaryOp("!") | ir.BinaryOp():
+                return f"((double){self.truth(expr)})"
+        raise CodegenError(f"unsupported expression {expr!r}")
+
+    def truth(self, expr: ir.Expr) -> str:
+        match expr:
+            case ir.UnaryOp("!", operand):
+                return f"({self.value(operand)} == 0.0)"
+            case ir.BinaryOp("&&" | "||" as op, left, right):
+                return f"({self.truth(left)} {op} {self.truth(right)})"
+            case ir.BinaryOp("<" | "<=" | ">" | ">=" | "==" | "!=" as op, left, right):
+                return f"({self.value(left)} {op} {self.value(right)})"
+        return f"({self.value(expr)} != 0.0)"
+
+
+def c_double(number: float) -> str:
+    """A C double literal that reads back as exactly `number` (repr is shortest round-trip)."""
+    if math.isnan(number):
+        return "NAN"
+    if math.isinf(number):
+        return "INFINITY" if number > 0 else "(-INFINITY)"
+    text = repr(float(number))
+    return f"({text})" if text.startswith("-") else text
+
+
+def _functions_used(exprs: Iterable[ir.Expr]) -> set[str]:
+    found: set[str] = set()
+    stack = list(exprs)
+    while stack:
+        expr = stack.pop()
+        match expr:
+            case ir.FuncCall(function, args):
+                found.add(function)
+                stack.extend(args)
+            case ir.UnaryOp(_, operand):
+                stack.append(operand)
+            case ir.BinaryOp(_, left, right):
+                stack.extend((left, right))
+    return found
+
+
+def _all_expressions(mission: ir.CheckedMission) -> list[ir.Expr]:
+    exprs: list[ir.Expr] = []
+    for state in mission.states:
+        for event in state.events:
+            exprs.append(event.condition)
+            exprs.extend(a.value for a in event.assignments)
+        for profile in state.profiles:
+            exprs.extend(profile.args)
+    return exprs
+
+
+# ---- limits ------------------------------------------------------------------------
+
+
+def _check_limits(mission: ir.CheckedMission) -> None:
+    def limit(what: str, count: int, most: int) -> None:
+        if count > most:
+            raise CodegenError(f"mission {mission.name}: {what}: {count} exceeds the "
+                               f"runtime's limit of {most}")
+
+    limit("states", len(mission.states), MAX_STATES)
+    limit("variables", len(mission.variables), MAX_VARIABLES)
+    limit("stack depth", mission.stack_depth, MAX_STACK)
+    for state in mission.states:
+        where = f"state {state.name}"
+        limit(f"{where}: flight-profile alternatives", len(state.profiles), MAX_PROFILES)
+        limit(f"{where}: events", len(state.events), MAX_EVENTS)
+        limit(f"{where}: route points", len(_route_points(state.route)), MAX_POINTS)
+        if not state.profiles:
+            raise CodegenError(f"mission {mission.name}: {where} has no flight profile")
+        for profile in state.profiles:
+            if profile.kind not in _PROFILE_KINDS:
+                raise CodegenError(f"{where}: flight profile {profile.kind!r} has no "
+                                   "runtime routine")
+            limit(f"{where}: {profile.kind} arguments", len(profile.args), MAX_PROFILE_ARGS)
+        if state.route.kind not in _ROUTE_KINDS:
+            raise CodegenError(f"{where}: flight route {state.route.kind!r} has no "
+                               "runtime routine")
+        for event in state.events:
+            if event.action not in _ACTIONS:
+                raise CodegenError(f"{where}: unknown action {event.action!r}")
+
+
+def _route_points(route: ir.Route) -> tuple[tuple[float, float], ...]:
+    """The route's (lat, lon) table: nav's single point is its two parameters."""
+    if route.kind == "nav":
+        lat, lon = route.params
+        return ((lat, lon),)
+    return route.points
+
+
+def _route_param(route: ir.Route) -> float:
+    """The route's scalar parameter (sweep: line spacing [m]); 0 when it has none."""
+    return route.params[0] if route.kind == "sweep" else 0.0
+
+
+# ---- the file ----------------------------------------------------------------------
+
+
+class _MissionWriter:
+    """Writes the C file, one `visit_*` per part of the mission, each returning lines."""
+
+    def __init__(self, mission: ir.CheckedMission):
+        self.mission = mission
+        self.variable_index = {v.name: i for i, v in enumerate(mission.variables)}
+        self.expressions = ExpressionWriter(self.variable_index)
+
+    def write(self) -> str:
+        lines = self.visit_header()
+        for index, state in enumerate(self.mission.states):
+            lines += self.visit_state(index, state)
+        lines += self.visit_mission()
+        return "\n".join(lines) + "\n"
+
+    def visit_header(self) -> list[str]:
+        mission = self.mission
+        lines = [
+            f"/* Mission {mission.name}: generated by gliderplan from the checked mission.",
+            f" * Mission hash {mission.hash}.",
+            " * Do not edit: run `gliderplan compile` again. */",
+            "",
+            "#include <math.h>",
+            "#include <stddef.h>",
+            "#include <stdint.h>",
+            "",
+            '#include "gp_mission.h"',
+            "",
+            f'_Static_assert(GP_N_SENSORS == {len(SENSORS)}, '
+            '"the runtime and the compiler disagree on the sensor array");',
+            "",
+            "enum sensor_index {",
+            *(f"    SENSOR_{s.name} = {s.index}," for s in SENSORS),
+            "};",
+            "",
+        ]
+        if mission.variables:
+            lines += ["enum variable_index {",
+                      *(f"    VAR_{v.name} = {i}," for i, v in enumerate(mission.variables)),
+                      "};", ""]
+        used = _functions_used(_all_expressions(mission))
+        # fmin/fmax as ir.evaluate has them: a NaN argument is ignored, a tie keeps `a`.
+        for function, beyond in (("min", "<"), ("max", ">")):
+            if function in used:
+                lines += [f"static double mission_f{function}(double a, double b)", "{",
+                          f"    return isnan(a) ? b : isnan(b) ? a : b {beyond} a ? b : a;",
+                          "}", ""]
+        return lines
+
+    def visit_state(self, index: int, state: ir.State) -> list[str]:
+        prefix = f"state{index}"
+        lines = [f"/* ---- state {index}: {state.name} " + "-" * 40 + " */", ""]
+        for number, event in enumerate(state.events):
+            lines += self.visit_event(f"{prefix}_event{number}", event)
+        lines += self.visit_event_table(prefix, state)
+        for number, profile in enumerate(state.profiles):
+            lines += self.visit_profile_args(f"{prefix}_profile{number}_args", profile)
+        lines += [f"static const gp_profile {prefix}_profiles[{len(state.profiles)}] = {{"]
+        lines += [f"    {{{_PROFILE_KINDS[p.kind]}, {len(p.args)}, "
+                  f"{prefix}_profile{n}_args}}," for n, p in enumerate(state.profiles)]
+        lines += ["};", ""]
+        points = _route_points(state.route)
+        if points:
+            lines += [f"static const double {prefix}_route_points[{len(points)}][2] = {{"]
+            lines += [f"    {{{c_double(lat)}, {c_double(lon)}}}," for lat, lon in points]
+            lines += ["};", ""]
+        if state.sensors:
+            indices = ", ".join(f"SENSOR_{u.name}" for u in state.sensors)
+            lines += [f"static const uint8_t {prefix}_sensors[{len(state.sensors)}] = "
+                      f"{{{indices}}};", ""]
+        return lines
+
+    def visit_event(self, name: str, event: ir.Event) -> list[str]:
+        lines = [f"static int {name}_condition(const double *s, const double *v)", "{",
+                 *self._unused(event.condition, reads_vars=True),
+                 f"    return {self.expressions.truth(event.condition)};", "}", ""]
+        if event.assignments:
+            values = [a.value for a in event.assignments]
+            lines += [f"static void {name}_assign(const double *s, double *v)", "{",
+                      *self._unused(*values, reads_vars=False)]
+            lines += [f"    v[VAR_{a.variable}] = {self.expressions.value(a.value)};"
+                      for a in event.assignments]
+            lines += ["}", ""]
+        return lines
+
+    def visit_event_table(self, prefix: str, state: ir.State) -> list[str]:
+        if not state.events:
+            return []
+        lines = [f"static const gp_event {prefix}_events[{len(state.events)}] = {{"]
+        for number, event in enumerate(state.events):
+            assign = f"{prefix}_event{number}_assign" if event.assignments else "NULL"
+            target = self.mission.state_index[event.target] if event.target else 0
+            comment = f"  /* {event.action} {event.target} */" if event.target else ""
+            lines.append(f"    {{{prefix}_event{number}_condition, {assign}, "
+                         f"{_ACTIONS[event.action]}, {target}}},{comment}")
+        return lines + ["};", ""]
+
+    def visit_profile_args(self, name: str, profile: ir.Profile) -> list[str]:
+        lines = [f"static void {name}(const double *s, const double *v, double *args)", "{",
+                 *self._unused(*profile.args, reads_vars=True)]
+        if not profile.args:
+            lines.append("    (void)args;")
+        lines += [f"    args[{i}] = {self.expressions.value(a)};"
+                  for i, a in enumerate(profile.args)]
+        return lines + ["}", ""]
+
+    def visit_mission(self) -> list[str]:
+        mission = self.mission
+        lines = []
+        if mission.variables:
+            initial = ", ".join(c_double(v.initial) for v in mission.variables)
+            lines += [f"static const double var_initial[{len(mission.variables)}] = "
+                      f"{{{initial}}};", ""]
+        lines += ["static const char *const sensor_names[GP_N_SENSORS] = {",
+                  *(f'    "{s.name}",' for s in SENSORS), "};", ""]
+        lines += [f"static const gp_state states[{len(mission.states)}] = {{"]
+        for index, state in enumerate(mission.states):
+            lines += self.visit_state_entry(index, state)
+        lines += ["};", ""]
+        lines += [
+            "const gp_mission gp_mission_table = {",
+            f"    .name = {_c_string(mission.name)},",
+            f'    .hash = "{mission.hash}",',
+            "    .states = states,",
+            f"    .n_states = {len(mission.states)},",
+            f"    .var_initial = {'var_initial' if mission.variables else 'NULL'},",
+            f"    .n_vars = {len(mission.variables)},",
+            f"    .stack_depth = {mission.stack_depth},",
+            f"    .read_mask = 0x{read_mask(mission):08x}u,",
+            f"    .default_ballast_cc = {c_double(default_ballast_cc(mission))},",
+            "    .sensor_names = sensor_names,",
+            "};",
+        ]
+        return lines
+
+    def visit_state_entry(self, index: int, state: ir.State) -> list[str]:
+        prefix = f"state{index}"
+        route = state.route
+        points = _route_points(route)
+        return [
+            "    {",
+            f"        .name = {_c_string(state.name)},",
+            f"        .route = {{{_ROUTE_KINDS[route.kind]}, {len(points)}, "
+            f"{c_double(_route_param(route))}, "
+            f"{f'{prefix}_route_points' if points else 'NULL'}}},",
+            f"        .profiles = {prefix}_profiles,",
+            f"        .n_profiles = {len(state.profiles)},",
+            f"        .sensors = {f'{prefix}_sensors' if state.sensors else 'NULL'},",
+            f"        .n_sensors = {len(state.sensors)},",
+            f"        .events = {f'{prefix}_events' if state.events else 'NULL'},",
+            f"        .n_events = {len(state.events)},",
+            "    },",
+        ]
+
+    @staticmethod
+    def _unused(*exprs: ir.Expr, reads_vars: bool) -> list[str]:
+        """`(void)` lines for the parameters the body does not read (-Wunused-parameter)."""
+        lines = []
+        if not any(ir.sensors_read(e) for e in exprs):
+            lines.append("    (void)s;")
+        if reads_vars and not any(ir.variables_read(e) for e in exprs):
+            lines.append("    (void)v;")
+        return lines
+
+
+def _c_string(text: str) -> str:
+    """A C string literal; names are identifiers, but escape anyway rather than trust it."""
+    escaped = "".join(ch if ch.isascii() and ch.isprintable() and ch not in '"\\?'
+                      else f"\\{ord(ch) & 0xFF:03o}" for ch in text)
+    return f'"{escaped}"'
