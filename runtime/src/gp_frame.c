@@ -37,53 +37,50 @@ static float get_f32(const uint8_t *p)
     return v;
 }
 
-/* Byte loops: a packet's zeros (small integers, floats) make blocks short, so a
- * memchr/memcpy per block costs more than it saves. */
+/* Byte loops over pointers: a packet's zeros (small integers, floats) make blocks
+ * short, so a memchr/memcpy per block would cost more than it saves. */
 size_t gp_cobs_encode(const uint8_t *in, size_t len, uint8_t *out)
 {
-    size_t code_at = 0, n = 1;
+    uint8_t *code_at = out, *dst = out + 1;
     uint8_t code = 1;
-    for (size_t i = 0; i < len; i++) {
-        if (in[i] == 0) {
-            out[code_at] = code;
-            code_at = n++;
-            code = 1;
-            continue;
+    for (const uint8_t *p = in, *end = in + len; p < end; p++) {
+        if (*p != 0) {
+            *dst++ = *p;
+            if (++code != 0xFF) {
+                continue;
+            }
         }
-        out[n++] = in[i];
-        if (++code == 0xFF) {
-            out[code_at] = code;
-            code_at = n++;
-            code = 1;
-        }
+        *code_at = code;  /* a zero, or a full block of 254 bytes, ends the block */
+        code_at = dst++;
+        code = 1;
     }
-    out[code_at] = code;
-    return n;
+    *code_at = code;
+    return (size_t)(dst - out);
 }
 
 int gp_cobs_decode(const uint8_t *in, size_t len, uint8_t *out, size_t cap)
 {
-    size_t i = 0, n = 0;
-    while (i < len) {
-        size_t code = in[i];
-        if (code == 0 || i + code > len || n + code - 1 > cap) {
+    const uint8_t *p = in, *end = in + len;
+    uint8_t *dst = out, *dst_end = out + cap;
+    while (p < end) {
+        size_t code = *p++;
+        if (code == 0 || code - 1 > (size_t)(end - p) || code - 1 > (size_t)(dst_end - dst)) {
             return -1;
         }
-        for (size_t j = i + 1; j < i + code; j++) {
-            if (in[j] == 0) {
+        for (const uint8_t *block_end = p + code - 1; p < block_end; p++) {
+            if (*p == 0) {
                 return -1;
             }
-            out[n++] = in[j];
+            *dst++ = *p;
         }
-        i += code;
-        if (code != 0xFF && i < len) {
-            if (n >= cap) {
+        if (code != 0xFF && p < end) {
+            if (dst == dst_end) {
                 return -1;
             }
-            out[n++] = 0;
+            *dst++ = 0;
         }
     }
-    return (int)n;
+    return (int)(dst - out);
 }
 
 size_t gp_frame_build(uint8_t type, uint8_t seq, uint8_t ack, const uint8_t *payload,
