@@ -201,7 +201,7 @@ def read_profile_csv(path: str | Path) -> MeasuredProfile:
     a row; rows of one cast share `time_s`. Errors name the file and line."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet may add a BOM
     except (OSError, UnicodeDecodeError) as err:
         raise OceanFileError(f"{path}: cannot read ocean file: {err}") from None
     rows = list(csv.reader(text.splitlines()))
