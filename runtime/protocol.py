@@ -475,7 +475,8 @@ class Link:
     """The science computer: one SENSORS per tick, waits for the COMMAND of that tick.
 
     Re-sends the same frame (same seq) on a NAK or after `retransmit_s` without an
-    answer, at most `max_retries` times; answers every dropped frame with NAK.
+    answer; gives up (LinkTimeoutError) after `max_retries` + 1 timeouts without one.
+    Answers every dropped frame with NAK.
     """
 
     def __init__(self, port: Port, retransmit_s: float = 0.2, max_retries: int = 25) -> None:
@@ -550,11 +551,17 @@ class Link:
         raise LinkTimeoutError(f"no HELLO within {timeout_s:g} s")
 
     def _exchange(self, wire: bytes, answered: type, match=lambda message: True) -> Message:
-        """Write `wire`, re-send it on NAK or silence, until an `answered` message matches."""
+        """Write `wire`, re-send it on NAK or silence, until an `answered` message matches.
+
+        Gives up after `max_retries` + 1 retransmission timeouts in all: NAKs re-send at
+        once but do not use up the budget, since a burst of them (one per damaged frame
+        the runtime dropped) says nothing about whether this frame arrived.
+        """
         wait_s = self.retransmit_s + len(wire) * 10 / BAUD  # time to put it on the line
-        for _ in range(self.max_retries + 1):
+        give_up = time.monotonic() + (self.max_retries + 1) * wait_s
+        while True:
             self.port.write(wire)
-            deadline = time.monotonic() + wait_s
+            deadline = min(time.monotonic() + wait_s, give_up)
             while (remaining := deadline - time.monotonic()) > 0:
                 message = self.receive(remaining)
                 if message is None:
@@ -565,7 +572,9 @@ class Link:
                     raise LinkReleasedError(message.reason)
                 if isinstance(message, Nak):
                     break
-        raise LinkTimeoutError(f"no {answered.__name__} after {self.max_retries} re-sends")
+            if time.monotonic() >= give_up:
+                raise LinkTimeoutError(f"no {answered.__name__} within {self.max_retries + 1} "
+                                       f"retransmission timeouts")
 
     def step(self, tick: int, values: Mapping[int, float] | Sequence[float]) -> Command:
         """Send one tick's SENSORS and return the runtime's COMMAND for that tick.

@@ -5,6 +5,7 @@ the link, link silence."""
 from __future__ import annotations
 
 import os
+import random
 import shutil
 import signal
 import subprocess
@@ -298,3 +299,29 @@ def test_a_mission_fault_releases_control_and_is_logged(build, glider, tmp_path)
     assert [c.stack_depth for c in commands if c.transition] == [0, 1, 2]
     assert (tmp_path / "events.log").read_text().splitlines() == [
         "0 start - a 0", "10 call a b 1", "20 call b a 2", "21 fault a b 2"]
+
+
+def test_random_frames_and_bytes_never_derail_the_runtime(binary, glider):
+    """Garbage, damaged frames and well-formed frames of every type but SENSORS (with
+    random payloads) between ticks: the runtime neither crashes nor steps on them."""
+    process = glider.start(binary)
+    link = glider.link()
+    link.wait_hello()
+    rng = random.Random(5)
+    commands = fly(link, 0, 20)
+    for burst in range(40):
+        noise = bytearray()
+        for _ in range(25):
+            kind = rng.choice([t for t in p.MessageType if t != p.MessageType.SENSORS])
+            payload = rng.randbytes(rng.randrange(0, p.MAX_PAYLOAD + 1))
+            if kind == p.MessageType.PLAN and rng.random() < 0.5:
+                payload = b"\x00\x00" + payload[2:]  # offset 0: starts a (bad) plan
+            wire = bytearray(p.build_frame(p.Frame(kind, rng.randrange(256), 0, payload)))
+            if rng.random() < 0.3:
+                wire[rng.randrange(len(wire) - 1)] = rng.randrange(1, 256)
+            noise += wire + rng.randbytes(rng.randrange(0, 40))
+        os.write(glider.master, bytes(noise))
+        commands += fly(link, 21 + burst, 21 + burst)
+    commands += fly(link, 61, 400)
+    assert transitions(commands) == FIG2_TRACE
+    assert process.wait(10) == 0
