@@ -1,0 +1,256 @@
+"""Building a mission binary: the runtime's C sources plus one generated mission file.
+
+The runtime sources ship inside the package (`gliderplan.runtime`: `include/*.h`,
+`src/*.c`), so a compile works after `pip install`. Three targets: the host, the
+TS-7800's ARMv5TE (ARM9) and the TS-5500's i486-class AMD Elan SC520, both static so
+the binary runs on the boards' old C libraries. Builds are cached by everything that
+determines the binary: the generated source, the runtime sources, the target and the
+compiler's version.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+from gliderplan.language.codegen_c import generate_c
+from gliderplan.language.ir import CheckedMission
+
+# The contract of runtime/include/gp_mission.h: every runtime source and the mission.
+C_FLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror")
+LINK_FLAGS = ("-lm",)
+
+
+class BuildError(Exception):
+    """A build that cannot run or failed; the message says what to do."""
+
+
+@dataclass(frozen=True)
+class Target:
+    """A board's toolchain: the compiler command, its flags, the Debian package with it."""
+
+    name: str
+    compiler: str
+    flags: tuple[str, ...]
+    package: str
+    description: str
+
+
+TARGETS: dict[str, Target] = {
+    t.name: t
+    for t in (
+        Target("host", "cc", (), "gcc", "this machine"),
+        Target("ts7800", "arm-linux-gnueabi-gcc", ("-march=armv5te", "-static"),
+               "gcc-arm-linux-gnueabi", "TS-7800, ARMv5TE (ARM9)"),
+        Target("ts5500", "i686-linux-gnu-gcc", ("-march=i486", "-static"),
+               "gcc-i686-linux-gnu", "TS-5500, i486-class AMD Elan SC520"),
+    )
+}
+
+
+def target(name: str) -> Target:
+    try:
+        return TARGETS[name]
+    except KeyError:
+        raise BuildError(f"unknown target {name!r}; choose one of "
+                         f"{', '.join(TARGETS)}") from None
+
+
+def compiler_command(board: Target) -> list[str]:
+    """The compiler to run, or a BuildError naming the Debian package that provides it."""
+    if shutil.which(board.compiler):
+        return [board.compiler]
+    raise BuildError(f"target {board.name} ({board.description}) needs {board.compiler}, "
+                     f"which is not installed; on Debian/Ubuntu: "
+                     f"sudo apt-get install {board.package}")
+
+
+@contextmanager
+def runtime_sources() -> Iterator[tuple[Path, list[Path]]]:
+    """(include directory, sorted C sources) of the runtime shipped with the package."""
+    with resources.as_file(resources.files("gliderplan.runtime")) as root:
+        include, sources = root / "include", sorted((root / "src").glob("*.c"))
+        if not (include / "gp_mission.h").is_file() or not sources:
+            raise BuildError(f"the runtime's C sources are missing from {root}: "
+                             "reinstall gliderplan")
+        yield include, sources
+
+
+def compiler_version(command: list[str]) -> str:
+    try:
+        done = subprocess.run([*command, "--version"], capture_output=True, text=True,
+                              check=True, timeout=60)
+    except (OSError, subprocess.SubprocessError) as err:
+        raise BuildError(f"{command[0]} --version failed: {err}") from err
+    return done.stdout
+
+
+def build_mission(c_source_path: str | Path, out_dir: str | Path,
+                  target_name: str = "host") -> Path:
+    """Compile the runtime with one mission's C file into `out_dir`; the binary's path.
+
+    The binary is named after the C file (`fig2.c` -> `fig2`). Uncached: see
+    `compile_mission` for the cached path from a checked mission.
+    """
+    c_source = Path(c_source_path)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    binary = out / c_source.stem
+    command = compiler_command(target(target_name))
+    with runtime_sources() as (include, sources):
+        _compile(command, target(target_name), include, [*sources, c_source], binary)
+    return binary
+
+
+def _compile(command: list[str], board: Target, include: Path, sources: list[Path],
+             binary: Path) -> None:
+    """Run the compiler into a temporary file, then rename: a failed build leaves nothing."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{binary.name}.", dir=binary.parent)
+    os.close(fd)
+    args = [*command, *C_FLAGS, *board.flags, f"-I{include}", *map(str, sources),
+            "-o", tmp, *LINK_FLAGS]
+    try:
+        done = subprocess.run(args, capture_output=True, text=True, timeout=600)
+        if done.returncode != 0:
+            raise BuildError(f"{command[0]} failed for target {board.name} "
+                             f"(exit {done.returncode}):\n{done.stderr.strip()}")
+        os.chmod(tmp, 0o755)
+        os.replace(tmp, binary)
+    except OSError as err:
+        raise BuildError(f"cannot run {command[0]}: {err}") from err
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+
+# ---- cached builds from a checked mission -------------------------------------------
+
+
+def cache_dir() -> Path:
+    """$GLIDERPLAN_CACHE_DIR, else ~/.cache/gliderplan/builds."""
+    configured = os.environ.get("GLIDERPLAN_CACHE_DIR")
+    if configured:
+        return Path(configured)
+    return Path.home() / ".cache" / "gliderplan" / "builds"
+
+
+def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
+              version: str) -> str:
+    """SHA-256 over everything that determines the binary."""
+    digest = hashlib.sha256()
+
+    def part(label: str, data: bytes) -> None:
+        digest.update(f"{label}:{len(data)}:".encode())
+        digest.update(data)
+
+    part("mission", mission_c.encode())
+    for path in [*sorted(include.glob("*.h")), *sources]:
+        part(path.name, path.read_bytes())
+    part("target", repr(board).encode())
+    part("flags", " ".join(C_FLAGS + LINK_FLAGS).encode())
+    part("compiler", version.encode())
+    return digest.hexdigest()
+
+
+def compile_mission(mission: CheckedMission, out_dir: str | Path,
+                    target_name: str = "host") -> Path:
+    """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>.
+
+    A build with the same inputs is copied from the cache instead of compiled again.
+    Raises CodegenError for a mission the runtime cannot hold, BuildError otherwise.
+    """
+    board = target(target_name)
+    command = compiler_command(board)
+    source = generate_c(mission)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    c_path = out / f"{mission.name}.c"
+    _write_if_changed(c_path, source)
+    binary = out / mission.name
+    with runtime_sources() as (include, sources):
+        key = build_key(source, include, sources, board, compiler_version(command))
+        cached = cache_dir() / key[:2] / key / mission.name
+        if not cached.is_file():
+            cached.parent.mkdir(parents=True, exist_ok=True)
+            _compile(command, board, include, [*sources, c_path], cached)
+    _copy_atomically(cached, binary)
+    return binary
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    if path.is_file() and path.read_text() == text:
+        return
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    with os.fdopen(fd, "w") as handle:
+        handle.write(text)
+    os.chmod(tmp, 0o644)
+    os.replace(tmp, path)
+
+
+def _copy_atomically(source: Path, destination: Path) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f".{destination.name}.", dir=destination.parent)
+    os.close(fd)
+    try:
+        shutil.copy2(source, tmp)
+        os.replace(tmp, destination)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+
+# ---- checking a plan with the runtime's own reader ----------------------------------
+
+
+class PlanRejected(Exception):
+    """The runtime refused a plan; the message is the runtime's own (it names the line)."""
+
+
+def check_plan(mission: CheckedMission, plan_path: str | Path, timeout_s: float = 10.0) -> None:
+    """Start the mission's host binary on the plan over a pty; it must get as far as HELLO.
+
+    The runtime reads its plan before it talks to the science computer, so the same
+    strict reader that will run on the board decides, not a second implementation, and
+    its message names the plan file and line.
+    """
+    import signal
+
+    from gliderplan.runtime.protocol import FdPort, Link, LinkError
+
+    with tempfile.TemporaryDirectory(prefix="gliderplan-plan-") as tmp:
+        work = Path(tmp)
+        binary = compile_mission(mission, work, "host")
+        master, slave = os.openpty()
+        try:
+            process = subprocess.Popen(
+                [str(binary), "--device", os.ttyname(slave), "--plan", str(plan_path),
+                 "--state-dir", str(work / "state")],
+                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+            link = Link(FdPort(master))
+            deadline = time.monotonic() + timeout_s
+            hello = False
+            while not hello and process.poll() is None and time.monotonic() < deadline:
+                try:
+                    link.wait_hello(0.1)
+                    hello = True
+                except LinkError:
+                    pass
+            if process.poll() is None:
+                process.send_signal(signal.SIGTERM)
+            _, stderr = process.communicate(timeout=timeout_s)
+        finally:
+            os.close(master)
+            os.close(slave)
+    if hello:
+        return
+    message = stderr.decode(errors="replace").strip()
+    if process.returncode == 1:
+        raise PlanRejected(message or "rejected without a message")
+    raise BuildError(f"the runtime neither accepted nor rejected the plan "
+                     f"(exit {process.returncode}): {message}")

@@ -1,0 +1,295 @@
+"""Fig. 2 end to end: `gliderplan compile` builds the runtime from the generated C, and a
+scripted science computer (protocol.Link) drives it over a pty pair, feeding missiontime.
+
+    s1 --call (500 s)--> s2 --return (1500 s)--> s1 --goto (2000 s)--> s3 --exit (2500 s)
+
+Also: corrupted frames change nothing, a killed runtime resumes, bad plans stop it
+before it starts, a hand-written plan's sensor windows reach the COMMANDs, and the
+TS-7800 and TS-5500 builds give the same trace under qemu-user.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import signal
+import subprocess
+import tty
+import zlib
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from gliderplan.cli.main import main
+from gliderplan.runtime import protocol as p
+
+ROOT = Path(__file__).resolve().parents[1]
+FIG2 = ROOT / "examples" / "fig2.mission"
+TICK_S = 10.0
+STATES = {0: "s1", 1: "s2", 2: "s3", p.NO_STATE: "-"}
+KINDS = {1: "start", 2: "goto", 3: "call", 4: "return", 5: "exit"}
+PAPER_TRACE = ["0 start - s1 0", "500 call s1 s2 1", "1500 return s2 s1 0",
+               "2000 goto s1 s3 0", "2500 exit s3 - 0"]
+
+pytestmark = pytest.mark.skipif(shutil.which("cc") is None,
+                                reason="no C compiler (cc) to build the runtime")
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory) -> Iterator[Path]:
+    """A build cache of this module's own, so the tests never read a stale user cache."""
+    directory = tmp_path_factory.mktemp("cache")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("GLIDERPLAN_CACHE_DIR", str(directory))
+        yield directory
+
+
+def compile_fig2(out: Path, *options: str) -> int:
+    return main(["compile", str(FIG2), "-o", str(out), *options])
+
+
+@pytest.fixture(scope="module")
+def binary(cache, tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("host")
+    assert compile_fig2(out) == 0
+    return out / "sampleMission"
+
+
+@pytest.fixture(scope="module")
+def fig2_hash(binary) -> str:
+    return (binary.parent / "sampleMission.c").read_text().split("Mission hash ")[1][:64]
+
+
+class Line:
+    """A pty pair: the runtime opens the slave by name, the science computer holds the master."""
+
+    def __init__(self) -> None:
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)  # held open so that a restarted runtime finds the same line
+        self.device = os.ttyname(self.slave)
+        self.process: subprocess.Popen | None = None
+
+    def start(self, command: list[str], *args: str) -> subprocess.Popen:
+        self.process = subprocess.Popen([*command, "--device", self.device, *args],
+                                        stderr=subprocess.PIPE, text=True)
+        return self.process
+
+    def link(self) -> p.Link:
+        return p.Link(p.FdPort(self.master), retransmit_s=0.2, max_retries=20)
+
+    def close(self) -> None:
+        if self.process and self.process.poll() is None:
+            self.process.kill()
+            self.process.wait(10)
+        os.close(self.master)
+        os.close(self.slave)
+
+
+@pytest.fixture
+def line() -> Iterator[Line]:
+    pair = Line()
+    yield pair
+    pair.close()
+
+
+def readings(tick: int) -> dict[int, float]:
+    """One tick's sensors: missiontime, depth sweeping 5-24 m, position, temperature."""
+    return {0: tick * TICK_S, 1: 5.0 + tick % 20, 2: 0.0, 6: 3910.0, 7: -7349.0, 9: 15.0}
+
+
+def fly(link: p.Link, first: int, last: int = 1000,
+        before_step=lambda tick: None) -> list[p.Command]:
+    commands = []
+    for tick in range(first, last + 1):
+        before_step(tick)
+        commands.append(link.step(tick, readings(tick)))
+        if commands[-1].done:
+            break
+    return commands
+
+
+def trace(commands: list[p.Command]) -> list[str]:
+    return [f"{c.tick * TICK_S:g} {KINDS[c.transition]} {STATES[c.from_state]} "
+            f"{STATES[c.to_state]} {c.stack_depth}" for c in commands if c.transition]
+
+
+def run_to_end(line: Line, command: list[str], state_dir: Path) -> list[p.Command]:
+    process = line.start(command, "--state-dir", str(state_dir))
+    link = line.link()
+    assert link.wait_hello(30).name == "sampleMission"
+    commands = fly(link, 0)
+    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert process.wait(30) == 0, process.stderr.read()
+    return commands
+
+
+def test_compiled_fig2_flies_the_papers_trace(binary, line, tmp_path):
+    commands = run_to_end(line, [str(binary)], tmp_path)
+    assert trace(commands) == PAPER_TRACE
+    assert (tmp_path / "events.log").read_text().splitlines() == PAPER_TRACE
+
+
+def test_a_second_compile_comes_from_the_cache(binary, cache, tmp_path):
+    entries = sorted(cache.rglob("sampleMission"))
+    assert compile_fig2(tmp_path) == 0
+    assert sorted(cache.rglob("sampleMission")) == entries  # nothing new was built
+    assert (tmp_path / "sampleMission").read_bytes() == binary.read_bytes()
+
+
+def test_a_missing_cross_compiler_names_the_debian_package(monkeypatch, tmp_path, capsys):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no compiler of any kind
+    assert compile_fig2(tmp_path / "out", "--target", "ts7800") == 1
+    assert "sudo apt-get install gcc-arm-linux-gnueabi" in capsys.readouterr().err
+
+
+def test_a_mission_beyond_the_runtime_limits_is_a_clear_error(tmp_path, capsys):
+    assert compile_fig2(tmp_path, "--max-stack", "40") == 1
+    assert "stack depth: 40 exceeds the runtime's limit of 32" in capsys.readouterr().err
+    assert not (tmp_path / "sampleMission").exists()
+
+
+def _sensors_frame(link: p.Link, tick: int) -> bytes:
+    """A SENSORS frame for `tick` with the seq the next real frame would use."""
+    frame = p.Frame(p.MessageType.SENSORS, (link.seq + 1) & 0xFF, link.ack,
+                    p.Sensors(tick, readings(tick)).pack())
+    return p.build_packet(frame)
+
+
+def test_corrupted_frames_are_rejected_and_change_nothing(binary, line, tmp_path):
+    process = line.start([str(binary)], "--state-dir", str(tmp_path))
+    link = line.link()
+    link.wait_hello(30)
+
+    def inject(tick: int) -> None:
+        if tick % 25:
+            return
+        # Each would be tick 250 (missiontime 2500: exit) if the runtime believed it.
+        packet = bytearray(_sensors_frame(link, 250))
+        bad_crc = bytes(packet[:-1]) + bytes([packet[-1] ^ 0x01])
+        bad_version = bytes([2]) + bytes(packet[1:-2])
+        bad_version += p.crc16_ccitt_false(bad_version).to_bytes(2, "big")
+        truncated = bytes(packet[:-5])
+        for wire in (bad_crc, bad_version, truncated):
+            os.write(line.master, p.cobs_encode(wire) + b"\x00")
+        os.write(line.master, b"\x13\x37 not a frame\x00")
+
+    commands = fly(link, 0, before_step=inject)
+    assert trace(commands) == PAPER_TRACE
+    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert process.wait(30) == 0
+
+
+def test_a_killed_runtime_resumes_with_the_same_trace(binary, line, tmp_path):
+    line.start([str(binary)], "--state-dir", str(tmp_path))
+    link = line.link()
+    link.wait_hello(30)
+    before = fly(link, 0, 120)  # in s2, called from s1
+    assert (before[-1].state, before[-1].stack_depth) == (1, 1)
+    line.process.send_signal(signal.SIGKILL)
+    line.process.wait(10)
+
+    process = line.start([str(binary)], "--state-dir", str(tmp_path))
+    link.wait_hello(30)
+    after = fly(link, 121)
+    assert (after[0].state, after[0].stack_depth, after[0].transition) == (1, 1, 0)
+    assert trace(before + after) == PAPER_TRACE
+    assert process.wait(30) == 0
+    assert (tmp_path / "events.log").read_text().splitlines() == PAPER_TRACE
+
+
+# ---- plans ---------------------------------------------------------------------------
+
+
+def make_plan(mission_hash: str, version: int = 1, temp_period_s: float = 60,
+              temp_on_s: float = 15) -> bytes:
+    """A plan for Fig. 2 written by hand from docs/plan-format.md."""
+    body = (f"GPPLAN {version}\nmission sampleMission\nhash {mission_hash}\n"
+            "computer ts7800 300\nbudget_j 6630000\npredicted_j 9876.5\nstates 3\n"
+            "state s1 300 600 0 1\nprofile 0 1 0.3 150 0.31\nend\n"
+            f"state s2 300 600 1 1\nsensor temp {temp_period_s:g} {temp_on_s:g}\n"
+            "profile 0 1 0.4 200 0.3\nend\n"
+            "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n").encode()
+    return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
+
+
+def bad_plans(mission_hash: str) -> dict[str, tuple[bytes, str]]:
+    good = make_plan(mission_hash)
+    other = make_plan("0" * 64)
+    wrong_version = make_plan(mission_hash, version=2)
+    bad_crc = good[:-3] + (b"00\n" if good[-3:] != b"00\n" else b"11\n")
+    return {
+        "truncated": (good[: len(good) // 2], "truncated"),
+        "bad-crc": (bad_crc, "checksum"),
+        "other-mission": (other, "hash"),
+        "wrong-version": (wrong_version, "version"),
+    }
+
+
+BAD_PLANS = ["truncated", "bad-crc", "other-mission", "wrong-version"]
+
+
+@pytest.mark.parametrize("case", BAD_PLANS)
+def test_the_runtime_refuses_to_start_on_a_bad_plan(binary, fig2_hash, line, tmp_path, case):
+    plan, word = bad_plans(fig2_hash)[case]
+    (tmp_path / "bad.plan").write_bytes(plan)
+    process = line.start([str(binary)], "--plan", str(tmp_path / "bad.plan"),
+                         "--state-dir", str(tmp_path / "state"))
+    assert process.wait(30) == 1
+    message = process.stderr.read()
+    assert "bad.plan" in message and word in message.lower(), message
+    assert not (tmp_path / "state" / "events.log").exists()
+
+
+@pytest.mark.parametrize("case", BAD_PLANS)
+def test_compile_rejects_a_bad_plan(binary, fig2_hash, tmp_path, capsys, case):
+    plan, word = bad_plans(fig2_hash)[case]
+    (tmp_path / "bad.plan").write_bytes(plan)
+    assert compile_fig2(tmp_path / "out", "--plan", str(tmp_path / "bad.plan")) == 1
+    message = capsys.readouterr().err
+    assert "plan rejected" in message and "bad.plan line" in message, message
+    assert word in message.lower(), message
+    assert not (tmp_path / "out" / "bad.plan").exists()
+
+
+def test_a_hand_written_plan_switches_sensors_on_their_windows(binary, fig2_hash, line,
+                                                              tmp_path, capsys):
+    (tmp_path / "fig2.plan").write_bytes(make_plan(fig2_hash))
+    out = tmp_path / "out"
+    assert compile_fig2(out, "--plan", str(tmp_path / "fig2.plan")) == 0
+    assert (out / "fig2.plan").read_bytes() == make_plan(fig2_hash)
+
+    commands = run_to_end(line, [str(out / "sampleMission"), "--plan", str(out / "fig2.plan")],
+                          tmp_path / "state")
+    assert trace(commands) == PAPER_TRACE
+    temp_bit, always = 1 << 9, 0b111  # temp (CTD) is planned; missiontime, depth, pitch not
+    in_s2 = [c for c in commands if c.state == 1]
+    assert len(in_s2) == 100
+    for command in in_s2:
+        t_in = command.tick * TICK_S - 500.0
+        assert bool(command.sensor_power & temp_bit) == (math.fmod(t_in, 60.0) < 15.0), t_in
+        assert command.sensor_power & always == always
+    in_s1 = [c for c in commands if c.state == 0]
+    assert all(not c.sensor_power & temp_bit for c in in_s1)
+    # The planned pitch and ballast replace the profile's own and the vehicle default.
+    assert {round(abs(c.pitch_rad), 6) for c in in_s1} == {0.3}
+    assert {abs(c.ballast_cc) for c in in_s1} == {150.0}
+
+
+# ---- the boards' CPUs under qemu-user ----------------------------------------------------
+
+BOARDS = [("ts7800", "arm-linux-gnueabi-gcc", "qemu-arm"),
+          ("ts5500", "i686-linux-gnu-gcc", "qemu-i386")]
+
+
+@pytest.mark.parametrize(("target", "compiler", "emulator"), BOARDS, ids=[b[0] for b in BOARDS])
+def test_board_builds_fly_the_same_trace_under_qemu(cache, line, tmp_path, target, compiler,
+                                                    emulator):
+    missing = [tool for tool in (compiler, emulator) if shutil.which(tool) is None]
+    if missing:
+        pytest.skip(f"{' and '.join(missing)} not installed (make sysdeps)")
+    assert compile_fig2(tmp_path / target, "--target", target) == 0
+    commands = run_to_end(line, [emulator, str(tmp_path / target / "sampleMission")],
+                          tmp_path / "state")
+    assert trace(commands) == PAPER_TRACE
