@@ -13,7 +13,6 @@ import sys
 from gliderplan.cli.common import write_atomically
 from gliderplan.cli.errors import UsageError
 from gliderplan.language.diagnostics import MissionSyntaxError, render_all
-from gliderplan.language.formatter import FormatError, format_source
 from gliderplan.language.source import SourceError, read_mission
 
 ORDER = 15
@@ -29,6 +28,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Imported here: every command's module is loaded at start-up, and `check` must start fast.
+    from gliderplan.language.formatter import FormatError, format_source
+
     failed = False
     for path in args.missions:
         try:

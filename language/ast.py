@@ -7,11 +7,59 @@ are normalised by the checker, not here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from typing import Any, ClassVar, dataclass_transform
 
 
-@dataclass(frozen=True)
-class Span:
+@dataclass_transform(eq_default=True)
+class Node:
+    """An immutable record: fields are the annotations, in order; a class attribute is
+    a default. Equality and hashing ignore `span` and the fields in `_uncompared`
+    (spellings such as ".454" for 0.454).
+
+    Lighter than frozen dataclasses, which generate six functions per class: this
+    module is imported on every `gliderplan check`, and start-up time matters there.
+    """
+
+    _fields: ClassVar[tuple[str, ...]] = ()
+    _compared: ClassVar[tuple[str, ...]] = ()
+    _uncompared: ClassVar[frozenset[str]] = frozenset()
+
+    def __init_subclass__(cls) -> None:
+        fields = tuple(n for n in cls.__dict__.get("__annotations__", {})
+                       if not n.startswith("_"))
+        cls._fields = fields
+        cls.__match_args__ = fields
+        cls._compared = tuple(n for n in fields if n != "span" and n not in cls._uncompared)
+        defaults = {n: cls.__dict__[n] for n in fields if n in cls.__dict__}
+        params = ", ".join(f"{n}=_defaults[{n!r}]" if n in defaults else n for n in fields)
+        stores = "".join(f"    fields[{n!r}] = {n}\n" for n in fields)
+        namespace: dict[str, Any] = {"_defaults": defaults}
+        exec(f"def __init__(self, {params}):\n    fields = self.__dict__\n{stores}", namespace)
+        cls.__init__ = namespace["__init__"]
+
+    def _key(self) -> tuple:
+        return tuple(getattr(self, n) for n in self._compared)
+
+    def __eq__(self, other: object) -> bool:
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash((self.__class__, self._key()))
+
+    def __repr__(self) -> str:
+        shown = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._fields if n != "span")
+        return f"{type(self).__name__}({shown})"
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+
+class Span(Node):
     """1-based line and column of the first character, and of the one after the last."""
 
     line: int
@@ -23,144 +71,125 @@ class Span:
 NO_SPAN = Span(0, 0, 0, 0)
 
 
-def _span() -> Span:
-    return field(default=NO_SPAN, compare=False, repr=False)
-
-
-@dataclass(frozen=True)
-class Ident:
+class Ident(Node):
     text: str
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
 # ---- expressions -------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Number:
+class Number(Node):
+    _uncompared = frozenset({"text"})
     value: float
-    text: str = field(compare=False)  # as written, e.g. ".454"
-    span: Span = _span()
+    text: str  # as written, e.g. ".454"
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Name:
+class Name(Node):
     """A sensor or a variable; the checker decides which."""
 
     name: str
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Unary:
+class Unary(Node):
     op: str  # "-" or "!"
     operand: Expr
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Binary:
+class Binary(Node):
     op: str  # + - * / < <= > >= == != && ||
     left: Expr
     right: Expr
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Call:
+class Call(Node):
     function: Ident
     args: tuple[Expr, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
 Expr = Number | Name | Unary | Binary | Call
 
 
-@dataclass(frozen=True)
-class Point:
+class Point(Node):
     """A (lat, lon) pair in Slocum DDMM.MMMM notation."""
 
     lat: Expr
     lon: Expr
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
 # ---- mission-level declarations ------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Quantity:
+class Quantity(Node):
+    _uncompared = frozenset({"text"})
     value: float
-    text: str = field(compare=False)
+    text: str
     unit: Ident | None = None
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class VehicleDecl:
+class VehicleDecl(Node):
     preset: Ident  # a preset name, or a file path written as a string
     is_file: bool
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class ComputerDecl:
+class ComputerDecl(Node):
     board: Ident
     is_file: bool
     clock: Quantity | None
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class BatteryDecl:
+class BatteryDecl(Node):
     capacity: Quantity
     voltage: Quantity | None
     reserve: Quantity | None
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class HorizonDecl:
+class HorizonDecl(Node):
     duration: Quantity
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class ObjectiveDecl:
+class ObjectiveDecl(Node):
     sense: Ident  # maximize | minimize
     target: Ident  # quality | energy
     quality_floor: Number | None
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Bound:
+class Bound(Node):
     """`weight 3`, `duty >= 0.25` or `quality >= 0.5` on a sensor."""
 
     kind: str  # weight | duty | quality
     op: str  # "=" for weight, else a comparison
     value: Number
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class SensorDecl:
+class SensorDecl(Node):
     sensor: Ident
     bounds: tuple[Bound, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class VarDecl:
+class VarDecl(Node):
     name: Ident
     initial: Expr
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class StackDecl:
+class StackDecl(Node):
     depth: Number
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
 Declaration = (
@@ -177,98 +206,87 @@ Declaration = (
 # ---- states --------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Invocation:
+class Invocation(Node):
     """`nav(3910.5, -7349.8)`, `yo(5, 20, .454, .454)` or a bare `noheading`."""
+
+    _uncompared = frozenset({"has_parens"})
 
     name: Ident
     args: tuple[Expr | Point, ...]
-    has_parens: bool = field(default=True, compare=False)
-    span: Span = _span()
+    has_parens: bool = True
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class RouteItem:
+class RouteItem(Node):
     route: Invocation
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class ProfileItem:
+class ProfileItem(Node):
     """One or more alternatives; the planner splits time between them."""
 
     alternatives: tuple[Invocation, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class SensorUse:
+class SensorUse(Node):
     sensor: Ident
     duty: Number | Ident | None  # a fixed duty, `auto`, or None (always on)
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class SensorsItem:
+class SensorsItem(Node):
     sensors: tuple[SensorUse, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class ExpectItem:
+class ExpectItem(Node):
     low: Quantity
     high: Quantity
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class RequireItem:
+class RequireItem(Node):
     sensor: Ident
     bounds: tuple[Bound, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Assignment:
+class Assignment(Node):
     target: Ident
     value: Expr
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Action:
+class Action(Node):
     kind: str  # goto | call | return | exit
     target: Ident | None
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Event:
+class Event(Node):
     condition: Expr
     assignments: tuple[Assignment, ...]
     action: Action | None
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class EventsItem:
+class EventsItem(Node):
     events: tuple[Event, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
 StateItem = RouteItem | ProfileItem | SensorsItem | ExpectItem | RequireItem | EventsItem
 
 
-@dataclass(frozen=True)
-class State:
+class State(Node):
     name: Ident
     items: tuple[StateItem, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN
 
 
-@dataclass(frozen=True)
-class Mission:
+class Mission(Node):
     name: Ident
     declarations: tuple[Declaration, ...]
     states: tuple[State, ...]
-    span: Span = _span()
+    span: Span = NO_SPAN

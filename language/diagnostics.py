@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -47,6 +46,8 @@ def closest(word: str, candidates: Iterable[str]) -> str | None:
         matches = [c for c in pool if related(lowered, c.lower())]
         if matches:
             return min(matches, key=lambda c: (abs(len(c) - len(word)), c))
+    import difflib  # only when a name is wrong: keeps it out of a clean check's start-up
+
     close = difflib.get_close_matches(word, pool, n=1, cutoff=0.6)
     return close[0] if close else None
 

@@ -7,7 +7,6 @@ hash that plans and compiled runtimes carry.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from collections.abc import Mapping
@@ -314,6 +313,8 @@ class CheckedMission:
         data = _encode(self)
         data.pop("defaults_used")
         canonical = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        import hashlib  # here, not at the top: `gliderplan check` starts faster without it
+
         return hashlib.sha256(canonical.encode()).hexdigest()
 
 
