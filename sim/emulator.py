@@ -6,6 +6,7 @@ processes can talk, and deterministic."""
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import signal
@@ -59,7 +60,7 @@ class CRuntime:
         """Send one tick's SENSORS (the sensors in `mask`), return the runtime's COMMAND."""
         from gliderplan.runtime.protocol import NO_STATE, LinkReleasedError, LinkTimeoutError
 
-        carried = {i: values[i] for i in range(len(values)) if mask >> i & 1}
+        carried = {i: values[i] for i in _indices(mask)}
         try:
             command = self.link.step(tick, carried)
             self.exited = command.state == NO_STATE
@@ -89,6 +90,12 @@ class CRuntime:
             os.close(self.master)
             os.close(self.slave)
             shutil.rmtree(self._work, ignore_errors=True)
+
+
+@functools.cache
+def _indices(mask: int) -> tuple[int, ...]:
+    """Sensor indices of the set bits of a mask."""
+    return tuple(i for i in range(32) if mask >> i & 1)
 
 
 def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None,
