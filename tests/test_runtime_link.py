@@ -129,6 +129,8 @@ def test_a_killed_runtime_resumes_from_its_checkpoint(binary, glider, tmp_path):
     assert before[-1].state == 1 and before[-1].stack_depth == 1
     glider.process.send_signal(signal.SIGKILL)
     glider.process.wait(5)
+    with open(tmp_path / "events.log", "a") as log:  # as if killed between log and checkpoint
+        log.write("1010 return s2 s1 0\n")
 
     process = glider.start(binary, "--state-dir", str(tmp_path))
     link.wait_hello()

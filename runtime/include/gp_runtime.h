@@ -26,6 +26,7 @@ typedef struct {
     uint8_t started;
     uint8_t profile;                /**< alternative flown, GP_NO_PROFILE: enter on next tick */
     uint8_t has_command;            /**< last_command is valid */
+    uint32_t events_log_bytes;      /**< size of the event log once this state was reached */
     gp_pilot pilot;
     gp_command last_command;        /**< the last tick answered (resent for the same tick) */
     gp_route_state route;           /**< last: its waypoints are not checkpointed */

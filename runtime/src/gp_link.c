@@ -147,6 +147,15 @@ static int open_events(session *s, char *message)
         snprintf(message, ERROR_LEN, "%.200s: %s", path, strerror(errno));
         return -1;
     }
+    /* Lines logged after the checkpoint belong to a tick the resumed runtime steps
+     * again: drop them, so that every transition is logged exactly once. */
+    off_t size = lseek(s->events_fd, 0, SEEK_END);
+    if (runtime.started && size > (off_t)runtime.events_log_bytes
+        && ftruncate(s->events_fd, (off_t)runtime.events_log_bytes) < 0) {
+        snprintf(message, ERROR_LEN, "%.200s: cannot drop lines after the checkpoint: %s", path,
+                 strerror(errno));
+        return -1;
+    }
     return 0;
 }
 
@@ -170,6 +179,8 @@ static int persist(session *s, const gp_tick_report *report)
         }
     }
     if (s->args->state_dir && report->changed) {
+        off_t size = lseek(s->events_fd, 0, SEEK_END);
+        runtime.events_log_bytes = size < 0 ? 0 : (uint32_t)size;
         gp_checkpoint_encode(s->mission, &runtime, checkpoint_buf);
         return gp_write_atomically(s->args->state_dir, "checkpoint", checkpoint_buf,
                                    sizeof checkpoint_buf);
