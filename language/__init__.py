@@ -37,5 +37,10 @@ def check_source(source: str, filename: str = "<mission>",
         syntax = parse(source)
     except MissionSyntaxError as err:
         return CheckResult(filename, source, None, err.diagnostics)
-    mission, diagnostics = check(syntax, stack_depth)
+    try:
+        mission, diagnostics = check(syntax, stack_depth)
+    except RecursionError:
+        from gliderplan.language.parser import TOO_DEEP
+
+        return CheckResult(filename, source, None, [TOO_DEEP])
     return CheckResult(filename, source, mission, diagnostics)

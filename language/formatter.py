@@ -59,6 +59,13 @@ class _Statement:
 def format_source(text: str) -> str:
     """The canonical text of a mission; MissionSyntaxError if it does not parse."""
     mission = parse(text)
+    try:
+        return _format(text, mission)
+    except RecursionError:
+        raise FormatError("expressions are nested too deeply to format") from None
+
+
+def _format(text: str, mission: ast.Mission) -> str:
     comments = list(_comments(text))
     statements = list(_statements(mission, text))
     trailer = _attach(comments, statements)

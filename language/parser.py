@@ -9,13 +9,18 @@ from pathlib import Path
 from lark import Lark, Token, Tree, UnexpectedInput
 
 from gliderplan.language import ast
-from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError
+from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, error
 
 GRAMMAR = Path(__file__).with_name("mission.lark")
 
 # A syntax error hides the rest of its state; the parser resumes at the next line that
 # starts a state (or, before the first state, a declaration), up to this many errors.
 MAX_SYNTAX_ERRORS = 20
+
+# Hundreds of nested operators (`- - - ... x`) exhaust Python's stack in the passes
+# that walk expressions; say so instead of crashing.
+TOO_DEEP = error("expressions are nested too deeply", ast.NO_SPAN,
+                 "split the expression with a variable ('set v = ...')")
 _RESUME_AT = re.compile(r"^[ \t]*(state|vehicle|computer|battery|horizon|objective|sensor|var"
                         r"|stack)\b", re.MULTILINE)
 
@@ -282,7 +287,10 @@ def parse(text: str) -> ast.Mission:
         tree = _lark().parse(text, start="start")
     except UnexpectedInput as err:
         raise MissionSyntaxError(_all_syntax_errors(err, text)) from None
-    return _ToAst().build(tree)
+    try:
+        return _ToAst().build(tree)
+    except RecursionError:
+        raise MissionSyntaxError([TOO_DEEP]) from None
 
 
 def _all_syntax_errors(first: UnexpectedInput, text: str) -> list[Diagnostic]:

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from gliderplan.cli.main import main
 from gliderplan.language import check_source
-from gliderplan.language.formatter import format_source
+from gliderplan.language.formatter import FormatError, format_source
 from gliderplan.language.parser import parse
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -194,3 +194,10 @@ def test_fmt_check_and_write_together_is_usage_error(tmp_path):
     with pytest.raises(SystemExit) as exit_:
         main(["fmt", "--check", "--write", str(tmp_path / "m.mission")])
     assert exit_.value.code == 2
+
+
+def test_too_deep_to_format_is_refused_not_a_crash():
+    source = "mission m\nstate s begin flightprofile surface sensors depth events case " \
+             + "-" * 400 + "depth > 1 exit end\n"
+    with pytest.raises(FormatError, match="nested too deeply"):
+        format_source(source)

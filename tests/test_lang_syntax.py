@@ -141,3 +141,18 @@ def test_non_finite_number_is_an_error():
 )
 def test_closest_name(word, candidates, expected):
     assert closest(word, candidates) == expected
+
+
+def test_deeply_nested_expressions_are_an_error_not_a_crash():
+    source = HEADER + "    case " + "-" * 5000 + "depth > 1 exit\nend\n"
+    assert _errors(source) == ["0:0: expressions are nested too deeply | split the "
+                               "expression with a variable ('set v = ...')"]
+
+
+def test_moderately_nested_expressions_are_fine():
+    assert check_source(HEADER + "    case " + "-" * 200 + "depth > 1 exit\nend\n").ok
+
+
+def test_parentheses_do_not_nest_the_tree():
+    source = HEADER + "    case " + "(" * 3000 + "depth" + ")" * 3000 + " > 1 exit\nend\n"
+    assert check_source(source).ok
