@@ -25,10 +25,11 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     """
     science = make_science(mission, ocean, config, vehicle)
     if runtime == "python":
+        from gliderplan.language.codegen_c import default_ballast_cc
         from gliderplan.sim.executor import PythonRuntime
 
-        # without a plan the glider pumps its full stroke, as the compiled runtime does
-        executor = PythonRuntime(mission, plan, vehicle.max_ballast_cc, robust_tracker)
+        # without a plan: the same buoyancy volume the compiler gives the C runtime
+        executor = PythonRuntime(mission, plan, default_ballast_cc(mission), robust_tracker)
         return simulate(mission, executor, science, config, progress)
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")

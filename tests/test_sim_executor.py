@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from gliderplan.cli.common import check_file
 from gliderplan.language import check_source, ir
+from gliderplan.language.codegen_c import default_ballast_cc
 from gliderplan.language.registry import SENSORS
 from gliderplan.sim import compiled, pilot
 from gliderplan.sim.executor import NONE, PythonRuntime
@@ -142,11 +143,12 @@ def test_the_plan_schedule_powers_sensors_and_alternates_profiles():
 
 def test_without_a_plan_every_logged_sensor_is_on_and_the_default_ballast_flies():
     mission = mission_from(PLAN_MISSION)
-    executor = PythonRuntime(mission, None, 233.0)
+    executor = PythonRuntime(mission, None, default_ballast_cc(mission))
     command = executor.step(0, powered_mask(0), readings(missiontime=0.0, depth=0.0))
     logged = sum(1 << i for i in (0, 1, 9, 12))
     assert command.sensor_power == logged
-    assert command.ballast_cc == -233.0 and command.profile == 0
+    assert command.ballast_cc == -default_ballast_cc(mission) == -233.0
+    assert command.profile == 0
 
 
 @pytest.mark.parametrize("mutate, line, message", [
