@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -50,7 +50,6 @@ class RunRecord:
     tick_s: float
     ended: str  # "exit", "duration" or "fault: ..."
     surfacings: int
-    extra: dict = field(default_factory=dict)
 
 
 def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float, float]:

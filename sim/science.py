@@ -28,7 +28,6 @@ from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.vehicle import GliderSim
 
-N_SENSORS = len(SENSORS)
 DEVICELESS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
 DEVICE_MASKS: dict[str, int] = {}
 for _s in SENSORS:
