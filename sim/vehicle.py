@@ -18,14 +18,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from gliderplan.power_models.segments import GLIDE, IRIDIUM, PUMP, SURFACE
+from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.geo import move_degrees
 
 SURFACE_DEPTH_M = 0.3  # shallower than this the antenna is out of the water
 HOVER_RATE_M_S = 0.05  # assumption: small buoyancy corrections move a hovering glider slowly
 PITCH_RATE_RAD_S = 0.1  # assumption: the battery moves ~26 deg in under 5 s
-MIN_INFLECTION_CC = 20.0  # smaller volume changes are trim, not an inflection (as segments.py)
 
 
 @dataclass(frozen=True)
@@ -110,7 +109,8 @@ class GliderSim:
                 moved, dv)
             glide_s = dt - moved / v.pump_rate_cc_s
             going = math.copysign(1.0, dv)
-            if abs(dv) >= MIN_INFLECTION_CC and going != self._turning_to:
+            # smaller volume changes are trim, not an inflection (as in a real log)
+            if abs(dv) >= MIN_PUMPED_CC and going != self._turning_to:
                 self._turning_to = going
                 self.inflection = True
         self.phase = PUMP if glide_s < dt else GLIDE
