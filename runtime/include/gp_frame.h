@@ -92,17 +92,11 @@ gp_frame_error gp_frame_parse(const uint8_t *wire, size_t len, gp_frame *out);
 /**
  * @brief Feed bytes to the reader up to and including the next delimiter.
  * @param used bytes consumed (all of `len` if no delimiter came)
- * @return as gp_frame_reader_push, for the frame the delimiter ended
+ * @return -1 if no frame ended, else a gp_frame_error for the frame the delimiter
+ *         ended (GP_FRAME_OK: `out` holds it); an empty frame (two delimiters) is ignored
  */
 int gp_frame_reader_feed(gp_frame_reader *reader, const uint8_t *data, size_t len,
                          size_t *used, gp_frame *out);
-
-/**
- * @brief Feed one byte to the reader.
- * @return -1 no frame ended, else a gp_frame_error for the frame that ended with this
- *         byte (GP_FRAME_OK: `out` holds it). An empty frame (two delimiters) is ignored.
- */
-int gp_frame_reader_push(gp_frame_reader *reader, uint8_t byte, gp_frame *out);
 
 /** @brief Human-readable name of a frame error. */
 const char *gp_frame_error_name(gp_frame_error error);

@@ -177,12 +177,6 @@ int gp_frame_reader_feed(gp_frame_reader *reader, const uint8_t *data, size_t le
     return result;
 }
 
-int gp_frame_reader_push(gp_frame_reader *reader, uint8_t byte, gp_frame *out)
-{
-    size_t used;
-    return gp_frame_reader_feed(reader, &byte, 1, &used, out);
-}
-
 const char *gp_frame_error_name(gp_frame_error error)
 {
     switch (error) {

@@ -40,6 +40,7 @@
     X(test_sensors_should_update_only_the_masked_values)                    \
     X(test_bad_frames_should_be_dropped_with_their_reason)                  \
     X(test_reader_should_resynchronise_after_garbage)                       \
+    X(test_reader_should_split_one_chunk_into_its_frames)                   \
     X(test_random_bytes_should_never_crash_the_reader)                      \
     X(test_hello_should_carry_the_raw_mission_hash)                         \
     X(test_checkpoint_should_round_trip)                                    \

@@ -6,6 +6,15 @@
 #include "gp_frame.h"
 #include "gp_test.h"
 
+/* The reader fed one byte at a time: the hardest way to split a stream. */
+static int push(gp_frame_reader *reader, uint8_t byte, gp_frame *out)
+{
+    size_t used;
+    int result = gp_frame_reader_feed(reader, &byte, 1, &used, out);
+    CHECK_INT(used, 1);
+    return result;
+}
+
 void test_crc_should_match_catalogue_check_values(void)
 {
     const uint8_t *check = (const uint8_t *)"123456789";
@@ -133,13 +142,13 @@ void test_reader_should_resynchronise_after_garbage(void)
     uint8_t wire[GP_MAX_FRAME];
     int results[4], n_results = 0;
     for (int i = 0; i < 400; i++) {  /* an overlong run of non-zero bytes */
-        CHECK_INT(gp_frame_reader_push(&reader, 0x07, &frame), -1);
+        CHECK_INT(push(&reader, 0x07, &frame), -1);
     }
-    results[n_results++] = gp_frame_reader_push(&reader, 0, &frame);
-    CHECK_INT(gp_frame_reader_push(&reader, 0, &frame), -1);  /* empty frame: ignored */
+    results[n_results++] = push(&reader, 0, &frame);
+    CHECK_INT(push(&reader, 0, &frame), -1);  /* empty frame: ignored */
     size_t n = gp_frame_build(GP_MSG_NAK, 9, 0, NULL, 0, wire);
     for (size_t i = 0; i < n; i++) {
-        int r = gp_frame_reader_push(&reader, wire[i], &frame);
+        int r = push(&reader, wire[i], &frame);
         if (r >= 0) {
             results[n_results++] = r;
         }
@@ -162,7 +171,7 @@ void test_random_bytes_should_never_crash_the_reader(void)
         if (byte < 8) {
             byte = 0;  /* frequent delimiters: many short frames */
         }
-        int r = gp_frame_reader_push(&reader, byte, &frame);
+        int r = push(&reader, byte, &frame);
         if (r >= 0) {
             frames++;
             CHECK(r <= GP_FRAME_TYPE);
@@ -197,4 +206,33 @@ void test_hello_should_carry_the_raw_mission_hash(void)
     CHECK_INT(payload[37], 0xb9);
     CHECK_INT(payload[38], 13);
     CHECK(memcmp(payload + 39, "sampleMission", 13) == 0);
+}
+
+void test_reader_should_split_one_chunk_into_its_frames(void)
+{
+    uint8_t stream[3 * GP_MAX_FRAME + 16];
+    size_t n = 0;
+    n += gp_frame_build(GP_MSG_NAK, 1, 0, NULL, 0, stream + n);
+    memcpy(stream + n, "\x13\x37\x00", 3);  /* a damaged frame between two good ones */
+    n += 3;
+    n += gp_frame_build(GP_MSG_NAK, 2, 0, NULL, 0, stream + n);
+    size_t third = gp_frame_build(GP_MSG_NAK, 3, 0, NULL, 0, stream + n);
+    n += third - 4;  /* the third is cut short */
+    gp_frame_reader reader = {0};
+    gp_frame frame;
+    int results[8], seqs[8], count = 0;
+    for (size_t i = 0, used; i < n && count < 8; i += used) {
+        int r = gp_frame_reader_feed(&reader, stream + i, n - i, &used, &frame);
+        if (r >= 0) {
+            seqs[count] = r == GP_FRAME_OK ? frame.seq : -1;
+            results[count++] = r;
+        }
+    }
+    CHECK_INT(count, 3);
+    CHECK_INT(results[0], GP_FRAME_OK);
+    CHECK_INT(seqs[0], 1);
+    CHECK(results[1] != GP_FRAME_OK);
+    CHECK_INT(results[2], GP_FRAME_OK);
+    CHECK_INT(seqs[2], 2);
+    CHECK_INT(reader.len, third - 4);  /* the cut frame waits for the rest */
 }
