@@ -3,6 +3,11 @@
 
 #include <string.h>
 
+static int known_action(uint8_t action)
+{
+    return action == GP_ACT_NONE || (action >= GP_ACT_GOTO && action <= GP_ACT_EXIT);
+}
+
 void gp_machine_start(gp_machine *m, const gp_mission *mission, gp_transition *out)
 {
     memset(m, 0, sizeof *m);
@@ -54,9 +59,7 @@ gp_step_result gp_machine_step(gp_machine *m, const gp_mission *mission,
         out->to = GP_EXITED;
         return GP_STEP_UNDERFLOW;
     }
-    if (event->action != GP_ACT_NONE && event->action != GP_ACT_GOTO
-        && event->action != GP_ACT_CALL && event->action != GP_ACT_RETURN
-        && event->action != GP_ACT_EXIT) {
+    if (!known_action(event->action)) {
         return GP_STEP_BAD_TABLE;
     }
     if (event->assign) {
@@ -89,31 +92,41 @@ gp_step_result gp_machine_step(gp_machine *m, const gp_mission *mission,
 
 const char *gp_mission_check(const gp_mission *mission)
 {
-    if (mission->n_states < 1 || mission->n_states > GP_MAX_STATES) {
+    if (mission->n_states < 1 || mission->n_states > GP_MAX_STATES || mission->states == NULL) {
         return "state count outside 1..GP_MAX_STATES";
     }
-    if (mission->n_vars > GP_MAX_VARIABLES) {
-        return "more variables than GP_MAX_VARIABLES";
+    if (mission->n_vars > GP_MAX_VARIABLES || (mission->n_vars > 0 && !mission->var_initial)) {
+        return "more variables than GP_MAX_VARIABLES, or no initial values";
     }
     if (mission->stack_depth < 1 || mission->stack_depth > GP_MAX_STACK) {
         return "stack depth outside 1..GP_MAX_STACK";
     }
     for (int s = 0; s < mission->n_states; s++) {
         const gp_state *state = &mission->states[s];
-        if (state->n_profiles < 1 || state->n_profiles > GP_MAX_PROFILES) {
+        if (state->n_profiles < 1 || state->n_profiles > GP_MAX_PROFILES || !state->profiles) {
             return "profile count outside 1..GP_MAX_PROFILES";
         }
         for (int p = 0; p < state->n_profiles; p++) {
-            if (state->profiles[p].n_args > GP_MAX_PROFILE_ARGS) {
-                return "more profile arguments than GP_MAX_PROFILE_ARGS";
+            const gp_profile *profile = &state->profiles[p];
+            if (profile->n_args > GP_MAX_PROFILE_ARGS || (profile->n_args > 0 && !profile->args)) {
+                return "more profile arguments than GP_MAX_PROFILE_ARGS, or no function for them";
             }
         }
-        if (state->route.n_points > GP_MAX_POINTS) {
-            return "more route points than GP_MAX_POINTS";
+        if (state->route.n_points > GP_MAX_POINTS
+            || (state->route.n_points > 0 && !state->route.points)) {
+            return "more route points than GP_MAX_POINTS, or none given";
         }
         for (int i = 0; i < state->n_sensors; i++) {
-            if (state->sensors[i] >= GP_N_SENSORS) {
+            if (!state->sensors || state->sensors[i] >= GP_N_SENSORS) {
                 return "sensor index outside the sensor array";
+            }
+        }
+        for (int i = 0; i < state->n_events; i++) {
+            const gp_event *event = state->events ? &state->events[i] : NULL;
+            if (!event || !event->condition || !known_action(event->action)
+                || ((event->action == GP_ACT_GOTO || event->action == GP_ACT_CALL)
+                    && event->target >= mission->n_states)) {
+                return "an event without a condition, or with an unknown action or target";
             }
         }
     }

@@ -211,4 +211,14 @@ void test_mission_check_should_accept_fig2_and_reject_bad_tables(void)
     bad = stacker;
     bad.n_states = 0;
     CHECK(gp_mission_check(&bad) != NULL);
+    static const gp_state nowhere[] = {
+        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, goto_nowhere, 1},
+    };
+    bad = stacker;
+    bad.states = nowhere;
+    bad.n_states = 1;
+    CHECK(gp_mission_check(&bad) != NULL);  /* goto state 9 of 1 */
+    bad = vars_mission;
+    bad.var_initial = NULL;
+    CHECK(gp_mission_check(&bad) != NULL);
 }
