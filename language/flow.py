@@ -41,39 +41,45 @@ def reachable_states(mission: ir.CheckedMission) -> set[str]:
 
 
 def _call_cycle(calls: Mapping[str, list[str]], roots: set[str]) -> list[str] | None:
-    """A cycle of call edges among states reachable from roots, as a path, or None."""
-    colour: dict[str, int] = {}  # 1 on the DFS path, 2 done
-    path: list[str] = []
+    """A cycle of call edges among states reachable from roots, as a path, or None.
 
-    def visit(state: str) -> list[str] | None:
-        colour[state] = 1
-        path.append(state)
-        for target in calls[state]:
-            if colour.get(target) == 1:
-                return path[path.index(target):] + [target]
-            if target not in colour and (found := visit(target)):
-                return found
-        path.pop()
-        colour[state] = 2
-        return None
-
+    Depth-first with an explicit stack: call chains may be thousands of states long.
+    """
+    colour: dict[str, int] = {}  # 1 on the current path, 2 done
     for root in sorted(roots):
-        if root not in colour and (found := visit(root)):
-            return found
+        if root in colour:
+            continue
+        colour[root] = 1
+        path, pending = [root], [iter(calls[root])]
+        while pending:
+            target = next(pending[-1], None)
+            if target is None:
+                colour[path.pop()] = 2
+                pending.pop()
+            elif colour.get(target) == 1:
+                return path[path.index(target):] + [target]
+            elif target not in colour:
+                colour[target] = 1
+                path.append(target)
+                pending.append(iter(calls[target]))
     return None
 
 
 def _deepest_call_chain(calls: Mapping[str, list[str]], roots: set[str]) -> list[str]:
-    """Longest path of call edges (the call graph is acyclic here)."""
+    """Longest path of call edges from a root (the call graph is acyclic here)."""
     longest: dict[str, list[str]] = {}
-
-    def chain(state: str) -> list[str]:
-        if state not in longest:
-            tails = [chain(t) for t in calls[state]]
+    for root in sorted(roots):
+        stack = [root]
+        while stack:  # post-order: a state's chain once all its callees' are known
+            state = stack[-1]
+            waiting = [t for t in calls[state] if t not in longest]
+            if waiting:
+                stack.extend(waiting)
+                continue
+            stack.pop()
+            tails = [longest[t] for t in calls[state]]
             longest[state] = [state] + max(tails, key=len, default=[])
-        return longest[state]
-
-    return max((chain(r) for r in sorted(roots)), key=len, default=[])
+    return max((longest[r] for r in sorted(roots)), key=len, default=[])
 
 
 class _Interval(NamedTuple):
@@ -161,6 +167,13 @@ def _always_true(condition: ir.Expr) -> bool:
     return _is_constant(condition) and ir.evaluate(condition, {}, {}) != 0.0
 
 
+def _path_text(states: list[str], shown: int = 8) -> str:
+    """`a -> b -> c`, shortened in the middle when long."""
+    if len(states) > shown:
+        states = states[: shown // 2] + ["..."] + states[-(shown // 2):]
+    return " -> ".join(states)
+
+
 def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> list[Diagnostic]:
     """All flow diagnostics; `states` maps names to their syntax (for locations)."""
     found: list[Diagnostic] = []
@@ -207,7 +220,7 @@ def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> l
                                                         strict=True)
                          if e.action == "call" and e.target == cycle[1])
         found.append(error(
-            f"call cycle {' -> '.join(cycle)} makes the state stack grow without bound",
+            f"call cycle {_path_text(cycle)} makes the state stack grow without bound",
             call_span,
             f"the runtime's stack holds {mission.stack_depth} states; break the cycle with "
             "'return' or 'goto'"))
@@ -216,7 +229,7 @@ def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> l
         depth = len(chain) - 1
         if depth > mission.stack_depth:
             found.append(error(
-                f"calls nest {depth} deep ({' -> '.join(chain)}), deeper than the runtime "
+                f"calls nest {depth} deep ({_path_text(chain)}), deeper than the runtime "
                 f"stack of {mission.stack_depth}", states[chain[0]].name.span,
                 f"raise the bound with 'stack {depth}' or flatten the calls"))
 
@@ -233,20 +246,22 @@ def _exit_warnings(mission: ir.CheckedMission, reachable: set[str],
         return [warning(f"mission '{mission.name}' never exits", ast.NO_SPAN,
                         "add 'case ... exit' to a state; until then the mission runs until "
                         "the battery is flat")]
-    callers = {s.name: [c for c in calls if s.name in calls[c]] for s in mission.states}
-    successors = {
-        s.name: gotos[s.name] + calls[s.name]
-        + (callers[s.name] if any(e.action == "return" for e in s.events) else [])
-        for s in mission.states
-    }
+    # Walk transitions backwards from the exiting states (linear in states + edges).
+    # `return` leads back to any state that calls the returning one.
+    returns = {s.name for s in mission.states if any(e.action == "return" for e in s.events)}
+    predecessors: dict[str, list[str]] = {s.name: [] for s in mission.states}
+    for source in predecessors:
+        for target in gotos[source] + calls[source]:
+            predecessors[target].append(source)
+            if target in returns:
+                predecessors[source].append(target)
     can_exit = set(exits)
-    changed = True
-    while changed:
-        changed = False
-        for name, nexts in successors.items():
-            if name not in can_exit and any(n in can_exit for n in nexts):
-                can_exit.add(name)
-                changed = True
+    todo = list(exits)
+    while todo:
+        for earlier in predecessors[todo.pop()]:
+            if earlier not in can_exit:
+                can_exit.add(earlier)
+                todo.append(earlier)
     return [
         warning(f"state '{s.name}' can never reach 'exit'", states[s.name].name.span,
                 "once here, the mission runs until the battery is flat")

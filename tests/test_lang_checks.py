@@ -154,3 +154,14 @@ def test_all_errors_of_a_pass_at_once():
                                        "depth < 1.5", "missiontime > 100 || depth < 0"])
 def test_conditions_that_can_hold_are_not_flagged(condition):
     assert _diagnostics(decl="var v = 1", event=f"case {condition} goto s1") == []
+
+
+def test_a_very_long_call_chain_is_reported_briefly():
+    states = [f"state s{i}\nbegin\n  flightprofile surface\n  sensors depth\n  events\n"
+              f"    case depth > 1 {'call s%d' % (i + 1) if i < 2999 else 'exit'}\n"
+              f"{'    case depth < 1 return' if i else ''}\nend\n" for i in range(3000)]
+    result = check_source("mission m\n" + "".join(states))
+    (diagnostic,) = result.diagnostics
+    assert diagnostic.message == ("calls nest 2999 deep (s0 -> s1 -> s2 -> s3 -> ... -> s2996 "
+                                  "-> s2997 -> s2998 -> s2999), deeper than the runtime stack "
+                                  "of 8")
