@@ -23,6 +23,32 @@ void test_crc_should_match_catalogue_check_values(void)
     CHECK_INT(gp_crc32(gp_crc32(0, check, 4), check + 4, 5), 0xCBF43926u);
 }
 
+/* The definition, one bit at a time: the reference for the table-driven CRC-16. */
+static uint16_t crc16_bitwise(const uint8_t *data, size_t len)
+{
+    uint16_t crc = 0xFFFFu;
+    for (size_t i = 0; i < len; i++) {
+        crc ^= (uint16_t)(data[i] << 8);
+        for (int bit = 0; bit < 8; bit++) {
+            crc = (crc & 0x8000u) ? (uint16_t)((crc << 1) ^ 0x1021u) : (uint16_t)(crc << 1);
+        }
+    }
+    return crc;
+}
+
+void test_crc16_should_equal_the_bitwise_definition(void)
+{
+    uint8_t data[300];
+    unsigned seed = 99;
+    for (int round = 0; round < 500; round++) {
+        size_t len = gp_test_random(&seed) % sizeof data;  /* odd and even lengths */
+        for (size_t i = 0; i < len; i++) {
+            data[i] = (uint8_t)gp_test_random(&seed);
+        }
+        CHECK_INT(gp_crc16(data, len), crc16_bitwise(data, len));
+    }
+}
+
 void test_cobs_should_encode_the_reference_examples(void)
 {
     static const struct {
