@@ -1,10 +1,12 @@
 """Benchmark: parse + check of a generated 5,000-state mission against lark's bare parse.
 
-    .venv/bin/python bench/bench_check_scale.py [--states 5000] [--runs 3]
+    .venv/bin/python bench/bench_check_scale.py [--states 5000] [--runs 3] [--shape survey|fig2]
 
-The mission is a chain of states, each with a route, two alternative profiles, four
-sensors (two duty auto), a variable assignment and three events (a call to a shared
-surfacing state, a goto to the next state, a time backstop); the last state exits.
+The mission is a chain of states. `survey` states (the default) have a route, two
+alternative profiles, four sensors (two duty auto), a variable assignment and two
+events (a call to a shared surfacing state, a goto to the next state); `fig2` states
+are shaped like the paper's s1 (route, one profile, three sensors, two events). The
+last state exits.
 Prints the size, the median time of `check_source` (parse, syntax tree, checker and
 flow analysis) and of lark's parse of the same text without building our tree, lines
 per second, and the ratio. Targets: parse + check <= 2 s; ratio <= 1.5 (the front end
@@ -19,6 +21,23 @@ import time
 
 from gliderplan.language import check_source
 from gliderplan.language.parser import _lark
+
+
+def generate_fig2(states: int) -> str:
+    parts = ["mission scale", ""]
+    for i in range(states):
+        nxt = f"goto s{i + 1}" if i + 1 < states else "exit"
+        parts.append(
+            f"state s{i}\n"
+            "begin\n"
+            f"  flightroute nav(3910.5, -7349.{i % 10}058)\n"
+            f"  flightprofile yo(5.0, {10 + i % 30}, .454, .454)\n"
+            "  sensors missiontime, depth, pitch\n"
+            "  events\n"
+            f"    case missiontime >= {(i + 1) * 500} {nxt}\n"
+            f"    case depth > 200 && missiontime < 100 {nxt}\n"
+            "end\n")
+    return "\n".join(parts)
 
 
 def generate(states: int) -> str:
@@ -57,15 +76,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--states", type=int, default=5000)
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--shape", choices=("survey", "fig2"), default="survey")
     args = parser.parse_args()
-    text = generate(args.states)
+    text = (generate if args.shape == "survey" else generate_fig2)(args.states)
     lines = text.count("\n") + 1
     result = check_source(text, "scale.mission")
     assert result.ok, result.render()[:2000]
     lark = _lark()
     full_s = median_s(lambda: check_source(text, "scale.mission"), args.runs)
     bare_s = median_s(lambda: lark.parse(text, start="start"), args.runs)
-    print(f"{args.states} states, {lines} lines, {len(text) / 1e6:.2f} MB")
+    print(f"{args.states} {args.shape} states, {lines} lines, {len(text) / 1e6:.2f} MB")
     print(f"parse + check: {full_s:.2f} s ({lines / full_s:,.0f} lines/s; target <= 2 s)")
     print(f"lark bare parse: {bare_s:.2f} s ({lines / bare_s:,.0f} lines/s)")
     print(f"ratio: {full_s / bare_s:.2f}x (target <= 1.5x)")
