@@ -241,12 +241,14 @@ def test_link_silence_releases_control_and_exits_3(binary, glider, tmp_path):
     assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE[:2]
 
 
-def test_a_stopped_runtime_releases_control(binary, glider):
+@pytest.mark.parametrize("signal_number", [signal.SIGTERM, signal.SIGSEGV],
+                         ids=["stopped", "crashed"])
+def test_a_stopped_or_crashed_runtime_releases_control(binary, glider, signal_number):
     process = glider.start(binary)
     link = glider.link()
     link.wait_hello()
     fly(link, 0, 5)
-    process.send_signal(signal.SIGTERM)
+    process.send_signal(signal_number)
     assert link.wait_release(timeout_s=10) == p.ReleaseReason.INTERNAL_ERROR
     assert process.wait(10) == 4
 

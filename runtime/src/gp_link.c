@@ -45,6 +45,9 @@ typedef struct {
 
 static gp_runtime runtime;
 static volatile sig_atomic_t stop_signal;  /* SIGTERM/SIGINT/SIGHUP received */
+static int crash_fd = -1;                  /* the line, for the crash handler */
+static uint8_t crash_release[GP_MAX_FRAME];  /* RELEASE (internal error), framed ahead */
+static size_t crash_release_len;
 static gp_plan plan;
 static char plan_text[GP_PLAN_MAX_BYTES + 1];
 static uint8_t checkpoint_buf[GP_CHECKPOINT_SIZE];
@@ -77,6 +80,7 @@ static int release(session *s, gp_release_reason reason, int status)
     uint8_t payload = (uint8_t)reason;
     send_frame(s, GP_MSG_RELEASE, &payload, 1);
     tcdrain(s->fd);  /* the RELEASE must reach the line before we close it */
+    crash_fd = -1;
     close(s->fd);
     if (s->events_fd >= 0) {
         close(s->events_fd);
@@ -317,6 +321,35 @@ static void catch_stop_signals(void)
     sigaction(SIGHUP, &action, NULL);
 }
 
+/* A crash (a bug in the runtime or the generated mission) must not leave the glider
+ * waiting for commands: the handler only calls write and _exit, both async-signal-safe. */
+static void on_crash_signal(int signal_number)
+{
+    (void)signal_number;
+    if (crash_fd >= 0) {
+        ssize_t ignored = write(crash_fd, crash_release, crash_release_len);
+        (void)ignored;
+    }
+    _exit(GP_EXIT_INTERNAL);
+}
+
+static void catch_crash_signals(session *s)
+{
+    uint8_t reason = GP_RELEASE_INTERNAL;
+    crash_release_len = gp_frame_build(GP_MSG_RELEASE, 0, 0, &reason, 1, crash_release);
+    crash_fd = s->fd;
+    struct sigaction action;
+    memset(&action, 0, sizeof action);
+    action.sa_handler = on_crash_signal;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGSEGV, &action, NULL);
+    sigaction(SIGBUS, &action, NULL);
+    sigaction(SIGFPE, &action, NULL);
+    sigaction(SIGILL, &action, NULL);
+    sigaction(SIGABRT, &action, NULL);
+}
+
 static int run_link(session *s)
 {
     static uint8_t chunk[READ_CHUNK];
@@ -326,6 +359,7 @@ static int run_link(session *s)
     s->last_valid_s = gp_now_s();
     s->hello_due_s = s->last_valid_s;
     catch_stop_signals();
+    catch_crash_signals(s);
     for (;;) {
         double now = gp_now_s();
         if (stop_signal) {
