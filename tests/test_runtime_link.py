@@ -231,7 +231,7 @@ def test_bad_arguments_are_a_one_line_error(binary, glider):
 
 
 def test_link_silence_releases_control_and_exits_3(binary, glider, tmp_path):
-    process = glider.start(binary, "--link-timeout-s", "0.5", "--state-dir", str(tmp_path))
+    process = glider.start(binary, "--link-timeout-s", "2", "--state-dir", str(tmp_path))
     link = glider.link()
     link.wait_hello()
     fly(link, 0, 60)  # into s2; then the science computer falls silent
@@ -290,7 +290,10 @@ def test_plan_pieces_out_of_order_are_ignored(binary, glider):
     pieces = p.plan_pieces(make_plan())
     assert len(pieces) >= 2
     link.send(pieces[1])  # no piece at offset 0 came first: nothing to continue
-    assert link.receive(0.5) is None
+    answers = []
+    while (message := link.receive(0.5)) is not None:
+        answers.append(message)
+    assert not any(isinstance(m, (p.PlanStatus, p.Nak)) for m in answers)
     assert link.send_plan(make_plan()).accepted
 
 
