@@ -170,8 +170,9 @@ def test_a_repeated_sensors_frame_gets_the_same_command_without_a_step(binary, g
     answers = []
     for _ in range(2):  # tick 50 is the call into s2: stepping twice would call again
         os.write(glider.master, wire)
-        while (message := link.receive(2.0)) is not None and not isinstance(message, p.Command):
-            pass
+        while (message := link.receive(2.0)) is not None and not (
+                isinstance(message, p.Command) and message.tick == 50):
+            pass  # skip late duplicates of earlier answers
         answers.append(message)
     assert answers[0] == answers[1]
     assert answers[0].transition == p.Transition.CALL and answers[0].event_count == 1
