@@ -1,0 +1,91 @@
+"""The hardware a plan is made for: vehicle, computer (and the clocks it may run at),
+battery, and the sensor devices the mission logs, from the mission's annotations or
+from overrides given on the command line."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from gliderplan.language import ir
+from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
+from gliderplan.power_models.battery import energy_to_j
+from gliderplan.power_models.board import Board, board_spec
+from gliderplan.power_models.catalog import preset_names
+from gliderplan.power_models.sensor import Sensor
+from gliderplan.power_models.vehicle import Vehicle
+
+_ENERGY = re.compile(
+    r"^\s*(?P<value>[0-9]+(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)\s*(?P<unit>[A-Za-z]+)"
+    r"(?:\s*(?:@|at)\s*(?P<volts>[0-9]+(?:\.[0-9]+)?)\s*V)?\s*$")
+
+
+class HardwareError(ValueError):
+    """A hardware spec the planner cannot use; the message says which and why."""
+
+
+@dataclass(frozen=True)
+class Hardware:
+    vehicle: Vehicle
+    board: Board  # at the mission's (or default) clock
+    modes: tuple[Board, ...]  # clocks the planner may choose between, slowest first
+    battery_j: float  # [J] stored energy
+    reserve_fraction: float  # [1] kept unused
+    devices: dict[str, Sensor]  # device name -> power model, for every device the mission logs
+    battery_name: str  # preset name, or "" for an energy given as a quantity
+    overridden: frozenset[str] = frozenset()  # annotations replaced by the caller
+
+    @property
+    def budget_j(self) -> float:
+        """Usable energy [J] = (1 - reserve) x battery."""
+        return (1.0 - self.reserve_fraction) * self.battery_j
+
+
+def parse_battery(spec: str) -> tuple[float, float | None, str]:
+    """(energy [J], reserve fraction or None, preset name or "") of "1.2kWh", "500 Wh",
+    "60Ah@14.4V" or a battery preset ("alkaline"; its usable fraction sets the reserve)."""
+    if spec in preset_names("battery"):
+        pack = load_battery(spec)
+        return pack.energy_j, 1.0 - pack.usable_fraction, spec
+    match = _ENERGY.match(spec)
+    if match is None:
+        raise HardwareError(
+            f"--battery {spec!r}: expected an energy such as 1.2kWh, 500Wh, 60Ah@14.4V, "
+            f"or a preset ({', '.join(preset_names('battery'))})")
+    volts = float(match["volts"]) if match["volts"] else None
+    try:
+        energy = energy_to_j(float(match["value"]), match["unit"], volts)
+    except ValueError as err:
+        raise HardwareError(f"--battery {spec!r}: {err}") from None
+    if energy <= 0.0:
+        raise HardwareError(f"--battery {spec!r}: the energy must be positive")
+    return energy, None, ""
+
+
+def mission_devices(mission: ir.CheckedMission) -> list[str]:
+    """Power-model devices behind the sensors the mission logs, in first-use order."""
+    names = (SENSOR_BY_NAME[u.name].device for s in mission.states for u in s.sensors)
+    return list(dict.fromkeys(d for d in names if d))
+
+
+def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
+                  computer: str | None = None) -> Hardware:
+    """The mission's hardware with optional overrides (`battery` as for `parse_battery`,
+    `computer` as "ts7800", "ts7800@500" or a board file). A computer given without a
+    clock lets the planner choose among the board's clocks; with one, the clock is fixed."""
+    vehicle = load_vehicle(mission.vehicle)
+    if computer is None:
+        spec, clock = mission.computer.board, mission.computer.clock_mhz
+    else:
+        spec, clock = computer, board_spec(computer)[1]
+    board = load_board(spec, clock)
+    modes = (board,) if clock is not None else tuple(board.modes())
+    if battery is None:
+        energy, reserve, name = mission.battery.energy_j, mission.battery.reserve_fraction, ""
+    else:
+        energy, preset_reserve, name = parse_battery(battery)
+        reserve = mission.battery.reserve_fraction if preset_reserve is None else preset_reserve
+    devices = {d: load_sensor(d) for d in mission_devices(mission)}
+    overridden = frozenset(k for k, v in (("battery", battery), ("computer", computer)) if v)
+    return Hardware(vehicle, board, modes, energy, reserve, devices, name, overridden)

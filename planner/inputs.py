@@ -1,0 +1,210 @@
+"""The planning problem as numbers: index sets, bounds and coefficients (pure numpy).
+
+Decision variables, all per state s (flattened over states into vectors):
+- d[p]: duty of each sensor marked `duty auto` (p = (s, sensor));
+- D[q]: on-fraction of each sensor device (q = (s, device)); D >= d of every sensor
+  it serves, because temp and conductivity share one CTD;
+- f[r]: time share of each flight-profile alternative (r = (s, profile));
+- g[m]: time share of each computer clock (m = (s, clock)).
+Everything that depends on the time in each state lives in `coefficients`, so that the
+cvxpy model takes it as parameter values and is built once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gliderplan.language import ir
+from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.planner.hardware import Hardware
+from gliderplan.planner.occupancy import Occupancy
+from gliderplan.planner.rates import ProfileRates, mode_powers, state_profiles
+
+SENSOR_PERIOD_S = 300.0  # on/off period of a duty-cycled sensor (long against its warm-up)
+PROFILE_CYCLE_S = 1800.0  # period over which alternative profiles alternate (a few yos)
+
+
+class PlanInputError(ValueError):
+    """Annotations that contradict each other (e.g. duty >= 0.6 and duty <= 0.5)."""
+
+
+def duty_for_quality(alpha: float, quality: float) -> float:
+    """Inverse of the utility log(1 + a d) / log(1 + a): the duty that gives `quality`."""
+    return math.expm1(quality * math.log1p(alpha)) / alpha
+
+
+@dataclass(frozen=True)
+class PlanInputs:
+    mission: ir.CheckedMission
+    hardware: Hardware
+    occupancy: Occupancy
+    states: tuple[str, ...]
+    time_s: np.ndarray  # (n_s,) [s]
+    # auto duties
+    duty_state: np.ndarray  # (n_p,) state index
+    duty_sensor: tuple[str, ...]
+    duty_device: np.ndarray  # (n_p,) index into the device pairs
+    alpha: np.ndarray  # (n_p,) utility curvature
+    weight: np.ndarray  # (n_p,) quality weight of the sensor
+    duty_lo: np.ndarray
+    duty_hi: np.ndarray
+    # fixed-duty sensors (always on or a fixed duty): (state index, sensor, duty, alpha, weight)
+    fixed: tuple[tuple[int, str, float, float, float], ...]
+    # sensor devices
+    dev_state: np.ndarray  # (n_q,)
+    dev_name: tuple[str, ...]
+    dev_power_w: np.ndarray  # (n_q,) on-power [W]
+    dev_lo: np.ndarray  # (n_q,) floor from fixed-duty sensors on the device
+    dev_hi: np.ndarray  # (n_q,) 1 with an auto sensor, else the floor
+    dev_warmup_j: np.ndarray  # (n_q,) [J] per switch-on
+    # profiles
+    prof_state: np.ndarray  # (n_r,)
+    profiles: tuple[ProfileRates, ...]
+    # computer clocks
+    mode_state: np.ndarray  # (n_m,)
+    mode_index: np.ndarray  # (n_m,) index into hardware.modes
+    mode_power_w: np.ndarray  # (n_m,) [W]; NaN: cannot keep up
+    sensor_quality_min: dict[str, float]  # mission-wide time-weighted quality floors
+    notes: tuple[str, ...]
+
+    @property
+    def sizes(self) -> tuple[int, int, int, int]:
+        return len(self.duty_state), len(self.dev_state), len(self.prof_state), len(self.mode_state)
+
+    def switch_ons(self) -> np.ndarray:
+        """Switch-ons [1] of each device over the mission when it is duty-cycled."""
+        t = self.time_s[self.dev_state]
+        visits = np.array([self.occupancy.visits[self.states[s]] for s in self.dev_state])
+        return np.ceil(t / SENSOR_PERIOD_S) + visits
+
+
+def _bounds(mission: ir.CheckedMission, state: ir.State, sensor: str, alpha: float
+            ) -> tuple[float, float]:
+    pref = mission.preference(sensor)
+    lo, hi = pref.duty_min, pref.duty_max
+    for req in state.requirements:
+        if req.sensor == sensor:
+            lo, hi = max(lo, req.duty_min, duty_for_quality(alpha, req.quality_min)), \
+                min(hi, req.duty_max)
+    if lo > hi + 1e-12:
+        raise PlanInputError(f"state {state.name}: sensor {sensor}: duty must be >= {lo:g} "
+                             f"and <= {hi:g}; the annotations contradict each other")
+    return lo, min(max(hi, lo), 1.0)
+
+
+def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
+                 occupancy: Occupancy) -> PlanInputs:
+    notes: list[str] = list(occupancy.notes)
+    duty: list[tuple] = []
+    fixed: list[tuple] = []
+    dev_keys: dict[tuple[int, str], int] = {}
+    dev_lo: list[float] = []
+    dev_auto: list[bool] = []
+    profiles: list[ProfileRates] = []
+    prof_state: list[int] = []
+    powers = mode_powers(hardware)
+    for s, state in enumerate(mission.states):
+        for use in state.sensors:
+            device = SENSOR_BY_NAME[use.name].device
+            if device is None:
+                continue  # flight sensors are part of the hotel load
+            q = dev_keys.setdefault((s, device), len(dev_keys))
+            if q == len(dev_lo):
+                dev_lo.append(0.0)
+                dev_auto.append(False)
+            model = hardware.devices[device]
+            weight = mission.preference(use.name).weight
+            if use.duty == "auto":
+                lo, hi = _bounds(mission, state, use.name, model.quality_alpha)
+                duty.append((s, use.name, q, model.quality_alpha, weight, lo, hi))
+                dev_auto[q] = True
+            else:
+                value = 1.0 if use.duty is None else float(use.duty)
+                fixed.append((s, use.name, value, model.quality_alpha, weight))
+                dev_lo[q] = max(dev_lo[q], value)
+        for rates in state_profiles(hardware, state, occupancy, notes):
+            profiles.append(rates)
+            prof_state.append(s)
+    if not duty:
+        notes.append("no sensor is marked `duty auto`: every sensor runs as written")
+    devs = list(dev_keys)
+    n_s = len(mission.states)
+    quality_min = {p.sensor: p.quality_min for p in mission.sensor_preferences
+                   if p.quality_min > 0.0}
+    cols = list(zip(*duty, strict=True)) if duty else [()] * 7
+    return PlanInputs(
+        mission=mission, hardware=hardware, occupancy=occupancy,
+        states=tuple(s.name for s in mission.states),
+        time_s=np.array([occupancy.time_s[s.name] for s in mission.states], float),
+        duty_state=np.array(cols[0], int), duty_sensor=tuple(cols[1]),
+        duty_device=np.array(cols[2], int), alpha=np.array(cols[3], float),
+        weight=np.array(cols[4], float), duty_lo=np.array(cols[5], float),
+        duty_hi=np.array(cols[6], float), fixed=tuple(fixed),
+        dev_state=np.array([k[0] for k in devs], int), dev_name=tuple(k[1] for k in devs),
+        dev_power_w=np.array([hardware.devices[k[1]].on_power_w for k in devs], float),
+        dev_lo=np.array(dev_lo, float),
+        dev_hi=np.array([1.0 if a else lo for a, lo in zip(dev_auto, dev_lo, strict=True)]),
+        dev_warmup_j=np.array([hardware.devices[k[1]].warmup_j if auto else 0.0
+                               for k, auto in zip(devs, dev_auto, strict=True)], float),
+        prof_state=np.array(prof_state, int), profiles=tuple(profiles),
+        mode_state=np.repeat(np.arange(n_s), len(powers)),
+        mode_index=np.tile(np.arange(len(powers)), n_s),
+        mode_power_w=np.tile(powers, n_s),
+        sensor_quality_min=quality_min, notes=tuple(dict.fromkeys(notes)),
+    )
+
+
+@dataclass(frozen=True)
+class Coefficients:
+    """Parameter values of the convex model. Energies in the model's unit (MJ)."""
+
+    dev_j: np.ndarray  # (n_q,) energy of device q fully on for the whole state
+    prof_j: np.ndarray  # (n_r,) energy of flying profile r for the whole state
+    mode_j: np.ndarray  # (n_m,) energy of the computer at clock m for the whole state
+    fixed_j: float  # warm-ups (charged whenever a device may cycle)
+    omega: np.ndarray  # (n_p,) quality weight of each auto duty, normalised
+    quality0: float  # quality from fixed-duty sensors
+    sensor_omega: dict[str, np.ndarray]  # sensor -> (n_p,) time weights for its floor
+    sensor_quality0: dict[str, float]
+
+
+ENERGY_UNIT_J = 1e6  # the model counts energy in MJ: coefficients of order 1 for Clarabel
+
+
+def utility(alpha: np.ndarray | float, duty: np.ndarray | float) -> np.ndarray:
+    """The sensors' quality curve, log(1 + a d) / log(1 + a), as power_models defines it."""
+    a = np.asarray(alpha, float)
+    return np.log1p(a * np.asarray(duty, float)) / np.log1p(a)
+
+
+def coefficients(inputs: PlanInputs) -> Coefficients:
+    t = inputs.time_s
+    scale = 1.0 / ENERGY_UNIT_J
+    mode_w = np.where(np.isfinite(inputs.mode_power_w), inputs.mode_power_w, 0.0)
+    prof_w = np.array([p.total_w for p in inputs.profiles])
+    fixed_j = float(np.sum(inputs.dev_warmup_j * inputs.switch_ons()))
+    # quality: weight x time of every (state, device sensor), fixed ones included
+    auto_wt = inputs.weight * t[inputs.duty_state]
+    fixed_wt = np.array([w * t[s] for s, _, _, _, w in inputs.fixed])
+    total = float(auto_wt.sum() + fixed_wt.sum()) or 1.0
+    fixed_u = np.array([float(utility(a, d)) for _, _, d, a, _ in inputs.fixed])
+    sensor_omega, sensor_q0 = {}, {}
+    for sensor in inputs.sensor_quality_min:
+        mine = np.array([n == sensor for n in inputs.duty_sensor], bool)
+        mine_fixed = [(t[s], float(utility(a, d))) for s, n, d, a, _ in inputs.fixed
+                      if n == sensor]
+        span = float(t[inputs.duty_state][mine].sum() + sum(x for x, _ in mine_fixed)) or 1.0
+        sensor_omega[sensor] = np.where(mine, t[inputs.duty_state], 0.0) / span
+        sensor_q0[sensor] = sum(x * u for x, u in mine_fixed) / span
+    return Coefficients(
+        dev_j=inputs.dev_power_w * t[inputs.dev_state] * scale,
+        prof_j=prof_w * t[inputs.prof_state] * scale,
+        mode_j=mode_w * t[inputs.mode_state] * scale,
+        fixed_j=fixed_j * scale,
+        omega=auto_wt / total,
+        quality0=float((fixed_wt * fixed_u).sum() / total) if len(fixed_u) else 0.0,
+        sensor_omega=sensor_omega, sensor_quality0=sensor_q0,
+    )

@@ -1,0 +1,165 @@
+"""The convex planning model, built once from cvxpy Parameters (DCP and DPP).
+
+Two problems share the variables and the constraints of `inputs.PlanInputs`:
+
+    quality problem:  maximise  Q(d)  s.t.  E(D, f, g) <= budget, common constraints
+    energy problem:   minimise  E(D, f, g)  s.t.  Q(d) >= floor, common constraints
+
+with Q = sum_p omega_p log(1 + a_p d_p) / log(1 + a_p) + Q0 (concave: a weighted sum of
+logs of affine functions) and E = E0 + e_dev . D + e_prof . f + e_mode . g (affine). The
+common constraints are linear in the variables (duty bounds, D >= d of every sensor a
+device serves, shares summing to one, clocks that keep up) or concave >= constant
+(per-sensor quality floors). Every number that depends on the time in each state, the
+budget or the hardware is a Parameter, so a sweep only sets values and re-solves: cvxpy
+compiles the problem once and reuses the compiled form.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import cvxpy as cp
+import numpy as np
+import scipy.sparse as sp
+
+from gliderplan.planner.inputs import ENERGY_UNIT_J, Coefficients, PlanInputs
+
+SOLVER = cp.CLARABEL
+SATURATION_TOLERANCE = 1e-6  # relative quality below the maximum that counts as saturated
+
+
+@dataclass(frozen=True)
+class Solution:
+    status: str  # cvxpy status: optimal, infeasible, ...
+    duty: np.ndarray
+    device: np.ndarray
+    share: np.ndarray
+    mode: np.ndarray
+    quality: float
+    model_energy_j: float
+    budget_dual: float | None  # d quality / d energy [1 J-1], quality problem only
+    solve_s: float  # wall-clock time of the solve call [s], compilation included
+    solver_s: float | None  # time inside Clarabel [s]
+    iterations: int | None
+
+    @property
+    def optimal(self) -> bool:
+        return self.status in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE)
+
+
+def _selector(rows: np.ndarray, n_cols: int) -> sp.csr_matrix:
+    """Sparse 0/1 matrix with a one in (i, rows[i])."""
+    n = len(rows)
+    return sp.csr_matrix((np.ones(n), (np.arange(n), rows)), shape=(n, n_cols))
+
+
+class PlanModel:
+    """The two problems and their parameters for one mission's index sets."""
+
+    def __init__(self, inputs: PlanInputs) -> None:
+        self.inputs = inputs
+        n_p, n_q, n_r, n_m = inputs.sizes
+        n_s = len(inputs.states)
+        self.duty = cp.Variable(n_p, name="duty") if n_p else None
+        self.device = cp.Variable(n_q, name="device") if n_q else None
+        self.share = cp.Variable(n_r, nonneg=True, name="share")
+        self.mode = cp.Variable(n_m, nonneg=True, name="clock")
+        self.p_dev = cp.Parameter(n_q, nonneg=True, name="dev_j") if n_q else None
+        self.p_prof = cp.Parameter(n_r, nonneg=True, name="prof_j")
+        self.p_mode = cp.Parameter(n_m, nonneg=True, name="mode_j")
+        self.p_fixed = cp.Parameter(nonneg=True, name="fixed_j")
+        self.p_omega = cp.Parameter(n_p, nonneg=True, name="omega") if n_p else None
+        self.p_quality0 = cp.Parameter(nonneg=True, name="quality0")
+        self.p_budget = cp.Parameter(nonneg=True, name="budget")
+        self.p_floor = cp.Parameter(name="floor")
+        self.p_sensor = {k: (cp.Parameter(n_p, nonneg=True), cp.Parameter(nonneg=True))
+                         for k in inputs.sensor_quality_min}
+
+        energy = self.p_fixed + self.p_prof @ self.share + self.p_mode @ self.mode
+        quality = self.p_quality0
+        common = [_selector(inputs.prof_state, n_s).T @ self.share == 1,
+                  _selector(inputs.mode_state, n_s).T @ self.mode == 1]
+        unusable = ~np.isfinite(inputs.mode_power_w)
+        if unusable.any():
+            common.append(self.mode[np.flatnonzero(unusable)] == 0)
+        if n_q:
+            energy = energy + self.p_dev @ self.device
+            common += [self.device >= inputs.dev_lo, self.device <= inputs.dev_hi]
+        if n_p:
+            utility = cp.multiply(1.0 / np.log1p(inputs.alpha),
+                                  cp.log1p(cp.multiply(inputs.alpha, self.duty)))
+            quality = quality + self.p_omega @ utility
+            common += [self.duty >= inputs.duty_lo, self.duty <= inputs.duty_hi,
+                       _selector(inputs.duty_device, n_q) @ self.device >= self.duty]
+            for sensor, (weights, offset) in self.p_sensor.items():
+                common.append(weights @ utility + offset >= inputs.sensor_quality_min[sensor])
+        self.energy = energy
+        self.quality = quality
+        self.budget_constraint = energy <= self.p_budget
+        self.quality_problem = cp.Problem(cp.Maximize(quality), [*common, self.budget_constraint])
+        self.energy_problem = cp.Problem(cp.Minimize(energy), [*common, quality >= self.p_floor])
+        for problem in (self.quality_problem, self.energy_problem):
+            assert problem.is_dcp(dpp=True), "the planning model must stay DCP and DPP"
+        self.set_floor(0.0)
+        self.set_budget_j(0.0)
+
+    # ---- parameter values ----------------------------------------------------------
+    def set_coefficients(self, c: Coefficients) -> None:
+        if self.p_dev is not None:
+            self.p_dev.value = c.dev_j
+        self.p_prof.value = c.prof_j
+        self.p_mode.value = c.mode_j
+        self.p_fixed.value = c.fixed_j
+        if self.p_omega is not None:
+            self.p_omega.value = c.omega
+        self.p_quality0.value = c.quality0
+        for sensor, (weights, offset) in self.p_sensor.items():
+            weights.value = c.sensor_omega[sensor]
+            offset.value = c.sensor_quality0[sensor]
+
+    def set_budget_j(self, budget_j: float) -> None:
+        self.p_budget.value = max(budget_j, 0.0) / ENERGY_UNIT_J
+
+    def set_floor(self, quality: float) -> None:
+        self.p_floor.value = quality
+
+    # ---- solving -------------------------------------------------------------------
+    def solve_quality(self, budget_j: float, **options: float) -> Solution:
+        """Best quality within `budget_j` [J]."""
+        self.set_budget_j(budget_j)
+        return self._solve(self.quality_problem, **options)
+
+    def solve_energy(self, quality_floor: float, **options: float) -> Solution:
+        """Least energy that reaches `quality_floor`."""
+        self.set_floor(quality_floor)
+        return self._solve(self.energy_problem, **options)
+
+    def _solve(self, problem: cp.Problem, **options: float) -> Solution:
+        start = time.perf_counter()
+        try:
+            problem.solve(solver=SOLVER, **options)
+        except cp.SolverError:
+            pass  # reported through the status below
+        elapsed = time.perf_counter() - start
+        status = problem.status or "solver_error"
+        stats = problem.solver_stats
+        ok = status in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE)
+
+        def value(x: cp.Variable | None) -> np.ndarray:
+            if x is None:
+                return np.zeros(0)
+            return np.asarray(x.value, float) if ok else np.full(x.shape, np.nan)
+
+        dual = None
+        if ok and problem is self.quality_problem:
+            dual = float(self.budget_constraint.dual_value) / ENERGY_UNIT_J
+        return Solution(
+            status=status, duty=value(self.duty), device=value(self.device),
+            share=value(self.share), mode=value(self.mode),
+            quality=float(self.quality.value) if ok else float("nan"),
+            model_energy_j=float(self.energy.value) * ENERGY_UNIT_J if ok else float("nan"),
+            budget_dual=dual, solve_s=elapsed,
+            solver_s=getattr(stats, "solve_time", None) if stats else None,
+            iterations=getattr(stats, "num_iters", None) if stats else None,
+        )

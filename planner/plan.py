@@ -1,0 +1,309 @@
+"""`plan_mission`: from a checked mission to a plan, and what the plan predicts.
+
+The mission's objective picks the problem: maximise quality within the budget, or
+minimise energy subject to a quality floor. A budget below what the mission needs at
+the least is not a solver status but an `InfeasibleBudget` that says how much is
+needed and what consumes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from gliderplan.language import ir
+from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.planner.hardware import Hardware, load_hardware
+from gliderplan.planner.inputs import (
+    PROFILE_CYCLE_S,
+    SENSOR_PERIOD_S,
+    PlanInputs,
+    build_inputs,
+    coefficients,
+    utility,
+)
+from gliderplan.planner.model import PlanModel, Solution
+from gliderplan.planner.occupancy import measured_occupancy, mission_occupancy
+from gliderplan.planner.rates import VEHICLE_COMPONENTS
+
+J_PER_WH = 3600.0
+_ON_EDGE = 1e-6  # a duty this close to 0 or 1 does not cycle (no warm-ups)
+
+
+class PlanningError(Exception):
+    """The mission cannot be planned as asked; the message says why in domain terms."""
+
+
+class InfeasibleBudget(PlanningError):
+    def __init__(self, budget_j: float, minimum_j: float,
+                 consumers: list[tuple[str, float]]) -> None:
+        self.budget_j, self.minimum_j, self.consumers = budget_j, minimum_j, consumers
+        short = minimum_j - budget_j
+        top = ", ".join(f"{name} {j / J_PER_WH:.3g} Wh" for name, j in consumers)
+        super().__init__(
+            f"the budget of {budget_j / J_PER_WH:.4g} Wh is too small: the mission needs at "
+            f"least {minimum_j / J_PER_WH:.4g} Wh ({short / J_PER_WH:.4g} Wh or "
+            f"{100 * short / minimum_j:.3g} % more). Largest consumers at that minimum: {top}.")
+
+
+@dataclass(frozen=True)
+class SensorPlan:
+    name: str
+    device: str
+    duty: float
+    period_s: float
+    on_s: float
+
+
+@dataclass(frozen=True)
+class ProfilePlan:
+    index: int
+    kind: str
+    share: float
+    speed_mps: float
+    pitch_rad: float
+    ballast_cc: float
+
+
+@dataclass(frozen=True)
+class StatePlan:
+    name: str
+    time_s: float
+    visits: int
+    clock_mhz: float
+    cycle_s: float
+    sensors: tuple[SensorPlan, ...]
+    profiles: tuple[ProfilePlan, ...]
+    energy_by_component_j: dict[str, float]
+    inflections: float
+    quality: float | None  # weighted quality of the state's device sensors; None if none
+
+    @property
+    def energy_j(self) -> float:
+        return float(sum(self.energy_by_component_j.values()))
+
+
+@dataclass(frozen=True)
+class Plan:
+    mission: str
+    mission_hash: str
+    computer: str
+    clock_mhz: float
+    objective: str
+    status: str  # "optimal"
+    quality: float
+    energy_j: float
+    budget_j: float
+    minimum_energy_j: float
+    shadow_price: float  # quality per extra Wh of budget at this plan
+    defaults_used: tuple[str, ...]
+    solver_status: str
+    solve_s: float
+    solver_iterations: int | None
+    states: tuple[StatePlan, ...]
+
+    @property
+    def components_j(self) -> dict[str, float]:
+        total: dict[str, float] = {}
+        for state in self.states:
+            for k, v in state.energy_by_component_j.items():
+                total[k] = total.get(k, 0.0) + v
+        return total
+
+
+def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
+            occupancy_s: dict[str, float] | None = None) -> tuple[PlanInputs, PlanModel]:
+    """The inputs and the built model (parameters set) for a mission."""
+    hardware = hardware or load_hardware(mission)
+    occupancy = (mission_occupancy(mission) if occupancy_s is None
+                 else measured_occupancy(mission, occupancy_s))
+    inputs = build_inputs(mission, hardware, occupancy)
+    model = PlanModel(inputs)
+    model.set_coefficients(coefficients(inputs))
+    return inputs, model
+
+
+def plan_mission(mission: ir.CheckedMission, hardware: Hardware | None = None, *,
+                 budget_j: float | None = None,
+                 occupancy_s: dict[str, float] | None = None) -> Plan:
+    """Plan a checked mission. `hardware` defaults to the mission's annotations,
+    `budget_j` [J] to (1 - reserve) x battery; `occupancy_s` (state -> seconds measured
+    in simulation) replaces the static timeline. Raises InfeasibleBudget or PlanningError."""
+    inputs, model = prepare(mission, hardware, occupancy_s)
+    return solve_plan(inputs, model, budget_j)
+
+
+def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = None) -> Plan:
+    """Solve a prepared model for the mission's objective."""
+    budget = inputs.hardware.budget_j if budget_j is None else budget_j
+    least = model.solve_energy(-1.0)
+    if not least.optimal:
+        raise PlanningError(f"the mission's constraints cannot all hold ({least.status}); "
+                            "check the duty and quality annotations")
+    minimum_j = realised_energy_j(inputs, least)
+    if inputs.mission.objective.sense == "minimize_energy":
+        floor = inputs.mission.objective.quality_floor
+        chosen = model.solve_energy(floor)
+        if not chosen.optimal:
+            best = model.solve_quality(1e30)
+            raise PlanningError(f"the quality floor {floor:g} cannot be reached: the best "
+                                f"this mission can do is {best.quality:.4g}")
+        if chosen.model_energy_j > budget * (1 + 1e-9):
+            raise InfeasibleBudget(budget, chosen.model_energy_j,
+                                   largest_consumers(inputs, chosen))
+        priced = model.solve_quality(chosen.model_energy_j)
+        shadow = priced.budget_dual if priced.optimal else 0.0
+    else:
+        if least.model_energy_j > budget * (1 + 1e-9):
+            raise InfeasibleBudget(budget, minimum_j, largest_consumers(inputs, least))
+        chosen = model.solve_quality(budget)
+        if not chosen.optimal:
+            raise PlanningError(f"the solver could not plan this mission ({chosen.status})")
+        shadow = chosen.budget_dual
+        if shadow is not None and shadow * J_PER_WH < 1e-9:
+            # Budget to spare: of the plans with this quality, fly the cheapest.
+            cheapest = model.solve_energy(chosen.quality * (1 - 1e-9))
+            if cheapest.optimal:
+                chosen = cheapest
+    return assemble(inputs, _snapped(inputs, chosen), budget, minimum_j,
+                    (shadow or 0.0) * J_PER_WH)
+
+
+def _snap(x: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float) -> np.ndarray:
+    """Values within solver tolerance of a bound put on it (a duty of 0.9999999 is 1)."""
+    x = np.clip(x, lo, hi)
+    x = np.where(np.abs(x - lo) < _ON_EDGE, lo, x)
+    return np.where(np.abs(x - hi) < _ON_EDGE, hi, x)
+
+
+def _snapped(inputs: PlanInputs, sol: Solution) -> Solution:
+    return replace(sol, duty=_snap(sol.duty, inputs.duty_lo, inputs.duty_hi),
+                   device=_snap(sol.device, inputs.dev_lo, inputs.dev_hi),
+                   share=_snap(sol.share, 0.0, 1.0), quality=float(sol.quality))
+
+
+# ---- what a solution means ----------------------------------------------------------------
+
+def _profile_components(inputs: PlanInputs, sol: Solution) -> np.ndarray:
+    """(n_r, len(VEHICLE_COMPONENTS)) energy [J] of each profile share."""
+    t = inputs.time_s[inputs.prof_state]
+    power = np.array([[p.power_w[c] for c in VEHICLE_COMPONENTS] for p in inputs.profiles])
+    return power * (np.clip(sol.share, 0.0, 1.0) * t)[:, None]
+
+
+def _device_energy_j(inputs: PlanInputs, sol: Solution) -> np.ndarray:
+    on = np.clip(sol.device, 0.0, 1.0)
+    cycling = (on > _ON_EDGE) & (on < 1.0 - _ON_EDGE)
+    return (inputs.dev_power_w * on * inputs.time_s[inputs.dev_state]
+            + np.where(cycling, inputs.dev_warmup_j * inputs.switch_ons(), 0.0))
+
+
+def _chosen_modes(inputs: PlanInputs, sol: Solution) -> np.ndarray:
+    """Index into hardware.modes of the clock each state runs at (the largest share)."""
+    n_modes = len(inputs.hardware.modes)
+    return np.argmax(sol.mode.reshape(len(inputs.states), n_modes), axis=1)
+
+
+def state_energy_j(inputs: PlanInputs, sol: Solution) -> list[dict[str, float]]:
+    """Energy [J] per state and component, as the plan will fly it."""
+    result = [dict.fromkeys(VEHICLE_COMPONENTS, 0.0) for _ in inputs.states]
+    for r, row in enumerate(_profile_components(inputs, sol)):
+        for c, value in zip(VEHICLE_COMPONENTS, row, strict=True):
+            result[inputs.prof_state[r]][c] += float(value)
+    n_modes = len(inputs.hardware.modes)
+    for s, m in enumerate(_chosen_modes(inputs, sol)):
+        result[s]["computer"] = float(inputs.mode_power_w[s * n_modes + m] * inputs.time_s[s])
+    for q, value in enumerate(_device_energy_j(inputs, sol)):
+        name = inputs.dev_name[q]
+        result[inputs.dev_state[q]][name] = result[inputs.dev_state[q]].get(name, 0.0) \
+            + float(value)
+    return result
+
+
+def realised_energy_j(inputs: PlanInputs, sol: Solution) -> float:
+    return float(sum(sum(s.values()) for s in state_energy_j(inputs, sol)))
+
+
+def largest_consumers(inputs: PlanInputs, sol: Solution, n: int = 3) -> list[tuple[str, float]]:
+    """The `n` components that draw the most energy [J] in a solution."""
+    totals: dict[str, float] = {}
+    for state in state_energy_j(inputs, sol):
+        for k, v in state.items():
+            totals[k] = totals.get(k, 0.0) + v
+    return sorted(totals.items(), key=lambda kv: -kv[1])[:n]
+
+
+def _state_quality(inputs: PlanInputs, sol: Solution, s: int) -> float | None:
+    terms = [(w, float(utility(a, d))) for st, _, d, a, w in inputs.fixed if st == s]
+    mine = inputs.duty_state == s
+    terms += [(w, float(utility(a, d))) for w, a, d in
+              zip(inputs.weight[mine], inputs.alpha[mine], sol.duty[mine], strict=True)]
+    weight = sum(w for w, _ in terms)
+    return float(sum(w * u for w, u in terms) / weight) if weight > 0 else None
+
+
+def _round9(x: float) -> float:
+    """The value as the plan file writes it (9 significant digits)."""
+    return float(format(float(x), ".9g"))
+
+
+def assemble(inputs: PlanInputs, sol: Solution, budget_j: float, minimum_j: float,
+             shadow_price: float) -> Plan:
+    hardware = inputs.hardware
+    energies = state_energy_j(inputs, sol)
+    modes = _chosen_modes(inputs, sol)
+    duty = np.clip(sol.duty, 0.0, 1.0)
+    states = []
+    for s, state in enumerate(inputs.mission.states):
+        t = float(inputs.time_s[s])
+        visits = inputs.occupancy.visits[state.name]
+        visit_s = t / visits if visits else 0.0
+        period = min(SENSOR_PERIOD_S, visit_s) if visit_s > 0 else SENSOR_PERIOD_S
+        cycle = min(PROFILE_CYCLE_S, visit_s) if visit_s > 0 else PROFILE_CYCLE_S
+        by_sensor = {inputs.duty_sensor[p]: float(duty[p])
+                     for p in np.flatnonzero(inputs.duty_state == s)}
+        by_sensor.update({n: d for st, n, d, _, _ in inputs.fixed if st == s and d < 1.0})
+        sensors = []
+        for use in state.sensors:
+            if use.name not in by_sensor:
+                continue
+            d = by_sensor[use.name]
+            sensors.append(SensorPlan(use.name, SENSOR_BY_NAME[use.name].device or "", d,
+                                      _round9(period), _round9(d * period)))
+        rows = np.flatnonzero(inputs.prof_state == s)
+        shares = np.clip(sol.share[rows], 0.0, 1.0)
+        shares = shares / shares.sum()
+        profiles = tuple(
+            ProfilePlan(p.index, p.kind, float(f), p.speed_mps, p.pitch_rad, p.ballast_cc)
+            for p, f in zip((inputs.profiles[r] for r in rows), shares, strict=True))
+        inflections = float(sum(inputs.profiles[r].inflections_per_s * f * t
+                                for r, f in zip(rows, shares, strict=True)))
+        states.append(StatePlan(state.name, t, visits, hardware.modes[modes[s]].clock_mhz,
+                                _round9(cycle), tuple(sensors), profiles, energies[s],
+                                inflections, _state_quality(inputs, sol, s)))
+    defaults = tuple(dict.fromkeys([*_describe_defaults(inputs), *inputs.notes]))
+    return Plan(
+        mission=inputs.mission.name, mission_hash=inputs.mission.hash,
+        computer=hardware.board.name, clock_mhz=hardware.board.clock_mhz,
+        objective=inputs.mission.objective.sense, status="optimal",
+        quality=float(sol.quality),
+        energy_j=float(sum(sum(e.values()) for e in energies)), budget_j=budget_j,
+        minimum_energy_j=minimum_j, shadow_price=shadow_price, defaults_used=defaults,
+        solver_status=sol.status, solve_s=sol.solve_s, solver_iterations=sol.iterations,
+        states=tuple(states),
+    )
+
+
+def _describe_defaults(inputs: PlanInputs) -> list[str]:
+    """The mission's defaulted annotations with the values the plan used."""
+    hw, mission = inputs.hardware, inputs.mission
+    values = {
+        "vehicle": f"vehicle {mission.vehicle}",
+        "computer": f"computer {hw.board.name} @ {hw.board.clock_mhz:g} MHz",
+        "battery": f"battery {hw.battery_j / 3.6e6:.4g} kWh reserve "
+                   f"{100 * hw.reserve_fraction:g} %",
+        "objective": "objective maximize quality",
+    }
+    return [f"{values.get(key, key)} (default)" for key in mission.defaults_used
+            if key not in hw.overridden]

@@ -1,0 +1,122 @@
+"""What each state costs per second, from the power models: the planner's coefficients.
+
+Per state and flight-profile alternative: the power [W] of each vehicle component
+(hotel, pump, pitch, surface, iridium) and the inflection rate, flying at the speed
+that minimises energy per metre for the state's fixed load, u* = (P / 2c)^(1/3)
+(DESIGN.md section 5; a hungrier computer makes the glider faster). Per clock of the
+computer: its mean power for the runtime's workload. Per sensor device: its on-power.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gliderplan.language import ir
+from gliderplan.planner.hardware import Hardware
+from gliderplan.planner.occupancy import TICK_S, Occupancy
+from gliderplan.power_models.board import Board
+from gliderplan.power_models.vehicle import Vehicle
+
+# Runtime work per tick (decode a frame, check events, run the routine, encode the reply,
+# append to the event log); assumption shared with the simulator: ~200k cycles.
+RUNTIME_CYCLES_PER_TICK = 200_000.0
+VEHICLE_COMPONENTS = ("hotel", "pump", "pitch", "surface", "iridium")
+
+
+@dataclass(frozen=True)
+class ProfileRates:
+    """One flight-profile alternative of a state, at its planned speed."""
+
+    index: int
+    kind: str
+    power_w: dict[str, float]  # vehicle component -> mean power [W]
+    inflections_per_s: float
+    speed_mps: float
+    pitch_rad: float
+    ballast_cc: float
+
+    @property
+    def total_w(self) -> float:
+        return float(sum(self.power_w.values()))
+
+
+def computer_power_w(board: Board, tick_s: float = TICK_S,
+                     cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> float | None:
+    """Mean power [W] of the board idling between ticks; None if it cannot keep up."""
+    busy = float(board.busy_fraction(cycles_per_tick, 1.0 / tick_s))
+    return None if busy > 1.0 else float(board.power_w(busy))
+
+
+def _yo_band(profile: ir.Profile, args: tuple[float, ...]) -> tuple[float, float]:
+    low, high = args[0], args[1]
+    if profile.kind == "thermotrackyo":
+        # Tracking narrows the band to depth_threshold around the thermocline: more
+        # inflections per hour; plan for it (the costlier case).
+        high = min(high, low + args[5])
+    return low, high
+
+
+def _profile_args(profile: ir.Profile, variables: dict[str, float]) -> tuple[float, ...]:
+    return tuple(ir.evaluate(a, {}, variables) for a in profile.args)
+
+
+def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
+                  variables: dict[str, float], fixed_load_w: float,
+                  visit_s: float, notes: list[str], where: str) -> ProfileRates:
+    """Component powers of one profile alternative. `fixed_load_w` [W] is the load the
+    glide speed is optimised for (hotel + computer); `visit_s` the mean time per visit."""
+    pitch0 = vehicle.nominal_pitch_rad
+    if profile.kind in ("yo", "thermotrackyo"):
+        args = _profile_args(profile, variables)
+        low, high = _yo_band(profile, args)
+        pitch = 0.5 * (args[2] + args[3])
+        if not (math.isfinite(low) and math.isfinite(high) and 0.0 <= low < high
+                and 0.0 < pitch < math.pi / 2):
+            low, high, pitch = vehicle.nominal_min_depth_m, vehicle.nominal_max_depth_m, pitch0
+            notes.append(f"{where}: arguments unknown before flight; planned as a yo "
+                         f"{low:g}-{high:g} m (the vehicle's nominal)")
+        speed = float(vehicle.optimal_speed_mps(fixed_load_w, low, high, pitch))
+        ballast = float(vehicle.ballast_for_speed(speed, pitch))
+        per_hour = float(vehicle.inflections_per_hour(low, high, pitch, ballast))
+        actuators_w = float(vehicle.profile_power_w(low, high, pitch, ballast))
+        pitch_w = vehicle.pitch_energy_j * per_hour / 3600.0
+        power = {"hotel": vehicle.hotel_w, "pump": actuators_w - pitch_w, "pitch": pitch_w,
+                 "surface": 0.0, "iridium": 0.0}
+        return ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch, ballast)
+    # surface and hover do not glide: the plan file still carries a glide command, the
+    # vehicle's nominal pitch at full buoyancy (what it climbs with).
+    ballast = vehicle.max_ballast_cc
+    speed = float(vehicle.glide(pitch0, ballast)[0])
+    if profile.kind == "surface":
+        call_s = min(max(visit_s - vehicle.surface_s, 0.0), vehicle.iridium_s)
+        call_fraction = call_s / visit_s if visit_s > 0.0 else 0.0
+        fixed_w = vehicle.surfacing_fixed_j / visit_s if visit_s > 0.0 else 0.0
+        power = {"hotel": 0.0, "pump": 0.0, "pitch": 0.0,
+                 "surface": vehicle.surface_w * (1.0 - call_fraction) + fixed_w,
+                 "iridium": vehicle.iridium_w * call_fraction}
+    else:  # hover: holds a depth with small corrections, counted in the hotel load
+        power = {"hotel": vehicle.hotel_w, "pump": 0.0, "pitch": 0.0,
+                 "surface": 0.0, "iridium": 0.0}
+    return ProfileRates(index, profile.kind, power, 0.0, speed, pitch0, ballast)
+
+
+def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
+                   notes: list[str]) -> list[ProfileRates]:
+    """Rates of every alternative of a state."""
+    load = hardware.vehicle.hotel_w + (computer_power_w(hardware.board) or 0.0)
+    visits = max(occupancy.visits[state.name], 1)
+    visit_s = occupancy.time_s[state.name] / visits
+    variables = occupancy.variables[state.name]
+    return [profile_rates(hardware.vehicle, p, j, variables, load, visit_s, notes,
+                          f"{state.name}: flightprofile {j}")
+            for j, p in enumerate(state.profiles)]
+
+
+def mode_powers(hardware: Hardware) -> np.ndarray:
+    """Mean power [W] of each clock the planner may choose; NaN for a clock that cannot
+    keep up with the runtime's workload."""
+    return np.array([np.nan if (p := computer_power_w(m)) is None else p
+                     for m in hardware.modes])

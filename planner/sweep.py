@@ -1,0 +1,127 @@
+"""Tradeoff sweeps: quality against budget (the Pareto frontier), against the computer
+and against the battery. Each sweep builds the model once and only changes parameter
+values between solves (cvxpy's DPP path: no re-compilation)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from gliderplan.language import ir
+from gliderplan.planner.hardware import load_hardware
+from gliderplan.planner.inputs import build_inputs, coefficients
+from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel
+from gliderplan.planner.occupancy import mission_occupancy
+from gliderplan.planner.plan import J_PER_WH, realised_energy_j
+
+COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
+BATTERIES = ("alkaline", "lithium_primary", "rechargeable")
+Progress = Callable[[int, int], None]
+_UNBOUNDED_J = 1e15  # a budget no mission reaches: the quality problem without a budget
+
+
+def energy_range_j(model: PlanModel) -> tuple[float, float]:
+    """(least energy the mission needs, energy at which more budget buys no quality) [J],
+    as the model counts energy (the budget constraint's own measure)."""
+    least = model.solve_energy(-1.0)
+    if not least.optimal:
+        raise ValueError(f"the mission's constraints cannot all hold ({least.status})")
+    best = model.solve_quality(_UNBOUNDED_J)
+    saturated = model.solve_energy(best.quality - SATURATION_TOLERANCE * abs(best.quality))
+    return least.model_energy_j, max(saturated.model_energy_j, least.model_energy_j)
+
+
+def pareto(model: PlanModel, points: int, progress: Progress | None = None) -> pd.DataFrame:
+    """Best quality at `points` budgets from the minimum energy to saturation."""
+    low, high = energy_range_j(model)
+    rows = []
+    for i, budget in enumerate(np.linspace(low, high, points)):
+        sol = model.solve_quality(float(budget))
+        rows.append({"budget_j": float(budget), "budget_wh": float(budget) / J_PER_WH,
+                     "quality": sol.quality, "energy_j": sol.model_energy_j,
+                     "shadow_price": (sol.budget_dual or 0.0) * J_PER_WH,
+                     "status": sol.status, "solve_ms": 1000 * sol.solve_s})
+        if progress:
+            progress(i + 1, points)
+    return pd.DataFrame(rows)
+
+
+def _row(model: PlanModel, budget_j: float) -> dict:
+    least = model.solve_energy(-1.0)
+    feasible = least.optimal and least.model_energy_j <= budget_j
+    sol = model.solve_quality(budget_j) if feasible else None
+    row = {"budget_j": budget_j, "minimum_energy_j": least.model_energy_j,
+           "status": "optimal" if sol is not None and sol.optimal else "infeasible",
+           "quality": sol.quality if sol else np.nan,
+           "energy_j": realised_energy_j(model.inputs, sol) if sol else np.nan,
+           "shadow_price": (sol.budget_dual or 0.0) * J_PER_WH if sol else np.nan}
+    return row
+
+
+def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
+              budget_j: float | None = None, progress: Progress | None = None) -> pd.DataFrame:
+    """The plan on each computer (fixed clock), at the mission's budget or `budget_j`."""
+    occupancy = mission_occupancy(mission)
+    model = None
+    rows = []
+    for i, spec in enumerate(specs):
+        hardware = load_hardware(mission, computer=spec)
+        inputs = build_inputs(mission, hardware, occupancy)
+        if model is None:
+            model = PlanModel(inputs)
+        model.inputs = inputs
+        model.set_coefficients(coefficients(inputs))
+        budget = hardware.budget_j if budget_j is None else budget_j
+        row = {"computer": f"{hardware.board.name}@{hardware.board.clock_mhz:g}",
+               **_row(model, budget)}
+        row["computer_j"] = float(np.nanmin(inputs.mode_power_w) * inputs.time_s.sum())
+        rows.append(row)
+        if progress:
+            progress(i + 1, len(specs))
+    return pd.DataFrame(rows)
+
+
+def batteries(mission: ir.CheckedMission, specs: Sequence[str] = BATTERIES,
+              computer: str | None = None, progress: Progress | None = None) -> pd.DataFrame:
+    """The plan with each battery (only the budget changes)."""
+    model = None
+    rows = []
+    for i, spec in enumerate(specs):
+        hardware = load_hardware(mission, battery=spec, computer=computer)
+        if model is None:
+            inputs = build_inputs(mission, hardware, mission_occupancy(mission))
+            model = PlanModel(inputs)
+            model.set_coefficients(coefficients(inputs))
+        rows.append({"battery": spec, "battery_j": hardware.battery_j,
+                     "reserve_fraction": hardware.reserve_fraction,
+                     **_row(model, hardware.budget_j)})
+        if progress:
+            progress(i + 1, len(specs))
+    return pd.DataFrame(rows)
+
+
+def plot_pareto(frame: pd.DataFrame, title: str) -> bytes:
+    """PNG of quality against budget, with the shadow price on a second axis."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+    ax.plot(frame["budget_wh"], frame["quality"], "o-", color="tab:blue", ms=3)
+    ax.set_xlabel("energy budget [Wh]")
+    ax.set_ylabel("quality [1]", color="tab:blue")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    price = ax.twinx()
+    price.plot(frame["budget_wh"], frame["shadow_price"], "--", color="tab:red")
+    price.set_ylabel("shadow price [quality per Wh]", color="tab:red")
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png")
+    plt.close(fig)
+    return buffer.getvalue()
