@@ -37,7 +37,7 @@ SANITIZERS = ("OPT=-O1 -g", "SANITIZE=-fsanitize=address,undefined -fno-sanitize
 @pytest.fixture(scope="module", params=["plain", "sanitized"])
 def build(request, tmp_path_factory) -> Path:
     """Runtimes of the hand-written tables (fig2-runtime, stacker-runtime), built plain
-    and under ASan + UBSan: the session code gets the sanitizers' checks too."""
+    and under ASan + UBSan: the link code gets the sanitizers' checks too."""
     build = tmp_path_factory.mktemp(request.param)
     flags = SANITIZERS if request.param == "sanitized" else ()
     subprocess.run(["make", "-C", str(RUNTIME), "fig2", f"BUILD={build}", "CC=gcc", *flags],

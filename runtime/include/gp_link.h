@@ -1,7 +1,7 @@
 /**
  * @file gp_link.h
  * @brief The runtime program: command line, start-up (plan, checkpoint), and the
- *        link session with the science computer (HELLO, SENSORS -> COMMAND, NAK,
+ *        link with the science computer (HELLO, SENSORS -> COMMAND, NAK,
  *        PLAN, watchdog RELEASE).
  */
 #ifndef GP_LINK_H

@@ -41,7 +41,7 @@ typedef struct {
     int has_plan;
     uint16_t plan_total, plan_received;
     uint32_t dropped;                /* frames dropped (bad CRC, COBS, ...) */
-} session;
+} link_state;
 
 static gp_runtime runtime;
 static volatile sig_atomic_t stop_signal;  /* SIGTERM/SIGINT/SIGHUP received */
@@ -52,12 +52,12 @@ static gp_plan plan;
 static char plan_text[GP_PLAN_MAX_BYTES + 1];
 static uint8_t checkpoint_buf[GP_CHECKPOINT_SIZE];
 
-static void say(const session *s, const char *message)
+static void say(const link_state *s, const char *message)
 {
     fprintf(stderr, "%s: %s\n", s->prog, message);
 }
 
-static int send_frame(session *s, uint8_t type, const uint8_t *payload, size_t len)
+static int send_frame(link_state *s, uint8_t type, const uint8_t *payload, size_t len)
 {
     s->seq = (uint8_t)(s->seq + 1);
     s->last_len = gp_frame_build(type, s->seq, s->ack, payload, len, s->last_wire);
@@ -65,7 +65,7 @@ static int send_frame(session *s, uint8_t type, const uint8_t *payload, size_t l
 }
 
 /* A NAK is not kept as the frame to re-send: NAK answered by NAK would never end. */
-static void send_nak(session *s)
+static void send_nak(link_state *s)
 {
     uint8_t wire[GP_MAX_FRAME];
     s->dropped++;
@@ -75,7 +75,7 @@ static void send_nak(session *s)
 }
 
 /* Give control back to the glider's own layered control and end with `status`. */
-static int release(session *s, gp_release_reason reason, int status)
+static int release(link_state *s, gp_release_reason reason, int status)
 {
     uint8_t payload = (uint8_t)reason;
     send_frame(s, GP_MSG_RELEASE, &payload, 1);
@@ -90,7 +90,7 @@ static int release(session *s, gp_release_reason reason, int status)
 
 /* ---- start-up ---------------------------------------------------------------- */
 
-static int load_plan(session *s, const char *path, char *message)
+static int load_plan(link_state *s, const char *path, char *message)
 {
     long len = gp_read_file(path, plan_text, GP_PLAN_MAX_BYTES);
     if (len < 0) {
@@ -108,7 +108,7 @@ static int load_plan(session *s, const char *path, char *message)
 }
 
 /* Resume from the state directory's checkpoint (and its plan) if there is one. */
-static int load_state(session *s, char *message)
+static int load_state(link_state *s, char *message)
 {
     const char *dir = s->args->state_dir;
     char path[GP_PATH_MAX];
@@ -139,7 +139,7 @@ static int load_state(session *s, char *message)
     return 0;
 }
 
-static int open_events(session *s, char *message)
+static int open_events(link_state *s, char *message)
 {
     char path[GP_PATH_MAX];
     if (gp_path_join(s->args->state_dir, "events.log", path) < 0) {
@@ -166,7 +166,7 @@ static int open_events(session *s, char *message)
 /* ---- one tick ---------------------------------------------------------------- */
 
 /* Log the tick's transitions and write the checkpoint: before the COMMAND goes out. */
-static int persist(session *s, const gp_tick_report *report)
+static int persist(link_state *s, const gp_tick_report *report)
 {
     double time_s = runtime.sensors[0];
     if (s->events_fd >= 0) {
@@ -192,7 +192,7 @@ static int persist(session *s, const gp_tick_report *report)
     return 0;
 }
 
-static int send_command(session *s, const gp_command *command)
+static int send_command(link_state *s, const gp_command *command)
 {
     uint8_t payload[GP_COMMAND_SIZE];
     gp_command_pack(command, payload);
@@ -200,7 +200,7 @@ static int send_command(session *s, const gp_command *command)
 }
 
 /* @return -1 to go on, else the exit status */
-static int on_sensors(session *s, const gp_frame *frame)
+static int on_sensors(link_state *s, const gp_frame *frame)
 {
     uint32_t tick;
     double readings[GP_N_SENSORS];
@@ -247,7 +247,7 @@ static int on_sensors(session *s, const gp_frame *frame)
 }
 
 /* Assemble PLAN pieces sent in order from offset 0; read the plan when complete. */
-static void on_plan(session *s, const gp_frame *frame)
+static void on_plan(link_state *s, const gp_frame *frame)
 {
     uint16_t offset, total, len;
     const uint8_t *data;
@@ -285,7 +285,7 @@ static void on_plan(session *s, const gp_frame *frame)
 }
 
 /* @return -1 to go on, else the exit status */
-static int on_frame(session *s, const gp_frame *frame)
+static int on_frame(link_state *s, const gp_frame *frame)
 {
     s->ack = frame->seq;
     s->last_valid_s = gp_now_s();
@@ -333,7 +333,7 @@ static void on_crash_signal(int signal_number)
     _exit(GP_EXIT_INTERNAL);
 }
 
-static void catch_crash_signals(session *s)
+static void catch_crash_signals(link_state *s)
 {
     uint8_t reason = GP_RELEASE_INTERNAL;
     crash_release_len = gp_frame_build(GP_MSG_RELEASE, 0, 0, &reason, 1, crash_release);
@@ -350,7 +350,7 @@ static void catch_crash_signals(session *s)
     sigaction(SIGABRT, &action, NULL);
 }
 
-static int run_link(session *s)
+static int run_link(link_state *s)
 {
     static uint8_t chunk[READ_CHUNK];
     uint8_t hello[GP_MAX_PAYLOAD];
@@ -401,10 +401,10 @@ static int run_link(session *s)
 int gp_main(int argc, char **argv)
 {
     static gp_args args;
-    static session s;
+    static link_state s;
     char message[ERROR_LEN];
     const char *slash = argc > 0 ? strrchr(argv[0], '/') : NULL;
-    s = (session){.mission = &gp_mission_table, .args = &args, .fd = -1, .events_fd = -1,
+    s = (link_state){.mission = &gp_mission_table, .args = &args, .fd = -1, .events_fd = -1,
                   .prog = slash ? slash + 1 : (argc > 0 ? argv[0] : "gliderplan-runtime")};
     const char *table_problem = gp_mission_check(s.mission);
     if (table_problem) {
