@@ -158,7 +158,8 @@ def _bad_character(err: UnexpectedCharacters, text: str) -> Diagnostic:
         return error("unexpected ';'", span, "statements end at the line; remove the ';'")
     shown = repr(char) if not char.isprintable() or char in "'\"" else f"'{char}'"
     return error(f"unexpected character {shown}", span,
-                 "'#' or '//' starts a comment" if char in "%$*" else None)
+                 "missions use letters, digits, '_', '.', operators and ( ) , | @ %; "
+                 "a comment starts with '#' or '//'")
 
 
 def _early_end(expected: set[str], text: str, literals: Mapping[str, str]) -> Diagnostic:
