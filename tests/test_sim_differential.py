@@ -92,3 +92,22 @@ def test_a_plan_s_schedule_is_flown_the_same_by_both_runtimes(tmp_path):
     assert set(survey["profile"]) == {0, 1}  # both bands flown
     assert 0.25 < survey["temp_on"].mean() < 0.45  # 20 s of every 60 s
     assert 0.25 < survey["oxygen_on"].mean() < 0.45  # 100 s of every 300 s
+
+
+@needs_cc
+@pytest.mark.parametrize("name", ["fig2_annotated.mission", "thermocline_survey.mission"])
+def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path):
+    mission = REPO / "examples" / name
+    plan = tmp_path / "mission.plan"
+    assert main(["plan", str(mission), "-o", str(plan)]) == 0
+    outputs = {}
+    for runtime in ("python", "c"):
+        out = tmp_path / runtime
+        assert main(["sim", str(mission), "--plan", str(plan), "--runtime", runtime,
+                     "-o", str(out)]) == 0
+        outputs[runtime] = ((out / "trace.csv").read_text(),
+                            pd.read_parquet(out / "timeseries.parquet"))
+    (python_trace, python), (c_trace, c) = outputs["python"], outputs["c"]
+    assert c_trace == python_trace
+    for column in ("depth_m", "profile", "temp_on", "oxygen_on"):
+        assert python[column].equals(c[column]), column

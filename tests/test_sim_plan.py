@@ -125,3 +125,54 @@ def test_the_computer_draws_the_power_of_the_plan_s_board_and_clock(tmp_path, ca
     busy = board.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / TICK_S)
     assert summary["energy_by_component_j"]["computer"] == pytest.approx(
         float(board.power_w(busy)) * 10800.0)
+
+
+# ---- with the planner's own plans ------------------------------------------------------
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def planner_plan(tmp_path: Path, budget_j: float | None = None,
+                 occupancy_s: dict[str, float] | None = None) -> Path:
+    """The planner's plan (and report) for the survey mission, as `gliderplan plan -o`
+    writes them; `occupancy_s` tells it how long the survey will last."""
+    from gliderplan.planner.plan import plan_mission
+    from gliderplan.planner.planfile import write_plan_bytes
+    from gliderplan.planner.report import report_json
+
+    plan = plan_mission(check_file(str(MISSION)).mission, budget_j=budget_j,
+                        occupancy_s=occupancy_s)
+    path = tmp_path / "survey.plan"
+    path.write_bytes(write_plan_bytes(plan))
+    (tmp_path / "survey.plan.json").write_text(json.dumps(report_json(plan)))
+    return path
+
+
+def test_the_planner_s_plan_for_the_survey_passes(tmp_path, capsys):
+    code, summary, _ = simulate(tmp_path, planner_plan(tmp_path), capsys)
+    assert code == 0
+    check = summary["plan_check"]
+    assert check["verdict"] == "pass"
+    assert check["simulated_j"] == pytest.approx(check["predicted_j"], rel=0.05)
+
+
+def test_a_plan_made_for_one_hour_of_a_three_hour_survey_is_a_violation(tmp_path, capsys):
+    plan = planner_plan(tmp_path, budget_j=40e3, occupancy_s={"survey": 3600.0})
+    code, summary, err = simulate(tmp_path, plan, capsys)
+    assert code == 3
+    (cause,) = summary["plan_check"]["causes"]
+    assert "inflections planned, 6" in cause and "1.00 h planned, 3.00 h flown" in cause
+    assert "plan check: violation" in err
+
+
+def test_the_annotated_fig2_flies_its_plan_within_the_prediction(tmp_path, capsys):
+    plan = tmp_path / "fig2.plan"
+    mission = EXAMPLES / "fig2_annotated.mission"
+    assert main(["plan", str(mission), "-o", str(plan)]) == 0
+    assert main(["sim", str(mission), "--plan", str(plan), "-o", str(tmp_path / "run")]) == 0
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    check = summary["plan_check"]
+    assert check["verdict"] == "pass"
+    assert check["simulated_j"] == pytest.approx(check["predicted_j"], rel=0.05)
+    assert [name for name, s in summary["states"].items() if "predicted_j" in s] == \
+        ["s1", "s2", "s3"]
