@@ -110,7 +110,7 @@ def _word_span(text: str, offset: int) -> ast.Span:
 
 
 def _code_before(text: str, offset: int) -> str:
-    """The text before offset on its line and the ones before, comments removed."""
+    """Up to 400 characters of code before offset, comments removed, trailing space cut."""
     start = max(0, offset - 400)
     return _COMMENT.sub("", text[start:offset]).rstrip()
 

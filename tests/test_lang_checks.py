@@ -157,9 +157,13 @@ def test_conditions_that_can_hold_are_not_flagged(condition):
 
 
 def test_a_very_long_call_chain_is_reported_briefly():
-    states = [f"state s{i}\nbegin\n  flightprofile surface\n  sensors depth\n  events\n"
-              f"    case depth > 1 {'call s%d' % (i + 1) if i < 2999 else 'exit'}\n"
-              f"{'    case depth < 1 return' if i else ''}\nend\n" for i in range(3000)]
+    def state(i: int) -> str:
+        action = f"call s{i + 1}" if i < 2999 else "exit"
+        back = "    case depth < 1 return\n" if i else ""
+        return (f"state s{i}\nbegin\n  flightprofile surface\n  sensors depth\n  events\n"
+                f"    case depth > 1 {action}\n{back}end\n")
+
+    states = [state(i) for i in range(3000)]
     result = check_source("mission m\n" + "".join(states))
     (diagnostic,) = result.diagnostics
     assert diagnostic.message == ("calls nest 2999 deep (s0 -> s1 -> s2 -> s3 -> ... -> s2996 "
