@@ -106,6 +106,7 @@ class PlanModel:
 
     # ---- parameter values ----------------------------------------------------------
     def set_coefficients(self, c: Coefficients) -> None:
+        self.coefficients = c
         if self.p_dev is not None:
             self.p_dev.value = c.dev_j
         self.p_prof.value = c.prof_j
@@ -123,6 +124,13 @@ class PlanModel:
 
     def set_floor(self, quality: float) -> None:
         self.p_floor.value = quality
+
+    def ample_budget_j(self) -> float:
+        """A budget [J] above anything the mission can spend: the quality problem without
+        a budget (an infinite one would upset the solver's scaling)."""
+        c = self.coefficients
+        most = c.fixed_j + float(c.dev_j.sum() + c.prof_j.sum() + c.mode_j.sum())
+        return 2.0 * most * ENERGY_UNIT_J + 1.0
 
     # ---- solving -------------------------------------------------------------------
     def solve_quality(self, budget_j: float, **options: float) -> Solution:

@@ -146,7 +146,7 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
         floor = inputs.mission.objective.quality_floor
         chosen = model.solve_energy(floor)
         if not chosen.optimal:
-            best = model.solve_quality(1e30)
+            best = model.solve_quality(model.ample_budget_j())
             raise PlanningError(f"the quality floor {floor:g} cannot be reached: the best "
                                 f"this mission can do is {best.quality:.4g}")
         if chosen.model_energy_j > budget * (1 + 1e-9):

@@ -19,7 +19,6 @@ from gliderplan.planner.plan import J_PER_WH, realised_energy_j
 COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
 BATTERIES = ("alkaline", "lithium_primary", "rechargeable")
 Progress = Callable[[int, int], None]
-_UNBOUNDED_J = 1e15  # a budget no mission reaches: the quality problem without a budget
 
 
 def energy_range_j(model: PlanModel) -> tuple[float, float]:
@@ -28,7 +27,7 @@ def energy_range_j(model: PlanModel) -> tuple[float, float]:
     least = model.solve_energy(-1.0)
     if not least.optimal:
         raise ValueError(f"the mission's constraints cannot all hold ({least.status})")
-    best = model.solve_quality(_UNBOUNDED_J)
+    best = model.solve_quality(model.ample_budget_j())
     saturated = model.solve_energy(best.quality - SATURATION_TOLERANCE * abs(best.quality))
     return least.model_energy_j, max(saturated.model_energy_j, least.model_energy_j)
 

@@ -1,0 +1,125 @@
+"""`gliderplan plan` as a user runs it: tables, files, JSON, sweeps and bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from gliderplan.planner.planfile import read_plan_bytes
+
+ROOT = Path(__file__).resolve().parents[1]
+ANNOTATED = str(ROOT / "examples" / "fig2_annotated.mission")
+FIG2 = str(ROOT / "examples" / "fig2.mission")
+SURVEY = str(ROOT / "examples" / "thermocline_survey.mission")
+
+
+def gliderplan(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "gliderplan.cli", *args],
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_table_says_what_each_state_does():
+    run = gliderplan("plan", ANNOTATED)
+    assert run.returncode == 0, run.stderr
+    out = run.stdout
+    for text in ("quality", "shadow price", "energy by component", "s1", "s2", "s3",
+                 "hotel", "computer", "ctd", "optode", "temp"):
+        assert text in out
+
+
+def test_fig2_without_annotations_says_which_defaults_it_used():
+    run = gliderplan("plan", FIG2)
+    assert run.returncode == 0, run.stderr
+    assert "vehicle slocum_g2_shallow (default)" in run.stdout
+    assert "computer ts7800 @ 300 MHz (default)" in run.stdout
+    assert "battery" in run.stdout and "(default)" in run.stdout
+
+
+def test_output_writes_plan_and_report(tmp_path):
+    out = tmp_path / "survey.plan"
+    run = gliderplan("plan", SURVEY, "-o", str(out), "--json")
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report == json.loads((tmp_path / "survey.plan.json").read_text())
+    contents = read_plan_bytes(out.read_bytes())
+    assert contents.mission == "thermoclineSurvey"
+    assert report["status"] == "optimal" and report["energy_j"] <= report["budget_j"]
+    for key in ("quality", "shadow_price", "defaults_used", "solver", "components_j"):
+        assert key in report
+    assert report["solver"]["iterations"] > 0
+    state = report["states"][2]
+    assert state["name"] == "track"
+    assert set(state["energy_by_component_j"]) >= {"hotel", "computer", "pump", "pitch",
+                                                   "surface", "ctd", "optode", "optics"}
+    assert sum(state["energy_by_component_j"].values()) == pytest.approx(state["energy_j"])
+    assert sum(s["energy_j"] for s in report["states"]) == pytest.approx(report["energy_j"])
+    assert {"index", "kind", "share", "speed_mps", "pitch_rad", "ballast_cc"} <= \
+        set(state["profiles"][0])
+    assert {"name", "duty", "period_s", "on_s"} <= set(state["sensors"][0])
+    assert contents.predicted_j == pytest.approx(report["energy_j"], rel=1e-8)
+
+
+def test_battery_and_computer_options_change_the_plan():
+    small = json.loads(gliderplan("plan", SURVEY, "--battery", "300Wh", "--json").stdout)
+    assert small["budget_j"] == pytest.approx(0.8 * 300 * 3600)  # the mission's 20 % reserve
+    fast = json.loads(gliderplan("plan", SURVEY, "--computer", "ts7800@500", "--json").stdout)
+    assert fast["computer"]["clock_mhz"] == 500
+    assert fast["components_j"]["computer"] > small["components_j"]["computer"]
+    preset = json.loads(gliderplan("plan", ANNOTATED, "--battery", "alkaline", "--json").stdout)
+    assert preset["budget_j"] == pytest.approx(0.85 * 7.8e6)
+
+
+def test_infeasible_budget_exits_1_with_the_minimum():
+    run = gliderplan("plan", ANNOTATED, "--battery", "4Wh")
+    assert run.returncode == 1
+    assert "needs at least" in run.stderr and "Largest consumers" in run.stderr
+    assert "Traceback" not in run.stderr
+    run = gliderplan("plan", ANNOTATED, "--battery", "4Wh", "--json")
+    assert run.returncode == 1
+    report = json.loads(run.stdout)
+    assert report["status"] == "infeasible" and report["shortfall_j"] > 0
+    assert len(report["largest_consumers_j"]) == 3
+
+
+@pytest.mark.parametrize("args,code,message", [
+    (["--battery", "4parsec"], 2, "parsec"),
+    (["--battery", "lots"], 2, "expected an energy"),
+    (["--computer", "ts9000"], 2, "unknown board preset"),
+    (["--computer", "ts7800@400"], 2, "no 400 MHz clock"),
+    (["--sweep", "1", "-o", "x"], 2, "between 2 and"),
+    (["--sweep", "5"], 2, "needs -o"),
+])
+def test_bad_options_give_a_clear_error(args, code, message):
+    run = gliderplan("plan", ANNOTATED, *args)
+    assert run.returncode == code
+    assert message in run.stderr and "Traceback" not in run.stderr
+
+
+def test_bad_mission_file_exits_1(tmp_path):
+    bad = tmp_path / "bad.mission"
+    bad.write_text("mission m\nstate a\nbegin\n  sensors nosuch\nend\n")
+    run = gliderplan("plan", str(bad))
+    assert run.returncode == 1 and "bad.mission:" in run.stderr
+    run = gliderplan("plan", str(tmp_path / "missing.mission"))
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+
+
+def test_sweep_writes_csvs_and_plot(tmp_path):
+    run = gliderplan("plan", str(ROOT / "tests/missions/planner_separable.mission"),
+                     "--sweep", "12", "-o", str(tmp_path / "sweep"))
+    assert run.returncode == 0, run.stderr
+    pareto = pd.read_csv(tmp_path / "sweep" / "pareto.csv")
+    assert len(pareto) == 12 and (pareto["quality"].diff().dropna() >= -1e-7).all()
+    boards = pd.read_csv(tmp_path / "sweep" / "computers.csv")
+    assert list(boards["computer"]) == ["ts5500@133", "ts7800@300", "ts7800@500"]
+    assert boards["minimum_energy_j"].is_monotonic_increasing  # faster boards draw more
+    packs = pd.read_csv(tmp_path / "sweep" / "batteries.csv")
+    assert list(packs["battery"]) == ["alkaline", "lithium_primary", "rechargeable"]
+    png = (tmp_path / "sweep" / "pareto.png").read_bytes()
+    assert png.startswith(b"\x89PNG")
+    assert "pareto: 12/12" in run.stderr
