@@ -78,7 +78,7 @@ class PythonRuntime:
         """(sensor index, period [s], on [s]) per logged sensor; period 0: always on."""
         scheduled = {}
         if self.plan is not None:
-            scheduled = {s.sensor: (s.period_s, s.on_s) for s in self.plan.states[i].sensors}
+            scheduled = {s.name: (s.period_s, s.on_s) for s in self.plan.states[i].sensors}
         table = []
         for use in state.sensors:
             info = SENSOR_BY_NAME[use.name]
