@@ -9,16 +9,16 @@ deterministic (source order throughout) and clean under
 
 Expressions follow `ir.evaluate` exactly: every value is a double, truth is `!= 0.0`,
 && and || short-circuit, min/max are C's fmin/fmax written out so that ties of signed
-zeros also resolve as the reference does (libm leaves that open), and constants are
-printed with `repr`, which C reads back to the same double, so the runtime and the
-Python reference agree bit for bit.
+zeros also resolve as the reference does (libm leaves that open), arithmetic goes
+through small functions (see `_HELPERS`), and constants are exact (see `c_double`),
+so the runtime and the Python reference agree bit for bit on every target.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from fractions import Fraction
 
 from gliderplan.language import ir
 from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
@@ -89,11 +89,29 @@ def default_ballast_cc(mission: ir.CheckedMission) -> float:
 # ---- expressions -------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+_ARITHMETIC = {"+": "add", "-": "sub", "*": "mul", "/": "div"}
+# Helpers the expressions call, emitted only when used (-Wunused-function).
+_HELPERS = {
+    # A truth value as a double through a call, not a conversion in place (see below).
+    "truth": ("static double mission_truth(int c)", "    return c ? 1.0 : 0.0;"),
+    # Arithmetic through calls too: gcc's front end folds `0.0 - x` to `-x` for some x
+    # (fabs, converted ints), wrong for x == +0.0; and on the i486's x87, whose registers
+    # carry 80 bits, the return rounds each result to double as the reference does.
+    **{name: (f"static double mission_{name}(double a, double b)", f"    return a {op} b;")
+       for name, op in (("add", "+"), ("sub", "-"), ("mul", "*"), ("div", "/"))},
+    # fmin/fmax as ir.evaluate has them: a NaN argument is ignored, a tie keeps `a`.
+    "fmin": ("static double mission_fmin(double a, double b)",
+             "    return isnan(a) ? b : isnan(b) ? a : b < a ? b : a;"),
+    "fmax": ("static double mission_fmax(double a, double b)",
+             "    return isnan(a) ? b : isnan(b) ? a : b > a ? b : a;"),
+}
+
+
+@dataclass
 class ExpressionWriter:
     """C text of expressions; `value` is a double, `truth` an int (0 or 1)."""
 
-    variable_index: Mapping[str, int]
+    helpers: set[str] = field(default_factory=set)  # of _HELPERS, as they are used
 
     def value(self, expr: ir.Expr) -> str:
         match expr:
@@ -106,13 +124,17 @@ class ExpressionWriter:
             case ir.UnaryOp("-", operand):
                 return f"(-{self.value(operand)})"
             case ir.BinaryOp("+" | "-" | "*" | "/" as op, left, right):
-                return f"({self.value(left)} {op} {self.value(right)})"
+                name = _ARITHMETIC[op]
+                self.helpers.add(name)
+                return f"mission_{name}({self.value(left)}, {self.value(right)})"
             case ir.FuncCall("abs", (arg,)):
                 return f"fabs({self.value(arg)})"
             case ir.FuncCall("min" | "max" as function, (first, second)):
+                self.helpers.add(f"f{function}")
                 return f"mission_f{function}({self.value(first)}, {self.value(second)})"
             case ir.UnaryOp("!") | ir.BinaryOp():
-                return f"((double){self.truth(expr)})"
+                self.helpers.add("truth")
+                return f"mission_truth{self.truth(expr)}"
         raise CodegenError(f"unsupported expression {expr!r}")
 
     def truth(self, expr: ir.Expr) -> str:
@@ -127,40 +149,21 @@ class ExpressionWriter:
 
 
 def c_double(number: float) -> str:
-    """A C double literal that reads back as exactly `number` (repr is shortest round-trip)."""
+    """A C double literal whose value is exactly `number`, in any evaluation precision.
+
+    Decimal when the decimal text is the binary value itself (integers, halves, ...);
+    otherwise C99 hexadecimal with the decimal in a comment: on the i486's x87 a
+    decimal constant is read in 80-bit precision (FLT_EVAL_METHOD 2), so `0.454`
+    would not be the double the reference uses.
+    """
     if math.isnan(number):
         return "NAN"
     if math.isinf(number):
         return "INFINITY" if number > 0 else "(-INFINITY)"
     text = repr(float(number))
+    if Fraction(text) != Fraction(number):
+        text = f"{float(number).hex()} /* {text} */"
     return f"({text})" if text.startswith("-") else text
-
-
-def _functions_used(exprs: Iterable[ir.Expr]) -> set[str]:
-    found: set[str] = set()
-    stack = list(exprs)
-    while stack:
-        expr = stack.pop()
-        match expr:
-            case ir.FuncCall(function, args):
-                found.add(function)
-                stack.extend(args)
-            case ir.UnaryOp(_, operand):
-                stack.append(operand)
-            case ir.BinaryOp(_, left, right):
-                stack.extend((left, right))
-    return found
-
-
-def _all_expressions(mission: ir.CheckedMission) -> list[ir.Expr]:
-    exprs: list[ir.Expr] = []
-    for state in mission.states:
-        for event in state.events:
-            exprs.append(event.condition)
-            exprs.extend(a.value for a in event.assignments)
-        for profile in state.profiles:
-            exprs.extend(profile.args)
-    return exprs
 
 
 # ---- limits ------------------------------------------------------------------------
@@ -216,15 +219,14 @@ class _MissionWriter:
 
     def __init__(self, mission: ir.CheckedMission):
         self.mission = mission
-        self.variable_index = {v.name: i for i, v in enumerate(mission.variables)}
-        self.expressions = ExpressionWriter(self.variable_index)
+        self.expressions = ExpressionWriter()
 
     def write(self) -> str:
-        lines = self.visit_header()
+        body: list[str] = []
         for index, state in enumerate(self.mission.states):
-            lines += self.visit_state(index, state)
-        lines += self.visit_mission()
-        return "\n".join(lines) + "\n"
+            body += self.visit_state(index, state)
+        body += self.visit_mission()
+        return "\n".join(self.visit_header() + body) + "\n"
 
     def visit_header(self) -> list[str]:
         mission = self.mission
@@ -251,13 +253,9 @@ class _MissionWriter:
             lines += ["enum variable_index {",
                       *(f"    VAR_{v.name} = {i}," for i, v in enumerate(mission.variables)),
                       "};", ""]
-        used = _functions_used(_all_expressions(mission))
-        # fmin/fmax as ir.evaluate has them: a NaN argument is ignored, a tie keeps `a`.
-        for function, beyond in (("min", "<"), ("max", ">")):
-            if function in used:
-                lines += [f"static double mission_f{function}(double a, double b)", "{",
-                          f"    return isnan(a) ? b : isnan(b) ? a : b {beyond} a ? b : a;",
-                          "}", ""]
+        for name, (signature, body) in _HELPERS.items():
+            if name in self.expressions.helpers:
+                lines += [signature, "{", body, "}", ""]
         return lines
 
     def visit_state(self, index: int, state: ir.State) -> list[str]:

@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import CodegenError, c_double, generate_c, read_mask
 from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.runtime.build import TARGETS
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((ROOT / "examples").glob("*.mission"))
@@ -77,11 +78,23 @@ def test_fig2_tables_name_the_transitions_of_the_paper():
     assert "{state2_event0_condition, NULL, GP_ACT_EXIT, 0}" in text
 
 
-@pytest.mark.parametrize("number", [0.1, -7349.8058, 1e-310, 5e-324, 1.7976931348623157e308,
-                                    -0.0, 2.0**53 + 2])
+def _read_back(literal: str) -> float:
+    """The value of a literal c_double printed: decimal or C99 hex, parenthesised if negative."""
+    text = literal.split("/*")[0].strip().strip("()").strip()
+    return float.fromhex(text) if "0x" in text else float(text)
+
+
+@pytest.mark.parametrize("number", [0.1, 0.454, -7349.8058, 2000.0, 0.5, 1e-310, 5e-324,
+                                    1.7976931348623157e308, -0.0, 2.0**53 + 2])
 def test_constants_are_printed_so_that_they_read_back_exactly(number):
-    assert float(c_double(number).strip("()")) == number
-    assert math.copysign(1, float(c_double(number).strip("()"))) == math.copysign(1, number)
+    value = _read_back(c_double(number))
+    assert value == number and math.copysign(1, value) == math.copysign(1, number)
+
+
+def test_constants_are_decimal_only_when_the_decimal_is_exact():
+    # Decimal text is read in 80-bit precision on the i486: only exact ones stay decimal.
+    assert c_double(2000.0) == "2000.0" and c_double(-0.5) == "(-0.5)"
+    assert c_double(0.454) == "0x1.d0e5604189375p-2 /* 0.454 */"
 
 
 def _mission(states: tuple[ir.State, ...], variables=(), stack_depth=8) -> ir.CheckedMission:
@@ -211,21 +224,33 @@ def _same(expected: float, c_bits: str) -> bool:
     return _bits(expected) == c_bits
 
 
-@needs_cc
+# Every build target; the boards' CPUs run under qemu-user. The i486 computes on the
+# x87, with 80-bit registers and decimal constants read in 80-bit precision.
+EMULATORS = {"host": (), "ts7800": ("qemu-arm",), "ts5500": ("qemu-i386",)}
+
+
+@pytest.mark.parametrize("board", EMULATORS)
 # Each example compiles a C file; shrinking would compile hundreds, and the assertion
 # already names the failing expression and inputs.
 @settings(max_examples=4, deadline=None, phases=[Phase.explicit, Phase.reuse, Phase.generate],
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                 HealthCheck.function_scoped_fixture])
 @given(exprs=st.lists(expressions, min_size=300, max_size=300),
        rows=st.lists(_inputs, min_size=12, max_size=12))
-def test_compiled_expressions_agree_bit_for_bit_with_the_reference(exprs, rows, tmp_path_factory):
+def test_compiled_expressions_agree_bit_for_bit_with_the_reference(board, exprs, rows,
+                                                                   tmp_path_factory):
+    compiler, flags, emulator = TARGETS[board].compiler, TARGETS[board].flags, EMULATORS[board]
+    missing = [tool for tool in (compiler, *emulator) if shutil.which(tool) is None]
+    if missing:
+        pytest.skip(f"{' and '.join(missing)} not installed (make sysdeps)")
     work = tmp_path_factory.mktemp("exprs")
     mission = _expression_mission(exprs)
     (work / "mission.c").write_text(generate_c(mission))
     (work / "driver.c").write_text(_DRIVER)
     binary = work / "exprs"
-    done = subprocess.run([CC, *STRICT, str(work / "mission.c"), str(work / "driver.c"),
-                           "-o", str(binary), "-lm"], capture_output=True, text=True)
+    done = subprocess.run([compiler, *STRICT, *flags, str(work / "mission.c"),
+                           str(work / "driver.c"), "-o", str(binary), "-lm"],
+                          capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
 
     lines = []
@@ -235,8 +260,8 @@ def test_compiled_expressions_agree_bit_for_bit_with_the_reference(exprs, rows, 
             sensors[SENSOR_BY_NAME[name].index] = value
         variables = [*row[len(SENSORS_USED):], 0.0]
         lines.append(" ".join(_bits(v) for v in (*sensors, *variables)))
-    run = subprocess.run([str(binary)], input="\n".join(lines) + "\n", capture_output=True,
-                         text=True, check=True)
+    run = subprocess.run([*emulator, str(binary)], input="\n".join(lines) + "\n",
+                         capture_output=True, text=True, check=True)
     answers = iter(run.stdout.split("\n"))
     for row in rows:
         sensors = dict(zip(SENSORS_USED, row, strict=False))

@@ -55,8 +55,8 @@ static void state0_profile0_args(const double *s, const double *v, double *args)
     (void)v;
     args[0] = 5.0;
     args[1] = 10.0;
-    args[2] = 0.454;
-    args[3] = 0.454;
+    args[2] = 0x1.d0e5604189375p-2 /* 0.454 */;
+    args[3] = 0x1.d0e5604189375p-2 /* 0.454 */;
 }
 
 static const gp_profile state0_profiles[1] = {
@@ -64,7 +64,7 @@ static const gp_profile state0_profiles[1] = {
 };
 
 static const double state0_route_points[1][2] = {
-    {3910.5, (-7349.8058)},
+    {3910.5, (-0x1.cb5ce48e8a71ep+12 /* -7349.8058 */)},
 };
 
 static const uint8_t state0_sensors[3] = {SENSOR_missiontime, SENSOR_depth, SENSOR_pitch};
@@ -87,8 +87,8 @@ static void state1_profile0_args(const double *s, const double *v, double *args)
     (void)v;
     args[0] = 5.0;
     args[1] = 20.0;
-    args[2] = 0.454;
-    args[3] = 0.454;
+    args[2] = 0x1.d0e5604189375p-2 /* 0.454 */;
+    args[3] = 0x1.d0e5604189375p-2 /* 0.454 */;
     args[4] = 10.0;
     args[5] = 10.0;
 }
@@ -117,8 +117,8 @@ static void state2_profile0_args(const double *s, const double *v, double *args)
     (void)v;
     args[0] = 5.0;
     args[1] = 20.0;
-    args[2] = 0.454;
-    args[3] = 0.454;
+    args[2] = 0x1.d0e5604189375p-2 /* 0.454 */;
+    args[3] = 0x1.d0e5604189375p-2 /* 0.454 */;
 }
 
 static const gp_profile state2_profiles[1] = {
@@ -126,7 +126,7 @@ static const gp_profile state2_profiles[1] = {
 };
 
 static const double state2_route_points[1][2] = {
-    {3910.5, (-7349.5058)},
+    {3910.5, (-0x1.cb5817c1bda51p+12 /* -7349.5058 */)},
 };
 
 static const uint8_t state2_sensors[3] = {SENSOR_missiontime, SENSOR_depth, SENSOR_pitch};
