@@ -28,13 +28,16 @@ def _edges(mission: ir.CheckedMission, kind: str) -> dict[str, list[str]]:
 
 
 def reachable_states(mission: ir.CheckedMission) -> set[str]:
-    """States the start state can lead to through goto and call (return goes back)."""
+    """States the start state can lead to through goto and call (return goes back).
+
+    An event whose condition can never be true leads nowhere.
+    """
     seen = {mission.states[0].name}
     todo = [mission.states[0].name]
     while todo:
         state = mission.state(todo.pop())
         for event in state.events:
-            if event.target and event.target not in seen:
+            if event.target and event.target not in seen and not never_true(event.condition):
                 seen.add(event.target)
                 todo.append(event.target)
     return seen
@@ -187,7 +190,7 @@ def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> l
         syntax = states[state.name]
         if state.name not in reachable:
             found.append(warning(f"state '{state.name}' is never entered", syntax.name.span,
-                                 "no goto or call leads to it from the start state "
+                                 "no goto or call that can fire leads to it from the start state "
                                  f"'{start}'"))
             continue
         logged = {s.name for s in state.sensors}

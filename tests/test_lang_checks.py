@@ -113,6 +113,8 @@ CASES = [
       "states": _state("s2", "case depth > 1 call s3") + _state("s3", "case depth > 1 return")},
      "error: calls nest 2 deep (s1 -> s2 -> s3), deeper than the runtime stack of 1"),
     ({"states": _state("s2", "case depth > 1 exit")}, "warning: state 's2' is never entered"),
+    ({"event": "case depth < 0 goto s2", "states": _state("s2", "case depth > 1 exit")},
+     "warning: state 's2' is never entered | no goto or call that can fire leads to it"),
     ({"event": "case depth > 5 goto s2", "states": _state("s2", "case depth > 1 goto s2")},
      "warning: state 's2' can never reach 'exit'"),
     ({"event": "case temp > 5 goto s1"},
