@@ -43,6 +43,7 @@ class Target:
     flags: tuple[str, ...]
     package: str
     description: str
+    fallback: tuple[str, ...] = ()  # another compiler command, used if it can link for us
 
 
 TARGETS: dict[str, Target] = {
@@ -52,7 +53,8 @@ TARGETS: dict[str, Target] = {
         Target("ts7800", "arm-linux-gnueabi-gcc", ("-march=armv5te", "-static"),
                "gcc-arm-linux-gnueabi", "TS-7800, ARMv5TE (ARM9)"),
         Target("ts5500", "i686-linux-gnu-gcc", ("-march=i486", "-static"),
-               "gcc-i686-linux-gnu", "TS-5500, i486-class AMD Elan SC520"),
+               "gcc-i686-linux-gnu", "TS-5500, i486-class AMD Elan SC520",
+               fallback=("gcc", "-m32")),
     )
 }
 
@@ -69,9 +71,24 @@ def compiler_command(board: Target) -> list[str]:
     """The compiler to run, or a BuildError naming the Debian package that provides it."""
     if shutil.which(board.compiler):
         return [board.compiler]
+    if board.fallback and shutil.which(board.fallback[0]) and _links(board, board.fallback):
+        return list(board.fallback)
     raise BuildError(f"target {board.name} ({board.description}) needs {board.compiler}, "
                      f"which is not installed; on Debian/Ubuntu: "
                      f"sudo apt-get install {board.package}")
+
+
+def _links(board: Target, command: tuple[str, ...]) -> bool:
+    """Whether `command` builds a program for the board (e.g. gcc -m32 needs multilib)."""
+    with tempfile.TemporaryDirectory(prefix="gliderplan-probe-") as tmp:
+        source = Path(tmp) / "probe.c"
+        source.write_text("int main(void) { return 0; }\n")
+        try:
+            done = subprocess.run([*command, *board.flags, str(source), "-o",
+                                   str(Path(tmp) / "probe")], capture_output=True, timeout=60)
+        except (OSError, subprocess.SubprocessError):
+            return False
+        return done.returncode == 0
 
 
 @contextmanager

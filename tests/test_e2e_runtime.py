@@ -144,6 +144,20 @@ def test_a_missing_cross_compiler_names_the_debian_package(monkeypatch, tmp_path
     assert "sudo apt-get install gcc-arm-linux-gnueabi" in capsys.readouterr().err
 
 
+def test_gcc_without_32_bit_support_is_no_ts5500_compiler(monkeypatch, tmp_path, capsys):
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        pytest.skip("no gcc to try -m32 with")
+    if subprocess.run([gcc, "-m32", "-print-file-name=crt1.o"], capture_output=True,
+                      text=True).stdout.strip() != "crt1.o":
+        pytest.skip("this gcc has 32-bit (multilib) support: -m32 would be used")
+    (tmp_path / "bin").mkdir()
+    (tmp_path / "bin" / "gcc").symlink_to(gcc)
+    monkeypatch.setenv("PATH", str(tmp_path / "bin"))  # gcc, but no i686-linux-gnu-gcc
+    assert compile_fig2(tmp_path / "out", "--target", "ts5500") == 1
+    assert "sudo apt-get install gcc-i686-linux-gnu" in capsys.readouterr().err
+
+
 def test_a_mission_beyond_the_runtime_limits_is_a_clear_error(tmp_path, capsys):
     assert compile_fig2(tmp_path, "--max-stack", "40") == 1
     assert "stack depth: 40 exceeds the runtime's limit of 32" in capsys.readouterr().err
