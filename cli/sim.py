@@ -39,7 +39,8 @@ def parse_duration_s(text: str) -> float:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_mission_argument(parser)
     parser.add_argument("--plan", metavar="PLANFILE",
-                        help="plan file (its report PLANFILE.json gives the prediction)")
+                        help="plan file; its report PLANFILE.json gives the prediction per "
+                             "state (without it the mission is planned again)")
     parser.add_argument("--runtime", choices=("python", "c"), default="python",
                         help="python: the reference executor (default); c: the compiled "
                              "runtime over a pseudo-terminal")
@@ -87,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.loop import RunConfig
     from gliderplan.sim.ocean import OceanFileError, load_ocean
     from gliderplan.sim.planfile import PlanFileError, read_plan
+    from gliderplan.sim.prediction import PlanReportError, plan_predictions
     from gliderplan.sim.science import NOISE_PRESETS
     from gliderplan.sim.session import fly
 
@@ -109,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
     except OceanFileError as err:
         raise CliError(f"--ocean: {err}") from None
     plan = predictions = None
+    predicted_by = "none"
     if args.plan:
         if not Path(args.plan).is_file():
             raise UsageError(f"--plan {args.plan}: no such file")
@@ -116,12 +119,10 @@ def run(args: argparse.Namespace) -> int:
             plan = read_plan(args.plan, mission)
         except PlanFileError as err:
             raise CliError(f"plan rejected: {err}") from None
-        report = Path(f"{args.plan}.json")
-        if report.is_file():
-            try:
-                predictions = accounting.read_plan_report(report)
-            except accounting.PlanReportError as err:
-                raise CliError(str(err)) from None
+        try:
+            predictions, predicted_by = plan_predictions(args.plan, mission)
+        except PlanReportError as err:
+            raise CliError(str(err)) from None
 
     progress = _Progress() if duration_s / args.tick > LONG_RUN_TICKS else None
     try:
@@ -136,7 +137,8 @@ def run(args: argparse.Namespace) -> int:
     check = accounting.check_plan(used, plan, predictions)
     meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": args.runtime,
             "ocean": args.ocean, "noise": args.noise, "tracker": args.tracker,
-            "seed": args.seed, "tick_s": args.tick, "plan": args.plan}
+            "seed": args.seed, "tick_s": args.tick, "plan": args.plan,
+            "prediction": predicted_by}
     write_atomically(out / "trace.csv", outputs.trace_csv(record.trace))
     table = outputs.timeseries_table(record, used, mission.battery.energy_j)
     write_atomically(out / "timeseries.parquet", outputs.parquet_bytes(table))

@@ -4,8 +4,8 @@ Every component is integrated over the run's ticks with `power_models.timeline` 
 vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
 pitch motor, the surface and Iridium phases, the computer at the clock of each state
 from its workload per tick, and each sensor device from its on/off timeline (with a
-warm-up at every switch-on). The plan check compares the run with the planner's report
-(`<plan>.json`: per state `energy_by_component_j`, `inflections`, `time_s`).
+warm-up at every switch-on). The plan check compares the run with the plan's prediction
+per state (prediction.py).
 
 A run that spends more than the plan's budget by more than `PLAN_TOLERANCE` violates the
 plan; the states that overran their prediction are named as the cause.
@@ -13,9 +13,7 @@ plan; the states that overran their prediction are named as the cause.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -27,6 +25,7 @@ from gliderplan.power_models.timeline import Timeline, energy_by_component_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunRecord
 from gliderplan.sim.planfile import Plan
+from gliderplan.sim.prediction import StatePrediction
 
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
 # Runtime work per tick: decode a frame, check events, run the library routine, encode the
@@ -35,10 +34,6 @@ PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 %
 RUNTIME_CYCLES_PER_TICK = 200_000.0
 DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
 DEVICE_BITS = {d: sum(1 << s.index for s in SENSORS if s.device == d) for d in DEVICES}
-
-
-class PlanReportError(ValueError):
-    """An unreadable planner report; the message names the file and key."""
 
 
 @dataclass(frozen=True)
@@ -112,51 +107,6 @@ def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
 
 
 # ---- the plan's prediction -------------------------------------------------------------
-
-@dataclass(frozen=True)
-class StatePrediction:
-    energy_by_component_j: dict[str, float]
-    inflections: float | None
-    time_s: float | None
-
-    @property
-    def energy_j(self) -> float:
-        return float(sum(self.energy_by_component_j.values()))
-
-
-def read_plan_report(path: str | Path) -> dict[str, StatePrediction]:
-    """Per-state predictions from the planner's JSON report beside a plan."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as err:
-        raise PlanReportError(f"{path}: cannot read the plan's report: {err}") from None
-    except json.JSONDecodeError as err:
-        raise PlanReportError(f"{path}:{err.lineno}: not JSON: {err.msg}") from None
-    states = data.get("states") if isinstance(data, dict) else None
-    if isinstance(states, dict):
-        items = list(states.items())
-    elif isinstance(states, list):
-        items = [(s.get("name", s.get("state")), s) for s in states if isinstance(s, dict)]
-    else:
-        raise PlanReportError(f"{path}: states: missing (expected per-state predictions)")
-    predictions = {}
-    for name, entry in items:
-        components = entry.get("energy_by_component_j") if isinstance(entry, dict) else None
-        if not isinstance(name, str) or not isinstance(components, dict):
-            raise PlanReportError(f"{path}: states.{name}: energy_by_component_j missing")
-        try:
-            energy = {str(k): float(v) for k, v in components.items()}
-        except (TypeError, ValueError):
-            raise PlanReportError(f"{path}: states.{name}.energy_by_component_j: "
-                                  "values must be numbers") from None
-        predictions[name] = StatePrediction(energy, _number(entry.get("inflections")),
-                                            _number(entry.get("time_s")))
-    return predictions
-
-
-def _number(value: object) -> float | None:
-    return float(value) if isinstance(value, int | float) else None
-
 
 @dataclass(frozen=True)
 class PlanCheck:

@@ -10,9 +10,10 @@ import numpy as np
 
 from gliderplan.language.registry import SENSORS
 from gliderplan.language.semantics import Transition
-from gliderplan.sim.energy import PlanCheck, RunEnergy, StatePrediction
+from gliderplan.sim.energy import PlanCheck, RunEnergy
 from gliderplan.sim.executor import NONE
 from gliderplan.sim.loop import RunRecord
+from gliderplan.sim.prediction import StatePrediction
 
 TRACE_HEADER = "time_s,kind,from_state,to_state,stack_depth"
 

@@ -7,9 +7,10 @@ import io
 
 import numpy as np
 
-from gliderplan.sim.energy import RunEnergy, StatePrediction
+from gliderplan.sim.energy import RunEnergy
 from gliderplan.sim.executor import NONE
 from gliderplan.sim.loop import RunRecord
+from gliderplan.sim.prediction import StatePrediction
 
 
 def _figure():

@@ -52,9 +52,9 @@ def write_plan(tmp_path: Path, budget_j: float, planned_s: float,
             f"profile 0 1 {PITCH_RAD} {BALLAST_CC:.9g} {u:.9g}\nend\n").encode()
     plan = tmp_path / "survey.plan"
     plan.write_bytes(body + f"crc32 {zlib.crc32(body):08x}\n".encode())
-    report = {"budget_j": budget_j, "predicted_j": predicted,
-              "states": {"survey": {"energy_by_component_j": components,
-                                    "inflections": inflections, "time_s": planned_s}}}
+    report = {"budget_j": budget_j, "energy_j": predicted,
+              "states": [{"name": "survey", "energy_by_component_j": components,
+                          "inflections": inflections, "time_s": planned_s}]}
     (tmp_path / "survey.plan.json").write_text(json.dumps(report))
     return plan
 
@@ -102,10 +102,11 @@ def test_a_plan_for_another_mission_is_refused(tmp_path, capsys):
 
 def test_a_broken_plan_report_is_a_clear_error(tmp_path, capsys):
     plan = write_plan(tmp_path, 120e3, 10800.0)
-    (tmp_path / "survey.plan.json").write_text('{"states": {"survey": {}}}')
+    (tmp_path / "survey.plan.json").write_text('{"states": [{"name": "survey"}]}')
     code = main(["sim", str(MISSION), "--plan", str(plan), "-o", str(tmp_path / "run")])
     err = capsys.readouterr().err
-    assert code == 1 and "survey.plan.json: states.survey: energy_by_component_j missing" in err
+    assert code == 1
+    assert "survey.plan.json: states[0]: needs a name and energy_by_component_j" in err
 
 
 def test_without_a_report_a_violation_names_the_states_that_spent_most(tmp_path, capsys):
@@ -113,6 +114,7 @@ def test_without_a_report_a_violation_names_the_states_that_spent_most(tmp_path,
     (tmp_path / "survey.plan.json").unlink()
     code, summary, _ = simulate(tmp_path, plan, capsys)
     assert code == 3
+    assert summary["prediction"] == "none"  # the planner would not make this plan
     (cause,) = summary["plan_check"]["causes"]
     assert cause.startswith("71.") and "against a budget of 40.0 kJ; most in survey (71." \
         in cause
@@ -177,3 +179,12 @@ def test_the_annotated_fig2_flies_its_plan_within_the_prediction(tmp_path, capsy
     assert check["simulated_j"] == pytest.approx(check["predicted_j"], rel=0.05)
     assert [name for name, s in summary["states"].items() if "predicted_j" in s] == \
         ["s1", "s2", "s3"]
+
+
+def test_without_its_report_the_planner_s_plan_is_predicted_by_planning_again(tmp_path, capsys):
+    plan = planner_plan(tmp_path)
+    (tmp_path / "survey.plan.json").unlink()
+    code, summary, _ = simulate(tmp_path, plan, capsys)
+    assert code == 0 and summary["prediction"] == "replanned"
+    survey = summary["states"]["survey"]
+    assert survey["simulated_j"] == pytest.approx(survey["predicted_j"], rel=0.05)
