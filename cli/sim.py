@@ -87,7 +87,6 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.emulator import EmulatorError
     from gliderplan.sim.loop import RunConfig
     from gliderplan.sim.ocean import OceanFileError, load_ocean
-    from gliderplan.sim.planfile import PlanFileError, read_plan
     from gliderplan.sim.prediction import PlanReportError, plan_predictions
     from gliderplan.sim.science import NOISE_PRESETS
     from gliderplan.sim.session import fly
@@ -115,6 +114,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plan:
         if not Path(args.plan).is_file():
             raise UsageError(f"--plan {args.plan}: no such file")
+        from gliderplan.sim.planfile import PlanFileError, read_plan
+
         try:
             plan = read_plan(args.plan, mission)
         except PlanFileError as err:

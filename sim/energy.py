@@ -14,6 +14,7 @@ plan; the states that overran their prediction are named as the cause.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,8 +25,10 @@ from gliderplan.power_models.catalog import preset_names
 from gliderplan.power_models.timeline import Timeline, energy_by_component_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunRecord
-from gliderplan.sim.planfile import Plan
 from gliderplan.sim.prediction import StatePrediction
+
+if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
+    from gliderplan.sim.planfile import Plan
 
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
 # Runtime work per tick: decode a frame, check events, run the library routine, encode the

@@ -12,12 +12,14 @@ from __future__ import annotations
 import functools
 import math
 import struct
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 from gliderplan.language import ir, semantics
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.sim import compiled, pilot
-from gliderplan.sim.planfile import Plan
+
+if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
+    from gliderplan.sim.planfile import Plan
 
 N_SENSORS = len(SENSORS)
 NONE = 0xFF  # state index of "no state" (exited, or no transition)

@@ -10,9 +10,12 @@ simulator calls it 650 000 times in a 30-day run.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from gliderplan.sim.geo import EARTH_RADIUS_M, bearing_rad, ddmm_to_degrees, offset_m
-from gliderplan.sim.planfile import StatePlan
+
+if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
+    from gliderplan.sim.planfile import StatePlan
 
 DIVE, CLIMB = 0, 1
 SURFACE_PITCH_RAD = 0.454  # docs/pilot.md: surface climbs at +0.454 rad

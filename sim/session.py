@@ -4,12 +4,15 @@ ocean, flown by the Python executor or by the compiled C runtime over a pty."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from gliderplan.language import ir
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
-from gliderplan.sim.planfile import Plan
+
+if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
+    from gliderplan.sim.planfile import Plan
 
 RUNTIMES = ("python", "c")
 
