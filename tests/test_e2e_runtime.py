@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import math
 import os
+import random
 import shutil
 import signal
+import struct
 import subprocess
 import tty
 import zlib
@@ -23,6 +25,9 @@ from pathlib import Path
 import pytest
 
 from gliderplan.cli.main import main
+from gliderplan.language import check_source, semantics
+from gliderplan.language.codegen_c import read_mask
+from gliderplan.language.registry import SENSORS
 from gliderplan.runtime import protocol as p
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -289,6 +294,52 @@ def test_a_hand_written_plan_switches_sensors_on_their_windows(binary, fig2_hash
     # The planned pitch and ballast replace the profile's own and the vehicle default.
     assert {round(abs(c.pitch_rad), 6) for c in in_s1} == {0.3}
     assert {abs(c.ballast_cc) for c in in_s1} == {150.0}
+
+
+# ---- a mission with variables, against the reference semantics ---------------------
+
+
+def f32(value: float) -> float:
+    """The value as the link carries it (binary32), so both sides see the same reading."""
+    return struct.unpack("<f", struct.pack("<f", value))[0]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, seed):
+    # A mission with variables, assignments that read sensors, call and return, checked
+    # tick by tick on random readings against language.semantics.
+    source = ROOT / "examples" / "thermocline_survey.mission"
+    mission = check_source(source.read_text(), str(source)).mission
+    assert main(["compile", str(source), "-o", str(tmp_path / "bin")]) == 0
+    names = {i: s.name for i, s in enumerate(mission.states)} | {p.NO_STATE: ""}
+    mask = read_mask(mission)
+    rng = random.Random(seed)
+
+    process = line.start([str(tmp_path / "bin" / mission.name)],
+                         "--state-dir", str(tmp_path / "state"))
+    link = line.link()
+    link.wait_hello(30)
+    machine, first = semantics.start(mission)
+    expected, actual = [first], []
+    for tick in range(100_000):
+        values = {s.index: f32(rng.uniform(-5.0, 90.0)) for s in SENSORS if mask >> s.index & 1}
+        values[0] = tick * 60.0
+        command = link.step(tick, values)
+        if command.transition:
+            actual.append(semantics.Transition(
+                values[0], KINDS[command.transition], names[command.from_state],
+                names[command.to_state], command.stack_depth))
+        readings = {s.name: values[s.index] for s in SENSORS if s.index in values}
+        machine, transition = semantics.step(mission, machine, readings, values[0])
+        if transition:
+            expected.append(transition)
+        if command.done:
+            break
+    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert process.wait(30) == 0
+    assert machine.exited
+    assert actual == expected
+    assert len(expected) > 10  # the readings make the survey move between its states
 
 
 # ---- the boards' CPUs under qemu-user ----------------------------------------------------
