@@ -43,9 +43,11 @@ def run(args: argparse.Namespace) -> int:
     if args.sweep is not None and not args.output:
         raise UsageError("--sweep needs -o DIR for its CSV files and plot")
     mission = load_mission(args)
+    from gliderplan.language.semantics import MissionFault
     from gliderplan.planner.hardware import HardwareError, load_hardware
     from gliderplan.planner.inputs import PlanInputError
     from gliderplan.planner.plan import InfeasibleBudget, PlanningError
+    from gliderplan.planner.planfile import PlanFileError
     from gliderplan.power_models.errors import ModelFileError
 
     try:
@@ -66,6 +68,11 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"{args.mission}: {err}") from None
     except (PlanningError, PlanInputError) as err:
         raise CliError(f"{args.mission}: {err}") from None
+    except MissionFault as err:
+        raise CliError(f"{args.mission}: the mission's timeline fails at {err}") from None
+    except PlanFileError as err:
+        raise CliError(f"{args.mission}: no plan file can carry this plan: {err.message} "
+                       "(docs/plan-format.md)") from None
 
 
 def _plan(mission, hardware, args: argparse.Namespace) -> int:

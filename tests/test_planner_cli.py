@@ -123,3 +123,18 @@ def test_sweep_writes_csvs_and_plot(tmp_path):
     png = (tmp_path / "sweep" / "pareto.png").read_bytes()
     assert png.startswith(b"\x89PNG")
     assert "pareto: 12/12" in run.stderr
+
+
+def test_mission_too_big_for_a_plan_file_is_explained(tmp_path, capsys):
+    from gliderplan.cli.main import main
+
+    actions = [f"goto s{i + 1}" for i in range(69)] + ["exit"]
+    states = [f"state s{i}\nbegin\n  flightroute noheading\n  flightprofile yo(3, 30, .454, "
+              f".454)\n  sensors missiontime\n  events\n    case missiontime >= {(i + 1) * 60} "
+              f"{action}\nend\n" for i, action in enumerate(actions)]
+    path = tmp_path / "big.mission"
+    path.write_text("mission big\n" + "".join(states))
+    assert main(["plan", str(path), "-o", str(tmp_path / "big.plan")]) == 1
+    err = capsys.readouterr().err
+    assert "no plan file can carry this plan" in err and "out of range" in err
+    assert not (tmp_path / "big.plan").exists()

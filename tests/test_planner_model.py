@@ -235,3 +235,34 @@ end
 """)
     with pytest.raises(PlanningError, match="quality floor 0.99 cannot be reached"):
         plan_mission(m)
+
+
+def test_timeline_follows_calls_returns_and_assignments():
+    m = source_mission("""mission m
+var next_fix = 1000
+var until = 0
+state dive
+begin
+  flightroute noheading
+  flightprofile yo(3, 30, .454, .454)
+  sensors missiontime, depth
+  events
+    case missiontime >= 4000 exit
+    case missiontime >= next_fix
+      set until = missiontime + 200, next_fix = missiontime + 1000 call fix
+end
+state fix
+begin
+  flightroute noheading
+  flightprofile surface
+  sensors missiontime, lat, lon
+  events
+    case missiontime >= until return
+end
+""")
+    occupancy = mission_occupancy(m)
+    runs = [(v.state, v.entry_s, v.duration_s) for v in occupancy.trace]
+    assert runs[:4] == [("dive", 0, 1000), ("fix", 1000, 200), ("dive", 1200, 800),
+                        ("fix", 2000, 200)]
+    assert occupancy.time_s == {"dive": 3400, "fix": 600}
+    assert occupancy.visits == {"dive": 4, "fix": 3}
