@@ -59,7 +59,7 @@ TARGETS: dict[str, Target] = {
 }
 
 
-def target(name: str) -> Target:
+def find_target(name: str) -> Target:
     try:
         return TARGETS[name]
     except KeyError:
@@ -111,8 +111,7 @@ def compiler_version(command: list[str]) -> str:
     return done.stdout
 
 
-def build_mission(c_source_path: str | Path, out_dir: str | Path,
-                  target_name: str = "host") -> Path:
+def build_mission(c_source_path: str | Path, out_dir: str | Path, target: str = "host") -> Path:
     """Compile the runtime with one mission's C file into `out_dir`; the binary's path.
 
     The binary is named after the C file (`fig2.c` -> `fig2`). Uncached: see
@@ -121,11 +120,11 @@ def build_mission(c_source_path: str | Path, out_dir: str | Path,
     c_source = Path(c_source_path)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    binary = out / c_source.stem
-    command = compiler_command(target(target_name))
+    board = find_target(target)
+    command = compiler_command(board)
     with runtime_sources() as (include, sources):
-        _compile(command, target(target_name), include, [*sources, c_source], binary)
-    return binary
+        _compile(command, board, include, [*sources, c_source], out / c_source.stem)
+    return out / c_source.stem
 
 
 def _compile(command: list[str], board: Target, include: Path, sources: list[Path],
@@ -160,7 +159,7 @@ def cache_dir() -> Path:
 
 
 def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
-              version: str) -> str:
+              command: list[str]) -> str:
     """SHA-256 over everything that determines the binary."""
     digest = hashlib.sha256()
 
@@ -173,31 +172,29 @@ def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
         part(path.name, path.read_bytes())
     part("target", repr(board).encode())
     part("flags", " ".join(C_FLAGS + LINK_FLAGS).encode())
-    part("compiler", version.encode())
+    part("compiler", " ".join(command).encode())
+    part("version", compiler_version(command).encode())
     return digest.hexdigest()
 
 
-def compile_mission(mission: CheckedMission, out_dir: str | Path,
-                    target_name: str = "host") -> Path:
+def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = "host") -> Path:
     """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>.
 
     A build with the same inputs is copied from the cache instead of compiled again.
     Raises CodegenError for a mission the runtime cannot hold, BuildError otherwise.
     """
-    board = target(target_name)
-    command = compiler_command(board)
+    board = find_target(target)
     source = generate_c(mission)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     c_path = out / f"{mission.name}.c"
     _write_if_changed(c_path, source)
-    binary = out / mission.name
     with runtime_sources() as (include, sources):
-        key = build_key(source, include, sources, board, compiler_version(command))
-        cached = cache_dir() / key[:2] / key / mission.name
-        if not cached.is_file():
-            cached.parent.mkdir(parents=True, exist_ok=True)
-            _compile(command, board, include, [*sources, c_path], cached)
+        key = build_key(source, include, sources, board, compiler_command(board))
+    cached = cache_dir() / key[:2] / key / mission.name
+    if not cached.is_file():
+        build_mission(c_path, cached.parent, target)
+    binary = out / mission.name
     _copy_atomically(cached, binary)
     return binary
 

@@ -28,6 +28,7 @@ from gliderplan.cli.main import main
 from gliderplan.language import check_source, semantics
 from gliderplan.language.codegen_c import read_mask
 from gliderplan.language.registry import SENSORS
+from gliderplan.runtime import build
 from gliderplan.runtime import protocol as p
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -141,6 +142,25 @@ def test_a_second_compile_comes_from_the_cache(binary, cache, tmp_path):
     assert compile_fig2(tmp_path) == 0
     assert sorted(cache.rglob("sampleMission")) == entries  # nothing new was built
     assert (tmp_path / "sampleMission").read_bytes() == binary.read_bytes()
+
+
+def test_the_cache_key_changes_with_every_input_of_the_build(tmp_path):
+    (tmp_path / "include").mkdir()
+    (tmp_path / "include" / "gp_mission.h").write_text("/* header */\n")
+    source = tmp_path / "gp_a.c"
+    source.write_text("int a;\n")
+    host, arm = build.TARGETS["host"], build.TARGETS["ts7800"]
+
+    def key(mission_c="m", board=host, command=("true",)):
+        return build.build_key(mission_c, tmp_path / "include", [source], board, list(command))
+
+    first = key()
+    assert key() == first
+    assert key(mission_c="m2") != first
+    assert key(board=arm) != first
+    assert key(command=("echo",)) != first  # another compiler (its --version differs too)
+    source.write_text("int b;\n")
+    assert key() != first
 
 
 def test_a_missing_cross_compiler_names_the_debian_package(monkeypatch, tmp_path, capsys):
