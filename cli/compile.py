@@ -13,11 +13,14 @@ ORDER = 40
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from gliderplan.runtime.build import TARGETS
+
     add_mission_argument(parser)
     parser.add_argument("--plan", metavar="PLANFILE",
                         help="plan file to check against the mission and copy beside the binary")
-    parser.add_argument("--target", choices=("host", "ts7800", "ts5500"), default="host",
-                        help="host (default), ts7800 (ARMv5TE) or ts5500 (i486)")
+    parser.add_argument("--target", choices=tuple(TARGETS), default="host",
+                        help="; ".join(f"{t.name}: {t.description}" for t in TARGETS.values())
+                        + " (default host)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="directory for MISSION.c, the binary and the plan")
 

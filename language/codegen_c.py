@@ -78,11 +78,12 @@ def default_ballast_cc(mission: ir.CheckedMission) -> float:
     The vehicle model's nominal flight (its calibration log, a yo at ~26 deg pitch)
     pumps the whole stroke either side of neutral, `max_ballast_cc`.
     """
+    from gliderplan.power_models.errors import ModelFileError
     from gliderplan.power_models.vehicle import load_vehicle
 
     try:
         return load_vehicle(mission.vehicle).max_ballast_cc
-    except Exception as err:  # a user's vehicle file may be unreadable in many ways
+    except (ModelFileError, OSError) as err:
         raise CodegenError(f"vehicle {mission.vehicle!r}: {err}") from err
 
 
