@@ -41,6 +41,10 @@ def _runs(mask: int) -> tuple[tuple[int, int], ...]:
     return tuple(runs)
 
 
+def _floats(values: tuple[float, ...] | None) -> tuple[float, ...] | None:
+    return None if values is None else tuple(float(v) for v in values)
+
+
 class Command(NamedTuple):
     """A COMMAND frame's fields (docs/protocol.md)."""
 
@@ -71,7 +75,13 @@ class PythonRuntime:
         self.index = mission.state_index
         self.checkers = [compiled.event_checker(s) for s in mission.states]
         self.argument_fns = [[compiled.arguments(p) for p in s.profiles] for s in mission.states]
+        # constant arguments (most profiles) are evaluated once, not every tick
+        self.constant_args = [[_floats(p.constant_args()) for p in s.profiles]
+                              for s in mission.states]
         self.power_tables = [self._power_table(i, s) for i, s in enumerate(mission.states)]
+        # states whose sensors are all always on have one power mask
+        self.constant_power = [None if any(period for _, period, _ in table) else
+                               pilot.sensor_power_mask(table, 0.0) for table in self.power_tables]
         self.s = [math.nan] * N_SENSORS
         self.machine: semantics.Machine | None = None
         self.event_count = 0
@@ -134,8 +144,8 @@ class PythonRuntime:
         s, i = self.s, self.state_i
         t_in = s[0] - self.entry_time_s
         state_plan = self.plan.states[i] if self.plan is not None else None
-        k = pilot.profile_index(state_plan, t_in)
-        args = self.argument_fns[i][k](s, machine.variables)
+        k = 0 if state_plan is None else pilot.profile_index(state_plan, t_in)
+        args = self.constant_args[i][k] or self.argument_fns[i][k](s, machine.variables)
         profile = self.state.profiles[k]
         depth = s[_DEPTH]
         if k != self.profile_k:
@@ -152,6 +162,8 @@ class PythonRuntime:
             depth, s[_TEMP], args, pitch, ballast)
         heading, valid = self.route.heading(s[_LAT], s[_LON])
         flags = (1 if surface else 0) | (4 if ballast_cmd > 0.0 else 0) | (8 if valid else 0)
-        power = pilot.sensor_power_mask(self.power_tables[i], t_in)
+        power = self.constant_power[i]
+        if power is None:
+            power = pilot.sensor_power_mask(self.power_tables[i], t_in)
         return Command(tick, i, len(machine.stack), kind, src, dst, k, flags, target, pitch_cmd,
                        ballast_cmd, heading, power, self.event_count)
