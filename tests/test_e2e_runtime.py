@@ -199,6 +199,21 @@ def test_gcc_without_32_bit_support_is_no_ts5500_compiler(monkeypatch, tmp_path,
     assert "sudo apt-get install gcc-i686-linux-gnu" in capsys.readouterr().err
 
 
+def test_a_compiler_failure_is_a_clear_error_and_caches_nothing(monkeypatch, tmp_path, capsys):
+    (tmp_path / "bin").mkdir()
+    fake = tmp_path / "bin" / "cc"
+    fake.write_text('#!/bin/sh\n[ "$1" = --version ] && { echo "fake cc 1.0"; exit 0; }\n'
+                    'echo "mission.c:1:1: error: out of cheese" >&2\nexit 1\n')
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path / 'bin'}:{os.environ['PATH']}")
+    monkeypatch.setenv("GLIDERPLAN_CACHE_DIR", str(tmp_path / "cache"))
+    assert compile_fig2(tmp_path / "out") == 1
+    message = capsys.readouterr().err
+    assert "cc failed for target host" in message and "out of cheese" in message
+    assert not (tmp_path / "out" / "sampleMission").exists()
+    assert not [p for p in (tmp_path / "cache").rglob("*") if p.is_file()]
+
+
 def test_a_mission_beyond_the_runtime_limits_is_a_clear_error(tmp_path, capsys):
     assert compile_fig2(tmp_path, "--max-stack", "40") == 1
     assert "stack depth: 40 exceeds the runtime's limit of 32" in capsys.readouterr().err
