@@ -150,8 +150,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"{mission.name}: {record.ended} after {record.columns['time_s'][-1]:g} s, "
           f"{len(record.trace)} transitions, {used.total_j / 1e3:.1f} kJ; "
           f"plan check: {check.verdict}", file=sys.stderr)
+    if check.causes:
+        print("  over the plan's prediction:" if check.verdict == "pass" else "  cause:",
+              file=sys.stderr)
     for cause in check.causes:
-        print(f"  {cause}", file=sys.stderr)
+        print(f"    {cause}", file=sys.stderr)
     return EXIT_PLAN_VIOLATION if check.verdict == "violation" else 0
 
 

@@ -142,7 +142,11 @@ def check_plan(energy: RunEnergy, plan: Plan | None,
         flown = sum(used.values())
         if flown <= predicted.energy_j * (1.0 + tolerance):
             continue
-        detail = [f"{name}: {flown / 1e3:.1f} kJ spent, {predicted.energy_j / 1e3:.1f} kJ planned"]
+        excess = {k: used[k] - v for k, v in predicted.energy_by_component_j.items() if k in used}
+        most = max(excess, key=excess.get, default=None)
+        detail = [f"{name}: {flown / 1e3:.1f} kJ spent, {predicted.energy_j / 1e3:.1f} kJ planned"
+                  + (f" ({most} +{excess[most] / 1e3:.1f} kJ)" if most and excess[most] > 0
+                     else "")]
         if predicted.inflections is not None and \
                 energy.inflections_by_state[name] > predicted.inflections * (1.0 + tolerance):
             detail.append(f"{predicted.inflections:.0f} inflections planned, "
