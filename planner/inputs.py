@@ -37,12 +37,64 @@ def duty_for_quality(alpha: float, quality: float) -> float:
 
 
 @dataclass(frozen=True)
+class Transit:
+    """Transit legs, per metre of route (DESIGN.md section 5, the pace formulation):
+    energy per metre = P p_total + e + c p^-2 with pace p = 1/u [s m-1], p_total = p +
+    k p^-2 the time per metre including pump runs, and on-time per metre x <= p."""
+
+    state: np.ndarray  # (n_t,) state index
+    length_m: np.ndarray  # (n_t,) route length over the mission [m]
+    load_w: np.ndarray  # (n_t,) hotel + computer [W], drawn the whole time
+    pump_s: np.ndarray  # (n_t,) k: pump time per metre at 1 m/s [s m-1 (m/s)-2]
+    pump_j: np.ndarray  # (n_t,) c: pump energy per metre at 1 m/s [J m-1 (m/s)-2]
+    pitch_j_per_m: np.ndarray  # (n_t,) e [J m-1]
+    inflections_per_m: np.ndarray  # (n_t,) [m-1]
+    min_pace: np.ndarray  # (n_t,) 1 / fastest speed [s m-1]
+    pitch_rad: np.ndarray  # (n_t,)
+
+    @property
+    def size(self) -> int:
+        return len(self.state)
+
+
+def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occupancy,
+                  notes: list[str]) -> Transit:
+    rows = []
+    computer_w = float(np.nanmin(mode_powers(hardware)))
+    vehicle = hardware.vehicle
+    for name, length in occupancy.legs_m.items():
+        state = mission.state(name)
+        if len(state.profiles) != 1 or state.profiles[0].kind not in ("yo", "thermotrackyo"):
+            notes.append(f"{name}: a transit leg with alternative or non-gliding profiles; "
+                         "planned at the nominal speed's time")
+            continue
+        rates = state_profiles(hardware, state, occupancy, notes)[0]
+        args = [ir.evaluate(a, {}, occupancy.variables[name]) for a in state.profiles[0].args]
+        low, high = args[0], args[1]
+        if state.profiles[0].kind == "thermotrackyo":
+            high = min(high, low + args[5])
+        pitch = rates.pitch_rad
+        load = vehicle.hotel_w + computer_w
+        c0 = float(vehicle.transit_coefficient(low, high, pitch, 0.0))
+        k = float(vehicle.transit_coefficient(low, high, pitch, 1.0)) - c0
+        e = float(vehicle.pitch_j_per_m(low, high, pitch))
+        rows.append((mission.state_index[name], length, load, k, c0, e,
+                     e / vehicle.pitch_energy_j if vehicle.pitch_energy_j else 0.0,
+                     1.0 / float(vehicle.max_speed_mps(pitch)), pitch))
+        notes.append(f"{name}: transit leg of {length / 1000:.3g} km; its time follows "
+                     "from the planned speed (later states keep their nominal-speed times)")
+    cols = [np.array(c, float) for c in zip(*rows, strict=True)] if rows else \
+        [np.zeros(0)] * 9
+    return Transit(cols[0].astype(int), *cols[1:])
+
+
+@dataclass(frozen=True)
 class PlanInputs:
     mission: ir.CheckedMission
     hardware: Hardware
     occupancy: Occupancy
     states: tuple[str, ...]
-    time_s: np.ndarray  # (n_s,) [s]
+    time_s: np.ndarray  # (n_s,) [s] fixed time in each state; 0 for transit legs
     # auto duties
     duty_state: np.ndarray  # (n_p,) state index
     duty_sensor: tuple[str, ...]
@@ -69,6 +121,21 @@ class PlanInputs:
     mode_power_w: np.ndarray  # (n_m,) [W]; NaN: cannot keep up
     sensor_quality_min: dict[str, float]  # mission-wide time-weighted quality floors
     notes: tuple[str, ...]
+    transit: Transit  # states whose time follows from the planned speed
+
+    @property
+    def duty_in_transit(self) -> np.ndarray:
+        """(n_p,) True where the duty variable is on-time per metre of a transit leg."""
+        return np.isin(self.duty_state, self.transit.state)
+
+    @property
+    def device_in_transit(self) -> np.ndarray:
+        return np.isin(self.dev_state, self.transit.state)
+
+    @property
+    def planning_time_s(self) -> np.ndarray:
+        """(n_s,) time [s] of each state in the walk (transit legs at the nominal speed)."""
+        return np.array([self.occupancy.time_s[s] for s in self.states], float)
 
     @property
     def sizes(self) -> tuple[int, int, int, int]:
@@ -76,7 +143,7 @@ class PlanInputs:
 
     def switch_ons(self) -> np.ndarray:
         """Switch-ons [1] of each device over the mission when it is duty-cycled."""
-        t = self.time_s[self.dev_state]
+        t = self.planning_time_s[self.dev_state]
         visits = np.array([self.occupancy.visits[self.states[s]] for s in self.dev_state])
         return np.ceil(t / SENSOR_PERIOD_S) + visits
 
@@ -130,6 +197,9 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
             prof_state.append(s)
     if not duty:
         notes.append("no sensor is marked `duty auto`: every sensor runs as written")
+    transit = _transit_legs(mission, hardware, occupancy, notes)
+    fixed_time = np.array([0.0 if s in transit.state else occupancy.time_s[st.name]
+                           for s, st in enumerate(mission.states)], float)
     devs = list(dev_keys)
     n_s = len(mission.states)
     quality_min = {p.sensor: p.quality_min for p in mission.sensor_preferences
@@ -138,7 +208,7 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
     return PlanInputs(
         mission=mission, hardware=hardware, occupancy=occupancy,
         states=tuple(s.name for s in mission.states),
-        time_s=np.array([occupancy.time_s[s.name] for s in mission.states], float),
+        time_s=fixed_time,
         duty_state=np.array(cols[0], int), duty_sensor=tuple(cols[1]),
         duty_device=np.array(cols[2], int), alpha=np.array(cols[3], float),
         weight=np.array(cols[4], float), duty_lo=np.array(cols[5], float),
@@ -153,7 +223,7 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
         mode_state=np.repeat(np.arange(n_s), len(powers)),
         mode_index=np.tile(np.arange(len(powers)), n_s),
         mode_power_w=np.tile(powers, n_s),
-        sensor_quality_min=quality_min, notes=tuple(dict.fromkeys(notes)),
+        sensor_quality_min=quality_min, notes=tuple(dict.fromkeys(notes)), transit=transit,
     )
 
 
@@ -169,6 +239,13 @@ class Coefficients:
     quality0: float  # quality from fixed-duty sensors
     sensor_omega: dict[str, np.ndarray]  # sensor -> (n_p,) time weights for its floor
     sensor_quality0: dict[str, float]
+    # transit legs: energy = pace_j . p + inv_j . p^-2 (+ e in fixed_j, devices in dev_j)
+    pace_j: np.ndarray  # (n_t,)
+    inv_pace_j: np.ndarray  # (n_t,)
+    omega_transit: np.ndarray  # (n_p,) quality weight of transit rows (nominal time)
+    leg_m: np.ndarray  # (n_t,) route length [m]: time = leg (p + k p^-2)
+    leg_pump_m: np.ndarray  # (n_t,) leg x k
+    horizon_left_s: float | None  # horizon minus the fixed states' time
 
 
 ENERGY_UNIT_J = 1e6  # the model counts energy in MJ: coefficients of order 1 for Clarabel
@@ -182,14 +259,22 @@ def utility(alpha: np.ndarray | float, duty: np.ndarray | float) -> np.ndarray:
 
 def coefficients(inputs: PlanInputs) -> Coefficients:
     t = inputs.time_s
+    tr = inputs.transit
     scale = 1.0 / ENERGY_UNIT_J
     mode_w = np.where(np.isfinite(inputs.mode_power_w), inputs.mode_power_w, 0.0)
     prof_w = np.array([p.total_w for p in inputs.profiles])
     fixed_j = float(np.sum(inputs.dev_warmup_j * inputs.switch_ons()))
-    # quality: weight x time of every (state, device sensor), fixed ones included
+    fixed_j += float(tr.length_m @ tr.pitch_j_per_m)
+    leg = np.zeros(len(inputs.states))
+    leg[tr.state] = tr.length_m
+    # quality: weight x time of every (state, device sensor), fixed ones included; transit
+    # legs count with their nominal-speed time so that the weights do not depend on speed
+    nominal = inputs.planning_time_s
     auto_wt = inputs.weight * t[inputs.duty_state]
-    fixed_wt = np.array([w * t[s] for s, _, _, _, w in inputs.fixed])
-    total = float(auto_wt.sum() + fixed_wt.sum()) or 1.0
+    fixed_wt = np.array([w * nominal[s] for s, _, _, _, w in inputs.fixed])
+    in_transit = inputs.duty_in_transit
+    total = float(auto_wt.sum() + fixed_wt.sum()
+                  + (inputs.weight * nominal[inputs.duty_state])[in_transit].sum()) or 1.0
     fixed_u = np.array([float(utility(a, d)) for _, _, d, a, _ in inputs.fixed])
     sensor_omega, sensor_q0 = {}, {}
     for sensor in inputs.sensor_quality_min:
@@ -199,12 +284,19 @@ def coefficients(inputs: PlanInputs) -> Coefficients:
         span = float(t[inputs.duty_state][mine].sum() + sum(x for x, _ in mine_fixed)) or 1.0
         sensor_omega[sensor] = np.where(mine, t[inputs.duty_state], 0.0) / span
         sensor_q0[sensor] = sum(x * u for x, u in mine_fixed) / span
+    horizon = inputs.mission.horizon_s
     return Coefficients(
-        dev_j=inputs.dev_power_w * t[inputs.dev_state] * scale,
+        dev_j=inputs.dev_power_w * (t + leg)[inputs.dev_state] * scale,
         prof_j=prof_w * t[inputs.prof_state] * scale,
         mode_j=mode_w * t[inputs.mode_state] * scale,
         fixed_j=fixed_j * scale,
         omega=auto_wt / total,
         quality0=float((fixed_wt * fixed_u).sum() / total) if len(fixed_u) else 0.0,
         sensor_omega=sensor_omega, sensor_quality0=sensor_q0,
+        pace_j=tr.length_m * tr.load_w * scale,
+        inv_pace_j=tr.length_m * (tr.load_w * tr.pump_s + tr.pump_j) * scale,
+        omega_transit=np.where(in_transit, inputs.weight * nominal[inputs.duty_state], 0.0)
+        / total,
+        leg_m=tr.length_m, leg_pump_m=tr.length_m * tr.pump_s,
+        horizon_left_s=None if horizon is None or not tr.size else horizon - float(t.sum()),
     )

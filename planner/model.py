@@ -24,9 +24,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from gliderplan.planner.inputs import ENERGY_UNIT_J, Coefficients, PlanInputs
+from gliderplan.planner.occupancy import NOMINAL_SPEED_MPS
 
 SOLVER = cp.CLARABEL
 SATURATION_TOLERANCE = 1e-6  # relative quality below the maximum that counts as saturated
+MAX_PACE_S_PER_M = 10.0  # slowest transit: 0.1 m/s (assumption: below it a glider steers badly)
+NOMINAL_PACE_S_PER_M = 1.0 / NOMINAL_SPEED_MPS
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,7 @@ class Solution:
     mode: np.ndarray
     quality: float
     model_energy_j: float
+    pace: np.ndarray  # (n_t,) [s m-1] of the transit legs
     budget_dual: float | None  # d quality / d energy [1 J-1], quality problem only
     solve_s: float  # wall-clock time of the solve call [s], compilation included
     solver_s: float | None  # time inside Clarabel [s]
@@ -78,6 +82,11 @@ class PlanModel:
 
         energy = self.p_fixed + self.p_prof @ self.share + self.p_mode @ self.mode
         quality = self.p_quality0
+        tr = inputs.transit
+        transit_duty = inputs.duty_in_transit
+        transit_dev = inputs.device_in_transit
+        steady_duty = np.flatnonzero(~transit_duty)
+        steady_dev = np.flatnonzero(~transit_dev)
         common = [_selector(inputs.prof_state, n_s).T @ self.share == 1,
                   _selector(inputs.mode_state, n_s).T @ self.mode == 1]
         unusable = ~np.isfinite(inputs.mode_power_w)
@@ -85,13 +94,19 @@ class PlanModel:
             common.append(self.mode[np.flatnonzero(unusable)] == 0)
         if n_q:
             energy = energy + self.p_dev @ self.device
-            common += [self.device >= inputs.dev_lo, self.device <= inputs.dev_hi]
+            common += [self.device[steady_dev] >= inputs.dev_lo[steady_dev],
+                       self.device[steady_dev] <= inputs.dev_hi[steady_dev]]
         if n_p:
             utility = cp.multiply(1.0 / np.log1p(inputs.alpha),
                                   cp.log1p(cp.multiply(inputs.alpha, self.duty)))
             quality = quality + self.p_omega @ utility
-            common += [self.duty >= inputs.duty_lo, self.duty <= inputs.duty_hi,
+            common += [self.duty[steady_duty] >= inputs.duty_lo[steady_duty],
+                       self.duty[steady_duty] <= inputs.duty_hi[steady_duty],
                        _selector(inputs.duty_device, n_q) @ self.device >= self.duty]
+        self.pace = cp.Variable(tr.size, name="pace") if tr.size else None
+        self.p_transit: dict[str, cp.Parameter] = {}
+        if tr.size:
+            energy, quality = self._transit(energy, quality, common)
             for sensor, (weights, offset) in self.p_sensor.items():
                 common.append(weights @ utility + offset >= inputs.sensor_quality_min[sensor])
         self.energy = energy
@@ -103,6 +118,48 @@ class PlanModel:
             assert problem.is_dcp(dpp=True), "the planning model must stay DCP and DPP"
         self.set_floor(0.0)
         self.set_budget_j(0.0)
+
+    def _transit(self, energy, quality, common: list) -> tuple:
+        """Transit legs in the pace formulation: per metre, glide time p, pump time k p^-2,
+        on-time x <= p; energy and time are convex in p, quality a perspective."""
+        inputs, tr = self.inputs, self.inputs.transit
+        n_t = tr.size
+        where = {s: i for i, s in enumerate(tr.state)}
+        rows = np.flatnonzero(inputs.duty_in_transit)
+        devs = np.flatnonzero(inputs.device_in_transit)
+        p = self.pace
+        pump = cp.multiply(tr.pump_s, cp.power(p, -2))  # pump time per metre
+        par = self.p_transit
+        par["pace_j"] = cp.Parameter(n_t, nonneg=True)
+        par["inv_pace_j"] = cp.Parameter(n_t, nonneg=True)
+        energy = energy + par["pace_j"] @ p + par["inv_pace_j"] @ cp.power(p, -2)
+        common += [p >= tr.min_pace, p <= MAX_PACE_S_PER_M]
+        if len(devs):
+            sel = _selector(np.array([where[s] for s in inputs.dev_state[devs]]), n_t)
+            floor = inputs.dev_lo[devs]
+            common.append(self.device[devs] >= cp.multiply(floor, sel @ (p + pump)))
+            free = np.flatnonzero(floor == 0.0)
+            if len(free):
+                common.append(self.device[devs[free]] <= (sel @ p)[free])
+        if len(rows):
+            sel = _selector(np.array([where[s] for s in inputs.duty_state[rows]]), n_t)
+            glide, x, a = sel @ p, self.duty[rows], inputs.alpha[rows]
+            common += [x >= cp.multiply(inputs.duty_lo[rows], sel @ (p + pump)),
+                       x <= cp.multiply(inputs.duty_hi[rows], glide),
+                       x <= inputs.duty_hi[rows] * NOMINAL_PACE_S_PER_M]
+            # Along a route, data quality is sampling per metre: on-time per metre against
+            # full-duty sampling at the nominal speed (flying slower buys no more than that).
+            per_metre = cp.multiply(1.0 / np.log1p(a),
+                                    cp.log1p(cp.multiply(a / NOMINAL_PACE_S_PER_M, x)))
+            par["omega"] = cp.Parameter(len(rows), nonneg=True)
+            quality = quality + par["omega"] @ per_metre
+        if inputs.mission.horizon_s is not None:
+            par["leg_m"] = cp.Parameter(n_t, nonneg=True)
+            par["leg_pump_m"] = cp.Parameter(n_t, nonneg=True)
+            par["horizon_left_s"] = cp.Parameter()
+            common.append(par["leg_m"] @ p + par["leg_pump_m"] @ cp.power(p, -2)
+                          <= par["horizon_left_s"])
+        return energy, quality
 
     # ---- parameter values ----------------------------------------------------------
     def set_coefficients(self, c: Coefficients) -> None:
@@ -118,6 +175,12 @@ class PlanModel:
         for sensor, (weights, offset) in self.p_sensor.items():
             weights.value = c.sensor_omega[sensor]
             offset.value = c.sensor_quality0[sensor]
+        values = {"pace_j": c.pace_j, "inv_pace_j": c.inv_pace_j,
+                  "omega": c.omega_transit[self.inputs.duty_in_transit],
+                  "leg_m": c.leg_m, "leg_pump_m": c.leg_pump_m,
+                  "horizon_left_s": c.horizon_left_s}
+        for name, parameter in self.p_transit.items():
+            parameter.value = values[name]
 
     def set_budget_j(self, budget_j: float) -> None:
         self.p_budget.value = max(budget_j, 0.0) / ENERGY_UNIT_J
@@ -130,6 +193,9 @@ class PlanModel:
         a budget (an infinite one would upset the solver's scaling)."""
         c = self.coefficients
         most = c.fixed_j + float(c.dev_j.sum() + c.prof_j.sum() + c.mode_j.sum())
+        if self.pace is not None:  # the slowest and the fastest legs bound the transit cost
+            fastest = 1.0 / self.inputs.transit.min_pace
+            most += float(c.pace_j.sum() * MAX_PACE_S_PER_M + c.inv_pace_j @ fastest**2)
         return 2.0 * most * ENERGY_UNIT_J + 1.0
 
     # ---- solving -------------------------------------------------------------------
@@ -167,6 +233,7 @@ class PlanModel:
             share=value(self.share), mode=value(self.mode),
             quality=float(self.quality.value) if ok else float("nan"),
             model_energy_j=float(self.energy.value) * ENERGY_UNIT_J if ok else float("nan"),
+            pace=value(self.pace),
             budget_dual=dual, solve_s=elapsed,
             solver_s=getattr(stats, "solve_time", None) if stats else None,
             iterations=getattr(stats, "num_iters", None) if stats else None,

@@ -20,7 +20,9 @@ from dataclasses import dataclass, field
 
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, fired_event
+from gliderplan.planner.legs import Position, leg_length_m, route_targets
 
+NOMINAL_SPEED_MPS = 0.35  # Slocum horizontal speed (paper; BCO-DMO): transit times in the walk
 TICK_S = 4.0  # the science computer writes the sensor array every 2-4 s; the simulator's tick
 DEFAULT_HORIZON_S = 30 * 86400.0  # planning horizon of an open-ended mission without `horizon`
 _MAX_VISITS = 100_000  # bounds the walk of a mission that bounces between states forever
@@ -34,7 +36,7 @@ class Visit:
     entry_s: float
     duration_s: float
     variables: dict[str, float]
-    ended_by: str  # "guard" | "expect" | "horizon"
+    ended_by: str  # "guard" | "expect" | "transit" | "horizon"
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,7 @@ class Occupancy:
     trace: tuple[Visit, ...] = ()
     source: str = "timeline"  # "timeline" | "simulation"
     notes: tuple[str, ...] = field(default=())  # defaults and bounds used, for the report
+    legs_m: dict[str, float] = field(default_factory=dict)  # transit state -> route length
 
     @property
     def total_s(self) -> float:
@@ -142,6 +145,8 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
     stack: list[str] = []
     now = 0.0
     trace: list[Visit] = []
+    position: Position | None = None  # where the last route left the glider
+    legs: dict[str, float] = {}
     while state is not None and now < horizon and len(trace) < _MAX_VISITS:
         here = mission.state(state)
         entry, entry_vars = now, dict(variables)
@@ -158,8 +163,15 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
                 break
             variables = _assign(found[1], found[0], variables)
             check_from = found[0] + TICK_S
+        targets = route_targets(here.route)
+        leg = leg_length_m(position, targets) if sensor_exit is not None else None
         if found is not None:
             fire_s, event, ended_by = found[0], found[1], "guard"
+        elif limit == horizon and leg is not None:
+            # A transit leg: the walk assumes the nominal speed; the planner chooses it.
+            fire_s = entry + math.ceil(leg / NOMINAL_SPEED_MPS / TICK_S) * TICK_S
+            event, ended_by = sensor_exit, "transit"
+            legs[state] = legs.get(state, 0.0) + leg
         elif limit < horizon:
             fire_s, event, ended_by = limit, sensor_exit, "expect"
             notes.append(f"{state}: planned at its expect upper bound "
@@ -171,6 +183,7 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
                          "runs to it")
             break
         trace.append(Visit(state, entry, fire_s - entry, entry_vars, ended_by))
+        position = targets[-1] if targets else position
         variables = _assign(event, fire_s, variables)
         now = fire_s
         match event.action:
@@ -187,10 +200,11 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
                 state = None
     if horizon_defaulted and trace and trace[-1].ended_by == "horizon":
         notes.append(f"horizon: {DEFAULT_HORIZON_S:g} s (default)")
-    return _summarise(mission, trace, notes)
+    return _summarise(mission, trace, notes, legs)
 
 
-def _summarise(mission: ir.CheckedMission, trace: list[Visit], notes: list[str]) -> Occupancy:
+def _summarise(mission: ir.CheckedMission, trace: list[Visit], notes: list[str],
+               legs: dict[str, float]) -> Occupancy:
     time_s = {s.name: 0.0 for s in mission.states}
     visits = {s.name: 0 for s in mission.states}
     first_vars: dict[str, dict[str, float]] = {}
@@ -202,7 +216,7 @@ def _summarise(mission: ir.CheckedMission, trace: list[Visit], notes: list[str])
     for s in mission.states:
         first_vars.setdefault(s.name, initial)
     return Occupancy(time_s, visits, first_vars, tuple(trace), "timeline",
-                     tuple(dict.fromkeys(notes)))
+                     tuple(dict.fromkeys(notes)), legs)
 
 
 def measured_occupancy(mission: ir.CheckedMission, occupancy_s: dict[str, float]) -> Occupancy:

@@ -24,11 +24,17 @@ from gliderplan.planner.inputs import (
     utility,
 )
 from gliderplan.planner.model import PlanModel, Solution
-from gliderplan.planner.occupancy import measured_occupancy, mission_occupancy
+from gliderplan.planner.occupancy import (
+    NOMINAL_SPEED_MPS,
+    measured_occupancy,
+    mission_occupancy,
+)
 from gliderplan.planner.rates import VEHICLE_COMPONENTS
 
 J_PER_WH = 3600.0
 _ON_EDGE = 1e-6  # a duty this close to 0 or 1 does not cycle (no warm-ups)
+_SHARE_EDGE = 1e-5  # a profile share this small is solver noise (5 ms of a 500 s state)
+_NO_PRICE = 1e-9  # quality per Wh below which the budget is not what limits the plan
 
 
 class PlanningError(Exception):
@@ -139,8 +145,10 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
     budget = inputs.hardware.budget_j if budget_j is None else budget_j
     least = model.solve_energy(-1.0)
     if not least.optimal:
+        hint = " and whether the horizon leaves time for the transit legs" \
+            if inputs.transit.size else ""
         raise PlanningError(f"the mission's constraints cannot all hold ({least.status}); "
-                            "check the duty and quality annotations")
+                            f"check the duty and quality annotations{hint}")
     minimum_j = realised_energy_j(inputs, least)
     if inputs.mission.objective.sense == "minimize_energy":
         floor = inputs.mission.objective.quality_floor
@@ -161,26 +169,30 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
         if not chosen.optimal:
             raise PlanningError(f"the solver could not plan this mission ({chosen.status})")
         shadow = chosen.budget_dual
-        if shadow is not None and shadow * J_PER_WH < 1e-9:
+        if shadow is not None and shadow * J_PER_WH < _NO_PRICE:
             # Budget to spare: of the plans with this quality, fly the cheapest.
             cheapest = model.solve_energy(chosen.quality * (1 - 1e-9))
             if cheapest.optimal:
                 chosen = cheapest
+    price = (shadow or 0.0) * J_PER_WH
     return assemble(inputs, _snapped(inputs, chosen), budget, minimum_j,
-                    (shadow or 0.0) * J_PER_WH)
+                    price if price >= _NO_PRICE else 0.0)
 
 
-def _snap(x: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float) -> np.ndarray:
+def _snap(x: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float,
+          edge: float = _ON_EDGE) -> np.ndarray:
     """Values within solver tolerance of a bound put on it (a duty of 0.9999999 is 1)."""
     x = np.clip(x, lo, hi)
-    x = np.where(np.abs(x - lo) < _ON_EDGE, lo, x)
-    return np.where(np.abs(x - hi) < _ON_EDGE, hi, x)
+    x = np.where(np.abs(x - lo) < edge, lo, x)
+    return np.where(np.abs(x - hi) < edge, hi, x)
 
 
 def _snapped(inputs: PlanInputs, sol: Solution) -> Solution:
-    return replace(sol, duty=_snap(sol.duty, inputs.duty_lo, inputs.duty_hi),
-                   device=_snap(sol.device, inputs.dev_lo, inputs.dev_hi),
-                   share=_snap(sol.share, 0.0, 1.0), quality=float(sol.quality))
+    steady_duty, steady_dev = ~inputs.duty_in_transit, ~inputs.device_in_transit
+    duty = np.where(steady_duty, _snap(sol.duty, inputs.duty_lo, inputs.duty_hi), sol.duty)
+    device = np.where(steady_dev, _snap(sol.device, inputs.dev_lo, inputs.dev_hi), sol.device)
+    return replace(sol, duty=duty, device=device,
+                   share=_snap(sol.share, 0.0, 1.0, _SHARE_EDGE), quality=float(sol.quality))
 
 
 # ---- what a solution means ----------------------------------------------------------------
@@ -192,17 +204,49 @@ def _profile_components(inputs: PlanInputs, sol: Solution) -> np.ndarray:
     return power * (np.clip(sol.share, 0.0, 1.0) * t)[:, None]
 
 
+def _pace_total(inputs: PlanInputs, sol: Solution) -> np.ndarray:
+    """(n_t,) time per metre [s m-1] of each transit leg, pump runs included."""
+    tr = inputs.transit
+    return sol.pace + tr.pump_s / sol.pace**2 if tr.size else np.zeros(0)
+
+
+def state_times_s(inputs: PlanInputs, sol: Solution) -> np.ndarray:
+    """(n_s,) time [s] in each state: fixed, or route length x time per metre."""
+    times = inputs.time_s.copy()
+    times[inputs.transit.state] = inputs.transit.length_m * _pace_total(inputs, sol)
+    return times
+
+
+def _fractions(inputs: PlanInputs, sol: Solution, rows_state: np.ndarray,
+               values: np.ndarray) -> np.ndarray:
+    """Duties as fractions of time; transit rows hold on-time per metre."""
+    fraction = np.array(values, float)
+    per_metre = dict(zip(inputs.transit.state, _pace_total(inputs, sol), strict=True))
+    for i, s in enumerate(rows_state):
+        if s in per_metre:
+            fraction[i] = values[i] / per_metre[s]
+    return np.clip(fraction, 0.0, 1.0)
+
+
+def duty_fractions(inputs: PlanInputs, sol: Solution) -> np.ndarray:
+    return _fractions(inputs, sol, inputs.duty_state, sol.duty)
+
+
 def _device_energy_j(inputs: PlanInputs, sol: Solution) -> np.ndarray:
-    on = np.clip(sol.device, 0.0, 1.0)
+    on = _fractions(inputs, sol, inputs.dev_state, sol.device)
     cycling = (on > _ON_EDGE) & (on < 1.0 - _ON_EDGE)
-    return (inputs.dev_power_w * on * inputs.time_s[inputs.dev_state]
+    return (inputs.dev_power_w * on * state_times_s(inputs, sol)[inputs.dev_state]
             + np.where(cycling, inputs.dev_warmup_j * inputs.switch_ons(), 0.0))
 
 
 def _chosen_modes(inputs: PlanInputs, sol: Solution) -> np.ndarray:
-    """Index into hardware.modes of the clock each state runs at (the largest share)."""
+    """Index into hardware.modes of the clock each state runs at (the largest share; a
+    transit leg runs at the cheapest clock, which its energy per metre assumes)."""
     n_modes = len(inputs.hardware.modes)
-    return np.argmax(sol.mode.reshape(len(inputs.states), n_modes), axis=1)
+    chosen = np.argmax(sol.mode.reshape(len(inputs.states), n_modes), axis=1)
+    powers = inputs.mode_power_w[:n_modes]
+    chosen[inputs.transit.state] = int(np.nanargmin(powers))
+    return chosen
 
 
 def state_energy_j(inputs: PlanInputs, sol: Solution) -> list[dict[str, float]]:
@@ -211,9 +255,15 @@ def state_energy_j(inputs: PlanInputs, sol: Solution) -> list[dict[str, float]]:
     for r, row in enumerate(_profile_components(inputs, sol)):
         for c, value in zip(VEHICLE_COMPONENTS, row, strict=True):
             result[inputs.prof_state[r]][c] += float(value)
+    times = state_times_s(inputs, sol)
+    tr, vehicle = inputs.transit, inputs.hardware.vehicle
+    for i, s in enumerate(tr.state):
+        result[s]["hotel"] = vehicle.hotel_w * float(times[s])
+        result[s]["pump"] = float(tr.length_m[i] * tr.pump_j[i] / sol.pace[i] ** 2)
+        result[s]["pitch"] = float(tr.length_m[i] * tr.pitch_j_per_m[i])
     n_modes = len(inputs.hardware.modes)
     for s, m in enumerate(_chosen_modes(inputs, sol)):
-        result[s]["computer"] = float(inputs.mode_power_w[s * n_modes + m] * inputs.time_s[s])
+        result[s]["computer"] = float(inputs.mode_power_w[s * n_modes + m] * times[s])
     for q, value in enumerate(_device_energy_j(inputs, sol)):
         name = inputs.dev_name[q]
         result[inputs.dev_state[q]][name] = result[inputs.dev_state[q]].get(name, 0.0) \
@@ -235,10 +285,13 @@ def largest_consumers(inputs: PlanInputs, sol: Solution, n: int = 3) -> list[tup
 
 
 def _state_quality(inputs: PlanInputs, sol: Solution, s: int) -> float | None:
+    """Weighted quality of a state's device sensors; on a transit leg the model's measure,
+    on-time per metre against full sampling at the nominal speed."""
     terms = [(w, float(utility(a, d))) for st, _, d, a, w in inputs.fixed if st == s]
     mine = inputs.duty_state == s
-    terms += [(w, float(utility(a, d))) for w, a, d in
-              zip(inputs.weight[mine], inputs.alpha[mine], sol.duty[mine], strict=True)]
+    sampled = np.where(inputs.duty_in_transit, sol.duty * NOMINAL_SPEED_MPS, sol.duty)
+    terms += [(w, float(utility(a, min(d, 1.0)))) for w, a, d in
+              zip(inputs.weight[mine], inputs.alpha[mine], sampled[mine], strict=True)]
     weight = sum(w for w, _ in terms)
     return float(sum(w * u for w, u in terms) / weight) if weight > 0 else None
 
@@ -253,10 +306,12 @@ def assemble(inputs: PlanInputs, sol: Solution, budget_j: float, minimum_j: floa
     hardware = inputs.hardware
     energies = state_energy_j(inputs, sol)
     modes = _chosen_modes(inputs, sol)
-    duty = np.clip(sol.duty, 0.0, 1.0)
+    duty = duty_fractions(inputs, sol)
+    times = state_times_s(inputs, sol)
+    legs = {s: i for i, s in enumerate(inputs.transit.state)}
     states = []
     for s, state in enumerate(inputs.mission.states):
-        t = float(inputs.time_s[s])
+        t = float(times[s])
         visits = inputs.occupancy.visits[state.name]
         visit_s = t / visits if visits else 0.0
         period = min(SENSOR_PERIOD_S, visit_s) if visit_s > 0 else SENSOR_PERIOD_S
@@ -279,6 +334,8 @@ def assemble(inputs: PlanInputs, sol: Solution, budget_j: float, minimum_j: floa
             for p, f in zip((inputs.profiles[r] for r in rows), shares, strict=True))
         inflections = float(sum(inputs.profiles[r].inflections_per_s * f * t
                                 for r, f in zip(rows, shares, strict=True)))
+        if s in legs:
+            profiles, inflections = _transit_profile(inputs, sol, legs[s], profiles[0])
         states.append(StatePlan(state.name, t, visits, hardware.modes[modes[s]].clock_mhz,
                                 _round9(cycle), tuple(sensors), profiles, energies[s],
                                 inflections, _state_quality(inputs, sol, s)))
@@ -293,6 +350,16 @@ def assemble(inputs: PlanInputs, sol: Solution, budget_j: float, minimum_j: floa
         solver_status=sol.status, solve_s=sol.solve_s, solver_iterations=sol.iterations,
         states=tuple(states),
     )
+
+
+def _transit_profile(inputs: PlanInputs, sol: Solution, i: int,
+                     profile: ProfilePlan) -> tuple[tuple[ProfilePlan, ...], float]:
+    """The planned speed of transit leg `i`, the buoyancy that flies it, its inflections."""
+    tr, vehicle = inputs.transit, inputs.hardware.vehicle
+    speed = 1.0 / float(sol.pace[i])
+    ballast = float(vehicle.ballast_for_speed(speed, tr.pitch_rad[i]))
+    planned = replace(profile, share=1.0, speed_mps=speed, ballast_cc=ballast)
+    return (planned,), float(tr.length_m[i] * tr.inflections_per_m[i])
 
 
 def _describe_defaults(inputs: PlanInputs) -> list[str]:

@@ -37,8 +37,11 @@ class Separable:
 
 def separable_form(inputs: PlanInputs, c: Coefficients) -> Separable | None:
     """The separable problem, or None when the model couples duties (shared device,
-    a device floor from a fixed-duty sensor, or a per-sensor quality floor)."""
-    if inputs.sensor_quality_min or len(np.unique(inputs.duty_device)) != len(inputs.duty_device):
+    a device floor from a fixed-duty sensor, a per-sensor quality floor, or a transit leg
+    whose time depends on its speed)."""
+    if inputs.transit.size or inputs.sensor_quality_min:
+        return None
+    if len(np.unique(inputs.duty_device)) != len(inputs.duty_device):
         return None
     if np.any(inputs.dev_lo[inputs.duty_device] > 0.0):
         return None

@@ -266,3 +266,64 @@ end
                         ("fix", 2000, 200)]
     assert occupancy.time_s == {"dive": 3400, "fix": 600}
     assert occupancy.visits == {"dive": 4, "fix": 3}
+
+
+TRANSIT = """mission leg
+computer {computer}
+battery 200 Wh reserve 10 %
+{horizon}
+state start
+begin
+  flightroute nav(3910.5, -7349.8)
+  flightprofile yo(3, 10, .454, .454)
+  sensors missiontime, depth
+  events
+    case missiontime >= 600 goto transit
+end
+state transit
+begin
+  flightroute nav(3916.5, -7349.8)
+  flightprofile yo(3, 10, .454, .454)
+  sensors missiontime, depth, altitude, temp duty auto
+  events
+    case altitude < 5 exit
+end
+"""
+
+
+def _transit_plan(computer: str = "ts7800 @ 300 MHz", horizon: str = ""):
+    m = source_mission(TRANSIT.format(computer=computer, horizon=horizon))
+    inputs, model = prepare(m)
+    return m, inputs, plan_mission(m)
+
+
+def test_transit_leg_flies_the_speed_that_minimises_energy_per_metre():
+    m, inputs, plan = _transit_plan()
+    leg = inputs.occupancy.legs_m["transit"]
+    assert leg == pytest.approx(6 * 1852, rel=1e-3)  # 6 minutes of latitude
+    transit = plan.states[1]
+    speed = transit.profiles[0].speed_mps
+    vehicle = inputs.hardware.vehicle
+    load = vehicle.hotel_w + transit.energy_by_component_j["computer"] / transit.time_s
+    expected = float(vehicle.optimal_speed_mps(load, 3, 10, 0.454))
+    assert speed == pytest.approx(expected, rel=1e-3)  # the pace model's u* = (P/2c)^(1/3)
+    pump_s = leg * inputs.transit.pump_s[0] * speed**2
+    assert transit.time_s == pytest.approx(leg / speed + pump_s, rel=1e-6)
+    assert plan.energy_j <= plan.budget_j
+    assert separable_form(inputs, coefficients(inputs)) is None
+
+
+def test_hungrier_computer_flies_the_transit_faster():
+    _, _, slow = _transit_plan("ts7800 @ 300 MHz")
+    _, _, fast = _transit_plan("ts7800 @ 500 MHz")
+    assert fast.states[1].profiles[0].speed_mps > slow.states[1].profiles[0].speed_mps
+
+
+def test_horizon_makes_the_transit_faster():
+    _, _, free = _transit_plan()
+    free_speed = free.states[1].profiles[0].speed_mps
+    _, inputs, tight = _transit_plan(horizon="horizon 14 h")
+    assert free.states[1].time_s + 600 > 14 * 3600  # without the horizon it takes longer
+    transit = tight.states[1]
+    assert transit.time_s + 600 <= 14 * 3600 * (1 + 1e-6)
+    assert transit.profiles[0].speed_mps > free_speed

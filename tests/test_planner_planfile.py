@@ -22,7 +22,8 @@ from gliderplan.planner.planfile import (
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ["examples/fig2.mission", "examples/fig2_annotated.mission",
-            "examples/thermocline_survey.mission", "tests/missions/planner_separable.mission"]
+            "examples/thermocline_survey.mission", "tests/missions/planner_separable.mission",
+            "tests/missions/planner_transit.mission"]
 
 
 def mission(path: str):
