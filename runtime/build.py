@@ -52,7 +52,8 @@ TARGETS: dict[str, Target] = {
         Target("host", "cc", (), "gcc", "this machine"),
         Target("ts7800", "arm-linux-gnueabi-gcc", ("-march=armv5te", "-static"),
                "gcc-arm-linux-gnueabi", "TS-7800, ARMv5TE (ARM9)"),
-        Target("ts5500", "i686-linux-gnu-gcc", ("-march=i486", "-static"),
+        # -mpc64: the x87 rounds each result to double once, as the reference does.
+        Target("ts5500", "i686-linux-gnu-gcc", ("-march=i486", "-mpc64", "-static"),
                "gcc-i686-linux-gnu", "TS-5500, i486-class AMD Elan SC520",
                fallback=("gcc", "-m32")),
     )
