@@ -14,7 +14,7 @@ from gliderplan.planner.hardware import load_hardware
 from gliderplan.planner.inputs import build_inputs, coefficients
 from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel
 from gliderplan.planner.occupancy import mission_occupancy
-from gliderplan.planner.plan import J_PER_WH, realised_energy_j
+from gliderplan.planner.plan import J_PER_WH, state_energy_j
 
 COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
 BATTERIES = ("alkaline", "lithium_primary", "rechargeable")
@@ -48,14 +48,24 @@ def pareto(model: PlanModel, points: int, progress: Progress | None = None) -> p
 
 
 def _row(model: PlanModel, budget_j: float) -> dict:
+    """Minimum energy and the plan at one budget (the cheapest of the best quality)."""
     least = model.solve_energy(-1.0)
-    feasible = least.optimal and least.model_energy_j <= budget_j
-    sol = model.solve_quality(budget_j) if feasible else None
     row = {"budget_j": budget_j, "minimum_energy_j": least.model_energy_j,
-           "status": "optimal" if sol is not None and sol.optimal else "infeasible",
-           "quality": sol.quality if sol else np.nan,
-           "energy_j": realised_energy_j(model.inputs, sol) if sol else np.nan,
-           "shadow_price": (sol.budget_dual or 0.0) * J_PER_WH if sol else np.nan}
+           "status": "infeasible", "quality": np.nan, "energy_j": np.nan,
+           "shadow_price": np.nan, "computer_j": np.nan}
+    if not (least.optimal and least.model_energy_j <= budget_j):
+        return row
+    sol = model.solve_quality(budget_j)
+    if not sol.optimal:
+        return row
+    price = (sol.budget_dual or 0.0) * J_PER_WH
+    if price < 1e-9:  # budget to spare: fly the cheapest plan of that quality
+        cheapest = model.solve_energy(sol.quality * (1 - 1e-9))
+        sol = cheapest if cheapest.optimal else sol
+    energies = state_energy_j(model.inputs, sol)
+    row.update(status="optimal", quality=sol.quality,
+               energy_j=float(sum(sum(e.values()) for e in energies)),
+               shadow_price=price, computer_j=float(sum(e["computer"] for e in energies)))
     return row
 
 
@@ -73,10 +83,8 @@ def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
         model.inputs = inputs
         model.set_coefficients(coefficients(inputs))
         budget = hardware.budget_j if budget_j is None else budget_j
-        row = {"computer": f"{hardware.board.name}@{hardware.board.clock_mhz:g}",
-               **_row(model, budget)}
-        row["computer_j"] = float(np.nanmin(inputs.mode_power_w) * inputs.time_s.sum())
-        rows.append(row)
+        rows.append({"computer": f"{hardware.board.name}@{hardware.board.clock_mhz:g}",
+                     **_row(model, budget)})
         if progress:
             progress(i + 1, len(specs))
     return pd.DataFrame(rows)
