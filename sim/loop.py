@@ -15,7 +15,9 @@ import numpy as np
 
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, Transition
+from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.executor import NONE, Command
+from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
 from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.science import ScienceComputer, SensorNoise
 from gliderplan.sim.vehicle import Current, GliderSim
@@ -54,8 +56,6 @@ class RunRecord:
 
 def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float, float]:
     """Where the glider is put in the water [deg]."""
-    from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
-
     if config.start_lat_deg is not None and config.start_lon_deg is not None:
         return config.start_lat_deg, config.start_lon_deg
     for state in mission.states:
@@ -147,7 +147,8 @@ def _close_row(cols: dict[str, list], state: int) -> None:
 
 
 def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
-                 vehicle) -> ScienceComputer:
+                 vehicle: Vehicle) -> ScienceComputer:
+    """The science computer over a glider put in the water at the mission's start."""
     lat, lon = start_position(mission, config)
     glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current)
     return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s)
