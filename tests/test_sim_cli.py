@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pandas as pd
@@ -139,3 +140,14 @@ def test_a_long_run_shows_progress(tmp_path, capsys):
     assert main(["sim", str(mission), "--duration", "5d", "-o", str(tmp_path / "r")]) == 0
     err = capsys.readouterr().err
     assert "\r[" in err and "of 5.00 d simulated" in err
+
+
+def test_a_current_carries_the_glider_east(tmp_path):
+    tracks = {}
+    for current in ("0,0", "0,0.2"):
+        out = tmp_path / current
+        assert main(["sim", str(FIG2), "--current", current, "-o", str(out)]) == 0
+        tracks[current] = pd.read_parquet(out / "timeseries.parquet")
+    drift = tracks["0,0.2"]["lon_deg"].iloc[-1] - tracks["0,0"]["lon_deg"].iloc[-1]
+    metres = drift * 111_320 * math.cos(math.radians(tracks["0,0"]["lat_deg"].iloc[-1]))
+    assert metres == pytest.approx(0.2 * 2500, rel=0.01)  # 0.2 m/s for 2500 s
