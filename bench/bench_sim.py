@@ -29,8 +29,8 @@ from gliderplan.language import semantics
 from gliderplan.language.registry import SENSORS
 from gliderplan.power_models import load_vehicle
 from gliderplan.sim import compiled, ocean
+from gliderplan.sim.flight import fly
 from gliderplan.sim.loop import RunConfig, RunRecord
-from gliderplan.sim.session import fly
 
 MISSION = Path(__file__).resolve().parents[1] / "tests" / "missions" / "sim_month.mission"
 USIMMARINE_REAL_TIME = (50, 300)  # MOOS-IvP uSimMarine, reported time warp

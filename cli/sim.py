@@ -85,11 +85,11 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.sim import energy as accounting
     from gliderplan.sim import outputs, plots
     from gliderplan.sim.emulator import EmulatorError
+    from gliderplan.sim.flight import fly
     from gliderplan.sim.loop import RunConfig
     from gliderplan.sim.ocean import OceanFileError, load_ocean
     from gliderplan.sim.prediction import PlanReportError, plan_predictions
     from gliderplan.sim.science import NOISE_PRESETS
-    from gliderplan.sim.session import fly
 
     mission = load_mission(args)
     if not (math.isfinite(args.tick) and 0.1 <= args.tick <= 60.0):

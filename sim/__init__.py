@@ -8,5 +8,5 @@ executor (executor.py, pilot.py, compiled.py: language/semantics.py plus the lib
 routines of docs/pilot.md) or the compiled C runtime over a pseudo-terminal
 (emulator.py). energy.py integrates every component's energy over the run and checks
 it against the plan (planfile.py reads plans); outputs.py and plots.py write a run's
-files; session.py puts one run together for `gliderplan sim` and the tests.
+files; flight.py puts one run together for `gliderplan sim` and the tests.
 """

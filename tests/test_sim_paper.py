@@ -17,9 +17,9 @@ from gliderplan.cli.common import check_file
 from gliderplan.language.semantics import Transition
 from gliderplan.power_models import load_vehicle
 from gliderplan.sim import ocean
+from gliderplan.sim.flight import fly
 from gliderplan.sim.loop import RunConfig, RunRecord
 from gliderplan.sim.science import NOISE_PRESETS
-from gliderplan.sim.session import fly
 
 REPO = Path(__file__).resolve().parents[1]
 MISSIONS = REPO / "tests" / "missions"

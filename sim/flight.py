@@ -1,4 +1,4 @@
-"""One simulated run of a checked mission: the glider and its science computer in an
+"""One simulated flight of a checked mission: the glider and its science computer in an
 ocean, flown by the Python executor or by the compiled C runtime over a pty."""
 
 from __future__ import annotations
