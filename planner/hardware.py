@@ -33,7 +33,6 @@ class Hardware:
     battery_j: float  # [J] stored energy
     reserve_fraction: float  # [1] kept unused
     devices: dict[str, Sensor]  # device name -> power model, for every device the mission logs
-    battery_name: str  # preset name, or "" for an energy given as a quantity
     overridden: frozenset[str] = frozenset()  # annotations replaced by the caller
 
     @property
@@ -42,12 +41,12 @@ class Hardware:
         return (1.0 - self.reserve_fraction) * self.battery_j
 
 
-def parse_battery(spec: str) -> tuple[float, float | None, str]:
-    """(energy [J], reserve fraction or None, preset name or "") of "1.2kWh", "500 Wh",
+def parse_battery(spec: str) -> tuple[float, float | None]:
+    """(energy [J], reserve fraction or None) of "1.2kWh", "500 Wh",
     "60Ah@14.4V" or a battery preset ("alkaline"; its usable fraction sets the reserve)."""
     if spec in preset_names("battery"):
         pack = load_battery(spec)
-        return pack.energy_j, 1.0 - pack.usable_fraction, spec
+        return pack.energy_j, 1.0 - pack.usable_fraction
     match = _ENERGY.match(spec)
     if match is None:
         raise HardwareError(
@@ -60,7 +59,7 @@ def parse_battery(spec: str) -> tuple[float, float | None, str]:
         raise HardwareError(f"--battery {spec!r}: {err}") from None
     if energy <= 0.0:
         raise HardwareError(f"--battery {spec!r}: the energy must be positive")
-    return energy, None, ""
+    return energy, None
 
 
 def mission_devices(mission: ir.CheckedMission) -> list[str]:
@@ -82,10 +81,10 @@ def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
     board = load_board(spec, clock)
     modes = (board,) if clock is not None else tuple(board.modes())
     if battery is None:
-        energy, reserve, name = mission.battery.energy_j, mission.battery.reserve_fraction, ""
+        energy, reserve = mission.battery.energy_j, mission.battery.reserve_fraction
     else:
-        energy, preset_reserve, name = parse_battery(battery)
+        energy, preset_reserve = parse_battery(battery)
         reserve = mission.battery.reserve_fraction if preset_reserve is None else preset_reserve
     devices = {d: load_sensor(d) for d in mission_devices(mission)}
     overridden = frozenset(k for k, v in (("battery", battery), ("computer", computer)) if v)
-    return Hardware(vehicle, board, modes, energy, reserve, devices, name, overridden)
+    return Hardware(vehicle, board, modes, energy, reserve, devices, overridden)

@@ -104,6 +104,7 @@ class Plan:
     minimum_energy_j: float
     shadow_price: float  # quality per extra Wh of budget at this plan
     defaults_used: tuple[str, ...]
+    time_source: str  # "timeline" (static walk) or "simulation" (measured occupancy)
     solver_status: str
     solve_s: float
     solver_iterations: int | None
@@ -347,7 +348,8 @@ def assemble(inputs: PlanInputs, sol: Solution, budget_j: float, minimum_j: floa
         quality=float(sol.quality),
         energy_j=float(sum(sum(e.values()) for e in energies)), budget_j=budget_j,
         minimum_energy_j=minimum_j, shadow_price=shadow_price, defaults_used=defaults,
-        solver_status=sol.status, solve_s=sol.solve_s, solver_iterations=sol.iterations,
+        time_source=inputs.occupancy.source, solver_status=sol.status, solve_s=sol.solve_s,
+        solver_iterations=sol.iterations,
         states=tuple(states),
     )
 

@@ -44,6 +44,7 @@ def report_json(plan: Plan) -> dict:
         "shadow_price_unit": "quality per Wh",
         "computer": {"board": plan.computer, "clock_mhz": plan.clock_mhz},
         "defaults_used": list(plan.defaults_used),
+        "time_source": plan.time_source,
         "solver": {"name": "CLARABEL", "status": plan.solver_status,
                    "time_s": plan.solve_s, "iterations": plan.solver_iterations},
         "components_j": plan.components_j,

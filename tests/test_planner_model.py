@@ -327,3 +327,12 @@ def test_horizon_makes_the_transit_faster():
     transit = tight.states[1]
     assert transit.time_s + 600 <= 14 * 3600 * (1 + 1e-6)
     assert transit.profiles[0].speed_mps > free_speed
+
+
+def test_report_says_where_the_times_came_from():
+    from gliderplan.planner.report import report_json
+
+    m = mission("examples/fig2_annotated.mission")
+    assert report_json(plan_mission(m))["time_source"] == "timeline"
+    measured = plan_mission(m, occupancy_s={"s1": 900, "s2": 1100, "s3": 500})
+    assert report_json(measured)["time_source"] == "simulation"
