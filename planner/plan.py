@@ -148,8 +148,8 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
     if not least.optimal:
         hint = " and whether the horizon leaves time for the transit legs" \
             if inputs.transit.size else ""
-        raise PlanningError(f"the mission's constraints cannot all hold ({least.status}); "
-                            f"check the duty and quality annotations{hint}")
+        raise PlanningError("the mission's annotations cannot all hold together: check the "
+                            f"duty and quality annotations{hint}")
     minimum_j = realised_energy_j(inputs, least)
     if inputs.mission.objective.sense == "minimize_energy":
         floor = inputs.mission.objective.quality_floor
@@ -165,7 +165,9 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
         shadow = priced.budget_dual if priced.optimal else 0.0
     else:
         if least.model_energy_j > budget * (1 + 1e-9):
-            raise InfeasibleBudget(budget, minimum_j, largest_consumers(inputs, least))
+            # the model's count (warm-ups included) is what the budget must cover
+            raise InfeasibleBudget(budget, least.model_energy_j,
+                                   largest_consumers(inputs, least))
         chosen = model.solve_quality(budget)
         if not chosen.optimal:
             raise PlanningError(f"the solver could not plan this mission ({chosen.status})")
