@@ -173,6 +173,9 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
     profiles: list[ProfileRates] = []
     prof_state: list[int] = []
     powers = mode_powers(hardware)
+    if not np.isfinite(powers).any():
+        raise PlanInputError(f"computer {hardware.board.name}: no clock keeps up with the "
+                             "runtime's work per tick")
     for s, state in enumerate(mission.states):
         for use in state.sensors:
             device = SENSOR_BY_NAME[use.name].device
