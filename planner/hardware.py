@@ -16,6 +16,9 @@ from gliderplan.power_models.catalog import preset_names
 from gliderplan.power_models.sensor import Sensor
 from gliderplan.power_models.vehicle import Vehicle
 
+# Runtime work per tick (decode a frame, check events, run the routine, encode the reply,
+# append to the event log); assumption shared with the simulator: ~200k cycles.
+RUNTIME_CYCLES_PER_TICK = 200_000.0
 _ENERGY = re.compile(
     r"^\s*(?P<value>[0-9]+(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)\s*(?P<unit>[A-Za-z]+)"
     r"(?:\s*(?:@|at)\s*(?P<volts>[0-9]+(?:\.[0-9]+)?)\s*V)?\s*$")
@@ -34,6 +37,7 @@ class Hardware:
     reserve_fraction: float  # [1] kept unused
     devices: dict[str, Sensor]  # device name -> power model, for every device the mission logs
     overridden: frozenset[str] = frozenset()  # annotations replaced by the caller
+    cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK  # runtime work per tick [cycles]
 
     @property
     def budget_j(self) -> float:
@@ -69,10 +73,12 @@ def mission_devices(mission: ir.CheckedMission) -> list[str]:
 
 
 def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
-                  computer: str | None = None) -> Hardware:
+                  computer: str | None = None,
+                  cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> Hardware:
     """The mission's hardware with optional overrides (`battery` as for `parse_battery`,
     `computer` as "ts7800", "ts7800@500" or a board file). A computer given without a
-    clock lets the planner choose among the board's clocks; with one, the clock is fixed."""
+    clock lets the planner choose among the board's clocks; with one, the clock is fixed.
+    `cycles_per_tick` is the computation the mission asks of the board every tick."""
     vehicle = load_vehicle(mission.vehicle)
     if computer is None:
         spec, clock = mission.computer.board, mission.computer.clock_mhz
@@ -87,4 +93,5 @@ def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
         reserve = mission.battery.reserve_fraction if preset_reserve is None else preset_reserve
     devices = {d: load_sensor(d) for d in mission_devices(mission)}
     overridden = frozenset(k for k, v in (("battery", battery), ("computer", computer)) if v)
-    return Hardware(vehicle, board, modes, energy, reserve, devices, overridden)
+    return Hardware(vehicle, board, modes, energy, reserve, devices, overridden,
+                    cycles_per_tick)

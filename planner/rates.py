@@ -20,9 +20,6 @@ from gliderplan.planner.occupancy import TICK_S, Occupancy
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.vehicle import Vehicle
 
-# Runtime work per tick (decode a frame, check events, run the routine, encode the reply,
-# append to the event log); assumption shared with the simulator: ~200k cycles.
-RUNTIME_CYCLES_PER_TICK = 200_000.0
 VEHICLE_COMPONENTS = ("hotel", "pump", "pitch", "surface", "iridium")
 
 
@@ -43,8 +40,8 @@ class ProfileRates:
         return float(sum(self.power_w.values()))
 
 
-def computer_power_w(board: Board, tick_s: float = TICK_S,
-                     cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> float | None:
+def computer_power_w(board: Board, cycles_per_tick: float,
+                     tick_s: float = TICK_S) -> float | None:
     """Mean power [W] of the board idling between ticks; None if it cannot keep up."""
     busy = float(board.busy_fraction(cycles_per_tick, 1.0 / tick_s))
     return None if busy > 1.0 else float(board.power_w(busy))
@@ -106,7 +103,9 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
 def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
                    notes: list[str]) -> list[ProfileRates]:
     """Rates of every alternative of a state."""
-    load = hardware.vehicle.hotel_w + (computer_power_w(hardware.board) or 0.0)
+    powers = mode_powers(hardware)
+    load = hardware.vehicle.hotel_w + (float(np.nanmin(powers)) if np.isfinite(powers).any()
+                                       else 0.0)
     visits = max(occupancy.visits[state.name], 1)
     visit_s = occupancy.time_s[state.name] / visits
     variables = occupancy.variables[state.name]
@@ -118,5 +117,6 @@ def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
 def mode_powers(hardware: Hardware) -> np.ndarray:
     """Mean power [W] of each clock the planner may choose; NaN for a clock that cannot
     keep up with the runtime's workload."""
-    return np.array([np.nan if (p := computer_power_w(m)) is None else p
+    return np.array([np.nan if (p := computer_power_w(m, hardware.cycles_per_tick)) is None
+                     else p
                      for m in hardware.modes])

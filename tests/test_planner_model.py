@@ -349,3 +349,13 @@ def test_a_board_too_slow_for_the_runtime_is_refused(tmp_path):
     m = mission("examples/fig2_annotated.mission")
     with pytest.raises(PlanInputError, match="no clock keeps up"):
         plan_mission(m, load_hardware(m, computer=str(board)))
+
+
+def test_clock_follows_the_computation_the_mission_needs():
+    m = mission("examples/fig2_annotated.mission")
+    light = plan_mission(m, load_hardware(m, computer="ts7800"))
+    assert {s.clock_mhz for s in light.states} == {300}  # idles cheaper at the slow clock
+    # 1.6e9 cycles every 4 s is 400 MHz of work: only the 500 MHz clock keeps up
+    heavy = plan_mission(m, load_hardware(m, computer="ts7800", cycles_per_tick=1.6e9))
+    assert {s.clock_mhz for s in heavy.states} == {500}
+    assert heavy.components_j["computer"] > light.components_j["computer"]
