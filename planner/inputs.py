@@ -116,8 +116,7 @@ class PlanInputs:
     prof_state: np.ndarray  # (n_r,)
     profiles: tuple[ProfileRates, ...]
     # computer clocks
-    mode_state: np.ndarray  # (n_m,)
-    mode_index: np.ndarray  # (n_m,) index into hardware.modes
+    mode_state: np.ndarray  # (n_m,) state of each pair; clocks in hardware.modes order
     mode_power_w: np.ndarray  # (n_m,) [W]; NaN: cannot keep up
     sensor_quality_min: dict[str, float]  # mission-wide time-weighted quality floors
     notes: tuple[str, ...]
@@ -224,7 +223,6 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
                                for k, auto in zip(devs, dev_auto, strict=True)], float),
         prof_state=np.array(prof_state, int), profiles=tuple(profiles),
         mode_state=np.repeat(np.arange(n_s), len(powers)),
-        mode_index=np.tile(np.arange(len(powers)), n_s),
         mode_power_w=np.tile(powers, n_s),
         sensor_quality_min=quality_min, notes=tuple(dict.fromkeys(notes)), transit=transit,
     )
