@@ -33,17 +33,20 @@ def energy_range_j(model: PlanModel) -> tuple[float, float]:
 
 
 def pareto(model: PlanModel, points: int, progress: Progress | None = None) -> pd.DataFrame:
-    """Best quality at `points` budgets from the minimum energy to saturation."""
+    """Best quality at `points` budgets from the minimum energy to saturation (one point
+    when the minimum already saturates: a mission with nothing to trade)."""
     low, high = energy_range_j(model)
+    # Nothing to trade (no duty to choose): a single point, and energy buys no quality.
+    flat = high <= low * (1.0 + 1e-9)
     rows = []
-    for i, budget in enumerate(np.linspace(low, high, points)):
+    for i, budget in enumerate([low] if flat else np.linspace(low, high, points)):
         sol = model.solve_quality(float(budget))
         rows.append({"budget_j": float(budget), "budget_wh": float(budget) / J_PER_WH,
                      "quality": sol.quality, "energy_j": sol.model_energy_j,
-                     "shadow_price": (sol.budget_dual or 0.0) * J_PER_WH,
+                     "shadow_price": 0.0 if flat else (sol.budget_dual or 0.0) * J_PER_WH,
                      "status": sol.status, "solve_ms": 1000 * sol.solve_s})
         if progress:
-            progress(i + 1, points)
+            progress(i + 1, 1 if flat else points)
     return pd.DataFrame(rows)
 
 

@@ -141,3 +141,10 @@ def test_mission_too_big_for_a_plan_file_is_explained(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "no plan file can carry this plan" in err and "out of range" in err
     assert not (tmp_path / "big.plan").exists()
+
+
+def test_sweep_of_a_mission_with_nothing_to_trade_is_one_point(tmp_path):
+    run = gliderplan("plan", FIG2, "--sweep", "5", "-o", str(tmp_path))
+    assert run.returncode == 0, run.stderr
+    pareto = pd.read_csv(tmp_path / "pareto.csv")
+    assert len(pareto) == 1 and pareto["shadow_price"].iloc[0] == 0.0
