@@ -108,5 +108,6 @@ def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None,
     try:
         binary = compile_mission(mission, work, "host")
     except (CodegenError, BuildError) as err:
+        shutil.rmtree(work, ignore_errors=True)
         raise EmulatorError(str(err)) from None
     return CRuntime(binary, mission, plan_path, naive_tracker, work)
