@@ -84,3 +84,19 @@ def test_a_current_carries_the_glider_away_from_its_dead_reckoning_until_a_fix()
     north, east = offset_m(g.dr_lat_deg, g.dr_lon_deg, g.lat_deg, g.lon_deg)
     assert abs(east) <= 2 * 0.1 * 4.0 + 1e-6  # drift of the fix tick and the first call tick
     assert g.surfacings == 1
+
+
+def test_the_ctd_lags_the_water_and_a_powered_off_ctd_is_not_sent():
+    from gliderplan.sim import ocean
+    from gliderplan.sim.science import DEVICELESS_MASK, ScienceComputer, SensorNoise
+
+    g = glider(tick_s=4.0)
+    science = ScienceComputer(g, ocean.bench(), SensorNoise(temperature_lag_s=8.0), 0, 4.0)
+    mask, values = science.readings(0)
+    assert mask == DEVICELESS_MASK  # nothing powered before the first COMMAND
+    assert values[9] == pytest.approx(24.0, abs=0.01)
+    g.depth_m = 40.0  # into 7 C water: the reading follows with an 8 s time constant
+    science.apply(40.0, -PITCH, -BALLAST, 0.0, 0, 1 << 9)
+    mask, values = science.readings(1)
+    assert mask & (1 << 9) and mask & (1 << 11)  # the CTD's temperature and salinity
+    assert values[9] == pytest.approx(7.0 + 17.0 * math.exp(-0.5), abs=0.02)
