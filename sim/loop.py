@@ -78,10 +78,11 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     last_tick = int(math.floor(config.duration_s / tick_s + 1e-9))
     trace: list[Transition] = []
     cols: dict[str, list] = {k: [] for k in (
-        "depth_m", "pitch_rad", "temperature_c", "state", "stack_depth", "profile",
-        "sensor_power", "phase", "pumped_out_cc", "pumped_in_cc", "inflection", "lat_deg",
-        "lon_deg")}
+        "depth_m", "pitch_rad", "temperature_c", "temp_reading_c", "state", "stack_depth",
+        "profile", "sensor_power", "phase", "pumped_out_cc", "pumped_in_cc", "inflection",
+        "lat_deg", "lon_deg")}
     depth_c, pitch_c, temp_c = cols["depth_m"], cols["pitch_rad"], cols["temperature_c"]
+    reading_c = cols["temp_reading_c"]
     state_c, stack_c, profile_c = cols["state"], cols["stack_depth"], cols["profile"]
     power_c, phase_c = cols["sensor_power"], cols["phase"]
     out_c, in_c, infl_c = cols["pumped_out_cc"], cols["pumped_in_cc"], cols["inflection"]
@@ -94,6 +95,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
         depth_c.append(glider.depth_m)
         pitch_c.append(glider.pitch_rad)
         temp_c.append(science.water_temperature_c)
+        reading_c.append(science.ctd_temperature_c)
         lat_c.append(glider.lat_deg)
         lon_c.append(glider.lon_deg)
         try:

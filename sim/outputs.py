@@ -26,8 +26,9 @@ def trace_csv(trace: list[Transition]) -> str:
 
 
 def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
-    """One row per tick: time, depth, pitch, water temperature, state, stack depth, each
-    logged sensor's power, power per component [W], battery remaining [J]."""
+    """One row per tick: time, depth, pitch, water temperature and the CTD's reading (NaN
+    while it is off), state, stack depth, each sensor's power, power per component [W],
+    battery remaining [J]."""
     import pyarrow as pa
 
     c = record.columns
@@ -38,6 +39,7 @@ def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
         "depth_m": c["depth_m"],
         "pitch_rad": c["pitch_rad"],
         "temperature_c": c["temperature_c"],
+        "temp_reading_c": c["temp_reading_c"],
         "state": names[np.where(state == NONE, len(record.state_names), state)],
         "stack_depth": c["stack_depth"].astype(np.int16),
         "profile": c["profile"].astype(np.int16),

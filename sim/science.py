@@ -34,6 +34,7 @@ for _s in SENSORS:
     if _s.device is not None:
         DEVICE_MASKS[_s.device] = DEVICE_MASKS.get(_s.device, 0) | (1 << _s.index)
 
+_TEMP_BIT = 1 << next(s.index for s in SENSORS if s.name == "temp")
 BOTTOM_DEPTH_M = 200.0  # assumption: water depth for the altimeter reading
 BATTERY_V = 15.0  # assumption: alkaline pack voltage, constant over the run
 _NOISE_BLOCK = 4096  # random numbers drawn per numpy call
@@ -84,6 +85,7 @@ class ScienceComputer:
         self._noise: list[tuple[float, float]] = []
         self._flicker_c = noise.flicker_c if self.rng.random() < 0.5 else -noise.flicker_c
         self.water_temperature_c = math.nan  # at the glider, this tick (for the record)
+        self.ctd_temperature_c = math.nan  # the CTD's reading sent this tick; NaN: CTD off
 
     def _draws(self) -> tuple[float, float]:
         """(temperature, depth) standard normal draws for one tick."""
@@ -113,7 +115,9 @@ class ScienceComputer:
             measured, conductivity_s_m(measured, salinity), salinity,
             250.0, 1.0, 0.001, math.hypot(c.north_mps, c.east_mps), 0.0,
         ]
-        return powered_mask(self.sensor_power), values
+        mask = powered_mask(self.sensor_power)
+        self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan
+        return mask, values
 
     def apply(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
               heading_rad: float, flags: int, sensor_power: int) -> None:

@@ -35,7 +35,8 @@ def test_timeseries_columns_and_summary(tmp_path):
     out = tmp_path / "run"
     assert main(["sim", str(FIG2), "-o", str(out)]) == 0
     table = pd.read_parquet(out / "timeseries.parquet")
-    for column in ("time_s", "depth_m", "pitch_rad", "temperature_c", "state", "stack_depth",
+    for column in ("time_s", "depth_m", "pitch_rad", "temperature_c", "temp_reading_c",
+                   "state", "stack_depth",
                    "temp_on", "oxygen_on", "power_hotel_w", "power_pump_w",
                    "power_computer_w", "power_ctd_w", "power_total_w", "battery_remaining_j"):
         assert column in table.columns, column
@@ -44,6 +45,12 @@ def test_timeseries_columns_and_summary(tmp_path):
     assert flying["temp_on"].groupby(flying["state"]).any().to_dict() == {
         "s1": False, "s2": True, "s3": False}  # only s2 logs temp
     assert flying["temp_on"][flying["state"] == "s2"].all()
+    # the CTD's reading is sent in the ticks after a COMMAND that powers it
+    sent = table["temp_reading_c"].notna()
+    powered_before = table["temp_on"].shift(1, fill_value=False)
+    assert sent.equals(powered_before) and sent.sum() == 250  # 500-1500 s at 4 s
+    read = table[sent]
+    assert (read["temp_reading_c"] - read["temperature_c"]).abs().max() < 0.1
     assert set(table["stack_depth"][table["state"] == "s2"]) == {1}
     summary = json.loads((out / "summary.json").read_text())
     total = summary["energy_j"]

@@ -106,6 +106,11 @@ def test_sea_trial_naive_tracker_never_detects_with_non_monotonic_readings(seed)
     assert len(depths) >= 10
     # always the whole range 2-30 m: the window was reset before the threshold was met
     assert all(d < 2.5 or d > 29.5 for d in depths)
+    # because, diving, nearly every other reading is warmer than the one before
+    c = record.columns
+    diving = np.diff(c["depth_m"]) > 0.1
+    warmer = np.diff(c["temp_reading_c"]) > 0
+    assert 0.3 < warmer[diving].mean() < 0.7
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
