@@ -79,8 +79,8 @@ def plan_predictions(plan_path: str | Path, mission: CheckedMission
 
     try:
         replanned = plan_mission(mission)
-    except PlanningError:  # e.g. the mission's own budget is infeasible: not this plan
-        return None, "none"
+    except (PlanningError, ValueError):  # an infeasible budget, unreadable hardware files:
+        return None, "none"  # then the planner could not have made this plan either
     if write_plan_bytes(replanned) != Path(plan_path).read_bytes():
         return None, "none"
     return predictions_from_report(report_json(replanned), "the planner's report"), "replanned"
