@@ -15,8 +15,20 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e '.[test]'
 	touch $@
 
+# The whole pipeline on the built-in examples: check, plan under the battery budget,
+# compile mission and plan to C, fly them on the simulated glider over a
+# pseudo-terminal, and sweep the survey's quality against its budget.
+DEMO := out/demo
+GP := $(BIN)/gliderplan
 demo: $(STAMP)
-	$(BIN)/gliderplan check examples/*.mission
+	$(GP) check examples/*.mission
+	$(GP) plan examples/fig2_annotated.mission -o $(DEMO)/fig2.plan
+	$(GP) compile examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan -o $(DEMO)/build
+	$(GP) sim examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan --runtime c -o $(DEMO)/run
+	$(GP) plan examples/thermocline_survey.mission --sweep 20 -o $(DEMO)/sweep
+	@echo "demo: plan and report in $(DEMO)/fig2.plan{,.json}; binary in $(DEMO)/build;"
+	@echo "      flight (trace.csv, summary.json, depth.png, energy.png) in $(DEMO)/run;"
+	@echo "      Pareto sweep (pareto.csv, pareto.png, computers.csv, batteries.csv) in $(DEMO)/sweep"
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -102,10 +102,15 @@ def _sweep(mission, hardware, args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory (--sweep writes several files there)")
 
+    live = sys.stderr.isatty()  # a counter rewritten in place only reads on a terminal
+
     def progress(label: str):
         def report(done: int, total: int) -> None:
-            print(f"\r{label}: {done}/{total}", end="\n" if done == total else "",
-                  file=sys.stderr, flush=True)
+            if live:
+                print(f"\r{label}: {done}/{total}", end="\n" if done == total else "",
+                      file=sys.stderr, flush=True)
+            elif done == total:
+                print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
         return report
 
     _, model = prepare(mission, hardware)
@@ -122,6 +127,7 @@ def _sweep(mission, hardware, args: argparse.Namespace) -> int:
                           "computers": boards.to_dict("records"),
                           "batteries": packs.to_dict("records")}, indent=2))
     else:
-        print(frame[["budget_wh", "quality", "shadow_price"]].to_string(index=False))
+        table = frame[["budget_wh", "quality", "shadow_price"]]
+        print(table.round({"budget_wh": 1, "quality": 4, "shadow_price": 5}).to_string(index=False))
         print(f"wrote pareto.csv, computers.csv, batteries.csv and pareto.png to {out}")
     return 0

@@ -17,6 +17,7 @@ compiles the problem once and reuses the compiled form.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import cvxpy as cp
@@ -212,7 +213,9 @@ class PlanModel:
     def _solve(self, problem: cp.Problem, **options: float) -> Solution:
         start = time.perf_counter()
         try:
-            problem.solve(solver=SOLVER, **options)
+            with warnings.catch_warnings():  # the status below says "optimal_inaccurate"
+                warnings.filterwarnings("ignore", message="Solution may be inaccurate")
+                problem.solve(solver=SOLVER, **options)
         except cp.SolverError:
             pass  # reported through the status below
         elapsed = time.perf_counter() - start

@@ -61,7 +61,9 @@ def infeasible_json(message: str, budget_j: float, minimum_j: float,
 
 
 def _wh(joules: float) -> str:
-    return f"{joules / J_PER_WH:.3g}"
+    """Three significant figures, without an exponent a pilot would have to decode."""
+    wh = joules / J_PER_WH
+    return f"{wh:,.0f}" if abs(wh) >= 1000 else f"{wh:.3g}"
 
 
 def _table(header: list[str], rows: list[list[str]]) -> list[str]:

@@ -12,6 +12,8 @@ from gliderplan.sim.executor import NONE
 from gliderplan.sim.loop import RunRecord
 from gliderplan.sim.prediction import StatePrediction
 
+BUDGET_LINE_SPAN = 3.0  # draw the budget line only if it lies within 3x the energy spent
+
 
 def _figure():
     import matplotlib
@@ -91,12 +93,16 @@ def energy_png(record: RunRecord, energy: RunEnergy,
             time_in_state = np.cumsum(state == i) * record.tick_s
             planned += p.energy_j / p.time_s * np.minimum(time_in_state, p.time_s)
         ax.plot(t, planned / 1e3, "k--", lw=1.5, label="plan (each state's prediction)")
-    if budget_j is not None:
+    title = "energy over time"
+    top_kj = ax.get_ylim()[1]
+    if budget_j is not None and budget_j / 1e3 <= BUDGET_LINE_SPAN * top_kj:
         ax.axhline(budget_j / 1e3, color="red", lw=1, label="plan budget")
+    elif budget_j is not None:  # a line far above the data would flatten the curves
+        title += f" (plan budget {budget_j / 1e3:,.0f} kJ, off the scale)"
     ax.set_xlabel(f"mission time [{unit}]")
     ax.set_ylabel("energy [kJ]")
     ax.legend(loc="upper left", fontsize=8)
-    ax.set_title("energy over time")
+    ax.set_title(title)
     return _png(fig, plt)
 
 

@@ -30,6 +30,8 @@ def test_table_says_what_each_state_does():
     for text in ("quality", "shadow price", "energy by component", "s1", "s2", "s3",
                  "hotel", "computer", "ctd", "optode", "temp"):
         assert text in out
+    assert "1,020 Wh budget" in out  # a kilowatt-hour pack reads without an exponent
+    assert "e+" not in out
 
 
 def test_fig2_without_annotations_says_which_defaults_it_used():
