@@ -7,7 +7,8 @@ needs them. Every pass reports all it finds, never just the first problem.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
+from typing import TypeVar
 
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
@@ -23,6 +24,7 @@ from gliderplan.language.units import UnitProblem, to_si
 
 MAX_STACK_DEPTH = 64
 _ACTIONS = ("goto", "call", "return", "exit")
+T = TypeVar("T")
 
 
 class _Checker:
@@ -302,12 +304,19 @@ class _Checker:
             requirements=tuple(reqs),
         )
 
+    def registered(self, ident: ast.Ident, table: Mapping[str, T], kind: str,
+                   plural: str) -> T | None:
+        """The registry entry `ident` names, or an error that lists the near misses."""
+        info = table.get(ident.text)
+        if info is None:
+            self.error(f"unknown {kind} '{ident.text}'", ident.span,
+                       did_you_mean(ident.text, table) or f"{plural}: {', '.join(table)}")
+        return info
+
     def route(self, invocation: ast.Invocation) -> ir.Route | None:
         name = invocation.name.text
-        info = ROUTES.get(name)
+        info = self.registered(invocation.name, ROUTES, "flight route", "routes")
         if info is None:
-            self.error(f"unknown flight route '{name}'", invocation.name.span,
-                       did_you_mean(name, ROUTES) or f"routes: {', '.join(ROUTES)}")
             return None
         scalars = [a for a in invocation.args if not isinstance(a, ast.Point)]
         points = [a for a in invocation.args if isinstance(a, ast.Point)]
@@ -332,10 +341,8 @@ class _Checker:
 
     def profile(self, invocation: ast.Invocation) -> ir.Profile | None:
         name = invocation.name.text
-        info = PROFILES.get(name)
+        info = self.registered(invocation.name, PROFILES, "flight profile", "profiles")
         if info is None:
-            self.error(f"unknown flight profile '{name}'", invocation.name.span,
-                       did_you_mean(name, PROFILES) or f"profiles: {', '.join(PROFILES)}")
             return None
         if len(invocation.args) != len(info.params) or any(
                 isinstance(a, ast.Point) for a in invocation.args):

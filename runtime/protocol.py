@@ -16,7 +16,7 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Protocol, cast
+from typing import NamedTuple, Protocol, cast
 
 PROTOCOL_VERSION = 1
 MAX_PAYLOAD = 240  # bytes
@@ -310,16 +310,15 @@ class Sensors:
 _COMMAND = struct.Struct("<IBBBBBBBBffffII")
 
 
-@dataclass(frozen=True)
-class Command:
+class Command(NamedTuple):  # a tuple: the simulator builds one per tick
     tick: int
-    state: int
+    state: int  # 0xFF once exited
     stack_depth: int
-    transition: int
+    transition: int  # 0 none, 1 start, 2 goto, 3 call, 4 return, 5 exit
     from_state: int
     to_state: int
     profile: int
-    flags: int
+    flags: int  # bit 0 surface, 1 mission done, 2 climbing, 3 heading valid
     depth_target_m: float
     pitch_rad: float
     ballast_cc: float

@@ -12,10 +12,11 @@ from __future__ import annotations
 import functools
 import math
 import struct
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
 from gliderplan.language import ir, semantics
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
+from gliderplan.runtime.protocol import Command
 from gliderplan.sim import compiled, pilot
 
 if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
@@ -43,25 +44,6 @@ def _runs(mask: int) -> tuple[tuple[int, int], ...]:
 
 def _floats(values: tuple[float, ...] | None) -> tuple[float, ...] | None:
     return None if values is None else tuple(float(v) for v in values)
-
-
-class Command(NamedTuple):
-    """A COMMAND frame's fields (docs/protocol.md)."""
-
-    tick: int
-    state: int  # 0xFF once exited
-    stack_depth: int
-    transition: int  # 0 none, 1 start, 2 goto, 3 call, 4 return, 5 exit
-    from_state: int
-    to_state: int
-    profile: int
-    flags: int  # bit 0 surface, 1 mission done, 2 climbing, 3 heading valid
-    depth_target_m: float
-    pitch_rad: float
-    ballast_cc: float
-    heading_rad: float
-    sensor_power: int
-    event_count: int
 
 
 class PythonRuntime:

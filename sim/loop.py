@@ -16,7 +16,8 @@ import numpy as np
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, Transition
 from gliderplan.power_models.vehicle import Vehicle
-from gliderplan.sim.executor import NONE, Command
+from gliderplan.runtime.protocol import Command
+from gliderplan.sim.executor import NONE
 from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
 from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.science import ScienceComputer, SensorNoise
