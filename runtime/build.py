@@ -28,6 +28,7 @@ from gliderplan.language.ir import CheckedMission
 # The contract of runtime/include/gp_mission.h: every runtime source and the mission.
 C_FLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror")
 LINK_FLAGS = ("-lm",)
+CACHED_BUILDS = 64  # at most ~40 MB: a static board binary is 0.6-0.7 MB, a host one 70 kB
 
 
 class BuildError(Exception):
@@ -152,7 +153,8 @@ def _compile(command: list[str], board: Target, include: Path, sources: list[Pat
 
 
 def cache_dir() -> Path:
-    """$GLIDERPLAN_CACHE_DIR, else ~/.cache/gliderplan/builds."""
+    """$GLIDERPLAN_CACHE_DIR, else ~/.cache/gliderplan/builds; the newest
+    `CACHED_BUILDS` builds are kept."""
     configured = os.environ.get("GLIDERPLAN_CACHE_DIR")
     if configured:
         return Path(configured)
@@ -193,11 +195,21 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = 
     with runtime_sources() as (include, sources):
         key = build_key(source, include, sources, board, compiler_command(board))
     cached = cache_dir() / key[:2] / key / mission.name
-    if not cached.is_file():
+    if cached.is_file():
+        os.utime(cached.parent)  # recently used: kept longest
+    else:
         build_mission(c_path, cached.parent, target)
+        _prune_cache(cache_dir(), CACHED_BUILDS)
     binary = out / mission.name
     _copy_atomically(cached, binary)
     return binary
+
+
+def _prune_cache(root: Path, keep: int) -> None:
+    """Remove all but the `keep` most recently used builds under `root`."""
+    entries = sorted(root.glob("??/*"), key=lambda d: d.stat().st_mtime, reverse=True)
+    for stale in entries[keep:]:
+        shutil.rmtree(stale, ignore_errors=True)  # another process may be removing it too
 
 
 def _write_if_changed(path: Path, text: str) -> None:

@@ -17,6 +17,7 @@ import shutil
 import signal
 import struct
 import subprocess
+import time
 import tty
 import zlib
 from collections.abc import Iterator
@@ -158,6 +159,22 @@ def test_a_second_compile_comes_from_the_cache(binary, cache, tmp_path):
     assert compile_fig2(tmp_path) == 0
     assert sorted(cache.rglob("sampleMission")) == entries  # nothing new was built
     assert (tmp_path / "sampleMission").read_bytes() == binary.read_bytes()
+
+
+def test_the_cache_keeps_the_most_recently_used_builds(monkeypatch, tmp_path):
+    monkeypatch.setenv("GLIDERPLAN_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(build, "CACHED_BUILDS", 2)
+    text = FIG2.read_text()
+    for horizon in (2500, 2600, 2500, 2700):  # the third is a cache hit that refreshes 2500
+        source = tmp_path / "m.mission"
+        source.write_text(text.replace("2500", str(horizon)))
+        assert main(["compile", str(source), "-o", str(tmp_path / str(horizon))]) == 0
+        time.sleep(0.01)  # distinct modification times
+    built = [b.read_bytes() for b in (tmp_path / "cache").rglob("sampleMission")]
+    assert len(built) == 2
+    assert (tmp_path / "2500" / "sampleMission").read_bytes() in built
+    assert (tmp_path / "2700" / "sampleMission").read_bytes() in built
+    assert (tmp_path / "2600" / "sampleMission").read_bytes() not in built
 
 
 def test_the_cache_key_changes_with_every_input_of_the_build(tmp_path):
