@@ -1,17 +1,19 @@
 """The science-computer side of the runtime link (docs/protocol.md), byte for byte.
 
 Framing (COBS + CRC-16/CCITT-FALSE), the seven messages, and `Link`: a small driver
-that plays the science computer over a serial port (pyserial, or `FdPort` over a pty
+that plays the science computer over a serial port (pyserial's, or `FdPort` over a pty
 master) for the simulator's emulator and the end-to-end tests.
 """
 
 from __future__ import annotations
 
 import binascii
+import fcntl
 import math
 import os
 import select
 import struct
+import termios
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -439,7 +441,10 @@ def plan_pieces(plan: bytes) -> list[Plan]:
 class Port(Protocol):
     """What Link needs of a serial port (pyserial's Serial has it)."""
 
-    timeout: float | None
+    def fileno(self) -> int: ...
+
+    @property
+    def in_waiting(self) -> int: ...
 
     def read(self, size: int = 1) -> bytes: ...
 
@@ -452,6 +457,18 @@ class FdPort:
     def __init__(self, fd: int, timeout: float | None = None) -> None:
         self.fd = fd
         self.timeout = timeout
+
+    def fileno(self) -> int:
+        return self.fd
+
+    @property
+    def in_waiting(self) -> int:
+        """Bytes ready to read (0 on a pty master with no slave open)."""
+        try:
+            count = fcntl.ioctl(self.fd, termios.FIONREAD, b"\0\0\0\0")
+        except OSError:
+            return 0
+        return struct.unpack("i", count)[0]
 
     def read(self, size: int = 1) -> bytes:
         ready, _, _ = select.select([self.fd], [], [], self.timeout)
@@ -507,8 +524,15 @@ class Link:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return None
-            self.port.timeout = remaining
-            data = self.port.read(512)
+            # wait here rather than in read(): a pyserial port reconfigures the line (a
+            # tcsetattr) on every change of its timeout
+            ready, _, _ = select.select([self.port], [], [], remaining)
+            if not ready:
+                continue
+            try:
+                data = self.port.read(max(1, self.port.in_waiting))
+            except OSError as err:  # pyserial's SerialException: the other end hung up
+                raise LinkError(f"the serial line hung up ({err})") from None
             for item in self._reader.feed(data):
                 if isinstance(item, ProtocolError):
                     self._drop()

@@ -1,24 +1,25 @@
 """The science computer behind a real serial line: the compiled C runtime runs as its own
-process on one end of a pseudo-terminal pair, the simulator speaks docs/protocol.md on
-the other (gliderplan.runtime.protocol.Link). The simulator sends each tick's SENSORS
+process and creates a pseudo-terminal (`--device pty`); the simulator opens the other end
+with pyserial, as it would a serial port, and speaks docs/protocol.md over it
+(gliderplan.runtime.protocol.Link). The simulator sends each tick's SENSORS
 frame and waits for that tick's COMMAND, so the run is lock-step: as fast as the two
 processes can talk, and deterministic."""
 
 from __future__ import annotations
 
 import functools
-import os
+import select
 import shutil
 import signal
 import subprocess
 import tempfile
-import tty
 from pathlib import Path
 
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
 
 HELLO_TIMEOUT_S = 10.0
+BAUD = 115200
 EXIT_TIMEOUT_S = 5.0
 
 
@@ -31,24 +32,28 @@ class CRuntime:
 
     def __init__(self, binary: Path, mission: ir.CheckedMission, plan_path: str | None,
                  naive_tracker: bool, work_dir: Path) -> None:
-        from gliderplan.runtime.protocol import FdPort, Link, LinkError
+        import serial
+
+        from gliderplan.runtime.protocol import Link, LinkError
 
         self._work = work_dir
         self.exited = False
-        self.master, self.slave = os.openpty()
-        tty.setraw(self.slave)  # the runtime sets raw mode too; no echo before it does
-        # no --state-dir: a simulated run needs no checkpoint to resume from
-        command = [str(binary), "--device", os.ttyname(self.slave)]
+        self.port: serial.Serial | None = None
+        self._stderr: str | None = None
+        # the runtime makes the pty and names its other end; no --state-dir: a simulated
+        # run needs no checkpoint to resume from
+        command = [str(binary), "--device", "pty"]
         if plan_path is not None:
             command += ["--plan", str(Path(plan_path).resolve())]
         if naive_tracker:
             command.append("--naive-tracker")
         self.process = subprocess.Popen(command, stdin=subprocess.DEVNULL,
-                                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        self.link = Link(FdPort(self.master))
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         try:
+            self.port = serial.Serial(self._peer_path(), BAUD, timeout=0)
+            self.link = Link(self.port)
             hello = self.link.wait_hello(HELLO_TIMEOUT_S)
-        except LinkError as err:
+        except (EmulatorError, LinkError, serial.SerialException) as err:
             self.close()
             raise EmulatorError(f"the runtime did not say HELLO ({err}): "
                                 f"{self.stderr_text()}") from None
@@ -58,7 +63,7 @@ class CRuntime:
 
     def step(self, tick: int, mask: int, values: list[float]):
         """Send one tick's SENSORS (the sensors in `mask`), return the runtime's COMMAND."""
-        from gliderplan.runtime.protocol import NO_STATE, LinkReleasedError, LinkTimeoutError
+        from gliderplan.runtime.protocol import NO_STATE, LinkError, LinkReleasedError
 
         carried = {i: values[i] for i in _indices(mask)}
         try:
@@ -68,16 +73,30 @@ class CRuntime:
         except LinkReleasedError as err:
             raise MissionFault(f"tick {tick}: the runtime released the glider ({err}): "
                                f"{self.stderr_text()}") from None
-        except LinkTimeoutError as err:
-            raise MissionFault(f"tick {tick}: the runtime stopped answering ({err})") from None
+        except LinkError as err:  # timed out, or hung up
+            raise MissionFault(f"tick {tick}: the runtime stopped answering ({err}): "
+                               f"{self.stderr_text()}") from None
+
+    def _peer_path(self) -> str:
+        """The pty path the runtime prints first, once it has opened the line."""
+        ready, _, _ = select.select([self.process.stdout], [], [], HELLO_TIMEOUT_S)
+        line = self.process.stdout.readline().decode(errors="replace").strip() if ready else ""
+        if not line:
+            raise EmulatorError("it opened no serial line")
+        return line
 
     def stderr_text(self) -> str:
-        if self.process.poll() is None:
-            return ""
-        return self.process.stderr.read().decode(errors="replace").strip()
+        """What the runtime said on stderr, once it has ended."""
+        if self._stderr is None and self.process.poll() is not None:
+            self._stderr = self.process.stderr.read().decode(errors="replace").strip()
+        return self._stderr or ""
 
     def close(self) -> None:
-        """Let an exited runtime finish (RELEASE, exit 0); stop one that is still flying."""
+        """Let an exited runtime finish (RELEASE, exit 0); stop one that is still flying.
+        Our end of the line closes first: the runtime waits for that before it closes its
+        own, which would discard what we had not read."""
+        if self.port is not None:
+            self.port.close()
         try:
             if not self.exited:
                 self.process.send_signal(signal.SIGTERM)
@@ -86,9 +105,9 @@ class CRuntime:
             self.process.kill()
             self.process.wait()
         finally:
+            self.stderr_text()  # kept for the error message
+            self.process.stdout.close()
             self.process.stderr.close()
-            os.close(self.master)
-            os.close(self.slave)
             shutil.rmtree(self._work, ignore_errors=True)
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import os
 import random
+import select
 import shutil
 import signal
 import struct
@@ -24,6 +25,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+import serial
 
 from gliderplan.cli.main import main
 from gliderplan.language import check_source, semantics
@@ -152,6 +154,28 @@ def test_compiled_fig2_flies_the_papers_trace(binary, line, tmp_path):
     commands = run_to_end(line, [str(binary)], tmp_path)
     assert trace(commands) == PAPER_TRACE
     assert (tmp_path / "events.log").read_text().splitlines() == PAPER_TRACE
+
+
+def test_fig2_over_a_line_the_runtime_makes_with_a_pyserial_peer(binary, tmp_path):
+    """`--device pty`: the runtime creates the pseudo-terminal and names its other end;
+    the science computer opens that with pyserial at 115200 8N1, as a real port."""
+    process = subprocess.Popen([str(binary), "--device", "pty", "--state-dir", str(tmp_path)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        ready, _, _ = select.select([process.stdout], [], [], 30)
+        device = process.stdout.readline().strip() if ready else ""
+        assert device.startswith("/dev/pts/"), process.stderr.read()
+        with serial.Serial(device, 115200, timeout=0) as port:
+            link = p.Link(port, retransmit_s=0.2, max_retries=20)
+            assert link.wait_hello(30).name == "sampleMission"
+            commands = fly(link, 0)
+            assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+        assert process.wait(30) == 0, process.stderr.read()  # it waited for us to hang up
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert trace(commands) == PAPER_TRACE
 
 
 def test_a_second_compile_comes_from_the_cache(binary, cache, tmp_path):

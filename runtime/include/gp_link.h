@@ -17,8 +17,11 @@ enum {
     GP_EXIT_INTERNAL = 4,     /**< internal error (mission fault, I/O) */
 };
 
+/** `--device pty`: create a pseudo-terminal and print its peer's path on stdout. */
+#define GP_DEVICE_PTY "pty"
+
 typedef struct {
-    const char *device;
+    const char *device;          /**< serial device path, or GP_DEVICE_PTY */
     const char *plan_path;       /**< NULL: no plan */
     const char *state_dir;       /**< NULL: no checkpoint, no event log */
     double link_timeout_s;       /**< default 10 */

@@ -12,6 +12,19 @@
 /** @brief Open `path` read-write in raw 115200 8N1; @return fd, or -1 with errno. */
 int gp_serial_open(const char *path);
 
+/**
+ * @brief Create a pseudo-terminal in raw 115200 8N1 for a simulated science computer:
+ *        the runtime keeps the master, the peer opens `peer_path` (its slave).
+ * @return the master's fd, or -1 with errno
+ */
+int gp_serial_open_pty(char *peer_path, size_t cap);
+
+/**
+ * @brief Before closing a pty master: wait (at most `max_s`) for the peer to close its
+ *        end, since closing the master discards whatever the peer has not yet read.
+ */
+void gp_serial_linger(int fd, double max_s);
+
 /** @brief Write all bytes (bounded retries); @return 0, or -1. */
 int gp_serial_write(int fd, const uint8_t *data, size_t len);
 

@@ -6,7 +6,7 @@
 
 #include "gp_link.h"
 
-#define USAGE "usage: PROG --device PATH [--plan FILE] [--state-dir DIR] " \
+#define USAGE "usage: PROG --device PATH|pty [--plan FILE] [--state-dir DIR] " \
               "[--link-timeout-s S] [--retransmit-ms MS] [--naive-tracker]"
 
 static int number(const char *text, double low, double high, double *out)

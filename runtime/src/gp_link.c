@@ -28,6 +28,7 @@ typedef struct {
     const gp_args *args;
     const char *prog;
     int fd;                          /* the serial line */
+    int own_pty;                     /* fd is the master of a pty we created */
     int events_fd;                   /* events.log, -1 without a state directory */
     gp_frame_reader reader;
     uint8_t seq;                     /* our last frame's seq */
@@ -57,6 +58,26 @@ static void say(const link_state *s, const char *message)
     fprintf(stderr, "%s: %s\n", s->prog, message);
 }
 
+/* The serial line: a device, or with `--device pty` a new pseudo-terminal whose peer
+ * path is the first line on stdout (for a simulated science computer to open). */
+static int open_line(link_state *s, char *message)
+{
+    char peer[128];
+    int pty = strcmp(s->args->device, GP_DEVICE_PTY) == 0;
+    s->fd = pty ? gp_serial_open_pty(peer, sizeof peer) : gp_serial_open(s->args->device);
+    s->own_pty = pty;
+    if (s->fd < 0) {
+        snprintf(message, ERROR_LEN, "%.200s: cannot open the serial line: %s",
+                 pty ? "a new pseudo-terminal" : s->args->device, strerror(errno));
+        return -1;
+    }
+    if (pty) {
+        printf("%s\n", peer);
+        fflush(stdout);
+    }
+    return 0;
+}
+
 static int send_frame(link_state *s, uint8_t type, const uint8_t *payload, size_t len)
 {
     s->seq = (uint8_t)(s->seq + 1);
@@ -80,6 +101,9 @@ static int release(link_state *s, gp_release_reason reason, int status)
     uint8_t payload = (uint8_t)reason;
     send_frame(s, GP_MSG_RELEASE, &payload, 1);
     tcdrain(s->fd);  /* the RELEASE must reach the line before we close it */
+    if (s->own_pty) {
+        gp_serial_linger(s->fd, s->args->link_timeout_s);
+    }
     crash_fd = -1;
     close(s->fd);
     if (s->events_fd >= 0) {
@@ -419,10 +443,7 @@ int gp_main(int argc, char **argv)
         say(&s, message);
         return GP_EXIT_BAD_INPUT;
     }
-    s.fd = gp_serial_open(args.device);
-    if (s.fd < 0) {
-        snprintf(message, sizeof message, "%.200s: cannot open the serial line: %s", args.device,
-                 strerror(errno));
+    if (open_line(&s, message) < 0) {
         say(&s, message);
         return GP_EXIT_BAD_INPUT;
     }

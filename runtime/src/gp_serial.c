@@ -1,28 +1,25 @@
-/* POSIX serial I/O. A hung-up peer (pty master closed) reads as silence, so the
- * watchdog, not an error path, decides when to give control back. */
-#define _POSIX_C_SOURCE 200809L
+/* POSIX serial I/O. A hung-up peer (the other end of a pty closed, or not yet opened)
+ * reads as silence, so the watchdog, not an error path, decides when to give control
+ * back. */
+#define _XOPEN_SOURCE 700 /* posix_openpt, grantpt, unlockpt, ptsname */
 #include "gp_serial.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
+#include <stdlib.h>
+#include <string.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
 #define WRITE_ATTEMPTS 1000
 
-int gp_serial_open(const char *path)
+/* Raw 115200 8N1, no flow control; reads return what is there (VMIN = VTIME = 0). */
+static int make_raw(int fd)
 {
-    int fd = open(path, O_RDWR | O_NOCTTY);
-    if (fd < 0) {
-        return -1;
-    }
     struct termios tio;
     if (tcgetattr(fd, &tio) < 0) {
-        int saved = errno;
-        close(fd);
-        errno = saved;
         return -1;
     }
     tio.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON
@@ -35,12 +32,60 @@ int gp_serial_open(const char *path)
     tio.c_cc[VTIME] = 0;
     if (cfsetispeed(&tio, B115200) < 0 || cfsetospeed(&tio, B115200) < 0
         || tcsetattr(fd, TCSANOW, &tio) < 0) {
-        int saved = errno;
-        close(fd);
-        errno = saved;
         return -1;
     }
+    return 0;
+}
+
+static int close_keeping_errno(int fd)
+{
+    int saved = errno;
+    close(fd);
+    errno = saved;
+    return -1;
+}
+
+int gp_serial_open(const char *path)
+{
+    int fd = open(path, O_RDWR | O_NOCTTY);
+    if (fd < 0) {
+        return -1;
+    }
+    return make_raw(fd) < 0 ? close_keeping_errno(fd) : fd;
+}
+
+int gp_serial_open_pty(char *peer_path, size_t cap)
+{
+    int fd = posix_openpt(O_RDWR | O_NOCTTY);
+    if (fd < 0) {
+        return -1;
+    }
+    const char *name = NULL;
+    if (grantpt(fd) < 0 || unlockpt(fd) < 0 || (name = ptsname(fd)) == NULL
+        || make_raw(fd) < 0) {
+        return close_keeping_errno(fd);
+    }
+    if (strlen(name) >= cap) {
+        errno = ENAMETOOLONG;
+        return close_keeping_errno(fd);
+    }
+    memcpy(peer_path, name, strlen(name) + 1);
     return fd;
+}
+
+void gp_serial_linger(int fd, double max_s)
+{
+    uint8_t sink[64];
+    for (double until = gp_now_s() + max_s; gp_now_s() < until;) {
+        struct pollfd pfd = {.fd = fd, .events = POLLIN};
+        int ready = poll(&pfd, 1, 50);
+        if (ready > 0 && (pfd.revents & POLLHUP)) {
+            return;
+        }
+        if (ready > 0 && read(fd, sink, sizeof sink) < 0 && errno != EINTR && errno != EAGAIN) {
+            return;
+        }
+    }
 }
 
 int gp_serial_write(int fd, const uint8_t *data, size_t len)
