@@ -52,6 +52,9 @@
     X(test_runtime_should_follow_the_plan_schedule)                         \
     X(test_runtime_should_resume_from_a_checkpoint_with_the_same_trace)     \
     X(test_runtime_should_report_start_and_event_on_tick_0_and_refuse_overflow) \
+    X(test_pty_should_carry_raw_bytes_to_the_path_it_names)                 \
+    X(test_pty_should_refuse_a_path_buffer_too_small)                       \
+    X(test_linger_should_end_when_the_peer_hangs_up_and_else_at_its_bound)  \
     X(test_args_should_parse_every_option)                                  \
     X(test_args_should_refuse_bad_command_lines)
 
