@@ -314,12 +314,12 @@ def test_a_killed_runtime_resumes_with_the_same_trace(binary, line, tmp_path):
 
 
 def make_plan(mission_hash: str, version: int = 1, temp_period_s: float = 60,
-              temp_on_s: float = 15) -> bytes:
+              temp_on_s: float = 15, s2_clock_mhz: int = 300) -> bytes:
     """A plan for Fig. 2 written by hand from docs/plan-format.md."""
     body = (f"GPPLAN {version}\nmission sampleMission\nhash {mission_hash}\n"
             "computer ts7800 300\nbudget_j 6630000\npredicted_j 9876.5\nstates 3\n"
             "state s1 300 600 0 1\nprofile 0 1 0.3 150 0.31\nend\n"
-            f"state s2 300 600 1 1\nsensor temp {temp_period_s:g} {temp_on_s:g}\n"
+            f"state s2 {s2_clock_mhz} 600 1 1\nsensor temp {temp_period_s:g} {temp_on_s:g}\n"
             "profile 0 1 0.4 200 0.3\nend\n"
             "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n").encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
@@ -386,6 +386,39 @@ def test_a_hand_written_plan_switches_sensors_on_their_windows(binary, fig2_hash
     # The planned pitch and ballast replace the profile's own and the vehicle default.
     assert {round(abs(c.pitch_rad), 6) for c in in_s1} == {0.3}
     assert {abs(c.ballast_cc) for c in in_s1} == {150.0}
+
+
+def test_the_runtime_sets_each_states_planned_clock(binary, fig2_hash, line, tmp_path):
+    (tmp_path / "fig2.plan").write_bytes(make_plan(fig2_hash, s2_clock_mhz=500))
+    speed = tmp_path / "scaling_setspeed"  # what cpufreq's userspace governor reads, in kHz
+    speed.write_text("")
+    process = line.start([str(binary), "--plan", str(tmp_path / "fig2.plan"),
+                          "--clock-file", str(speed)])
+    link = line.link()
+    link.wait_hello(30)
+    clocks: dict[int, set[str]] = {}  # state -> the clock file after each of its ticks
+    for tick in range(1000):
+        command = link.step(tick, readings(tick))
+        clocks.setdefault(command.state, set()).add(speed.read_text())
+        if command.done:
+            break
+    assert process.wait(30) == 0, process.stderr.read()
+    assert clocks[0] == {"300000\n"} and clocks[2] == {"300000\n"}
+    assert clocks[1] == {"500000\n"}
+
+
+def test_a_clock_that_cannot_be_set_is_said_once_and_the_mission_flies_on(
+        binary, fig2_hash, line, tmp_path):
+    (tmp_path / "fig2.plan").write_bytes(make_plan(fig2_hash, s2_clock_mhz=500))
+    process = line.start([str(binary), "--plan", str(tmp_path / "fig2.plan"),
+                          "--clock-file", str(tmp_path / "no" / "such" / "file")])
+    link = line.link()
+    link.wait_hello(30)
+    assert trace(fly(link, 0)) == PAPER_TRACE
+    assert process.wait(30) == 0
+    said = process.stderr.read()
+    assert said.count("cannot set the clock to 300 MHz") == 1, said
+    assert "500 MHz" not in said
 
 
 # ---- a mission with variables, against the reference semantics ---------------------

@@ -7,6 +7,7 @@
 #include "gp_link.h"
 
 #define USAGE "usage: PROG --device PATH|pty [--plan FILE] [--state-dir DIR] " \
+              "[--clock-file PATH] " \
               "[--link-timeout-s S] [--retransmit-ms MS] [--naive-tracker]"
 
 static int number(const char *text, double low, double high, double *out)
@@ -33,7 +34,7 @@ int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
         }
         int takes_value = strcmp(option, "--device") == 0 || strcmp(option, "--plan") == 0
             || strcmp(option, "--state-dir") == 0 || strcmp(option, "--link-timeout-s") == 0
-            || strcmp(option, "--retransmit-ms") == 0;
+            || strcmp(option, "--retransmit-ms") == 0 || strcmp(option, "--clock-file") == 0;
         if (!takes_value) {
             snprintf(error, cap, "unknown argument '%.64s'; " USAGE, option);
             return -1;
@@ -49,6 +50,8 @@ int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
             out->plan_path = value;
         } else if (strcmp(option, "--state-dir") == 0) {
             out->state_dir = value;
+        } else if (strcmp(option, "--clock-file") == 0) {
+            out->clock_path = value;
         } else if (strcmp(option, "--link-timeout-s") == 0) {
             if (number(value, 0.001, 86400.0, &number_value) < 0) {
                 snprintf(error, cap, "--link-timeout-s '%.32s' is not a number of seconds in "

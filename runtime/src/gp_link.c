@@ -29,6 +29,8 @@ typedef struct {
     const char *prog;
     int fd;                          /* the serial line */
     int own_pty;                     /* fd is the master of a pty we created */
+    double clock_mhz;                /* last clock written to --clock-file, 0: none */
+    int clock_failed;                /* --clock-file could not be written: said once */
     int events_fd;                   /* events.log, -1 without a state directory */
     gp_frame_reader reader;
     uint8_t seq;                     /* our last frame's seq */
@@ -223,6 +225,38 @@ static int send_command(link_state *s, const gp_command *command)
     return send_frame(s, GP_MSG_COMMAND, payload, sizeof payload);
 }
 
+/* The planned clock of the current state, written in kHz to --clock-file (a cpufreq
+ * scaling_setspeed under the userspace governor) when it changes. A clock that cannot
+ * be set costs energy, not safety: say so once and fly on. */
+static void follow_clock(link_state *s)
+{
+    if (!s->args->clock_path || !s->has_plan || s->clock_failed
+        || runtime.machine.state == GP_EXITED) {
+        return;
+    }
+    double mhz = plan.states[runtime.machine.state].clock_mhz;
+    if (mhz == s->clock_mhz) {
+        return;
+    }
+    char text[32];
+    int len = snprintf(text, sizeof text, "%ld\n", lround(mhz * 1000.0));
+    int fd = open(s->args->clock_path, O_WRONLY | O_TRUNC | O_CLOEXEC);
+    int written = fd >= 0 && write(fd, text, (size_t)len) == len;
+    int saved = errno;
+    if (fd >= 0) {
+        close(fd);
+    }
+    if (!written) {
+        char message[ERROR_LEN];
+        snprintf(message, sizeof message, "%.200s: cannot set the clock to %g MHz: %s; "
+                 "flying on at the present clock", s->args->clock_path, mhz, strerror(saved));
+        say(s, message);
+        s->clock_failed = 1;
+        return;
+    }
+    s->clock_mhz = mhz;
+}
+
 /* @return -1 to go on, else the exit status */
 static int on_sensors(link_state *s, const gp_frame *frame)
 {
@@ -261,6 +295,7 @@ static int on_sensors(link_state *s, const gp_frame *frame)
         say(s, message);
         return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
     }
+    follow_clock(s);
     s->answered = 1;
     s->answered_seq = frame->seq;
     send_command(s, &command);
