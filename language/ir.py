@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, is_dataclass
 from functools import cached_property
 
@@ -80,22 +80,20 @@ _COMPARISONS = {
 }
 
 
-def _fmin(a: float, b: float) -> float:
-    """C's fmin: a NaN argument is ignored (the other is returned); NaN only if both are."""
-    if math.isnan(a):
-        return b
-    if math.isnan(b):
-        return a
-    return min(a, b)
+def _ignoring_nan(pick: Callable[[float, float], float]) -> Callable[[float, float], float]:
+    """C's fmin/fmax from min/max: a NaN argument is ignored (the other is returned);
+    NaN only if both are."""
+    def c_style(a: float, b: float) -> float:
+        if math.isnan(a):
+            return b
+        if math.isnan(b):
+            return a
+        return pick(a, b)
+    return c_style
 
 
-def _fmax(a: float, b: float) -> float:
-    """C's fmax: a NaN argument is ignored (the other is returned); NaN only if both are."""
-    if math.isnan(a):
-        return b
-    if math.isnan(b):
-        return a
-    return max(a, b)
+_fmin = _ignoring_nan(min)
+_fmax = _ignoring_nan(max)
 
 
 # The generated C calls fabs, fmin and fmax; these must agree with them, NaN included.
