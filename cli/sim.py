@@ -19,6 +19,7 @@ from gliderplan.cli.errors import CliError, UsageError
 
 ORDER = 60
 EXIT_PLAN_VIOLATION = 3
+EXIT_INTERRUPTED = 130  # as for any command stopped by Ctrl-C
 _DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(s|min|h|d)\s*$")
 _DURATION_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
 LONG_RUN_TICKS = 100_000  # progress on stderr for runs longer than this
@@ -134,6 +135,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if progress is not None:
             progress.finish()
+    if not len(record.columns["time_s"]):
+        raise KeyboardInterrupt  # nothing flown, nothing to write
     used = accounting.account(record, mission, vehicle, plan)
     check = accounting.check_plan(used, plan, predictions)
     meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": args.runtime,
@@ -147,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
     write_atomically(out / "depth.png", plots.depth_png(record))
     write_atomically(out / "energy.png", plots.energy_png(
         record, used, predictions, plan.budget_j if plan else None))
-    print(f"{mission.name}: {record.ended} after {record.columns['time_s'][-1]:g} s, "
+    print(f"{mission.name}: {record.ended} after {_time_text(record.columns['time_s'][-1])}, "
           f"{len(record.trace)} transitions, {used.total_j / 1e3:.1f} kJ; "
           f"plan check: {check.verdict}", file=sys.stderr)
     if check.causes:
@@ -155,7 +158,19 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)
     for cause in check.causes:
         print(f"    {cause}", file=sys.stderr)
+    if record.ended == "interrupted":
+        print(f"  interrupted: the outputs in {out} cover the part flown", file=sys.stderr)
+        return EXIT_INTERRUPTED
     return EXIT_PLAN_VIOLATION if check.verdict == "violation" else 0
+
+
+def _time_text(seconds: float) -> str:
+    """Mission time as a pilot reads it: 2500 s, 5.2 h, 12.0 d."""
+    if seconds >= 2 * 86400:
+        return f"{seconds / 86400:.1f} d"
+    if seconds >= 3 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds:g} s"
 
 
 class _Progress:

@@ -51,7 +51,7 @@ class RunRecord:
     columns: dict[str, np.ndarray]
     state_names: tuple[str, ...]
     tick_s: float
-    ended: str  # "exit", "duration" or "fault: ..."
+    ended: str  # "exit", "duration", "interrupted" or "fault: ..."
     surfacings: int
 
 
@@ -91,54 +91,66 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     ended = "duration"
     pack, unpack = _COMMAND_F32.pack, _COMMAND_F32.unpack
     readings, runtime_step, apply = science.readings, runtime.step, science.apply
-    for tick in range(last_tick + 1):
-        mask, values = readings(tick)
-        depth_c.append(glider.depth_m)
-        pitch_c.append(glider.pitch_rad)
-        temp_c.append(science.water_temperature_c)
-        reading_c.append(science.ctd_temperature_c)
-        lat_c.append(glider.lat_deg)
-        lon_c.append(glider.lon_deg)
-        try:
-            cmd = runtime_step(tick, mask, values)
-        except MissionFault as fault:
-            ended = f"fault: {fault}"
-            _close_row(cols, state_c[-1] if state_c else NONE)
-            break
-        time_s = tick * tick_s
-        if tick == 0:
-            trace.append(Transition(time_s, "start", "", names[0], 0))
-        if cmd.transition >= 2:
-            kind = TRANSITION_KINDS[cmd.transition]
-            trace.append(Transition(
-                time_s, kind, names[cmd.from_state],
-                "" if cmd.to_state == NONE else names[cmd.to_state], cmd.stack_depth))
-        state_c.append(cmd.state)
-        stack_c.append(cmd.stack_depth)
-        profile_c.append(cmd.profile)
-        power_c.append(cmd.sensor_power)
-        if cmd.state == NONE:
-            ended = "exit"
+    try:
+        for tick in range(last_tick + 1):
+            mask, values = readings(tick)
+            depth_c.append(glider.depth_m)
+            pitch_c.append(glider.pitch_rad)
+            temp_c.append(science.water_temperature_c)
+            reading_c.append(science.ctd_temperature_c)
+            lat_c.append(glider.lat_deg)
+            lon_c.append(glider.lon_deg)
+            try:
+                cmd = runtime_step(tick, mask, values)
+            except MissionFault as fault:
+                ended = f"fault: {fault}"
+                _close_row(cols, state_c[-1] if state_c else NONE)
+                break
+            time_s = tick * tick_s
+            if tick == 0:
+                trace.append(Transition(time_s, "start", "", names[0], 0))
+            if cmd.transition >= 2:
+                kind = TRANSITION_KINDS[cmd.transition]
+                trace.append(Transition(
+                    time_s, kind, names[cmd.from_state],
+                    "" if cmd.to_state == NONE else names[cmd.to_state], cmd.stack_depth))
+            state_c.append(cmd.state)
+            stack_c.append(cmd.stack_depth)
+            profile_c.append(cmd.profile)
+            power_c.append(cmd.sensor_power)
+            if cmd.state == NONE:
+                ended = "exit"
+                phase_c.append(glider.phase)
+                out_c.append(0.0)
+                in_c.append(0.0)
+                infl_c.append(False)
+                break
+            target, pitch, ballast, heading = unpack(pack(
+                cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad))
+            apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power)
             phase_c.append(glider.phase)
-            out_c.append(0.0)
-            in_c.append(0.0)
-            infl_c.append(False)
-            break
-        target, pitch, ballast, heading = unpack(pack(
-            cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad))
-        apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power)
-        phase_c.append(glider.phase)
-        out_c.append(glider.pumped_out_cc)
-        in_c.append(glider.pumped_in_cc)
-        infl_c.append(glider.inflection)
-        if progress is not None and tick % PROGRESS_TICKS == 0 and tick:
-            progress(time_s, last_tick * tick_s)
+            out_c.append(glider.pumped_out_cc)
+            in_c.append(glider.pumped_in_cc)
+            infl_c.append(glider.inflection)
+            if progress is not None and tick % PROGRESS_TICKS == 0 and tick:
+                progress(time_s, last_tick * tick_s)
+    except KeyboardInterrupt:  # keep what was flown: the caller writes it out
+        ended = "interrupted"
+        _drop_partial_tick(cols, trace, tick_s)
     n = len(state_c)
     columns = {
         "time_s": np.arange(n, dtype=float) * tick_s,
         **{k: np.asarray(v[:n]) for k, v in cols.items()},
     }
     return RunRecord(trace, columns, names, tick_s, ended, glider.surfacings)
+
+
+def _drop_partial_tick(cols: dict[str, list], trace: list[Transition], tick_s: float) -> None:
+    """After an interruption mid-tick: keep only the ticks whose rows are complete."""
+    n = min(len(v) for v in cols.values())
+    for values in cols.values():
+        del values[n:]
+    trace[:] = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
 
 
 def _close_row(cols: dict[str, list], state: int) -> None:

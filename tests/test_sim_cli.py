@@ -158,3 +158,35 @@ def test_a_current_carries_the_glider_east(tmp_path):
     drift = tracks["0,0.2"]["lon_deg"].iloc[-1] - tracks["0,0"]["lon_deg"].iloc[-1]
     metres = drift * 111_320 * math.cos(math.radians(tracks["0,0"]["lat_deg"].iloc[-1]))
     assert metres == pytest.approx(0.2 * 2500, rel=0.01)  # 0.2 m/s for 2500 s
+
+
+def interrupt_at(monkeypatch, at_tick: int) -> None:
+    """Ctrl-C while the science computer reads the sensors of tick `at_tick`."""
+    from gliderplan.sim.science import ScienceComputer
+
+    original = ScienceComputer.readings
+
+    def readings(self, tick):
+        if tick == at_tick:
+            raise KeyboardInterrupt
+        return original(self, tick)
+    monkeypatch.setattr(ScienceComputer, "readings", readings)
+
+
+def test_ctrl_c_keeps_the_part_flown(tmp_path, capsys, monkeypatch):
+    interrupt_at(monkeypatch, 300)
+    assert main(["sim", str(FIG2), "--tick", "4", "-o", str(tmp_path)]) == 130
+    assert {p.name for p in tmp_path.iterdir()} == FILES
+    table = pd.read_parquet(tmp_path / "timeseries.parquet")
+    assert len(table) == 300 and table["time_s"].iloc[-1] == 299 * 4
+    assert json.loads((tmp_path / "summary.json").read_text())["ended"] == "interrupted"
+    trace = pd.read_csv(tmp_path / "trace.csv")
+    assert list(trace["kind"]) == ["start", "call"]  # s1 -call-> s2 at 500 s, then Ctrl-C
+    assert "interrupted" in capsys.readouterr().err
+
+
+def test_ctrl_c_before_the_first_tick_writes_nothing(tmp_path, capsys, monkeypatch):
+    interrupt_at(monkeypatch, 0)
+    assert main(["sim", str(FIG2), "-o", str(tmp_path / "run")]) == 130
+    assert not (tmp_path / "run").exists() or not any((tmp_path / "run").iterdir())
+    assert "interrupted" in capsys.readouterr().err
