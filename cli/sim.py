@@ -180,13 +180,18 @@ class _Progress:
 
     def __init__(self) -> None:
         self.shown = False
+        self.live = sys.stderr.isatty()  # redrawn in place on a terminal, else a line each
 
     def __call__(self, done_s: float, total_s: float) -> None:
         filled = int(self.WIDTH * done_s / total_s) if total_s else self.WIDTH
-        print(f"\r[{'#' * filled}{'.' * (self.WIDTH - filled)}] {done_s / 86400:.2f} of "
-              f"{total_s / 86400:.2f} d simulated", end="", file=sys.stderr, flush=True)
+        bar = (f"[{'#' * filled}{'.' * (self.WIDTH - filled)}] "
+               f"{done_s / 86400:.2f} of {total_s / 86400:.2f} d simulated")
+        if self.live:
+            print("\r" + bar, end="", file=sys.stderr, flush=True)
+        else:
+            print(bar, file=sys.stderr, flush=True)
         self.shown = True
 
     def finish(self) -> None:
-        if self.shown:
+        if self.shown and self.live:
             print(file=sys.stderr)
