@@ -43,12 +43,14 @@ class PlanningError(Exception):
 
 class InfeasibleBudget(PlanningError):
     def __init__(self, budget_j: float, minimum_j: float,
-                 consumers: list[tuple[str, float]]) -> None:
+                 consumers: list[tuple[str, float]], origin: str = "") -> None:
+        """`origin`: where the budget came from, e.g. "4 Wh less the 15 % reserve"."""
         self.budget_j, self.minimum_j, self.consumers = budget_j, minimum_j, consumers
         short = minimum_j - budget_j
         top = ", ".join(f"{name} {j / J_PER_WH:.3g} Wh" for name, j in consumers)
+        of = f" ({origin})" if origin else ""
         super().__init__(
-            f"the budget of {budget_j / J_PER_WH:.4g} Wh is too small: the mission needs at "
+            f"the budget of {budget_j / J_PER_WH:.4g} Wh{of} is too small: the mission needs at "
             f"least {minimum_j / J_PER_WH:.4g} Wh ({short / J_PER_WH:.4g} Wh or "
             f"{100 * short / minimum_j:.3g} % more). Largest consumers at that minimum: {top}.")
 
@@ -143,7 +145,11 @@ def plan_mission(mission: ir.CheckedMission, hardware: Hardware | None = None, *
 
 def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = None) -> Plan:
     """Solve a prepared model for the mission's objective."""
-    budget = inputs.hardware.budget_j if budget_j is None else budget_j
+    hardware = inputs.hardware
+    budget = hardware.budget_j if budget_j is None else budget_j
+    origin = "" if budget_j is not None or not hardware.reserve_fraction else (
+        f"{hardware.battery_j / J_PER_WH:.4g} Wh less the "
+        f"{100 * hardware.reserve_fraction:.3g} % reserve")
     least = model.solve_energy(-1.0)
     if not least.optimal:
         hint = " and whether the horizon leaves time for the transit legs" \
@@ -160,14 +166,14 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
                                 f"this mission can do is {best.quality:.4g}")
         if chosen.model_energy_j > budget * (1 + 1e-9):
             raise InfeasibleBudget(budget, chosen.model_energy_j,
-                                   largest_consumers(inputs, chosen))
+                                   largest_consumers(inputs, chosen), origin)
         priced = model.solve_quality(chosen.model_energy_j)
         shadow = priced.budget_dual if priced.optimal else 0.0
     else:
         if least.model_energy_j > budget * (1 + 1e-9):
             # the model's count (warm-ups included) is what the budget must cover
             raise InfeasibleBudget(budget, least.model_energy_j,
-                                   largest_consumers(inputs, least))
+                                   largest_consumers(inputs, least), origin)
         chosen = model.solve_quality(budget)
         if not chosen.optimal:
             raise PlanningError(f"the solver could not plan this mission ({chosen.status})")

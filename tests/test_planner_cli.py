@@ -80,6 +80,7 @@ def test_infeasible_budget_exits_1_with_the_minimum():
     run = gliderplan("plan", ANNOTATED, "--battery", "4Wh")
     assert run.returncode == 1
     assert "needs at least" in run.stderr and "Largest consumers" in run.stderr
+    assert "3.4 Wh (4 Wh less the 15 % reserve)" in run.stderr  # the mission keeps 15 %
     assert "Traceback" not in run.stderr
     run = gliderplan("plan", ANNOTATED, "--battery", "4Wh", "--json")
     assert run.returncode == 1
