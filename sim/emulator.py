@@ -19,7 +19,6 @@ from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
 
 HELLO_TIMEOUT_S = 10.0
-BAUD = 115200
 EXIT_TIMEOUT_S = 5.0
 
 
@@ -34,7 +33,7 @@ class CRuntime:
                  naive_tracker: bool, work_dir: Path) -> None:
         import serial
 
-        from gliderplan.runtime.protocol import Link, LinkError
+        from gliderplan.runtime.protocol import BAUD, Link, LinkError
 
         self._work = work_dir
         self.exited = False

@@ -65,11 +65,12 @@ int gp_serial_open_pty(char *peer_path, size_t cap)
         || make_raw(fd) < 0) {
         return close_keeping_errno(fd);
     }
-    if (strlen(name) >= cap) {
+    size_t len = strlen(name);
+    if (len >= cap) {
         errno = ENAMETOOLONG;
         return close_keeping_errno(fd);
     }
-    memcpy(peer_path, name, strlen(name) + 1);
+    memcpy(peer_path, name, len + 1);
     return fd;
 }
 
