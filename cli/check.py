@@ -6,8 +6,9 @@ import argparse
 import json
 import sys
 
-from gliderplan.cli.common import check_file
+from gliderplan.cli.common import add_max_stack_argument, check_file
 from gliderplan.cli.errors import CliError
+from gliderplan.contract import ExitCode
 
 ORDER = 10
 
@@ -17,8 +18,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help="print the checked mission(s) as JSON on stdout")
     parser.add_argument("--strict", action="store_true", help="warnings fail the check too")
-    parser.add_argument("--max-stack", type=int, metavar="N", default=None,
-                        help="runtime state-stack depth (default: the mission's, else 8)")
+    add_max_stack_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -30,8 +30,8 @@ def run(args: argparse.Namespace) -> int:
         except CliError as err:
             print(f"gliderplan check: error: {err}", file=sys.stderr)
             failed = True
-            if err.exit_code == 2 and len(args.missions) == 1:
-                return 2
+            if err.exit_code == ExitCode.USAGE and len(args.missions) == 1:
+                return ExitCode.USAGE
             continue
         if result.diagnostics:
             print(result.render(), file=sys.stderr)
@@ -41,4 +41,4 @@ def run(args: argparse.Namespace) -> int:
             checked.append(result.mission.to_json())
     if args.json and checked:
         print(json.dumps(checked[0] if len(checked) == 1 else checked, indent=2))
-    return 1 if failed else 0
+    return ExitCode.BAD_INPUT if failed else ExitCode.OK

@@ -9,6 +9,7 @@ import tempfile
 from pathlib import Path
 
 from gliderplan.cli.errors import CliError, UsageError
+from gliderplan.contract import DEFAULT_STACK_DEPTH, MAX_STACK_DEPTH
 from gliderplan.language import CheckResult, check_source
 from gliderplan.language.ir import CheckedMission
 from gliderplan.language.source import SourceError, read_mission
@@ -16,14 +17,20 @@ from gliderplan.language.source import SourceError, read_mission
 
 def add_mission_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("mission", help="mission file (any name; .mission by convention)")
+    add_max_stack_argument(parser)
+
+
+def add_max_stack_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-stack", type=int, metavar="N", default=None,
-                        help="runtime state-stack depth (default: the mission's, else 8)")
+                        help=f"runtime state-stack depth, 1 to {MAX_STACK_DEPTH} "
+                             f"(default: the mission's, else {DEFAULT_STACK_DEPTH})")
 
 
 def check_file(path: str, stack_depth: int | None = None) -> CheckResult:
     """Read and check one file; unreadable files raise CliError/UsageError."""
-    if stack_depth is not None and not 1 <= stack_depth <= 64:
-        raise UsageError("--max-stack must be between 1 and 64")
+    if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
+        raise UsageError(f"--max-stack must be between 1 and {MAX_STACK_DEPTH}, the "
+                         "runtime's limit")
     try:
         source = read_mission(path)
     except SourceError as err:

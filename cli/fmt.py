@@ -12,6 +12,7 @@ import sys
 
 from gliderplan.cli.common import write_atomically
 from gliderplan.cli.errors import UsageError
+from gliderplan.contract import ExitCode
 from gliderplan.language.diagnostics import MissionSyntaxError, render_all
 from gliderplan.language.source import SourceError, read_mission
 
@@ -60,4 +61,4 @@ def run(args: argparse.Namespace) -> int:
                 write_atomically(path, formatted)
         else:
             sys.stdout.write(formatted)
-    return 1 if failed else 0
+    return ExitCode.BAD_INPUT if failed else ExitCode.OK

@@ -18,8 +18,7 @@ from types import ModuleType
 
 import gliderplan.cli
 from gliderplan.cli.errors import CliError
-
-INTERNAL_ERROR = 3
+from gliderplan.contract import ExitCode
 
 
 def subcommands() -> dict[str, ModuleType]:
@@ -37,7 +36,7 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.print_usage(sys.stderr)
         print(f"{self.prog}: error: {message}", file=sys.stderr)
-        raise SystemExit(2)
+        raise SystemExit(ExitCode.USAGE)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -54,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; return the exit code (0 ok, 1 bad input, 2 bad usage)."""
+    """Run the CLI; return the exit code (`contract.ExitCode`)."""
     args = build_parser().parse_args(argv)
     try:
         return int(args._run(args))
@@ -63,14 +62,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return err.exit_code
     except KeyboardInterrupt:
         print(f"gliderplan {args.command}: interrupted", file=sys.stderr)
-        return 130
+        return ExitCode.INTERRUPTED
     except Exception as err:  # a bug: say so plainly; the traceback only on request
         if os.environ.get("GLIDERPLAN_DEBUG"):
             raise
         print(f"gliderplan {args.command}: internal error: {type(err).__name__}: {err}\n"
               "  (this is a bug in gliderplan; rerun with GLIDERPLAN_DEBUG=1 for details)",
               file=sys.stderr)
-        return INTERNAL_ERROR
+        return ExitCode.INTERNAL
 
 
 def entry() -> None:

@@ -16,10 +16,9 @@ from pathlib import Path
 
 from gliderplan.cli.common import add_mission_argument, load_mission, write_atomically
 from gliderplan.cli.errors import CliError, UsageError
+from gliderplan.contract import ExitCode
 
 ORDER = 60
-EXIT_PLAN_VIOLATION = 3
-EXIT_INTERRUPTED = 130  # as for any command stopped by Ctrl-C
 _DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(s|min|h|d)\s*$")
 _DURATION_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
 LONG_RUN_TICKS = 100_000  # progress on stderr for runs longer than this
@@ -160,8 +159,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"    {cause}", file=sys.stderr)
     if record.ended == "interrupted":
         print(f"  interrupted: the outputs in {out} cover the part flown", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    return EXIT_PLAN_VIOLATION if check.verdict == "violation" else 0
+        return ExitCode.INTERRUPTED
+    return ExitCode.OVER_BUDGET if check.verdict == "violation" else ExitCode.OK
 
 
 def _time_text(seconds: float) -> str:

@@ -10,6 +10,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import TypeVar
 
+from gliderplan.contract import MAX_STACK_DEPTH
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
 from gliderplan.language.flow import check_flow
@@ -22,7 +23,6 @@ from gliderplan.language.registry import (
 )
 from gliderplan.language.units import UnitProblem, to_si
 
-MAX_STACK_DEPTH = 64
 _ACTIONS = ("goto", "call", "return", "exit")
 T = TypeVar("T")
 
@@ -116,7 +116,9 @@ class _Checker:
                     depth = decl.depth.value
                     if depth != int(depth) or not 1 <= depth <= MAX_STACK_DEPTH:
                         self.error(f"stack depth must be a whole number from 1 to "
-                                   f"{MAX_STACK_DEPTH}", decl.depth.span)
+                                   f"{MAX_STACK_DEPTH}", decl.depth.span,
+                                   f"the runtime's state stack holds at most "
+                                   f"{MAX_STACK_DEPTH} states")
                     else:
                         fields["stack_depth"] = int(depth)
         if self.stack_depth_override is not None:

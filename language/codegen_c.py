@@ -20,17 +20,9 @@ import math
 from dataclasses import dataclass, field
 from fractions import Fraction
 
+from gliderplan import contract
 from gliderplan.language import ir
 from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
-
-# Limits of runtime/include/gp_mission.h (the tables use uint8_t counts).
-MAX_STATES = 64
-MAX_VARIABLES = 64
-MAX_PROFILES = 8
-MAX_PROFILE_ARGS = 6
-MAX_POINTS = 64
-MAX_STACK = 32
-MAX_EVENTS = 255
 
 _ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
             "return": "GP_ACT_RETURN", "exit": "GP_ACT_EXIT"}
@@ -176,21 +168,24 @@ def _check_limits(mission: ir.CheckedMission) -> None:
             raise CodegenError(f"mission {mission.name}: {what}: {count} exceeds the "
                                f"runtime's limit of {most}")
 
-    limit("states", len(mission.states), MAX_STATES)
-    limit("variables", len(mission.variables), MAX_VARIABLES)
-    limit("stack depth", mission.stack_depth, MAX_STACK)
+    limit("states", len(mission.states), contract.MAX_STATES)
+    limit("variables", len(mission.variables), contract.MAX_VARIABLES)
+    limit("stack depth", mission.stack_depth, contract.MAX_STACK_DEPTH)
     for state in mission.states:
         where = f"state {state.name}"
-        limit(f"{where}: flight-profile alternatives", len(state.profiles), MAX_PROFILES)
-        limit(f"{where}: events", len(state.events), MAX_EVENTS)
-        limit(f"{where}: route points", len(_route_points(state.route)), MAX_POINTS)
+        limit(f"{where}: flight-profile alternatives", len(state.profiles),
+              contract.MAX_PROFILE_ALTERNATIVES)
+        limit(f"{where}: events", len(state.events), contract.MAX_EVENTS_PER_STATE)
+        limit(f"{where}: route points", len(_route_points(state.route)),
+              contract.MAX_ROUTE_POINTS)
         if not state.profiles:
             raise CodegenError(f"mission {mission.name}: {where} has no flight profile")
         for profile in state.profiles:
             if profile.kind not in _PROFILE_KINDS:
                 raise CodegenError(f"{where}: flight profile {profile.kind!r} has no "
                                    "runtime routine")
-            limit(f"{where}: {profile.kind} arguments", len(profile.args), MAX_PROFILE_ARGS)
+            limit(f"{where}: {profile.kind} arguments", len(profile.args),
+                  contract.MAX_PROFILE_ARGS)
         if state.route.kind not in _ROUTE_KINDS:
             raise CodegenError(f"{where}: flight route {state.route.kind!r} has no "
                                "runtime routine")

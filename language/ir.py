@@ -13,7 +13,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, is_dataclass
 from functools import cached_property
 
-from gliderplan.language.registry import DEFAULT_STACK_DEPTH
+from gliderplan.contract import DEFAULT_STACK_DEPTH
 
 # ---- expressions (no spans: the checker has reported everything by now) ----------
 

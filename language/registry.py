@@ -145,6 +145,3 @@ ROUTES: dict[str, RouteInfo] = {
 
 # Functions usable in conditions and assignments: name -> argument count.
 FUNCTIONS: dict[str, int] = {"abs": 1, "min": 2, "max": 2}
-
-# The runtime's state stack has a fixed depth; `call` chains deeper than this are errors.
-DEFAULT_STACK_DEPTH = 8

@@ -74,11 +74,20 @@ _HAS_ERROR = "mission m\nstate s1 begin flightprofile yo(5, 20, .454, 2) end\n"
         (_HAS_ERROR, [], 1),
         (_HAS_ERROR, ["--strict"], 1),
         (_WARNS_ONLY, ["--max-stack", "0"], 2),
+        (_WARNS_ONLY, ["--max-stack", "32"], 0),
+        (_WARNS_ONLY, ["--max-stack", "33"], 2),
     ],
 )
 def test_exit_codes(tmp_path, capsys, text, flags, expected_code):
     assert main(["check", *flags, _write(tmp_path, text)]) == expected_code
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_a_stack_the_runtime_cannot_hold_fails_the_check_at_its_line(tmp_path, capsys):
+    path = _write(tmp_path, "mission m\nstack 40\n" + _WARNS_ONLY.split("\n", 1)[1])
+    assert main(["check", path]) == 1
+    assert f"{path}:2:7: error: stack depth must be a whole number from 1 to 32" \
+        in capsys.readouterr().err
 
 
 def test_strict_examples_are_clean(capsys):

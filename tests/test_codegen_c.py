@@ -19,7 +19,8 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from gliderplan.language import check_source, codegen_c, ir
+from gliderplan import contract
+from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import CodegenError, c_double, generate_c, read_mask
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.runtime.build import TARGETS
@@ -101,9 +102,11 @@ def test_constants_are_decimal_only_when_the_decimal_is_exact():
 def test_the_limits_are_those_of_the_runtime_header():
     header = (INCLUDE / "gp_mission.h").read_text()
     defined = dict(re.findall(r"^#define GP_(MAX_\w+) (\d+)", header, re.MULTILINE))
-    for name in ("MAX_STATES", "MAX_VARIABLES", "MAX_PROFILES", "MAX_PROFILE_ARGS",
-                 "MAX_POINTS", "MAX_STACK"):
-        assert getattr(codegen_c, name) == int(defined[name]), name
+    for c_name, name in (("MAX_STATES", "MAX_STATES"), ("MAX_VARIABLES", "MAX_VARIABLES"),
+                         ("MAX_PROFILES", "MAX_PROFILE_ALTERNATIVES"),
+                         ("MAX_PROFILE_ARGS", "MAX_PROFILE_ARGS"),
+                         ("MAX_POINTS", "MAX_ROUTE_POINTS"), ("MAX_STACK", "MAX_STACK_DEPTH")):
+        assert getattr(contract, name) == int(defined[c_name]), name
 
 
 def test_an_unreadable_vehicle_file_is_a_codegen_error(tmp_path):

@@ -255,9 +255,15 @@ def test_a_compiler_failure_is_a_clear_error_and_caches_nothing(monkeypatch, tmp
     assert not [p for p in (tmp_path / "cache").rglob("*") if p.is_file()]
 
 
-def test_a_mission_beyond_the_runtime_limits_is_a_clear_error(tmp_path, capsys):
-    assert compile_fig2(tmp_path, "--max-stack", "40") == 1
-    assert "stack depth: 40 exceeds the runtime's limit of 32" in capsys.readouterr().err
+def test_a_stack_beyond_the_runtime_limit_is_refused_before_compiling(tmp_path, capsys):
+    assert compile_fig2(tmp_path, "--max-stack", "40") == 2
+    assert "--max-stack must be between 1 and 32" in capsys.readouterr().err
+    deep = tmp_path / "deep.mission"
+    deep.write_text(FIG2.read_text().replace("mission sampleMission\n",
+                                             "mission sampleMission\nstack 40\n"))
+    assert main(["compile", str(deep), "-o", str(tmp_path)]) == 1
+    assert f"{deep}:2:7: error: stack depth must be a whole number from 1 to 32" \
+        in capsys.readouterr().err
     assert not (tmp_path / "sampleMission").exists()
 
 

@@ -73,7 +73,9 @@ CASES = [
     ({"decl": "var depth = 1"}, "error: variable 'depth' has the name of a sensor"),
     ({"decl": "var v = 1\nvar v = 2"}, "error: variable 'v' is declared twice"),
     ({"decl": "var v = depth"}, "error: sensor 'depth' cannot be used here"),
-    ({"decl": "stack 100"}, "error: stack depth must be a whole number from 1 to 64"),
+    ({"decl": "stack 100"}, "error: stack depth must be a whole number from 1 to 32"),
+    ({"decl": "stack 40"}, "error: stack depth must be a whole number from 1 to 32 | the "
+                           "runtime's state stack holds at most 32 states"),
     ({"decl": "objective maximize energy"}, "error: cannot maximize 'energy'"),
     ({"decl": "objective maximize quality quality >= 0.5"},
      "warning: a quality floor has no effect when maximizing quality"),

@@ -1,0 +1,139 @@
+"""The facts two parts of gliderplan share, each defined once.
+
+The checker, the code generator, the planner, the plan file, the simulator, the
+serial protocol and the C runtime all rest on the numbers below. Python imports them
+from here; the C runtime includes `runtime/include/gp_contract.h`, which is generated
+from this module (`python -m gliderplan.contract`) and compared with it by the tests.
+Change a fact here, regenerate the header, and every part follows.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+# ---- limits of the runtime's tables and of the plan file ----------------------------
+# The C runtime holds a mission in static tables with uint8_t counts, and the plan file
+# and its reader have fixed sizes. `gliderplan check` refuses a mission past any of
+# them, so that nothing it accepts is refused later for its size.
+
+MAX_STATES = 64  # states of a mission (the plan file's `states` line: 1..64)
+MAX_VARIABLES = 64  # variables of a mission
+MAX_STACK_DEPTH = 32  # the state stack: the largest `stack N` (or --max-stack)
+DEFAULT_STACK_DEPTH = 8  # the state stack of a mission without `stack N`
+MAX_EVENTS_PER_STATE = 255  # events of one state (a uint8_t count)
+MAX_PROFILE_ALTERNATIVES = 8  # `flightprofile a | b | ...` alternatives of one state
+MAX_PROFILE_ARGS = 6  # arguments of one flight profile
+MAX_ROUTE_POINTS = 64  # (lat, lon) points of one state's route
+MAX_SWEEP_WAYPOINTS = 256  # waypoints a `sweep` route expands to
+MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a plan file
+MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
+MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]
+MAX_PLAN_LINE_BYTES = 255  # length of a plan-file line, its LF included [bytes]
+
+# ---- time and workload --------------------------------------------------------------
+
+# The science computer writes the sensor array every 2-4 s: one SENSORS frame, one
+# COMMAND and one step of the mission per tick. The planner's occupancy and the
+# simulator's clock both run on it.
+TICK_S = 4.0  # [s]
+# The runtime's work per tick: decode a frame, check events, run the library routine,
+# encode the COMMAND, append to the event log. An assumption (a C loop without an
+# interpreter, plus Linux serial I/O): under 0.1 % busy at 300 MHz and a 4 s tick. The
+# planner prices the computer with it and the simulator bills it.
+RUNTIME_CYCLES_PER_TICK = 200_000.0  # [cycles]
+
+
+# ---- energy components --------------------------------------------------------------
+
+
+class Component:
+    """Names of the energy components, as the plan predicts them and the simulator bills
+    them; the sensor devices (`SensorInfo.device`) are components under their own names."""
+
+    HOTEL = "hotel"  # the vehicle's base load while gliding
+    PUMP = "pump"  # buoyancy pump runs
+    PITCH = "pitch"  # battery shifts at inflections
+    SURFACE = "surface"  # the base load at the surface
+    IRIDIUM = "iridium"  # satellite calls at the surface
+    COMPUTER = "computer"  # the single-board computer running the mission
+
+
+VEHICLE_COMPONENTS: tuple[str, ...] = (Component.HOTEL, Component.PUMP, Component.PITCH,
+                                       Component.SURFACE, Component.IRIDIUM)
+
+
+# ---- the serial link (docs/protocol.md) ---------------------------------------------
+
+PROTOCOL_VERSION = 1
+MAX_PAYLOAD = 240  # [bytes] of one frame's payload
+MAX_WIRE = 250  # [bytes] of COBS before the delimiter that a receiver accepts
+PLAN_PIECE = 200  # [bytes] of plan file per PLAN frame
+MAX_LINK_PLAN = 65535  # [bytes] of a plan sent over the link (PLAN's `total` is a u16)
+COMMAND_SIZE = 36  # [bytes] of a COMMAND payload
+BAUD = 115200  # 8N1: 10 bits per byte on the line
+
+
+class MessageType(IntEnum):
+    HELLO = 0x01
+    SENSORS = 0x02
+    COMMAND = 0x03
+    RELEASE = 0x04
+    PLAN = 0x05
+    PLAN_STATUS = 0x06
+    NAK = 0x7F
+
+
+class TransitionKind(IntEnum):
+    """COMMAND's `transition` field, the event log's `kind` and an event's action."""
+
+    NONE = 0
+    START = 1
+    GOTO = 2
+    CALL = 3
+    RETURN = 4
+    EXIT = 5
+
+
+# The language's action words and the kinds they make.
+TRANSITION_BY_ACTION: dict[str, TransitionKind] = {
+    "goto": TransitionKind.GOTO, "call": TransitionKind.CALL,
+    "return": TransitionKind.RETURN, "exit": TransitionKind.EXIT}
+
+NO_STATE = 0xFF  # COMMAND's `state` once exited; `from`/`to` of no state
+
+# COMMAND's `flags` (plain ints: the simulator builds a COMMAND every tick).
+FLAG_SURFACE = 1 << 0
+FLAG_DONE = 1 << 1  # the mission exited
+FLAG_CLIMBING = 1 << 2  # else diving
+FLAG_HEADING = 1 << 3  # `heading_rad` is valid
+
+
+class ReleaseReason(IntEnum):
+    """RELEASE's `reason`: why the runtime gave control back to the glider."""
+
+    LINK_SILENT = 1
+    INTERNAL_ERROR = 2
+    MISSION_EXITED = 3
+
+
+class RuntimeExit(IntEnum):
+    """Exit status of a mission binary (runtime/README.md)."""
+
+    DONE = 0  # the mission exited
+    BAD_INPUT = 1  # bad arguments, plan or checkpoint
+    LINK_LOST = 3  # the watchdog: the link went silent
+    INTERNAL = 4  # a mission fault, I/O that failed, a crash or a stop signal
+
+
+# ---- the command line ---------------------------------------------------------------
+
+
+class ExitCode(IntEnum):
+    """Exit status of every `gliderplan` command (README.md)."""
+
+    OK = 0
+    BAD_INPUT = 1  # a bad mission, an infeasible budget, a failed validation
+    USAGE = 2  # bad command-line usage: a missing file, a malformed option
+    OVER_BUDGET = 3  # a simulated run broke its plan's energy budget
+    INTERNAL = 70  # a bug in gliderplan (EX_SOFTWARE of sysexits.h)
+    INTERRUPTED = 130  # stopped by Ctrl-C (128 + SIGINT)
