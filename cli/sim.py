@@ -16,7 +16,7 @@ from pathlib import Path
 
 from gliderplan.cli.common import add_mission_argument, load_mission, write_atomically
 from gliderplan.cli.errors import CliError, UsageError
-from gliderplan.contract import ExitCode
+from gliderplan.contract import TICK_S, ExitCode
 
 ORDER = 60
 _DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(s|min|h|d)\s*$")
@@ -59,8 +59,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--current", metavar="N,E", default="0,0",
                         help="depth-averaged current toward north and east [m/s]")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    parser.add_argument("--tick", type=float, default=4.0, metavar="S",
-                        help="sensor-array period [s] (default 4)")
+    parser.add_argument("--tick", type=float, default=TICK_S, metavar="S",
+                        help=f"sensor-array period [s] (default {TICK_S:g})")
     parser.add_argument("--duration", metavar="T",
                         help="end the run here if the mission has not exited (3600s, 90min, "
                              "6h, 30d; default: the mission's horizon, else 30d)")

@@ -9,6 +9,7 @@ Change a fact here, regenerate the header, and every part follows.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from enum import IntEnum
 
 # ---- limits of the runtime's tables and of the plan file ----------------------------
@@ -29,6 +30,48 @@ MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a pla
 MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
 MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]
 MAX_PLAN_LINE_BYTES = 255  # length of a plan-file line, its LF included [bytes]
+
+# ---- the sensor array ----------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class SensorInfo:
+    """A value the glider measures, readable in conditions and loggable in `sensors`."""
+
+    name: str
+    index: int  # position in the sensor array (protocol and runtime)
+    unit: str  # SI unit of the value
+    device: str | None  # power-model device that produces it; None: flight sensor, in hotel load
+    description: str
+
+
+# The science computer's sensor array: SENSORS bit i of the link and the runtime's
+# sensors[i] are the sensor of index i. Order is the layout; append only, never reorder
+# (it is a wire format). A new sensor is one entry here (and, if it draws power of its
+# own, a device file in power_models/data).
+SENSORS: tuple[SensorInfo, ...] = (
+    SensorInfo("missiontime", 0, "s", None, "time since the mission started"),
+    SensorInfo("depth", 1, "m", None, "depth below the surface, positive down"),
+    SensorInfo("pitch", 2, "rad", None, "vehicle pitch, positive nose up"),
+    SensorInfo("roll", 3, "rad", None, "vehicle roll"),
+    SensorInfo("heading", 4, "rad", None, "magnetic heading"),
+    SensorInfo("altitude", 5, "m", None, "height above the sea floor"),
+    SensorInfo("lat", 6, "DDMM.MMMM", None, "latitude, Slocum degrees and minutes"),
+    SensorInfo("lon", 7, "DDMM.MMMM", None, "longitude, Slocum degrees and minutes"),
+    SensorInfo("battery", 8, "V", None, "battery voltage"),
+    SensorInfo("temp", 9, "degC", "ctd", "water temperature (CTD)"),
+    SensorInfo("conductivity", 10, "S/m", "ctd", "water conductivity (CTD)"),
+    SensorInfo("salinity", 11, "PSU", "ctd", "practical salinity (CTD)"),
+    SensorInfo("oxygen", 12, "umol/kg", "optode", "dissolved oxygen (optode)"),
+    SensorInfo("chlorophyll", 13, "ug/l", "optics", "chlorophyll fluorescence (optics)"),
+    SensorInfo("backscatter", 14, "1/m", "optics", "optical backscatter (optics)"),
+    SensorInfo("current", 15, "m/s", "adcp", "water current speed (ADCP)"),
+    SensorInfo("modem", 16, "B", "modem", "bytes received by the acoustic modem"),
+)
+N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
+# Sensors without a device of their own: always powered while logged, in the hotel load.
+FLIGHT_SENSORS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
+
 
 # ---- time and workload --------------------------------------------------------------
 

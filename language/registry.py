@@ -1,9 +1,9 @@
 """The vocabulary a mission may use: sensors, flight profiles, flight routes, functions.
 
-Adding a sensor, profile or route is one entry here (and, for the runtime, one
-library routine): the grammar never changes. Each sensor has a fixed index: the
-position of its value in the science computer's sensor array, shared by the C
-runtime, the serial protocol and the simulator.
+Adding a profile or route is one entry here (and, for the runtime, one library
+routine): the grammar never changes. Sensors are one entry each too, in
+`gliderplan.contract.SENSORS`: their order is the science computer's sensor array,
+shared by the C runtime, the serial protocol and the simulator.
 """
 
 from __future__ import annotations
@@ -11,38 +11,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gliderplan.contract import MAX_ROUTE_POINTS, SENSORS, SensorInfo
 
-@dataclass(frozen=True)
-class SensorInfo:
-    """A value the glider measures, readable in conditions and loggable in `sensors`."""
+__all__ = ["FUNCTIONS", "PROFILES", "ROUTES", "SENSORS", "SENSOR_BY_NAME", "ParamSpec",
+           "ProfileInfo", "RouteInfo", "SensorInfo"]
 
-    name: str
-    index: int  # position in the sensor array (protocol and runtime)
-    unit: str  # SI unit of the value
-    device: str | None  # power-model device that produces it; None: flight sensor, in hotel load
-    description: str
-
-
-# Order is the sensor-array layout; append only, never reorder (it is a wire format).
-SENSORS: tuple[SensorInfo, ...] = (
-    SensorInfo("missiontime", 0, "s", None, "time since the mission started"),
-    SensorInfo("depth", 1, "m", None, "depth below the surface, positive down"),
-    SensorInfo("pitch", 2, "rad", None, "vehicle pitch, positive nose up"),
-    SensorInfo("roll", 3, "rad", None, "vehicle roll"),
-    SensorInfo("heading", 4, "rad", None, "magnetic heading"),
-    SensorInfo("altitude", 5, "m", None, "height above the sea floor"),
-    SensorInfo("lat", 6, "DDMM.MMMM", None, "latitude, Slocum degrees and minutes"),
-    SensorInfo("lon", 7, "DDMM.MMMM", None, "longitude, Slocum degrees and minutes"),
-    SensorInfo("battery", 8, "V", None, "battery voltage"),
-    SensorInfo("temp", 9, "degC", "ctd", "water temperature (CTD)"),
-    SensorInfo("conductivity", 10, "S/m", "ctd", "water conductivity (CTD)"),
-    SensorInfo("salinity", 11, "PSU", "ctd", "practical salinity (CTD)"),
-    SensorInfo("oxygen", 12, "umol/kg", "optode", "dissolved oxygen (optode)"),
-    SensorInfo("chlorophyll", 13, "ug/l", "optics", "chlorophyll fluorescence (optics)"),
-    SensorInfo("backscatter", 14, "1/m", "optics", "optical backscatter (optics)"),
-    SensorInfo("current", 15, "m/s", "adcp", "water current speed (ADCP)"),
-    SensorInfo("modem", 16, "B", "modem", "bytes received by the acoustic modem"),
-)
 SENSOR_BY_NAME: dict[str, SensorInfo] = {s.name: s for s in SENSORS}
 
 
@@ -132,7 +105,8 @@ ROUTES: dict[str, RouteInfo] = {
             "fly toward one waypoint",
         ),
         RouteInfo("noheading", (), 0, 0, "no horizontal goal: hold no heading"),
-        RouteInfo("waypoints", (), 1, 64, "fly a list of (lat, lon) waypoints in order"),
+        RouteInfo("waypoints", (), 1, MAX_ROUTE_POINTS,
+                  "fly a list of (lat, lon) waypoints in order"),
         RouteInfo(
             "sweep",
             (ParamSpec("spacing", unit="m", low=0.0, low_open=True),),

@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
@@ -16,9 +17,6 @@ from gliderplan.power_models.catalog import preset_names
 from gliderplan.power_models.sensor import Sensor
 from gliderplan.power_models.vehicle import Vehicle
 
-# Runtime work per tick (decode a frame, check events, run the routine, encode the reply,
-# append to the event log); assumption shared with the simulator: ~200k cycles.
-RUNTIME_CYCLES_PER_TICK = 200_000.0
 _ENERGY = re.compile(
     r"^\s*(?P<value>[0-9]+(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)\s*(?P<unit>[A-Za-z]+)"
     r"(?:\s*(?:@|at)\s*(?P<volts>[0-9]+(?:\.[0-9]+)?)\s*V)?\s*$")

@@ -14,9 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract import TICK_S
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
-from gliderplan.planner.occupancy import TICK_S, Occupancy
+from gliderplan.planner.occupancy import Occupancy
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.vehicle import Vehicle
 

@@ -17,52 +17,23 @@ import termios
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from enum import IntEnum
 from typing import NamedTuple, Protocol, cast
 
-PROTOCOL_VERSION = 1
-MAX_PAYLOAD = 240  # bytes
-MAX_PACKET = 6 + MAX_PAYLOAD + 2  # 248 bytes decoded
-MAX_WIRE = 250  # bytes before the delimiter a receiver accepts
+from gliderplan.contract import (
+    BAUD,
+    COMMAND_SIZE,
+    FLAG_DONE,
+    MAX_LINK_PLAN,
+    MAX_PAYLOAD,
+    MAX_WIRE,
+    N_SENSORS,
+    PLAN_PIECE,
+    PROTOCOL_VERSION,
+    MessageType,
+)
+
 HEADER = struct.Struct("<BBBBH")  # version, type, seq, ack, length
-N_SENSORS = 17
-PLAN_PIECE = 200  # bytes of plan file per PLAN frame
-MAX_PLAN = 65535  # bytes of a plan over the link (`total` is a u16)
-BAUD = 115200  # 8N1: 10 bits per byte on the line
-
-
-class MessageType(IntEnum):
-    HELLO = 0x01
-    SENSORS = 0x02
-    COMMAND = 0x03
-    RELEASE = 0x04
-    PLAN = 0x05
-    PLAN_STATUS = 0x06
-    NAK = 0x7F
-
-
-class Transition(IntEnum):
-    """COMMAND's `transition` field."""
-
-    NONE = 0
-    START = 1
-    GOTO = 2
-    CALL = 3
-    RETURN = 4
-    EXIT = 5
-
-
-class ReleaseReason(IntEnum):
-    LINK_SILENT = 1
-    INTERNAL_ERROR = 2
-    MISSION_EXITED = 3
-
-
-FLAG_SURFACE = 1 << 0
-FLAG_DONE = 1 << 1
-FLAG_CLIMBING = 1 << 2
-FLAG_HEADING = 1 << 3
-NO_STATE = 0xFF
+MAX_PACKET = HEADER.size + MAX_PAYLOAD + 2  # 248 bytes decoded
 
 
 # ---- errors ------------------------------------------------------------------------
@@ -310,17 +281,18 @@ class Sensors:
 
 
 _COMMAND = struct.Struct("<IBBBBBBBBffffII")
+assert _COMMAND.size == COMMAND_SIZE
 
 
 class Command(NamedTuple):  # a tuple: the simulator builds one per tick
     tick: int
-    state: int  # 0xFF once exited
+    state: int  # NO_STATE once exited
     stack_depth: int
-    transition: int  # 0 none, 1 start, 2 goto, 3 call, 4 return, 5 exit
+    transition: int  # a TransitionKind
     from_state: int
     to_state: int
     profile: int
-    flags: int  # bit 0 surface, 1 mission done, 2 climbing, 3 heading valid
+    flags: int  # FLAG_SURFACE, FLAG_DONE, FLAG_CLIMBING, FLAG_HEADING
     depth_target_m: float
     pitch_rad: float
     ballast_cc: float
@@ -429,8 +401,8 @@ def unpack_message(frame: Frame) -> Message:
 
 def plan_pieces(plan: bytes) -> list[Plan]:
     """A plan file cut into PLAN messages of at most PLAN_PIECE bytes, in order."""
-    if not 0 < len(plan) <= MAX_PLAN:
-        raise ValueError(f"a plan file has 1..{MAX_PLAN} bytes, not {len(plan)}")
+    if not 0 < len(plan) <= MAX_LINK_PLAN:
+        raise ValueError(f"a plan file has 1..{MAX_LINK_PLAN} bytes, not {len(plan)}")
     return [Plan(offset, len(plan), plan[offset:offset + PLAN_PIECE])
             for offset in range(0, len(plan), PLAN_PIECE)]
 

@@ -33,7 +33,8 @@ class CRuntime:
                  naive_tracker: bool, work_dir: Path) -> None:
         import serial
 
-        from gliderplan.runtime.protocol import BAUD, Link, LinkError
+        from gliderplan.contract import BAUD
+        from gliderplan.runtime.protocol import Link, LinkError
 
         self._work = work_dir
         self.exited = False
@@ -62,7 +63,8 @@ class CRuntime:
 
     def step(self, tick: int, mask: int, values: list[float]):
         """Send one tick's SENSORS (the sensors in `mask`), return the runtime's COMMAND."""
-        from gliderplan.runtime.protocol import NO_STATE, LinkError, LinkReleasedError
+        from gliderplan.contract import NO_STATE
+        from gliderplan.runtime.protocol import LinkError, LinkReleasedError
 
         carried = {i: values[i] for i in _indices(mask)}
         try:

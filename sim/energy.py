@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
 from gliderplan.power_models import load_board, load_sensor
@@ -31,10 +32,6 @@ if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a p
     from gliderplan.sim.planfile import Plan
 
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
-# Runtime work per tick: decode a frame, check events, run the library routine, encode the
-# COMMAND and append to the event log; assumption: ~200k cycles (an interpreted-free C loop
-# plus Linux serial I/O), i.e. under 0.1 % busy at 300 MHz and a 4 s tick.
-RUNTIME_CYCLES_PER_TICK = 200_000.0
 DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
 DEVICE_BITS = {d: sum(1 << s.index for s in SENSORS if s.device == d) for d in DEVICES}
 

@@ -14,6 +14,16 @@ import math
 import struct
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import (
+    FLAG_CLIMBING,
+    FLAG_DONE,
+    FLAG_HEADING,
+    FLAG_SURFACE,
+    N_SENSORS,
+    NO_STATE,
+    TRANSITION_BY_ACTION,
+    TransitionKind,
+)
 from gliderplan.language import ir, semantics
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.protocol import Command
@@ -22,9 +32,8 @@ from gliderplan.sim import compiled, pilot
 if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
     from gliderplan.sim.planfile import Plan
 
-N_SENSORS = len(SENSORS)
-NONE = 0xFF  # state index of "no state" (exited, or no transition)
-TRANSITION_CODES = {"start": 1, "goto": 2, "call": 3, "return": 4, "exit": 5}
+# COMMAND's `transition` of each kind the reference semantics reports.
+_KIND_CODES = {"start": TransitionKind.START, **TRANSITION_BY_ACTION}
 _F32 = struct.Struct(f"<{N_SENSORS}f")
 _DEPTH, _LAT, _LON, _TEMP = (SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp"))
 
@@ -114,15 +123,15 @@ class PythonRuntime:
         return self._command(tick, transition)
 
     def _command(self, tick: int, transition: semantics.Transition | None) -> Command:
-        kind, src, dst = 0, NONE, NONE
+        kind, src, dst = TransitionKind.NONE, NO_STATE, NO_STATE
         if transition is not None:
-            kind = TRANSITION_CODES[transition.kind]
-            src = self.index[transition.from_state] if transition.from_state else NONE
-            dst = self.index[transition.to_state] if transition.to_state else NONE
+            kind = _KIND_CODES[transition.kind]
+            src = self.index[transition.from_state] if transition.from_state else NO_STATE
+            dst = self.index[transition.to_state] if transition.to_state else NO_STATE
         machine = self.machine
         if machine.state is None:
-            return Command(tick, NONE, 0, kind, src, dst, 0, 2, 0.0, 0.0, 0.0, 0.0, 0,
-                           self.event_count)
+            return Command(tick, NO_STATE, 0, kind, src, dst, 0, FLAG_DONE, 0.0, 0.0, 0.0, 0.0,
+                           0, self.event_count)
         s, i = self.s, self.state_i
         t_in = s[0] - self.entry_time_s
         state_plan = self.plan.states[i] if self.plan is not None else None
@@ -143,7 +152,8 @@ class PythonRuntime:
         target, pitch_cmd, ballast_cmd, surface = self.routine.command(
             depth, s[_TEMP], args, pitch, ballast)
         heading, valid = self.route.heading(s[_LAT], s[_LON])
-        flags = (1 if surface else 0) | (4 if ballast_cmd > 0.0 else 0) | (8 if valid else 0)
+        flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
+                 | (FLAG_HEADING if valid else 0))
         power = self.constant_power[i]
         if power is None:
             power = pilot.sensor_power_mask(self.power_tables[i], t_in)

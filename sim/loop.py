@@ -13,17 +13,17 @@ from typing import Protocol
 
 import numpy as np
 
+from gliderplan.contract import NO_STATE, TICK_S, TRANSITION_BY_ACTION, TransitionKind
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, Transition
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.runtime.protocol import Command
-from gliderplan.sim.executor import NONE
 from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
 from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.science import ScienceComputer, SensorNoise
 from gliderplan.sim.vehicle import Current, GliderSim
 
-TRANSITION_KINDS = {2: "goto", 3: "call", 4: "return", 5: "exit"}
+ACTION_OF_KIND = {kind: action for action, kind in TRANSITION_BY_ACTION.items()}
 _COMMAND_F32 = struct.Struct("<4f")
 PROGRESS_TICKS = 50_000  # report progress this often on long runs
 
@@ -34,7 +34,7 @@ class Runtime(Protocol):
 
 @dataclass(frozen=True)
 class RunConfig:
-    tick_s: float = 4.0  # the science computer writes the sensor array every 2-4 s
+    tick_s: float = TICK_S
     duration_s: float = 30 * 86400.0  # the run ends here if the mission has not exited
     seed: int = 0
     noise: SensorNoise = SensorNoise()
@@ -104,21 +104,20 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 cmd = runtime_step(tick, mask, values)
             except MissionFault as fault:
                 ended = f"fault: {fault}"
-                _close_row(cols, state_c[-1] if state_c else NONE)
+                _close_row(cols, state_c[-1] if state_c else NO_STATE)
                 break
             time_s = tick * tick_s
             if tick == 0:
                 trace.append(Transition(time_s, "start", "", names[0], 0))
-            if cmd.transition >= 2:
-                kind = TRANSITION_KINDS[cmd.transition]
+            if cmd.transition > TransitionKind.START:
                 trace.append(Transition(
-                    time_s, kind, names[cmd.from_state],
-                    "" if cmd.to_state == NONE else names[cmd.to_state], cmd.stack_depth))
+                    time_s, ACTION_OF_KIND[cmd.transition], names[cmd.from_state],
+                    "" if cmd.to_state == NO_STATE else names[cmd.to_state], cmd.stack_depth))
             state_c.append(cmd.state)
             stack_c.append(cmd.stack_depth)
             profile_c.append(cmd.profile)
             power_c.append(cmd.sensor_power)
-            if cmd.state == NONE:
+            if cmd.state == NO_STATE:
                 ended = "exit"
                 phase_c.append(glider.phase)
                 out_c.append(0.0)

@@ -8,10 +8,10 @@ import json
 
 import numpy as np
 
+from gliderplan.contract import NO_STATE
 from gliderplan.language.registry import SENSORS
 from gliderplan.language.semantics import Transition
 from gliderplan.sim.energy import PlanCheck, RunEnergy
-from gliderplan.sim.executor import NONE
 from gliderplan.sim.loop import RunRecord
 from gliderplan.sim.prediction import StatePrediction
 
@@ -40,7 +40,7 @@ def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
         "pitch_rad": c["pitch_rad"],
         "temperature_c": c["temperature_c"],
         "temp_reading_c": c["temp_reading_c"],
-        "state": names[np.where(state == NONE, len(record.state_names), state)],
+        "state": names[np.where(state == NO_STATE, len(record.state_names), state)],
         "stack_depth": c["stack_depth"].astype(np.int16),
         "profile": c["profile"].astype(np.int16),
         "lat_deg": c["lat_deg"],

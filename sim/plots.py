@@ -7,8 +7,8 @@ import io
 
 import numpy as np
 
+from gliderplan.contract import NO_STATE
 from gliderplan.sim.energy import RunEnergy
-from gliderplan.sim.executor import NONE
 from gliderplan.sim.loop import RunRecord
 from gliderplan.sim.prediction import StatePrediction
 
@@ -52,11 +52,11 @@ def depth_png(record: RunRecord) -> bytes:
     colours = plt.get_cmap("tab10")
     state = c["state"].astype(int)
     for index, a, b in _state_runs(state):
-        if index == NONE:
+        if index == NO_STATE:
             continue
         end = t[b] if b < len(t) else t[-1]
         ax.axvspan(t[a], end, color=colours(index % 10), alpha=0.15, lw=0)
-    flown = sorted(set(state.tolist()) - {NONE})
+    flown = sorted(set(state.tolist()) - {NO_STATE})
     handles = [Patch(color=colours(i % 10), alpha=0.3, label=record.state_names[i])
                for i in flown]
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=8,

@@ -28,6 +28,7 @@ import pytest
 import serial
 
 from gliderplan.cli.main import main
+from gliderplan.contract import NO_STATE, ReleaseReason
 from gliderplan.language import check_source, semantics
 from gliderplan.language.codegen_c import read_mask
 from gliderplan.language.registry import SENSORS
@@ -37,7 +38,7 @@ from gliderplan.runtime import protocol as p
 ROOT = Path(__file__).resolve().parents[1]
 FIG2 = ROOT / "examples" / "fig2.mission"
 TICK_S = 10.0
-STATES = {0: "s1", 1: "s2", 2: "s3", p.NO_STATE: "-"}
+STATES = {0: "s1", 1: "s2", 2: "s3", NO_STATE: "-"}
 KINDS = {1: "start", 2: "goto", 3: "call", 4: "return", 5: "exit"}
 PAPER_TRACE = ["0 start - s1 0", "500 call s1 s2 1", "1500 return s2 s1 0",
                "2000 goto s1 s3 0", "2500 exit s3 - 0"]
@@ -145,7 +146,7 @@ def run_to_end(line: Line, command: list[str], state_dir: Path) -> list[p.Comman
     link = line.link()
     assert link.wait_hello(30).name == "sampleMission"
     commands = fly(link, 0)
-    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert link.wait_release() == ReleaseReason.MISSION_EXITED
     assert process.wait(30) == 0, process.stderr.read()
     return commands
 
@@ -169,7 +170,7 @@ def test_fig2_over_a_line_the_runtime_makes_with_a_pyserial_peer(binary, tmp_pat
             link = p.Link(port, retransmit_s=0.2, max_retries=20)
             assert link.wait_hello(30).name == "sampleMission"
             commands = fly(link, 0)
-            assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+            assert link.wait_release() == ReleaseReason.MISSION_EXITED
         assert process.wait(30) == 0, process.stderr.read()  # it waited for us to hang up
     finally:
         if process.poll() is None:
@@ -294,7 +295,7 @@ def test_corrupted_frames_are_rejected_and_change_nothing(binary, line, tmp_path
 
     commands = fly(link, 0, before_step=inject)
     assert trace(commands) == PAPER_TRACE
-    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert link.wait_release() == ReleaseReason.MISSION_EXITED
     assert process.wait(30) == 0
 
 
@@ -444,7 +445,7 @@ def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, 
     source = ROOT / "examples" / "thermocline_survey.mission"
     mission = check_source(source.read_text(), str(source)).mission
     assert main(["compile", str(source), "-o", str(tmp_path / "bin"), "--target", target]) == 0
-    names = {i: s.name for i, s in enumerate(mission.states)} | {p.NO_STATE: ""}
+    names = {i: s.name for i, s in enumerate(mission.states)} | {NO_STATE: ""}
     mask = read_mask(mission)
     rng = random.Random(seed)
 
@@ -468,7 +469,7 @@ def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, 
             expected.append(transition)
         if command.done:
             break
-    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert link.wait_release() == ReleaseReason.MISSION_EXITED
     assert process.wait(30) == 0
     assert machine.exited
     assert actual == expected

@@ -17,13 +17,14 @@ from pathlib import Path
 
 import pytest
 
+from gliderplan.contract import NO_STATE, ReleaseReason, TransitionKind
 from gliderplan.runtime import protocol as p
 
 RUNTIME = Path(__file__).resolve().parents[1] / "runtime"
 FIG2_HASH = "5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9"
 FIG2_TRACE = ["0 start - s1 0", "500 call s1 s2 1", "1500 return s2 s1 0",
               "2000 goto s1 s3 0", "2500 exit s3 - 0"]
-NAMES = {0: "s1", 1: "s2", 2: "s3", p.NO_STATE: "-"}
+NAMES = {0: "s1", 1: "s2", 2: "s3", NO_STATE: "-"}
 
 pytestmark = pytest.mark.skipif(
     shutil.which("gcc") is None or shutil.which("make") is None,
@@ -120,8 +121,8 @@ def test_fig2_over_the_serial_link_gives_the_papers_trace(binary, glider, tmp_pa
         "sampleMission", FIG2_HASH, 17)
     commands = fly(link, 0, 400)
     assert transitions(commands) == FIG2_TRACE
-    assert commands[-1].done and commands[-1].state == p.NO_STATE
-    assert link.wait_release() == p.ReleaseReason.MISSION_EXITED
+    assert commands[-1].done and commands[-1].state == NO_STATE
+    assert link.wait_release() == ReleaseReason.MISSION_EXITED
     assert process.wait(10) == 0
     assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE
 
@@ -175,7 +176,7 @@ def test_a_repeated_sensors_frame_gets_the_same_command_without_a_step(binary, g
             pass  # skip late duplicates of earlier answers
         answers.append(message)
     assert answers[0] == answers[1]
-    assert answers[0].transition == p.Transition.CALL and answers[0].event_count == 1
+    assert answers[0].transition == TransitionKind.CALL and answers[0].event_count == 1
 
 
 def test_plans_over_the_link_are_checked_and_a_bad_one_keeps_the_last(binary, glider, tmp_path):
@@ -236,7 +237,7 @@ def test_link_silence_releases_control_and_exits_3(binary, glider, tmp_path):
     link = glider.link()
     link.wait_hello()
     fly(link, 0, 60)  # into s2; then the science computer falls silent
-    assert link.wait_release(timeout_s=10) == p.ReleaseReason.LINK_SILENT
+    assert link.wait_release(timeout_s=10) == ReleaseReason.LINK_SILENT
     assert process.wait(10) == 3
     assert "link silent" in process.stderr.read()
     assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE[:2]
@@ -250,7 +251,7 @@ def test_a_stopped_or_crashed_runtime_releases_control(binary, glider, signal_nu
     link.wait_hello()
     fly(link, 0, 5)
     process.send_signal(signal_number)
-    assert link.wait_release(timeout_s=10) == p.ReleaseReason.INTERNAL_ERROR
+    assert link.wait_release(timeout_s=10) == ReleaseReason.INTERNAL_ERROR
     assert process.wait(10) == 4
 
 
@@ -280,7 +281,7 @@ def test_hello_repeats_until_the_first_sensors(binary, glider):
     link = glider.link()
     hellos = [link.wait_hello(), link.wait_hello(), link.wait_hello()]
     assert len(hellos) == 3 and link.hello.name == "sampleMission"
-    assert fly(link, 0, 0)[0].transition == p.Transition.START
+    assert fly(link, 0, 0)[0].transition == TransitionKind.START
 
 
 def test_plan_pieces_out_of_order_are_ignored(binary, glider):
@@ -306,7 +307,7 @@ def test_a_mission_fault_releases_control_and_is_logged(build, glider, tmp_path)
     with pytest.raises(p.LinkReleasedError) as released:
         for tick in range(100):
             commands.append(link.step(tick, {0: float(tick)}))
-    assert released.value.reason == p.ReleaseReason.INTERNAL_ERROR
+    assert released.value.reason == ReleaseReason.INTERNAL_ERROR
     assert process.wait(10) == 4
     assert "call overflows the state stack" in process.stderr.read()
     assert [c.stack_depth for c in commands if c.transition] == [0, 1, 2]

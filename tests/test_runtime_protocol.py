@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from gliderplan.contract import FLAG_CLIMBING, FLAG_HEADING, ReleaseReason, TransitionKind
 from gliderplan.runtime import protocol as p
 
 
@@ -54,11 +55,11 @@ def test_frame_layout_is_byte_exact():
 MESSAGES = [
     p.Hello(read_mask=0b111, mission_hash=bytes(range(32)), name="sampleMission"),
     p.Sensors(tick=42, values={0: 500.0, 1: 12.5, 9: 14.25}),
-    p.Command(tick=42, state=1, stack_depth=1, transition=p.Transition.CALL, from_state=0,
-              to_state=1, profile=0, flags=p.FLAG_CLIMBING | p.FLAG_HEADING,
+    p.Command(tick=42, state=1, stack_depth=1, transition=TransitionKind.CALL, from_state=0,
+              to_state=1, profile=0, flags=FLAG_CLIMBING | FLAG_HEADING,
               depth_target_m=5.0, pitch_rad=0.5, ballast_cc=230.0, heading_rad=1.5,
               sensor_power=0x207, event_count=3),
-    p.Release(p.ReleaseReason.MISSION_EXITED),
+    p.Release(ReleaseReason.MISSION_EXITED),
     p.Plan(offset=200, total=450, data=b"x" * 200),
     p.PlanStatus(False, "plan line 3: hash does not match the mission"),
     p.Nak(),

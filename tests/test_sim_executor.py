@@ -13,11 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gliderplan.cli.common import check_file
+from gliderplan.contract import NO_STATE
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import default_ballast_cc
 from gliderplan.language.registry import SENSORS
 from gliderplan.sim import compiled, pilot
-from gliderplan.sim.executor import NONE, PythonRuntime
+from gliderplan.sim.executor import PythonRuntime
 from gliderplan.sim.geo import ddmm_to_degrees, offset_m
 from gliderplan.sim.planfile import PlanFileError, parse_plan
 from gliderplan.sim.science import DEVICELESS_MASK, powered_mask
@@ -77,7 +78,7 @@ end
     # 10.09999995 < 10.1 in double, but the link rounds it to binary32 10.1000004
     executor = PythonRuntime(mission, None, 200.0)
     command = executor.step(0, DEVICELESS_MASK, readings(missiontime=0.0, depth=10.09999995))
-    assert command.transition == 5 and command.state == NONE
+    assert command.transition == 5 and command.state == NO_STATE
 
 
 def test_a_sensor_not_sent_keeps_its_last_value():

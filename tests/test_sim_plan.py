@@ -15,11 +15,11 @@ import pytest
 
 from gliderplan.cli.common import check_file
 from gliderplan.cli.main import main
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
 from gliderplan.power_models import load_board, load_sensor, load_vehicle
-from gliderplan.sim.energy import RUNTIME_CYCLES_PER_TICK
 
 MISSION = Path(__file__).resolve().parent / "missions" / "sim_budget.mission"
-PITCH_RAD, BALLAST_CC, TICK_S = 0.454, 233.0, 4.0
+PITCH_RAD, BALLAST_CC = 0.454, 233.0
 
 
 def predicted_components_j(time_s: float) -> dict[str, float]:
