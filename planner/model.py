@@ -24,7 +24,7 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from gliderplan.planner.inputs import ENERGY_UNIT_J, Coefficients, PlanInputs
+from gliderplan.planner.inputs import ENERGY_UNIT_J, Coefficients, PlanInputs, coefficients
 from gliderplan.planner.occupancy import NOMINAL_SPEED_MPS
 
 SOLVER = cp.CLARABEL
@@ -59,11 +59,37 @@ def _selector(rows: np.ndarray, n_cols: int) -> sp.csr_matrix:
     return sp.csr_matrix((np.ones(n), (np.arange(n), rows)), shape=(n, n_cols))
 
 
+def structure(inputs: PlanInputs) -> tuple:
+    """What the built problems hold as constants rather than Parameters: the index sets
+    and sizes, the duty and device bounds, the utility curvatures, the clocks that cannot
+    keep up, the transit legs' pump and speed limits, whether there is a horizon. Two
+    inputs with the same structure can share one model (a sweep only sets values)."""
+    tr = inputs.transit
+    arrays = (inputs.duty_state, inputs.duty_device, inputs.alpha, inputs.duty_lo,
+              inputs.duty_hi, inputs.dev_state, inputs.dev_lo, inputs.dev_hi, inputs.prof_state,
+              inputs.mode_state, np.isfinite(inputs.mode_power_w), tr.state, tr.pump_s,
+              tr.min_pace)
+    return (len(inputs.states), inputs.mission.horizon_s is not None,
+            tuple(sorted(inputs.sensor_quality_min.items())),
+            *((a.shape, a.dtype.str, a.tobytes()) for a in arrays))
+
+
+def model_for(inputs: PlanInputs, reuse: PlanModel | None = None) -> PlanModel:
+    """A model of `inputs` with its coefficients set: `reuse` itself when its structure is
+    that of `inputs` (no re-compilation), else a model built anew."""
+    model = reuse if reuse is not None and reuse.structure == structure(inputs) \
+        else PlanModel(inputs)
+    model.inputs = inputs
+    model.set_coefficients(coefficients(inputs))
+    return model
+
+
 class PlanModel:
     """The two problems and their parameters for one mission's index sets."""
 
     def __init__(self, inputs: PlanInputs) -> None:
         self.inputs = inputs
+        self.structure = structure(inputs)
         n_p, n_q, n_r, n_m = inputs.sizes
         n_s = len(inputs.states)
         self.duty = cp.Variable(n_p, name="duty") if n_p else None

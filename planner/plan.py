@@ -20,10 +20,9 @@ from gliderplan.planner.inputs import (
     SENSOR_PERIOD_S,
     PlanInputs,
     build_inputs,
-    coefficients,
     utility,
 )
-from gliderplan.planner.model import PlanModel, Solution
+from gliderplan.planner.model import PlanModel, Solution, model_for
 from gliderplan.planner.occupancy import (
     NOMINAL_SPEED_MPS,
     measured_occupancy,
@@ -128,9 +127,7 @@ def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
     occupancy = (mission_occupancy(mission) if occupancy_s is None
                  else measured_occupancy(mission, occupancy_s))
     inputs = build_inputs(mission, hardware, occupancy)
-    model = PlanModel(inputs)
-    model.set_coefficients(coefficients(inputs))
-    return inputs, model
+    return inputs, model_for(inputs)
 
 
 def plan_mission(mission: ir.CheckedMission, hardware: Hardware | None = None, *,
@@ -139,24 +136,43 @@ def plan_mission(mission: ir.CheckedMission, hardware: Hardware | None = None, *
     """Plan a checked mission. `hardware` defaults to the mission's annotations,
     `budget_j` [J] to (1 - reserve) x battery; `occupancy_s` (state -> seconds measured
     in simulation) replaces the static timeline. Raises InfeasibleBudget or PlanningError."""
-    inputs, model = prepare(mission, hardware, occupancy_s)
-    return solve_plan(inputs, model, budget_j)
+    _, model = prepare(mission, hardware, occupancy_s)
+    return solve_plan(model, budget_j)
 
 
-def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = None) -> Plan:
-    """Solve a prepared model for the mission's objective."""
-    hardware = inputs.hardware
-    budget = hardware.budget_j if budget_j is None else budget_j
+def solve_plan(model: PlanModel, budget_j: float | None = None) -> Plan:
+    """The plan of a prepared model at `budget_j` [J] (default: the hardware's budget)."""
+    hardware = model.inputs.hardware
     origin = "" if budget_j is not None or not hardware.reserve_fraction else (
         f"{hardware.battery_j / J_PER_WH:.4g} Wh less the "
         f"{100 * hardware.reserve_fraction:.3g} % reserve")
+    choice = choose_plan(model, hardware.budget_j if budget_j is None else budget_j, origin)
+    return assemble(model.inputs, choice)
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The plan a budget buys (`choose_plan`): the solution to fly and what it tells."""
+
+    solution: Solution  # snapped: values within solver tolerance of a bound are on it
+    budget_j: float  # [J]
+    minimum_j: float  # least energy the mission can be flown with [J], as flown
+    shadow_price: float  # quality per extra Wh of budget; 0 when the budget does not limit
+
+
+def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
+    """Which plan to fly at `budget_j` [J], for the mission's objective: the best quality
+    within the budget (and of the plans with that quality, the cheapest when the budget
+    is not what limits), or the least energy that reaches the quality floor. Raises
+    InfeasibleBudget when the budget is below what the mission needs (`origin` says where
+    the budget came from), PlanningError when the annotations cannot all hold."""
+    inputs = model.inputs
     least = model.solve_energy(-1.0)
     if not least.optimal:
         hint = " and whether the horizon leaves time for the transit legs" \
             if inputs.transit.size else ""
         raise PlanningError("the mission's annotations cannot all hold together: check the "
                             f"duty and quality annotations{hint}")
-    minimum_j = realised_energy_j(inputs, least)
     if inputs.mission.objective.sense == "minimize_energy":
         floor = inputs.mission.objective.quality_floor
         chosen = model.solve_energy(floor)
@@ -164,17 +180,12 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
             best = model.solve_quality(model.ample_budget_j())
             raise PlanningError(f"the quality floor {floor:g} cannot be reached: the best "
                                 f"this mission can do is {best.quality:.4g}")
-        if chosen.model_energy_j > budget * (1 + 1e-9):
-            raise InfeasibleBudget(budget, chosen.model_energy_j,
-                                   largest_consumers(inputs, chosen), origin)
+        _check_budget(inputs, chosen, budget_j, origin)
         priced = model.solve_quality(chosen.model_energy_j)
         shadow = priced.budget_dual if priced.optimal else 0.0
     else:
-        if least.model_energy_j > budget * (1 + 1e-9):
-            # the model's count (warm-ups included) is what the budget must cover
-            raise InfeasibleBudget(budget, least.model_energy_j,
-                                   largest_consumers(inputs, least), origin)
-        chosen = model.solve_quality(budget)
+        _check_budget(inputs, least, budget_j, origin)
+        chosen = model.solve_quality(budget_j)
         if not chosen.optimal:
             raise PlanningError(f"the solver could not plan this mission ({chosen.status})")
         shadow = chosen.budget_dual
@@ -184,8 +195,16 @@ def solve_plan(inputs: PlanInputs, model: PlanModel, budget_j: float | None = No
             if cheapest.optimal:
                 chosen = cheapest
     price = (shadow or 0.0) * J_PER_WH
-    return assemble(inputs, _snapped(inputs, chosen), budget, minimum_j,
-                    price if price >= _NO_PRICE else 0.0)
+    return Choice(_snapped(inputs, chosen), budget_j, realised_energy_j(inputs, least),
+                  price if price >= _NO_PRICE else 0.0)
+
+
+def _check_budget(inputs: PlanInputs, needed: Solution, budget_j: float, origin: str) -> None:
+    """InfeasibleBudget unless `budget_j` covers the solution as the model counts it
+    (warm-ups included: what the budget constraint itself measures)."""
+    if needed.model_energy_j > budget_j * (1 + 1e-9):
+        raise InfeasibleBudget(budget_j, needed.model_energy_j,
+                               largest_consumers(inputs, needed), origin)
 
 
 def _snap(x: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float,
@@ -310,9 +329,9 @@ def _round9(x: float) -> float:
     return float(format(float(x), ".9g"))
 
 
-def assemble(inputs: PlanInputs, sol: Solution, budget_j: float, minimum_j: float,
-             shadow_price: float) -> Plan:
-    hardware = inputs.hardware
+def assemble(inputs: PlanInputs, choice: Choice) -> Plan:
+    """The plan of a chosen solution, state by state."""
+    hardware, sol = inputs.hardware, choice.solution
     energies = state_energy_j(inputs, sol)
     modes = _chosen_modes(inputs, sol)
     duty = duty_fractions(inputs, sol)
@@ -354,8 +373,9 @@ def assemble(inputs: PlanInputs, sol: Solution, budget_j: float, minimum_j: floa
         computer=hardware.board.name, clock_mhz=hardware.board.clock_mhz,
         objective=inputs.mission.objective.sense, status="optimal",
         quality=float(sol.quality),
-        energy_j=float(sum(sum(e.values()) for e in energies)), budget_j=budget_j,
-        minimum_energy_j=minimum_j, shadow_price=shadow_price, defaults_used=defaults,
+        energy_j=float(sum(sum(e.values()) for e in energies)), budget_j=choice.budget_j,
+        minimum_energy_j=choice.minimum_j, shadow_price=choice.shadow_price,
+        defaults_used=defaults,
         time_source=inputs.occupancy.source, solver_status=sol.status, solve_s=sol.solve_s,
         solver_iterations=sol.iterations,
         states=tuple(states),

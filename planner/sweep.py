@@ -1,6 +1,8 @@
 """Tradeoff sweeps: quality against budget (the Pareto frontier), against the computer
-and against the battery. Each sweep builds the model once and only changes parameter
-values between solves (cvxpy's DPP path: no re-compilation)."""
+and against the battery. The frontier is the best quality at each budget; the computer
+and battery sweeps show the plan `plan.choose_plan` would fly, as `plan_mission` does.
+A sweep builds the model once and only changes parameter values between solves (cvxpy's
+DPP path: no re-compilation), unless the model's structure changes (`model.structure`)."""
 
 from __future__ import annotations
 
@@ -11,10 +13,10 @@ import pandas as pd
 
 from gliderplan.language import ir
 from gliderplan.planner.hardware import load_hardware
-from gliderplan.planner.inputs import build_inputs, coefficients
-from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel
+from gliderplan.planner.inputs import build_inputs
+from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel, model_for
 from gliderplan.planner.occupancy import mission_occupancy
-from gliderplan.planner.plan import J_PER_WH, state_energy_j
+from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, choose_plan, state_energy_j
 
 COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
 BATTERIES = ("alkaline", "lithium_primary", "rechargeable")
@@ -51,40 +53,34 @@ def pareto(model: PlanModel, points: int, progress: Progress | None = None) -> p
 
 
 def _row(model: PlanModel, budget_j: float) -> dict:
-    """Minimum energy and the plan at one budget (the cheapest of the best quality)."""
-    least = model.solve_energy(-1.0)
-    row = {"budget_j": budget_j, "minimum_energy_j": least.model_energy_j,
-           "status": "infeasible", "quality": np.nan, "energy_j": np.nan,
-           "shadow_price": np.nan, "computer_j": np.nan}
-    if not (least.optimal and least.model_energy_j <= budget_j):
-        return row
-    sol = model.solve_quality(budget_j)
-    if not sol.optimal:
-        return row
-    price = (sol.budget_dual or 0.0) * J_PER_WH
-    if price < 1e-9:  # budget to spare: fly the cheapest plan of that quality
-        cheapest = model.solve_energy(sol.quality * (1 - 1e-9))
-        sol = cheapest if cheapest.optimal else sol
-    energies = state_energy_j(model.inputs, sol)
-    row.update(status="optimal", quality=sol.quality,
+    """Minimum energy and the plan `choose_plan` flies at one budget."""
+    row = {"budget_j": budget_j, "minimum_energy_j": np.nan, "status": "infeasible",
+           "quality": np.nan, "energy_j": np.nan, "shadow_price": np.nan,
+           "computer_j": np.nan}
+    try:
+        choice = choose_plan(model, budget_j)
+    except InfeasibleBudget as short:
+        return {**row, "minimum_energy_j": short.minimum_j}
+    energies = state_energy_j(model.inputs, choice.solution)
+    row.update(minimum_energy_j=choice.minimum_j, status="optimal",
+               quality=choice.solution.quality,
                energy_j=float(sum(sum(e.values()) for e in energies)),
-               shadow_price=price, computer_j=float(sum(e["computer"] for e in energies)))
+               shadow_price=choice.shadow_price,
+               computer_j=float(sum(e["computer"] for e in energies)))
     return row
 
 
 def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
               budget_j: float | None = None, progress: Progress | None = None) -> pd.DataFrame:
-    """The plan on each computer (fixed clock), at the mission's budget or `budget_j`."""
+    """The plan on each computer, at the mission's budget or `budget_j`. The model is
+    re-used while its structure stays (a fixed clock), rebuilt when it changes (a board
+    whose clocks the planner chooses among)."""
     occupancy = mission_occupancy(mission)
     model = None
     rows = []
     for i, spec in enumerate(specs):
         hardware = load_hardware(mission, computer=spec)
-        inputs = build_inputs(mission, hardware, occupancy)
-        if model is None:
-            model = PlanModel(inputs)
-        model.inputs = inputs
-        model.set_coefficients(coefficients(inputs))
+        model = model_for(build_inputs(mission, hardware, occupancy), model)
         budget = hardware.budget_j if budget_j is None else budget_j
         rows.append({"computer": f"{hardware.board.name}@{hardware.board.clock_mhz:g}",
                      **_row(model, budget)})
@@ -101,9 +97,7 @@ def batteries(mission: ir.CheckedMission, specs: Sequence[str] = BATTERIES,
     for i, spec in enumerate(specs):
         hardware = load_hardware(mission, battery=spec, computer=computer)
         if model is None:
-            inputs = build_inputs(mission, hardware, mission_occupancy(mission))
-            model = PlanModel(inputs)
-            model.set_coefficients(coefficients(inputs))
+            model = model_for(build_inputs(mission, hardware, mission_occupancy(mission)))
         rows.append({"battery": spec, "battery_j": hardware.battery_j,
                      "reserve_fraction": hardware.reserve_fraction,
                      **_row(model, hardware.budget_j)})

@@ -11,10 +11,11 @@ import pytest
 from gliderplan.language import check_source
 from gliderplan.language.source import read_mission
 from gliderplan.planner.hardware import load_hardware
-from gliderplan.planner.inputs import ENERGY_UNIT_J, PlanInputError, coefficients
+from gliderplan.planner.inputs import ENERGY_UNIT_J, PlanInputError, build_inputs, coefficients
+from gliderplan.planner.model import model_for
 from gliderplan.planner.occupancy import mission_occupancy
 from gliderplan.planner.plan import InfeasibleBudget, PlanningError, plan_mission, prepare
-from gliderplan.planner.sweep import energy_range_j, pareto
+from gliderplan.planner.sweep import computers, energy_range_j, pareto
 from gliderplan.planner.waterfill import separable_form, water_fill
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -359,3 +360,30 @@ def test_clock_follows_the_computation_the_mission_needs():
     heavy = plan_mission(m, load_hardware(m, computer="ts7800", cycles_per_tick=1.6e9))
     assert {s.clock_mhz for s in heavy.states} == {500}
     assert heavy.components_j["computer"] > light.components_j["computer"]
+
+
+def test_each_computer_in_a_sweep_gets_the_plan_made_for_it_alone():
+    """The sweep re-uses one model while its structure stays (a fixed clock) and builds
+    another when it changes (a board whose clock the planner chooses)."""
+    m = mission("examples/fig2_annotated.mission")
+    specs = ("ts7800@500", "ts7800", "ts5500")
+    rows = computers(m, specs).to_dict("records")
+    for spec, row in zip(specs, rows, strict=True):
+        alone = plan_mission(m, load_hardware(m, computer=spec))
+        assert row["status"] == "optimal"
+        assert row["quality"] == pytest.approx(alone.quality, rel=1e-6), spec
+        assert row["energy_j"] == pytest.approx(alone.energy_j, rel=1e-6), spec
+        assert row["computer_j"] == pytest.approx(alone.components_j["computer"], rel=1e-6)
+    assert rows[0]["computer_j"] > rows[1]["computer_j"]  # free clock: the cheaper 300 MHz
+
+
+def test_a_model_is_reused_only_for_inputs_of_the_same_structure():
+    m = mission("examples/fig2_annotated.mission")
+    occupancy = mission_occupancy(m)
+
+    def inputs(spec: str):
+        return build_inputs(m, load_hardware(m, computer=spec), occupancy)
+
+    fixed = model_for(inputs("ts7800@300"))
+    assert model_for(inputs("ts7800@500"), fixed) is fixed
+    assert model_for(inputs("ts7800"), fixed) is not fixed
