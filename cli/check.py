@@ -37,8 +37,8 @@ def run(args: argparse.Namespace) -> int:
             print(result.render(), file=sys.stderr)
         has_warnings = any(not d.is_error for d in result.diagnostics)
         failed |= not result.ok or (args.strict and has_warnings)
-        if result.mission is not None:
-            checked.append(result.mission.to_json())
-    if args.json and checked:
+        if args.json and result.mission is not None:  # the JSON and its hash cost seconds
+            checked.append(result.mission.to_json())    # on a large mission: only on request
+    if checked:
         print(json.dumps(checked[0] if len(checked) == 1 else checked, indent=2))
     return ExitCode.BAD_INPUT if failed else ExitCode.OK

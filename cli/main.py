@@ -2,8 +2,9 @@
 
 Each subcommand is a module in this package named after it, with ``ORDER`` (its
 place in --help), ``add_arguments(parser)`` and ``run(args) -> int``; the first line
-of its docstring is its help. Subcommand modules import heavy libraries (cvxpy,
-pandas) inside ``run`` only, so that ``gliderplan check`` starts fast.
+of its docstring is its help. Only the module of the subcommand that runs is imported
+(all of them for --help or a mistyped command), and subcommand modules import heavy
+libraries (cvxpy, pandas) inside ``run`` only, so that ``gliderplan check`` starts fast.
 """
 
 from __future__ import annotations
@@ -21,13 +22,22 @@ from gliderplan.cli.errors import CliError
 from gliderplan.contract import ExitCode
 
 
-def subcommands() -> dict[str, ModuleType]:
-    """Subcommand name -> module, in --help order."""
-    modules = (importlib.import_module(f"gliderplan.cli.{info.name}")
-               for info in pkgutil.iter_modules(gliderplan.cli.__path__)
-               if not info.name.startswith("_"))
-    found = [m for m in modules if hasattr(m, "ORDER") and hasattr(m, "run")]
+def subcommands(only: str | None = None) -> dict[str, ModuleType]:
+    """Subcommand name -> module, in --help order; just `only` when that names one."""
+    names = [info.name for info in pkgutil.iter_modules(gliderplan.cli.__path__)
+             if not info.name.startswith("_")]
+    found = [m for m in map(_module, [only] if only in names else names) if _is_subcommand(m)]
+    if only is not None and not found:  # not a subcommand (a mistake, or a helper module)
+        return subcommands()
     return {m.__name__.rsplit(".", 1)[1]: m for m in sorted(found, key=lambda m: m.ORDER)}
+
+
+def _module(name: str) -> ModuleType:
+    return importlib.import_module(f"gliderplan.cli.{name}")
+
+
+def _is_subcommand(module: ModuleType) -> bool:
+    return hasattr(module, "ORDER") and hasattr(module, "run")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -39,12 +49,13 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(ExitCode.USAGE)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser; with `command`, only that subcommand's (if it is one)."""
     parser = _Parser(prog="gliderplan", description="Mission language, power-aware planner, "
                      "C runtime and simulator for Slocum-class underwater gliders.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name, module in subcommands().items():
+    for name, module in subcommands(command).items():
         help_text = module.__doc__.splitlines()[0].split(": ", 1)[-1]
         sub_parser = sub.add_parser(name, help=help_text, description=help_text)
         module.add_arguments(sub_parser)
@@ -54,7 +65,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit code (`contract.ExitCode`)."""
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    # The top-level parser has no option but --help, so a first word is the command.
+    command = argv[0] if argv and not argv[0].startswith("-") else None
+    args = build_parser(command).parse_args(argv)
     try:
         return int(args._run(args))
     except CliError as err:

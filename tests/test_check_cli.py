@@ -131,11 +131,46 @@ def test_json_dump_of_the_checked_mission(capsys):
     assert len(data["hash"]) == 64
 
 
-def test_check_does_not_import_heavy_libraries():
+def test_check_without_json_does_not_serialise_the_mission(monkeypatch, capsys):
+    """The JSON form and its hash cost seconds on a large mission: only on request."""
+    from gliderplan.language.ir import CheckedMission
+
+    def refuse(self):
+        raise AssertionError("to_json called without --json")
+
+    monkeypatch.setattr(CheckedMission, "to_json", refuse)
+    assert main(["check", str(EXAMPLES / "fig2.mission")]) == 0
+    assert capsys.readouterr().out == ""
+
+
+def test_check_imports_nothing_of_the_later_stages():
+    """`check` runs the front end only: no runtime, planner, simulator or power models,
+    and none of the libraries they need."""
     probe = ("import sys\n"
              "from gliderplan.cli.main import main\n"
              f"code = main(['check', {str(EXAMPLES / 'fig2.mission')!r}])\n"
              "heavy = {'numpy', 'pandas', 'cvxpy', 'scipy', 'matplotlib', 'clarabel'}\n"
-             "print(code, sorted({m.split('.')[0] for m in sys.modules} & heavy))\n")
+             "stages = {'gliderplan.runtime', 'gliderplan.planner', 'gliderplan.sim',\n"
+             "          'gliderplan.power_models'}\n"
+             "loaded = {m.split('.')[0] for m in sys.modules} & heavy\n"
+             "loaded |= {'.'.join(m.split('.')[:2]) for m in sys.modules} & stages\n"
+             "print(code, sorted(loaded))\n")
     proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
     assert proc.stdout.split("\n")[0] == "0 []", proc.stdout + proc.stderr
+
+
+def test_help_lists_every_subcommand(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["--help"])
+    assert exit_.value.code == 0
+    out = capsys.readouterr().out
+    for name in ("check", "fmt", "plan", "compile", "sim", "power", "calibrate"):
+        assert f"    {name}" in out, out
+
+
+def test_unknown_subcommand_is_bad_usage_naming_the_choices(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["chek", str(EXAMPLES / "fig2.mission")])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'chek'" in err and "'check'" in err
