@@ -76,15 +76,20 @@ class MissionSyntaxError(Exception):
         self.diagnostics = diagnostics
 
 
-def render(diagnostic: Diagnostic, filename: str, source: str) -> str:
-    """Format one diagnostic with the offending source line underlined."""
+def render_all(diagnostics: Iterable[Diagnostic], filename: str, source: str) -> str:
+    """Format each diagnostic with the offending source line underlined; the source is
+    split into lines once for all of them, so the time grows with their number."""
+    source_lines = source.splitlines()
+    return "\n".join(_render(d, filename, source_lines) for d in diagnostics)
+
+
+def _render(diagnostic: Diagnostic, filename: str, source_lines: list[str]) -> str:
     span = diagnostic.span
     if span.line <= 0:
         lines = [f"{filename}: {diagnostic.severity}: {diagnostic.message}"]
     else:
         where = f"{filename}:{span.line}:{span.column}"
         lines = [f"{where}: {diagnostic.severity}: {diagnostic.message}"]
-        source_lines = source.splitlines()
         if span.line <= len(source_lines):
             text = source_lines[span.line - 1].expandtabs(1)
             gutter = f"{span.line:>5} | "
@@ -95,7 +100,3 @@ def render(diagnostic: Diagnostic, filename: str, source: str) -> str:
     if diagnostic.hint:
         lines.append(f"      = hint: {diagnostic.hint}")
     return "\n".join(lines)
-
-
-def render_all(diagnostics: Iterable[Diagnostic], filename: str, source: str) -> str:
-    return "\n".join(render(d, filename, source) for d in diagnostics)

@@ -173,3 +173,29 @@ def test_a_very_long_call_chain_is_reported_briefly():
     assert diagnostic.message == ("calls nest 2999 deep (s0 -> s1 -> s2 -> s3 -> ... -> s2996 "
                                   "-> s2997 -> s2998 -> s2999), deeper than the runtime stack "
                                   "of 8")
+
+
+def test_rendering_splits_the_source_once_however_many_diagnostics():
+    """Each message looks its line up in one list of lines: rendering grows with the
+    number of messages, not with messages times the length of the file."""
+    from gliderplan.language.diagnostics import render_all
+
+    class CountingSource(str):
+        splits = 0
+
+        def splitlines(self, keepends: bool = False) -> list[str]:
+            CountingSource.splits += 1
+            return super().splitlines(keepends)
+
+    spares = "".join(_state(f"spare{i}", "case missiontime > 5 exit") for i in range(300))
+    source = _TEMPLATE.format(**{**_DEFAULTS, "states": spares})
+    result = check_source(source, "m.mission")
+    never_entered = [d for d in result.diagnostics if "is never entered" in d.message]
+    assert len(never_entered) == 300
+
+    text = render_all(result.diagnostics, "m.mission", CountingSource(source))
+
+    assert CountingSource.splits == 1
+    last = never_entered[-1].span.line
+    assert f"m.mission:{last}:7: warning: state 'spare299' is never entered" in text
+    assert f"{last:>5} | state spare299\n" in text
