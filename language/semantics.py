@@ -65,13 +65,27 @@ def step(mission: ir.CheckedMission, machine: Machine, sensors: Mapping[str, flo
     event = fired_event(mission.state(machine.state), sensors, machine.variables)
     if event is None:
         return machine, None
+    return fire(mission, machine, event, sensors, time_s)
+
+
+def fire(mission: ir.CheckedMission, machine: Machine, event: ir.Event,
+         sensors: Mapping[str, float], time_s: float) -> tuple[Machine, Transition | None]:
+    """Fire `event`, whose condition holds: its assignments in order (each sees the ones
+    before), then its action. For a caller that found the event itself (once per tick)."""
     variables = dict(machine.variables)
     for assign in event.assignments:
         variables[assign.variable] = ir.evaluate(assign.value, sensors, variables)
-    here, stack = machine.state, machine.stack
+    return act(mission, Machine(machine.state, machine.stack, variables), event, time_s)
+
+
+def act(mission: ir.CheckedMission, machine: Machine, event: ir.Event,
+        time_s: float) -> tuple[Machine, Transition | None]:
+    """The event's action on a machine in the event's state whose variables already hold
+    the event's assignments: the machine after it and its transition (None: no action)."""
+    here, stack, variables = machine.state, machine.stack, machine.variables
     match event.action:
         case None:
-            return Machine(here, stack, variables), None
+            return machine, None
         case "goto":
             after = Machine(event.target, (), variables)
         case "call":

@@ -4,6 +4,9 @@ The mission is run with the reference semantics on the runtime's tick grid, with
 `missiontime` as the only sensor that has a value (every other reading is NaN, as on
 the runtime before a sensor has reported). Missiontime guards then decide every exit
 they can: Fig. 2 gives s1 0-500 s, s2 500-1500 s, s1 1500-2000 s, s3 2000-2500 s.
+Which event fires and what its action does are the reference's (`semantics.fired_event`,
+`semantics.act`); only an assignment that needs an unknown reading differs: it keeps the
+variable's value.
 
 A state whose exit depends on other sensors is planned at the upper bound of its
 `expect` annotation (robust: the budget must hold when the water is unkind), leaving by
@@ -20,7 +23,7 @@ from dataclasses import dataclass, field
 
 from gliderplan.contract import TICK_S
 from gliderplan.language import ir
-from gliderplan.language.semantics import MissionFault, fired_event
+from gliderplan.language.semantics import Machine, act, fired_event, start
 from gliderplan.planner.legs import Position, leg_length_m, route_targets
 
 NOMINAL_SPEED_MPS = 0.35  # Slocum horizontal speed (paper; BCO-DMO): transit times in the walk
@@ -140,14 +143,13 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
         horizon_defaulted = True
     else:
         horizon_defaulted = False
-    variables = {v.name: v.initial for v in mission.variables}
-    state: str | None = mission.states[0].name
-    stack: list[str] = []
+    machine, _ = start(mission)
     now = 0.0
     trace: list[Visit] = []
     position: Position | None = None  # where the last route left the glider
     legs: dict[str, float] = {}
-    while state is not None and now < horizon and len(trace) < _MAX_VISITS:
+    while machine.state is not None and now < horizon and len(trace) < _MAX_VISITS:
+        state, variables = machine.state, dict(machine.variables)
         here = mission.state(state)
         entry, entry_vars = now, dict(variables)
         check_from = now if not trace else now + TICK_S  # the entering tick already fired
@@ -184,20 +186,9 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
             break
         trace.append(Visit(state, entry, fire_s - entry, entry_vars, ended_by))
         position = targets[-1] if targets else position
-        variables = _assign(event, fire_s, variables)
         now = fire_s
-        match event.action:
-            case "goto":
-                state, stack = event.target, []
-            case "call":
-                stack.append(state)
-                state = event.target
-            case "return":
-                if not stack:
-                    raise MissionFault(f"{fire_s:g} s: return from {state} with an empty stack")
-                state = stack.pop()
-            case "exit":
-                state = None
+        machine, _ = act(mission, Machine(state, machine.stack, _assign(event, fire_s, variables)),
+                         event, fire_s)
     if horizon_defaulted and trace and trace[-1].ended_by == "horizon":
         notes.append(f"horizon: {DEFAULT_HORIZON_S:g} s (default)")
     return _summarise(mission, trace, notes, legs)

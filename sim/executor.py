@@ -1,8 +1,9 @@
 """The Python reference executor: what the C runtime does with one SENSORS frame.
 
-Transitions come from `language.semantics.step` (the reference semantics); the events
-of the current state are first screened by a compiled checker (sim/compiled.py), so
-that the ticks on which nothing fires (almost all of them) cost one function call.
+The events of the current state are checked by a compiled checker (sim/compiled.py),
+once per tick: the ticks on which nothing fires (almost all of them) cost one function
+call. The event it finds is fired by `language.semantics.fire` (the reference
+semantics: assignments, then the action).
 Commands come from the library routines of docs/pilot.md (sim/pilot.py). Sensor
 values arrive as the link carries them: IEEE binary32, widened to double.
 """
@@ -111,9 +112,11 @@ class PythonRuntime:
             self.machine, transition = semantics.start(self.mission, s[0])
             self._enter(self.machine.state)
         machine = self.machine
-        if machine.state is not None and self.checkers[self.state_i](s, machine.variables) >= 0:
+        fired_i = -1 if machine.state is None else self.checkers[self.state_i](s, machine.variables)
+        if fired_i >= 0:  # conditions checked once, above; the reference fires the event
             named = {info.name: s[info.index] for info in SENSORS}
-            after, fired = semantics.step(self.mission, machine, named, s[0])
+            after, fired = semantics.fire(self.mission, machine, self.state.events[fired_i],
+                                          named, s[0])
             self.machine = after
             self.event_count += 1
             if fired is not None:

@@ -15,7 +15,7 @@ import numpy as np
 
 from gliderplan.contract import NO_STATE, TICK_S, TRANSITION_BY_ACTION, TransitionKind
 from gliderplan.language import ir
-from gliderplan.language.semantics import MissionFault, Transition
+from gliderplan.language.semantics import MissionFault, Transition, start
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
@@ -108,7 +108,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 break
             time_s = tick * tick_s
             if tick == 0:
-                trace.append(Transition(time_s, "start", "", names[0], 0))
+                trace.append(start(mission, time_s)[1])
             if cmd.transition > TransitionKind.START:
                 trace.append(Transition(
                     time_s, ACTION_OF_KIND[cmd.transition], names[cmd.from_state],

@@ -100,6 +100,34 @@ end
     assert executor.step(2, mask, readings(missiontime=8, temp=5.0)).transition == 5
 
 
+def test_each_condition_is_evaluated_once_per_tick(monkeypatch):
+    """The compiled checker finds the event; firing it evaluates no condition again
+    (only the assignment's value, through the reference semantics)."""
+    mission = mission_from("""mission once
+var bottom = 20
+state a begin flightroute noheading flightprofile hover(5) sensors missiontime, depth
+  events
+    case depth > bottom set bottom = depth + 2
+    case missiontime >= 8 exit
+end
+""")
+    conditions = {id(e.condition) for s in mission.states for e in s.events}
+    evaluated = []
+    reference = ir.evaluate
+
+    def spy(expr, sensors, variables):
+        evaluated.append(id(expr))
+        return reference(expr, sensors, variables)
+
+    monkeypatch.setattr(ir, "evaluate", spy)
+    executor = PythonRuntime(mission, None, 200.0)
+    kinds = [executor.step(t, DEVICELESS_MASK, readings(missiontime=4.0 * t, depth=21.0 + t))
+             .transition for t in range(3)]
+    assert kinds == [1, 0, 5]  # start; the assignment fired at 4 s; exit at 8 s
+    assert executor.machine.variables == {"bottom": 23.0}  # 21 + 2 at tick 0, then 22 < 23
+    assert evaluated and not conditions & set(evaluated)
+
+
 PLAN_MISSION = """mission planned
 state a
 begin
