@@ -1,6 +1,7 @@
 # Two entry points for a fresh machine: `make demo` and `make test`.
 # Both create .venv and install gliderplan into it; `test` also installs the system
-# packages the C runtime tests need (cross compilers, qemu-user, valgrind) when it can.
+# packages the C runtime tests need (cross compilers, qemu-user, valgrind, libFuzzer);
+# under CI=true it fails when one cannot be installed.
 
 PYTHON ?= python3
 VENV := .venv
@@ -36,19 +37,11 @@ lint: $(STAMP)
 test: $(STAMP) lint sysdeps
 	$(BIN)/python -m pytest -q
 
-# Toolchains for the TS-7800 (ARMv5TE) and TS-5500 (i486) builds, qemu-user to run
-# them, valgrind for the runtime bench. Installed when we may (root or sudo); tests
-# that need a missing one say so and are reported as skipped.
-SYSDEPS := gcc-arm-linux-gnueabi libc6-dev-armel-cross gcc-i686-linux-gnu \
-	libc6-dev-i386-cross qemu-user valgrind
+# Toolchains for the TS-7800 (ARMv5TE) and TS-5500 (i486) builds, qemu-user to run them
+# on the boards' CPU models, valgrind, libFuzzer, musl built for the i486. Under CI=true
+# a tool that cannot be installed fails the run, and so does any test that skips.
 sysdeps:
-	@missing=$$(for p in $(SYSDEPS); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
-	if [ -z "$$missing" ]; then exit 0; fi; \
-	if [ "$$(id -u)" = 0 ]; then SUDO=; elif command -v sudo >/dev/null; then SUDO="sudo -n"; \
-	else echo "sysdeps: cannot install $$missing (not root)"; exit 0; fi; \
-	$$SUDO apt-get update -qq && $$SUDO env DEBIAN_FRONTEND=noninteractive \
-		apt-get install -y -qq --no-install-recommends $$missing >/dev/null \
-		|| echo "sysdeps: could not install $$missing"
+	@sh tests/sysdeps.sh
 
 clean:
 	rm -rf $(VENV) out
