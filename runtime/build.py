@@ -3,7 +3,8 @@
 The runtime sources ship inside the package (`gliderplan.runtime`: `include/*.h`,
 `src/*.c`), so a compile works after `pip install`. Three targets: the host, the
 TS-7800's ARMv5TE (ARM9) and the TS-5500's i486-class AMD Elan SC520, both static so
-the binary runs on the boards' old C libraries. Builds are cached by everything that
+the binary runs on the boards' old C libraries; the TS-5500's links musl built for the
+i486 (`musl-i486.sh`). Builds are cached by everything that
 determines the binary: the generated source, the runtime sources, the target and the
 compiler's version.
 """
@@ -35,28 +36,37 @@ class BuildError(Exception):
     """A build that cannot run or failed; the message says what to do."""
 
 
+# How to get musl built for the i486 (the distribution's 32-bit C libraries use i686
+# instructions the TS-5500 does not have).
+MUSL_I486 = (f"sudo sh {Path(__file__).with_name('musl-i486.sh')} /usr/local/lib/musl-i486 "
+             "/usr/local/bin  (it needs gcc-i686-linux-gnu)")
+
+
 @dataclass(frozen=True)
 class Target:
-    """A board's toolchain: the compiler command, its flags, the Debian package with it."""
+    """A board: its compiler command and flags, how to install the compiler, and the
+    qemu-user command that runs its binaries on the board's own CPU model."""
 
     name: str
     compiler: str
     flags: tuple[str, ...]
-    package: str
+    install: str
     description: str
-    fallback: tuple[str, ...] = ()  # another compiler command, used if it can link for us
+    emulator: tuple[str, ...] = ()
 
 
 TARGETS: dict[str, Target] = {
     t.name: t
     for t in (
-        Target("host", "cc", (), "gcc", "this machine"),
+        Target("host", "cc", (), "sudo apt-get install gcc", "this machine"),
         Target("ts7800", "arm-linux-gnueabi-gcc", ("-march=armv5te", "-static"),
-               "gcc-arm-linux-gnueabi", "TS-7800, ARMv5TE (ARM9)"),
+               "sudo apt-get install gcc-arm-linux-gnueabi", "TS-7800, ARMv5TE (ARM9)",
+               emulator=("qemu-arm", "-cpu", "arm926")),
+        # musl compiled for the i486, linked statically: no i686 instruction anywhere.
         # -mpc64: the x87 rounds each result to double once, as the reference does.
-        Target("ts5500", "i686-linux-gnu-gcc", ("-march=i486", "-mpc64", "-static"),
-               "gcc-i686-linux-gnu", "TS-5500, i486-class AMD Elan SC520",
-               fallback=("gcc", "-m32")),
+        Target("ts5500", "i486-linux-musl-gcc", ("-march=i486", "-mpc64", "-static"),
+               MUSL_I486, "TS-5500, i486-class AMD Elan SC520",
+               emulator=("qemu-i386", "-cpu", "486")),
     )
 }
 
@@ -70,27 +80,11 @@ def find_target(name: str) -> Target:
 
 
 def compiler_command(board: Target) -> list[str]:
-    """The compiler to run, or a BuildError naming the Debian package that provides it."""
+    """The compiler to run, or a BuildError saying how to install it."""
     if shutil.which(board.compiler):
         return [board.compiler]
-    if board.fallback and shutil.which(board.fallback[0]) and _links(board, board.fallback):
-        return list(board.fallback)
     raise BuildError(f"target {board.name} ({board.description}) needs {board.compiler}, "
-                     f"which is not installed; on Debian/Ubuntu: "
-                     f"sudo apt-get install {board.package}")
-
-
-def _links(board: Target, command: tuple[str, ...]) -> bool:
-    """Whether `command` builds a program for the board (e.g. gcc -m32 needs multilib)."""
-    with tempfile.TemporaryDirectory(prefix="gliderplan-probe-") as tmp:
-        source = Path(tmp) / "probe.c"
-        source.write_text("int main(void) { return 0; }\n")
-        try:
-            done = subprocess.run([*command, *board.flags, str(source), "-o",
-                                   str(Path(tmp) / "probe")], capture_output=True, timeout=60)
-        except (OSError, subprocess.SubprocessError):
-            return False
-        return done.returncode == 0
+                     f"which is not installed; on Debian/Ubuntu: {board.install}")
 
 
 @contextmanager

@@ -1,4 +1,4 @@
-"""Under CI=true a skipped test fails.
+"""Under CI=true a skipped test fails; the boards' CPU models for the tests that run them.
 
 Tests skip only when something outside the project is missing: a cross compiler, qemu,
 libFuzzer, the shared Slocum logs. A developer's machine may lack them, and pytest's
@@ -9,6 +9,8 @@ summary (-ra) says which tests were skipped and why; CI installs every one of th
 from __future__ import annotations
 
 import os
+import shutil
+from collections.abc import Callable
 
 import pytest
 
@@ -25,3 +27,21 @@ def pytest_runtest_makereport(item, call):
         reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else report.longrepr
         report.outcome = "failed"
         report.longrepr = f"skipped under CI=true, where every tool must be installed: {reason}"
+
+
+@pytest.fixture
+def board_runner() -> Callable[[str], list[str]]:
+    """For a build target, the command prefix that runs its binaries on the board's own CPU
+    model (`qemu-i386 -cpu 486`, `qemu-arm -cpu arm926`; nothing for the host). Skips when
+    the target's compiler or emulator is not installed."""
+    from gliderplan.runtime.build import TARGETS
+
+    def runner(target: str) -> list[str]:
+        board = TARGETS[target]
+        tools = [board.compiler, *board.emulator[:1]]
+        missing = [tool for tool in tools if shutil.which(tool) is None]
+        if missing:
+            pytest.skip(f"{' and '.join(missing)} not installed (make sysdeps)")
+        return list(board.emulator)
+
+    return runner

@@ -5,7 +5,7 @@ scripted science computer (protocol.Link) drives it over a pty pair, feeding mis
 
 Also: corrupted frames change nothing, a killed runtime resumes, bad plans stop it
 before it starts, a hand-written plan's sensor windows reach the COMMANDs, and the
-TS-7800 and TS-5500 builds give the same trace under qemu-user.
+TS-7800 and TS-5500 builds fly it on the boards' own CPU models under qemu-user.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import os
 import random
+import re
 import select
 import shutil
 import signal
@@ -43,20 +44,7 @@ KINDS = {1: "start", 2: "goto", 3: "call", 4: "return", 5: "exit"}
 PAPER_TRACE = ["0 start - s1 0", "500 call s1 s2 1", "1500 return s2 s1 0",
                "2000 goto s1 s3 0", "2500 exit s3 - 0"]
 
-# The boards' builds run under qemu-user: (target, cross compiler, emulator).
-BOARDS = [("ts7800", "arm-linux-gnueabi-gcc", "qemu-arm"),
-          ("ts5500", "i686-linux-gnu-gcc", "qemu-i386")]
-
-
-def board_runner(target: str) -> list[str]:
-    """The command prefix that runs a binary for `target`; skips if its tools are missing."""
-    if target == "host":
-        return []
-    _, compiler, emulator = next(b for b in BOARDS if b[0] == target)
-    missing = [tool for tool in (compiler, emulator) if shutil.which(tool) is None]
-    if missing:
-        pytest.skip(f"{' and '.join(missing)} not installed (make sysdeps)")
-    return [emulator]
+BOARDS = [target for target in build.TARGETS if target != "host"]
 
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None,
@@ -227,18 +215,19 @@ def test_a_missing_cross_compiler_names_the_debian_package(monkeypatch, tmp_path
     assert "sudo apt-get install gcc-arm-linux-gnueabi" in capsys.readouterr().err
 
 
-def test_gcc_without_32_bit_support_is_no_ts5500_compiler(monkeypatch, tmp_path, capsys):
-    gcc = shutil.which("gcc")
-    if gcc is None:
-        pytest.skip("no gcc to try -m32 with")
-    if subprocess.run([gcc, "-m32", "-print-file-name=crt1.o"], capture_output=True,
-                      text=True).stdout.strip() != "crt1.o":
-        pytest.skip("this gcc has 32-bit (multilib) support: -m32 would be used")
+def test_a_ts5500_build_needs_musl_for_the_i486_and_says_how_to_build_it(monkeypatch, tmp_path,
+                                                                         capsys):
+    # The i686 toolchain alone (or gcc -m32) would link a C library the board cannot run.
     (tmp_path / "bin").mkdir()
-    (tmp_path / "bin" / "gcc").symlink_to(gcc)
-    monkeypatch.setenv("PATH", str(tmp_path / "bin"))  # gcc, but no i686-linux-gnu-gcc
+    for tool in ("gcc", "i686-linux-gnu-gcc"):
+        if shutil.which(tool):
+            (tmp_path / "bin" / tool).symlink_to(shutil.which(tool))
+    monkeypatch.setenv("PATH", str(tmp_path / "bin"))
     assert compile_fig2(tmp_path / "out", "--target", "ts5500") == 1
-    assert "sudo apt-get install gcc-i686-linux-gnu" in capsys.readouterr().err
+    said = capsys.readouterr().err
+    assert "needs i486-linux-musl-gcc, which is not installed" in said
+    script = said.split("sudo sh ")[1].split()[0]
+    assert Path(script).is_file() and script.endswith("musl-i486.sh")
 
 
 def test_a_compiler_failure_is_a_clear_error_and_caches_nothing(monkeypatch, tmp_path, capsys):
@@ -438,7 +427,8 @@ def f32(value: float) -> float:
 
 @pytest.mark.parametrize(("target", "seed"), [("host", 1), ("host", 2), ("host", 3),
                                             ("ts7800", 4), ("ts5500", 5)])
-def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, target, seed):
+def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, target, seed,
+                                                        board_runner):
     # A mission with variables, assignments that read sensors, call and return, checked
     # tick by tick on random readings against language.semantics.
     runner = board_runner(target)
@@ -476,12 +466,45 @@ def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, 
     assert len(expected) > 10  # the readings make the survey move between its states
 
 
-# ---- the boards' CPUs under qemu-user ----------------------------------------------------
+# ---- the boards' CPU models under qemu-user (-cpu arm926, -cpu 486) -----------------
 
-@pytest.mark.parametrize("target", [b[0] for b in BOARDS])
-def test_board_builds_fly_the_same_trace_under_qemu(cache, line, tmp_path, target):
+@pytest.mark.parametrize("target", BOARDS)
+def test_board_builds_fly_fig2_on_the_boards_cpus(cache, line, tmp_path, target, board_runner):
     runner = board_runner(target)
     assert compile_fig2(tmp_path / target, "--target", target) == 0
     commands = run_to_end(line, [*runner, str(tmp_path / target / "sampleMission")],
                           tmp_path / "state")
     assert trace(commands) == PAPER_TRACE
+
+
+# Instructions the i486 does not have: the P6's conditional moves and x87 compares that set
+# EFLAGS, the Pentium's cmpxchg8b, rdtsc and model registers, fast system calls, MMX/SSE.
+I686_ONLY = re.compile(r"\s(cmov\w+|fcmov\w+|fu?comip?|cmpxchg8b|rdtsc|rdmsr|wrmsr|rdpmc|"
+                       r"sysenter|sysexit|syscall|fisttp\w*|[lms]fence|clflush|prefetch\w*|"
+                       r"emms|ldmxcsr|stmxcsr)\s|%x?mm\d")
+OBJDUMP = "i686-linux-gnu-objdump"
+
+
+def i686_only_instructions(binary: Path) -> list[str]:
+    """Disassembled lines of `binary` that an i486 cannot execute."""
+    listing = subprocess.run([OBJDUMP, "-d", str(binary)], capture_output=True, text=True,
+                             check=True).stdout
+    return [line.strip() for line in listing.splitlines() if I686_ONLY.search(line)]
+
+
+def test_the_ts5500_binary_has_no_instruction_the_i486_lacks(cache, tmp_path, board_runner):
+    board_runner("ts5500")
+    if shutil.which(OBJDUMP) is None:
+        pytest.skip(f"{OBJDUMP} not installed (make sysdeps)")
+    # The scan finds what an i686 build of the same kind of code contains.
+    probe = tmp_path / "probe.c"
+    probe.write_text("int least(int a, int b) { return a < b ? a : b; }\n"
+                     "int below(double a, double b) { return a < b; }\n")
+    subprocess.run(["i686-linux-gnu-gcc", "-O2", "-march=i686", "-c", str(probe), "-o",
+                    str(tmp_path / "probe.o")], check=True)
+    found = " ".join(i686_only_instructions(tmp_path / "probe.o"))
+    assert "cmov" in found and "fcomip" in found
+
+    assert compile_fig2(tmp_path / "ts5500", "--target", "ts5500") == 0
+    assert i686_only_instructions(tmp_path / "ts5500" / "sampleMission") == []
+

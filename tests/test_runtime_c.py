@@ -1,4 +1,5 @@
-"""The C runtime's unit tests (runtime/tests), plain and under ASan + UBSan."""
+"""The C runtime's unit tests (runtime/tests): plain, under ASan + UBSan, and on the
+boards' own CPU models under qemu-user."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import subprocess
 from pathlib import Path
 
 import pytest
+
+from gliderplan.runtime.build import TARGETS
 
 RUNTIME = Path(__file__).resolve().parents[1] / "runtime"
 
@@ -45,17 +48,11 @@ def test_c_unit_tests_pass_under_sanitizers(tmp_path):
     assert "runtime error" not in output and "AddressSanitizer" not in output
 
 
-@pytest.mark.parametrize(
-    ("compiler", "flags", "emulator"),
-    [("arm-linux-gnueabi-gcc", "-march=armv5te -static", "qemu-arm"),   # TS-7800
-     ("i686-linux-gnu-gcc", "-march=i486 -static", "qemu-i386")],       # TS-5500
-    ids=["ts7800-armv5te", "ts5500-i486"],
-)
-def test_c_unit_tests_pass_on_the_boards_cpus(tmp_path, compiler, flags, emulator):
-    missing = [tool for tool in (compiler, emulator) if shutil.which(tool) is None]
-    if missing:
-        pytest.skip(f"{' and '.join(missing)} not installed (make sysdeps installs them)")
-    output = _make("test", BUILD=str(tmp_path / "build"), CC=compiler, CFLAGS=flags,
-                   RUN=emulator)
+@pytest.mark.parametrize("target", ["ts7800", "ts5500"])
+def test_c_unit_tests_pass_on_the_boards_cpu_models(tmp_path, target, board_runner):
+    emulator = board_runner(target)
+    board = TARGETS[target]
+    output = _make("test", BUILD=str(tmp_path / "build"), CC=board.compiler,
+                   CFLAGS=" ".join(board.flags), RUN=" ".join(emulator))
     passed, failed = _summary(output)
     assert failed == 0 and passed >= 40
