@@ -21,8 +21,22 @@ static int number(const char *text, double low, double high, double *out)
     return 0;
 }
 
+/* At most `cap - 1` bytes of `text` with every byte outside printable ASCII shown as '?':
+ * an argument quoted in an error must not break its line or drive the terminal. */
+static const char *shown(const char *text, char *out, size_t cap)
+{
+    size_t n = 0;
+    for (; text[n] != '\0' && n + 1 < cap; n++) {
+        unsigned char c = (unsigned char)text[n];
+        out[n] = c >= 0x20 && c <= 0x7E ? (char)c : '?';
+    }
+    out[n] = '\0';
+    return out;
+}
+
 int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
 {
+    char quoted[65];
     *out = (gp_args){.link_timeout_s = 10.0, .retransmit_ms = 200};
     for (int i = 1; i < argc; i++) {
         const char *option = argv[i];
@@ -36,7 +50,8 @@ int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
             || strcmp(option, "--state-dir") == 0 || strcmp(option, "--link-timeout-s") == 0
             || strcmp(option, "--retransmit-ms") == 0 || strcmp(option, "--clock-file") == 0;
         if (!takes_value) {
-            snprintf(error, cap, "unknown argument '%.64s'; " USAGE, option);
+            snprintf(error, cap, "unknown argument '%s'; " USAGE,
+                     shown(option, quoted, sizeof quoted));
             return -1;
         }
         if (value == NULL) {
@@ -54,15 +69,15 @@ int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
             out->clock_path = value;
         } else if (strcmp(option, "--link-timeout-s") == 0) {
             if (number(value, 0.001, 86400.0, &number_value) < 0) {
-                snprintf(error, cap, "--link-timeout-s '%.32s' is not a number of seconds in "
-                                     "0.001..86400", value);
+                snprintf(error, cap, "--link-timeout-s '%s' is not a number of seconds in "
+                                     "0.001..86400", shown(value, quoted, 33));
                 return -1;
             }
             out->link_timeout_s = number_value;
         } else {
             if (number(value, 1, 60000, &number_value) < 0 || number_value != floor(number_value)) {
-                snprintf(error, cap, "--retransmit-ms '%.32s' is not a whole number of "
-                                     "milliseconds in 1..60000", value);
+                snprintf(error, cap, "--retransmit-ms '%s' is not a whole number of "
+                                     "milliseconds in 1..60000", shown(value, quoted, 33));
                 return -1;
             }
             out->retransmit_ms = (int)number_value;

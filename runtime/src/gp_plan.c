@@ -46,7 +46,10 @@ static int next_line(reader *r)
 {
     r->line_no++;
     const char *line = r->text + r->pos;
-    const char *end = memchr(line, '\n', r->len - r->pos);
+    const char *end = r->pos < r->len ? memchr(line, '\n', r->len - r->pos) : NULL;
+    if (end == NULL) {
+        return fail(r, "the plan ends before this line (truncated file)");
+    }
     size_t line_len = (size_t)(end - line);
     r->pos += line_len + 1;
     r->n_fields = 0;

@@ -40,6 +40,9 @@ void test_args_should_refuse_bad_command_lines(void)
         {2, {"prog", "--device"}, "--device needs a value"},
         {3, {"prog", "--devise", "x"}, "unknown argument '--devise'"},
         {4, {"prog", "--device", "x", "--retransmit-ms"}, "--retransmit-ms needs a value"},
+        /* Found by fuzz/fuzz_args.c: a quoted argument broke the message's line. */
+        {2, {"prog", "--\ntray"}, "unknown argument '--?tray'"},
+        {4, {"prog", "--link-timeout-s", "1\n\x1b[2J", "--device"}, "'1??[2J' is not"},
     };
     gp_args args;
     char error[256];

@@ -133,6 +133,14 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
     }
 }
 
+void test_plan_should_reject_a_file_of_only_its_checksum_line(void)
+{
+    /* Found by fuzz/fuzz_plan.c: the reader ran past the end of the text. */
+    char error[GP_PLAN_ERROR_LEN];
+    CHECK_INT(read_text(with_crc(""), error), -1);
+    CHECK_CONTAINS(error, "line 1: the plan ends before this line (truncated file)");
+}
+
 void test_plan_should_reject_an_overlong_line(void)
 {
     char long_name[300];
