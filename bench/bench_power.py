@@ -92,7 +92,8 @@ def loop_energy_j(timeline: Timeline, vehicle, board, sensors, steps: int) -> fl
         power = base[phase[i]] + board.idle_w + (board.active_w - board.idle_w) * busy_i
         energy = power * dt
         energy += (vehicle.pump_out_j_per_cc + vehicle.pump_out_j_per_cc_m * depth[i]) * out_cc[i]
-        energy += vehicle.pump_in_j_per_cc * in_cc[i]
+        pump_in = vehicle.pump_in_j_per_cc + vehicle.pump_in_j_per_cc_m * depth[i]
+        energy += max(pump_in, 0.0) * in_cc[i]
         if inflection[i]:
             energy += vehicle.pitch_energy_j
         for k, sensor in enumerate(sensors):

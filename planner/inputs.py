@@ -40,7 +40,8 @@ def duty_for_quality(alpha: float, quality: float) -> float:
 class Transit:
     """Transit legs, per metre of route (DESIGN.md section 5, the pace formulation):
     energy per metre = P p_total + e + c p^-2 with pace p = 1/u [s m-1], p_total = p +
-    k p^-2 the time per metre including pump runs, and on-time per metre x <= p."""
+    k p^-2 + tau the time per metre including pump runs and turns, and on-time per metre
+    x <= p."""
 
     state: np.ndarray  # (n_t,) state index
     length_m: np.ndarray  # (n_t,) route length over the mission [m]
@@ -48,6 +49,7 @@ class Transit:
     pump_s: np.ndarray  # (n_t,) k: pump time per metre at 1 m/s [s m-1 (m/s)-2]
     pump_j: np.ndarray  # (n_t,) c: pump energy per metre at 1 m/s [J m-1 (m/s)-2]
     pitch_j_per_m: np.ndarray  # (n_t,) e [J m-1]
+    turn_s_per_m: np.ndarray  # (n_t,) tau: turns beyond their pump runs [s m-1]
     inflections_per_m: np.ndarray  # (n_t,) [m-1]
     min_pace: np.ndarray  # (n_t,) 1 / fastest speed [s m-1]
     pitch_rad: np.ndarray  # (n_t,)
@@ -79,12 +81,13 @@ def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occ
         k = float(vehicle.transit_coefficient(low, high, pitch, 1.0)) - c0
         e = float(vehicle.pitch_j_per_m(low, high, pitch))
         rows.append((mission.state_index[name], length, load, k, c0, e,
+                     float(vehicle.turn_s_per_m(low, high, pitch)),
                      e / vehicle.pitch_energy_j if vehicle.pitch_energy_j else 0.0,
                      1.0 / float(vehicle.max_speed_mps(pitch)), pitch))
         notes.append(f"{name}: transit leg of {length / 1000:.3g} km; its time follows "
                      "from the planned speed (later states keep their nominal-speed times)")
     cols = [np.array(c, float) for c in zip(*rows, strict=True)] if rows else \
-        [np.zeros(0)] * 9
+        [np.zeros(0)] * 10
     return Transit(cols[0].astype(int), *cols[1:])
 
 
@@ -265,7 +268,7 @@ def coefficients(inputs: PlanInputs) -> Coefficients:
     mode_w = np.where(np.isfinite(inputs.mode_power_w), inputs.mode_power_w, 0.0)
     prof_w = np.array([p.total_w for p in inputs.profiles])
     fixed_j = float(np.sum(inputs.dev_warmup_j * inputs.switch_ons()))
-    fixed_j += float(tr.length_m @ tr.pitch_j_per_m)
+    fixed_j += float(tr.length_m @ (tr.pitch_j_per_m + tr.load_w * tr.turn_s_per_m))
     leg = np.zeros(len(inputs.states))
     leg[tr.state] = tr.length_m
     # quality: weight x time of every (state, device sensor), fixed ones included; transit
@@ -299,5 +302,6 @@ def coefficients(inputs: PlanInputs) -> Coefficients:
         omega_transit=np.where(in_transit, inputs.weight * nominal[inputs.duty_state], 0.0)
         / total,
         leg_m=tr.length_m, leg_pump_m=tr.length_m * tr.pump_s,
-        horizon_left_s=None if horizon is None or not tr.size else horizon - float(t.sum()),
+        horizon_left_s=None if horizon is None or not tr.size
+        else horizon - float(t.sum()) - float(tr.length_m @ tr.turn_s_per_m),
     )

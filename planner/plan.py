@@ -233,9 +233,9 @@ def _profile_components(inputs: PlanInputs, sol: Solution) -> np.ndarray:
 
 
 def _pace_total(inputs: PlanInputs, sol: Solution) -> np.ndarray:
-    """(n_t,) time per metre [s m-1] of each transit leg, pump runs included."""
+    """(n_t,) time per metre [s m-1] of each transit leg, pump runs and turns included."""
     tr = inputs.transit
-    return sol.pace + tr.pump_s / sol.pace**2 if tr.size else np.zeros(0)
+    return sol.pace + tr.pump_s / sol.pace**2 + tr.turn_s_per_m if tr.size else np.zeros(0)
 
 
 def state_times_s(inputs: PlanInputs, sol: Solution) -> np.ndarray:

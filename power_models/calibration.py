@@ -177,7 +177,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
 def _pump_model_j(vehicle: Vehicle, event: seg.PumpEvent) -> float:
     if event.outward:
         return float(vehicle.pump_energy_j(event.depth_m, event.volume_cc))
-    return float(vehicle.pump_in_energy_j(event.volume_cc))
+    return float(vehicle.pump_in_energy_j(event.depth_m, event.volume_cc))
 
 
 def log_timeline(log: FlightLog) -> Timeline:

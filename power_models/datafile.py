@@ -98,7 +98,7 @@ class Table:
             raise self.error(
                 name, f"expected {{ value = ..., unit = ..., source = ... }}, got {entry!r}"
             )
-        unknown = set(entry) - {"value", "unit", "source", "note"}
+        unknown = set(entry) - {"value", "unit", "source", "note", "sd"}
         if unknown:
             raise self.error(name, f"unknown field(s) {sorted(unknown)}")
         for part in ("value", "unit", "source"):
@@ -130,6 +130,28 @@ class Table:
                 name, f"must be <= {value_in(maximum, unit, dimension)} {unit}, got {value} {unit}"
             )
         return converted
+
+    def sd(self, name: str, dimension: str) -> float | None:
+        """The standard deviation [model unit] written next to a figure's value (`sd`, in the
+        figure's own unit: calibration's bootstrap uncertainty), or None. Call after
+        `quantity` has checked the entry."""
+        entry = self.data.get(name)
+        if not isinstance(entry, dict) or "sd" not in entry:
+            return None
+        spread = entry["sd"]
+        if isinstance(spread, bool) or not isinstance(spread, int | float) or not (
+            math.isfinite(spread) and spread >= 0.0
+        ):
+            raise self.error(name, f"sd must be a finite number >= 0, got {spread!r}")
+        return abs(to_model_unit(float(spread), entry["unit"], dimension))
+
+    def text_list(self, name: str) -> list[str]:
+        """A list of text values."""
+        self.used.add(name)
+        items = self.data.get(name)
+        if not isinstance(items, list) or not all(isinstance(i, str) and i for i in items):
+            raise self.error(name, f"expected a list of names, got {items!r}")
+        return list(items)
 
     def tables(self, name: str) -> list[Table]:
         """An array of tables (`[[name]]`), at least one."""

@@ -1,8 +1,9 @@
-"""Steady-glide flight model of a buoyancy glider (Merckelbach et al. 2019).
+"""Steady-glide flight model of a buoyancy glider (Merckelbach et al. 2019, the model that
+`gliderflight` fits to Slocum logs).
 
-Net buoyancy B = rho g dV lifts (or sinks) the glider; lift L = 1/2 rho S U^2 (aw + ah)
-alpha and drag D = 1/2 rho S U^2 (Cd0 + Cd1 alpha^2) balance it along a glide path
-that is steeper than the pitch by the angle of attack alpha:
+Net buoyancy B = g [rho (Vg (1 - eps p) + dV) - m] lifts (or sinks) the glider; lift
+L = 1/2 rho S U^2 (aw + ah) alpha and drag D = 1/2 rho S U^2 (Cd0 + Cd1 alpha^2) balance
+it along a glide path that is steeper than the pitch by the angle of attack alpha:
 
     tan(theta + alpha) = D / L = (Cd0 + Cd1 alpha^2) / ((aw + ah) alpha)
     U^2 = 2 B sin(gamma) / (rho S (Cd0 + Cd1 alpha^2)),   gamma = theta + alpha
@@ -10,11 +11,17 @@ that is steeper than the pitch by the angle of attack alpha:
 
 Notes
 -----
-The glider is taken as trimmed neutral at zero pumped volume, so B = rho g dV; hull
-compressibility and thermal expansion (the Vg(1 - eps p) and m terms of the full model)
-only shift that neutral point. For a given pitch alpha does not depend on dV, so u grows
-with sqrt(dV) and the inverse (`ballast_for_speed`) is closed-form. Dives and climbs
-are symmetric: angles and volumes are magnitudes.
+B / (rho g) is the net buoyancy volume b [cc]. With the trim t, the glider's net buoyancy at
+zero pumped volume at the surface in water of the reference density rho0 (positive: light),
+the mass is m = rho0 (Vg - t) and
+
+    b(z) = dV + t - Vg eps p(z) + (Vg - t) (1 - rho0 / rho(z)),   p(z) = rho0 g z
+
+so a glider trimmed neutral (t = 0) in uniform water of rho0 without compressibility flies
+on b = dV: dives and climbs are then symmetric. A real glider is trimmed a little light or
+heavy, is squeezed at depth and flies through water whose density changes with depth,
+which makes its dives and climbs differ. For a given pitch alpha does not depend on b, so
+the speed grows with sqrt(b) and `ballast_for_speed` is closed-form.
 """
 
 from __future__ import annotations
@@ -25,19 +32,38 @@ from dataclasses import dataclass
 import numpy as np
 
 _BISECTION_STEPS = 60  # halves the bracket to ~1e-18 rad: exact in double precision
+_DEPTH_CELLS = 128  # midpoint rule over a yo band: exact for uniform water, 1e-5 with a profile
+
+Array = np.ndarray
 
 
 @dataclass(frozen=True)
 class FlightParams:
-    """Hydrodynamic parameters. SI units: [kg m-3], [m s-2], [m2], [rad-1], [1]."""
+    """Hydrodynamic and buoyancy parameters. SI units: [kg m-3], [m s-2], [m2], [rad-1], [1];
+    volumes [cc], compressibility [Pa-1]."""
 
-    rho_kg_m3: float
+    rho_kg_m3: float  # reference water density: the trim is given in this water
     g_m_s2: float
     wing_area_m2: float
     lift_wing_per_rad: float  # aw
     lift_hull_per_rad: float  # ah
     drag_cd0: float
     drag_cd1_per_rad2: float
+    hull_volume_cc: float = 0.0  # Vg
+    trim_cc: float = 0.0  # net buoyancy at zero pumped volume at the surface, positive light
+    compressibility_per_pa: float = 0.0  # eps: the hull's relative volume loss per Pa
+
+
+@dataclass(frozen=True)
+class DensityProfile:
+    """In-situ water density [kg m-3] against depth [m], linear between the points and held
+    beyond the ends (an `ocean profile` measured by a CTD)."""
+
+    depth_m: Array
+    rho_kg_m3: Array
+
+    def at(self, depth_m: Array | float) -> Array:
+        return np.interp(depth_m, self.depth_m, self.rho_kg_m3)
 
 
 def _check_pitch(pitch_rad: np.ndarray) -> None:
@@ -67,48 +93,114 @@ def angle_of_attack_rad(params: FlightParams, pitch_rad: np.ndarray | float) -> 
     return 0.5 * (low + high)
 
 
-def _glide_geometry(
+def glide_geometry(
     params: FlightParams, pitch_rad: np.ndarray | float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Glide-path angle [rad] and drag coefficient [1] at a pitch."""
+    """Glide-path angle gamma [rad] and the speed per root buoyancy volume
+    U / sqrt(b) [m s-1 cc-1/2] at a pitch (neither depends on b)."""
     alpha = angle_of_attack_rad(params, pitch_rad)
     gamma = np.asarray(pitch_rad, float) + alpha
     drag = params.drag_cd0 + params.drag_cd1_per_rad2 * alpha**2
-    return gamma, drag
+    # U^2 = 2 rho g b sin(gamma) / (rho S Cd): the density cancels
+    per_root_cc = np.sqrt(2.0 * params.g_m_s2 * 1e-6 * np.sin(gamma) / (params.wing_area_m2 * drag))
+    return gamma, per_root_cc
 
 
 def glide(
     params: FlightParams, pitch_rad: np.ndarray | float, ballast_cc: np.ndarray | float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Horizontal and vertical speed (u, w) [m s-1] at pitch [rad] and buoyancy volume [cc].
+    """Horizontal and vertical speed (u, w) [m s-1] at pitch [rad] on a net buoyancy volume
+    [cc] (the pumped volume of a glider trimmed neutral).
 
     Both are magnitudes; a zero volume gives zero speed.
     """
     volume = np.asarray(ballast_cc, float)
     if np.any(volume < 0.0):
         raise ValueError("ballast volume must be >= 0 cc (a magnitude either side of neutral)")
-    gamma, drag = _glide_geometry(params, pitch_rad)
-    buoyancy_n = params.rho_kg_m3 * params.g_m_s2 * volume * 1e-6
-    speed = np.sqrt(
-        2.0 * buoyancy_n * np.sin(gamma) / (params.rho_kg_m3 * params.wing_area_m2 * drag)
-    )
+    gamma, per_root_cc = glide_geometry(params, pitch_rad)
+    speed = per_root_cc * np.sqrt(volume)
     return speed * np.cos(gamma), speed * np.sin(gamma)
 
 
 def glide_slope(params: FlightParams, pitch_rad: np.ndarray | float) -> np.ndarray:
     """w / u [1] of the glide path at a pitch (independent of the buoyancy volume)."""
-    gamma, _ = _glide_geometry(params, pitch_rad)
+    gamma, _ = glide_geometry(params, pitch_rad)
     return np.tan(gamma)
 
 
 def ballast_for_speed(
     params: FlightParams, u_mps: np.ndarray | float, pitch_rad: np.ndarray | float
 ) -> np.ndarray:
-    """Buoyancy volume [cc] that makes the glider fly at horizontal speed `u_mps` [m s-1]."""
+    """Net buoyancy volume [cc] that makes the glider fly at horizontal speed `u_mps` [m s-1]."""
     u = np.asarray(u_mps, float)
     if np.any(u < 0.0):
         raise ValueError("speed must be >= 0 m/s")
-    gamma, drag = _glide_geometry(params, pitch_rad)
-    speed = u / np.cos(gamma)
-    buoyancy_n = speed**2 * params.rho_kg_m3 * params.wing_area_m2 * drag / (2.0 * np.sin(gamma))
-    return buoyancy_n / (params.rho_kg_m3 * params.g_m_s2) * 1e6
+    gamma, per_root_cc = glide_geometry(params, pitch_rad)
+    return (u / (np.cos(gamma) * per_root_cc)) ** 2
+
+
+def net_buoyancy_cc(
+    params: FlightParams,
+    pumped_cc: Array | float,
+    depth_m: Array | float,
+    rho_kg_m3: Array | float | None = None,
+) -> Array | float:
+    """Net buoyancy volume b [cc], positive up, at a signed pumped volume [cc] and depth [m]
+    in water of in-situ density `rho_kg_m3` (default: the reference density).
+
+    Plain arithmetic, so that the simulator's per-tick floats stay floats.
+    """
+    pressure_pa = params.rho_kg_m3 * params.g_m_s2 * depth_m
+    squeeze_cc = params.hull_volume_cc * params.compressibility_per_pa * pressure_pa
+    b = pumped_cc + params.trim_cc - squeeze_cc
+    if rho_kg_m3 is not None:
+        b = b + (params.hull_volume_cc - params.trim_cc) * (1.0 - params.rho_kg_m3 / rho_kg_m3)
+    return b
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One glide across a depth band: its duration [s], mean vertical speed [m s-1] (band /
+    duration) and horizontal distance [m]."""
+
+    time_s: Array
+    w_mps: Array
+    distance_m: Array
+
+
+def glide_leg(
+    params: FlightParams,
+    top_m: Array | float,
+    bottom_m: Array | float,
+    pitch_rad: Array | float,
+    pumped_cc: Array | float,
+    climbing: bool,
+    ocean: DensityProfile | None = None,
+) -> Leg:
+    """A steady dive (or climb) across [top_m, bottom_m] at pitch [rad] (magnitude) with
+    `pumped_cc` [cc] (magnitude) pumped below (above) neutral, through `ocean` (default:
+    uniform water of the reference density). Broadcasts over its array arguments.
+
+    Raises ValueError where the glider's trim leaves it without buoyancy to glide.
+    """
+    top = np.asarray(top_m, float)
+    bottom = np.asarray(bottom_m, float)
+    if np.any(bottom - top <= 0.0) or np.any(top < 0.0):
+        raise ValueError("a glide needs 0 <= top < bottom")
+    gamma, per_root_cc = glide_geometry(params, pitch_rad)
+    sign = 1.0 if climbing else -1.0
+    cells = (np.arange(_DEPTH_CELLS) + 0.5) / _DEPTH_CELLS
+    depth = top[..., None] + (bottom - top)[..., None] * cells
+    rho = None if ocean is None else ocean.at(depth)
+    volume = sign * net_buoyancy_cc(
+        params, sign * np.asarray(pumped_cc, float)[..., None], depth, rho
+    )
+    if np.any(volume <= 0.0):
+        raise ValueError(
+            f"the glider cannot {'climb' if climbing else 'dive'}: its trim and the water "
+            "leave it without buoyancy at this pumped volume"
+        )
+    w = (per_root_cc * np.sin(gamma))[..., None] * np.sqrt(volume)
+    band = bottom - top
+    time = band * np.mean(1.0 / w, axis=-1)
+    return Leg(time, band / time, band / np.tan(gamma))

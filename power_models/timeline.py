@@ -47,7 +47,7 @@ def energy_by_component_j(
         "surface": np.where(phase == SURFACE, vehicle.surface_w * dt, 0.0),
         "iridium": np.where(phase == IRIDIUM, vehicle.iridium_w * dt, 0.0),
         "pump": vehicle.pump_energy_j(timeline.depth_m, timeline.pumped_out_cc)
-        + vehicle.pump_in_energy_j(timeline.pumped_in_cc),
+        + vehicle.pump_in_energy_j(timeline.depth_m, timeline.pumped_in_cc),
         "pitch": np.where(timeline.inflection, vehicle.pitch_energy_j, 0.0),
     }
     if board is not None:

@@ -21,17 +21,29 @@ So u* = (P / 2c)^(1/3): a hungrier hotel load makes the best glider faster.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from gliderplan.power_models import flight
-from gliderplan.power_models.catalog import resolve
-from gliderplan.power_models.datafile import read_model_file
-from gliderplan.power_models.flight import FlightParams
+from gliderplan.power_models.catalog import preset_names, resolve
+from gliderplan.power_models.datafile import Table, read_model_file
+from gliderplan.power_models.flight import DensityProfile, FlightParams
 
 Array = np.ndarray
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """How sure calibration is of the fitted figures: one standard deviation of each (in
+    the model's unit, keyed as in the data file, e.g. "hotel_power", "flight.drag_cd0") and
+    their correlation, from a bootstrap over dives."""
+
+    keys: tuple[str, ...]
+    sd: np.ndarray  # (k,)
+    correlation: np.ndarray  # (k, k)
+    source: str
 
 
 @dataclass(frozen=True)
@@ -43,7 +55,7 @@ class Vehicle:
     hotel_w: float  # submerged base load without pump and pitch motor
     pump_out_j_per_cc: float  # a_out: pump-out energy per cc at the surface
     pump_out_j_per_cc_m: float  # b_out: extra pump-out energy per cc per metre of depth
-    pump_in_j_per_cc: float  # a_in: pump-in energy per cc (pressure helps; no depth term)
+    pump_in_j_per_cc: float  # a_in: pump-in energy per cc at the surface
     pump_rate_cc_s: float
     max_ballast_cc: float  # largest buoyancy volume either side of neutral
     pitch_energy_j: float  # battery-shift energy per inflection
@@ -56,6 +68,11 @@ class Vehicle:
     nominal_min_depth_m: float
     nominal_max_depth_m: float
     flight: FlightParams
+    pump_in_j_per_cc_m: float = 0.0  # b_in: pump-in energy per cc per metre (< 0: pressure helps)
+    top_turn_s: float = 0.0  # time an inflection at the top of a yo takes beyond its pump run
+    bottom_turn_s: float = 0.0  # the same at the bottom
+    hotel_includes: tuple[str, ...] = ()  # devices ("ctd", "computer", ...) in the hotel load
+    uncertainty: Uncertainty | None = field(default=None, compare=False)
 
     # ---- flight -------------------------------------------------------------------
     def glide(self, pitch_rad: Array | float, ballast_cc: Array | float) -> tuple[Array, Array]:
@@ -79,9 +96,11 @@ class Vehicle:
             volume_cc, float
         )
 
-    def pump_in_energy_j(self, volume_cc: Array | float) -> Array:
-        """Energy [J] to pump `volume_cc` [cc] back in (sea pressure helps, no depth term)."""
-        return self.pump_in_j_per_cc * np.asarray(volume_cc, float)
+    def pump_in_energy_j(self, depth_m: Array | float, volume_cc: Array | float) -> Array:
+        """Energy [J] to pump `volume_cc` [cc] back in at `depth_m` [m]: (a + b depth) V, never
+        below 0 (deep enough, sea pressure alone pushes the oil back)."""
+        per_cc = self.pump_in_j_per_cc + self.pump_in_j_per_cc_m * np.asarray(depth_m, float)
+        return np.maximum(per_cc, 0.0) * np.asarray(volume_cc, float)
 
     def pump_time_s(self, volume_cc: Array | float) -> Array:
         """Time [s] the pump needs for `volume_cc` [cc]."""
@@ -98,27 +117,39 @@ class Vehicle:
         return self.surfacing_j + self.iridium_w * self.iridium_s
 
     # ---- yo profiles --------------------------------------------------------------
+    def turn_s(self, volume_cc: Array | float) -> Array:
+        """Time [s] of a yo's two inflections at a pumped volume [cc] either side of
+        neutral: both pump runs (2 x volume each) and the turns' time beyond them."""
+        return 2.0 * self.pump_time_s(2.0 * np.asarray(volume_cc, float)) + (
+            self.top_turn_s + self.bottom_turn_s
+        )
+
     def _yo_cycle(
         self,
         min_depth_m: Array | float,
         max_depth_m: Array | float,
         pitch_rad: Array | float,
         ballast_cc: Array | float,
+        ocean: DensityProfile | None = None,
     ) -> tuple[Array, Array, Array]:
         """(time [s], actuator energy [J], horizontal distance [m]) of one dive + climb."""
-        band = np.asarray(max_depth_m, float) - np.asarray(min_depth_m, float)
-        if np.any(band <= 0.0) or np.any(np.asarray(min_depth_m, float) < 0.0):
+        if np.any(np.asarray(min_depth_m, float) >= np.asarray(max_depth_m, float)) or np.any(
+            np.asarray(min_depth_m, float) < 0.0
+        ):
             raise ValueError("a yo needs 0 <= min_depth < max_depth")
-        u, w = self.glide(pitch_rad, ballast_cc)
+        dive, climb = (
+            flight.glide_leg(self.flight, min_depth_m, max_depth_m, pitch_rad, ballast_cc, up,
+                             ocean)
+            for up in (False, True)
+        )
         pumped = 2.0 * np.asarray(ballast_cc, float)
-        glide_s = 2.0 * band / w
-        time = glide_s + 2.0 * self.pump_time_s(pumped)
+        time = dive.time_s + climb.time_s + self.turn_s(ballast_cc)
         energy = (
             self.pump_energy_j(max_depth_m, pumped)
-            + self.pump_in_energy_j(pumped)
+            + self.pump_in_energy_j(min_depth_m, pumped)
             + 2.0 * self.pitch_energy_j
         )
-        return time, energy, glide_s * u
+        return time, energy, dive.distance_m + climb.distance_m
 
     def inflections_per_hour(
         self,
@@ -163,19 +194,21 @@ class Vehicle:
         pitch_rad: Array | float,
         hotel_w: Array | float | None = None,
     ) -> Array:
-        """c [J m-1 (m/s)-2] of energy per metre = P/u + pitch_j_per_m + c u^2 for a yo band.
+        """c [J m-1 (m/s)-2] of energy per metre = P/u + pitch_j_per_m + P turn_s_per_m + c u^2
+        for a yo band.
 
         c holds the pump energy and the hotel load spent while pumping (both grow with the
-        pumped volume, hence with u^2); `hotel_w` [W] defaults to the vehicle's own.
+        pumped volume, hence with u^2); `hotel_w` [W] defaults to the vehicle's own. The
+        closed form is exact for a glider trimmed neutral in uniform water without
+        compressibility; a calibrated trim and compressibility are in `_yo_cycle` only.
         """
         hotel = self.hotel_w if hotel_w is None else np.asarray(hotel_w, float)
         band = np.asarray(max_depth_m, float) - np.asarray(min_depth_m, float)
         u_unit, _ = self.glide(pitch_rad, 1.0)  # speed at 1 cc: u = u_unit sqrt(dV)
         slope = flight.glide_slope(self.flight, pitch_rad)
         per_cc = (
-            self.pump_out_j_per_cc
-            + self.pump_out_j_per_cc_m * np.asarray(max_depth_m, float)
-            + self.pump_in_j_per_cc
+            self.pump_energy_j(max_depth_m, 1.0)
+            + self.pump_in_energy_j(min_depth_m, 1.0)
             + 2.0 * hotel / self.pump_rate_cc_s
         )
         # per cycle: 2 dV pumped out and 2 dV in over 2 band / slope metres; dV = u^2 / u_unit^2
@@ -185,9 +218,21 @@ class Vehicle:
         self, min_depth_m: Array | float, max_depth_m: Array | float, pitch_rad: Array | float
     ) -> Array:
         """Pitch-motor energy per metre travelled [J m-1] (independent of speed)."""
+        return self.pitch_energy_j * self._inflections_per_m(min_depth_m, max_depth_m, pitch_rad)
+
+    def turn_s_per_m(
+        self, min_depth_m: Array | float, max_depth_m: Array | float, pitch_rad: Array | float
+    ) -> Array:
+        """Time per metre travelled [s m-1] the turns take beyond their pump runs
+        (independent of speed); the hotel load runs through it."""
+        per_inflection = 0.5 * (self.top_turn_s + self.bottom_turn_s)
+        return per_inflection * self._inflections_per_m(min_depth_m, max_depth_m, pitch_rad)
+
+    def _inflections_per_m(
+        self, min_depth_m: Array | float, max_depth_m: Array | float, pitch_rad: Array | float
+    ) -> Array:
         band = np.asarray(max_depth_m, float) - np.asarray(min_depth_m, float)
-        slope = flight.glide_slope(self.flight, pitch_rad)
-        return self.pitch_energy_j * slope / band
+        return flight.glide_slope(self.flight, pitch_rad) / band
 
     def optimal_speed_mps(
         self,
@@ -212,47 +257,128 @@ def load_vehicle(spec: str) -> Vehicle:
     return read_vehicle_file(resolve("vehicle", spec))
 
 
+# file key -> (attribute, dimension, options); a flight key is "flight.<key>". Every figure
+# calibration may fit or draw is here, so that loading, writing and drawing agree.
+FIGURES: dict[str, tuple[str, str, dict]] = {
+    "hotel_power": ("hotel_w", "power", {}),
+    "pump_out_energy_per_volume": ("pump_out_j_per_cc", "pump_per_volume", {}),
+    "pump_out_energy_per_volume_depth": ("pump_out_j_per_cc_m", "pump_per_volume_depth", {}),
+    "pump_in_energy_per_volume": ("pump_in_j_per_cc", "pump_per_volume", {}),
+    "pump_in_energy_per_volume_depth": (
+        "pump_in_j_per_cc_m", "pump_per_volume_depth", {"default": 0.0, "minimum": -np.inf}
+    ),
+    "pump_rate": ("pump_rate_cc_s", "flow", {"positive": True}),
+    "max_ballast": ("max_ballast_cc", "volume", {"positive": True}),
+    "pitch_energy": ("pitch_energy_j", "energy", {}),
+    "surface_power": ("surface_w", "power", {}),
+    "surface_time": ("surface_s", "time", {}),
+    "iridium_power": ("iridium_w", "power", {}),
+    "iridium_time": ("iridium_s", "time", {}),
+    "surfacing_energy": ("surfacing_fixed_j", "energy", {}),
+    "top_turn_time": ("top_turn_s", "time", {"default": 0.0}),
+    "bottom_turn_time": ("bottom_turn_s", "time", {"default": 0.0}),
+    "nominal_pitch": (
+        "nominal_pitch_rad", "angle", {"positive": True, "maximum": np.pi / 2 * 0.999}
+    ),
+    "nominal_min_depth": ("nominal_min_depth_m", "length", {}),
+    "nominal_max_depth": ("nominal_max_depth_m", "length", {"positive": True}),
+    "flight.water_density": ("rho_kg_m3", "density", {"positive": True}),
+    "flight.gravity": ("g_m_s2", "acceleration", {"positive": True}),
+    "flight.wing_area": ("wing_area_m2", "area", {"positive": True}),
+    "flight.lift_slope_wing": ("lift_wing_per_rad", "per_angle", {"positive": True}),
+    "flight.lift_slope_hull": ("lift_hull_per_rad", "per_angle", {}),
+    "flight.drag_cd0": ("drag_cd0", "dimensionless", {"positive": True}),
+    "flight.drag_cd1": ("drag_cd1_per_rad2", "dimensionless", {}),
+    "flight.hull_volume": ("hull_volume_cc", "volume", {"default": 0.0}),
+    "flight.trim_volume": ("trim_cc", "volume", {"default": 0.0, "minimum": -np.inf}),
+    "flight.compressibility": ("compressibility_per_pa", "compressibility", {"default": 0.0}),
+}
+
+
+def with_figures(vehicle: Vehicle, values: dict[str, float]) -> Vehicle:
+    """A copy of `vehicle` with figures replaced, keyed as in the data file [model units]."""
+    top = {FIGURES[k][0]: float(v) for k, v in values.items() if not k.startswith("flight.")}
+    fl = {FIGURES[k][0]: float(v) for k, v in values.items() if k.startswith("flight.")}
+    return replace(vehicle, flight=replace(vehicle.flight, **fl), **top)
+
+
+def figure_value(vehicle: Vehicle, key: str) -> float:
+    """A figure of `vehicle` by its data-file key [model unit]."""
+    owner = vehicle.flight if key.startswith("flight.") else vehicle
+    return float(getattr(owner, FIGURES[key][0]))
+
+
 def read_vehicle_file(path: Path) -> Vehicle:
     """Parse and validate a vehicle data file."""
     top = read_model_file(path, "vehicle")
     fl = top.table("flight")
-    params = FlightParams(
-        rho_kg_m3=fl.quantity("water_density", "density", positive=True),
-        g_m_s2=fl.quantity("gravity", "acceleration", positive=True),
-        wing_area_m2=fl.quantity("wing_area", "area", positive=True),
-        lift_wing_per_rad=fl.quantity("lift_slope_wing", "per_angle", positive=True),
-        lift_hull_per_rad=fl.quantity("lift_slope_hull", "per_angle"),
-        drag_cd0=fl.quantity("drag_cd0", "dimensionless", positive=True),
-        drag_cd1_per_rad2=fl.quantity("drag_cd1", "dimensionless"),
-    )
+    values: dict[str, float] = {}
+    spreads: dict[str, float] = {}
+    for key, (attr, dimension, options) in FIGURES.items():
+        table, name = (fl, key[7:]) if key.startswith("flight.") else (top, key)
+        values[attr] = table.quantity(name, dimension, **options)
+        spread = table.sd(name, dimension)
+        if spread is not None:
+            spreads[key] = spread
     fl.finish()
-    min_depth = top.quantity("nominal_min_depth", "length")
-    max_depth = top.quantity("nominal_max_depth", "length", positive=True)
-    if max_depth <= min_depth:
+    if values["nominal_max_depth_m"] <= values["nominal_min_depth_m"]:
         raise top.error("nominal_max_depth", "must be deeper than nominal_min_depth")
+    flight_attrs = {FIGURES[k][0] for k in FIGURES if k.startswith("flight.")}
+    params = FlightParams(**{a: v for a, v in values.items() if a in flight_attrs})
     vehicle = Vehicle(
         name=top.text("name"),
         description=top.text("description", ""),
-        hotel_w=top.quantity("hotel_power", "power"),
-        pump_out_j_per_cc=top.quantity("pump_out_energy_per_volume", "pump_per_volume"),
-        pump_out_j_per_cc_m=top.quantity(
-            "pump_out_energy_per_volume_depth", "pump_per_volume_depth"
-        ),
-        pump_in_j_per_cc=top.quantity("pump_in_energy_per_volume", "pump_per_volume"),
-        pump_rate_cc_s=top.quantity("pump_rate", "flow", positive=True),
-        max_ballast_cc=top.quantity("max_ballast", "volume", positive=True),
-        pitch_energy_j=top.quantity("pitch_energy", "energy"),
-        surface_w=top.quantity("surface_power", "power"),
-        surface_s=top.quantity("surface_time", "time"),
-        iridium_w=top.quantity("iridium_power", "power"),
-        iridium_s=top.quantity("iridium_time", "time"),
-        surfacing_fixed_j=top.quantity("surfacing_energy", "energy"),
-        nominal_pitch_rad=top.quantity(
-            "nominal_pitch", "angle", positive=True, maximum=np.pi / 2 * 0.999
-        ),
-        nominal_min_depth_m=min_depth,
-        nominal_max_depth_m=max_depth,
         flight=params,
+        hotel_includes=_hotel_includes(top),
+        uncertainty=_uncertainty(top, spreads),
+        **{a: v for a, v in values.items() if a not in flight_attrs},
     )
     top.finish()
     return vehicle
+
+
+def _hotel_includes(top: Table) -> tuple[str, ...]:
+    """Devices the hotel load already holds (`hotel_includes = { devices = [...], source }`)."""
+    if not top.has("hotel_includes"):
+        return ()
+    table = top.table("hotel_includes")
+    devices = table.text_list("devices")
+    table.text("source")
+    known = {*preset_names("sensor"), "computer"}
+    for device in devices:
+        if device not in known:
+            raise table.error("devices", f"unknown device {device!r}; expected one of "
+                              f"{', '.join(sorted(known))}")
+    table.finish()
+    return tuple(devices)
+
+
+def _uncertainty(top: Table, spreads: dict[str, float]) -> Uncertainty | None:
+    """The figures' standard deviations and, if the file gives it, their correlation
+    (`[uncertainty] figures = [...], correlation = [[...]], source = ...`); without one
+    the figures are taken as independent."""
+    keys = tuple(spreads)
+    correlation = np.eye(len(keys))
+    source = "standard deviations written next to the figures; taken as independent"
+    if top.has("uncertainty"):
+        table = top.table("uncertainty")
+        listed = table.text_list("figures")
+        source = table.text("source")
+        table.used.add("correlation")
+        matrix = np.asarray(table.data.get("correlation"), float)
+        if matrix.shape != (len(listed), len(listed)) or not np.allclose(matrix, matrix.T) or \
+                not np.allclose(np.diag(matrix), 1.0) or np.any(np.abs(matrix) > 1.0 + 1e-9):
+            raise table.error("correlation", f"expected a symmetric {len(listed)} x "
+                              f"{len(listed)} matrix of correlations with 1 on its diagonal")
+        unknown = [k for k in listed if k not in spreads]
+        if unknown:
+            raise table.error("figures", f"{', '.join(unknown)}: no sd next to the figure")
+        order = [listed.index(k) if k in listed else None for k in keys]
+        for i, a in enumerate(order):
+            for j, b in enumerate(order):
+                if a is not None and b is not None:
+                    correlation[i, j] = matrix[a, b]
+        table.finish()
+    if not keys:
+        return None
+    return Uncertainty(keys, np.array([spreads[k] for k in keys]), correlation, source)

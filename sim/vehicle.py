@@ -1,13 +1,14 @@
 """The simulated glider: what the glider's own layered control does with a COMMAND.
 
 Each tick the glider pumps toward the commanded buoyancy volume at the pump rate (an
-inflection: no distance covered while pumping), moves its battery toward the commanded
-pitch, and glides the rest of the tick at the steady-glide speeds of
-`power_models.flight` for that pitch and volume. Commanded to the surface it climbs,
-takes a GPS fix (`surface_s`) that resets its dead reckoning, makes its Iridium call
-(`iridium_s`) and waits there. Horizontally it flies the commanded heading; a
-depth-averaged current drifts the true position but not the dead-reckoned one, which
-is what the glider reports (Slocum DDMM.MMMM) until the next fix.
+inflection: no distance covered while pumping, nor while it turns for the vehicle's turn
+time after the pump run), moves its battery toward the commanded pitch, and glides the
+rest of the tick at the steady-glide speeds of `power_models.flight` for that pitch and
+its net buoyancy at its depth (pumped volume, trim, the hull squeezed by sea pressure).
+Commanded to the surface it climbs, takes a GPS fix (`surface_s`) that resets its dead
+reckoning, makes its Iridium call (`iridium_s`) and waits there. Horizontally it flies
+the commanded heading; a depth-averaged current drifts the true position but not the
+dead-reckoned one, which is what the glider reports (Slocum DDMM.MMMM) until the next fix.
 
 One `GliderSim` is stepped once per tick; it is mutable for speed (a 30-day run is
 650 000 ticks) and its per-tick outputs feed `power_models.timeline`.
@@ -18,6 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gliderplan.power_models.flight import glide_geometry, net_buoyancy_cc
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.geo import move_degrees
@@ -61,20 +63,22 @@ class GliderSim:
         self.pumped_in_cc = 0.0
         self.inflection = False
         self._turning_to = 0.0  # sign of the buoyancy the last inflection went to
-        self._glide_cache: dict[tuple[float, float], tuple[float, float]] = {}
+        self._turn_left_s = 0.0  # time the current inflection still turns after pumping
+        self._geometry: dict[float, tuple[float, float]] = {}
 
     def _speeds(self, pitch_rad: float, ballast_cc: float) -> tuple[float, float]:
-        """(u, w) [m s-1] magnitudes; commands repeat, so the bisection runs once each."""
-        key = (pitch_rad, ballast_cc)
-        speeds = self._glide_cache.get(key)
-        if speeds is None:
-            if pitch_rad <= 0.0 or ballast_cc <= 0.0 or pitch_rad >= math.pi / 2:
-                speeds = (0.0, 0.0)
-            else:
-                u, w = self.vehicle.glide(pitch_rad, ballast_cc)
-                speeds = (float(u), float(w))
-            self._glide_cache[key] = speeds
-        return speeds
+        """(u, w) [m s-1] magnitudes at the current depth with `ballast_cc` pumped (signed);
+        commands repeat, so the angle-of-attack bisection runs once per pitch."""
+        if pitch_rad <= 0.0 or pitch_rad >= math.pi / 2:
+            return 0.0, 0.0
+        per_root = self._geometry.get(pitch_rad)
+        if per_root is None:
+            gamma, speed = glide_geometry(self.vehicle.flight, pitch_rad)
+            per_root = (float(speed * math.cos(gamma)), float(speed * math.sin(gamma)))
+            self._geometry[pitch_rad] = per_root
+        net = net_buoyancy_cc(self.vehicle.flight, ballast_cc, self.depth_m)
+        root = math.sqrt(max(math.copysign(1.0, ballast_cc) * net, 0.0))
+        return per_root[0] * root, per_root[1] * root
 
     def step(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
              heading_rad: float, heading_valid: bool, surface: bool) -> None:
@@ -113,7 +117,12 @@ class GliderSim:
             if abs(dv) >= MIN_PUMPED_CC and going != self._turning_to:
                 self._turning_to = going
                 self.inflection = True
+                self._turn_left_s = v.bottom_turn_s if going > 0.0 else v.top_turn_s
         self.phase = PUMP if glide_s < dt else GLIDE
+        if self._turn_left_s > 0.0 and self.ballast_cc == ballast_cc:
+            turning = min(self._turn_left_s, glide_s)
+            self._turn_left_s -= turning
+            glide_s -= turning
 
         if ballast_cc == 0.0 and self.ballast_cc == 0.0:
             # hovering: small buoyancy corrections toward the target depth
@@ -121,7 +130,7 @@ class GliderSim:
             self.depth_m += math.copysign(step_m, depth_target_m - self.depth_m)
             u = 0.0
         else:
-            u, w = self._speeds(abs(pitch_rad), abs(self.ballast_cc))
+            u, w = self._speeds(abs(pitch_rad), self.ballast_cc)
             rising = self.ballast_cc > 0.0
             self.depth_m = max(0.0, self.depth_m + (-w if rising else w) * glide_s)
         self._drift(u * glide_s, dt)

@@ -3,6 +3,7 @@ independent water-filling solver, monotone Pareto frontier and the shadow price.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,7 @@ from gliderplan.planner.occupancy import mission_occupancy
 from gliderplan.planner.plan import InfeasibleBudget, PlanningError, plan_mission, prepare
 from gliderplan.planner.sweep import computers, energy_range_j, pareto
 from gliderplan.planner.waterfill import separable_form, water_fill
+from gliderplan.power_models import flight
 
 ROOT = Path(__file__).resolve().parents[1]
 TIGHT = {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12}
@@ -309,9 +311,26 @@ def test_transit_leg_flies_the_speed_that_minimises_energy_per_metre():
     expected = float(vehicle.optimal_speed_mps(load, 3, 10, 0.454))
     assert speed == pytest.approx(expected, rel=1e-3)  # the pace model's u* = (P/2c)^(1/3)
     pump_s = leg * inputs.transit.pump_s[0] * speed**2
-    assert transit.time_s == pytest.approx(leg / speed + pump_s, rel=1e-6)
+    turn_s = leg * inputs.transit.turn_s_per_m[0]
+    assert transit.time_s == pytest.approx(leg / speed + pump_s + turn_s, rel=1e-6)
     assert plan.energy_j <= plan.budget_j
     assert separable_form(inputs, coefficients(inputs)) is None
+
+
+def test_turns_lengthen_a_transit_leg_and_cost_hotel_energy():
+    m = source_mission(TRANSIT.format(computer="ts7800 @ 300 MHz", horizon=""))
+    hardware = load_hardware(m)
+    turning = dataclasses.replace(hardware, vehicle=dataclasses.replace(
+        hardware.vehicle, top_turn_s=50.0, bottom_turn_s=30.0))
+    plain, slow = plan_mission(m, hardware), plan_mission(m, turning)
+    inputs, _ = prepare(m, turning)
+    leg = inputs.occupancy.legs_m["transit"]
+    cycles = leg / (2 * (10 - 3) / float(flight.glide_slope(turning.vehicle.flight, 0.454)))
+    extra_s = slow.states[1].time_s - leg * (1 / slow.states[1].profiles[0].speed_mps
+                                             + inputs.transit.pump_s[0]
+                                             * slow.states[1].profiles[0].speed_mps**2)
+    assert extra_s == pytest.approx(80.0 * cycles, rel=1e-6)  # two turns a yo cycle
+    assert slow.energy_j > plain.energy_j
 
 
 def test_hungrier_computer_flies_the_transit_faster():

@@ -131,3 +131,40 @@ def test_broken_or_missing_files(tmp_path):
         load_board(str(tmp_path / "nowhere.toml"))
     with pytest.raises(ModelFileError, match="unknown vehicle preset"):
         load_vehicle("slocum_g9")
+
+
+def test_a_figure_may_carry_its_standard_deviation_in_its_own_unit(tmp_path):
+    path = _copy_with(
+        tmp_path, "vehicle", "slocum_g3", 'value = 1.155, unit = "W"',
+        'value = 1155, unit = "mW", sd = 50'
+    )
+    vehicle = load_vehicle(str(path))
+    assert vehicle.hotel_w == pytest.approx(1.155)
+    assert vehicle.uncertainty.keys == ("hotel_power",)
+    assert vehicle.uncertainty.sd == pytest.approx([0.05])
+    assert load_vehicle("slocum_g3").uncertainty is None
+
+
+UNCERTAINTY = '\n[uncertainty]\nfigures = ["hotel_power"]\ncorrelation = [[{}]]\nsource = "x"\n'
+
+
+@pytest.mark.parametrize(
+    ("sd", "tail", "head", "key", "message"),
+    [
+        (", sd = -1", "", "", "hotel_power", "sd must be a finite number >= 0"),
+        ("", UNCERTAINTY.format(1), "", "uncertainty.figures", "no sd next to the figure"),
+        (", sd = 0.1", UNCERTAINTY.format(0.5), "", "uncertainty.correlation",
+         "expected a symmetric 1 x 1 matrix"),
+        ("", "", 'hotel_includes = { devices = ["ctd", "sonar"], source = "x" }\n',
+         "hotel_includes.devices", "unknown device 'sonar'"),
+    ],
+)
+def test_uncertainty_and_hotel_contents_are_checked(tmp_path, sd, tail, head, key, message):
+    path = _copy_with(tmp_path, "vehicle", "slocum_g3", 'value = 1.155, unit = "W"',
+                      f'value = 1.155, unit = "W"{sd}')
+    text = path.read_text().replace("hotel_power = ", head + "hotel_power = ", 1)
+    path.write_text(text + tail)
+    with pytest.raises(ModelFileError) as caught:
+        load_vehicle(str(path))
+    assert str(caught.value).startswith(f"{path}: {key}: ")
+    assert message in str(caught.value)

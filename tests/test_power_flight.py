@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from gliderplan.power_models import load_vehicle
+from gliderplan.power_models import flight, load_vehicle
 
 PITCH_26 = math.radians(26.0)
 
@@ -74,7 +74,7 @@ def test_deeper_yos_need_fewer_inflections_and_less_energy(vehicle):
     expected = (
         (
             vehicle.pump_energy_j(bottoms, 400.0)
-            + vehicle.pump_in_energy_j(400.0)
+            + vehicle.pump_in_energy_j(5.0, 400.0)
             + 2 * vehicle.pitch_energy_j
         )
         * per_hour
@@ -89,13 +89,16 @@ def test_g3_pump_model_is_the_fitted_formula():
     assert g3.pump_energy_j(100.0, 200.0) == pytest.approx(2.4888 * 200 + 0.012276 * 200 * 100)
 
 
-def test_transit_coefficient_gives_energy_per_metre(vehicle):
+@pytest.mark.parametrize("turn_s", [0.0, 30.0])
+def test_transit_coefficient_gives_energy_per_metre(vehicle, turn_s):
     hotel = 3.5
+    vehicle = dataclasses.replace(vehicle, top_turn_s=turn_s, bottom_turn_s=turn_s / 2)
     for u in (0.15, 0.25, 0.3):
         ballast = vehicle.ballast_for_speed(u, PITCH_26)
         direct = vehicle.energy_per_km_j(5.0, 60.0, PITCH_26, ballast, hotel) / 1e3
         c = vehicle.transit_coefficient(5.0, 60.0, PITCH_26, hotel)
-        formula = hotel / u + vehicle.pitch_j_per_m(5.0, 60.0, PITCH_26) + c * u**2
+        formula = (hotel / u + vehicle.pitch_j_per_m(5.0, 60.0, PITCH_26)
+                   + hotel * vehicle.turn_s_per_m(5.0, 60.0, PITCH_26) + c * u**2)
         assert direct == pytest.approx(formula, rel=1e-9)
 
 
@@ -124,3 +127,64 @@ def test_surfacing_costs(vehicle):
     )
     g3 = load_vehicle("slocum_g3")
     assert g3.surfacing_with_iridium_j == pytest.approx(389 + 5.55 * 637)
+
+
+# ---- trim, compressibility and the water column ----------------------------------------
+BAND = (3.0, 36.0)
+
+
+def _trimmed(trim_cc=0.0, eps=0.0, hull_cc=60_000.0):
+    vehicle = load_vehicle("slocum_g2_shallow")
+    return dataclasses.replace(vehicle.flight, hull_volume_cc=hull_cc, trim_cc=trim_cc,
+                               compressibility_per_pa=eps)
+
+
+def test_a_neutral_glider_in_uniform_water_dives_and_climbs_alike():
+    params = _trimmed()
+    dive, climb = (flight.glide_leg(params, *BAND, PITCH_26, 230.0, up) for up in (False, True))
+    _, w = flight.glide(params, PITCH_26, 230.0)
+    assert dive.w_mps == pytest.approx(w) and climb.w_mps == pytest.approx(w)
+    assert dive.time_s == pytest.approx((BAND[1] - BAND[0]) / w)
+
+
+def test_a_glider_trimmed_light_climbs_faster_than_it_dives():
+    params = _trimmed(trim_cc=80.0)
+    dive, climb = (flight.glide_leg(params, *BAND, PITCH_26, 230.0, up) for up in (False, True))
+    _, w_dive = flight.glide(params, PITCH_26, 230.0 - 80.0)
+    _, w_climb = flight.glide(params, PITCH_26, 230.0 + 80.0)
+    assert dive.w_mps == pytest.approx(w_dive) and climb.w_mps == pytest.approx(w_climb)
+    with pytest.raises(ValueError, match="cannot dive"):
+        flight.glide_leg(_trimmed(trim_cc=250.0), *BAND, PITCH_26, 230.0, False)
+
+
+def test_the_hull_squeezed_at_depth_makes_deep_dives_faster():
+    params = _trimmed(eps=5e-10)
+    shallow, deep = (flight.glide_leg(params, top, top + 10.0, PITCH_26, 230.0, False)
+                     for top in (0.0, 90.0))
+    assert deep.w_mps > shallow.w_mps
+    # 60 l squeezed by 5e-10 per Pa at 95 m: ~29 cc heavier
+    squeeze = 60_000.0 * 5e-10 * params.rho_kg_m3 * params.g_m_s2 * 95.0
+    assert deep.w_mps == pytest.approx(float(flight.glide(params, PITCH_26, 230.0 + squeeze)[1]),
+                                       rel=1e-3)
+
+
+def test_net_buoyancy_follows_the_water_density():
+    params = _trimmed(trim_cc=40.0, eps=4e-10)
+    mass_kg = params.rho_kg_m3 * (params.hull_volume_cc - params.trim_cc) * 1e-6
+    rho, depth, pumped = 1027.0, 30.0, -230.0
+    pressure = params.rho_kg_m3 * params.g_m_s2 * depth
+    volume_cc = params.hull_volume_cc * (1 - params.compressibility_per_pa * pressure)
+    expected = volume_cc + pumped - mass_kg / rho * 1e6  # B / (rho g) of Merckelbach et al.
+    assert flight.net_buoyancy_cc(params, pumped, depth, rho) == pytest.approx(expected)
+    # denser water deep down: the glider dives slower there than in uniform water
+    ocean = flight.DensityProfile(np.array([0.0, 40.0]), np.array([params.rho_kg_m3, 1027.0]))
+    uniform = flight.glide_leg(params, *BAND, PITCH_26, 230.0, False)
+    layered = flight.glide_leg(params, *BAND, PITCH_26, 230.0, False, ocean)
+    assert layered.time_s > uniform.time_s
+
+
+def test_turn_times_lengthen_the_yo(vehicle):
+    turning = dataclasses.replace(vehicle, top_turn_s=40.0, bottom_turn_s=20.0)
+    per_hour = vehicle.inflections_per_hour(5.0, 50.0, PITCH_26, 200.0)
+    slower = turning.inflections_per_hour(5.0, 50.0, PITCH_26, 200.0)
+    assert 7200.0 / slower - 7200.0 / per_hour == pytest.approx(60.0)

@@ -150,7 +150,7 @@ def test_timeline_energy_adds_up_every_component():
         2.0 * (vehicle.surface_w + vehicle.iridium_w + 4 * vehicle.hotel_w)
         + 2.0 * (3 * board.idle_w + 2 * board.active_w + 0.5 * (board.idle_w + board.active_w))
         + float(vehicle.pump_energy_j(50.0, 400.0))
-        + float(vehicle.pump_in_energy_j(400.0))
+        + float(vehicle.pump_in_energy_j(10.0, 400.0))
         + 2 * vehicle.pitch_energy_j
         + 4 * 2.0 * ctd.on_power_w
         + 2 * ctd.warmup_j  # on four steps, switched on twice

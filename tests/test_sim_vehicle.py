@@ -3,11 +3,13 @@ surfacing with GPS fix and Iridium call, hovering, dead reckoning against a curr
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
 
 from gliderplan.power_models import load_vehicle
+from gliderplan.power_models.flight import glide, net_buoyancy_cc
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, PUMP, SURFACE
 from gliderplan.sim.geo import offset_m
 from gliderplan.sim.vehicle import Current, GliderSim
@@ -100,3 +102,22 @@ def test_the_ctd_lags_the_water_and_a_powered_off_ctd_is_not_sent():
     mask, values = science.readings(1)
     assert mask & (1 << 9) and mask & (1 << 11)  # the CTD's temperature and salinity
     assert values[9] == pytest.approx(7.0 + 17.0 * math.exp(-0.5), abs=0.02)
+
+
+def test_a_trimmed_glider_dives_at_its_net_buoyancy_and_turns_for_its_turn_time():
+    flight = dataclasses.replace(VEHICLE.flight, hull_volume_cc=60_000.0, trim_cc=60.0,
+                                 compressibility_per_pa=5e-10)
+    turning = dataclasses.replace(VEHICLE, flight=flight, top_turn_s=20.0, bottom_turn_s=0.0)
+    g = GliderSim(turning, 1.0, 39.0, -73.0, Current(), 2.0)
+    still = 0
+    while g.depth_m == 2.0:  # pumping, then turning at the top: no vertical motion
+        g.step(30.0, -PITCH, -BALLAST, 0.0, True, False)
+        still += 1
+    assert still == math.ceil(BALLAST / VEHICLE.pump_rate_cc_s) + 20
+    for _ in range(60):
+        g.step(30.0, -PITCH, -BALLAST, 0.0, True, False)
+    before = g.depth_m
+    g.step(30.0, -PITCH, -BALLAST, 0.0, True, False)
+    net = -net_buoyancy_cc(flight, -BALLAST, before)  # 233 cc less the 60 cc light trim ...
+    assert BALLAST - 60.0 < net < BALLAST  # ... plus the hull squeezed at depth
+    assert g.depth_m - before == pytest.approx(float(glide(flight, PITCH, net)[1]), rel=1e-6)
