@@ -73,6 +73,15 @@ N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32
 FLIGHT_SENSORS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
 
 
+# ---- the library routines (docs/pilot.md) -------------------------------------------
+# The C runtime and the Python reference executor fly alike, bit for bit.
+
+SURFACE_PITCH_RAD = 0.454  # [rad] pitch of the climb to the surface
+TRACK_WINDOW = 64  # (depth, temp) readings the thermocline tracker keeps per leg
+WAYPOINT_RADIUS_M = 50.0  # [m] a waypoint closer than this is reached
+EARTH_RADIUS_M = 6371000.0  # [m] of the sphere positions and headings are computed on
+
+
 # ---- time and workload --------------------------------------------------------------
 
 # The science computer writes the sensor array every 2-4 s: one SENSORS frame, one
@@ -99,6 +108,7 @@ class Component:
     SURFACE = "surface"  # the base load at the surface
     IRIDIUM = "iridium"  # satellite calls at the surface
     COMPUTER = "computer"  # the single-board computer running the mission
+    SENSORS = "sensors"  # the sensor devices together, where they are not billed one by one
 
 
 VEHICLE_COMPONENTS: tuple[str, ...] = (Component.HOTEL, Component.PUMP, Component.PITCH,
@@ -117,6 +127,8 @@ BAUD = 115200  # 8N1: 10 bits per byte on the line
 
 
 class MessageType(IntEnum):
+    """The type byte of a frame's header."""
+
     HELLO = 0x01
     SENSORS = 0x02
     COMMAND = 0x03
@@ -145,7 +157,7 @@ TRANSITION_BY_ACTION: dict[str, TransitionKind] = {
 NO_STATE = 0xFF  # COMMAND's `state` once exited; `from`/`to` of no state
 
 # COMMAND's `flags` (plain ints: the simulator builds a COMMAND every tick).
-FLAG_SURFACE = 1 << 0
+FLAG_SURFACE = 1 << 0  # go to (or stay at) the surface
 FLAG_DONE = 1 << 1  # the mission exited
 FLAG_CLIMBING = 1 << 2  # else diving
 FLAG_HEADING = 1 << 3  # `heading_rad` is valid
@@ -154,8 +166,8 @@ FLAG_HEADING = 1 << 3  # `heading_rad` is valid
 class ReleaseReason(IntEnum):
     """RELEASE's `reason`: why the runtime gave control back to the glider."""
 
-    LINK_SILENT = 1
-    INTERNAL_ERROR = 2
+    LINK_SILENT = 1  # no valid frame for the link timeout (the watchdog)
+    INTERNAL_ERROR = 2  # a mission fault, I/O that failed, a crash or a stop signal
     MISSION_EXITED = 3
 
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from gliderplan import contract
+from gliderplan.contract.c_header import sensor_index
 from gliderplan.language import ir
 from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 
@@ -111,7 +112,7 @@ class ExpressionWriter:
             case ir.Const(number):
                 return c_double(number)
             case ir.SensorRef(name):
-                return f"s[SENSOR_{name}]"
+                return f"s[{sensor_index(name)}]"
             case ir.VarRef(name):
                 return f"v[VAR_{name}]"
             case ir.UnaryOp("-", operand):
@@ -240,10 +241,6 @@ class _MissionWriter:
             f'_Static_assert(GP_N_SENSORS == {len(SENSORS)}, '
             '"the runtime and the compiler disagree on the sensor array");',
             "",
-            "enum sensor_index {",
-            *(f"    SENSOR_{s.name} = {s.index}," for s in SENSORS),
-            "};",
-            "",
         ]
         if mission.variables:
             lines += ["enum variable_index {",
@@ -272,7 +269,7 @@ class _MissionWriter:
             lines += [f"    {{{c_double(lat)}, {c_double(lon)}}}," for lat, lon in points]
             lines += ["};", ""]
         if state.sensors:
-            indices = ", ".join(f"SENSOR_{u.name}" for u in state.sensors)
+            indices = ", ".join(sensor_index(u.name) for u in state.sensors)
             lines += [f"static const uint8_t {prefix}_sensors[{len(state.sensors)}] = "
                       f"{{{indices}}};", ""]
         return lines

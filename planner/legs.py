@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import math
 
+from gliderplan.contract import EARTH_RADIUS_M
 from gliderplan.language import ir
 
-EARTH_RADIUS_M = 6371000.0
 Position = tuple[float, float]  # (lat, lon) [deg]
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from gliderplan.contract import VEHICLE_COMPONENTS, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.hardware import Hardware, load_hardware
@@ -28,7 +29,6 @@ from gliderplan.planner.occupancy import (
     measured_occupancy,
     mission_occupancy,
 )
-from gliderplan.planner.rates import VEHICLE_COMPONENTS
 
 J_PER_WH = 3600.0
 _ON_EDGE = 1e-6  # a duty this close to 0 or 1 does not cycle (no warm-ups)
@@ -286,12 +286,12 @@ def state_energy_j(inputs: PlanInputs, sol: Solution) -> list[dict[str, float]]:
     times = state_times_s(inputs, sol)
     tr, vehicle = inputs.transit, inputs.hardware.vehicle
     for i, s in enumerate(tr.state):
-        result[s]["hotel"] = vehicle.hotel_w * float(times[s])
-        result[s]["pump"] = float(tr.length_m[i] * tr.pump_j[i] / sol.pace[i] ** 2)
-        result[s]["pitch"] = float(tr.length_m[i] * tr.pitch_j_per_m[i])
+        result[s][Component.HOTEL] = vehicle.hotel_w * float(times[s])
+        result[s][Component.PUMP] = float(tr.length_m[i] * tr.pump_j[i] / sol.pace[i] ** 2)
+        result[s][Component.PITCH] = float(tr.length_m[i] * tr.pitch_j_per_m[i])
     n_modes = len(inputs.hardware.modes)
     for s, m in enumerate(_chosen_modes(inputs, sol)):
-        result[s]["computer"] = float(inputs.mode_power_w[s * n_modes + m] * times[s])
+        result[s][Component.COMPUTER] = float(inputs.mode_power_w[s * n_modes + m] * times[s])
     for q, value in enumerate(_device_energy_j(inputs, sol)):
         name = inputs.dev_name[q]
         result[inputs.dev_state[q]][name] = result[inputs.dev_state[q]].get(name, 0.0) \

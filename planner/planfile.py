@@ -13,15 +13,19 @@ import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from gliderplan.contract import (
+    MAX_NAME_LENGTH,
+    MAX_PLAN_BYTES,
+    MAX_PLAN_LINE_BYTES,
+    MAX_PLAN_SENSORS,
+    MAX_PROFILE_ALTERNATIVES,
+    MAX_STATES,
+)
 from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.plan import Plan
 
 VERSION = 1
-MAX_LINE_BYTES = 255  # including the LF
-MAX_FILE_BYTES = 65536
-MAX_STATES, MAX_SENSORS, MAX_PROFILES = 64, 16, 8
-
-_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,31}\Z")
+_NAME = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME_LENGTH - 1}}}\Z")
 _NUMBER = re.compile(r"-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?\Z")
 _COUNT = re.compile(r"[0-9]+\Z")
 _HEX64 = re.compile(r"[0-9a-f]{64}\Z")
@@ -178,8 +182,8 @@ class _Cursor:
 
 
 def _split_lines(data: bytes) -> list[str]:
-    if len(data) > MAX_FILE_BYTES:
-        raise PlanFileError(0, f"the file has {len(data)} bytes, more than {MAX_FILE_BYTES}")
+    if len(data) > MAX_PLAN_BYTES:
+        raise PlanFileError(0, f"the file has {len(data)} bytes, more than {MAX_PLAN_BYTES}")
     if not data.endswith(b"\n"):
         raise PlanFileError(data.count(b"\n") + 1, "truncated: the last line has no LF")
     lines = data[:-1].split(b"\n")
@@ -187,9 +191,9 @@ def _split_lines(data: bytes) -> list[str]:
         bad = next((b for b in raw if not 0x20 <= b <= 0x7E), None)
         if bad is not None:
             raise PlanFileError(i, f"byte 0x{bad:02x} is not printable ASCII")
-        if len(raw) + 1 > MAX_LINE_BYTES:
+        if len(raw) + 1 > MAX_PLAN_LINE_BYTES:
             raise PlanFileError(i, f"the line has {len(raw) + 1} bytes, more than "
-                                f"{MAX_LINE_BYTES}")
+                                f"{MAX_PLAN_LINE_BYTES}")
         if not raw:
             raise PlanFileError(i, "empty line")
         if raw.startswith(b" ") or raw.endswith(b" ") or b"  " in raw:
@@ -231,8 +235,8 @@ def _state_block(cur: _Cursor) -> StateBlock:
     name = cur.name(name)
     clock_mhz, cycle_s = cur.number(clock, "clock"), cur.number(cycle, "cycle")
     cur.check(clock_mhz > 0 and cycle_s > 0, "clock and cycle must be > 0")
-    n_sensors = cur.count(n_sensors, "sensors", 0, MAX_SENSORS)
-    n_profiles = cur.count(n_profiles, "profiles", 1, MAX_PROFILES)
+    n_sensors = cur.count(n_sensors, "sensors", 0, MAX_PLAN_SENSORS)
+    n_profiles = cur.count(n_profiles, "profiles", 1, MAX_PROFILE_ALTERNATIVES)
     sensors = []
     for _ in range(n_sensors):
         sensor, period, on = cur.next("sensor", 3)
@@ -243,7 +247,7 @@ def _state_block(cur: _Cursor) -> StateBlock:
     profiles = []
     for i in range(n_profiles):
         index, share, pitch, ballast, speed = cur.next("profile", 5)
-        cur.check(cur.count(index, "index", 0, MAX_PROFILES - 1) == i,
+        cur.check(cur.count(index, "index", 0, MAX_PROFILE_ALTERNATIVES - 1) == i,
                   f"profile index {index} out of order (expected {i})")
         line = ProfileLine(i, cur.number(share, "share"), cur.number(pitch, "pitch"),
                            cur.number(ballast, "ballast"), cur.number(speed, "speed"))

@@ -14,14 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import TICK_S, Component
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.vehicle import Vehicle
-
-VEHICLE_COMPONENTS = ("hotel", "pump", "pitch", "surface", "iridium")
 
 
 @dataclass(frozen=True)
@@ -81,8 +79,8 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
         per_hour = float(vehicle.inflections_per_hour(low, high, pitch, ballast))
         actuators_w = float(vehicle.profile_power_w(low, high, pitch, ballast))
         pitch_w = vehicle.pitch_energy_j * per_hour / 3600.0
-        power = {"hotel": vehicle.hotel_w, "pump": actuators_w - pitch_w, "pitch": pitch_w,
-                 "surface": 0.0, "iridium": 0.0}
+        power = {Component.HOTEL: vehicle.hotel_w, Component.PUMP: actuators_w - pitch_w,
+                 Component.PITCH: pitch_w, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
         return ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch, ballast)
     # surface and hover do not glide: the plan file still carries a glide command, the
     # vehicle's nominal pitch at full buoyancy (what it climbs with).
@@ -92,12 +90,12 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
         call_s = min(max(visit_s - vehicle.surface_s, 0.0), vehicle.iridium_s)
         call_fraction = call_s / visit_s if visit_s > 0.0 else 0.0
         fixed_w = vehicle.surfacing_fixed_j / visit_s if visit_s > 0.0 else 0.0
-        power = {"hotel": 0.0, "pump": 0.0, "pitch": 0.0,
-                 "surface": vehicle.surface_w * (1.0 - call_fraction) + fixed_w,
-                 "iridium": vehicle.iridium_w * call_fraction}
+        power = {Component.HOTEL: 0.0, Component.PUMP: 0.0, Component.PITCH: 0.0,
+                 Component.SURFACE: vehicle.surface_w * (1.0 - call_fraction) + fixed_w,
+                 Component.IRIDIUM: vehicle.iridium_w * call_fraction}
     else:  # hover: holds a depth with small corrections, counted in the hotel load
-        power = {"hotel": vehicle.hotel_w, "pump": 0.0, "pitch": 0.0,
-                 "surface": 0.0, "iridium": 0.0}
+        power = {Component.HOTEL: vehicle.hotel_w, Component.PUMP: 0.0, Component.PITCH: 0.0,
+                 Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
     return ProfileRates(index, profile.kind, power, 0.0, speed, pitch0, ballast)
 
 

@@ -11,6 +11,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from gliderplan.contract import Component
 from gliderplan.language import ir
 from gliderplan.planner.hardware import load_hardware
 from gliderplan.planner.inputs import build_inputs
@@ -66,7 +67,7 @@ def _row(model: PlanModel, budget_j: float) -> dict:
                quality=choice.solution.quality,
                energy_j=float(sum(sum(e.values()) for e in energies)),
                shadow_price=choice.shadow_price,
-               computer_j=float(sum(e["computer"] for e in energies)))
+               computer_j=float(sum(e[Component.COMPUTER] for e in energies)))
     return row
 
 

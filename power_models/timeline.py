@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract import Component
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, PITCH, PUMP, SURFACE
 from gliderplan.power_models.sensor import Sensor
@@ -43,22 +44,22 @@ def energy_by_component_j(
     phase, dt = timeline.phase, timeline.dt_s
     gliding = (phase == GLIDE) | (phase == PUMP) | (phase == PITCH)
     parts = {
-        "hotel": np.where(gliding, vehicle.hotel_w * dt, 0.0),
-        "surface": np.where(phase == SURFACE, vehicle.surface_w * dt, 0.0),
-        "iridium": np.where(phase == IRIDIUM, vehicle.iridium_w * dt, 0.0),
-        "pump": vehicle.pump_energy_j(timeline.depth_m, timeline.pumped_out_cc)
+        Component.HOTEL: np.where(gliding, vehicle.hotel_w * dt, 0.0),
+        Component.SURFACE: np.where(phase == SURFACE, vehicle.surface_w * dt, 0.0),
+        Component.IRIDIUM: np.where(phase == IRIDIUM, vehicle.iridium_w * dt, 0.0),
+        Component.PUMP: vehicle.pump_energy_j(timeline.depth_m, timeline.pumped_out_cc)
         + vehicle.pump_in_energy_j(timeline.depth_m, timeline.pumped_in_cc),
-        "pitch": np.where(timeline.inflection, vehicle.pitch_energy_j, 0.0),
+        Component.PITCH: np.where(timeline.inflection, vehicle.pitch_energy_j, 0.0),
     }
     if board is not None:
         busy = np.zeros(phase.shape) if timeline.board_busy is None else timeline.board_busy
-        parts["computer"] = board.power_w(busy) * dt
+        parts[Component.COMPUTER] = board.power_w(busy) * dt
     if sensors:
         on = timeline.sensor_on
         on_w = np.array([s.on_power_w for s in sensors])[:, None]
         warmup_j = np.array([s.warmup_j for s in sensors])[:, None]
         before = np.concatenate([np.zeros((on.shape[0], 1), bool), on[:, :-1]], axis=1)
-        parts["sensors"] = (on * on_w * dt + (on & ~before) * warmup_j).sum(axis=0)
+        parts[Component.SENSORS] = (on * on_w * dt + (on & ~before) * warmup_j).sum(axis=0)
     return parts
 
 

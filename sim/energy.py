@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
 from gliderplan.power_models import load_board, load_sensor
@@ -63,7 +63,7 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
                         pumped_out_cc=c["pumped_out_cc"], pumped_in_cc=c["pumped_in_cc"],
                         inflection=c["inflection"].astype(bool))
     parts = energy_by_component_j(timeline, vehicle)
-    parts["computer"] = _computer_j(state, dt, mission, plan)
+    parts[Component.COMPUTER] = _computer_j(state, dt, mission, plan)
     power = c["sensor_power"].astype(np.int64)
     for device in DEVICES:
         on = (power & DEVICE_BITS[device]) != 0
@@ -72,7 +72,7 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
                                        np.zeros(len(on)), np.zeros(len(on), bool),
                                        sensor_on=on[None, :])
             parts[device] = energy_by_component_j(device_timeline, vehicle,
-                                                  sensors=[load_sensor(device)])["sensors"]
+                                                  sensors=[load_sensor(device)])[Component.SENSORS]
     flying = state < len(mission.states)  # the row of the exit is the run's end: no energy
     parts = {k: np.where(flying, v, 0.0) for k, v in parts.items()}
     names = record.state_names

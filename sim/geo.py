@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import math
 
-EARTH_RADIUS_M = 6371000.0
+from gliderplan.contract import EARTH_RADIUS_M
+
 TWO_PI = 2.0 * math.pi
 _RAD = math.pi / 180.0
 

@@ -12,16 +12,19 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from gliderplan.sim.geo import EARTH_RADIUS_M, bearing_rad, ddmm_to_degrees, offset_m
+from gliderplan.contract import (
+    EARTH_RADIUS_M,
+    MAX_SWEEP_WAYPOINTS,
+    SURFACE_PITCH_RAD,
+    TRACK_WINDOW,
+    WAYPOINT_RADIUS_M,
+)
+from gliderplan.sim.geo import bearing_rad, ddmm_to_degrees, offset_m
 
 if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
     from gliderplan.sim.planfile import StatePlan
 
 DIVE, CLIMB = 0, 1
-SURFACE_PITCH_RAD = 0.454  # docs/pilot.md: surface climbs at +0.454 rad
-TRACK_WINDOW = 64  # robust tracker: at most this many readings in the window
-WAYPOINT_RADIUS_M = 50.0
-MAX_SWEEP_WAYPOINTS = 256
 
 
 # ---- flight profiles -----------------------------------------------------------------

@@ -23,12 +23,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract import FLIGHT_SENSORS_MASK
 from gliderplan.language.registry import SENSORS
 from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.vehicle import GliderSim
 
-DEVICELESS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
 DEVICE_MASKS: dict[str, int] = {}
 for _s in SENSORS:
     if _s.device is not None:
@@ -64,7 +64,7 @@ NOISE_PRESETS: dict[str, SensorNoise] = {
 def powered_mask(sensor_power: int) -> int:
     """Sensors sent in a tick: those without a device plus every sensor of a device that
     `sensor_power` (bit i: sensor i's device on) keeps powered."""
-    mask = DEVICELESS_MASK
+    mask = FLIGHT_SENSORS_MASK
     for bits in DEVICE_MASKS.values():
         if sensor_power & bits:
             mask |= bits

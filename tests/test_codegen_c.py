@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import shutil
 import struct
 import subprocess
@@ -19,7 +18,6 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from gliderplan import contract
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import CodegenError, c_double, generate_c, read_mask
 from gliderplan.language.registry import SENSOR_BY_NAME
@@ -97,16 +95,6 @@ def test_constants_are_decimal_only_when_the_decimal_is_exact():
     # Decimal text is read in 80-bit precision on the i486: only exact ones stay decimal.
     assert c_double(2000.0) == "2000.0" and c_double(-0.5) == "(-0.5)"
     assert c_double(0.454) == "0x1.d0e5604189375p-2 /* 0.454 */"
-
-
-def test_the_limits_are_those_of_the_runtime_header():
-    header = (INCLUDE / "gp_mission.h").read_text()
-    defined = dict(re.findall(r"^#define GP_(MAX_\w+) (\d+)", header, re.MULTILINE))
-    for c_name, name in (("MAX_STATES", "MAX_STATES"), ("MAX_VARIABLES", "MAX_VARIABLES"),
-                         ("MAX_PROFILES", "MAX_PROFILE_ALTERNATIVES"),
-                         ("MAX_PROFILE_ARGS", "MAX_PROFILE_ARGS"),
-                         ("MAX_POINTS", "MAX_ROUTE_POINTS"), ("MAX_STACK", "MAX_STACK_DEPTH")):
-        assert getattr(contract, name) == int(defined[c_name]), name
 
 
 def test_an_unreadable_vehicle_file_is_a_codegen_error(tmp_path):

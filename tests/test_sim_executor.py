@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gliderplan.cli.common import check_file
-from gliderplan.contract import NO_STATE
+from gliderplan.contract import FLIGHT_SENSORS_MASK, NO_STATE
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import default_ballast_cc
 from gliderplan.language.registry import SENSORS
@@ -21,7 +21,7 @@ from gliderplan.sim import compiled, pilot
 from gliderplan.sim.executor import PythonRuntime
 from gliderplan.sim.geo import ddmm_to_degrees, offset_m
 from gliderplan.sim.planfile import PlanFileError, parse_plan
-from gliderplan.sim.science import DEVICELESS_MASK, powered_mask
+from gliderplan.sim.science import powered_mask
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((REPO / "examples").glob("*.mission")) + sorted(
@@ -77,7 +77,7 @@ end
 """)
     # 10.09999995 < 10.1 in double, but the link rounds it to binary32 10.1000004
     executor = PythonRuntime(mission, None, 200.0)
-    command = executor.step(0, DEVICELESS_MASK, readings(missiontime=0.0, depth=10.09999995))
+    command = executor.step(0, FLIGHT_SENSORS_MASK, readings(missiontime=0.0, depth=10.09999995))
     assert command.transition == 5 and command.state == NO_STATE
 
 
@@ -96,7 +96,7 @@ end
     mask = powered_mask(ALL_ON)
     assert executor.step(0, mask, readings(missiontime=0, depth=1, temp=15.0)).transition == 1
     # the CTD is off this tick: its old 15 C stands, the new 5 C is not seen
-    assert executor.step(1, DEVICELESS_MASK, readings(missiontime=4, temp=5.0)).transition == 0
+    assert executor.step(1, FLIGHT_SENSORS_MASK, readings(missiontime=4, temp=5.0)).transition == 0
     assert executor.step(2, mask, readings(missiontime=8, temp=5.0)).transition == 5
 
 
@@ -121,7 +121,7 @@ end
 
     monkeypatch.setattr(ir, "evaluate", spy)
     executor = PythonRuntime(mission, None, 200.0)
-    kinds = [executor.step(t, DEVICELESS_MASK, readings(missiontime=4.0 * t, depth=21.0 + t))
+    kinds = [executor.step(t, FLIGHT_SENSORS_MASK, readings(missiontime=4.0 * t, depth=21.0 + t))
              .transition for t in range(3)]
     assert kinds == [1, 0, 5]  # start; the assignment fired at 4 s; exit at 8 s
     assert executor.machine.variables == {"bottom": 23.0}  # 21 + 2 at tick 0, then 22 < 23

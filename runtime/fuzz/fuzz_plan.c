@@ -16,7 +16,7 @@
 #include "gp_crc.h"
 #include "gp_plan.h"
 
-static char text[GP_PLAN_MAX_BYTES + 32];
+static char text[GP_MAX_PLAN_BYTES + 32];
 static gp_plan plan;
 
 static int has_crc_line(const uint8_t *data, size_t size)
@@ -39,8 +39,8 @@ static void check_accepted(const gp_mission *mission)
     for (unsigned s = 0; s < plan.n_states; s++) {
         const gp_plan_state *ps = &plan.states[s];
         double shares = 0;
-        if (!(ps->cycle_s > 0) || ps->n_sensors > GP_PLAN_MAX_SENSORS
-            || ps->n_profiles == 0 || ps->n_profiles > GP_MAX_PROFILES) {
+        if (!(ps->cycle_s > 0) || ps->n_sensors > GP_MAX_PLAN_SENSORS
+            || ps->n_profiles == 0 || ps->n_profiles > GP_MAX_PROFILE_ALTERNATIVES) {
             abort();
         }
         for (unsigned i = 0; i < ps->n_sensors; i++) {
@@ -74,9 +74,9 @@ static void check_accepted(const gp_mission *mission)
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     const gp_mission *mission = &gp_mission_table;
-    size_t len = size < GP_PLAN_MAX_BYTES + 1 ? size : GP_PLAN_MAX_BYTES + 1;
+    size_t len = size < GP_MAX_PLAN_BYTES + 1 ? size : GP_MAX_PLAN_BYTES + 1;
     memcpy(text, data, len);
-    if (!has_crc_line(data, len) && len <= GP_PLAN_MAX_BYTES) {
+    if (!has_crc_line(data, len) && len <= GP_MAX_PLAN_BYTES) {
         uint32_t crc = gp_crc32(0, (const uint8_t *)text, len);
         len += (size_t)snprintf(text + len, sizeof text - len, "crc32 %08x\n", (unsigned)crc);
     }

@@ -11,24 +11,8 @@
 
 #include "gp_mission.h"
 
-#define GP_PROTOCOL_VERSION 1
-#define GP_MAX_PAYLOAD 240                         /**< bytes */
 #define GP_MAX_PACKET (6 + GP_MAX_PAYLOAD + 2)     /**< decoded packet, 248 bytes */
-#define GP_MAX_WIRE 250                            /**< COBS bytes before the delimiter */
 #define GP_MAX_FRAME (GP_MAX_WIRE + 1)             /**< with the delimiter */
-#define GP_PLAN_PIECE 200                          /**< plan bytes per PLAN frame */
-#define GP_COMMAND_SIZE 36
-#define GP_NO_STATE 0xFFu
-
-typedef enum {
-    GP_MSG_HELLO = 0x01,
-    GP_MSG_SENSORS = 0x02,
-    GP_MSG_COMMAND = 0x03,
-    GP_MSG_RELEASE = 0x04,
-    GP_MSG_PLAN = 0x05,
-    GP_MSG_PLAN_STATUS = 0x06,
-    GP_MSG_NAK = 0x7F,
-} gp_msg_type;
 
 /** Why a frame was dropped (0: it was not). */
 typedef enum {
@@ -41,15 +25,6 @@ typedef enum {
     GP_FRAME_LENGTH,     /**< length field disagrees with the packet, or a bad payload size */
     GP_FRAME_TYPE,       /**< unknown message type */
 } gp_frame_error;
-
-typedef enum { GP_RELEASE_LINK_SILENT = 1, GP_RELEASE_INTERNAL = 2, GP_RELEASE_EXITED = 3 } gp_release_reason;
-
-enum {
-    GP_FLAG_SURFACE = 1u << 0,
-    GP_FLAG_DONE = 1u << 1,
-    GP_FLAG_CLIMBING = 1u << 2,
-    GP_FLAG_HEADING = 1u << 3,
-};
 
 typedef struct {
     uint8_t type, seq, ack;

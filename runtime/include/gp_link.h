@@ -9,13 +9,7 @@
 
 #include <stddef.h>
 
-/** Exit statuses of the program. */
-enum {
-    GP_EXIT_DONE = 0,         /**< mission exited */
-    GP_EXIT_BAD_INPUT = 1,    /**< bad arguments, plan or checkpoint */
-    GP_EXIT_LINK_LOST = 3,    /**< watchdog: link silent */
-    GP_EXIT_INTERNAL = 4,     /**< internal error (mission fault, I/O) */
-};
+#include "gp_contract.h"  /* the exit statuses, gp_exit_status */
 
 /** `--device pty`: create a pseudo-terminal and print its peer's path on stdout. */
 #define GP_DEVICE_PTY "pty"

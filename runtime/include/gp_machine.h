@@ -11,17 +11,7 @@
 
 #include "gp_mission.h"
 
-#define GP_EXITED 0xFFu  /**< `state` once the mission exited */
-
-/** Kinds of transition, numbered as COMMAND's `transition` field. */
-typedef enum {
-    GP_TR_NONE = 0,
-    GP_TR_START = 1,
-    GP_TR_GOTO = 2,
-    GP_TR_CALL = 3,
-    GP_TR_RETURN = 4,
-    GP_TR_EXIT = 5,
-} gp_transition_kind;
+#define GP_EXITED GP_NO_STATE  /**< `state` once the mission exited */
 
 typedef struct {
     uint8_t kind;   /**< gp_transition_kind */
@@ -43,7 +33,7 @@ typedef enum {
 typedef struct {
     uint8_t state;                    /**< current state, GP_EXITED once exited */
     uint8_t depth;                    /**< states on the stack */
-    uint8_t stack[GP_MAX_STACK];      /**< callers, stack[depth-1] on top */
+    uint8_t stack[GP_MAX_STACK_DEPTH];      /**< callers, stack[depth-1] on top */
     double vars[GP_MAX_VARIABLES];
     uint32_t event_count;             /**< events fired (transitions and assignments) */
 } gp_machine;

@@ -5,28 +5,30 @@
  *
  * One generated C file defines `gp_mission_table` and the functions it points to.
  * Everything is `const` and static: the runtime allocates nothing.
- * Indices of sensors are those of gliderplan.language.registry.SENSORS.
+ * Sensor indices and the limits of the tables are those of gp_contract.h.
  */
 #ifndef GP_MISSION_H
 #define GP_MISSION_H
 
 #include <stdint.h>
 
-#define GP_N_SENSORS 17      /**< length of the sensor array (registry) */
-#define GP_MAX_STATES 64     /**< plan-format limit */
-#define GP_MAX_VARIABLES 64
-#define GP_MAX_PROFILES 8    /**< alternatives per state */
-#define GP_MAX_PROFILE_ARGS 6
-#define GP_MAX_POINTS 64     /**< route points per state */
-#define GP_MAX_STACK 32      /**< upper bound of a mission's stack_depth */
+#include "gp_contract.h"
 
-/** Action of an event. */
+/* The tables count in uint8_t: the contract's limits must fit. */
+_Static_assert(GP_MAX_STATES <= UINT8_MAX && GP_MAX_VARIABLES <= UINT8_MAX
+               && GP_MAX_STACK_DEPTH <= UINT8_MAX && GP_MAX_EVENTS_PER_STATE <= UINT8_MAX
+               && GP_MAX_PROFILE_ALTERNATIVES <= UINT8_MAX && GP_MAX_PROFILE_ARGS <= UINT8_MAX
+               && GP_MAX_ROUTE_POINTS <= UINT8_MAX && GP_N_SENSORS <= UINT8_MAX,
+               "a limit of gp_contract.h does not fit the mission tables' uint8_t counts");
+_Static_assert(GP_N_SENSORS <= 32, "sensor masks are uint32_t");
+
+/** Action of an event: the transition it makes. */
 typedef enum {
-    GP_ACT_NONE = 0,   /**< assignments only, no transition */
-    GP_ACT_GOTO = 2,
-    GP_ACT_CALL = 3,
-    GP_ACT_RETURN = 4,
-    GP_ACT_EXIT = 5,
+    GP_ACT_NONE = GP_TR_NONE,   /**< assignments only, no transition */
+    GP_ACT_GOTO = GP_TR_GOTO,
+    GP_ACT_CALL = GP_TR_CALL,
+    GP_ACT_RETURN = GP_TR_RETURN,
+    GP_ACT_EXIT = GP_TR_EXIT,
 } gp_action;
 
 typedef enum {
@@ -81,7 +83,7 @@ typedef struct {
     const char *name;
     gp_route route;
     const gp_profile *profiles;  /**< alternatives, in source order */
-    uint8_t n_profiles;          /**< 1..GP_MAX_PROFILES */
+    uint8_t n_profiles;          /**< 1..GP_MAX_PROFILE_ALTERNATIVES */
     const uint8_t *sensors;      /**< sensor indices the state logs, in source order */
     uint8_t n_sensors;
     const gp_event *events;      /**< checked in order each tick; the first true fires */
@@ -95,7 +97,7 @@ typedef struct {
     uint8_t n_states;
     const double *var_initial;    /**< initial values of the variables */
     uint8_t n_vars;
-    uint8_t stack_depth;          /**< 1..GP_MAX_STACK */
+    uint8_t stack_depth;          /**< 1..GP_MAX_STACK_DEPTH */
     uint32_t read_mask;           /**< sensors the mission reads (bit i: sensor i) */
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
     const char *const *sensor_names;  /**< GP_N_SENSORS names, registry order */

@@ -11,8 +11,6 @@
 
 #include "gp_mission.h"
 
-#define GP_TRACK_WINDOW 64       /**< (depth, temp) readings a leg keeps */
-#define GP_SURFACE_PITCH_RAD 0.454
 
 typedef enum { GP_LEG_DIVE = 0, GP_LEG_CLIMB = 1 } gp_leg;
 

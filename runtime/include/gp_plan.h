@@ -12,12 +12,7 @@
 
 #include "gp_mission.h"
 
-#define GP_PLAN_MAX_BYTES 65536
-#define GP_PLAN_MAX_LINE 255        /**< bytes including the LF */
-#define GP_PLAN_MAX_SENSORS 16      /**< sensor lines per state */
 #define GP_PLAN_ERROR_LEN 160
-/** Sensors without a device (registry indices 0..8): always powered when logged. */
-#define GP_FLIGHT_SENSORS_MASK 0x1FFu
 
 typedef struct {
     uint8_t sensor;                  /**< registry index */
@@ -31,12 +26,12 @@ typedef struct {
 typedef struct {
     double clock_mhz, cycle_s;
     uint8_t n_sensors, n_profiles;
-    gp_plan_sensor sensors[GP_PLAN_MAX_SENSORS];
-    gp_plan_profile profiles[GP_MAX_PROFILES];
+    gp_plan_sensor sensors[GP_MAX_PLAN_SENSORS];
+    gp_plan_profile profiles[GP_MAX_PROFILE_ALTERNATIVES];
 } gp_plan_state;
 
 typedef struct {
-    char computer[33];
+    char computer[GP_MAX_NAME_LENGTH + 1];
     double clock_mhz, budget_j, predicted_j;
     uint8_t n_states;
     gp_plan_state states[GP_MAX_STATES];

@@ -10,16 +10,13 @@
 
 #include "gp_mission.h"
 
-#define GP_MAX_WAYPOINTS 256      /**< sweep waypoints at most */
-#define GP_WAYPOINT_RADIUS_M 50.0
-#define GP_EARTH_RADIUS_M 6371000.0
 
 /** Where the route is: the waypoint flown to, and the waypoints in decimal degrees.
  *  The waypoints come last: they follow from the route, so a checkpoint leaves them out. */
 typedef struct {
     uint16_t next;                          /**< index of the waypoint flown to */
     uint16_t n_waypoints;
-    double waypoints[GP_MAX_WAYPOINTS][2];  /**< (lat, lon) [deg] */
+    double waypoints[GP_MAX_SWEEP_WAYPOINTS][2];  /**< (lat, lon) [deg] */
 } gp_route_state;
 
 /** @brief Slocum DDMM.MMMM to decimal degrees. */
@@ -47,7 +44,7 @@ int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, do
 
 /**
  * @brief Lawn-mower waypoints covering the convex hull of `corners` (DDMM.MMMM).
- * @param out (lat, lon) [deg], at most GP_MAX_WAYPOINTS
+ * @param out (lat, lon) [deg], at most GP_MAX_SWEEP_WAYPOINTS
  * @return number of waypoints
  */
 uint16_t gp_sweep_waypoints(const double (*corners)[2], uint8_t n_corners, double spacing_m,

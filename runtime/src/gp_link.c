@@ -52,7 +52,7 @@ static int crash_fd = -1;                  /* the line, for the crash handler */
 static uint8_t crash_release[GP_MAX_FRAME];  /* RELEASE (internal error), framed ahead */
 static size_t crash_release_len;
 static gp_plan plan;
-static char plan_text[GP_PLAN_MAX_BYTES + 1];
+static char plan_text[GP_MAX_PLAN_BYTES + 1];
 static uint8_t checkpoint_buf[GP_CHECKPOINT_SIZE];
 
 static void say(const link_state *s, const char *message)
@@ -118,7 +118,7 @@ static int release(link_state *s, gp_release_reason reason, int status)
 
 static int load_plan(link_state *s, const char *path, char *message)
 {
-    long len = gp_read_file(path, plan_text, GP_PLAN_MAX_BYTES);
+    long len = gp_read_file(path, plan_text, GP_MAX_PLAN_BYTES);
     if (len < 0) {
         snprintf(message, ERROR_LEN, "%.200s: cannot read the plan file%s", path,
                  len == -1 ? " (no such file)" : " (unreadable, or larger than 65536 bytes)");
@@ -194,7 +194,7 @@ static int open_events(link_state *s, char *message)
 /* Log the tick's transitions and write the checkpoint: before the COMMAND goes out. */
 static int persist(link_state *s, const gp_tick_report *report)
 {
-    double time_s = runtime.sensors[0];
+    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
     if (s->events_fd >= 0) {
         for (int i = 0; i < report->n_transitions; i++) {
             const gp_transition *t = &report->transitions[i];
@@ -282,25 +282,25 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     gp_runtime_tick(&runtime, s->mission, &options, tick, &command, &report);
     if (persist(s, &report) < 0) {
         say(s, "cannot write the checkpoint or event log; releasing control");
-        return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+        return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
     }
     if (report.fault) {
         char message[ERROR_LEN];
         snprintf(message, sizeof message, "mission fault at missiontime %g s in state %.64s: %s; "
-                 "releasing control", runtime.sensors[0],
+                 "releasing control", runtime.sensors[GP_SENSOR_MISSIONTIME],
                  s->mission->states[report.refused.from].name,
                  report.fault == GP_STEP_OVERFLOW ? "call overflows the state stack"
                  : report.fault == GP_STEP_UNDERFLOW ? "return with an empty stack"
                  : "event targets no state");
         say(s, message);
-        return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+        return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
     }
     follow_clock(s);
     s->answered = 1;
     s->answered_seq = frame->seq;
     send_command(s, &command);
     if (runtime.machine.state == GP_EXITED) {
-        return release(s, GP_RELEASE_EXITED, GP_EXIT_DONE);
+        return release(s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
     }
     return -1;
 }
@@ -394,7 +394,7 @@ static void on_crash_signal(int signal_number)
 
 static void catch_crash_signals(link_state *s)
 {
-    uint8_t reason = GP_RELEASE_INTERNAL;
+    uint8_t reason = GP_RELEASE_INTERNAL_ERROR;
     crash_release_len = gp_frame_build(GP_MSG_RELEASE, 0, 0, &reason, 1, crash_release);
     crash_fd = s->fd;
     struct sigaction action;
@@ -423,7 +423,7 @@ static int run_link(link_state *s)
         double now = gp_now_s();
         if (stop_signal) {
             say(s, "stopped by a signal; releasing control");
-            return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+            return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
         }
         if (now - s->last_valid_s >= s->args->link_timeout_s) {
             say(s, "link silent past its timeout; releasing control");
@@ -440,7 +440,7 @@ static int run_link(link_state *s)
         long n = gp_serial_read(s->fd, chunk, sizeof chunk, (int)ceil(fmax(wait_s, 0) * 1000));
         if (n < 0) {
             say(s, "serial read failed; releasing control");
-            return release(s, GP_RELEASE_INTERNAL, GP_EXIT_INTERNAL);
+            return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
         }
         for (size_t i = 0, used; i < (size_t)n; i += used) {
             gp_frame frame;
@@ -484,7 +484,7 @@ int gp_main(int argc, char **argv)
     }
     if (runtime.started && runtime.machine.state == GP_EXITED) {
         say(&s, "the checkpoint says the mission already exited");
-        return release(&s, GP_RELEASE_EXITED, GP_EXIT_DONE);
+        return release(&s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
     }
     return run_link(&s);
 }

@@ -52,7 +52,7 @@ gp_step_result gp_machine_step(gp_machine *m, const gp_mission *mission,
         return GP_STEP_BAD_TABLE;
     }
     if (event->action == GP_ACT_CALL
-        && (m->depth >= mission->stack_depth || m->depth >= GP_MAX_STACK)) {
+        && (m->depth >= mission->stack_depth || m->depth >= GP_MAX_STACK_DEPTH)) {
         return GP_STEP_OVERFLOW;
     }
     if (event->action == GP_ACT_RETURN && m->depth == 0) {
@@ -98,13 +98,14 @@ const char *gp_mission_check(const gp_mission *mission)
     if (mission->n_vars > GP_MAX_VARIABLES || (mission->n_vars > 0 && !mission->var_initial)) {
         return "more variables than GP_MAX_VARIABLES, or no initial values";
     }
-    if (mission->stack_depth < 1 || mission->stack_depth > GP_MAX_STACK) {
-        return "stack depth outside 1..GP_MAX_STACK";
+    if (mission->stack_depth < 1 || mission->stack_depth > GP_MAX_STACK_DEPTH) {
+        return "stack depth outside 1..GP_MAX_STACK_DEPTH";
     }
     for (int s = 0; s < mission->n_states; s++) {
         const gp_state *state = &mission->states[s];
-        if (state->n_profiles < 1 || state->n_profiles > GP_MAX_PROFILES || !state->profiles) {
-            return "profile count outside 1..GP_MAX_PROFILES";
+        if (state->n_profiles < 1 || state->n_profiles > GP_MAX_PROFILE_ALTERNATIVES
+            || !state->profiles) {
+            return "profile count outside 1..GP_MAX_PROFILE_ALTERNATIVES";
         }
         for (int p = 0; p < state->n_profiles; p++) {
             const gp_profile *profile = &state->profiles[p];
@@ -112,9 +113,9 @@ const char *gp_mission_check(const gp_mission *mission)
                 return "more profile arguments than GP_MAX_PROFILE_ARGS, or no function for them";
             }
         }
-        if (state->route.n_points > GP_MAX_POINTS
+        if (state->route.n_points > GP_MAX_ROUTE_POINTS
             || (state->route.n_points > 0 && !state->route.points)) {
-            return "more route points than GP_MAX_POINTS, or none given";
+            return "more route points than GP_MAX_ROUTE_POINTS, or none given";
         }
         for (int i = 0; i < state->n_sensors; i++) {
             if (!state->sensors || state->sensors[i] >= GP_N_SENSORS) {

@@ -14,8 +14,8 @@
 #define MAX_FIELDS 8
 #define SHARE_TOLERANCE 1e-6
 #define HALF_PI 1.57079632679489661923
-/* printf arguments for "%.*s" of a field, at most 32 characters of it */
-#define SHOWN(f) (int)((f)->len > 32 ? 32 : (f)->len), (f)->start
+/* printf arguments for "%.*s" of a field, at most a name's length of it */
+#define SHOWN(f) (int)((f)->len > GP_MAX_NAME_LENGTH ? GP_MAX_NAME_LENGTH : (f)->len), (f)->start
 
 typedef struct {
     const char *start;
@@ -101,7 +101,7 @@ static int expect(reader *r, const char *keyword, int n_fields)
 
 static int is_name(const field *f)
 {
-    if (f->len < 1 || f->len > 32) {
+    if (f->len < 1 || f->len > GP_MAX_NAME_LENGTH) {
         return 0;
     }
     for (size_t i = 0; i < f->len; i++) {
@@ -154,7 +154,7 @@ static int number_field(reader *r, int index, const char *what, double *out)
     if (!ok || i != f->len) {
         return fail(r, "%s '%.*s' is not a NUMBER", what, SHOWN(f));
     }
-    char buf[GP_PLAN_MAX_LINE + 1];
+    char buf[GP_MAX_PLAN_LINE_BYTES + 1];
     memcpy(buf, s, f->len);
     buf[f->len] = '\0';
     *out = strtod(buf, NULL);
@@ -209,8 +209,8 @@ static int check_bytes(reader *r, size_t *crc_line_start)
     if (r->len == 0) {
         return fail(r, "empty file (truncated)");
     }
-    if (r->len > GP_PLAN_MAX_BYTES) {
-        return fail(r, "file of %zu bytes exceeds %d", r->len, GP_PLAN_MAX_BYTES);
+    if (r->len > GP_MAX_PLAN_BYTES) {
+        return fail(r, "file of %zu bytes exceeds %d", r->len, GP_MAX_PLAN_BYTES);
     }
     size_t line_start = 0, last_line_start = 0;
     for (size_t i = 0; i < r->len; i++) {
@@ -218,8 +218,8 @@ static int check_bytes(reader *r, size_t *crc_line_start)
         if (c != '\n' && (c < 0x20 || c > 0x7E)) {
             return fail(r, "byte 0x%02x is not allowed (printable ASCII and LF only)", c);
         }
-        if (i - line_start + 1 > GP_PLAN_MAX_LINE) {
-            return fail(r, "longer than %d bytes", GP_PLAN_MAX_LINE);
+        if (i - line_start + 1 > GP_MAX_PLAN_LINE_BYTES) {
+            return fail(r, "longer than %d bytes", GP_MAX_PLAN_LINE_BYTES);
         }
         if (c == '\n') {
             last_line_start = line_start;
@@ -349,7 +349,7 @@ static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
 {
     int index;
     if (expect(r, "profile", 6) < 0
-        || count_field(r, 1, "profile INDEX", 0, GP_MAX_PROFILES - 1, &index) < 0) {
+        || count_field(r, 1, "profile INDEX", 0, GP_MAX_PROFILE_ALTERNATIVES - 1, &index) < 0) {
         return -1;
     }
     if (index != expected_index) {
@@ -386,8 +386,8 @@ static int read_state(reader *r, const gp_mission *mission, int s, gp_plan_state
     }
     if (number_field(r, 2, "CLOCK_MHZ", &out->clock_mhz) < 0
         || number_field(r, 3, "CYCLE_S", &out->cycle_s) < 0
-        || count_field(r, 4, "N_SENSORS", 0, GP_PLAN_MAX_SENSORS, &n_sensors) < 0
-        || count_field(r, 5, "N_PROFILES", 1, GP_MAX_PROFILES, &n_profiles) < 0) {
+        || count_field(r, 4, "N_SENSORS", 0, GP_MAX_PLAN_SENSORS, &n_sensors) < 0
+        || count_field(r, 5, "N_PROFILES", 1, GP_MAX_PROFILE_ALTERNATIVES, &n_profiles) < 0) {
         return -1;
     }
     if (!(out->clock_mhz > 0) || !(out->cycle_s > 0)) {

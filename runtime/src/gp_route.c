@@ -43,7 +43,7 @@ static double cross(point o, point a, point b)
 /* Andrew's monotone chain; `p` sorted in place; hull counter-clockwise in `hull`. */
 static int convex_hull(point *p, int n, point *hull)
 {
-    for (int i = 1; i < n; i++) {  /* insertion sort by (x, y): n <= GP_MAX_POINTS */
+    for (int i = 1; i < n; i++) {  /* insertion sort by (x, y): n <= GP_MAX_ROUTE_POINTS */
         point key = p[i];
         int j = i - 1;
         while (j >= 0 && (p[j].x > key.x || (p[j].x == key.x && p[j].y > key.y))) {
@@ -105,8 +105,8 @@ static int clip_line(const point *hull, int n, double y, double *west, double *e
 uint16_t gp_sweep_waypoints(const double (*corners)[2], uint8_t n_corners, double spacing_m,
                             double (*out)[2])
 {
-    point p[GP_MAX_POINTS], hull[2 * GP_MAX_POINTS];
-    int n = n_corners > GP_MAX_POINTS ? GP_MAX_POINTS : n_corners;
+    point p[GP_MAX_ROUTE_POINTS], hull[2 * GP_MAX_ROUTE_POINTS];
+    int n = n_corners > GP_MAX_ROUTE_POINTS ? GP_MAX_ROUTE_POINTS : n_corners;
     if (n == 0 || !(spacing_m > 0)) {
         return 0;
     }
@@ -124,7 +124,7 @@ uint16_t gp_sweep_waypoints(const double (*corners)[2], uint8_t n_corners, doubl
     double scale = GP_EARTH_RADIUS_M * GP_PI / 180.0;
     double east_scale = scale * cos(origin[0] * GP_PI / 180.0);
     uint16_t count = 0;
-    for (int line = 0; count + 2 <= GP_MAX_WAYPOINTS; line++) {
+    for (int line = 0; count + 2 <= GP_MAX_SWEEP_WAYPOINTS; line++) {
         double y = south + spacing_m / 2.0 + line * spacing_m;
         double west, east;
         if (y > north || !clip_line(hull, h, y, &west, &east)) {
@@ -159,7 +159,7 @@ void gp_route_fill(gp_route_state *rs, const gp_route *route)
     if (route->kind == GP_ROUTE_NOHEADING) {
         return;
     }
-    for (int i = 0; i < route->n_points && i < GP_MAX_POINTS; i++) {
+    for (int i = 0; i < route->n_points && i < GP_MAX_ROUTE_POINTS; i++) {
         rs->waypoints[i][0] = gp_ddmm_to_deg(route->points[i][0]);
         rs->waypoints[i][1] = gp_ddmm_to_deg(route->points[i][1]);
         rs->n_waypoints++;

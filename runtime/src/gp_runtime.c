@@ -4,12 +4,6 @@
 #include <math.h>
 #include <string.h>
 
-#define MISSIONTIME 0
-#define DEPTH 1
-#define LAT 6
-#define LON 7
-#define TEMP 9
-
 void gp_runtime_init(gp_runtime *rt)
 {
     memset(rt, 0, sizeof *rt);
@@ -22,7 +16,7 @@ void gp_runtime_init(gp_runtime *rt)
 
 static void enter_state(gp_runtime *rt, const gp_mission *mission)
 {
-    rt->entry_time_s = rt->sensors[MISSIONTIME];
+    rt->entry_time_s = rt->sensors[GP_SENSOR_MISSIONTIME];
     rt->profile = GP_NO_PROFILE;
     if (rt->machine.state < mission->n_states) {
         gp_route_enter(&rt->route, &mission->states[rt->machine.state].route);
@@ -42,7 +36,7 @@ static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options 
     const gp_state *state = &mission->states[rt->machine.state];
     const gp_plan_state *ps = options->plan ? &options->plan->states[rt->machine.state] : NULL;
     gp_schedule_now now;
-    gp_schedule(state, ps, rt->sensors[MISSIONTIME] - rt->entry_time_s,
+    gp_schedule(state, ps, rt->sensors[GP_SENSOR_MISSIONTIME] - rt->entry_time_s,
                 mission->default_ballast_cc, &now);
     if (now.profile >= state->n_profiles) {
         now.profile = 0;
@@ -54,17 +48,18 @@ static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options 
         profile->args(rt->sensors, rt->machine.vars, in.args);
     }
     if (now.profile != rt->profile) {  /* entering the state or switching alternative */
-        gp_pilot_enter(&rt->pilot, &in, rt->sensors[DEPTH]);
+        gp_pilot_enter(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH]);
         rt->profile = now.profile;
         report->changed = 1;
     }
     gp_pilot_command vertical;
-    if (gp_pilot_step(&rt->pilot, &in, rt->sensors[DEPTH], rt->sensors[TEMP], &vertical)) {
+    if (gp_pilot_step(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH], rt->sensors[GP_SENSOR_TEMP],
+                      &vertical)) {
         report->changed = 1;
     }
     double heading;
-    int heading_valid = gp_route_step(&rt->route, &state->route, rt->sensors[LAT],
-                                      rt->sensors[LON], &heading);
+    int heading_valid = gp_route_step(&rt->route, &state->route, rt->sensors[GP_SENSOR_LAT],
+                                      rt->sensors[GP_SENSOR_LON], &heading);
     cmd->profile = now.profile;
     cmd->flags = (uint8_t)(vertical.flags | (heading_valid ? GP_FLAG_HEADING : 0));
     cmd->depth_target_m = (float)vertical.depth_target_m;

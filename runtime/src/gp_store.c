@@ -63,9 +63,9 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *buf, 
         return "state index outside the mission";
     }
     if (loaded.machine.depth > mission->stack_depth || loaded.pilot.n_window > GP_TRACK_WINDOW
-        || loaded.pilot.n_recent > 3 || loaded.route.n_waypoints > GP_MAX_WAYPOINTS
-        || loaded.route.next >= GP_MAX_WAYPOINTS
-        || (loaded.profile >= GP_MAX_PROFILES && loaded.profile != GP_NO_PROFILE)) {
+        || loaded.pilot.n_recent > 3 || loaded.route.n_waypoints > GP_MAX_SWEEP_WAYPOINTS
+        || loaded.route.next >= GP_MAX_SWEEP_WAYPOINTS
+        || (loaded.profile >= GP_MAX_PROFILE_ALTERNATIVES && loaded.profile != GP_NO_PROFILE)) {
         return "counts outside their bounds";
     }
     for (int i = 0; i < loaded.machine.depth; i++) {

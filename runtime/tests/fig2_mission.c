@@ -10,7 +10,7 @@
 
 #include "gp_mission.h"
 
-#define MISSIONTIME 0
+#define MISSIONTIME GP_SENSOR_MISSIONTIME
 
 static const char *const sensor_names[GP_N_SENSORS] = {
     "missiontime", "depth", "pitch", "roll", "heading", "altitude", "lat", "lon", "battery",
@@ -48,9 +48,10 @@ static const double s3_point[1][2] = {{3910.5, -7349.5058}};
 static const gp_profile s1_profiles[] = {{GP_PROFILE_YO, 4, yo_5_10}};
 static const gp_profile s2_profiles[] = {{GP_PROFILE_THERMOTRACKYO, 6, thermo_5_20}};
 static const gp_profile s3_profiles[] = {{GP_PROFILE_YO, 4, yo_5_20}};
-static const uint8_t s1_sensors[] = {0, 1, 2};
-static const uint8_t s2_sensors[] = {0, 1, 2, 9};
-static const uint8_t s3_sensors[] = {0, 1, 2};
+static const uint8_t s1_sensors[] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH};
+static const uint8_t s2_sensors[] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH,
+                                       GP_SENSOR_TEMP};
+static const uint8_t s3_sensors[] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH};
 static const gp_event s1_events[] = {
     {s1_goto_s3, NULL, GP_ACT_GOTO, 2},
     {s1_call_s2, NULL, GP_ACT_CALL, 1},

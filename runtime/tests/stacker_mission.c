@@ -7,14 +7,16 @@
 
 #include "gp_mission.h"
 
+#define MISSIONTIME GP_SENSOR_MISSIONTIME
+
 static const char *const sensor_names[GP_N_SENSORS] = {
     "missiontime", "depth", "pitch", "roll", "heading", "altitude", "lat", "lon", "battery",
     "temp", "conductivity", "salinity", "oxygen", "chlorophyll", "backscatter", "current",
     "modem",
 };
 
-static int after_10(const double *s, const double *v) { (void)v; return s[0] >= 10; }
-static int after_20(const double *s, const double *v) { (void)v; return s[0] >= 20; }
+static int after_10(const double *s, const double *v) { (void)v; return s[MISSIONTIME] >= 10; }
+static int after_20(const double *s, const double *v) { (void)v; return s[MISSIONTIME] >= 20; }
 static void hover_5(const double *s, const double *v, double *a) { (void)s; (void)v; a[0] = 5; }
 
 static const gp_profile hover[] = {{GP_PROFILE_HOVER, 1, hover_5}};

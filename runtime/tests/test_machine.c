@@ -206,7 +206,7 @@ void test_mission_check_should_accept_fig2_and_reject_bad_tables(void)
 {
     CHECK(gp_mission_check(&gp_mission_table) == NULL);
     gp_mission bad = stacker;
-    bad.stack_depth = GP_MAX_STACK + 1;
+    bad.stack_depth = GP_MAX_STACK_DEPTH + 1;
     CHECK(gp_mission_check(&bad) != NULL);
     bad = stacker;
     bad.n_states = 0;

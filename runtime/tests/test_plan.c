@@ -28,7 +28,7 @@
     "profile 0 1 0.454 230 0.31\n"                                                  \
     "end\n"
 
-static char text[GP_PLAN_MAX_BYTES + 512];
+static char text[GP_MAX_PLAN_BYTES + 512];
 
 /* `body` with its crc32 line appended, into `text`; @return length. */
 static size_t with_crc(const char *body)
@@ -42,7 +42,7 @@ static size_t with_crc(const char *body)
 /* The good body with the first `from` replaced by `to`, checksummed. */
 static size_t variant(const char *from, const char *to)
 {
-    static char body[GP_PLAN_MAX_BYTES];
+    static char body[GP_MAX_PLAN_BYTES];
     const char *at = strstr(GOOD_BODY, from);
     if (at == NULL) {
         gp_test_fail(__FILE__, __LINE__, from);
@@ -176,7 +176,7 @@ void test_plan_should_reject_truncated_and_corrupted_files(void)
 
 void test_plan_should_reject_a_file_over_64_kib(void)
 {
-    static char big[GP_PLAN_MAX_BYTES + 2];
+    static char big[GP_MAX_PLAN_BYTES + 2];
     char error[GP_PLAN_ERROR_LEN];
     static gp_plan plan;
     memset(big, 'a', sizeof big);

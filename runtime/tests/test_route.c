@@ -100,7 +100,7 @@ void test_sweep_should_mow_a_square_in_alternating_lines(void)
     local_point(44.0, -63.0, 0, 1000, corners[2]);
     local_point(44.0, -63.0, 500, 500, corners[3]);    /* inside: not a hull vertex */
     local_point(44.0, -63.0, 1000, 0, corners[4]);
-    static double out[GP_MAX_WAYPOINTS][2];
+    static double out[GP_MAX_SWEEP_WAYPOINTS][2];
     uint16_t n = gp_sweep_waypoints((const double(*)[2])corners, 5, 200, out);
     CHECK_INT(n, 10);
     double origin[2] = {gp_ddmm_to_deg(corners[0][0]), gp_ddmm_to_deg(corners[0][1])};
@@ -121,7 +121,7 @@ void test_sweep_should_clip_lines_to_a_triangle(void)
     local_point(44.0, -63.0, 0, 0, corners[0]);
     local_point(44.0, -63.0, 0, 1000, corners[1]);
     local_point(44.0, -63.0, 1000, 0, corners[2]);
-    static double out[GP_MAX_WAYPOINTS][2];
+    static double out[GP_MAX_SWEEP_WAYPOINTS][2];
     uint16_t n = gp_sweep_waypoints((const double(*)[2])corners, 3, 500, out);
     CHECK_INT(n, 4);  /* lines at 250 m and 750 m */
     double origin[2] = {gp_ddmm_to_deg(corners[0][0]), gp_ddmm_to_deg(corners[0][1])};
@@ -138,7 +138,7 @@ void test_sweep_should_stop_at_256_waypoints(void)
     local_point(44.0, -63.0, 0, 0, corners[0]);
     local_point(44.0, -63.0, 0, 5000, corners[1]);
     local_point(44.0, -63.0, 5000, 0, corners[2]);
-    static double out[GP_MAX_WAYPOINTS][2];
-    CHECK_INT(gp_sweep_waypoints((const double(*)[2])corners, 3, 1.0, out), GP_MAX_WAYPOINTS);
+    static double out[GP_MAX_SWEEP_WAYPOINTS][2];
+    CHECK_INT(gp_sweep_waypoints((const double(*)[2])corners, 3, 1.0, out), GP_MAX_SWEEP_WAYPOINTS);
     CHECK_INT(gp_sweep_waypoints((const double(*)[2])corners, 3, 0.0, out), 0);
 }

@@ -10,38 +10,18 @@
 
 _Static_assert(GP_N_SENSORS == 17, "the runtime and the compiler disagree on the sensor array");
 
-enum sensor_index {
-    SENSOR_missiontime = 0,
-    SENSOR_depth = 1,
-    SENSOR_pitch = 2,
-    SENSOR_roll = 3,
-    SENSOR_heading = 4,
-    SENSOR_altitude = 5,
-    SENSOR_lat = 6,
-    SENSOR_lon = 7,
-    SENSOR_battery = 8,
-    SENSOR_temp = 9,
-    SENSOR_conductivity = 10,
-    SENSOR_salinity = 11,
-    SENSOR_oxygen = 12,
-    SENSOR_chlorophyll = 13,
-    SENSOR_backscatter = 14,
-    SENSOR_current = 15,
-    SENSOR_modem = 16,
-};
-
 /* ---- state 0: s1 ---------------------------------------- */
 
 static int state0_event0_condition(const double *s, const double *v)
 {
     (void)v;
-    return (s[SENSOR_missiontime] >= 2000.0);
+    return (s[GP_SENSOR_MISSIONTIME] >= 2000.0);
 }
 
 static int state0_event1_condition(const double *s, const double *v)
 {
     (void)v;
-    return ((s[SENSOR_missiontime] >= 500.0) && (s[SENSOR_missiontime] < 1500.0));
+    return ((s[GP_SENSOR_MISSIONTIME] >= 500.0) && (s[GP_SENSOR_MISSIONTIME] < 1500.0));
 }
 
 static const gp_event state0_events[2] = {
@@ -67,14 +47,14 @@ static const double state0_route_points[1][2] = {
     {3910.5, (-0x1.cb5ce48e8a71ep+12 /* -7349.8058 */)},
 };
 
-static const uint8_t state0_sensors[3] = {SENSOR_missiontime, SENSOR_depth, SENSOR_pitch};
+static const uint8_t state0_sensors[3] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH};
 
 /* ---- state 1: s2 ---------------------------------------- */
 
 static int state1_event0_condition(const double *s, const double *v)
 {
     (void)v;
-    return (s[SENSOR_missiontime] >= 1500.0);
+    return (s[GP_SENSOR_MISSIONTIME] >= 1500.0);
 }
 
 static const gp_event state1_events[1] = {
@@ -97,14 +77,14 @@ static const gp_profile state1_profiles[1] = {
     {GP_PROFILE_THERMOTRACKYO, 6, state1_profile0_args},
 };
 
-static const uint8_t state1_sensors[4] = {SENSOR_missiontime, SENSOR_depth, SENSOR_pitch, SENSOR_temp};
+static const uint8_t state1_sensors[4] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH, GP_SENSOR_TEMP};
 
 /* ---- state 2: s3 ---------------------------------------- */
 
 static int state2_event0_condition(const double *s, const double *v)
 {
     (void)v;
-    return (s[SENSOR_missiontime] >= 2500.0);
+    return (s[GP_SENSOR_MISSIONTIME] >= 2500.0);
 }
 
 static const gp_event state2_events[1] = {
@@ -129,7 +109,7 @@ static const double state2_route_points[1][2] = {
     {3910.5, (-0x1.cb5817c1bda51p+12 /* -7349.5058 */)},
 };
 
-static const uint8_t state2_sensors[3] = {SENSOR_missiontime, SENSOR_depth, SENSOR_pitch};
+static const uint8_t state2_sensors[3] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH};
 
 static const char *const sensor_names[GP_N_SENSORS] = {
     "missiontime",

@@ -1,0 +1,108 @@
+/**
+ * @file gp_contract.h
+ * @brief The facts the runtime shares with the rest of gliderplan, generated
+ *        from gliderplan.contract: do not edit; run
+ *        `python -m gliderplan.contract > runtime/include/gp_contract.h`.
+ */
+#ifndef GP_CONTRACT_H
+#define GP_CONTRACT_H
+
+/* ---- limits of the mission tables and the plan file */
+
+#define GP_MAX_STATES 64  /**< states of a mission (the plan file's `states` line: 1..64) */
+#define GP_MAX_VARIABLES 64  /**< variables of a mission */
+#define GP_MAX_STACK_DEPTH 32  /**< the state stack: the largest `stack N` (or --max-stack) */
+#define GP_MAX_EVENTS_PER_STATE 255  /**< events of one state (a uint8_t count) */
+#define GP_MAX_PROFILE_ALTERNATIVES 8  /**< `flightprofile a | b | ...` alternatives of one state */
+#define GP_MAX_PROFILE_ARGS 6  /**< arguments of one flight profile */
+#define GP_MAX_ROUTE_POINTS 64  /**< (lat, lon) points of one state's route */
+#define GP_MAX_SWEEP_WAYPOINTS 256  /**< waypoints a `sweep` route expands to */
+/** characters of a mission, state or computer name in a plan file */
+#define GP_MAX_NAME_LENGTH 32
+#define GP_MAX_PLAN_SENSORS 16  /**< `sensor` lines of one state block of a plan file */
+#define GP_MAX_PLAN_BYTES 65536  /**< size of a plan file [bytes] */
+#define GP_MAX_PLAN_LINE_BYTES 255  /**< length of a plan-file line, its LF included [bytes] */
+
+/* ---- the library routines (docs/pilot.md) */
+
+#define GP_SURFACE_PITCH_RAD 0.454  /**< [rad] pitch of the climb to the surface */
+#define GP_TRACK_WINDOW 64  /**< (depth, temp) readings the thermocline tracker keeps per leg */
+#define GP_WAYPOINT_RADIUS_M 50.0  /**< [m] a waypoint closer than this is reached */
+/** [m] of the sphere positions and headings are computed on */
+#define GP_EARTH_RADIUS_M 6371000.0
+
+/* ---- the serial link (docs/protocol.md) */
+
+#define GP_PROTOCOL_VERSION 1
+#define GP_MAX_PAYLOAD 240  /**< [bytes] of one frame's payload */
+#define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
+#define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
+/** [bytes] of a plan sent over the link (PLAN's `total` is a u16) */
+#define GP_MAX_LINK_PLAN 65535
+#define GP_COMMAND_SIZE 36  /**< [bytes] of a COMMAND payload */
+#define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
+
+/* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
+
+#define GP_N_SENSORS 17  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
+/** Sensors without a device of their own: always powered while logged, in the hotel load. */
+#define GP_FLIGHT_SENSORS_MASK 0x1FFu
+
+enum {
+    GP_SENSOR_MISSIONTIME = 0,  /**< time since the mission started [s] */
+    GP_SENSOR_DEPTH = 1,  /**< depth below the surface, positive down [m] */
+    GP_SENSOR_PITCH = 2,  /**< vehicle pitch, positive nose up [rad] */
+    GP_SENSOR_ROLL = 3,  /**< vehicle roll [rad] */
+    GP_SENSOR_HEADING = 4,  /**< magnetic heading [rad] */
+    GP_SENSOR_ALTITUDE = 5,  /**< height above the sea floor [m] */
+    GP_SENSOR_LAT = 6,  /**< latitude, Slocum degrees and minutes [DDMM.MMMM] */
+    GP_SENSOR_LON = 7,  /**< longitude, Slocum degrees and minutes [DDMM.MMMM] */
+    GP_SENSOR_BATTERY = 8,  /**< battery voltage [V] */
+    GP_SENSOR_TEMP = 9,  /**< water temperature (CTD) [degC] */
+    GP_SENSOR_CONDUCTIVITY = 10,  /**< water conductivity (CTD) [S/m] */
+    GP_SENSOR_SALINITY = 11,  /**< practical salinity (CTD) [PSU] */
+    GP_SENSOR_OXYGEN = 12,  /**< dissolved oxygen (optode) [umol/kg] */
+    GP_SENSOR_CHLOROPHYLL = 13,  /**< chlorophyll fluorescence (optics) [ug/l] */
+    GP_SENSOR_BACKSCATTER = 14,  /**< optical backscatter (optics) [1/m] */
+    GP_SENSOR_CURRENT = 15,  /**< water current speed (ADCP) [m/s] */
+    GP_SENSOR_MODEM = 16,  /**< bytes received by the acoustic modem [B] */
+};
+
+/* ---- COMMAND's flags */
+
+enum {
+    GP_FLAG_SURFACE = 1u,  /**< go to (or stay at) the surface */
+    GP_FLAG_DONE = 2u,  /**< the mission exited */
+    GP_FLAG_CLIMBING = 4u,  /**< else diving */
+    GP_FLAG_HEADING = 8u,  /**< `heading_rad` is valid */
+};
+
+/** The type byte of a frame's header. */
+typedef enum {
+    GP_MSG_HELLO = 0x01, GP_MSG_SENSORS = 0x02, GP_MSG_COMMAND = 0x03, GP_MSG_RELEASE = 0x04,
+    GP_MSG_PLAN = 0x05, GP_MSG_PLAN_STATUS = 0x06, GP_MSG_NAK = 0x7F,
+} gp_msg_type;
+
+/** COMMAND's `transition` field, the event log's `kind` and an event's action. */
+typedef enum {
+    GP_TR_NONE = 0, GP_TR_START = 1, GP_TR_GOTO = 2, GP_TR_CALL = 3, GP_TR_RETURN = 4,
+    GP_TR_EXIT = 5,
+} gp_transition_kind;
+
+/** RELEASE's `reason`: why the runtime gave control back to the glider. */
+typedef enum {
+    GP_RELEASE_LINK_SILENT = 1,  /**< no valid frame for the link timeout (the watchdog) */
+    /** a mission fault, I/O that failed, a crash or a stop signal */
+    GP_RELEASE_INTERNAL_ERROR = 2,
+    GP_RELEASE_MISSION_EXITED = 3,
+} gp_release_reason;
+
+/** Exit status of a mission binary (runtime/README.md). */
+typedef enum {
+    GP_EXIT_DONE = 0,  /**< the mission exited */
+    GP_EXIT_BAD_INPUT = 1,  /**< bad arguments, plan or checkpoint */
+    GP_EXIT_LINK_LOST = 3,  /**< the watchdog: the link went silent */
+    GP_EXIT_INTERNAL = 4,  /**< a mission fault, I/O that failed, a crash or a stop signal */
+} gp_exit_status;
+
+#endif /* GP_CONTRACT_H */
