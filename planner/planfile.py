@@ -215,7 +215,9 @@ def read_plan_bytes(data: bytes) -> PlanFile:
     clock_mhz = cur.number(clock, "clock")
     cur.check(clock_mhz > 0, "the clock must be > 0 MHz")
     budget = cur.number(cur.next("budget_j", 1)[0], "budget_j")
+    cur.check(budget >= 0, "budget_j must be >= 0")
     predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j")
+    cur.check(predicted >= 0, "predicted_j must be >= 0")
     n_states = cur.count(cur.next("states", 1)[0], "states", 1, MAX_STATES)
     blocks = [_state_block(cur) for _ in range(n_states)]
     (checksum,) = cur.next("crc32", 1)

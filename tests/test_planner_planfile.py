@@ -101,6 +101,8 @@ def _mutate(data: bytes, old: bytes, new: bytes, fix_crc: bool = True) -> bytes:
     (b"profile 0 1 ", b"profile 0 0.5 ", 10, "sum to"),
     (b"profile 0 1 ", b"profile 1 1 ", 10, "out of order"),
     (b"computer ts7800 300", b"computer ts7800 inf", 4, "NUMBER"),
+    (b"budget_j ", b"budget_j -", 5, "budget_j must be >= 0"),
+    (b"predicted_j ", b"predicted_j -", 6, "predicted_j must be >= 0"),
     (b"\nend\n", b"\nfin\n", 11, "expected 'end'"),
     (b"sensor temp 300 300", b"sensor temp 300", 9, "3 fields"),
 ])

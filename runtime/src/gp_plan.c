@@ -290,11 +290,20 @@ static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
     if (!(plan->clock_mhz > 0)) {
         return fail(r, "clock must be > 0 MHz");
     }
-    if (expect(r, "budget_j", 2) < 0 || number_field(r, 1, "budget_j", &plan->budget_j) < 0
-        || expect(r, "predicted_j", 2) < 0
-        || number_field(r, 1, "predicted_j", &plan->predicted_j) < 0
-        || expect(r, "states", 2) < 0
-        || count_field(r, 1, "states", 1, GP_MAX_STATES, &count) < 0) {
+    if (expect(r, "budget_j", 2) < 0 || number_field(r, 1, "budget_j", &plan->budget_j) < 0) {
+        return -1;
+    }
+    if (!(plan->budget_j >= 0)) {
+        return fail(r, "budget_j must be >= 0");
+    }
+    if (expect(r, "predicted_j", 2) < 0
+        || number_field(r, 1, "predicted_j", &plan->predicted_j) < 0) {
+        return -1;
+    }
+    if (!(plan->predicted_j >= 0)) {
+        return fail(r, "predicted_j must be >= 0");
+    }
+    if (expect(r, "states", 2) < 0 || count_field(r, 1, "states", 1, GP_MAX_STATES, &count) < 0) {
         return -1;
     }
     if (count != mission->n_states) {

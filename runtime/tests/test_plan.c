@@ -93,6 +93,8 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"budget_j 180000", "budget_j +5", "line 5: budget_j '+5' is not a NUMBER"},
         {"budget_j 180000", "budget_j 1e999", "line 5: budget_j 1e999 is not finite"},
         {"budget_j 180000", "budget_j 0x10", "line 5: budget_j '0x10' is not a NUMBER"},
+        {"budget_j 180000", "budget_j -180000", "line 5: budget_j must be >= 0"},
+        {"predicted_j 9876.5", "predicted_j -1", "line 6: predicted_j must be >= 0"},
         {"predicted_j 9876.5\n", "", "line 6: expected a 'predicted_j' line, found 'states'"},
         {"states 3", "states 4", "line 7: plan has 4 states, mission 'sampleMission' has 3"},
         {"states 3", "states 65", "line 7: states 65 outside 1..64"},
