@@ -24,8 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-from gliderplan.cli.common import check_file
-from gliderplan.language import semantics
+from gliderplan.language import check_file, semantics
 from gliderplan.language.registry import SENSORS
 from gliderplan.power_models import load_vehicle
 from gliderplan.sim import compiled, ocean

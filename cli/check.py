@@ -6,9 +6,11 @@ import argparse
 import json
 import sys
 
-from gliderplan.cli.common import add_max_stack_argument, check_file
-from gliderplan.cli.errors import CliError
+from gliderplan.cli.common import add_max_stack_argument
+from gliderplan.cli.main import report
 from gliderplan.contract import ExitCode
+from gliderplan.contract.errors import GliderplanError
+from gliderplan.language import check_file
 
 ORDER = 10
 
@@ -22,23 +24,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    failed = False
+    """Every file is checked; exit 1 if any fails (alone, a file exits with its error's
+    code: 2 for one that does not exist)."""
+    code = ExitCode.OK
     checked = []
     for path in args.missions:
         try:
             result = check_file(path, args.max_stack)
-        except CliError as err:
-            print(f"gliderplan check: error: {err}", file=sys.stderr)
-            failed = True
-            if err.exit_code == ExitCode.USAGE and len(args.missions) == 1:
-                return ExitCode.USAGE
+        except GliderplanError as err:  # an unreadable file: say so, check the others
+            alone = report("check", err)
+            code = max(code, alone if len(args.missions) == 1 else ExitCode.BAD_INPUT)
             continue
         if result.diagnostics:
             print(result.render(), file=sys.stderr)
         has_warnings = any(not d.is_error for d in result.diagnostics)
-        failed |= not result.ok or (args.strict and has_warnings)
+        if not result.ok or (args.strict and has_warnings):
+            code = max(code, ExitCode.BAD_INPUT)
         if args.json and result.mission is not None:  # the JSON and its hash cost seconds
             checked.append(result.mission.to_json())    # on a large mission: only on request
     if checked:
         print(json.dumps(checked[0] if len(checked) == 1 else checked, indent=2))
-    return ExitCode.BAD_INPUT if failed else ExitCode.OK
+    return code

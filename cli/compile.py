@@ -6,8 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from gliderplan.cli.common import add_mission_argument, load_mission, write_atomically
-from gliderplan.cli.errors import CliError, UsageError
+from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.contract.errors import UsageError
 
 ORDER = 40
 
@@ -26,34 +26,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from gliderplan.language.codegen_c import CodegenError
-    from gliderplan.runtime.build import BuildError, PlanRejected, check_plan, compile_mission
+    from gliderplan.runtime.build import compile_mission
 
     mission = load_mission(args)
     out = Path(args.output)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
-    plan = _read_plan(args.plan) if args.plan else None
-    try:
-        if plan is not None:
-            check_plan(mission, args.plan)
-        binary = compile_mission(mission, out, args.target)
-    except CodegenError as err:
-        raise CliError(f"{args.mission}: {err}") from None
-    except PlanRejected as err:
-        raise CliError(f"plan rejected: {err}") from None
-    except BuildError as err:
-        raise CliError(str(err)) from None
-    if plan is not None:
-        write_atomically(out / Path(args.plan).name, plan)
+    binary = compile_mission(mission, out, args.target, args.plan)
     print(f"{binary} ({args.target})", file=sys.stderr)
     return 0
-
-
-def _read_plan(path: str) -> bytes:
-    try:
-        return Path(path).read_bytes()
-    except FileNotFoundError:
-        raise UsageError(f"--plan {path}: no such file") from None
-    except OSError as err:
-        raise CliError(f"--plan {path}: {err.strerror}") from None

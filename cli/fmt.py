@@ -10,11 +10,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gliderplan.cli.common import write_atomically
-from gliderplan.cli.errors import UsageError
+from gliderplan.cli.main import report
 from gliderplan.contract import ExitCode
-from gliderplan.language.diagnostics import MissionSyntaxError, render_all
-from gliderplan.language.source import SourceError, read_mission
+from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import write_atomically
 
 ORDER = 15
 
@@ -29,36 +28,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    # Imported here: every command's module is loaded at start-up, and `check` must start fast.
-    from gliderplan.language.formatter import FormatError, format_source
+    """Every file is formatted; exit 1 if any fails (alone, a file exits with its error's
+    code: 2 for one that does not exist)."""
+    # Imported here: every command's module is loaded for --help, and `check` must start fast.
+    from gliderplan.language.formatter import format_file
 
-    failed = False
+    code = ExitCode.OK
     for path in args.missions:
         try:
-            source = read_mission(path)
-        except SourceError as err:
-            if err.usage and len(args.missions) == 1:
-                raise UsageError(str(err)) from None
-            print(f"gliderplan fmt: error: {err}", file=sys.stderr)
-            failed = True
-            continue
-        try:
-            formatted = format_source(source)
-        except MissionSyntaxError as err:
-            print(render_all(err.diagnostics, path, source), file=sys.stderr)
-            failed = True
-            continue
-        except FormatError as err:
-            print(f"gliderplan fmt: error: {path}: {err}", file=sys.stderr)
-            failed = True
+            source, formatted = format_file(path)
+        except GliderplanError as err:  # unreadable, or does not parse: the others go on
+            alone = report("fmt", err)
+            code = max(code, alone if len(args.missions) == 1 else ExitCode.BAD_INPUT)
             continue
         if args.check:
             if formatted != source:
                 print(f"{path}: would be reformatted")
-                failed = True
+                code = max(code, ExitCode.BAD_INPUT)
         elif args.write:
             if formatted != source:
                 write_atomically(path, formatted)
         else:
             sys.stdout.write(formatted)
-    return ExitCode.BAD_INPUT if failed else ExitCode.OK
+    return code

@@ -2,9 +2,11 @@
 
 Each subcommand is a module in this package named after it, with ``ORDER`` (its
 place in --help), ``add_arguments(parser)`` and ``run(args) -> int``; the first line
-of its docstring is its help. Only the module of the subcommand that runs is imported
-(all of them for --help or a mistyped command), and subcommand modules import heavy
-libraries (cvxpy, pandas) inside ``run`` only, so that ``gliderplan check`` starts fast.
+of its docstring is its help. A subcommand parses, calls the library and prints; the
+errors the library raises (`contract.errors.GliderplanError`) become messages here only
+(`report`). Only the module of the subcommand that runs is imported (all of them for
+--help or a mistyped command), and subcommand modules import heavy libraries (cvxpy,
+pandas) inside ``run`` only, so that ``gliderplan check`` starts fast.
 """
 
 from __future__ import annotations
@@ -18,8 +20,8 @@ from collections.abc import Sequence
 from types import ModuleType
 
 import gliderplan.cli
-from gliderplan.cli.errors import CliError
 from gliderplan.contract import ExitCode
+from gliderplan.contract.errors import GliderplanError
 
 
 def subcommands(only: str | None = None) -> dict[str, ModuleType]:
@@ -71,9 +73,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser(command).parse_args(argv)
     try:
         return int(args._run(args))
-    except CliError as err:
-        print(f"gliderplan {args.command}: error: {err}", file=sys.stderr)
-        return err.exit_code
+    except GliderplanError as err:
+        return report(args.command, err)
     except KeyboardInterrupt:
         print(f"gliderplan {args.command}: interrupted", file=sys.stderr)
         return ExitCode.INTERRUPTED
@@ -84,6 +85,15 @@ def main(argv: Sequence[str] | None = None) -> int:
               "  (this is a bug in gliderplan; rerun with GLIDERPLAN_DEBUG=1 for details)",
               file=sys.stderr)
         return ExitCode.INTERNAL
+
+
+def report(command: str, err: GliderplanError) -> ExitCode:
+    """The one place an error becomes a message: its details (a mission's diagnostics),
+    then one line naming the command; the exit code the error carries."""
+    if err.details:
+        print(err.details, file=sys.stderr)
+    print(f"gliderplan {command}: error: {err}", file=sys.stderr)
+    return err.exit_code
 
 
 def entry() -> None:

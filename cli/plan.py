@@ -13,10 +13,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
-from gliderplan.cli.common import add_mission_argument, load_mission, write_atomically
-from gliderplan.cli.errors import CliError, UsageError
+from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.contract.errors import UsageError
 
 ORDER = 30
 
@@ -38,96 +37,51 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.sweep is not None and not 2 <= args.sweep <= 10_000:
-        raise UsageError("--sweep N: N must be between 2 and 10000")
     if args.sweep is not None and not args.output:
         raise UsageError("--sweep needs -o DIR for its CSV files and plot")
     mission = load_mission(args)
-    from gliderplan.language.semantics import MissionFault
-    from gliderplan.planner.hardware import HardwareError, load_hardware
-    from gliderplan.planner.inputs import PlanInputError
-    from gliderplan.planner.plan import InfeasibleBudget, PlanningError
-    from gliderplan.planner.planfile import PlanFileError
-    from gliderplan.power_models.errors import ModelFileError
+    if args.sweep is not None:
+        return _sweep(mission, args)
+    from gliderplan.planner import make_plan
+    from gliderplan.planner.plan import InfeasibleBudget
+    from gliderplan.planner.report import infeasible_json, report_json, report_text
 
     try:
-        hardware = load_hardware(mission, battery=args.battery, computer=args.computer)
-        if args.sweep is not None:
-            return _sweep(mission, hardware, args)
-        return _plan(mission, hardware, args)
-    except HardwareError as err:
-        raise UsageError(str(err)) from None
-    except ModelFileError as err:
-        raise UsageError(f"{err}") from None
-    except InfeasibleBudget as err:
+        plan = make_plan(mission, battery=args.battery, computer=args.computer,
+                         output=args.output)
+    except InfeasibleBudget as short:  # the report says so too; the error is for main
         if args.json:
-            from gliderplan.planner.report import infeasible_json
-
-            print(json.dumps(infeasible_json(str(err), err.budget_j, err.minimum_j,
-                                             err.consumers), indent=2))
-        raise CliError(f"{args.mission}: {err}") from None
-    except (PlanningError, PlanInputError) as err:
-        raise CliError(f"{args.mission}: {err}") from None
-    except MissionFault as err:
-        raise CliError(f"{args.mission}: the mission's timeline fails at {err}") from None
-    except PlanFileError as err:
-        raise CliError(f"{args.mission}: no plan file can carry this plan: {err.message} "
-                       "(docs/plan-format.md)") from None
-
-
-def _plan(mission, hardware, args: argparse.Namespace) -> int:
-    from gliderplan.planner.plan import plan_mission
-    from gliderplan.planner.planfile import write_plan_bytes
-    from gliderplan.planner.report import report_json, report_text
-
-    plan = plan_mission(mission, hardware)
-    report = report_json(plan)
-    if args.output:
-        report_path = Path(args.output + ".json")
-        write_atomically(args.output, write_plan_bytes(plan))
-        write_atomically(report_path, json.dumps(report, indent=2) + "\n")
-    print(json.dumps(report, indent=2) if args.json else report_text(plan), end="")
+            print(json.dumps(infeasible_json(short), indent=2))
+        raise
     if args.json:
-        print()
-    if args.output and not args.json:
-        print(f"wrote {args.output} and {args.output}.json")
+        print(json.dumps(report_json(plan), indent=2))
+    else:
+        print(report_text(plan), end="")
+        if args.output:
+            print(f"wrote {args.output} and {args.output}.json")
     return 0
 
 
-def _sweep(mission, hardware, args: argparse.Namespace) -> int:
-    from gliderplan.planner.plan import prepare
-    from gliderplan.planner.sweep import batteries, computers, pareto, plot_pareto
-
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {out}: not a directory (--sweep writes several files there)")
+def _sweep(mission, args: argparse.Namespace) -> int:  # noqa: ANN001
+    from gliderplan.planner import sweep_mission
 
     live = sys.stderr.isatty()  # a counter rewritten in place only reads on a terminal
 
-    def progress(label: str):
-        def report(done: int, total: int) -> None:
-            if live:
-                print(f"\r{label}: {done}/{total}", end="\n" if done == total else "",
-                      file=sys.stderr, flush=True)
-            elif done == total:
-                print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
-        return report
+    def progress(label: str, done: int, total: int) -> None:
+        if live:
+            print(f"\r{label}: {done}/{total}", end="\n" if done == total else "",
+                  file=sys.stderr, flush=True)
+        elif done == total:
+            print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
 
-    _, model = prepare(mission, hardware)
-    frame = pareto(model, args.sweep, progress("pareto"))
-    boards = computers(mission, budget_j=hardware.budget_j, progress=progress("computers"))
-    packs = batteries(mission, computer=args.computer, progress=progress("batteries"))
-    write_atomically(out / "pareto.csv", frame.to_csv(index=False))
-    write_atomically(out / "computers.csv", boards.to_csv(index=False))
-    write_atomically(out / "batteries.csv", packs.to_csv(index=False))
-    write_atomically(out / "pareto.png",
-                     plot_pareto(frame, f"{mission.name}: quality against budget"))
+    sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
+                          computer=args.computer, progress=progress)
     if args.json:
-        print(json.dumps({"pareto": frame.to_dict("records"),
-                          "computers": boards.to_dict("records"),
-                          "batteries": packs.to_dict("records")}, indent=2))
+        print(json.dumps({"pareto": sweep.pareto.to_dict("records"),
+                          "computers": sweep.computers.to_dict("records"),
+                          "batteries": sweep.batteries.to_dict("records")}, indent=2))
     else:
-        table = frame[["budget_wh", "quality", "shadow_price"]]
+        table = sweep.pareto[["budget_wh", "quality", "shadow_price"]]
         print(table.round({"budget_wh": 1, "quality": 4, "shadow_price": 5}).to_string(index=False))
-        print(f"wrote pareto.csv, computers.csv, batteries.csv and pareto.png to {out}")
+        print(f"wrote {', '.join(p.name for p in sweep.files)} to {args.output}")
     return 0

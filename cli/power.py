@@ -14,7 +14,7 @@ import argparse
 import json
 import math
 
-from gliderplan.cli.errors import CliError, UsageError
+from gliderplan.contract.errors import UsageError
 
 KINDS = ("board", "sensor", "vehicle", "battery")
 
@@ -97,13 +97,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from gliderplan.power_models.errors import ModelFileError
-
     handlers = {"list": _list, "show": _show, "energy": _energy, "speed": _speed}
-    try:
-        text, data = handlers[args.power_command](args)
-    except ModelFileError as err:
-        raise CliError(str(err)) from None
+    text, data = handlers[args.power_command](args)
     print(json.dumps(data, indent=2) if args.json else text)
     return 0
 

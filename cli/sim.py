@@ -12,11 +12,10 @@ import math
 import os
 import re
 import sys
-from pathlib import Path
 
-from gliderplan.cli.common import add_mission_argument, load_mission, write_atomically
-from gliderplan.cli.errors import CliError, UsageError
+from gliderplan.cli.common import add_mission_argument, load_mission
 from gliderplan.contract import TICK_S, ExitCode
+from gliderplan.contract.errors import UsageError
 
 ORDER = 60
 _DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(s|min|h|d)\s*$")
@@ -81,84 +80,33 @@ def _current(text: str):
 
 
 def run(args: argparse.Namespace) -> int:
-    from gliderplan.power_models import ModelFileError, load_vehicle
-    from gliderplan.sim import energy as accounting
-    from gliderplan.sim import outputs, plots
-    from gliderplan.sim.emulator import EmulatorError
-    from gliderplan.sim.flight import fly
-    from gliderplan.sim.loop import RunConfig
-    from gliderplan.sim.ocean import OceanFileError, load_ocean
-    from gliderplan.sim.prediction import PlanReportError, plan_predictions
-    from gliderplan.sim.science import NOISE_PRESETS
+    from gliderplan.sim.run import DEFAULT_DURATION_S, run_mission
 
     mission = load_mission(args)
-    if not (math.isfinite(args.tick) and 0.1 <= args.tick <= 60.0):
-        raise UsageError(f"--tick {args.tick:g}: must lie between 0.1 and 60 s")
-    duration_s = parse_duration_s(args.duration) if args.duration else (
-        mission.horizon_s or 30 * 86400.0)
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {out}: not a directory")
-    config = RunConfig(tick_s=args.tick, duration_s=duration_s, seed=args.seed,
-                       noise=NOISE_PRESETS[args.noise], current=_current(args.current))
+    duration_s = parse_duration_s(args.duration) if args.duration else None
+    ticks = (duration_s or mission.horizon_s or DEFAULT_DURATION_S) / max(args.tick, 1e-9)
+    progress = _Progress() if ticks > LONG_RUN_TICKS else None
     try:
-        vehicle = load_vehicle(mission.vehicle)
-    except ModelFileError as err:
-        raise CliError(f"{args.mission}: vehicle: {err}") from None
-    try:
-        ocean = load_ocean(args.ocean, Path(args.ocean_logs) if args.ocean_logs else None)
-    except OceanFileError as err:
-        raise CliError(f"--ocean: {err}") from None
-    plan = predictions = None
-    predicted_by = "none"
-    if args.plan:
-        if not Path(args.plan).is_file():
-            raise UsageError(f"--plan {args.plan}: no such file")
-        from gliderplan.sim.planfile import PlanFileError, read_plan
-
-        try:
-            plan = read_plan(args.plan, mission)
-        except PlanFileError as err:
-            raise CliError(f"plan rejected: {err}") from None
-        try:
-            predictions, predicted_by = plan_predictions(args.plan, mission)
-        except PlanReportError as err:
-            raise CliError(str(err)) from None
-
-    progress = _Progress() if duration_s / args.tick > LONG_RUN_TICKS else None
-    try:
-        record = fly(mission, ocean, config, vehicle, plan, args.plan, args.runtime,
-                     robust_tracker=args.tracker == "robust", progress=progress)
-    except EmulatorError as err:
-        raise CliError(f"--runtime c: {err}") from None
+        result = run_mission(
+            mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
+            ocean_logs=args.ocean_logs, noise=args.noise, tracker=args.tracker,
+            current=_current(args.current), seed=args.seed, tick_s=args.tick,
+            duration_s=duration_s, progress=progress)
     finally:
         if progress is not None:
             progress.finish()
-    if not len(record.columns["time_s"]):
-        raise KeyboardInterrupt  # nothing flown, nothing to write
-    used = accounting.account(record, mission, vehicle, plan)
-    check = accounting.check_plan(used, plan, predictions)
-    meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": args.runtime,
-            "ocean": args.ocean, "noise": args.noise, "tracker": args.tracker,
-            "seed": args.seed, "tick_s": args.tick, "plan": args.plan,
-            "prediction": predicted_by}
-    write_atomically(out / "trace.csv", outputs.trace_csv(record.trace))
-    table = outputs.timeseries_table(record, used, mission.battery.energy_j)
-    write_atomically(out / "timeseries.parquet", outputs.parquet_bytes(table))
-    write_atomically(out / "summary.json", outputs.summary(record, used, check, predictions, meta))
-    write_atomically(out / "depth.png", plots.depth_png(record))
-    write_atomically(out / "energy.png", plots.energy_png(
-        record, used, predictions, plan.budget_j if plan else None))
+    record, check = result.record, result.check
     print(f"{mission.name}: {record.ended} after {_time_text(record.columns['time_s'][-1])}, "
-          f"{len(record.trace)} transitions, {used.total_j / 1e3:.1f} kJ; "
+          f"{len(record.trace)} transitions, {result.energy.total_j / 1e3:.1f} kJ; "
           f"plan check: {check.verdict}", file=sys.stderr)
     if check.causes:
         print("  over the plan's prediction:" if check.verdict == "pass" else "  cause:",
               file=sys.stderr)
     for cause in check.causes:
         print(f"    {cause}", file=sys.stderr)
-    if record.ended == "interrupted":
-        print(f"  interrupted: the outputs in {out} cover the part flown", file=sys.stderr)
+    if result.interrupted:
+        print(f"  interrupted: the outputs in {args.output} cover the part flown",
+              file=sys.stderr)
         return ExitCode.INTERRUPTED
     return ExitCode.OVER_BUDGET if check.verdict == "violation" else ExitCode.OK
 

@@ -1,7 +1,9 @@
 """gliderplan.language: the mission language's grammar, checker, formatter and code generator.
 
 `check_source` is the front end in one call: text in, checked mission and
-diagnostics out. It never raises on bad input.
+diagnostics out. It never raises on bad input. `check_file` does the same for a file
+(`gliderplan check`); `CheckResult.checked` turns a result with errors into a
+MissionError for the commands that go on with the mission.
 """
 
 from __future__ import annotations
@@ -11,8 +13,16 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, render_all
+from gliderplan.contract import MAX_STACK_DEPTH
+from gliderplan.contract.errors import UsageError
+from gliderplan.language.diagnostics import (
+    Diagnostic,
+    MissionError,
+    MissionSyntaxError,
+    render_all,
+)
 from gliderplan.language.ir import CheckedMission
+from gliderplan.language.source import read_mission
 
 
 @dataclass(frozen=True)
@@ -28,6 +38,22 @@ class CheckResult:
 
     def render(self) -> str:
         return render_all(self.diagnostics, self.filename, self.source)
+
+    def checked(self) -> CheckedMission:
+        """The checked mission; MissionError (with the diagnostics) if it has errors."""
+        if self.mission is None:
+            raise MissionError(f"{self.filename}: mission has errors", details=self.render())
+        return self.mission
+
+
+def check_file(path: str, stack_depth: int | None = None) -> CheckResult:
+    """Read and check a mission file (`gliderplan check`). Raises SourceError for a file
+    that cannot be read as mission text, UsageError for a stack depth the runtime cannot
+    hold; a bad mission is not an error here but a result with diagnostics."""
+    if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
+        raise UsageError(f"--max-stack must be between 1 and {MAX_STACK_DEPTH}, the "
+                         "runtime's limit")
+    return check_source(read_mission(path), path, stack_depth)
 
 
 def check_source(source: str, filename: str = "<mission>",

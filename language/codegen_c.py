@@ -22,6 +22,7 @@ from fractions import Fraction
 
 from gliderplan import contract
 from gliderplan.contract.c_header import sensor_index
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 
@@ -37,7 +38,7 @@ _HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep"})
 _ALWAYS_READ = ("missiontime", "depth", "pitch")
 
 
-class CodegenError(Exception):
+class CodegenError(GliderplanError):
     """The mission uses something the C runtime cannot hold (the message says what and where)."""
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language.ast import NO_SPAN, Span
 
 
@@ -66,6 +67,10 @@ def did_you_mean(word: str, candidates: Iterable[str]) -> str | None:
     """A hint naming the closest candidate, or None when nothing is close."""
     match = closest(word, candidates)
     return f"did you mean '{match}'?" if match else None
+
+
+class MissionError(GliderplanError):
+    """A mission with errors; `details` holds its rendered diagnostics."""
 
 
 class MissionSyntaxError(Exception):

@@ -17,9 +17,13 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ast
+from gliderplan.language.diagnostics import MissionError, MissionSyntaxError, render_all
 from gliderplan.language.parser import parse
+from gliderplan.language.source import read_mission
 
 INDENT = "  "
 WIDTH = 88  # longer statements are broken after a ',', a '|' or before 'set' and the action
@@ -32,7 +36,7 @@ _UNARY_MINUS, _ATOM = 7, 8
 _COMMENT_OR_STRING = re.compile(r"\"[^\"\n]*\"|(?P<comment>(#|//)[^\n]*)")
 
 
-class FormatError(Exception):
+class FormatError(GliderplanError):
     """The formatter could not keep the mission's meaning or comments: nothing is written."""
 
 
@@ -54,6 +58,20 @@ class _Statement:
     blank_before: bool = False  # canonical blank line (states, after the header)
     leading: list[_Comment] = field(default_factory=list)
     trailing: _Comment | None = None
+
+
+def format_file(path: str | Path) -> tuple[str, str]:
+    """(text, canonical text) of a mission file. Raises SourceError when it cannot be read,
+    MissionError (with the diagnostics) when it does not parse, FormatError when the
+    formatter could not keep its meaning or comments."""
+    text = read_mission(path)
+    try:
+        return text, format_source(text)
+    except MissionSyntaxError as err:
+        raise MissionError(f"{path}: does not parse, left as it is",
+                           details=render_all(err.diagnostics, str(path), text)) from None
+    except FormatError as err:
+        raise FormatError(f"{path}: {err}") from None
 
 
 def format_source(text: str) -> str:

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 
 
@@ -38,7 +39,7 @@ class Machine:
         return self.state is None
 
 
-class MissionFault(Exception):
+class MissionFault(GliderplanError):
     """The mission did something the runtime refuses (stack overflow or underflow)."""
 
 

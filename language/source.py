@@ -4,15 +4,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from gliderplan.contract.errors import GliderplanError
+
 MAX_MISSION_BYTES = 16 * 1024 * 1024  # far beyond any real mission; guards the parser
 
 
-class SourceError(Exception):
-    """The file cannot be read as mission text. `usage` is True when the path itself is wrong."""
-
-    def __init__(self, message: str, usage: bool):
-        super().__init__(message)
-        self.usage = usage
+class SourceError(GliderplanError):
+    """The file cannot be read as mission text; `usage` when the path itself is wrong."""
 
 
 def read_mission(path: str | Path) -> str:
@@ -26,7 +24,7 @@ def read_mission(path: str | Path) -> str:
         size = path.stat().st_size
         if size > MAX_MISSION_BYTES:
             raise SourceError(f"{path}: {size} bytes is too large for a mission "
-                              f"(limit {MAX_MISSION_BYTES} bytes)", usage=False)
+                              f"(limit {MAX_MISSION_BYTES} bytes)")
         data = path.read_bytes()
     except OSError as err:
         raise SourceError(f"{path}: cannot read: {err.strerror}", usage=True) from None

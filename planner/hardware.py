@@ -7,7 +7,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, ExitCode
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
@@ -22,8 +23,11 @@ _ENERGY = re.compile(
     r"(?:\s*(?:@|at)\s*(?P<volts>[0-9]+(?:\.[0-9]+)?)\s*V)?\s*$")
 
 
-class HardwareError(ValueError):
-    """A hardware spec the planner cannot use; the message says which and why."""
+class HardwareError(GliderplanError, ValueError):
+    """A hardware option the planner cannot use (a malformed --battery); the message says
+    which and why."""
+
+    exit_code = ExitCode.USAGE
 
 
 @dataclass(frozen=True)

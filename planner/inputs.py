@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.hardware import Hardware
@@ -27,7 +28,7 @@ SENSOR_PERIOD_S = 300.0  # on/off period of a duty-cycled sensor (long against i
 PROFILE_CYCLE_S = 1800.0  # period over which alternative profiles alternate (a few yos)
 
 
-class PlanInputError(ValueError):
+class PlanInputError(GliderplanError, ValueError):
     """Annotations that contradict each other (e.g. duty >= 0.6 and duty <= 0.5)."""
 
 

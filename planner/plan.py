@@ -13,8 +13,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gliderplan.contract import VEHICLE_COMPONENTS, Component
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.language.semantics import MissionFault
 from gliderplan.planner.hardware import Hardware, load_hardware
 from gliderplan.planner.inputs import (
     PROFILE_CYCLE_S,
@@ -36,7 +38,7 @@ _SHARE_EDGE = 1e-5  # a profile share this small is solver noise (5 ms of a 500 
 _NO_PRICE = 1e-9  # quality per Wh below which the budget is not what limits the plan
 
 
-class PlanningError(Exception):
+class PlanningError(GliderplanError):
     """The mission cannot be planned as asked; the message says why in domain terms."""
 
 
@@ -124,8 +126,11 @@ def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
             occupancy_s: dict[str, float] | None = None) -> tuple[PlanInputs, PlanModel]:
     """The inputs and the built model (parameters set) for a mission."""
     hardware = hardware or load_hardware(mission)
-    occupancy = (mission_occupancy(mission) if occupancy_s is None
-                 else measured_occupancy(mission, occupancy_s))
+    try:
+        occupancy = (mission_occupancy(mission) if occupancy_s is None
+                     else measured_occupancy(mission, occupancy_s))
+    except MissionFault as fault:
+        raise PlanningError(f"the mission's timeline fails at {fault}") from None
     inputs = build_inputs(mission, hardware, occupancy)
     return inputs, model_for(inputs)
 

@@ -21,6 +21,7 @@ from gliderplan.contract import (
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
 )
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.plan import Plan
 
@@ -32,14 +33,23 @@ _HEX64 = re.compile(r"[0-9a-f]{64}\Z")
 _HEX8 = re.compile(r"[0-9a-f]{8}\Z")
 
 
-class PlanFileError(ValueError):
-    """A plan file that breaks the format; `line` is 1-based (0: the file as a whole)."""
+class PlanFileError(GliderplanError, ValueError):
+    """A plan file that breaks the format; `line` is 1-based (0: the file as a whole);
+    `usage`: there is no such file."""
 
-    def __init__(self, line: int, message: str, path: str = "") -> None:
+    def __init__(self, line: int, message: str, path: str = "", *, usage: bool = False) -> None:
         self.line, self.message, self.path = line, message, path
         where = f"{path}:" if path else ""
         where += f"{line}:" if line else ""
-        super().__init__(f"{where} {message}" if where else message)
+        super().__init__(f"{where} {message}" if where else message, usage=usage)
+
+
+class PlanRejected(GliderplanError):
+    """A plan that a command cannot fly or ship: the message, "plan rejected: ...", is the
+    reader's (the Python reader's or the C runtime's own) and names the file and line."""
+
+    def __init__(self, reason: str, *, usage: bool = False) -> None:
+        super().__init__(f"plan rejected: {reason}", usage=usage)
 
 
 def number(x: float) -> str:
@@ -129,7 +139,11 @@ def render(contents: PlanFile) -> bytes:
     body = "".join(line + "\n" for line in lines).encode("ascii")
     data = body + f"crc32 {zlib.crc32(body):08x}\n".encode("ascii")
     # The writer must never emit what the reader (and the runtime) would refuse.
-    read_plan_bytes(data)
+    try:
+        read_plan_bytes(data)
+    except PlanFileError as err:
+        raise PlanFileError(0, f"no plan file can carry this plan: {err.message} "
+                            "(docs/plan-format.md)") from None
     return data
 
 
@@ -280,13 +294,20 @@ def check_against_mission(contents: PlanFile, mission: CheckedMission) -> None:
                                 f"{name!r}")
 
 
+def read_plan_data(path: str | Path) -> bytes:
+    """The bytes of a plan file; PlanFileError (`usage` when missing) if it cannot be read."""
+    try:
+        return Path(path).read_bytes()
+    except FileNotFoundError:
+        raise PlanFileError(0, "no such file", str(path), usage=True) from None
+    except OSError as err:
+        raise PlanFileError(0, f"cannot read the plan: {err.strerror}", str(path)) from None
+
+
 def read_plan_file(path: str | Path, mission: CheckedMission | None = None) -> PlanFile:
     """Read a plan file strictly (and, given the mission's name, hash and states, check
     that it is for that mission). Errors are PlanFileError with `path:line:` first."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as err:
-        raise PlanFileError(0, f"cannot read the plan: {err.strerror}", str(path)) from None
+    data = read_plan_data(path)
     try:
         contents = read_plan_bytes(data)
         if mission is not None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from gliderplan.planner.plan import J_PER_WH, Plan, StatePlan
+from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, Plan, StatePlan
 
 REPORT_VERSION = 1
 
@@ -52,12 +52,12 @@ def report_json(plan: Plan) -> dict:
     }
 
 
-def infeasible_json(message: str, budget_j: float, minimum_j: float,
-                    consumers: list[tuple[str, float]]) -> dict:
-    return {"report_version": REPORT_VERSION, "status": "infeasible", "message": message,
-            "budget_j": budget_j, "minimum_energy_j": minimum_j,
-            "shortfall_j": minimum_j - budget_j,
-            "largest_consumers_j": dict(consumers)}
+def infeasible_json(short: InfeasibleBudget) -> dict:
+    """The report of a budget below what the mission needs."""
+    return {"report_version": REPORT_VERSION, "status": "infeasible", "message": str(short),
+            "budget_j": short.budget_j, "minimum_energy_j": short.minimum_j,
+            "shortfall_j": short.minimum_j - short.budget_j,
+            "largest_consumers_j": dict(short.consumers)}
 
 
 def _wh(joules: float) -> str:

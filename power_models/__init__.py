@@ -2,7 +2,8 @@
 and battery, each loaded from a data file that gives a source and a unit for every number.
 
 `load_board`, `load_sensor`, `load_vehicle` and `load_battery` are imported lazily so that
-`gliderplan.power_models.catalog` (used by the language checker) stays free of numpy.
+`gliderplan.power_models.catalog` (used by the language checker) stays free of numpy;
+so is `calibrate`, the pipeline of `gliderplan calibrate` (log_calibration.py).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ _LAZY = {
     "load_battery": "gliderplan.power_models.battery",
     "Battery": "gliderplan.power_models.battery",
     "ModelFileError": "gliderplan.power_models.errors",
+    "calibrate": "gliderplan.power_models.log_calibration",
+    "Calibration": "gliderplan.power_models.log_calibration",
 }
 
 __all__ = sorted(_LAZY)

@@ -92,7 +92,8 @@ def board_spec(spec: str) -> tuple[Path, float | None]:
         return resolve("board", spec), None
     match = _SPEC.match(spec)
     if match is None:
-        raise ModelFileError(spec, None, "expected NAME, NAME@CLOCK_MHZ or a path to a .toml file")
+        raise ModelFileError(spec, None, "expected NAME, NAME@CLOCK_MHZ or a path to a .toml file",
+                             usage=True)
     clock = float(match["clock"]) if match["clock"] else None
     return resolve("board", match["name"]), clock
 
@@ -112,7 +113,7 @@ def load_board(spec: str, clock_mhz: float | None = None) -> Board:
     try:
         return board.at_clock(wanted)
     except ValueError as err:
-        raise ModelFileError(str(path), "mode", str(err)) from None
+        raise ModelFileError(str(path), "mode", str(err), usage=True) from None
 
 
 def read_board_file(path: Path) -> Board:

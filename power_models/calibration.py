@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gliderplan.power_models import segments as seg
-from gliderplan.power_models.slocum_log import FlightLog
+from gliderplan.power_models.slocum_log import FlightLog, LogError
 from gliderplan.power_models.timeline import Timeline, energy_by_component_j
 from gliderplan.power_models.vehicle import Vehicle
 
@@ -226,7 +226,8 @@ def split_record(log: FlightLog) -> Split:
     the later part if both do."""
     events = seg.segment(log).pump_events
     if len(events) < 2:
-        raise ValueError("the record needs at least two inflections to split it for validation")
+        raise LogError("cannot validate: the record needs at least two inflections to split "
+                       "it for validation")
     middle = log.t_s[-1] / 2.0
     cut = min((e.start for e in events[1:]), key=lambda i: abs(log.t_s[i] - middle))
     early, late = log.slice(0, cut + 1), log.slice(cut, log.t_s.size)

@@ -53,5 +53,6 @@ def resolve(kind: str, spec: str) -> Path:
             None,
             f"unknown {kind} preset (presets: {', '.join(names)}; "
             f"or give a path to a .toml file){hint}",
+            usage=True,
         )
     return preset_path(kind, spec)

@@ -182,9 +182,9 @@ def read_model_file(path: Path, kind: str) -> Table:
         with open(path, "rb") as handle:
             data = tomllib.load(handle)
     except FileNotFoundError:
-        raise ModelFileError(shown, None, "no such file") from None
+        raise ModelFileError(shown, None, "no such file", usage=True) from None
     except OSError as err:
-        raise ModelFileError(shown, None, f"cannot read: {err.strerror}") from None
+        raise ModelFileError(shown, None, f"cannot read: {err.strerror}", usage=True) from None
     except tomllib.TOMLDecodeError as err:
         raise ModelFileError(shown, None, f"not valid TOML: {err}") from None
     top = Table(shown, "", data)

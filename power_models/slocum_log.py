@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gliderplan.contract.errors import GliderplanError
+
 # dbd variable -> field; the first is the time base every other series is synced onto.
 _SERIES = (
     ("m_depth", "depth_m"),
@@ -26,7 +28,7 @@ _SERIES = (
 REQUIRED_VARIABLES = tuple(name for name, _ in _SERIES) + ("m_battery",)
 
 
-class LogError(Exception):
+class LogError(GliderplanError):
     """Logs that cannot be read or lack a variable the calibration needs."""
 
 
@@ -84,7 +86,7 @@ def expand_log_paths(paths: list[str]) -> list[str]:
         elif path.is_file():
             files.append(str(path))
         else:
-            raise LogError(f"{item}: no such file or directory")
+            raise LogError(f"{item}: no such file or directory", usage=True)
     return files
 
 
@@ -101,7 +103,7 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
     files = expand_log_paths(paths)
     cache = cache_dir if cache_dir is not None else default_cache_dir(files)
     if cache is not None and not Path(cache).is_dir():
-        raise LogError(f"{cache}: cache directory not found")
+        raise LogError(f"{cache}: cache directory not found", usage=True)
     try:
         logs = dbdreader.MultiDBD(filenames=files, cacheDir=cache)
         synced = logs.get_sync(*(name for name, _ in _SERIES))

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import write_atomically
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.ir import CheckedMission
 
@@ -32,7 +34,7 @@ LINK_FLAGS = ("-lm",)
 CACHED_BUILDS = 64  # at most ~40 MB: a static board binary is 0.6-0.7 MB, a host one 70 kB
 
 
-class BuildError(Exception):
+class BuildError(GliderplanError):
     """A build that cannot run or failed; the message says what to do."""
 
 
@@ -174,13 +176,22 @@ def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
     return digest.hexdigest()
 
 
-def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = "host") -> Path:
-    """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>.
+def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = "host",
+                    plan_path: str | Path | None = None) -> Path:
+    """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>: the
+    pipeline of `gliderplan compile`. With `plan_path`, the plan is first checked by the
+    runtime's own reader (`runtime_accepts`) and then copied beside the binary.
 
     A build with the same inputs is copied from the cache instead of compiled again.
-    Raises CodegenError for a mission the runtime cannot hold, BuildError otherwise.
+    Raises CodegenError for a mission the runtime cannot hold, PlanRejected for a plan
+    it would refuse, BuildError otherwise.
     """
     board = find_target(target)
+    if plan_path is not None:
+        from gliderplan.planner.planfile import read_plan_data
+
+        plan = read_plan_data(plan_path)
+        runtime_accepts(mission, plan_path)
     source = generate_c(mission)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -196,6 +207,8 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = 
         _prune_cache(cache_dir(), CACHED_BUILDS)
     binary = out / mission.name
     _copy_atomically(cached, binary)
+    if plan_path is not None:
+        write_atomically(out / Path(plan_path).name, plan)
     return binary
 
 
@@ -229,12 +242,10 @@ def _copy_atomically(source: Path, destination: Path) -> None:
 # ---- checking a plan with the runtime's own reader ----------------------------------
 
 
-class PlanRejected(Exception):
-    """The runtime refused a plan; the message is the runtime's own (it names the line)."""
-
-
-def check_plan(mission: CheckedMission, plan_path: str | Path, timeout_s: float = 10.0) -> None:
-    """Start the mission's host binary on the plan over a pty; it must get as far as HELLO.
+def runtime_accepts(mission: CheckedMission, plan_path: str | Path,
+                    timeout_s: float = 10.0) -> None:
+    """Start the mission's host binary on the plan over a pty; it must get as far as HELLO,
+    else PlanRejected with the runtime's own message.
 
     The runtime reads its plan before it talks to the science computer, so the same
     strict reader that will run on the board decides, not a second implementation, and
@@ -242,6 +253,7 @@ def check_plan(mission: CheckedMission, plan_path: str | Path, timeout_s: float 
     """
     import signal
 
+    from gliderplan.planner.planfile import PlanRejected
     from gliderplan.runtime.protocol import FdPort, Link, LinkError
 
     with tempfile.TemporaryDirectory(prefix="gliderplan-plan-") as tmp:

@@ -8,5 +8,15 @@ executor (executor.py, pilot.py, compiled.py: language/semantics.py plus the lib
 routines of docs/pilot.md) or the compiled C runtime over a pseudo-terminal
 (emulator.py). energy.py integrates every component's energy over the run and checks
 it against the plan (planfile.py reads plans); outputs.py and plots.py write a run's
-files; flight.py puts one run together for `gliderplan sim` and the tests.
+files; flight.py flies one run. `run_mission` (run.py) is the whole pipeline of
+`gliderplan sim` as one Python call:
+
+    from gliderplan.language import check_file
+    from gliderplan.sim import run_mission
+    result = run_mission(check_file("fig2.mission").checked(), "run", plan_path="fig2.plan")
+    result.check.verdict          # "pass", "violation" or "no plan"
 """
+
+from gliderplan.sim.run import RunResult, run_mission
+
+__all__ = ["RunResult", "run_mission"]

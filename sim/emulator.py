@@ -15,6 +15,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
 
@@ -22,7 +23,7 @@ HELLO_TIMEOUT_S = 10.0
 EXIT_TIMEOUT_S = 5.0
 
 
-class EmulatorError(Exception):
+class EmulatorError(GliderplanError):
     """The C runtime could not be built or started, or broke the link."""
 
 

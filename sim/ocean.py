@@ -29,10 +29,12 @@ from pathlib import Path
 
 import numpy as np
 
+from gliderplan.contract.errors import GliderplanError
+
 Number = float | np.ndarray
 
 
-class OceanFileError(ValueError):
+class OceanFileError(GliderplanError, ValueError):
     """A bad ocean profile file; the message starts with `FILE:LINE:`."""
 
 
@@ -270,10 +272,10 @@ def load_ocean(spec: str, data_dir: Path | None = None) -> Ocean:
         case "north-sea":
             if data_dir is None:
                 raise OceanFileError("north-sea: needs the Slocum logs directory "
-                                     "(GLIDERPLAN_SLOCUM_LOGS or --ocean-logs)")
+                                     "(GLIDERPLAN_SLOCUM_LOGS or --ocean-logs)", usage=True)
             return north_sea(data_dir)
     path = Path(spec)
     if not path.exists():
         raise OceanFileError(f"{spec}: no such ocean file or preset "
-                             f"(presets: {', '.join(PRESETS)})")
+                             f"(presets: {', '.join(PRESETS)})", usage=True)
     return read_profile_csv(path)

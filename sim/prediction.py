@@ -10,10 +10,11 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language.ir import CheckedMission
 
 
-class PlanReportError(ValueError):
+class PlanReportError(GliderplanError, ValueError):
     """An unreadable planner report; the message names the file and key."""
 
 

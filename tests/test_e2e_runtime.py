@@ -360,6 +360,23 @@ def test_compile_rejects_a_bad_plan(binary, fig2_hash, tmp_path, capsys, case):
     assert not (tmp_path / "out" / "bad.plan").exists()
 
 
+def test_compile_mission_checks_the_plan_with_the_runtime_and_ships_it(binary, fig2_hash,
+                                                                      tmp_path):
+    from gliderplan.language import check_file
+    from gliderplan.planner.planfile import PlanRejected
+    from gliderplan.runtime.build import compile_mission
+
+    mission = check_file(str(FIG2)).checked()
+    (tmp_path / "fig2.plan").write_bytes(make_plan(fig2_hash))
+    built = compile_mission(mission, tmp_path / "out", plan_path=tmp_path / "fig2.plan")
+    assert built == tmp_path / "out" / "sampleMission" and built.is_file()
+    assert (tmp_path / "out" / "fig2.plan").read_bytes() == make_plan(fig2_hash)
+    (tmp_path / "bad.plan").write_bytes(bad_plans(fig2_hash)["bad-crc"][0])
+    with pytest.raises(PlanRejected, match="plan rejected: .*bad.plan line"):
+        compile_mission(mission, tmp_path / "out2", plan_path=tmp_path / "bad.plan")
+    assert not (tmp_path / "out2").exists()
+
+
 def test_a_hand_written_plan_switches_sensors_on_their_windows(binary, fig2_hash, line,
                                                               tmp_path, capsys):
     (tmp_path / "fig2.plan").write_bytes(make_plan(fig2_hash))

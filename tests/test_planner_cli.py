@@ -151,3 +151,23 @@ def test_sweep_of_a_mission_with_nothing_to_trade_is_one_point(tmp_path):
     assert run.returncode == 0, run.stderr
     pareto = pd.read_csv(tmp_path / "pareto.csv")
     assert len(pareto) == 1 and pareto["shadow_price"].iloc[0] == 0.0
+
+
+def test_make_plan_and_sweep_mission_are_the_plan_command_as_calls(tmp_path):
+    from gliderplan.language import check_file
+    from gliderplan.planner import make_plan, sweep_mission
+
+    mission = check_file(ANNOTATED).checked()
+    plan = make_plan(mission, battery="500Wh", output=tmp_path / "a.plan")
+    report = json.loads((tmp_path / "a.plan.json").read_text())
+    assert report["budget_j"] == pytest.approx(plan.budget_j) == pytest.approx(0.85 * 500 * 3600)
+    assert read_plan_bytes((tmp_path / "a.plan").read_bytes()).budget_j == \
+        pytest.approx(plan.budget_j)
+    seen = []
+    sweep = sweep_mission(check_file(SURVEY).checked(), 4, tmp_path / "sweep",
+                          progress=lambda label, done, total: seen.append((label, done, total)))
+    assert [p.name for p in sweep.files] == ["pareto.csv", "computers.csv", "batteries.csv",
+                                             "pareto.png"]
+    assert len(sweep.pareto) == 4 and list(sweep.computers["computer"]) == \
+        ["ts5500@133", "ts7800@300", "ts7800@500"]
+    assert ("pareto", 4, 4) in seen and ("batteries", 3, 3) in seen

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from gliderplan.contract import ExitCode
 from gliderplan.language import check_source
 from gliderplan.language.source import read_mission
 from gliderplan.planner.plan import plan_mission
@@ -140,8 +141,9 @@ def test_read_plan_file_checks_the_mission(tmp_path, annotated):
     with pytest.raises(PlanFileError, match="hash") as info:
         read_plan_file(path, other)
     assert str(info.value).startswith(f"{path}:3:")
-    with pytest.raises(PlanFileError, match="cannot read"):
+    with pytest.raises(PlanFileError, match="missing.plan: no such file") as info:
         read_plan_file(tmp_path / "missing.plan")
+    assert info.value.exit_code == ExitCode.USAGE
 
 
 @pytest.mark.parametrize("path", EXAMPLES)

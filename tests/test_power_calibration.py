@@ -173,10 +173,10 @@ def test_max_error_turns_a_poor_fit_into_a_failure(capsys):
 @pytest.mark.parametrize(
     ("argv", "code", "message"),
     [
-        (["calibrate", "nowhere.dbd"], 1, "nowhere.dbd: no such file"),
+        (["calibrate", "nowhere.dbd"], 2, "nowhere.dbd: no such file"),
         (["calibrate", ".", "--max-error", "0.05"], 2, "--max-error needs --validate"),
         (["calibrate", ".", "-o", "out.txt"], 2, "must end in .toml"),
-        (["calibrate", ".", "--base", "slocum_g9"], 1, "unknown vehicle preset"),
+        (["calibrate", ".", "--base", "slocum_g9"], 2, "unknown vehicle preset"),
     ],
 )
 def test_calibrate_bad_input(capsys, argv, code, message):
@@ -190,3 +190,15 @@ def test_calibrate_rejects_a_file_that_is_not_a_log(capsys, tmp_path):
     bogus.write_bytes(b"not a log")
     assert main(["calibrate", str(bogus)]) == 1
     assert "cannot read the logs" in capsys.readouterr().err
+
+
+@needs_logs
+def test_calibrate_is_the_command_as_one_call(tmp_path):
+    from gliderplan.power_models import calibrate
+
+    result = calibrate([str(LOGS)], validate=True, output=tmp_path / "sebastian.toml")
+    assert abs(result.relative_error) <= MAX_VALIDATION_ERROR
+    assert result.report["validation"]["relative_error"] == result.relative_error
+    written = read_vehicle_file(tmp_path / "sebastian.toml")
+    assert written.name == "sebastian"
+    assert written.hotel_w == pytest.approx(result.vehicle.hotel_w, rel=1e-5)

@@ -89,9 +89,9 @@ def test_optimal_speed_grows_with_hotel_load(capsys):
 @pytest.mark.parametrize(
     ("argv", "code", "message"),
     [
-        (["power", "show", "vehicle", "nosuch"], 1, "unknown vehicle preset"),
-        (["power", "show", "board", "ts7800@400"], 1, "no 400 MHz clock"),
-        (["power", "show", "vehicle", "missing.toml"], 1, "missing.toml: no such file"),
+        (["power", "show", "vehicle", "nosuch"], 2, "unknown vehicle preset"),
+        (["power", "show", "board", "ts7800@400"], 2, "no 400 MHz clock"),
+        (["power", "show", "vehicle", "missing.toml"], 2, "missing.toml: no such file"),
         (["power", "energy", "--min-depth", "30", "--max-depth", "20"], 2, "deeper than"),
         (["power", "energy", "--speed", "fast"], 2, "expected numbers"),
         (["power", "speed", "--hotel-w", "-1"], 2, "--hotel-w"),

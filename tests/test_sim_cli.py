@@ -9,9 +9,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from gliderplan.cli.errors import UsageError
 from gliderplan.cli.main import main
 from gliderplan.cli.sim import parse_duration_s
+from gliderplan.contract.errors import UsageError
 
 REPO = Path(__file__).resolve().parents[1]
 FIG2 = REPO / "examples" / "fig2.mission"
@@ -84,8 +84,8 @@ def test_bad_durations_are_usage_errors(text):
 
 @pytest.mark.parametrize("args, code, message", [
     (["--duration", "soon"], 2, "--duration 'soon': expected a number with a unit"),
-    (["--ocean", "atlantis"], 1, "no such ocean file or preset"),
-    (["--plan", "missing.plan"], 2, "--plan missing.plan: no such file"),
+    (["--ocean", "atlantis"], 2, "no such ocean file or preset"),
+    (["--plan", "missing.plan"], 2, "missing.plan: no such file"),
     (["--current", "north"], 2, "--current 'north'"),
     (["--tick", "0"], 2, "--tick 0"),
 ])
@@ -192,3 +192,20 @@ def test_ctrl_c_before_the_first_tick_writes_nothing(tmp_path, capsys, monkeypat
     assert main(["sim", str(FIG2), "-o", str(tmp_path / "run")]) == 130
     assert not (tmp_path / "run").exists() or not any((tmp_path / "run").iterdir())
     assert "interrupted" in capsys.readouterr().err
+
+
+def test_run_mission_is_the_sim_command_as_one_call(tmp_path):
+    from gliderplan.language import check_file
+    from gliderplan.planner import make_plan
+    from gliderplan.sim import run_mission
+
+    annotated = check_file(str(REPO / "examples" / "fig2_annotated.mission")).checked()
+    plan_path = tmp_path / "fig2.plan"
+    make_plan(annotated, output=plan_path)
+    result = run_mission(annotated, tmp_path / "run", plan_path=plan_path, seed=3)
+    assert {p.name for p in result.files} == FILES and all(p.is_file() for p in result.files)
+    assert [t.kind for t in result.record.trace] == ["start", "call", "return", "goto", "exit"]
+    assert result.check.verdict == "pass" and not result.interrupted
+    assert result.plan is not None and result.check.budget_j == result.plan.budget_j
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["energy_j"] == pytest.approx(result.energy.total_j)

@@ -60,7 +60,7 @@ def test_the_naive_tracker_is_the_same_in_both_runtimes(tmp_path):
 
 def write_plan(path: Path, mission_path: Path) -> Path:
     """A plan for sim_alternating.mission: profile shares, sensor duty cycles, clocks."""
-    from gliderplan.cli.common import check_file
+    from gliderplan.language import check_file
 
     mission = check_file(str(mission_path)).mission
     body = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"

@@ -12,9 +12,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gliderplan.cli.common import check_file
 from gliderplan.contract import FLIGHT_SENSORS_MASK, NO_STATE
-from gliderplan.language import check_source, ir
+from gliderplan.language import check_file, check_source, ir
 from gliderplan.language.codegen_c import default_ballast_cc
 from gliderplan.language.registry import SENSORS
 from gliderplan.sim import compiled, pilot

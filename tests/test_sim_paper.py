@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gliderplan.cli.common import check_file
+from gliderplan.language import check_file
 from gliderplan.language.semantics import Transition
 from gliderplan.power_models import load_vehicle
 from gliderplan.sim import ocean

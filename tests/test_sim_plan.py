@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
-from gliderplan.cli.common import check_file
 from gliderplan.cli.main import main
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
+from gliderplan.language import check_file
 from gliderplan.power_models import load_board, load_sensor, load_vehicle
 
 MISSION = Path(__file__).resolve().parent / "missions" / "sim_budget.mission"

@@ -1,0 +1,86 @@
+"""The planner's two commands as Python calls: `make_plan` (`gliderplan plan`) plans a
+mission and writes its plan file and report; `sweep_mission` (`gliderplan plan --sweep`)
+writes the Pareto, computer and battery sweeps. Both raise GliderplanErrors that say
+what to change; the heavy libraries load on the first call."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from gliderplan.contract.errors import UsageError
+from gliderplan.contract.files import write_atomically
+from gliderplan.language.ir import CheckedMission
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from gliderplan.planner.plan import Plan
+
+SWEEP_FILES = ("pareto.csv", "computers.csv", "batteries.csv", "pareto.png")
+SweepProgress = Callable[[str, int, int], None]  # (sweep, points done, points in all)
+
+
+def make_plan(mission: CheckedMission, *, battery: str | None = None,
+              computer: str | None = None, output: str | Path | None = None) -> Plan:
+    """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
+    preset) and `computer` ("ts7800@500"; "ts7800" lets the planner pick the clock) in
+    its place. With `output`, write the plan file there and its JSON report beside it
+    (`output`.json), atomically. Raises InfeasibleBudget (with the minimum energy and the
+    largest consumers), PlanningError, HardwareError or ModelFileError."""
+    from gliderplan.planner.hardware import load_hardware
+    from gliderplan.planner.plan import plan_mission
+    from gliderplan.planner.planfile import write_plan_bytes
+    from gliderplan.planner.report import report_json
+
+    plan = plan_mission(mission, load_hardware(mission, battery=battery, computer=computer))
+    data = write_plan_bytes(plan)
+    if output is not None:
+        write_atomically(output, data)
+        write_atomically(f"{output}.json", json.dumps(report_json(plan), indent=2) + "\n")
+    return plan
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """The tradeoff tables of one mission (planner/README.md, "Sweeps")."""
+
+    pareto: pd.DataFrame  # best quality against budget
+    computers: pd.DataFrame  # the plan on each computer
+    batteries: pd.DataFrame  # the plan with each battery
+    files: tuple[Path, ...]
+
+
+def sweep_mission(mission: CheckedMission, points: int, output_dir: str | Path, *,
+                  battery: str | None = None, computer: str | None = None,
+                  progress: SweepProgress | None = None) -> Sweep:
+    """The Pareto frontier at `points` budgets (2 to 10000), the plan on each computer at
+    the mission's budget and with each battery; writes SWEEP_FILES into `output_dir`."""
+    from gliderplan.planner.hardware import load_hardware
+    from gliderplan.planner.plan import prepare
+    from gliderplan.planner.sweep import batteries, computers, pareto, plot_pareto
+
+    if not 2 <= points <= 10_000:
+        raise UsageError("--sweep N: N must be between 2 and 10000")
+    out = Path(output_dir)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: not a directory (--sweep writes several files there)")
+    hardware = load_hardware(mission, battery=battery, computer=computer)
+
+    def labelled(label: str) -> Callable[[int, int], None] | None:
+        return None if progress is None else lambda done, total: progress(label, done, total)
+
+    _, model = prepare(mission, hardware)
+    frame = pareto(model, points, labelled("pareto"))
+    boards = computers(mission, budget_j=hardware.budget_j, progress=labelled("computers"))
+    packs = batteries(mission, computer=computer, progress=labelled("batteries"))
+    contents = {"pareto.csv": frame.to_csv(index=False),
+                "computers.csv": boards.to_csv(index=False),
+                "batteries.csv": packs.to_csv(index=False),
+                "pareto.png": plot_pareto(frame, f"{mission.name}: quality against budget")}
+    for name in SWEEP_FILES:
+        write_atomically(out / name, contents[name])
+    return Sweep(frame, boards, packs, tuple(out / name for name in SWEEP_FILES))

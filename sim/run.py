@@ -1,0 +1,126 @@
+"""`run_mission`: one simulated flight from a checked mission to its files, the pipeline of
+`gliderplan sim`: load the vehicle, the ocean and the plan, fly, bill every component,
+check the flight against the plan, write the run's files."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from gliderplan.contract import TICK_S
+from gliderplan.contract.errors import UsageError
+from gliderplan.contract.files import write_atomically
+from gliderplan.language.ir import CheckedMission
+
+if TYPE_CHECKING:  # numpy, pandas and the planner: loaded when a run starts
+    from gliderplan.sim.energy import PlanCheck, RunEnergy
+    from gliderplan.sim.loop import RunRecord
+    from gliderplan.sim.planfile import Plan
+    from gliderplan.sim.vehicle import Current
+
+RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png")
+DEFAULT_DURATION_S = 30 * 86400.0  # a run of a mission without a horizon ends here
+TRACKERS = ("robust", "naive")
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """A simulated flight: what happened, what it cost, the verdict against its plan."""
+
+    record: RunRecord  # the transition trace and one row per tick
+    energy: RunEnergy  # every component's energy, per tick and per state [J]
+    check: PlanCheck  # the flight against the plan ("no plan" without one)
+    plan: Plan | None
+    files: tuple[Path, ...]  # the run's files, written atomically
+
+    @property
+    def interrupted(self) -> bool:
+        return self.record.ended == "interrupted"
+
+
+def run_mission(mission: CheckedMission, output_dir: str | Path, *,
+                plan_path: str | Path | None = None, runtime: str = "python",
+                ocean: str = "bench", ocean_logs: str | Path | None = None,
+                noise: str = "ctd", tracker: str = "robust", current: Current | None = None,
+                seed: int = 0, tick_s: float = TICK_S, duration_s: float | None = None,
+                progress: Callable[[float, float], None] | None = None) -> RunResult:
+    """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
+
+    `plan_path`: the plan to fly and to check the flight against (without one every
+    sensor a state logs is always on). `runtime`: "python" (the reference executor) or
+    "c" (the compiled runtime over a pseudo-terminal). `ocean`: a preset (bench,
+    sea-trial, north-sea with `ocean_logs`, uniform) or a CSV file. `noise`: a key of
+    `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
+    `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
+    horizon, else 30 days). `progress(done_s, total_s)` is called on long runs.
+
+    Raises a GliderplanError (a missing or bad file, a plan for another mission, a
+    runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
+    interrupted later keeps and writes the part flown (`RunResult.interrupted`).
+    """
+    from gliderplan.power_models import load_vehicle
+    from gliderplan.sim import energy as accounting
+    from gliderplan.sim import outputs, plots
+    from gliderplan.sim.flight import fly
+    from gliderplan.sim.loop import RunConfig
+    from gliderplan.sim.ocean import load_ocean
+    from gliderplan.sim.prediction import plan_predictions
+    from gliderplan.sim.science import NOISE_PRESETS
+    from gliderplan.sim.vehicle import Current
+
+    if not (math.isfinite(tick_s) and 0.1 <= tick_s <= 60.0):
+        raise UsageError(f"--tick {tick_s:g}: must lie between 0.1 and 60 s")
+    if noise not in NOISE_PRESETS or tracker not in TRACKERS:
+        raise UsageError(f"noise {noise!r} or tracker {tracker!r}: expected one of "
+                         f"{', '.join(NOISE_PRESETS)} and one of {', '.join(TRACKERS)}")
+    out = Path(output_dir)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: not a directory")
+    duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_DURATION_S
+    config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
+                       noise=NOISE_PRESETS[noise], current=current or Current())
+    vehicle = load_vehicle(mission.vehicle)
+    water = load_ocean(ocean, Path(ocean_logs) if ocean_logs else None)
+    plan, predictions, predicted_by = None, None, "none"
+    if plan_path is not None:
+        plan = _read_plan(plan_path, mission)
+        predictions, predicted_by = plan_predictions(plan_path, mission)
+    record = fly(mission, water, config, vehicle, plan, None if plan_path is None
+                 else str(plan_path), runtime, robust_tracker=tracker == "robust",
+                 progress=progress)
+    if not len(record.columns["time_s"]):
+        raise KeyboardInterrupt  # nothing flown, nothing to write
+    used = accounting.account(record, mission, vehicle, plan)
+    check = accounting.check_plan(used, plan, predictions)
+    meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
+            "ocean": ocean, "noise": noise, "tracker": tracker, "seed": seed,
+            "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
+            "prediction": predicted_by}
+    contents = {
+        "trace.csv": outputs.trace_csv(record.trace),
+        "timeseries.parquet": outputs.parquet_bytes(
+            outputs.timeseries_table(record, used, mission.battery.energy_j)),
+        "summary.json": outputs.summary(record, used, check, predictions, meta),
+        "depth.png": plots.depth_png(record),
+        "energy.png": plots.energy_png(record, used, predictions,
+                                       plan.budget_j if plan else None),
+    }
+    for name in RUN_FILES:
+        write_atomically(out / name, contents[name])
+    return RunResult(record, used, check, plan, tuple(out / name for name in RUN_FILES))
+
+
+def _read_plan(path: str | Path, mission: CheckedMission) -> Plan:
+    """The plan for `mission` in `path`: PlanFileError if there is no such file,
+    PlanRejected (naming the file and line) if it is not a plan for `mission`."""
+    from gliderplan.planner.planfile import PlanRejected, read_plan_data
+    from gliderplan.sim.planfile import PlanFileError, parse_plan
+
+    data = read_plan_data(path)
+    try:
+        return parse_plan(data, str(path), mission)
+    except PlanFileError as err:
+        raise PlanRejected(str(err)) from None
