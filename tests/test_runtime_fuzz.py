@@ -1,22 +1,25 @@
 """The C runtime's input readers under libFuzzer with ASan and UBSan (runtime/fuzz).
 
 The frame decoder, the plan reader and the command line each run for FUZZ_SECONDS
-(40 s: two minutes in all) from their committed corpus, and every committed input,
-the crashes found so far among them, is replayed as a regression test.
+from their committed corpus (40 s under CI=true: two minutes in all; 15 s elsewhere, or
+GLIDERPLAN_FUZZ_SECONDS), and every committed input, the crashes found so far among
+them, is replayed as a regression test.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
 from pathlib import Path
 
 import pytest
+from conftest import running_in_ci
 
 RUNTIME = Path(__file__).resolve().parents[1] / "runtime"
 FUZZERS = ("frame", "plan", "args")
-FUZZ_SECONDS = 40
+FUZZ_SECONDS = int(os.environ.get("GLIDERPLAN_FUZZ_SECONDS", 40 if running_in_ci() else 15))
 
 
 @pytest.fixture(scope="module")
