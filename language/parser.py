@@ -6,10 +6,11 @@ import re
 from functools import cache
 from pathlib import Path
 
-from lark import Lark, Token, Tree, UnexpectedInput
+from lark import Lark, UnexpectedInput
 
 from gliderplan.language import ast
 from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, error
+from gliderplan.language.lalr import Parser
 
 GRAMMAR = Path(__file__).with_name("mission.lark")
 
@@ -38,200 +39,194 @@ def _lark() -> Lark:
     )
 
 
-def _span_of(item: Token | object) -> ast.Span:
-    meta = getattr(item, "meta", item)
-    if getattr(meta, "empty", False):
-        return ast.NO_SPAN
-    return ast.Span(meta.line, meta.column, meta.end_line, meta.end_column)
+# A token from the driver: (text, line, column, end_line, end_column).
+TokenTuple = tuple[str, int, int, int, int]
 
 
-def _ident(token: Token) -> ast.Ident:
-    return ast.Ident(str(token), _span_of(token))
+def _ident(token: TokenTuple) -> ast.Ident:
+    return ast.Ident(token[0], ast.Span(*token[1:]))
 
 
-def _number_token(token: Token) -> ast.Number:
-    return ast.Number(float(token), str(token), _span_of(token))
+def _number_token(token: TokenTuple) -> ast.Number:
+    return ast.Number(float(token[0]), token[0], ast.Span(*token[1:]))
 
 
-class _ToAst:
-    """One method per grammar rule; each takes the rule's meta (positions) and its built
-    children, and returns the matching ast node.
+class _Build:
+    """One method per grammar rule that makes a node (or its alias); each takes the
+    rule's position `where` (line, column, end line, end column) and its children:
+    nodes already built, tokens, and None for a missing [optional] part."""
 
-    A plain bottom-up walk rather than lark's Transformer: it skips per-call wrappers
-    and token visits, which made tree building cost half as much as parsing itself.
-    """
-
-    def build(self, tree: Tree) -> object:
-        children = [self.build(c) if isinstance(c, Tree) else c for c in tree.children]
-        return getattr(self, tree.data)(tree.meta, children)
-
-    def start(self, meta, children):
+    def start(self, where, children):
         header, *rest = children
         declarations = tuple(c for c in rest if not isinstance(c, ast.State))
         states = tuple(c for c in rest if isinstance(c, ast.State))
-        return ast.Mission(header, declarations, states, _span_of(meta))
+        return ast.Mission(header, declarations, states, ast.Span(*where))
 
-    def mission_header(self, meta, children):
+    def recovery(self, where, children):
+        return None  # parsed after an error only to find the next one
+
+    def mission_header(self, where, children):
         return _ident(children[0])
 
     # ---- declarations
-    def vehicle_decl(self, meta, children):
-        return ast.VehicleDecl(*_preset(children[0]), _span_of(meta))
+    def vehicle_decl(self, where, children):
+        return ast.VehicleDecl(*_preset(children[0]), ast.Span(*where))
 
-    def computer_decl(self, meta, children):
+    def computer_decl(self, where, children):
         board, clock = children
-        return ast.ComputerDecl(*_preset(board), clock, _span_of(meta))
+        return ast.ComputerDecl(*_preset(board), clock, ast.Span(*where))
 
-    def battery_decl(self, meta, children):
+    def battery_decl(self, where, children):
         capacity, voltage, reserve = children
-        return ast.BatteryDecl(capacity, voltage, reserve, _span_of(meta))
+        return ast.BatteryDecl(capacity, voltage, reserve, ast.Span(*where))
 
-    def voltage(self, meta, children):
+    def voltage(self, where, children):
         return children[0]
 
     reserve = voltage
 
-    def horizon_decl(self, meta, children):
-        return ast.HorizonDecl(children[0], _span_of(meta))
+    def horizon_decl(self, where, children):
+        return ast.HorizonDecl(children[0], ast.Span(*where))
 
-    def objective_decl(self, meta, children):
+    def objective_decl(self, where, children):
         sense, target, floor = children
-        return ast.ObjectiveDecl(_ident(sense), _ident(target), floor, _span_of(meta))
+        return ast.ObjectiveDecl(_ident(sense), _ident(target), floor, ast.Span(*where))
 
-    def quality_floor(self, meta, children):
+    def quality_floor(self, where, children):
         return children[0]
 
-    def sensor_decl(self, meta, children):
+    def sensor_decl(self, where, children):
         sensor, *bounds = children
-        return ast.SensorDecl(_ident(sensor), tuple(bounds), _span_of(meta))
+        return ast.SensorDecl(_ident(sensor), tuple(bounds), ast.Span(*where))
 
-    def var_decl(self, meta, children):
+    def var_decl(self, where, children):
         name, value = children
-        return ast.VarDecl(_ident(name), value, _span_of(meta))
+        return ast.VarDecl(_ident(name), value, ast.Span(*where))
 
-    def stack_decl(self, meta, children):
-        return ast.StackDecl(children[0], _span_of(meta))
+    def stack_decl(self, where, children):
+        return ast.StackDecl(children[0], ast.Span(*where))
 
-    def weight(self, meta, children):
-        return ast.Bound("weight", "=", children[0], _span_of(meta))
+    def weight(self, where, children):
+        return ast.Bound("weight", "=", children[0], ast.Span(*where))
 
-    def duty_bound(self, meta, children):
+    def duty_bound(self, where, children):
         op, value = children
-        return ast.Bound("duty", str(op), value, _span_of(meta))
+        return ast.Bound("duty", op[0], value, ast.Span(*where))
 
-    def quality_bound(self, meta, children):
-        return ast.Bound("quality", ">=", children[0], _span_of(meta))
+    def quality_bound(self, where, children):
+        return ast.Bound("quality", ">=", children[0], ast.Span(*where))
 
-    def quantity(self, meta, children):
+    def quantity(self, where, children):
         number, unit = children
         return ast.Quantity(number.value, number.text, _ident(unit) if unit else None,
-                            _span_of(meta))
+                            ast.Span(*where))
 
-    def number(self, meta, children):
+    def number(self, where, children):
         return _number_token(children[0])
 
-    def negative(self, meta, children):
-        token = children[0]
-        return ast.Number(-float(token), f"-{token}", _span_of(meta))
+    def negative(self, where, children):
+        text = children[0][0]
+        return ast.Number(-float(text), f"-{text}", ast.Span(*where))
 
     # ---- states
-    def state(self, meta, children):
+    def state(self, where, children):
         name, *items = children
-        return ast.State(_ident(name), tuple(items), _span_of(meta))
+        return ast.State(_ident(name), tuple(items), ast.Span(*where))
 
-    def route_item(self, meta, children):
-        return ast.RouteItem(children[0], _span_of(meta))
+    def route_item(self, where, children):
+        return ast.RouteItem(children[0], ast.Span(*where))
 
-    def profile_item(self, meta, children):
-        return ast.ProfileItem(tuple(children), _span_of(meta))
+    def profile_item(self, where, children):
+        return ast.ProfileItem(tuple(children), ast.Span(*where))
 
-    def sensors_item(self, meta, children):
-        return ast.SensorsItem(tuple(children), _span_of(meta))
+    def sensors_item(self, where, children):
+        return ast.SensorsItem(tuple(children), ast.Span(*where))
 
-    def sensor_use(self, meta, children):
+    def sensor_use(self, where, children):
         sensor, duty = children
-        if isinstance(duty, Token):
+        if isinstance(duty, tuple):  # `auto`
             duty = _ident(duty)
-        return ast.SensorUse(_ident(sensor), duty, _span_of(meta))
+        return ast.SensorUse(_ident(sensor), duty, ast.Span(*where))
 
-    def expect_item(self, meta, children):
-        return ast.ExpectItem(children[0], children[1], _span_of(meta))
+    def expect_item(self, where, children):
+        return ast.ExpectItem(children[0], children[1], ast.Span(*where))
 
-    def require_item(self, meta, children):
+    def require_item(self, where, children):
         sensor, *bounds = children
-        return ast.RequireItem(_ident(sensor), tuple(bounds), _span_of(meta))
+        return ast.RequireItem(_ident(sensor), tuple(bounds), ast.Span(*where))
 
-    def events_item(self, meta, children):
-        return ast.EventsItem(tuple(children), _span_of(meta))
+    def events_item(self, where, children):
+        return ast.EventsItem(tuple(children), ast.Span(*where))
 
-    def invocation(self, meta, children):
+    def invocation(self, where, children):
         name, *args = children
         has_parens = bool(args)  # maybe_placeholders gives [None] for "()"
         args = tuple(a for a in args if a is not None)
-        return ast.Invocation(_ident(name), args, has_parens, _span_of(meta))
+        return ast.Invocation(_ident(name), args, has_parens, ast.Span(*where))
 
-    def point(self, meta, children):
-        return ast.Point(children[0], children[1], _span_of(meta))
+    def point(self, where, children):
+        return ast.Point(children[0], children[1], ast.Span(*where))
 
-    def event(self, meta, children):
+    def event(self, where, children):
         condition, assignments, action = children
-        return ast.Event(condition, assignments or (), action, _span_of(meta))
+        return ast.Event(condition, assignments or (), action, ast.Span(*where))
 
-    def assignments(self, meta, children):
+    def assignments(self, where, children):
         return tuple(children)
 
-    def assignment(self, meta, children):
-        return ast.Assignment(_ident(children[0]), children[1], _span_of(meta))
+    def assignment(self, where, children):
+        return ast.Assignment(_ident(children[0]), children[1], ast.Span(*where))
 
-    def goto(self, meta, children):
-        return ast.Action("goto", _ident(children[0]), _span_of(meta))
+    def goto(self, where, children):
+        return ast.Action("goto", _ident(children[0]), ast.Span(*where))
 
-    def call(self, meta, children):
-        return ast.Action("call", _ident(children[0]), _span_of(meta))
+    def call(self, where, children):
+        return ast.Action("call", _ident(children[0]), ast.Span(*where))
 
-    def return_(self, meta, children):
-        return ast.Action("return", None, _span_of(meta))
+    def return_(self, where, children):
+        return ast.Action("return", None, ast.Span(*where))
 
-    def exit(self, meta, children):
-        return ast.Action("exit", None, _span_of(meta))
+    def exit(self, where, children):
+        return ast.Action("exit", None, ast.Span(*where))
 
     # ---- expressions
-    def literal(self, meta, children):
+    def literal(self, where, children):
         return _number_token(children[0])
 
-    def name(self, meta, children):
-        return ast.Name(str(children[0]), _span_of(meta))
+    def name(self, where, children):
+        return ast.Name(children[0][0], ast.Span(*where))
 
-    def function_call(self, meta, children):
+    def function_call(self, where, children):
         name, *args = children
-        return ast.Call(_ident(name), tuple(a for a in args if a is not None), _span_of(meta))
+        return ast.Call(_ident(name), tuple(a for a in args if a is not None),
+                        ast.Span(*where))
 
-    def neg(self, meta, children):
-        return ast.Unary("-", children[0], _span_of(meta))
+    def neg(self, where, children):
+        return ast.Unary("-", children[0], ast.Span(*where))
 
-    def not_(self, meta, children):
-        return ast.Unary("!", children[0], _span_of(meta))
+    def not_(self, where, children):
+        return ast.Unary("!", children[0], ast.Span(*where))
 
-    def comparison(self, meta, children):
+    def comparison(self, where, children):
         left, op, right = children
-        return ast.Binary(str(op), left, right, _span_of(meta))
+        return ast.Binary(op[0], left, right, ast.Span(*where))
 
-    def or_expr(self, meta, children):
+    def or_expr(self, where, children):
         return _fold(children, "||")
 
-    def and_expr(self, meta, children):
+    def and_expr(self, where, children):
         return _fold(children, "&&")
 
-    def sum(self, meta, children):
+    def sum(self, where, children):
         return _fold_with_ops(children)
 
     product = sum
 
 
-def _preset(token: Token) -> tuple[ast.Ident, bool]:
+def _preset(token: TokenTuple) -> tuple[ast.Ident, bool]:
     """A preset name, or a "file path" (quotes removed)."""
-    if token.type == "STRING":
-        return ast.Ident(str(token)[1:-1], _span_of(token)), True
+    if token[0].startswith('"'):
+        return ast.Ident(token[0][1:-1], ast.Span(*token[1:])), True
     return _ident(token), False
 
 
@@ -250,8 +245,13 @@ def _fold_with_ops(children: list) -> ast.Expr:
     """Left-associative fold of [operand, op, operand, op, operand, ...]."""
     result = children[0]
     for op, right in zip(children[1::2], children[2::2], strict=True):
-        result = ast.Binary(str(op), result, right, _join(result.span, right.span))
+        result = ast.Binary(op[0], result, right, _join(result.span, right.span))
     return result
+
+
+@cache
+def _parser() -> Parser:
+    return Parser(_lark(), _Build())
 
 
 @cache
@@ -284,13 +284,9 @@ def _blank_before(text: str, offset: int) -> str:
 def parse(text: str) -> ast.Mission:
     """Parse mission source; raise MissionSyntaxError with every syntax error found."""
     try:
-        tree = _lark().parse(text, start="start")
+        return _parser().parse(text, "start")
     except UnexpectedInput as err:
         raise MissionSyntaxError(_all_syntax_errors(err, text)) from None
-    try:
-        return _ToAst().build(tree)
-    except RecursionError:
-        raise MissionSyntaxError([TOO_DEEP]) from None
 
 
 def _all_syntax_errors(first: UnexpectedInput, text: str) -> list[Diagnostic]:
@@ -308,7 +304,7 @@ def _all_syntax_errors(first: UnexpectedInput, text: str) -> list[Diagnostic]:
         if resume is None:
             break
         try:
-            _lark().parse(_blank_before(text, resume), start="recovery")
+            _parser().parse(_blank_before(text, resume), "recovery")
             break
         except UnexpectedInput as err:
             found.append(describe(err, text, literals))
