@@ -27,17 +27,24 @@ def _edges(mission: ir.CheckedMission, kind: str) -> dict[str, list[str]]:
             for s in mission.states}
 
 
-def reachable_states(mission: ir.CheckedMission) -> set[str]:
+def reachable_states(mission: ir.CheckedMission,
+                     impossible: Mapping[int, bool] | None = None) -> set[str]:
     """States the start state can lead to through goto and call (return goes back).
 
-    An event whose condition can never be true leads nowhere.
+    An event whose condition can never be true leads nowhere; `impossible` may hold
+    `never_true` of each event's condition already, by the event's id().
     """
+    def leads_nowhere(event: ir.Event) -> bool:
+        if impossible is not None:
+            return impossible[id(event)]
+        return never_true(event.condition)
+
     seen = {mission.states[0].name}
     todo = [mission.states[0].name]
     while todo:
         state = mission.state(todo.pop())
         for event in state.events:
-            if event.target and event.target not in seen and not never_true(event.condition):
+            if event.target and event.target not in seen and not leads_nowhere(event):
                 seen.add(event.target)
                 todo.append(event.target)
     return seen
@@ -129,17 +136,13 @@ def _intervals(expr: ir.Expr) -> dict[str, _Interval] | None:
             for name, interval in b.items():
                 merged[name] = merged.get(name, _Interval()).meet(interval)
             return merged
-        case ir.BinaryOp(op, ir.SensorRef(name), constant) if op in _FLIP and _is_constant(
+        case ir.BinaryOp(op, ir.SensorRef(name), constant) if op in _FLIP and ir.is_constant(
                 constant):
             return {name: _bound(op, ir.evaluate(constant, {}, {}))}
-        case ir.BinaryOp(op, constant, ir.SensorRef(name)) if op in _FLIP and _is_constant(
+        case ir.BinaryOp(op, constant, ir.SensorRef(name)) if op in _FLIP and ir.is_constant(
                 constant):
             return {name: _bound(_FLIP[op], ir.evaluate(constant, {}, {}))}
     return None
-
-
-def _is_constant(expr: ir.Expr) -> bool:
-    return not ir.sensors_read(expr) and not ir.variables_read(expr)
 
 
 _FLIP = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "=="}
@@ -155,7 +158,7 @@ def _bound(op: str, value: float) -> _Interval:
 
 def never_true(condition: ir.Expr) -> bool:
     """True when the condition is statically false (constant, or contradictory bounds)."""
-    if _is_constant(condition):
+    if ir.is_constant(condition):
         return ir.evaluate(condition, {}, {}) == 0.0
     if isinstance(condition, ir.BinaryOp) and condition.op == "||":
         return never_true(condition.left) and never_true(condition.right)
@@ -167,7 +170,7 @@ def never_true(condition: ir.Expr) -> bool:
 
 
 def _always_true(condition: ir.Expr) -> bool:
-    return _is_constant(condition) and ir.evaluate(condition, {}, {}) != 0.0
+    return ir.is_constant(condition) and ir.evaluate(condition, {}, {}) != 0.0
 
 
 def _path_text(states: list[str], shown: int = 8) -> str:
@@ -180,7 +183,8 @@ def _path_text(states: list[str], shown: int = 8) -> str:
 def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> list[Diagnostic]:
     """All flow diagnostics; `states` maps names to their syntax (for locations)."""
     found: list[Diagnostic] = []
-    reachable = reachable_states(mission)
+    impossible = {id(e): never_true(e.condition) for s in mission.states for e in s.events}
+    reachable = reachable_states(mission, impossible)
     calls = _edges(mission, "call")
     gotos = _edges(mission, "goto")
     start = mission.states[0].name
@@ -204,7 +208,7 @@ def check_flow(mission: ir.CheckedMission, states: Mapping[str, ast.State]) -> l
                 found.append(warning(
                     f"event reads '{sensor}', which state '{state.name}' does not log",
                     node.condition.span, f"add '{sensor}' to the sensors of '{state.name}'"))
-            if never_true(event.condition):
+            if impossible[id(event)]:
                 found.append(warning("this condition can never be true", node.condition.span))
             elif _always_true(event.condition) and event.action and fired_always_at is None:
                 fired_always_at = node.span.line

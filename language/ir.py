@@ -134,6 +134,20 @@ def evaluate(expr: Expr, sensors: Mapping[str, float], variables: Mapping[str, f
     raise TypeError(f"not an expression: {expr!r}")
 
 
+def is_constant(expr: Expr) -> bool:
+    """True when the expression reads no sensor and no variable (its value is fixed)."""
+    match expr:
+        case Const():
+            return True
+        case UnaryOp(_, operand):
+            return is_constant(operand)
+        case BinaryOp(_, left, right):
+            return is_constant(left) and is_constant(right)
+        case FuncCall(_, args):
+            return all(is_constant(a) for a in args)
+    return False
+
+
 def sensors_read(expr: Expr) -> frozenset[str]:
     """Names of the sensors an expression reads."""
     match expr:
@@ -183,7 +197,7 @@ class Profile:
 
     def constant_args(self) -> tuple[float, ...] | None:
         """Argument values when none reads a variable or sensor, else None."""
-        if any(sensors_read(a) or variables_read(a) for a in self.args):
+        if not all(is_constant(a) for a in self.args):
             return None
         return tuple(evaluate(a, {}, {}) for a in self.args)
 
