@@ -1,0 +1,63 @@
+"""Timing a command as the user runs it: a fresh process each time, medians of several runs.
+
+Shared by the benchmarks that measure what a user waits for. Wall time is what the user
+pays; CPU time (user + system, of the process and its children) is printed beside it
+because the development machine's two cores are shared, and waiting for a core shows up
+in wall time only.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import NamedTuple
+
+# Bytecode caching on, as on a user's machine (a warm-up run writes the .pyc files even
+# if PYTHONDONTWRITEBYTECODE is set in this shell).
+ENV = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+
+
+class Timing(NamedTuple):
+    wall_s: float
+    cpu_s: float
+
+
+def gliderplan(*args: str) -> list[str]:
+    """The `gliderplan` command of this interpreter's environment."""
+    script = Path(sys.executable).with_name("gliderplan")
+    command = [str(script)] if script.exists() else [sys.executable, "-m", "gliderplan.cli"]
+    return command + list(args)
+
+
+def run_once(command: list[str]) -> Timing:
+    """Wall and CPU time of one run; the command must succeed."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, env=ENV)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return Timing(wall, cpu)
+
+
+def median_of(commands: dict[str, list[str]], runs: int) -> dict[str, Timing]:
+    """Median wall and CPU time of each command over `runs` runs, taken in turn (so that
+    a change in the machine's load falls on all of them alike), after one warm-up run."""
+    for command in commands.values():
+        run_once(command)
+    times: dict[str, list[Timing]] = {name: [] for name in commands}
+    for _ in range(runs):
+        for name, command in commands.items():
+            times[name].append(run_once(command))
+    return {name: Timing(statistics.median(t.wall_s for t in found),
+                         statistics.median(t.cpu_s for t in found))
+            for name, found in times.items()}
+
+
+def load_average() -> str:
+    return "load average " + " ".join(f"{x:.1f}" for x in os.getloadavg())
