@@ -15,7 +15,7 @@ from gliderplan.language.formatter import FormatError, format_source
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 SOURCES = [p.read_text() for p in sorted(EXAMPLES.glob("*.mission"))]
 
-_VOCABULARY = [
+VOCABULARY = [
     "mission", "state", "begin", "end", "events", "case", "goto", "call", "return", "exit",
     "set", "var", "sensor", "sensors", "flightprofile", "flightroute", "expect", "require",
     "vehicle", "computer", "battery", "horizon", "objective", "stack", "duty", "auto",
@@ -24,6 +24,7 @@ _VOCABULARY = [
     "missiontime", "depth", "temp", "s1", "s2", "x", "max", "abs", "0", "5", ".454", "1e400",
     "-7349.8", "(", ")", ",", "|", "..", "@", "%", "=", "==", ">=", "<", "&&", "||", "!", "+",
     "-", "*", "/", "kWh", "Ah", "V", "h", "min", "MHz", "\"b.toml\"", "#c", "\n", "\t", "é",
+    ";",
 ]
 
 _FUZZ = settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -44,7 +45,7 @@ _PREFIXES = ["", "mission m\n", "mission m\nstate s1 begin flightprofile surface
 
 
 @_FUZZ
-@given(st.sampled_from(_PREFIXES), st.lists(st.sampled_from(_VOCABULARY), max_size=80))
+@given(st.sampled_from(_PREFIXES), st.lists(st.sampled_from(VOCABULARY), max_size=80))
 def test_token_soup(prefix, tokens):
     _front_end_survives(prefix + " ".join(tokens))
 
@@ -55,9 +56,9 @@ def test_random_text(source):
     _front_end_survives(source)
 
 
-@_FUZZ
-@given(st.sampled_from(SOURCES), st.data())
-def test_mutated_examples(source, data):
+def mutated(source: str, data: st.DataObject) -> str:
+    """The source with one to four of its space-separated words deleted, doubled or
+    replaced by a word of the vocabulary."""
     tokens = source.split(" ")
     for _ in range(data.draw(st.integers(1, 4))):
         at = data.draw(st.integers(0, len(tokens) - 1))
@@ -67,8 +68,14 @@ def test_mutated_examples(source, data):
         elif kind == "duplicate":
             tokens.insert(at, tokens[at])
         else:
-            tokens[at] = data.draw(st.sampled_from(_VOCABULARY))
-    _front_end_survives(" ".join(tokens))
+            tokens[at] = data.draw(st.sampled_from(VOCABULARY))
+    return " ".join(tokens)
+
+
+@_FUZZ
+@given(st.sampled_from(SOURCES), st.data())
+def test_mutated_examples(source, data):
+    _front_end_survives(mutated(source, data))
 
 
 @settings(max_examples=100, deadline=None,

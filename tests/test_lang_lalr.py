@@ -11,6 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lark import Lark, Token, Tree, UnexpectedInput
 from lark.exceptions import UnexpectedCharacters, UnexpectedToken
+from test_lang_fuzz import VOCABULARY, mutated
 
 from gliderplan.language.lalr import Parser
 from gliderplan.language.parser import _lark
@@ -103,21 +104,12 @@ def test_edge_cases_parse_as_lark_parses_them(text):
     _agrees_with_lark(text)
 
 
-_VOCABULARY = [
-    "mission", "state", "begin", "end", "events", "case", "goto", "call", "return", "exit",
-    "set", "var", "sensor", "sensors", "flightprofile", "flightroute", "expect", "require",
-    "vehicle", "computer", "battery", "horizon", "objective", "stack", "duty", "auto",
-    "weight", "quality", "reserve", "at", "maximize", "minimize", "yo", "nav", "s1", "x",
-    "max", "0", "5", ".454", "1e400", "-7349.8", "(", ")", ",", "|", "..", "@", "%", "=",
-    "==", ">=", "<", "&&", "||", "!", "+", "-", "*", "/", "kWh", "\"b.toml\"", "#c", "\n",
-    "\t", "\u00e9", ";",
-]
 _PREFIXES = ["", "mission m\n", "mission m\nstate s1 begin flightprofile surface events case ",
              "mission m\nstate s1 begin flightprofile yo("]
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.sampled_from(_PREFIXES), st.lists(st.sampled_from(_VOCABULARY), max_size=60))
+@given(st.sampled_from(_PREFIXES), st.lists(st.sampled_from(VOCABULARY), max_size=60))
 def test_token_soup_parses_as_lark_parses_it(prefix, tokens):
     _agrees_with_lark(prefix + " ".join(tokens))
 
@@ -125,17 +117,7 @@ def test_token_soup_parses_as_lark_parses_it(prefix, tokens):
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from([p.read_text() for p in MISSIONS]), st.data())
 def test_mutated_examples_parse_as_lark_parses_them(source, data):
-    tokens = source.split(" ")
-    for _ in range(data.draw(st.integers(1, 3))):
-        at = data.draw(st.integers(0, len(tokens) - 1))
-        kind = data.draw(st.sampled_from(["delete", "duplicate", "replace"]))
-        if kind == "delete":
-            del tokens[at]
-        elif kind == "duplicate":
-            tokens.insert(at, tokens[at])
-        else:
-            tokens[at] = data.draw(st.sampled_from(_VOCABULARY))
-    _agrees_with_lark(" ".join(tokens))
+    _agrees_with_lark(mutated(source, data))
 
 
 # Tokens across lines (strings here; mission.lark has none) and a rule with one child
