@@ -85,7 +85,10 @@ def run(args: argparse.Namespace) -> int:
     mission = load_mission(args)
     duration_s = parse_duration_s(args.duration) if args.duration else None
     ticks = (duration_s or mission.horizon_s or DEFAULT_DURATION_S) / max(args.tick, 1e-9)
-    progress = _Progress() if ticks > LONG_RUN_TICKS else None
+    from gliderplan.cli.progress import ProgressBar
+
+    progress = ProgressBar(lambda done, total: f"{done / 86400:.2f} of {total / 86400:.2f} d "
+                           "simulated") if ticks > LONG_RUN_TICKS else None
     try:
         result = run_mission(
             mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
@@ -118,27 +121,3 @@ def _time_text(seconds: float) -> str:
     if seconds >= 3 * 3600:
         return f"{seconds / 3600:.1f} h"
     return f"{seconds:g} s"
-
-
-class _Progress:
-    """A progress bar on stderr, for runs of many ticks."""
-
-    WIDTH = 30
-
-    def __init__(self) -> None:
-        self.shown = False
-        self.live = sys.stderr.isatty()  # redrawn in place on a terminal, else a line each
-
-    def __call__(self, done_s: float, total_s: float) -> None:
-        filled = int(self.WIDTH * done_s / total_s) if total_s else self.WIDTH
-        bar = (f"[{'#' * filled}{'.' * (self.WIDTH - filled)}] "
-               f"{done_s / 86400:.2f} of {total_s / 86400:.2f} d simulated")
-        if self.live:
-            print("\r" + bar, end="", file=sys.stderr, flush=True)
-        else:
-            print(bar, file=sys.stderr, flush=True)
-        self.shown = True
-
-    def finish(self) -> None:
-        if self.shown and self.live:
-            print(file=sys.stderr)

@@ -14,7 +14,10 @@ files; flight.py flies one run. `run_mission` (run.py) is the whole pipeline of
     from gliderplan.language import check_file
     from gliderplan.sim import run_mission
     result = run_mission(check_file("fig2.mission").checked(), "run", plan_path="fig2.plan")
-    result.check.verdict          # "pass", "violation" or "no plan"
+    result.check.verdict          # "pass", "over prediction", "violation" or "no plan"
+
+montecarlo.py flies a mission in many scenarios drawn by scenarios.py (ocean, model
+figures, battery), on the executors of backends.py (this process, a process pool, Dask).
 """
 
 from gliderplan.sim.run import RunResult, run_mission

@@ -112,3 +112,45 @@ def _png(fig, plt) -> bytes:
     fig.savefig(sink, format="png")
     plt.close(fig)
     return sink.getvalue()
+
+
+# ---- Monte Carlo -----------------------------------------------------------------------
+
+def energy_histogram_png(energy_j: np.ndarray, budget_j: np.ndarray, nominal_budget_j: float,
+                         held_share: float) -> bytes:
+    """Energy spent in each scenario against the budget: the plan's budget as a line, the
+    range of the scenarios' own budgets (their batteries differ) as a band."""
+    plt = _figure()
+    fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
+    ax.hist(energy_j / 1e3, bins=min(50, max(10, len(energy_j) // 10)), color="tab:blue",
+            alpha=0.8, label="scenarios")
+    if len(budget_j):
+        low, high = np.quantile(budget_j, [0.05, 0.95]) / 1e3
+        ax.axvspan(low, high, color="red", alpha=0.12, lw=0,
+                   label="scenarios' budgets (5-95 %)")
+    ax.axvline(nominal_budget_j / 1e3, color="red", lw=1.5, label="plan budget")
+    ax.set_xlabel("energy spent [kJ]")
+    ax.set_ylabel("scenarios")
+    ax.set_title(f"energy per scenario: the budget held in {100 * held_share:.1f} %")
+    ax.legend(fontsize=8)
+    return _png(fig, plt)
+
+
+def exhaustion_png(exhausted_s: np.ndarray, duration_s: np.ndarray) -> bytes:
+    """Share of scenarios whose budget still holds against mission time (a scenario whose
+    budget ran out at t drops out at t; one that never ran out stays to its end)."""
+    plt = _figure()
+    fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
+    n = len(exhausted_s)
+    end = float(np.nanmax(duration_s)) if n else 1.0
+    t, unit = _time_axis(np.array([0.0, end]))
+    scale = end / t[-1] if t[-1] else 1.0
+    out = np.sort(exhausted_s[np.isfinite(exhausted_s)])
+    times = np.concatenate([[0.0], out, [end]])
+    holding = 1.0 - np.concatenate([[0], np.arange(1, len(out) + 1), [len(out)]]) / max(n, 1)
+    ax.step(times / scale, 100 * holding, where="post", color="tab:green")
+    ax.set_ylim(0, 102)
+    ax.set_xlabel(f"mission time [{unit}]")
+    ax.set_ylabel("scenarios with budget left [%]")
+    ax.set_title(f"time to exhaustion: {len(out)} of {n} scenarios ran out of budget")
+    return _png(fig, plt)

@@ -48,6 +48,8 @@ class SensorNoise:
     temperature_lag_s: float = 0.0  # first-order CTD response time
     flicker_c: float = 0.0  # non-monotonic mode: +-flicker_c alternating every reading
     depth_sigma_m: float = 0.0
+    spike_probability: float = 0.0  # a reading off by +-spike_c (a fouled cell, a bubble)
+    spike_c: float = 0.0
 
 
 NOISE_PRESETS: dict[str, SensorNoise] = {
@@ -83,6 +85,10 @@ class ScienceComputer:
             if noise.temperature_lag_s > 0.0 else 0.0
         self._ctd_temp = math.nan
         self._noise: list[tuple[float, float]] = []
+        # spikes come from a stream of their own: a run without them draws as before
+        self._spike_rng = np.random.default_rng([seed, 1]) \
+            if noise.spike_probability > 0.0 else None
+        self._spikes: list[float] = []
         self._flicker_c = noise.flicker_c if self.rng.random() < 0.5 else -noise.flicker_c
         self.water_temperature_c = math.nan  # at the glider, this tick (for the record)
         self.ctd_temperature_c = math.nan  # the CTD's reading sent this tick; NaN: CTD off
@@ -93,6 +99,15 @@ class ScienceComputer:
             self._noise = self.rng.standard_normal((_NOISE_BLOCK, 2)).tolist()
             self._noise.reverse()
         return self._noise.pop()
+
+    def _spike_c(self) -> float:
+        """This reading's spike [degC]: 0, or +-spike_c with the spike probability."""
+        if not self._spikes:
+            u = self._spike_rng.random((_NOISE_BLOCK, 2))
+            hit = u[:, 0] < self.noise.spike_probability
+            self._spikes = np.where(hit, np.where(u[:, 1] < 0.5, -1.0, 1.0), 0.0).tolist()
+            self._spikes.reverse()
+        return self.noise.spike_c * self._spikes.pop()
 
     def readings(self, tick: int) -> tuple[int, list[float]]:
         """(mask, values): the sensor array at `tick` (all 17 values [registry units]) and
@@ -107,6 +122,8 @@ class ScienceComputer:
         self._ctd_temp = ctd
         self._flicker_c = -self._flicker_c
         measured = ctd + noise.temperature_sigma_c * z_temp + self._flicker_c
+        if self._spike_rng is not None:
+            measured += self._spike_c()
         depth = max(0.0, g.depth_m + noise.depth_sigma_m * z_depth)
         c = self.glider.current
         values = [

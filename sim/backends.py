@@ -1,0 +1,71 @@
+"""Where Monte Carlo scenarios run: this process, a local process pool, or a Dask cluster.
+
+All three are driven through one `concurrent.futures` interface (`submit`, futures,
+`as_completed`): Dask distributed's `Client.get_executor()` offers the same one as
+`ProcessPoolExecutor`, so the code that sends scenarios out is the same for every kind.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing
+import signal
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from gliderplan.contract.errors import UsageError
+
+
+class BackendError(UsageError):
+    """A scheduler that cannot be reached or used; the message says what to do."""
+
+
+def _ignore_interrupt() -> None:
+    """Workers leave Ctrl-C to the parent, which stops handing out work and keeps what
+    finished (a worker killed mid-batch would lose it)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextmanager
+def scenario_executor(workers: int, scheduler: str | None = None
+                      ) -> Iterator[cf.Executor | None]:
+    """An executor for `workers` workers: None (this process) for one worker and no
+    scheduler; a local process pool; or Dask: `scheduler` "local" starts a LocalCluster of
+    `workers` single-threaded processes, "tcp://HOST:PORT" joins a running scheduler."""
+    if scheduler is None:
+        if workers <= 1:
+            yield None
+            return
+        context = multiprocessing.get_context("fork" if "fork" in
+                                              multiprocessing.get_all_start_methods()
+                                              else "spawn")
+        pool = cf.ProcessPoolExecutor(workers, mp_context=context,
+                                      initializer=_ignore_interrupt)
+        try:
+            yield pool
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+        return
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise BackendError(f"--scheduler {scheduler}: Dask distributed is not installed "
+                           "(pip install 'gliderplan[dask]')") from None
+    cluster = None
+    try:
+        if scheduler == "local":
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        else:
+            client = Client(scheduler, timeout=10)
+    except OSError as err:
+        if cluster is not None:
+            cluster.close()
+        raise BackendError(f"--scheduler {scheduler}: cannot reach it: {err}") from None
+    try:
+        yield client.get_executor()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,248 @@
+"""Monte Carlo: a mission (and its plan) flown in many drawn scenarios, and how likely it
+is that the energy budget holds.
+
+Scenario i is drawn from its own seed, the child i of the run's `SeedSequence`
+(sim/scenarios.py), so a result depends on the run's seed and the scenario's index
+only: not on the number of workers, nor on which worker flew it. Scenarios go to the
+workers in batches (each long enough, ~100 ms, that sending it costs little) through
+any `concurrent.futures`-style executor: a local process pool, or Dask distributed's
+`Client.get_executor()`. An interrupted run keeps every scenario that finished.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import math
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from gliderplan.contract import TICK_S
+from gliderplan.language import ir
+from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.sim.energy import RunEnergy, account, check_plan
+from gliderplan.sim.loop import RunConfig, RunRecord
+from gliderplan.sim.prediction import StatePrediction
+from gliderplan.sim.scenarios import ScenarioSpec, draw_scenario
+
+BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending it is cheap
+BATCHES_PER_WORKER = 4  # at least this many batches per worker, so the ends even out
+CONFIDENCE_Z = 1.959963984540054  # 95 % two-sided
+QUANTILES = (0.05, 0.5, 0.95)
+
+
+@dataclass(frozen=True)
+class Job:
+    """Everything a worker needs to fly scenarios of one run (pickled once per batch)."""
+
+    mission: ir.CheckedMission
+    plan: object | None  # sim.planfile.Plan: the schedules flown (None: sensors always on)
+    predictions: dict[str, StatePrediction] | None  # the plan's prediction per state
+    vehicle: Vehicle  # the nominal vehicle the scenarios draw around
+    spec: ScenarioSpec
+    budget_j: float  # the plan's budget (else the mission's usable battery energy) [J]
+    seed: int
+    duration_s: float  # a run ends here if the mission has not exited [s]
+    tick_s: float = TICK_S
+    robust_tracker: bool = True
+
+
+def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
+    """Child `index` of the run's seed: what `SeedSequence(seed).spawn(n)[index]` is."""
+    return np.random.SeedSequence(job.seed, spawn_key=(index,))
+
+
+def fly_scenario(job: Job, index: int) -> dict:
+    """Fly scenario `index`: one row of the results table."""
+    from gliderplan.sim.flight import fly
+
+    scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
+    config = RunConfig(tick_s=job.tick_s, duration_s=job.duration_s, seed=scenario.seed,
+                       noise=scenario.noise, current=scenario.current)
+    record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
+                 robust_tracker=job.robust_tracker)
+    energy = account(record, job.mission, scenario.vehicle, job.plan)
+    check = check_plan(energy, job.plan, job.predictions)
+    budget = job.budget_j * scenario.usable_fraction
+    spent = np.cumsum(sum(energy.per_tick_j.values()))
+    over = np.flatnonzero(spent > budget)
+    component, excess = _most_overrun(energy, job.predictions)
+    names = record.state_names
+    return {
+        "scenario": index,
+        "seed": scenario.seed,
+        "energy_j": energy.total_j,
+        "budget_j": budget,
+        "held": bool(energy.total_j <= budget),
+        "exhausted_s": float(record.columns["time_s"][over[0]]) if len(over) else math.nan,
+        "duration_s": float(record.columns["time_s"][-1]) if len(spent) else 0.0,
+        "ended": record.ended,
+        "end_state": _end_state(record),
+        "quality": flown_quality(job.mission, record),
+        "plan_check": check.verdict,
+        "overran_component": component,
+        "overran_j": excess,
+        **{f"time_{name}_s": energy.time_by_state_s.get(name, 0.0) for name in names},
+        **{f"energy_{k}_j": v for k, v in energy.by_component_j().items()},
+        **{f"drawn_{k}": v for k, v in scenario.drawn.items()},
+    }
+
+
+def _end_state(record: RunRecord) -> str:
+    """The state the run ended in (for an exit: the state that exited)."""
+    if record.ended == "exit" and record.trace:
+        return record.trace[-1].from_state
+    state = record.columns["state"]
+    names = record.state_names
+    return names[int(state[-1])] if len(state) and 0 <= state[-1] < len(names) else ""
+
+
+def _most_overrun(energy: RunEnergy, predictions: dict[str, StatePrediction] | None
+                  ) -> tuple[str, float]:
+    """The component whose energy exceeded the plan's prediction by the most [J] (its
+    excess; negative when every component stayed under), or, without a prediction, the
+    largest consumer and its energy."""
+    flown = energy.by_component_j()
+    if not predictions:
+        name = max(flown, key=flown.get, default="")
+        return name, flown.get(name, 0.0)
+    predicted: dict[str, float] = {}
+    for p in predictions.values():
+        for k, v in p.energy_by_component_j.items():
+            predicted[k] = predicted.get(k, 0.0) + v
+    excess = {k: flown.get(k, 0.0) - predicted.get(k, 0.0) for k in {*flown, *predicted}}
+    name = max(sorted(excess), key=excess.get)
+    return name, excess[name]
+
+
+def flown_quality(mission: ir.CheckedMission, record: RunRecord) -> float:
+    """Data quality as flown: over the sensors the mission weighs, the weighted share of
+    the time a state logged the sensor that its device was on (0..1; NaN without any)."""
+    state = record.columns["state"].astype(int)
+    power = record.columns["sensor_power"].astype(np.int64)
+    total = weight = 0.0
+    for pref in mission.sensor_preferences:
+        info = SENSOR_BY_NAME[pref.sensor]
+        logging = np.isin(state, [i for i, s in enumerate(mission.states)
+                                  if any(u.name == pref.sensor for u in s.sensors)])
+        if not logging.any() or pref.weight <= 0.0:
+            continue
+        on = (power[logging] >> info.index & 1).mean()
+        total += pref.weight * float(on)
+        weight += pref.weight
+    return total / weight if weight else math.nan
+
+
+def run_batch(job: Job, indices: Iterable[int]) -> list[dict]:
+    """Fly a batch of scenarios (what a worker does with one task)."""
+    return [fly_scenario(job, i) for i in indices]
+
+
+# ---- the run ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    rows: list[dict]  # one per finished scenario, by index
+    requested: int
+    interrupted: bool
+    wall_s: float
+
+    def table(self):
+        """The rows as a pandas DataFrame."""
+        import pandas as pd
+
+        return pd.DataFrame(self.rows)
+
+
+def batches(count: int, first_s: float, workers: int) -> list[list[int]]:
+    """Scenarios 1..count-1 (0 was flown to time one) in batches of at least BATCH_S
+    each at `first_s` [s] per scenario, but at least BATCHES_PER_WORKER per worker."""
+    rest = list(range(1, count))
+    if not rest:
+        return []
+    size = max(1, math.ceil(BATCH_S / max(first_s, 1e-6)))
+    size = min(size, max(1, math.ceil(len(rest) / (BATCHES_PER_WORKER * max(workers, 1)))))
+    return [rest[i:i + size] for i in range(0, len(rest), size)]
+
+
+def run_montecarlo(job: Job, count: int, executor: cf.Executor | None = None, workers: int = 1,
+                   progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
+    """Fly `count` scenarios: in this process without an executor, else batches through
+    `executor` (with `workers` workers). Ctrl-C stops it and keeps what finished."""
+    start = time.perf_counter()
+    rows: dict[int, dict] = {}
+    interrupted = False
+    futures: set[cf.Future] = set()
+    try:
+        t0 = time.perf_counter()
+        rows[0] = fly_scenario(job, 0)
+        if progress:
+            progress(1, count)
+        plan = batches(count, time.perf_counter() - t0, workers)
+        if executor is None:
+            for batch in plan:
+                rows.update((r["scenario"], r) for r in run_batch(job, batch))
+                if progress:
+                    progress(len(rows), count)
+        else:
+            futures = {executor.submit(run_batch, job, batch) for batch in plan}
+            for future in cf.as_completed(futures):
+                rows.update((r["scenario"], r) for r in future.result())
+                if progress:
+                    progress(len(rows), count)
+    except KeyboardInterrupt:
+        interrupted = True
+        for future in futures:
+            future.cancel()
+    ordered = [rows[i] for i in sorted(rows)]
+    return MonteCarloResult(ordered, count, interrupted, time.perf_counter() - start)
+
+
+# ---- what the runs say ------------------------------------------------------------------
+
+def wilson_interval(held: int, n: int, z: float = CONFIDENCE_Z) -> tuple[float, float]:
+    """Wilson score interval of a proportion held / n (95 % by default)."""
+    if n == 0:
+        return 0.0, 1.0
+    p = held / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def summary(result: MonteCarloResult, meta: dict) -> dict:
+    """Probability that the budget holds with its 95 % interval, energy and duration
+    quantiles, how the runs ended."""
+    table = result.table()
+    n = len(table)
+    held = int(table["held"].sum()) if n else 0
+    low, high = wilson_interval(held, n)
+
+    def quantiles(column: str) -> dict[str, float]:
+        if not n:
+            return {}
+        values = np.quantile(table[column].to_numpy(float), QUANTILES)
+        return {f"p{round(100 * q):02d}": float(v) for q, v in zip(QUANTILES, values,
+                                                                   strict=True)}
+
+    exhausted = table["exhausted_s"].dropna() if n else table
+    return {
+        **meta,
+        "scenarios": n,
+        "requested": result.requested,
+        "interrupted": result.interrupted,
+        "budget_held": held,
+        "probability_budget_holds": held / n if n else None,
+        "probability_interval_95": [low, high],
+        "energy_j": quantiles("energy_j"),
+        "duration_s": quantiles("duration_s"),
+        "exhausted_before_end": int(len(exhausted)),
+        "over_budget_by_tolerance": int((table["plan_check"] == "violation").sum()) if n
+        else 0,
+        "ended": {str(k): int(v) for k, v in table["ended"].value_counts().items()} if n
+        else {},
+        "wall_s": result.wall_s,
+    }

@@ -1,0 +1,171 @@
+"""Monte Carlo as a user runs it: seeded scenarios, results that do not depend on the
+workers, the files of a run, bad scenario files, Ctrl-C."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gliderplan.cli.main import main
+from gliderplan.language import check_file
+from gliderplan.power_models import load_vehicle
+from gliderplan.sim import montecarlo
+from gliderplan.sim.backends import scenario_executor
+from gliderplan.sim.scenarios import (
+    ScenarioFileError,
+    draw_scenario,
+    read_spec,
+    scenario_seeds,
+)
+
+REPO = Path(__file__).resolve().parents[1]
+FIG2 = REPO / "examples" / "fig2_annotated.mission"
+SURVEY = REPO / "examples" / "thermocline_survey.mission"
+FILES = {"scenarios.parquet", "summary.json", "energy.png", "exhaustion.png"}
+
+
+def _job(seed: int = 7, budget_j: float = 60e3) -> montecarlo.Job:
+    mission = check_file(str(FIG2)).mission
+    return montecarlo.Job(mission, None, None, load_vehicle(mission.vehicle), read_spec(),
+                          budget_j, seed, 2600.0)
+
+
+def test_a_scenario_is_its_seed_and_index_whatever_else_was_drawn():
+    spec, vehicle = read_spec(), load_vehicle("slocum_g2_shallow")
+    seeds = scenario_seeds(3, 5)
+    first = [draw_scenario(spec, vehicle, i, s) for i, s in enumerate(seeds)]
+    again = draw_scenario(spec, vehicle, 4, scenario_seeds(3, 5)[4])
+    assert again == first[4]
+    assert len({s.ocean.depth_m for s in first}) == 5  # the draws differ between scenarios
+    assert all(6.0 <= s.ocean.depth_m <= 30.0 for s in first)  # clipped to its bounds
+    assert first[0].vehicle.hotel_w != vehicle.hotel_w  # model figures are drawn too
+    job = _job(seed=3)
+    assert montecarlo.scenario_seed(job, 4).generate_state(2).tolist() == \
+        seeds[4].generate_state(2).tolist()
+
+
+def test_calibrated_spreads_and_correlations_come_first(tmp_path):
+    text = (REPO / "power_models" / "data" / "vehicle_slocum_g3.toml").read_text()
+    text = text.replace('value = 1.155, unit = "W"', 'value = 1.155, unit = "W", sd = 0.2', 1)
+    path = tmp_path / "g3.toml"
+    path.write_text(text)
+    vehicle = load_vehicle(str(path))
+    spec = read_spec()
+    hotel = [draw_scenario(spec, vehicle, i, s).vehicle.hotel_w
+             for i, s in enumerate(scenario_seeds(1, 400))]
+    # the file's 0.2 W, not the scenario file's default 5 % (0.06 W)
+    assert 0.15 < np.std(hotel) < 0.25
+
+
+def test_results_do_not_depend_on_the_number_of_workers():
+    job = _job()
+    alone = montecarlo.run_montecarlo(job, 5)
+    with scenario_executor(2) as pool:
+        pooled = montecarlo.run_montecarlo(job, 5, pool, 2)
+    assert [r["scenario"] for r in pooled.rows] == list(range(5))
+    pd.testing.assert_frame_equal(alone.table(), pooled.table())
+    assert alone.table()["energy_j"].nunique() == 5
+
+
+def test_dask_local_cluster_gives_the_local_pools_results():
+    pytest.importorskip("distributed")
+    job = _job(seed=11)
+    with scenario_executor(2) as pool:
+        local = montecarlo.run_montecarlo(job, 4, pool, 2)
+    with scenario_executor(2, "local") as dask:
+        distributed = montecarlo.run_montecarlo(job, 4, dask, 2)
+    pd.testing.assert_frame_equal(local.table(), distributed.table())
+
+
+def test_the_budget_verdict_follows_each_scenarios_battery():
+    spent = montecarlo.run_montecarlo(_job(budget_j=1e9), 3).table()
+    tight = float(spent["energy_j"].median())
+    table = montecarlo.run_montecarlo(_job(budget_j=tight / 0.97), 3).table()
+    assert (table["held"] == (table["energy_j"] <= table["budget_j"])).all()
+    assert table["budget_j"].nunique() == 3  # each scenario's battery holds its own share
+    exhausted = table.loc[~table["held"], "exhausted_s"]
+    assert exhausted.notna().all() and (exhausted < table.loc[~table["held"],
+                                                              "duration_s"]).all()
+
+
+def test_wilson_interval_brackets_the_share():
+    low, high = montecarlo.wilson_interval(95, 100)
+    assert low < 0.95 < high
+    assert montecarlo.wilson_interval(10, 10)[1] == pytest.approx(1.0)
+    assert montecarlo.wilson_interval(10, 10)[0] == pytest.approx(0.7225, abs=1e-3)
+
+
+def test_command_writes_its_files_and_says_how_likely(tmp_path, capsys):
+    out = tmp_path / "mc"
+    args = ["montecarlo", str(FIG2), "--scenarios", "4", "--workers", "1", "--seed", "5",
+            "-o", str(out)]
+    assert main(args) == 0
+    assert {p.name for p in out.iterdir()} == FILES
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scenarios"] == 4 and summary["budget_held"] == 4
+    low, high = summary["probability_interval_95"]
+    assert low < 1.0 and high == pytest.approx(1.0)
+    assert set(summary["energy_j"]) == {"p05", "p50", "p95"}
+    table = pd.read_parquet(out / "scenarios.parquet")
+    for column in ("scenario", "energy_j", "duration_s", "quality", "end_state", "held",
+                   "overran_component", "drawn_thermocline_depth_m", "time_s1_s"):
+        assert column in table
+    assert (table["end_state"] == "s3").all()
+    assert "the budget held in 4 of 4 scenarios: 100.0 %" in capsys.readouterr().out
+    for png in ("energy.png", "exhaustion.png"):
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_ctrl_c_keeps_the_scenarios_that_finished(tmp_path, monkeypatch, capsys):
+    real = montecarlo.fly_scenario
+
+    def interrupted_at_two(job, index):
+        if index == 2:
+            raise KeyboardInterrupt
+        return real(job, index)
+
+    monkeypatch.setattr(montecarlo, "fly_scenario", interrupted_at_two)
+    out = tmp_path / "mc"
+    code = main(["montecarlo", str(FIG2), "--scenarios", "5", "--workers", "1", "-o",
+                 str(out)])
+    assert code == 130
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] and summary["scenarios"] == 2
+    assert "2 of 5 scenarios finished" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('kind = "board"\n', 'kind: expected "scenarios"'),
+    ('kind = "scenarios"\n[ocean]\n', "ocean.thermocline_depth_m: missing"),
+    ('kind = "scenarios"\n[ocean]\nthermocline_depth_m = { dist = "gamma" }\n',
+     "dist: expected fixed, uniform or normal"),
+    ('kind = "scenarios"\n[ocean]\nthermocline_depth_m = { dist = "uniform", low = 3 }\n',
+     "thermocline_depth_m: high: missing"),
+    ('kind = "scenarios"\n[ocean]\nthermocline_depht_m = 3\n',
+     "ocean.thermocline_depht_m: unknown key"),
+    ('kind = "scenarios"\n[vehicle]\nhotel_powr = { relative_sd = 0.1 }\n',
+     "vehicle.hotel_powr: not a vehicle figure"),
+    ("kind = \n", "not valid TOML"),
+])
+def test_bad_scenario_files_name_file_and_key(tmp_path, capsys, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ScenarioFileError, match=message):
+        read_spec(path)
+    code = main(["montecarlo", str(FIG2), "--scenarios", "2", "--scenario-file", str(path),
+                 "-o", str(tmp_path / "mc")])
+    err = capsys.readouterr().err
+    assert code == 1 and f"{path}: " in err and "Traceback" not in err
+    assert not (tmp_path / "mc").exists()
+
+
+def test_bad_usage_exits_2(tmp_path, capsys):
+    for extra in (["--scenarios", "0"], ["--scenarios", "2", "--workers", "0"],
+                  ["--scenarios", "2", "--scenario-file", str(tmp_path / "none.toml")],
+                  ["--scenarios", "2", "--plan", str(tmp_path / "none.plan")]):
+        assert main(["montecarlo", str(FIG2), *extra, "-o", str(tmp_path / "mc")]) == 2
+    assert "Traceback" not in capsys.readouterr().err
