@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 from gliderplan.cli.common import add_mission_argument, load_mission
@@ -34,6 +35,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the JSON report")
     parser.add_argument("--sweep", type=int, metavar="N",
                         help="Pareto sweep with N budgets, plus computer and battery sweeps")
+    parser.add_argument("--confidence", type=float, metavar="C",
+                        help="plan so that the budget holds with this probability (e.g. "
+                             "0.95): the scenario approach over simulated scenarios")
+    parser.add_argument("--scenarios", type=int, metavar="N",
+                        help="with --confidence: scenarios to fly (default: as many as the "
+                             "confidence needs at --risk)")
+    parser.add_argument("--risk", type=float, default=1e-3, metavar="B",
+                        help="with --confidence: the chance that the scenarios drawn were "
+                             "unrepresentative (default 0.001)")
+    parser.add_argument("--seed", type=int, default=0, help="with --confidence: seed")
+    parser.add_argument("--scenario-file", metavar="FILE",
+                        help="with --confidence: the distributions to draw from")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
+                        help="with --confidence: worker processes (default: one per core)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,17 +57,24 @@ def run(args: argparse.Namespace) -> int:
     mission = load_mission(args)
     if args.sweep is not None:
         return _sweep(mission, args)
+    from gliderplan.cli.progress import ProgressBar
     from gliderplan.planner import make_plan
     from gliderplan.planner.plan import InfeasibleBudget
     from gliderplan.planner.report import infeasible_json, report_json, report_text
 
+    progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios flown")
     try:
         plan = make_plan(mission, battery=args.battery, computer=args.computer,
-                         output=args.output)
+                         output=args.output, confidence=args.confidence,
+                         scenarios=args.scenarios, seed=args.seed, risk=args.risk,
+                         scenario_file=args.scenario_file, workers=args.workers,
+                         progress=progress)
     except InfeasibleBudget as short:  # the report says so too; the error is for main
         if args.json:
             print(json.dumps(infeasible_json(short), indent=2))
         raise
+    finally:
+        progress.finish()
     if args.json:
         print(json.dumps(report_json(plan), indent=2))
     else:

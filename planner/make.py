@@ -25,18 +25,42 @@ SweepProgress = Callable[[str, int, int], None]  # (sweep, points done, points i
 
 
 def make_plan(mission: CheckedMission, *, battery: str | None = None,
-              computer: str | None = None, output: str | Path | None = None) -> Plan:
+              computer: str | None = None, output: str | Path | None = None,
+              confidence: float | None = None, scenarios: int | None = None, seed: int = 0,
+              risk: float = 1e-3, scenario_file: str | Path | None = None, workers: int = 1,
+              progress: Callable[[float, float], None] | None = None) -> Plan:
     """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
     preset) and `computer` ("ts7800@500"; "ts7800" lets the planner pick the clock) in
-    its place. With `output`, write the plan file there and its JSON report beside it
-    (`output`.json), atomically. Raises InfeasibleBudget (with the minimum energy and the
-    largest consumers), PlanningError, HardwareError or ModelFileError."""
+    its place. With `confidence`, the budget holds with that probability: the scenario
+    approach over `scenarios` simulated scenarios (default: as many as the confidence
+    needs at `risk`) drawn from `scenario_file` (default: the shipped one) from `seed`,
+    flown by `workers` processes (planner/confidence.py). With `output`, write the plan
+    file there and its JSON report beside it (`output`.json), atomically. Raises
+    InfeasibleBudget (with the minimum energy and the largest consumers), PlanningError,
+    HardwareError or ModelFileError."""
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import plan_mission
     from gliderplan.planner.planfile import write_plan_bytes
     from gliderplan.planner.report import report_json
 
-    plan = plan_mission(mission, load_hardware(mission, battery=battery, computer=computer))
+    hardware = load_hardware(mission, battery=battery, computer=computer)
+    if confidence is None:
+        plan = plan_mission(mission, hardware)
+    else:
+        from gliderplan.planner.confidence import plan_mission_at_confidence
+        from gliderplan.sim.backends import scenario_executor
+        from gliderplan.sim.scenarios import read_spec
+
+        for name, value in (("--confidence", confidence), ("--risk", risk)):
+            if not 0.0 < value < 1.0:
+                raise UsageError(f"{name} {value:g}: must lie strictly between 0 and 1")
+        if scenarios is not None and scenarios < 1:
+            raise UsageError(f"--scenarios {scenarios}: must be at least 1")
+        spec = read_spec(scenario_file)
+        with scenario_executor(workers) as executor:
+            plan = plan_mission_at_confidence(
+                mission, hardware, confidence, scenarios=scenarios, seed=seed, risk=risk,
+                spec=spec, executor=executor, workers=workers, progress=progress)
     data = write_plan_bytes(plan)
     if output is not None:
         write_atomically(output, data)

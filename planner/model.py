@@ -138,6 +138,7 @@ class PlanModel:
                 common.append(weights @ utility + offset >= inputs.sensor_quality_min[sensor])
         self.energy = energy
         self.quality = quality
+        self.common = common  # what every problem over these variables keeps
         self.budget_constraint = energy <= self.p_budget
         self.quality_problem = cp.Problem(cp.Maximize(quality), [*common, self.budget_constraint])
         self.energy_problem = cp.Problem(cp.Minimize(energy), [*common, quality >= self.p_floor])

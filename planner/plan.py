@@ -112,6 +112,7 @@ class Plan:
     solve_s: float
     solver_iterations: int | None
     states: tuple[StatePlan, ...]
+    confidence: object | None = None  # planner.confidence.Confidence of a plan at a confidence
 
     @property
     def components_j(self) -> dict[str, float]:

@@ -49,6 +49,7 @@ def report_json(plan: Plan) -> dict:
                    "time_s": plan.solve_s, "iterations": plan.solver_iterations},
         "components_j": plan.components_j,
         "states": [_state_json(s) for s in plan.states],
+        "confidence": plan.confidence.to_json() if plan.confidence is not None else None,
     }
 
 
@@ -90,6 +91,12 @@ def report_text(plan: Plan) -> str:
              f"shadow price {plan.shadow_price:.4g} quality per extra Wh"
              + ("  (the budget is not the limit)" if plan.shadow_price < 1e-9 else ""),
              "", "what each state does:"]
+    if plan.confidence is not None:
+        c = plan.confidence
+        lines.insert(3, f"confidence {c.achieved:.3g} (asked {c.requested:g}): the budget "
+                        f"holds in all {c.scenarios} simulated scenarios; {c.method}, risk "
+                        f"{c.risk:g}, {c.dimension} decisions, {c.support} scenarios active; "
+                        "the shadow price is at this confidence")
     lines += _table(["state", "time h", "clock", "plan"],
                     [[s.name, f"{s.time_s / 3600:.2f}", f"{s.clock_mhz:g}", _does(s)]
                      for s in plan.states])
