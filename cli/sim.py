@@ -2,7 +2,9 @@
 
 Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.png.
 Without --plan every sensor a state logs is always on. Exit status 3: the run spent
-more than the plan's budget (a plan violation; summary.json names the cause).
+more than the plan's budget (a plan violation; summary.json names the cause). A run
+within its budget in which a state spent more than 5 % over its prediction says "plan
+check: over prediction" and names the state and the component (exit 0).
 """
 
 from __future__ import annotations
@@ -103,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
           f"{len(record.trace)} transitions, {result.energy.total_j / 1e3:.1f} kJ; "
           f"plan check: {check.verdict}", file=sys.stderr)
     if check.causes:
-        print("  over the plan's prediction:" if check.verdict == "pass" else "  cause:",
+        print("  over the plan's prediction:" if check.verdict == "over prediction"
+              else "  cause:",
               file=sys.stderr)
     for cause in check.causes:
         print(f"    {cause}", file=sys.stderr)

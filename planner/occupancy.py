@@ -169,6 +169,9 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
         leg = leg_length_m(position, targets) if sensor_exit is not None else None
         if found is not None:
             fire_s, event, ended_by = found[0], found[1], "guard"
+            if sensor_exit is not None:
+                notes.append(f"{state}: its exits on readings ({_reads(here)}) are assumed "
+                             "not to fire before its missiontime guard")
         elif limit == horizon and leg is not None:
             # A transit leg: the walk assumes the nominal speed; the planner chooses it.
             fire_s = entry + math.ceil(leg / NOMINAL_SPEED_MPS / TICK_S) * TICK_S
@@ -181,6 +184,9 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
         else:
             trace.append(Visit(state, entry, horizon - entry, entry_vars, "horizon"))
             why = "default horizon" if horizon_defaulted else "horizon"
+            if sensor_exit is not None:
+                notes.append(f"{state}: its exits on readings ({_reads(here)}) are assumed "
+                             "not to fire")
             notes.append(f"{state}: no exit decided before the {why} ({horizon:g} s); "
                          "runs to it")
             break
@@ -192,6 +198,35 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
     if horizon_defaulted and trace and trace[-1].ended_by == "horizon":
         notes.append(f"horizon: {DEFAULT_HORIZON_S:g} s (default)")
     return _summarise(mission, trace, notes, legs)
+
+
+def _reads(state: ir.State) -> str:
+    """The readings other than missiontime that a state's exits depend on."""
+    names = set()
+    for event in state.events:
+        if event.action is not None:
+            names |= ir.sensors_read(event.condition) - {"missiontime"}
+    return ", ".join(sorted(names))
+
+
+def _variable_arguments(mission: ir.CheckedMission, trace: list[Visit]) -> list[str]:
+    """Notes for profile arguments that read variables: planned at their value on the
+    state's first visit, though the flight may change them."""
+    notes = []
+    assigned = {a.variable for s in mission.states for e in s.events for a in e.assignments}
+    first = {}
+    for visit in trace:
+        first.setdefault(visit.state, visit.variables)
+    initial = {v.name: v.initial for v in mission.variables}
+    for state in mission.states:
+        read = sorted(set().union(*(ir.variables_read(a) for p in state.profiles
+                                    for a in p.args)) & assigned)
+        if read:
+            values = first.get(state.name, initial)
+            notes.append(f"{state.name}: profile arguments {', '.join(read)} planned at "
+                         + ", ".join(f"{v} = {values[v]:g}" for v in read)
+                         + " (their value on entry); events may change them in flight")
+    return notes
 
 
 def _summarise(mission: ir.CheckedMission, trace: list[Visit], notes: list[str],
@@ -206,6 +241,7 @@ def _summarise(mission: ir.CheckedMission, trace: list[Visit], notes: list[str],
     initial = {v.name: v.initial for v in mission.variables}
     for s in mission.states:
         first_vars.setdefault(s.name, initial)
+    notes = [*notes, *_variable_arguments(mission, trace)]
     return Occupancy(time_s, visits, first_vars, tuple(trace), "timeline",
                      tuple(dict.fromkeys(notes)), legs)
 

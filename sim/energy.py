@@ -8,7 +8,10 @@ warm-up at every switch-on). The plan check compares the run with the plan's pre
 per state (prediction.py).
 
 A run that spends more than the plan's budget by more than `PLAN_TOLERANCE` violates the
-plan; the states that overran their prediction are named as the cause.
+plan; the states that overran their prediction are named as the cause. A run within its
+budget in which a state overran its own prediction by more than the tolerance is "over
+prediction", with the state and the component responsible: the budget held, but the
+plan's prediction was wrong.
 """
 
 from __future__ import annotations
@@ -110,7 +113,7 @@ def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
 
 @dataclass(frozen=True)
 class PlanCheck:
-    verdict: str  # "pass", "violation" or "no plan"
+    verdict: str  # "pass", "over prediction", "violation" or "no plan"
     budget_j: float | None
     predicted_j: float | None
     simulated_j: float
@@ -161,5 +164,6 @@ def check_plan(energy: RunEnergy, plan: Plan | None,
         causes = [(0.0, f"{simulated / 1e3:.1f} kJ spent against a budget of "
                         f"{plan.budget_j / 1e3:.1f} kJ; most in " + ", ".join(
                             f"{name} ({joules / 1e3:.1f} kJ)" for joules, name in spent[:3]))]
-    return PlanCheck("violation" if over_budget else "pass", plan.budget_j, plan.predicted_j,
+    verdict = "violation" if over_budget else "over prediction" if causes else "pass"
+    return PlanCheck(verdict, plan.budget_j, plan.predicted_j,
                      simulated, tolerance, tuple(text for _, text in causes))

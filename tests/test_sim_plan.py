@@ -175,7 +175,9 @@ def test_the_annotated_fig2_flies_its_plan_within_the_prediction(tmp_path, capsy
     assert main(["sim", str(mission), "--plan", str(plan), "-o", str(tmp_path / "run")]) == 0
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     check = summary["plan_check"]
-    assert check["verdict"] == "pass"
+    # within the budget; a state more than 5 % over its own prediction is named
+    assert check["verdict"] in ("pass", "over prediction")
+    assert all(c.split(":")[0] in ("s1", "s2", "s3") for c in check["causes"])
     assert check["simulated_j"] == pytest.approx(check["predicted_j"], rel=0.05)
     assert [name for name, s in summary["states"].items() if "predicted_j" in s] == \
         ["s1", "s2", "s3"]
@@ -188,3 +190,17 @@ def test_without_its_report_the_planner_s_plan_is_predicted_by_planning_again(tm
     assert code == 0 and summary["prediction"] == "replanned"
     survey = summary["states"]["survey"]
     assert survey["simulated_j"] == pytest.approx(survey["predicted_j"], rel=0.05)
+
+
+def test_a_run_over_its_prediction_says_so_even_within_its_budget(tmp_path, capsys):
+    mission = EXAMPLES / "thermocline_survey.mission"
+    plan = tmp_path / "survey.plan"
+    assert main(["plan", str(mission), "-o", str(plan)]) == 0
+    code = main(["sim", str(mission), "--plan", str(plan), "-o", str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    check = json.loads((tmp_path / "run" / "summary.json").read_text())["plan_check"]
+    assert code == 0 and check["simulated_j"] < check["budget_j"]
+    assert check["simulated_j"] > check["predicted_j"] * 1.05
+    assert check["verdict"] == "over prediction"
+    assert "plan check: over prediction" in err and "over the plan's prediction:" in err
+    assert any(c.startswith("track: ") and "(pump +" in c for c in check["causes"])
