@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from gliderplan.cli.common import check_file
+from gliderplan.language import check_file
 from gliderplan.planner.plan import plan_mission
 from gliderplan.planner.planfile import write_plan_bytes
 from gliderplan.power_models import load_vehicle
