@@ -1,7 +1,10 @@
-"""Random and mutated input never crashes the front end: it gives diagnostics instead."""
+"""Random and mutated input never crashes the front end: it gives diagnostics instead, each
+error at a line and column of the source (only a file with no mission text in it at all
+is refused as a whole), and a mission it accepts generates C or a clear CodegenError."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
@@ -9,8 +12,10 @@ from hypothesis import strategies as st
 
 from gliderplan.cli.main import main
 from gliderplan.language import check_source
-from gliderplan.language.diagnostics import MissionSyntaxError
+from gliderplan.language.codegen_c import CodegenError, generate_c
+from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError
 from gliderplan.language.formatter import FormatError, format_source
+from gliderplan.language.syntax_errors import is_blank
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 SOURCES = [p.read_text() for p in sorted(EXAMPLES.glob("*.mission"))]
@@ -27,13 +32,32 @@ VOCABULARY = [
     ";",
 ]
 
-_FUZZ = settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+# Examples per test; a long run: GLIDERPLAN_FUZZ_EXAMPLES=20000 pytest tests/test_lang_fuzz.py
+EXAMPLES_PER_TEST = int(os.environ.get("GLIDERPLAN_FUZZ_EXAMPLES", "200"))
+_FUZZ = settings(max_examples=EXAMPLES_PER_TEST, deadline=None,
+                 suppress_health_check=[HealthCheck.too_slow])
+
+
+def _located(diagnostic: Diagnostic, source: str) -> bool:
+    """At a line of the source (or just past its last line) and a column on it."""
+    span = diagnostic.span
+    return 1 <= span.line <= len(source.splitlines()) + 1 and span.column >= 1
 
 
 def _front_end_survives(source: str) -> None:
     result = check_source(source, "fuzz.mission")
     assert result.ok or any(d.is_error for d in result.diagnostics)
-    result.render()  # rendering any diagnostic must work too
+    errors = [d for d in result.diagnostics if d.is_error]
+    assert all(_located(d, source) for d in errors) or is_blank(source), errors
+    rendered = result.render()  # rendering any diagnostic must work too
+    for d in errors:
+        if _located(d, source):
+            assert f"fuzz.mission:{d.span.line}:{d.span.column}: error: " in rendered
+    if result.ok:
+        try:
+            generate_c(result.mission)
+        except CodegenError:
+            pass  # a mission the runtime cannot hold, said in one line
     try:
         format_source(source)
     except (MissionSyntaxError, FormatError):
@@ -56,26 +80,44 @@ def test_random_text(source):
     _front_end_survives(source)
 
 
-def mutated(source: str, data: st.DataObject) -> str:
-    """The source with one to four of its space-separated words deleted, doubled or
-    replaced by a word of the vocabulary."""
-    tokens = source.split(" ")
-    for _ in range(data.draw(st.integers(1, 4))):
-        at = data.draw(st.integers(0, len(tokens) - 1))
-        kind = data.draw(st.sampled_from(["delete", "duplicate", "replace"]))
+# Characters that, put into an example, give half-typed words, a stray quote or bracket,
+# a number cut short: the lexer's and the checker's corners.
+_CHARACTERS = list("()|,.:;\"'#@%=<>!&+-*/0519eE\n\t x")
+
+
+def _edited(pieces: list[str], data: st.DataObject, most: int, alphabet: list[str]) -> list[str]:
+    """`pieces` after 1..`most` random edits: one deleted or doubled, or one of `alphabet`
+    inserted or put in its place."""
+    for _ in range(data.draw(st.integers(1, most))):
+        at = data.draw(st.integers(0, len(pieces) - 1))
+        kind = data.draw(st.sampled_from(["delete", "duplicate", "insert", "replace"]))
         if kind == "delete":
-            del tokens[at]
+            del pieces[at]
         elif kind == "duplicate":
-            tokens.insert(at, tokens[at])
+            pieces.insert(at, pieces[at])
+        elif kind == "insert":
+            pieces.insert(at, data.draw(st.sampled_from(alphabet)))
         else:
-            tokens[at] = data.draw(st.sampled_from(VOCABULARY))
-    return " ".join(tokens)
+            pieces[at] = data.draw(st.sampled_from(alphabet))
+    return pieces
+
+
+def mutated(source: str, data: st.DataObject) -> str:
+    """The source with one to four of its space-separated words deleted or doubled, or a
+    word of the vocabulary inserted or put in a word's place."""
+    return " ".join(_edited(source.split(" "), data, 4, VOCABULARY))
 
 
 @_FUZZ
 @given(st.sampled_from(SOURCES), st.data())
 def test_mutated_examples(source, data):
     _front_end_survives(mutated(source, data))
+
+
+@_FUZZ
+@given(st.sampled_from(SOURCES), st.data())
+def test_examples_with_characters_edited(source, data):
+    _front_end_survives("".join(_edited(list(source), data, 6, _CHARACTERS)))
 
 
 @settings(max_examples=100, deadline=None,
