@@ -9,6 +9,7 @@
 #include <poll.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/times.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
@@ -134,9 +135,14 @@ long gp_serial_read(int fd, uint8_t *buf, size_t cap, int timeout_ms)
     return (long)n;
 }
 
+/* CLOCK_MONOTONIC arrived with Linux 2.6; on the TS-5500's Linux 2.4 the clock ticks
+ * since boot (times(): 10 ms at HZ=100) stand in. Neither steps with the wall clock. */
 double gp_now_s(void)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+    if (clock_gettime(CLOCK_MONOTONIC, &ts) == 0) {
+        return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+    }
+    struct tms unused;
+    return (double)(unsigned long)times(&unused) / (double)sysconf(_SC_CLK_TCK);
 }

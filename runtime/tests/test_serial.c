@@ -2,7 +2,9 @@
  * the path it names, and the linger before closing that ends when the peer hangs up
  * and otherwise at its bound. */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <fcntl.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "gp_serial.h"
@@ -62,4 +64,30 @@ void test_linger_should_end_when_the_peer_hangs_up_and_else_at_its_bound(void)
     gp_serial_linger(master, 60.0);  /* peer gone: returns at once, not after 60 s */
     CHECK(gp_now_s() - start < 30.0);
     close(master);
+}
+
+/* The build of the tests links with -Wl,--wrap=clock_gettime: a kernel without a
+ * monotonic clock (Linux 2.4, the TS-5500's) is one flag away. */
+static int monotonic_clock_missing;
+int __real_clock_gettime(clockid_t clock, struct timespec *ts);
+int __wrap_clock_gettime(clockid_t clock, struct timespec *ts);
+int __wrap_clock_gettime(clockid_t clock, struct timespec *ts)
+{
+    if (monotonic_clock_missing && clock == CLOCK_MONOTONIC) {
+        errno = EINVAL;
+        return -1;
+    }
+    return __real_clock_gettime(clock, ts);
+}
+
+void test_now_should_count_clock_ticks_on_a_kernel_without_a_monotonic_clock(void)
+{
+    monotonic_clock_missing = 1;
+    double start = gp_now_s();
+    struct timespec pause = {0, 300 * 1000 * 1000};
+    nanosleep(&pause, NULL);
+    double elapsed = gp_now_s() - start;
+    monotonic_clock_missing = 0;
+    CHECK(start > 0);
+    CHECK(elapsed >= 0.25 && elapsed < 10.0);
 }
