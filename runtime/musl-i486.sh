@@ -48,6 +48,43 @@ $apt update >"$work/update.log" 2>&1 || true
 tar -xzf "$work"/src/musl_*.orig.tar.gz -C "$work/src"
 cd "$work"/src/musl-*/
 
+# The TS-5500 build's -mpc64 sets the x87 to double precision for the whole program (its
+# arithmetic then rounds each result once, as the reference semantics do). musl reads and
+# prints numbers (strtod, printf) in long double and needs the 64-bit mantissa for that:
+# those two routines get it for the duration of the call.
+with_extended_precision() {  # FILE 'DEFINITION LINE' NAME 'ARGUMENTS OF THE CALL'
+    awk -v line="$2" -v name="$3" -v args="$4" '
+        $0 == line && !done {
+            renamed = line
+            sub(name "\\(", name "_x87(", renamed)
+            call = name "_x87(" args ")"
+            print renamed ";"
+            print line
+            print "{"
+            print "\tunsigned short saved, extended;"
+            print "\t__asm__ volatile (\"fnstcw %0\" : \"=m\"(saved) : : \"memory\");"
+            print "\textended = saved | 0x300;"
+            print "\t__asm__ volatile (\"fldcw %0\" : : \"m\"(extended) : \"memory\");"
+            print "\t__typeof__(" call ") result = " call ";"
+            print "\t__asm__ volatile (\"fldcw %0\" : : \"m\"(saved) : \"memory\");"
+            print "\treturn result;"
+            print "}"
+            print renamed
+            done = 1
+            next
+        }
+        { print }
+        END { if (!done) exit 1 }' "$1" >"$1.new" && mv "$1.new" "$1" || {
+        echo "musl-i486: '$2' not found in $1 (another musl version?)" >&2
+        exit 1
+    }
+}
+with_extended_precision src/internal/floatscan.c \
+    'long double __floatscan(FILE *f, int prec, int pok)' __floatscan 'f, prec, pok'
+with_extended_precision src/stdio/vfprintf.c \
+    'static int fmt_fp(FILE *f, long double y, int w, int p, int fl, int t)' fmt_fp \
+    'f, y, w, p, fl, t'
+
 ./configure --target=i386 --prefix="$prefix" --disable-shared --enable-wrapper=gcc \
     CROSS_COMPILE="$cross" CC="${cross}gcc" CFLAGS="-march=i486 -O2" >"$work/build.log" 2>&1 &&
     make -j"$(nproc)" >>"$work/build.log" 2>&1 &&
@@ -56,6 +93,10 @@ cd "$work"/src/musl-*/
     echo "musl-i486: the build failed" >&2
     exit 1
 }
+# musl's specs replace gcc's start files, and with them the object that sets the x87's
+# precision for -mpc64; put it back.
+sed -i '/^\*startfile:$/{n;s/$/ %{mpc32:crtprec32.o%s} %{mpc64:crtprec64.o%s} %{mpc80:crtprec80.o%s}/}' \
+    "$prefix/lib/musl-gcc.specs"
 mkdir -p "$bindir"
 ln -sf "$prefix/bin/musl-gcc" "$bindir/i486-linux-musl-gcc"
 echo "musl-i486: musl $(cat VERSION) for the i486 in $prefix; compiler $bindir/i486-linux-musl-gcc"

@@ -54,7 +54,15 @@ apt_get() {
 }
 
 missing=$(for p in $PACKAGES; do dpkg -s "$p" >/dev/null 2>&1 || echo "$p"; done | xargs)
-command -v i486-linux-musl-gcc >/dev/null && musl= || musl=1
+# An install from before -mpc64 worked with it (its start file, strtod and printf at
+# extended precision) is built again.
+if command -v i486-linux-musl-gcc >/dev/null &&
+    grep -q crtprec64 "$MUSL_PREFIX/lib/musl-gcc.specs" 2>/dev/null &&
+    grep -q __floatscan_x87 "$MUSL_PREFIX/lib/libc.a" 2>/dev/null; then
+    musl=
+else
+    musl=1
+fi
 [ -z "$missing" ] && [ -z "$musl" ] && exit 0
 
 if [ "$(id -u)" = 0 ]; then

@@ -525,3 +525,30 @@ def test_the_ts5500_binary_has_no_instruction_the_i486_lacks(cache, tmp_path, bo
     assert compile_fig2(tmp_path / "ts5500", "--target", "ts5500") == 0
     assert i686_only_instructions(tmp_path / "ts5500" / "sampleMission") == []
 
+
+def test_the_ts5500_build_rounds_each_result_to_double_once(tmp_path, board_runner):
+    # x87 registers hold 64-bit mantissas; -mpc64 sets the precision to double's 53 bits at
+    # start-up, or a difference is rounded twice and lands one unit off the reference. The
+    # C library's strtod and printf still read and print every double exactly.
+    emulator = board_runner("ts5500")
+    board = build.TARGETS["ts5500"]
+    source = tmp_path / "difference.c"
+    source.write_text("#include <stdio.h>\n#include <stdlib.h>\n"
+                      "int main(int argc, char **argv) {\n"
+                      "    for (int i = 1; i + 1 < argc; i += 2) {\n"
+                      "        volatile double a = strtod(argv[i], NULL);\n"
+                      "        volatile double b = strtod(argv[i + 1], NULL);\n"
+                      "        printf(\"%a %.17g\\n\", a - b, a - b);\n"
+                      "    }\n"
+                      "    return 0;\n"
+                      "}\n")
+    subprocess.run([board.compiler, *board.flags, str(source), "-o", str(tmp_path / "difference")],
+                   check=True)
+    pairs = [(-3.256479851258976e16, 2.00001), (0.454, 0.0), (1.7976931348623157e308, 1e292),
+             (5e-324, 0.0), (123456.789, 0.001), (-7349.8058, 3910.5)]
+    done = subprocess.run([*emulator, str(tmp_path / "difference"),
+                           *(repr(x) for pair in pairs for x in pair)],
+                          capture_output=True, text=True, check=True)
+    for (a, b), line in zip(pairs, done.stdout.splitlines(), strict=True):
+        exact, decimal = line.split()
+        assert float.fromhex(exact) == float(decimal) == a - b, (a, b, line)
