@@ -9,7 +9,7 @@
 # this says what is missing and why, and the tests that need it are reported as skipped.
 set -u
 
-PACKAGES="gcc-arm-linux-gnueabi libc6-dev-armel-cross gcc-i686-linux-gnu libc6-dev-i386-cross
+PACKAGES="gcc make gcc-arm-linux-gnueabi libc6-dev-armel-cross gcc-i686-linux-gnu libc6-dev-i386-cross
           qemu-user valgrind clang libclang-rt-dev"
 MUSL_PREFIX=/usr/local/lib/musl-i486
 LOCK_WAIT_S=${LOCK_WAIT_S:-900}
