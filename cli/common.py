@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
-from gliderplan.contract import DEFAULT_STACK_DEPTH, MAX_STACK_DEPTH
+from gliderplan.contract import DEFAULT_STACK_DEPTH, MAX_STACK_DEPTH, RUNTIME_CYCLES_PER_TICK
 from gliderplan.language import check_file
 from gliderplan.language.ir import CheckedMission
 
@@ -19,6 +20,24 @@ def add_max_stack_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-stack", type=int, metavar="N", default=None,
                         help=f"runtime state-stack depth, 1 to {MAX_STACK_DEPTH} "
                              f"(default: the mission's, else {DEFAULT_STACK_DEPTH})")
+
+
+def cycles_per_tick(text: str) -> float:
+    """A workload in cycles per tick (argparse type): a positive finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of cycles, got {text!r}")
+    return value
+
+
+def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--cycles-per-tick", type=cycles_per_tick, metavar="N",
+                        default=RUNTIME_CYCLES_PER_TICK,
+                        help="the board's work every tick [cycles] in states that do not say "
+                             f"(default: the runtime's own, {RUNTIME_CYCLES_PER_TICK:,.0f})")
 
 
 def load_mission(args: argparse.Namespace) -> CheckedMission:

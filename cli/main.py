@@ -25,13 +25,17 @@ from gliderplan.contract.errors import GliderplanError
 
 
 def subcommands(only: str | None = None) -> dict[str, ModuleType]:
-    """Subcommand name -> module, in --help order; just `only` when that names one."""
+    """Subcommand name -> module, in --help order; just `only` when that names one.
+    A module's name is its command's, with `_` for `-` (compare_sbc: compare-sbc)."""
     names = [info.name for info in pkgutil.iter_modules(gliderplan.cli.__path__)
              if not info.name.startswith("_")]
-    found = [m for m in map(_module, [only] if only in names else names) if _is_subcommand(m)]
+    wanted = only.replace("-", "_") if only is not None else None
+    found = [m for m in map(_module, [wanted] if wanted in names else names)
+             if _is_subcommand(m)]
     if only is not None and not found:  # not a subcommand (a mistake, or a helper module)
         return subcommands()
-    return {m.__name__.rsplit(".", 1)[1]: m for m in sorted(found, key=lambda m: m.ORDER)}
+    return {m.__name__.rsplit(".", 1)[1].replace("_", "-"): m
+            for m in sorted(found, key=lambda m: m.ORDER)}
 
 
 def _module(name: str) -> ModuleType:

@@ -15,7 +15,7 @@ import json
 import os
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.cli.common import add_cycles_argument, add_mission_argument, load_mission
 from gliderplan.contract.errors import UsageError
 
 ORDER = 30
@@ -49,6 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --confidence: the distributions to draw from")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
                         help="with --confidence: worker processes (default: one per core)")
+    add_cycles_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -97,7 +98,8 @@ def _sweep(mission, args: argparse.Namespace) -> int:  # noqa: ANN001
             print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
 
     sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
-                          computer=args.computer, progress=progress)
+                          computer=args.computer, progress=progress,
+                          cycles_per_tick=args.cycles_per_tick)
     if args.json:
         print(json.dumps({"pareto": sweep.pareto.to_dict("records"),
                           "computers": sweep.computers.to_dict("records"),

@@ -14,6 +14,7 @@ import argparse
 import json
 import math
 
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
 from gliderplan.contract.errors import UsageError
 
 KINDS = ("board", "sensor", "vehicle", "battery")
@@ -152,9 +153,14 @@ def _derived(kind: str, model: object) -> list[dict]:
         return {"what": what, "value": float(value), "unit": unit}
 
     if kind == "board":
-        return [
-            row(f"active power at {m.clock_mhz:g} MHz", m.active_w, "W") for m in model.modes()
-        ] + [row(f"boot energy at {model.clock_mhz:g} MHz", model.boot_j, "J")]
+        rows = [row(f"active power at {m.clock_mhz:g} MHz", m.active_w, "W")
+                for m in model.modes()]
+        rows.append(row(f"boot energy at {model.clock_mhz:g} MHz", model.boot_j, "J"))
+        return rows + [
+            row(f"mean power at {m.clock_mhz:g} MHz, {how} between ticks",
+                m.mean_power_w(RUNTIME_CYCLES_PER_TICK, TICK_S, sleep), "W")
+            for m in model.modes() for how, sleep in (("idle", False), ("asleep", True))
+            if not sleep or m.sleep is not None]
     if kind == "battery":
         return [
             row("energy", model.energy_wh, "Wh"),

@@ -268,7 +268,9 @@ def coefficients(inputs: PlanInputs) -> Coefficients:
     scale = 1.0 / ENERGY_UNIT_J
     mode_w = np.where(np.isfinite(inputs.mode_power_w), inputs.mode_power_w, 0.0)
     prof_w = np.array([p.total_w for p in inputs.profiles])
-    fixed_j = float(np.sum(inputs.dev_warmup_j * inputs.switch_ons()))
+    # the board boots once, at its default clock, before the mission starts
+    fixed_j = inputs.hardware.board.boot_j + float(np.sum(inputs.dev_warmup_j
+                                                          * inputs.switch_ons()))
     fixed_j += float(tr.length_m @ (tr.pitch_j_per_m + tr.load_w * tr.turn_s_per_m))
     leg = np.zeros(len(inputs.states))
     leg[tr.state] = tr.length_m

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.files import write_atomically
 from gliderplan.language.ir import CheckedMission
@@ -25,25 +26,28 @@ SweepProgress = Callable[[str, int, int], None]  # (sweep, points done, points i
 
 
 def make_plan(mission: CheckedMission, *, battery: str | None = None,
-              computer: str | None = None, output: str | Path | None = None,
+              computer: str | None = None, cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK,
+              output: str | Path | None = None,
               confidence: float | None = None, scenarios: int | None = None, seed: int = 0,
               risk: float = 1e-3, scenario_file: str | Path | None = None, workers: int = 1,
               progress: Callable[[float, float], None] | None = None) -> Plan:
     """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
     preset) and `computer` ("ts7800@500"; "ts7800" lets the planner pick the clock) in
-    its place. With `confidence`, the budget holds with that probability: the scenario
-    approach over `scenarios` simulated scenarios (default: as many as the confidence
-    needs at `risk`) drawn from `scenario_file` (default: the shipped one) from `seed`,
-    flown by `workers` processes (planner/confidence.py). With `output`, write the plan
-    file there and its JSON report beside it (`output`.json), atomically. Raises
-    InfeasibleBudget (with the minimum energy and the largest consumers), PlanningError,
-    HardwareError or ModelFileError."""
+    its place; `cycles_per_tick` [cycles] is the board's work every tick. With
+    `confidence`, the budget holds with that probability: the scenario approach over
+    `scenarios` simulated scenarios (default: as many as the confidence needs at `risk`)
+    drawn from `scenario_file` (default: the shipped one) from `seed`, flown by `workers`
+    processes (planner/confidence.py). With `output`, write the plan file there and its
+    JSON report beside it (`output`.json), atomically. Raises InfeasibleBudget (with the
+    minimum energy and the largest consumers), PlanningError, HardwareError or
+    ModelFileError."""
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import plan_mission
     from gliderplan.planner.planfile import write_plan_bytes
     from gliderplan.planner.report import report_json
 
-    hardware = load_hardware(mission, battery=battery, computer=computer)
+    hardware = load_hardware(mission, battery=battery, computer=computer,
+                             cycles_per_tick=cycles_per_tick)
     if confidence is None:
         plan = plan_mission(mission, hardware)
     else:
@@ -80,6 +84,7 @@ class Sweep:
 
 def sweep_mission(mission: CheckedMission, points: int, output_dir: str | Path, *,
                   battery: str | None = None, computer: str | None = None,
+                  cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK,
                   progress: SweepProgress | None = None) -> Sweep:
     """The Pareto frontier at `points` budgets (2 to 10000), the plan on each computer at
     the mission's budget and with each battery; writes SWEEP_FILES into `output_dir`."""
@@ -92,15 +97,18 @@ def sweep_mission(mission: CheckedMission, points: int, output_dir: str | Path, 
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory (--sweep writes several files there)")
-    hardware = load_hardware(mission, battery=battery, computer=computer)
+    hardware = load_hardware(mission, battery=battery, computer=computer,
+                             cycles_per_tick=cycles_per_tick)
 
     def labelled(label: str) -> Callable[[int, int], None] | None:
         return None if progress is None else lambda done, total: progress(label, done, total)
 
     _, model = prepare(mission, hardware)
     frame = pareto(model, points, labelled("pareto"))
-    boards = computers(mission, budget_j=hardware.budget_j, progress=labelled("computers"))
-    packs = batteries(mission, computer=computer, progress=labelled("batteries"))
+    boards = computers(mission, budget_j=hardware.budget_j, progress=labelled("computers"),
+                       cycles_per_tick=cycles_per_tick)
+    packs = batteries(mission, computer=computer, progress=labelled("batteries"),
+                      cycles_per_tick=cycles_per_tick)
     contents = {"pareto.csv": frame.to_csv(index=False),
                 "computers.csv": boards.to_csv(index=False),
                 "batteries.csv": packs.to_csv(index=False),

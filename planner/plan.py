@@ -100,7 +100,7 @@ class Plan:
     computer: str
     clock_mhz: float
     objective: str
-    status: str  # "optimal"
+    status: str  # "optimal"; "infeasible" for `least_energy_plan` beyond the budget
     quality: float
     energy_j: float
     budget_j: float
@@ -205,6 +205,19 @@ def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
                   price if price >= _NO_PRICE else 0.0)
 
 
+def least_energy_plan(model: PlanModel, budget_j: float) -> Plan:
+    """The plan that needs the least energy: what the mission costs at the least when
+    `budget_j` [J] cannot buy it (status "infeasible" then). PlanningError when the
+    annotations cannot all hold."""
+    least = model.solve_energy(-1.0)
+    if not least.optimal:
+        raise PlanningError("the mission's annotations cannot all hold together")
+    minimum = realised_energy_j(model.inputs, least)
+    plan = assemble(model.inputs, Choice(_snapped(model.inputs, least), budget_j, minimum, 0.0))
+    short = least.model_energy_j > budget_j * (1 + 1e-9)
+    return replace(plan, status="infeasible") if short else plan
+
+
 def _check_budget(inputs: PlanInputs, needed: Solution, budget_j: float, origin: str) -> None:
     """InfeasibleBudget unless `budget_j` covers the solution as the model counts it
     (warm-ups included: what the budget constraint itself measures)."""
@@ -298,6 +311,7 @@ def state_energy_j(inputs: PlanInputs, sol: Solution) -> list[dict[str, float]]:
     n_modes = len(inputs.hardware.modes)
     for s, m in enumerate(_chosen_modes(inputs, sol)):
         result[s][Component.COMPUTER] = float(inputs.mode_power_w[s * n_modes + m] * times[s])
+    result[0][Component.COMPUTER] += inputs.hardware.board.boot_j  # booted for the start state
     for q, value in enumerate(_device_energy_j(inputs, sol)):
         name = inputs.dev_name[q]
         result[inputs.dev_state[q]][name] = result[inputs.dev_state[q]].get(name, 0.0) \

@@ -42,8 +42,8 @@ class ProfileRates:
 def computer_power_w(board: Board, cycles_per_tick: float,
                      tick_s: float = TICK_S) -> float | None:
     """Mean power [W] of the board idling between ticks; None if it cannot keep up."""
-    busy = float(board.busy_fraction(cycles_per_tick, 1.0 / tick_s))
-    return None if busy > 1.0 else float(board.power_w(busy))
+    power = float(board.mean_power_w(cycles_per_tick, tick_s))
+    return None if np.isnan(power) else power
 
 
 def _yo_band(profile: ir.Profile, args: tuple[float, ...]) -> tuple[float, float]:

@@ -11,15 +11,15 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from gliderplan.contract import Component
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
 from gliderplan.language import ir
+from gliderplan.planner.compare import COMPUTERS
 from gliderplan.planner.hardware import load_hardware
 from gliderplan.planner.inputs import build_inputs
 from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel, model_for
 from gliderplan.planner.occupancy import mission_occupancy
 from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, choose_plan, state_energy_j
 
-COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
 BATTERIES = ("alkaline", "lithium_primary", "rechargeable")
 Progress = Callable[[int, int], None]
 
@@ -72,7 +72,8 @@ def _row(model: PlanModel, budget_j: float) -> dict:
 
 
 def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
-              budget_j: float | None = None, progress: Progress | None = None) -> pd.DataFrame:
+              budget_j: float | None = None, progress: Progress | None = None,
+              cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> pd.DataFrame:
     """The plan on each computer, at the mission's budget or `budget_j`. The model is
     re-used while its structure stays (a fixed clock), rebuilt when it changes (a board
     whose clocks the planner chooses among)."""
@@ -80,7 +81,7 @@ def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
     model = None
     rows = []
     for i, spec in enumerate(specs):
-        hardware = load_hardware(mission, computer=spec)
+        hardware = load_hardware(mission, computer=spec, cycles_per_tick=cycles_per_tick)
         model = model_for(build_inputs(mission, hardware, occupancy), model)
         budget = hardware.budget_j if budget_j is None else budget_j
         rows.append({"computer": f"{hardware.board.name}@{hardware.board.clock_mhz:g}",
@@ -91,12 +92,14 @@ def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
 
 
 def batteries(mission: ir.CheckedMission, specs: Sequence[str] = BATTERIES,
-              computer: str | None = None, progress: Progress | None = None) -> pd.DataFrame:
+              computer: str | None = None, progress: Progress | None = None,
+              cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> pd.DataFrame:
     """The plan with each battery (only the budget changes)."""
     model = None
     rows = []
     for i, spec in enumerate(specs):
-        hardware = load_hardware(mission, battery=spec, computer=computer)
+        hardware = load_hardware(mission, battery=spec, computer=computer,
+                                 cycles_per_tick=cycles_per_tick)
         if model is None:
             model = model_for(build_inputs(mission, hardware, mission_occupancy(mission)))
         rows.append({"battery": spec, "battery_j": hardware.battery_j,

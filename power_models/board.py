@@ -1,9 +1,12 @@
-"""Single-board computers (SBCs) that run the mission: power per clock, boot cost, throughput.
+"""Single-board computers (SBCs) that run the mission: power per clock, sleep, boot, throughput.
 
-A board draws `idle_w` when it has nothing to do and `active_w` while busy; a workload
-of `cycles_per_tick` x `ticks_per_s` keeps it busy a fraction of the time, so its mean
-power is idle + (active - idle) x busy. Table I of Woithe & Kremer gives the active
-powers; the other figures and their basis are in the data files.
+Every tick the runtime has `cycles_per_tick` of work: the board is active for
+cycles / (clock x cycles per clock) seconds and then, until the next tick, either idles
+(`idle_w`) or, if it can and the mission asks it to, sleeps (`sleep.power_w`) and pays
+`sleep.wake_j` to wake for the next tick, which takes `sleep.wake_latency_s`. Powering
+the board up for the mission costs `boot_j` once. Table I of Woithe & Kremer gives the
+active powers; the other figures and their basis (most are assumptions) are in the data
+files.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from gliderplan.power_models.catalog import is_path_spec, resolve
-from gliderplan.power_models.datafile import read_model_file
+from gliderplan.power_models.datafile import Table, read_model_file
 from gliderplan.power_models.errors import ModelFileError
 
 
@@ -26,6 +29,36 @@ class ClockMode:
     clock_mhz: float
     active_w: float
     idle_w: float
+    wake_j: float = 0.0  # energy of a wake-up from sleep at this clock [J]
+
+
+@dataclass(frozen=True)
+class SleepMode:
+    """Suspend between ticks: the board's draw while asleep, what waking costs, what wakes
+    it ("serial": a byte on the science computer's line; "timer": its real-time clock)."""
+
+    power_w: float
+    wake_latency_s: float
+    wake_j: float
+    wakes_on: tuple[str, ...]
+
+
+WAKE_SOURCES = ("serial", "timer")
+
+
+@dataclass(frozen=True)
+class TickEnergy:
+    """Energy [J] of the board over one tick, by what it does: run the tick's work, idle or
+    sleep until the next tick, wake up. NaN throughout where it cannot keep up."""
+
+    active_j: np.ndarray
+    idle_j: np.ndarray
+    sleep_j: np.ndarray
+    wake_j: np.ndarray
+
+    @property
+    def total_j(self) -> np.ndarray:
+        return self.active_j + self.idle_j + self.sleep_j + self.wake_j
 
 
 @dataclass(frozen=True)
@@ -37,7 +70,7 @@ class Board:
     clock_mhz: float
     active_w: float
     idle_w: float
-    sleep_w: float
+    sleep: SleepMode | None  # None: the board cannot sleep between ticks
     boot_s: float
     boot_j: float
     cycles_per_s: float
@@ -53,11 +86,13 @@ class Board:
         """This board at another of its clocks [MHz]; ValueError if it has no such clock."""
         for mode in self.clock_modes:
             if abs(mode.clock_mhz - clock_mhz) < 1e-6:
+                sleep = replace(self.sleep, wake_j=mode.wake_j) if self.sleep else None
                 return replace(
                     self,
                     clock_mhz=mode.clock_mhz,
                     active_w=mode.active_w,
                     idle_w=mode.idle_w,
+                    sleep=sleep,
                     boot_j=self.boot_j if self.boot_j_given else self.boot_s * mode.active_w,
                     cycles_per_s=mode.clock_mhz * 1e6 * self.cycles_per_clock,
                 )
@@ -75,9 +110,41 @@ class Board:
         )
 
     def power_w(self, busy_fraction: np.ndarray | float) -> np.ndarray:
-        """Mean electrical power [W] at a busy fraction in [0, 1] (clipped)."""
+        """Mean electrical power [W] at a busy fraction in [0, 1] (clipped), idling when
+        not busy."""
         busy = np.clip(np.asarray(busy_fraction, float), 0.0, 1.0)
         return self.idle_w + (self.active_w - self.idle_w) * busy
+
+    def can_sleep(self, cycles_per_tick: np.ndarray | float, tick_s: float) -> np.ndarray:
+        """Whether the board can sleep between ticks of this work: it has a sleep mode and
+        the work and the wake-up fit in the tick."""
+        if self.sleep is None:
+            return np.zeros(np.shape(cycles_per_tick), bool)
+        busy_s = np.asarray(cycles_per_tick, float) / self.cycles_per_s
+        return busy_s + self.sleep.wake_latency_s <= tick_s
+
+    def tick_energy(self, cycles_per_tick: np.ndarray | float, tick_s: float,
+                    sleep: bool = False) -> TickEnergy:
+        """Energy [J] of one tick of `tick_s` [s] with `cycles_per_tick` [cycles] of work,
+        idling between ticks, or sleeping where `sleep` is asked and `can_sleep`."""
+        busy_s = np.asarray(cycles_per_tick, float) / self.cycles_per_s
+        fits = busy_s <= tick_s
+        asleep = self.can_sleep(cycles_per_tick, tick_s) & sleep
+        rest_s = np.where(fits, tick_s - busy_s, np.nan)
+        mode = self.sleep or SleepMode(0.0, 0.0, 0.0, ())
+        nan = np.where(fits, 0.0, np.nan)
+        return TickEnergy(
+            active_j=np.where(fits, self.active_w * busy_s, np.nan),
+            idle_j=np.where(asleep, 0.0, self.idle_w * rest_s) + nan,
+            sleep_j=np.where(asleep, mode.power_w * (rest_s - mode.wake_latency_s), 0.0) + nan,
+            wake_j=np.where(asleep, mode.wake_j, 0.0) + nan,
+        )
+
+    def mean_power_w(self, cycles_per_tick: np.ndarray | float, tick_s: float,
+                     sleep: bool = False) -> np.ndarray:
+        """Mean power [W] over ticks of this work (`tick_energy` per second); NaN where
+        the board cannot keep up."""
+        return self.tick_energy(cycles_per_tick, tick_s, sleep).total_j / tick_s
 
 
 _SPEC = re.compile(
@@ -119,6 +186,7 @@ def load_board(spec: str, clock_mhz: float | None = None) -> Board:
 def read_board_file(path: Path) -> Board:
     """Parse and validate a board data file."""
     top = read_model_file(path, "board")
+    sleep = _sleep_mode(top)
     modes = []
     for table in top.tables("mode"):
         clock = table.quantity("clock", "clock", positive=True)
@@ -126,8 +194,12 @@ def read_board_file(path: Path) -> Board:
         idle = table.quantity("idle_power", "power")
         if idle > active:
             raise table.error("idle_power", "must not exceed active_power")
+        if sleep is None and table.has("wake_energy"):
+            raise table.error("wake_energy", "the board has no [sleep] table to wake from")
+        # waking runs the CPU, so its energy is a figure of each clock
+        wake = table.quantity("wake_energy", "energy") if sleep else 0.0
         table.finish()
-        modes.append(ClockMode(clock, active, idle))
+        modes.append(ClockMode(clock, active, idle, wake))
     modes.sort(key=lambda m: m.clock_mhz)
     default_clock = top.quantity("default_clock", "clock", modes[0].clock_mhz, positive=True)
     boot_s = top.quantity("boot_time", "time")
@@ -138,7 +210,7 @@ def read_board_file(path: Path) -> Board:
         clock_mhz=modes[0].clock_mhz,
         active_w=modes[0].active_w,
         idle_w=modes[0].idle_w,
-        sleep_w=top.quantity("sleep_power", "power"),
+        sleep=sleep,
         boot_s=boot_s,
         boot_j=top.quantity("boot_energy", "energy", 0.0),
         cycles_per_s=0.0,
@@ -151,3 +223,21 @@ def read_board_file(path: Path) -> Board:
         return template.at_clock(default_clock)
     except ValueError as err:
         raise top.error("default_clock", str(err)) from None
+
+
+def _sleep_mode(top: Table) -> SleepMode | None:
+    """The `[sleep]` table (power, wake_latency, wake_on; the energy of a wake-up is each
+    mode's `wake_energy`), or None: a board without one cannot sleep between ticks."""
+    if not top.has("sleep"):
+        return None
+    table = top.table("sleep")
+    wakes_on = table.text_list("wake_on")
+    unknown = [w for w in wakes_on if w not in WAKE_SOURCES]
+    if unknown or not wakes_on:
+        raise table.error("wake_on", f"expected some of {', '.join(WAKE_SOURCES)}, got "
+                          f"{wakes_on!r}")
+    table.text("source")
+    mode = SleepMode(table.quantity("power", "power"), table.quantity("wake_latency", "time"),
+                     0.0, tuple(wakes_on))
+    table.finish()
+    return mode

@@ -213,9 +213,10 @@ def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
                 rows.append((dotted, item["value"], item["unit"], item["source"]))
             elif isinstance(item, dict):
                 walk(dotted, item)
-            elif isinstance(item, list):
+            elif isinstance(item, list):  # an array of tables (a list of names is no figure)
                 for index, sub in enumerate(item):
-                    walk(f"{dotted}[{index}]", sub)
+                    if isinstance(sub, dict):
+                        walk(f"{dotted}[{index}]", sub)
 
     walk("", data)
     return rows

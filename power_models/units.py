@@ -35,6 +35,7 @@ UNITS: dict[str, dict[str, float]] = {
     "dimensionless": {"1": 1.0},
     "fraction": {"1": 1.0, "%": 0.01},
     "cycles_per_clock": {"cycles/clock": 1.0},
+    "cycles": {"cycles": 1.0, "Mcycles": 1e6},
 }
 
 

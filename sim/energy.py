@@ -106,7 +106,9 @@ def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
 
     per_state = np.array([power_w(board.at_clock(plan.states[i].clock_mhz) if plan else board)
                           for i in range(len(mission.states))])
-    return per_state[np.minimum(state, len(per_state) - 1)] * dt
+    per_tick = per_state[np.minimum(state, len(per_state) - 1)] * dt
+    per_tick[:1] += board.boot_j  # booted at its default clock for the first tick
+    return per_tick
 
 
 # ---- the plan's prediction -------------------------------------------------------------

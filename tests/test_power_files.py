@@ -84,6 +84,32 @@ def test_units_are_converted(tmp_path):
             "must not exceed active_power",
         ),
         (
+            "board",
+            "ts7800",
+            'wake_energy = { value = 1.03, unit = "J", source = "assumption: wake_latency at '
+            'active power (the CPU resumes the drivers at full load): 0.3 s x 3.42 W" }',
+            "",
+            "mode[0].wake_energy",
+            "missing",
+        ),
+        (
+            "board",
+            "ts5500",
+            'idle_power = { value = 2.2, unit = "W",',
+            'wake_energy = { value = 1, unit = "J", source = "x" }\n'
+            'idle_power = { value = 2.2, unit = "W",',
+            "mode[0].wake_energy",
+            "no [sleep] table",
+        ),
+        (
+            "board",
+            "ts7800",
+            'wake_on = ["serial", "timer"]',
+            "wake_on = []",
+            "sleep.wake_on",
+            "expected some of serial, timer",
+        ),
+        (
             "battery",
             "alkaline",
             'value = 85, unit = "%"',

@@ -82,6 +82,36 @@ def test_workload_becomes_busy_time_and_power():
     assert load_board("ts7800@500").busy_fraction(1.5e6, 100.0) < busy[1]
 
 
+def test_a_tick_is_active_for_its_work_then_idles_or_sleeps():
+    board = load_board("ts7800@300")
+    busy_s = 3e8 / 300e6  # 1 s of work in a 4 s tick
+    idle = board.tick_energy(3e8, 4.0)
+    assert float(idle.active_j) == pytest.approx(3.42 * busy_s)
+    assert float(idle.idle_j) == pytest.approx(2.57 * 3.0)
+    assert float(idle.sleep_j) == 0.0 and float(idle.wake_j) == 0.0
+    asleep = board.tick_energy(3e8, 4.0, sleep=True)
+    assert float(asleep.idle_j) == 0.0
+    assert float(asleep.sleep_j) == pytest.approx(0.8 * (3.0 - 0.3))  # wake latency 0.3 s
+    assert float(asleep.wake_j) == pytest.approx(1.03)
+    assert float(asleep.total_j) < float(idle.total_j)
+    assert board.mean_power_w(3e8, 4.0) == pytest.approx(float(idle.total_j) / 4.0)
+    # the faster clock wakes at its own cost
+    assert float(load_board("ts7800@500").tick_energy(3e8, 4.0, True).wake_j) == 1.24
+
+
+def test_a_board_sleeps_only_where_it_can():
+    assert load_board("ts5500").sleep is None
+    ts5500 = load_board("ts5500")
+    assert float(ts5500.tick_energy(1e6, 4.0, sleep=True).total_j) == pytest.approx(
+        float(ts5500.tick_energy(1e6, 4.0).total_j))
+    board = load_board("ts7800@300")
+    no_room = 3.9 * 300e6  # 3.9 s of work: no time left for a 0.3 s wake-up
+    assert not board.can_sleep(no_room, 4.0)
+    assert float(board.tick_energy(no_room, 4.0, sleep=True).sleep_j) == 0.0
+    too_much = board.tick_energy(5 * 300e6, 4.0)  # 5 s of work every 4 s
+    assert np.isnan(float(too_much.total_j))
+
+
 def test_boot_energy_follows_the_clock():
     slow, fast = load_board("ts7800").modes()
     assert fast.boot_j / slow.boot_j == pytest.approx(4.14 / 3.42)

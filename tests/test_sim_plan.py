@@ -126,8 +126,10 @@ def test_the_computer_draws_the_power_of_the_plan_s_board_and_clock(tmp_path, ca
     assert code == 0
     board = load_board("ts5500", 133.0)
     busy = board.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / TICK_S)
+    # idle between ticks, and one boot (20 s at 2.7 W) before the first
+    assert board.boot_j == pytest.approx(54.0)
     assert summary["energy_by_component_j"]["computer"] == pytest.approx(
-        float(board.power_w(busy)) * 10800.0)
+        float(board.power_w(busy)) * 10800.0 + board.boot_j)
 
 
 # ---- with the planner's own plans ------------------------------------------------------

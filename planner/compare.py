@@ -1,0 +1,251 @@
+"""Which board, and when does the answer flip: single-board computers compared on one mission.
+
+Each board is planned on the mission at the same battery (`choose_plan`, as
+`gliderplan plan --computer` would), and its energy over the plan is split by what the
+board does each tick (`Board.tick_energy`): run the tick's work (active), idle or sleep
+until the next tick, wake up, plus one boot. Endurance is the usable battery spent at
+the mission's own plan's vehicle and sensor power (the same sampling plan) plus each
+board's mean power.
+
+The crossover: a board's energy on the mission against the workload per tick (the same
+cycles in every state, the states' times from its plan) is piecewise linear, and a
+board that cannot keep up drops out. Where the ranking of the boards changes, the
+workload is found by bisection, and said in cycles per tick and in reference
+computations per tick beyond the runtime's own work.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S, Component
+from gliderplan.language import ir
+from gliderplan.planner.hardware import Hardware, HardwareError, load_hardware
+from gliderplan.planner.inputs import build_inputs
+from gliderplan.planner.model import model_for
+from gliderplan.planner.occupancy import mission_occupancy
+from gliderplan.planner.plan import (
+    InfeasibleBudget,
+    Plan,
+    assemble,
+    choose_plan,
+    least_energy_plan,
+)
+from gliderplan.power_models.board import Board, board_spec
+from gliderplan.power_models.computation import equivalents
+from gliderplan.power_models.datafile import file_entries
+from gliderplan.power_models.units import to_model_unit
+
+COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
+SECONDS_PER_DAY = 86400.0
+_BISECTIONS = 60  # halvings of a workload interval in log space: far below a cycle
+_GRID_POINTS = 600
+
+
+@dataclass(frozen=True)
+class BoardEnergy:
+    """A board's energy [J] on a mission, by what it does."""
+
+    active_j: float  # running the ticks' work
+    idle_j: float  # idling between ticks
+    sleep_j: float  # asleep between ticks
+    wake_j: float  # waking up for the next tick
+    boot_j: float  # booting once for the mission
+
+    @property
+    def total_j(self) -> float:
+        return self.active_j + self.idle_j + self.sleep_j + self.wake_j + self.boot_j
+
+
+@dataclass(frozen=True)
+class BoardResult:
+    """One board on the mission."""
+
+    name: str  # "ts7800@300", or a board file's name with its clock
+    hardware: Hardware
+    plan: Plan  # status "infeasible": the least-energy plan, beyond the battery
+    energy: BoardEnergy
+    endurance_days: float  # usable battery at the reference plan's vehicle and sensors
+    assumptions: dict[str, str]  # data-file key -> figure and source, for assumed figures
+
+    @property
+    def board(self) -> Board:
+        return self.hardware.board
+
+    @property
+    def share(self) -> float:
+        """Fraction [1] of the mission's energy the board draws."""
+        return self.energy.total_j / self.plan.energy_j if self.plan.energy_j else 0.0
+
+
+@dataclass(frozen=True)
+class Crossover:
+    """A workload at which the ranking of the boards changes."""
+
+    cycles_per_tick: float  # [cycles]
+    before: tuple[str, ...]  # ranking just below, cheapest first (boards that keep up)
+    after: tuple[str, ...]  # ranking just above
+    reason: str
+
+    @property
+    def equivalents(self) -> dict[str, float]:
+        """Reference computations per tick beyond the runtime's own work."""
+        return equivalents(max(self.cycles_per_tick - RUNTIME_CYCLES_PER_TICK, 0.0))
+
+
+@dataclass(frozen=True)
+class Comparison:
+    mission: str
+    cycles_per_tick: float  # the workload the boards were planned at [cycles]
+    battery_j: float
+    budget_j: float
+    reference: str  # the board whose plan sets the sampling plan for endurance
+    boards: tuple[BoardResult, ...]
+    workload: np.ndarray  # (n,) [cycles per tick] of the energy curves
+    curves_j: dict[str, np.ndarray]  # board -> (n,) energy on the mission [J]; NaN: cannot
+    crossovers: tuple[Crossover, ...]
+
+
+def board_label(hardware: Hardware) -> str:
+    """"ts7800@300" for a board held at one of its clocks; the bare name for a board of
+    one clock ("ts5500") or whose clock the planner picks ("ts7800")."""
+    board = hardware.board
+    fixed = len(hardware.modes) == 1 and len(board.clock_modes) > 1
+    return f"{board.name}@{board.clock_mhz:g}" if fixed else board.name
+
+
+def plan_energy(hardware: Hardware, plan: Plan) -> BoardEnergy:
+    """The board's energy over `plan`, split by what it does each tick (its workload per
+    tick at the clock the plan sets in each state) and one boot."""
+    parts = np.zeros(4)
+    for state in plan.states:
+        board = hardware.board.at_clock(state.clock_mhz)
+        tick = board.tick_energy(hardware.cycles_per_tick, TICK_S)
+        parts += state.time_s / TICK_S * np.array(
+            [float(tick.active_j), float(tick.idle_j), float(tick.sleep_j), float(tick.wake_j)])
+    return BoardEnergy(*(float(p) for p in parts), hardware.board.boot_j)
+
+
+def energy_curve_j(hardware: Hardware, plan: Plan, workload: np.ndarray) -> np.ndarray:
+    """(n,) the board's energy [J] on the mission at each workload [cycles per tick], the
+    states' times those of `plan`, each state at its cheapest clock; NaN where no clock
+    keeps up."""
+    time_s = sum(s.time_s for s in plan.states)
+    per_tick = np.array([m.tick_energy(workload, TICK_S).total_j for m in hardware.modes])
+    with np.errstate(all="ignore"):
+        cheapest = np.where(np.isnan(per_tick).all(axis=0), np.nan,
+                            np.nanmin(np.where(np.isnan(per_tick), np.inf, per_tick), axis=0))
+    return hardware.board.boot_j + time_s / TICK_S * cheapest
+
+
+def _ranking(energies: dict[str, float]) -> tuple[str, ...]:
+    """Boards that keep up, cheapest first."""
+    return tuple(sorted((n for n, e in energies.items() if np.isfinite(e)),
+                        key=lambda n: energies[n]))
+
+
+Curve = Callable[[np.ndarray], dict[str, np.ndarray]]  # workloads -> board -> energy [J]
+
+
+def crossovers(curve: Curve, names: Sequence[str], workload: np.ndarray
+               ) -> tuple[Crossover, ...]:
+    """Where the ranking of `curve(workload) -> {name: energy}` changes on the grid,
+    each found by bisection between the grid points around it."""
+    def rank_at(w: float) -> tuple[str, ...]:
+        values = curve(np.array([w]))
+        return _ranking({n: float(values[n][0]) for n in names})
+
+    grid = curve(workload)
+    ranks = [_ranking({n: float(grid[n][i]) for n in names}) for i in range(len(workload))]
+    found = []
+    for i in range(1, len(workload)):
+        if ranks[i] == ranks[i - 1]:
+            continue
+        low, high = float(np.log(workload[i - 1])), float(np.log(workload[i]))
+        before = ranks[i - 1]
+        for _ in range(_BISECTIONS):
+            middle = 0.5 * (low + high)
+            if rank_at(float(np.exp(middle))) == before:
+                low = middle
+            else:
+                high = middle
+        after = rank_at(float(np.exp(high)))
+        found.append(Crossover(float(np.exp(high)), before, after, _reason(before, after)))
+    return tuple(found)
+
+
+def _reason(before: tuple[str, ...], after: tuple[str, ...]) -> str:
+    dropped = [n for n in before if n not in after]
+    if not after:
+        return "no board keeps up beyond this workload"
+    if dropped:
+        return f"{', '.join(dropped)} cannot keep up beyond this workload"
+    swapped = [n for n in before if before.index(n) != after.index(n)]
+    return f"{' and '.join(swapped)} cost the same here; beyond it their order reverses"
+
+
+def assumed_figures(spec: str, hardware: Hardware) -> dict[str, str]:
+    """The figures of a board's data file that this comparison uses and whose source says
+    they are assumptions: data-file key -> "value unit: source". Clock modes the board is
+    not held at are left out, and so are the sleep figures (no state sleeps yet)."""
+    path, _ = board_spec(spec)
+    entries = file_entries(path)
+    clocks = {m.clock_mhz for m in hardware.modes}
+    unused = {key.split(".")[0] for key, value, unit, _ in entries
+              if key.startswith("mode[") and key.endswith(".clock")
+              and to_model_unit(value, unit, "clock") not in clocks}
+    return {key: f"{value:g} {unit}: {source}" for key, value, unit, source in entries
+            if source.lower().startswith("assumption") and key.split(".")[0] not in unused
+            and not key.startswith("sleep.") and not key.endswith(".wake_energy")}
+
+
+def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS, *,
+                   battery: str | None = None,
+                   cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> Comparison:
+    """The boards of `specs` ("ts5500", "ts7800@500", a board file) planned on `mission`
+    with `battery` (default: the mission's) at `cycles_per_tick`, and the workloads at
+    which their ranking flips. Raises HardwareError/ModelFileError for a bad spec,
+    PlanningError when the mission cannot be planned at all."""
+    occupancy = mission_occupancy(mission)
+    reference_hw = load_hardware(mission, battery=battery, cycles_per_tick=cycles_per_tick)
+    model = model_for(build_inputs(mission, reference_hw, occupancy))
+    reference = _plan(model, reference_hw.budget_j)
+    flown_s = sum(s.time_s for s in reference.states)
+    others_w = (reference.energy_j - reference.components_j[Component.COMPUTER]) / flown_s
+    results = []
+    for spec in specs:
+        hardware = load_hardware(mission, battery=battery, computer=spec,
+                                 cycles_per_tick=cycles_per_tick)
+        model = model_for(build_inputs(mission, hardware, occupancy), model)
+        plan = _plan(model, hardware.budget_j)
+        energy = plan_energy(hardware, plan)
+        board_w = (energy.total_j - energy.boot_j) / sum(s.time_s for s in plan.states)
+        endurance = hardware.budget_j / (others_w + board_w) / SECONDS_PER_DAY
+        name = board_label(hardware)
+        if any(r.name == name for r in results):
+            raise HardwareError(f"--computer {spec}: {name} is compared already")
+        results.append(BoardResult(name, hardware, plan, energy, endurance,
+                                   assumed_figures(spec, hardware)))
+    capacity = max(m.cycles_per_s * TICK_S for r in results for m in r.hardware.modes)
+    workload = np.geomspace(min(1e4, cycles_per_tick), 1.1 * capacity, _GRID_POINTS)
+
+    def curve(w: np.ndarray) -> dict[str, np.ndarray]:
+        return {r.name: energy_curve_j(r.hardware, r.plan, w) for r in results}
+
+    names = [r.name for r in results]
+    return Comparison(mission.name, cycles_per_tick, reference_hw.battery_j,
+                      reference_hw.budget_j, board_label(reference_hw), tuple(results),
+                      workload, curve(workload), crossovers(curve, names, workload))
+
+
+def _plan(model, budget_j: float) -> Plan:
+    """The plan `choose_plan` flies at `budget_j`, or the least-energy plan (status
+    "infeasible") when the budget cannot buy the mission on this board."""
+    try:
+        return assemble(model.inputs, choose_plan(model, budget_j))
+    except InfeasibleBudget:
+        return least_energy_plan(model, budget_j)
+

@@ -1,0 +1,264 @@
+"""The board comparison as people and tools read it: a table, JSON, CSV files and a plot
+of each board's energy against the workload per tick with the crossovers marked."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
+from gliderplan.contract.files import write_atomically
+from gliderplan.planner.compare import BoardResult, Comparison, Crossover
+from gliderplan.power_models.computation import load_computations
+from gliderplan.reports.figures import pyplot, render
+
+J_PER_WH = 3600.0
+FILES = ("boards.csv", "workload.csv", "crossovers.csv", "sbc.png")
+
+# What every comparison rests on besides the boards' own figures.
+MODEL_NOTES = (
+    f"workload per tick: {RUNTIME_CYCLES_PER_TICK:,.0f} cycles is the runtime's own work every "
+    f"{TICK_S:g} s tick, an assumption (contract.RUNTIME_CYCLES_PER_TICK); --cycles-per-tick "
+    "sets another",
+    "cycles of the reference computations: i486 instructions counted by "
+    "bench/bench_workloads.py x 4 cycles per instruction (an assumption), the same on "
+    "every board",
+    "energy against workload: the states' times of each board's own plan, each state at "
+    "the board's cheapest clock for that workload",
+    "endurance: the usable battery spent at the vehicle and sensor power of the mission's "
+    "own plan (the same sampling plan for every board) plus each board's mean power",
+)
+
+
+def _wh(joules: float) -> float:
+    return joules / J_PER_WH
+
+
+def _clock(result: BoardResult) -> float | None:
+    """The board's clock [MHz], or None when the planner picks it per state."""
+    return None if len(result.hardware.modes) > 1 else result.board.clock_mhz
+
+
+def board_json(result: BoardResult) -> dict[str, Any]:
+    """One board: its data file's figures as given, and what it costs on the mission."""
+    board, energy, plan = result.board, result.energy, result.plan
+    sleep = board.sleep
+    return {
+        "description": board.description,
+        "clock_mhz": _clock(result),
+        "clocks_mhz": [m.clock_mhz for m in result.hardware.modes],
+        "active_power_w": board.active_w,
+        "idle_power_w": board.idle_w,
+        "sleep_power_w": sleep.power_w if sleep else None,
+        "wake_latency_s": sleep.wake_latency_s if sleep else None,
+        "wake_energy_j": sleep.wake_j if sleep else None,
+        "wakes_on": list(sleep.wakes_on) if sleep else [],
+        "boot_time_s": board.boot_s,
+        "boot_energy_j": board.boot_j,
+        "status": plan.status,
+        "board_energy_j": energy.total_j,
+        "active_j": energy.active_j,
+        "idle_j": energy.idle_j,
+        "sleep_j": energy.sleep_j,
+        "wake_j": energy.wake_j,
+        "boot_j": energy.boot_j,
+        "share_of_mission": result.share,
+        "mission_energy_j": plan.energy_j,
+        "minimum_energy_j": plan.minimum_energy_j,
+        "quality": plan.quality,
+        "endurance_days": result.endurance_days,
+        "assumptions": dict(result.assumptions),
+    }
+
+
+def crossover_json(crossover: Crossover) -> dict[str, Any]:
+    return {"cycles_per_tick": crossover.cycles_per_tick,
+            "ranking_before": list(crossover.before), "ranking_after": list(crossover.after),
+            "reason": crossover.reason,
+            "extra_computations_per_tick": crossover.equivalents}
+
+
+def comparison_json(comparison: Comparison) -> dict[str, Any]:
+    """The whole comparison; boards keyed by their names ("ts5500", "ts7800@300", ...)."""
+    return {
+        "mission": comparison.mission,
+        "cycles_per_tick": comparison.cycles_per_tick,
+        "tick_s": TICK_S,
+        "battery_j": comparison.battery_j,
+        "budget_j": comparison.budget_j,
+        "reference_plan": comparison.reference,
+        "boards": {r.name: board_json(r) for r in comparison.boards},
+        "crossovers": [crossover_json(c) for c in comparison.crossovers],
+        "computations": {c.name: {"cycles": c.cycles, "description": c.description,
+                                  "source": c.source} for c in load_computations()},
+        "assumptions": list(MODEL_NOTES),
+    }
+
+
+def boards_frame(comparison: Comparison) -> pd.DataFrame:
+    """One row per board (boards.csv): figures, energy split, mission energy, endurance."""
+    rows = []
+    for r in comparison.boards:
+        data = board_json(r)
+        rows.append({"board": r.name, **{k: v for k, v in data.items()
+                                         if k not in ("description", "clocks_mhz", "wakes_on",
+                                                      "assumptions")},
+                     "board_energy_wh": _wh(r.energy.total_j),
+                     "mission_energy_wh": _wh(r.plan.energy_j)})
+    return pd.DataFrame(rows)
+
+
+def workload_frame(comparison: Comparison) -> pd.DataFrame:
+    """Each board's energy on the mission [Wh] against the workload (workload.csv); empty
+    where the board cannot keep up."""
+    columns = {"cycles_per_tick": comparison.workload}
+    columns.update({f"{name}_wh": _wh(values) for name, values in comparison.curves_j.items()})
+    return pd.DataFrame(columns)
+
+
+def crossovers_frame(comparison: Comparison) -> pd.DataFrame:
+    """One row per crossover (crossovers.csv)."""
+    rows = [{"cycles_per_tick": c.cycles_per_tick, "ranking_before": " < ".join(c.before),
+             "ranking_after": " < ".join(c.after), "reason": c.reason,
+             **{f"{k}_per_tick": v for k, v in c.equivalents.items()}}
+            for c in comparison.crossovers]
+    columns = ["cycles_per_tick", "ranking_before", "ranking_after", "reason",
+               *(f"{c.name}_per_tick" for c in load_computations())]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def cycles_text(cycles: float) -> str:
+    """A workload as people say it: "532 M cycles/tick"."""
+    for factor, prefix in ((1e9, "G"), (1e6, "M"), (1e3, "k")):
+        if cycles >= factor:
+            return f"{cycles / factor:.3g} {prefix}cycles/tick"
+    return f"{cycles:.3g} cycles/tick"
+
+
+def equivalents_text(crossover: Crossover) -> str:
+    """ "beyond the runtime's own work: 74 thermocline fits or 525 spectra per tick"."""
+    parts = [f"{n:,.3g} x {name}" for name, n in crossover.equivalents.items()]
+    return "beyond the runtime's own work, " + " or ".join(parts) + " per tick"
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    fmt = "  ".join(f"{{:{'<' if i == 0 else '>'}{w}}}" for i, w in enumerate(widths))
+    return [fmt.format(*header), *(fmt.format(*r) for r in rows)]
+
+
+def _num(value: float | None, digits: str = ".3g") -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) \
+        else format(value, digits)
+
+
+def _assumed(result: BoardResult, key: str) -> str:
+    """"*" when the board's figure `key` ("idle_power", "boot_time") is an assumption."""
+    return "*" if any(k == key or k.endswith(f".{key}") for k in result.assumptions) else ""
+
+
+def comparison_text(comparison: Comparison) -> str:
+    """The table a person reads, the crossovers and every assumption behind them."""
+    c = comparison
+    lines = [f"mission {c.mission}: {len(c.boards)} boards at {c.cycles_per_tick:,.0f} cycles "
+             f"per {TICK_S:g} s tick, battery {_wh(c.battery_j):,.4g} Wh "
+             f"({_wh(c.budget_j):,.4g} Wh usable)", ""]
+    header = ["board", "clock MHz", "active W", "idle W", "boot s", "board Wh", "active Wh",
+              "idle Wh", "sleep+wake Wh", "boot Wh", "share", "mission Wh", "quality",
+              "endurance d"]
+    rows = []
+    for r in c.boards:
+        e, b = r.energy, r.board
+        rows.append([r.name, _num(_clock(r), "g") if _clock(r) else "auto",
+                     _num(b.active_w, "g") + _assumed(r, "active_power"),
+                     _num(b.idle_w, "g") + _assumed(r, "idle_power"),
+                     _num(b.boot_s, "g") + _assumed(r, "boot_time"), _num(_wh(e.total_j)),
+                     _num(_wh(e.active_j)), _num(_wh(e.idle_j)),
+                     _num(_wh(e.sleep_j + e.wake_j)), _num(_wh(e.boot_j)),
+                     f"{100 * r.share:.1f} %",
+                     _num(_wh(r.plan.energy_j)) + (" (over)" if r.plan.status != "optimal"
+                                                   else ""),
+                     _num(r.plan.quality, ".4f"), _num(r.endurance_days, ".1f")])
+    lines += _table(header, rows)
+    lines.append("* an assumption, not a measurement (below)")
+    cheapest = min(c.boards, key=lambda r: r.energy.total_j)
+    lines += ["", f"cheapest board on this mission: {cheapest.name} "
+              f"({_wh(cheapest.energy.total_j):.3g} Wh)"]
+    over = [r.name for r in c.boards if r.plan.status != "optimal"]
+    if over:
+        lines.append(f"over the battery on: {', '.join(over)} (the least-energy plan shown)")
+    lines += ["", "crossovers (workload at which the ranking changes, cheapest first):"]
+    if not c.crossovers:
+        lines.append("  none up to the fastest board's capacity")
+    for x in c.crossovers:
+        lines.append(f"  {cycles_text(x.cycles_per_tick)}: {' < '.join(x.before) or '-'} "
+                     f"becomes {' < '.join(x.after) or 'none'}; {x.reason}")
+        lines.append(f"    ({equivalents_text(x)})")
+    lines += ["", "assumptions (figures without a measurement behind them):"]
+    lines += [f"  {line}" for line in assumption_lines(c)]
+    return "\n".join(lines) + "\n"
+
+
+def assumptions_by_figure(comparison: Comparison) -> dict[str, list[str]]:
+    """Each assumed figure ("ts7800 idle_power 2.57 W: assumption: ...") and the compared
+    boards that use it."""
+    found: dict[str, list[str]] = {}
+    for r in comparison.boards:
+        for key, text in r.assumptions.items():
+            found.setdefault(f"{r.board.name} {key.split('.')[-1]} {text}", []).append(r.name)
+    return found
+
+
+def assumption_lines(comparison: Comparison) -> list[str]:
+    """One line per assumed figure (with the boards that use it), then the model's own."""
+    lines = []
+    for figure, boards in assumptions_by_figure(comparison).items():
+        value, source = figure.split(": ", 1)
+        lines.append(f"{value} (for {', '.join(boards)}): {source}")
+    return lines + list(MODEL_NOTES)
+
+
+def energy_plot(comparison: Comparison, fmt: str = "png") -> bytes:
+    """Each board's energy on the mission [Wh] against the workload per tick (log axis),
+    the mission's workload and the crossovers marked."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(8, 4.6), dpi=110)
+    w = comparison.workload
+    for name, values in comparison.curves_j.items():
+        ax.plot(w, _wh(values), label=name, lw=1.8)
+    ax.set_xscale("log")
+    ax.axvline(comparison.cycles_per_tick, color="grey", ls=":", lw=1)
+    top = np.nanmax([np.nanmax(_wh(v)) for v in comparison.curves_j.values()])
+    ax.annotate("mission's workload", (comparison.cycles_per_tick, top), fontsize=8,
+                rotation=90, va="top", ha="right", color="grey")
+    for x in comparison.crossovers:
+        ax.axvline(x.cycles_per_tick, color="black", ls="--", lw=0.8)
+        ax.annotate(f"crossover {cycles_text(x.cycles_per_tick)}", (x.cycles_per_tick, top),
+                    fontsize=7, rotation=90, va="top", ha="right")
+    ax.set_xlabel(f"workload [cycles per {TICK_S:g} s tick]")
+    ax.set_ylabel("board energy on the mission [Wh]")
+    ax.set_title(f"{comparison.mission}: board energy against workload (ends where a "
+                 "board cannot keep up)", fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, loc="upper left")
+    return render(fig, fmt)
+
+
+def write_files(comparison: Comparison, out: Path) -> tuple[Path, ...]:
+    """Write FILES into the directory `out`, each atomically."""
+    contents = {"boards.csv": boards_frame(comparison).to_csv(index=False),
+                "workload.csv": workload_frame(comparison).to_csv(index=False),
+                "crossovers.csv": crossovers_frame(comparison).to_csv(index=False),
+                "sbc.png": energy_plot(comparison, "png")}
+    for name in FILES:
+        write_atomically(out / name, contents[name])
+    return tuple(out / name for name in FILES)
+
+
+def as_json(comparison: Comparison) -> str:
+    return json.dumps(comparison_json(comparison), indent=2, allow_nan=False) + "\n"

@@ -1,0 +1,206 @@
+"""`gliderplan compare-sbc` as a user runs it: the boards with their data files' figures,
+the energy split, the crossovers (checked against the planner itself at workloads either
+side), the files it writes, and bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from gliderplan.cli.common import check_file
+from gliderplan.contract import TICK_S
+from gliderplan.planner.compare import compare_boards
+from gliderplan.planner.hardware import load_hardware
+from gliderplan.planner.inputs import PlanInputError
+from gliderplan.planner.plan import plan_mission
+from gliderplan.power_models import load_board
+from gliderplan.power_models.catalog import preset_path
+
+ROOT = Path(__file__).resolve().parents[1]
+ANNOTATED = str(ROOT / "examples" / "fig2_annotated.mission")
+SURVEY = str(ROOT / "examples" / "thermocline_survey.mission")
+
+
+def gliderplan(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "gliderplan.cli", *args],
+                          capture_output=True, text=True, timeout=300)
+
+
+def compare_json(*args: str) -> dict:
+    run = gliderplan("compare-sbc", *args, "--json")
+    assert run.returncode == 0, run.stderr
+    return json.loads(run.stdout)
+
+
+def computer_j(mission, spec: str, cycles: float) -> float:
+    """The computer's energy in the plan `gliderplan plan --computer spec` makes."""
+    plan = plan_mission(mission, load_hardware(mission, computer=spec, cycles_per_tick=cycles))
+    return plan.components_j["computer"]
+
+
+def test_the_three_boards_with_table_i_figures_and_the_data_files_idle_powers():
+    data = compare_json(ANNOTATED)
+    boards = data["boards"]
+    assert list(boards) == ["ts5500", "ts7800@300", "ts7800@500"]
+    # Table I of Woithe & Kremer
+    assert [b["active_power_w"] for b in boards.values()] == [2.7, 3.42, 4.14]
+    assert [b["idle_power_w"] for b in boards.values()] == [
+        load_board(spec).idle_w for spec in boards]
+    for name, board in boards.items():
+        assert any(k.endswith("idle_power") and "assumption" in v
+                   for k, v in board["assumptions"].items()), name
+        parts = sum(board[k] for k in ("active_j", "idle_j", "sleep_j", "wake_j", "boot_j"))
+        assert parts == pytest.approx(board["board_energy_j"], rel=1e-12)
+        assert board["share_of_mission"] == pytest.approx(
+            board["board_energy_j"] / board["mission_energy_j"])
+        assert board["status"] == "optimal" and 0 < board["quality"] <= 1
+        assert board["endurance_days"] > 0
+    assert boards["ts5500"]["boot_energy_j"] == pytest.approx(20 * 2.7)  # boot time x active
+    assert boards["ts5500"]["sleep_power_w"] is None  # it cannot sleep between ticks
+    assert any("assumption" in note for note in data["assumptions"])
+
+
+def test_board_energy_is_what_the_planner_charges_for_the_computer():
+    mission = check_file(ANNOTATED).mission
+    data = compare_json(ANNOTATED, "--cycles-per-tick", "5e7")
+    for spec, board in data["boards"].items():
+        assert board["board_energy_j"] == pytest.approx(computer_j(mission, spec, 5e7),
+                                                        rel=1e-9)
+    # the active share follows the workload: 5e7 cycles every 4 s at 133 MHz
+    ts5500 = data["boards"]["ts5500"]
+    busy_s = 5e7 / 133e6
+    assert ts5500["active_j"] / (ts5500["active_j"] + ts5500["idle_j"]) == pytest.approx(
+        2.7 * busy_s / (2.7 * busy_s + 2.2 * (TICK_S - busy_s)))
+
+
+def test_endurance_ranks_with_board_power_at_the_same_sampling_plan():
+    data = compare_json(SURVEY)
+    boards = data["boards"]
+    power = {n: b["board_energy_j"] for n, b in boards.items()}
+    by_power = sorted(power, key=power.get)
+    by_endurance = sorted(boards, key=lambda n: -boards[n]["endurance_days"])
+    assert by_power == by_endurance
+
+
+def test_the_crossover_where_the_ts5500_cannot_keep_up_is_its_clock_times_the_tick():
+    data = compare_json(SURVEY)
+    first = data["crossovers"][0]
+    capacity = 133e6 * TICK_S  # cycles a 133 MHz board runs in one tick
+    assert first["cycles_per_tick"] == pytest.approx(capacity, rel=1e-9)
+    assert first["ranking_before"][0] == "ts5500" and "ts5500" not in first["ranking_after"]
+    assert first["extra_computations_per_tick"]["thermocline_fit"] == pytest.approx(
+        (capacity - 2e5) / 7096504)
+    mission = check_file(SURVEY).mission
+    below = {spec: computer_j(mission, spec, 0.999 * capacity)
+             for spec in ("ts5500", "ts7800@300")}
+    assert below["ts5500"] < below["ts7800@300"]
+    with pytest.raises(PlanInputError, match="no clock keeps up"):
+        computer_j(mission, "ts5500", 1.001 * capacity)
+
+
+BOARD = """kind = "board"
+name = "quickboard"
+description = "a fast board with a low idle power, for the test"
+default_clock = {{ value = 1000, unit = "MHz", source = "test" }}
+boot_time = {{ value = 1, unit = "s", source = "test" }}
+[[mode]]
+clock = {{ value = 1000, unit = "MHz", source = "test" }}
+active_power = {{ value = {active}, unit = "W", source = "test" }}
+idle_power = {{ value = {idle}, unit = "W", source = "assumption: test" }}
+"""
+
+
+def test_an_energy_crossover_agrees_with_the_planner_on_either_side(tmp_path):
+    board = tmp_path / "quick.toml"
+    board.write_text(BOARD.format(active=10.0, idle=2.0))
+    data = compare_json(SURVEY, "--computer", "ts5500", "--computer", str(board))
+    assert list(data["boards"]) == ["ts5500", "quickboard"]
+    assert "mode[0].idle_power" in data["boards"]["quickboard"]["assumptions"]
+    crossing = data["crossovers"][0]
+    assert crossing["ranking_before"] == ["quickboard", "ts5500"]
+    assert crossing["ranking_after"] == ["ts5500", "quickboard"]
+    # where the two boards' energies meet, from their figures alone: per tick each costs
+    # idle x tick + (active - idle) x cycles / clock, plus one boot per mission
+    mission = check_file(SURVEY).mission
+    ticks = sum(s.time_s for s in plan_mission(mission).states) / TICK_S
+    slow, fast = (2.2, 2.7, 133e6, 54.0), (2.0, 10.0, 1e9, 10.0)
+
+    def energy(board, w):
+        idle, active, hz, boot = board
+        return boot + ticks * (idle * TICK_S + (active - idle) * w / hz)
+
+    expected = (energy(slow, 0) - energy(fast, 0)) / (
+        (fast[1] - fast[0]) / fast[2] - (slow[1] - slow[0]) / slow[2]) / ticks
+    assert crossing["cycles_per_tick"] == pytest.approx(expected, rel=1e-3)
+    w = crossing["cycles_per_tick"]
+    assert computer_j(mission, str(board), 0.9 * w) < computer_j(mission, "ts5500", 0.9 * w)
+    assert computer_j(mission, str(board), 1.1 * w) > computer_j(mission, "ts5500", 1.1 * w)
+
+
+def test_output_files_hold_the_tables_and_the_plot(tmp_path):
+    out = tmp_path / "sbc"
+    run = gliderplan("compare-sbc", ANNOTATED, "-o", str(out))
+    assert run.returncode == 0, run.stderr
+    assert "ts5500" in run.stdout and "crossover" in run.stdout
+    assert "* an assumption" in run.stdout and "2.2*" in run.stdout
+    boards = pd.read_csv(out / "boards.csv")
+    assert list(boards["board"]) == ["ts5500", "ts7800@300", "ts7800@500"]
+    assert list(boards["active_power_w"]) == [2.7, 3.42, 4.14]
+    curve = pd.read_csv(out / "workload.csv")
+    assert list(curve.columns) == ["cycles_per_tick", "ts5500_wh", "ts7800@300_wh",
+                                   "ts7800@500_wh"]
+    assert curve["ts5500_wh"].isna().any() and curve["ts5500_wh"].notna().any()
+    crossings = pd.read_csv(out / "crossovers.csv")
+    assert len(crossings) >= 1 and "thermocline_fit_per_tick" in crossings.columns
+    assert (out / "sbc.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_comparison_as_a_library_call():
+    mission = check_file(ANNOTATED).mission
+    comparison = compare_boards(mission, ["ts7800@500"], battery="2kWh")
+    (board,) = comparison.boards
+    assert board.name == "ts7800@500" and comparison.battery_j == pytest.approx(7.2e6)
+    assert board.energy.total_j == pytest.approx(board.plan.components_j["computer"])
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--computer", "ts9999"], "unknown board preset"),
+    (["--computer", "ts7800@400"], "no 400 MHz clock"),
+    (["--computer", "ts5500", "--computer", "ts5500"], "compared already"),
+    (["--cycles-per-tick", "-5"], "positive number of cycles"),
+    (["--cycles-per-tick", "lots"], "positive number of cycles"),
+    (["--battery", "a lot"], "expected an energy"),
+])
+def test_bad_usage_is_one_line_and_exit_2(args, message):
+    run = gliderplan("compare-sbc", ANNOTATED, *args)
+    assert run.returncode == 2
+    assert message in run.stderr and "Traceback" not in run.stderr
+
+
+def test_a_file_where_the_output_directory_should_be_is_refused(tmp_path):
+    taken = tmp_path / "taken"
+    taken.write_text("x")
+    run = gliderplan("compare-sbc", ANNOTATED, "-o", str(taken))
+    assert run.returncode == 2 and "not a directory" in run.stderr
+
+
+def test_a_bad_mission_exits_1(tmp_path):
+    bad = tmp_path / "bad.mission"
+    bad.write_text("mission m\nstate s\nbegin\n  flightprofile yo(5, 20, .454, .454)\nend\n"
+                   "state s\nbegin\nend\n")
+    run = gliderplan("compare-sbc", str(bad))
+    assert run.returncode == 1 and "Traceback" not in run.stderr
+
+
+def test_a_board_file_that_breaks_its_format_names_the_key(tmp_path):
+    board = tmp_path / "broken.toml"
+    board.write_text(preset_path("board", "ts7800").read_text().replace(
+        'wake_on = ["serial", "timer"]', 'wake_on = ["sonar"]'))
+    run = gliderplan("compare-sbc", ANNOTATED, "--computer", str(board))
+    assert run.returncode == 1
+    assert "sleep.wake_on" in run.stderr and "serial, timer" in run.stderr
