@@ -24,7 +24,6 @@ from gliderplan.planner.planfile import write_plan_bytes
 from gliderplan.power_models import load_vehicle
 from gliderplan.sim import montecarlo
 from gliderplan.sim.backends import scenario_executor
-from gliderplan.sim.planfile import parse_plan
 from gliderplan.sim.scenarios import read_spec
 
 REPO = Path(__file__).resolve().parents[1]
@@ -37,9 +36,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-dask", action="store_true")
     args = parser.parse_args(argv)
     mission = check_file(str(SURVEY)).mission
-    nominal = plan_mission(mission)
-    plan = parse_plan(write_plan_bytes(nominal), "survey plan", mission)
-    job = montecarlo.Job(mission, plan, None, load_vehicle(mission.vehicle), read_spec(),
+    nominal = plan = plan_mission(mission).plan
+    job = montecarlo.Job(mission, plan, load_vehicle(mission.vehicle), read_spec(),
                          nominal.budget_j, 0, mission.horizon_s)
     runs = [("1 worker (this process)", 1, None), ("2 local workers", 2, None)]
     if not args.no_dask:

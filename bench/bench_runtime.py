@@ -160,11 +160,14 @@ def checked(source: str, name: str) -> CheckedMission:
 def fig2_plan(mission: CheckedMission) -> bytes:
     """A plan by hand (docs/plan-format.md): a CTD duty of 1/4 in s2, two alternating
     yos in s1 so that the schedule has work every tick."""
-    body = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
-            "budget_j 6630000\npredicted_j 9876.5\nstates 3\n"
-            "state s1 300 600 0 1\nprofile 0 1 0.3 150 0.31\nend\n"
-            "state s2 300 600 1 1\nsensor temp 60 15\nprofile 0 1 0.4 200 0.3\nend\n"
-            "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n").encode()
+    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+            "budget_j 6630000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\nstates 3\n"
+            "state s1 300 600 0 1\npredict 1000 2 20\nenergy 3950\n"
+            "profile 0 1 0.3 150 0.31\nend\n"
+            "state s2 300 600 1 1\npredict 1000 1 12\nenergy 3950\n"
+            "sensor temp 60 15\nprofile 0 1 0.4 200 0.3\nend\n"
+            "state s3 300 600 0 1\npredict 500 1 5\nenergy 1976.5\n"
+            "profile 0 1 0.454 230 0.31\nend\n").encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
 
 

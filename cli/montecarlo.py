@@ -58,6 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from gliderplan.cli.progress import ProgressBar
     from gliderplan.cli.sim import parse_duration_s
+    from gliderplan.planner.planfile import load_plan
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import montecarlo, plots
     from gliderplan.sim.backends import scenario_executor
@@ -76,10 +77,10 @@ def run(args: argparse.Namespace) -> int:
         mission.horizon_s or 30 * 86400.0)
     spec = read_spec(args.scenario_file)
     vehicle = load_vehicle(mission.vehicle)
-    plan, predictions = _plan(args, mission)
+    plan = None if args.plan is None else load_plan(args.plan, mission)
     budget_j = plan.budget_j if plan is not None else \
         mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
-    job = montecarlo.Job(mission, plan, predictions, vehicle, spec, budget_j, args.seed,
+    job = montecarlo.Job(mission, plan, vehicle, spec, budget_j, args.seed,
                          duration_s, robust_tracker=args.tracker == "robust")
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios")
     try:
@@ -112,18 +113,6 @@ def run(args: argparse.Namespace) -> int:
               f"the files in {out} hold them", file=sys.stderr)
         return ExitCode.INTERRUPTED
     return ExitCode.OK
-
-
-def _plan(args: argparse.Namespace, mission):
-    """(plan, predictions) of --plan, or (None, None)."""
-    if not args.plan:
-        return None, None
-    if not Path(args.plan).is_file():
-        raise UsageError(f"--plan {args.plan}: no such file")
-    from gliderplan.sim.planfile import read_plan
-    from gliderplan.sim.prediction import plan_predictions
-
-    return read_plan(args.plan, mission), plan_predictions(args.plan, mission)[0]
 
 
 def _parquet(table) -> bytes:

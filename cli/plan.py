@@ -65,11 +65,11 @@ def run(args: argparse.Namespace) -> int:
 
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios flown")
     try:
-        plan = make_plan(mission, battery=args.battery, computer=args.computer,
-                         output=args.output, confidence=args.confidence,
-                         scenarios=args.scenarios, seed=args.seed, risk=args.risk,
-                         scenario_file=args.scenario_file, workers=args.workers,
-                         progress=progress)
+        result = make_plan(mission, battery=args.battery, computer=args.computer,
+                           output=args.output, confidence=args.confidence,
+                           scenarios=args.scenarios, seed=args.seed, risk=args.risk,
+                           scenario_file=args.scenario_file, workers=args.workers,
+                           progress=progress)
     except InfeasibleBudget as short:  # the report says so too; the error is for main
         if args.json:
             print(json.dumps(infeasible_json(short), indent=2))
@@ -77,9 +77,9 @@ def run(args: argparse.Namespace) -> int:
     finally:
         progress.finish()
     if args.json:
-        print(json.dumps(report_json(plan), indent=2))
+        print(json.dumps(report_json(result), indent=2))
     else:
-        print(report_text(plan), end="")
+        print(report_text(result), end="")
         if args.output:
             print(f"wrote {args.output} and {args.output}.json")
     return 0

@@ -40,8 +40,8 @@ def parse_duration_s(text: str) -> float:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_mission_argument(parser)
     parser.add_argument("--plan", metavar="PLANFILE",
-                        help="plan file; its report PLANFILE.json gives the prediction per "
-                             "state (without it the mission is planned again)")
+                        help="plan file to fly; the run is checked against the budget and "
+                             "the per-state prediction it carries")
     parser.add_argument("--runtime", choices=("python", "c"), default="python",
                         help="python: the reference executor (default); c: the compiled "
                              "runtime over a pseudo-terminal")

@@ -30,6 +30,9 @@ MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a pla
 MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
 MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]
 MAX_PLAN_LINE_BYTES = 255  # length of a plan-file line, its LF included [bytes]
+MAX_PLAN_COMPONENTS = 16  # energy components a plan predicts (its `components` line)
+MAX_PLAN_ASSUMPTIONS = 255  # `assume` lines of a plan file (a uint8_t count)
+PLAN_FORMAT_VERSION = 2  # the plan file's `GPPLAN` line (docs/plan-format.md)
 
 # ---- the sensor array ----------------------------------------------------------------
 

@@ -23,7 +23,8 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "MAX_STATES", "MAX_VARIABLES", "MAX_STACK_DEPTH", "MAX_EVENTS_PER_STATE",
         "MAX_PROFILE_ALTERNATIVES", "MAX_PROFILE_ARGS", "MAX_ROUTE_POINTS",
         "MAX_SWEEP_WAYPOINTS", "MAX_NAME_LENGTH", "MAX_PLAN_SENSORS", "MAX_PLAN_BYTES",
-        "MAX_PLAN_LINE_BYTES")),
+        "MAX_PLAN_LINE_BYTES", "MAX_PLAN_COMPONENTS", "MAX_PLAN_ASSUMPTIONS",
+        "PLAN_FORMAT_VERSION")),
     ("the library routines (docs/pilot.md)", (
         "SURFACE_PITCH_RAD", "TRACK_WINDOW", "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (

@@ -29,11 +29,12 @@ from gliderplan.planner.model import model_for
 from gliderplan.planner.occupancy import mission_occupancy
 from gliderplan.planner.plan import (
     InfeasibleBudget,
-    Plan,
+    PlanResult,
     assemble,
     choose_plan,
     least_energy_plan,
 )
+from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.board import Board, board_spec
 from gliderplan.power_models.computation import equivalents
 from gliderplan.power_models.datafile import file_entries
@@ -66,7 +67,7 @@ class BoardResult:
 
     name: str  # "ts7800@300", or a board file's name with its clock
     hardware: Hardware
-    plan: Plan  # status "infeasible": the least-energy plan, beyond the battery
+    planned: PlanResult  # status "infeasible": the least-energy plan, beyond the battery
     energy: BoardEnergy
     endurance_days: float  # usable battery at the reference plan's vehicle and sensors
     assumptions: dict[str, str]  # data-file key -> figure and source, for assumed figures
@@ -78,7 +79,8 @@ class BoardResult:
     @property
     def share(self) -> float:
         """Fraction [1] of the mission's energy the board draws."""
-        return self.energy.total_j / self.plan.energy_j if self.plan.energy_j else 0.0
+        mission_j = self.planned.plan.predicted_j
+        return self.energy.total_j / mission_j if mission_j else 0.0
 
 
 @dataclass(frozen=True)
@@ -212,28 +214,28 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
     occupancy = mission_occupancy(mission)
     reference_hw = load_hardware(mission, battery=battery, cycles_per_tick=cycles_per_tick)
     model = model_for(build_inputs(mission, reference_hw, occupancy))
-    reference = _plan(model, reference_hw.budget_j)
+    reference = _plan(model, reference_hw.budget_j).plan
     flown_s = sum(s.time_s for s in reference.states)
-    others_w = (reference.energy_j - reference.components_j[Component.COMPUTER]) / flown_s
+    others_w = (reference.predicted_j - reference.components_j[Component.COMPUTER]) / flown_s
     results = []
     for spec in specs:
         hardware = load_hardware(mission, battery=battery, computer=spec,
                                  cycles_per_tick=cycles_per_tick)
         model = model_for(build_inputs(mission, hardware, occupancy), model)
-        plan = _plan(model, hardware.budget_j)
-        energy = plan_energy(hardware, plan)
-        board_w = (energy.total_j - energy.boot_j) / sum(s.time_s for s in plan.states)
+        planned = _plan(model, hardware.budget_j)
+        energy = plan_energy(hardware, planned.plan)
+        board_w = (energy.total_j - energy.boot_j) / sum(s.time_s for s in planned.plan.states)
         endurance = hardware.budget_j / (others_w + board_w) / SECONDS_PER_DAY
         name = board_label(hardware)
         if any(r.name == name for r in results):
             raise HardwareError(f"--computer {spec}: {name} is compared already")
-        results.append(BoardResult(name, hardware, plan, energy, endurance,
+        results.append(BoardResult(name, hardware, planned, energy, endurance,
                                    assumed_figures(spec, hardware)))
     capacity = max(m.cycles_per_s * TICK_S for r in results for m in r.hardware.modes)
     workload = np.geomspace(min(1e4, cycles_per_tick), 1.1 * capacity, _GRID_POINTS)
 
     def curve(w: np.ndarray) -> dict[str, np.ndarray]:
-        return {r.name: energy_curve_j(r.hardware, r.plan, w) for r in results}
+        return {r.name: energy_curve_j(r.hardware, r.planned.plan, w) for r in results}
 
     names = [r.name for r in results]
     return Comparison(mission.name, cycles_per_tick, reference_hw.battery_j,
@@ -241,7 +243,7 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
                       workload, curve(workload), crossovers(curve, names, workload))
 
 
-def _plan(model, budget_j: float) -> Plan:
+def _plan(model, budget_j: float) -> PlanResult:
     """The plan `choose_plan` flies at `budget_j`, or the least-energy plan (status
     "infeasible") when the budget cannot buy the mission on this board."""
     try:

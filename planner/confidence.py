@@ -37,12 +37,13 @@ from gliderplan.planner.occupancy import measured_occupancy
 from gliderplan.planner.plan import (
     J_PER_WH,
     Choice,
-    Plan,
     PlanningError,
+    PlanResult,
     _snapped,
     assemble,
     realised_energy_j,
 )
+from gliderplan.planner.planfile import MISSION_SUBJECT, Assumption
 from gliderplan.power_models.vehicle import Vehicle
 
 DEFAULT_RISK = 1e-3  # beta: the chance that the N scenarios drawn were unrepresentative
@@ -179,11 +180,12 @@ class ScenarioModel:
 def plan_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
                        scenario_times_s: list[dict[str, float]], vehicles: list[Vehicle],
                        usable: list[float], confidence: float, risk: float = DEFAULT_RISK,
-                       seed: int = 0, budget_j: float | None = None) -> Plan:
+                       seed: int = 0, budget_j: float | None = None) -> PlanResult:
     """The plan whose budget holds in every sampled scenario: scenario k spends
     `scenario_times_s[k]` in each state, with `vehicles[k]`'s figures and a battery that
     holds `usable[k]` of its rating. Its prediction is at the scenarios' mean times with
-    the nominal vehicle; `Plan.confidence` says what the N scenarios guarantee."""
+    the nominal vehicle; `PlanResult.confidence` says what the N scenarios guarantee, and
+    the plan's assumptions say it too."""
     count = len(scenario_times_s)
     if count == 0 or not (len(vehicles) == len(usable) == count):
         raise ValueError("one vehicle and one usable share per scenario")
@@ -216,37 +218,35 @@ def plan_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
     dimension = decision_dimension(inputs)
     stated = Confidence(confidence, risk, count, dimension,
                         achieved_confidence(count, dimension, risk), active, seed)
-    plan = assemble(inputs, choice)
-    notes = (*plan.defaults_used,
-             f"plan at confidence {stated.achieved:.3g}: the budget holds in every one of "
-             f"{count} simulated scenarios ({stated.method}; risk {risk:g}, dimension "
-             f"{dimension}); the prediction is at the scenarios' mean times")
-    return replace(plan, confidence=stated, defaults_used=notes)
+    result = assemble(inputs, choice)
+    stated_note = Assumption(
+        MISSION_SUBJECT, f"plan at confidence {stated.achieved:.3g}: the budget holds in every "
+        f"one of {count} simulated scenarios ({stated.method}; risk {risk:g}, dimension "
+        f"{dimension}); the prediction is at the scenarios' mean times")
+    plan = replace(result.plan, assumptions=(*result.plan.assumptions, stated_note))
+    return replace(result, plan=plan, confidence=stated)
 
 
 def plan_mission_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
                                confidence: float, *, scenarios: int | None = None,
                                seed: int = 0, risk: float = DEFAULT_RISK, spec=None,
-                               executor=None, workers: int = 1, progress=None) -> Plan:
+                               executor=None, workers: int = 1, progress=None) -> PlanResult:
     """Plan so that the budget holds with `confidence`: fly the mission's nominal plan in
     N scenarios (N from the confidence and `risk` unless given), then plan on what each
     scenario spent its time on (`plan_at_confidence`). `spec`: a scenario file's
     distributions (default: the shipped one); `executor`/`workers` as in Monte Carlo."""
     from gliderplan.planner.plan import plan_mission, prepare
-    from gliderplan.planner.planfile import write_plan_bytes
     from gliderplan.sim import montecarlo
-    from gliderplan.sim.planfile import parse_plan
     from gliderplan.sim.scenarios import draw_scenario, read_spec
 
     if not 0.0 < confidence < 1.0 or not 0.0 < risk < 1.0:
         raise ValueError("confidence and risk must lie strictly between 0 and 1")
-    nominal = plan_mission(mission, hardware)
+    nominal = plan_mission(mission, hardware).plan
     times = {s.name: s.time_s for s in nominal.states}
     dimension = decision_dimension(prepare(mission, hardware, times)[0])
     count = scenarios or scenarios_needed(confidence, dimension, risk)
     spec = spec or read_spec()
-    flown = parse_plan(write_plan_bytes(nominal), "the nominal plan", mission)
-    job = montecarlo.Job(mission, flown, None, hardware.vehicle, spec, hardware.budget_j, seed,
+    job = montecarlo.Job(mission, nominal, hardware.vehicle, spec, hardware.budget_j, seed,
                          mission.horizon_s or 30 * 86400.0)
     result = montecarlo.run_montecarlo(job, count, executor, workers, progress)
     if result.interrupted:

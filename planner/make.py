@@ -19,7 +19,7 @@ from gliderplan.language.ir import CheckedMission
 if TYPE_CHECKING:
     import pandas as pd
 
-    from gliderplan.planner.plan import Plan
+    from gliderplan.planner.plan import PlanResult
 
 SWEEP_FILES = ("pareto.csv", "computers.csv", "batteries.csv", "pareto.png")
 SweepProgress = Callable[[str, int, int], None]  # (sweep, points done, points in all)
@@ -30,7 +30,7 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
               output: str | Path | None = None,
               confidence: float | None = None, scenarios: int | None = None, seed: int = 0,
               risk: float = 1e-3, scenario_file: str | Path | None = None, workers: int = 1,
-              progress: Callable[[float, float], None] | None = None) -> Plan:
+              progress: Callable[[float, float], None] | None = None) -> PlanResult:
     """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
     preset) and `computer` ("ts7800@500"; "ts7800" lets the planner pick the clock) in
     its place; `cycles_per_tick` [cycles] is the board's work every tick. With
@@ -38,9 +38,10 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     `scenarios` simulated scenarios (default: as many as the confidence needs at `risk`)
     drawn from `scenario_file` (default: the shipped one) from `seed`, flown by `workers`
     processes (planner/confidence.py). With `output`, write the plan file there and its
-    JSON report beside it (`output`.json), atomically. Raises InfeasibleBudget (with the
-    minimum energy and the largest consumers), PlanningError, HardwareError or
-    ModelFileError."""
+    JSON report beside it (`output`.json), atomically. The result holds the plan
+    (`.plan`, what the file holds) and what its solve tells (quality, minimum energy,
+    shadow price, the confidence). Raises InfeasibleBudget (with the minimum energy and
+    the largest consumers), PlanningError, HardwareError or ModelFileError."""
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import plan_mission
     from gliderplan.planner.planfile import write_plan_bytes
@@ -49,7 +50,7 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     hardware = load_hardware(mission, battery=battery, computer=computer,
                              cycles_per_tick=cycles_per_tick)
     if confidence is None:
-        plan = plan_mission(mission, hardware)
+        result = plan_mission(mission, hardware)
     else:
         from gliderplan.planner.confidence import plan_mission_at_confidence
         from gliderplan.sim.backends import scenario_executor
@@ -62,14 +63,14 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
             raise UsageError(f"--scenarios {scenarios}: must be at least 1")
         spec = read_spec(scenario_file)
         with scenario_executor(workers) as executor:
-            plan = plan_mission_at_confidence(
+            result = plan_mission_at_confidence(
                 mission, hardware, confidence, scenarios=scenarios, seed=seed, risk=risk,
                 spec=spec, executor=executor, workers=workers, progress=progress)
-    data = write_plan_bytes(plan)
+    data = write_plan_bytes(result.plan)
     if output is not None:
         write_atomically(output, data)
-        write_atomically(f"{output}.json", json.dumps(report_json(plan), indent=2) + "\n")
-    return plan
+        write_atomically(f"{output}.json", json.dumps(report_json(result), indent=2) + "\n")
+    return result
 
 
 @dataclass(frozen=True)

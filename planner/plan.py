@@ -15,7 +15,6 @@ import numpy as np
 from gliderplan.contract import VEHICLE_COMPONENTS, Component
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
-from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.language.semantics import MissionFault
 from gliderplan.planner.hardware import Hardware, load_hardware
 from gliderplan.planner.inputs import (
@@ -30,6 +29,14 @@ from gliderplan.planner.occupancy import (
     NOMINAL_SPEED_MPS,
     measured_occupancy,
     mission_occupancy,
+)
+from gliderplan.planner.planfile import (
+    Assumption,
+    Plan,
+    ProfilePlan,
+    SensorPlan,
+    StatePlan,
+    as_written,
 )
 
 J_PER_WH = 3600.0
@@ -57,70 +64,23 @@ class InfeasibleBudget(PlanningError):
 
 
 @dataclass(frozen=True)
-class SensorPlan:
-    name: str
-    device: str
-    duty: float
-    period_s: float
-    on_s: float
+class PlanResult:
+    """A plan and what its solve tells about it (the report's figures): the quality it
+    buys, the least energy the mission needs, what one more Wh would buy."""
 
-
-@dataclass(frozen=True)
-class ProfilePlan:
-    index: int
-    kind: str
-    share: float
-    speed_mps: float
-    pitch_rad: float
-    ballast_cc: float
-
-
-@dataclass(frozen=True)
-class StatePlan:
-    name: str
-    time_s: float
-    visits: int
-    clock_mhz: float
-    cycle_s: float
-    sensors: tuple[SensorPlan, ...]
-    profiles: tuple[ProfilePlan, ...]
-    energy_by_component_j: dict[str, float]
-    inflections: float
-    quality: float | None  # weighted quality of the state's device sensors; None if none
-
-    @property
-    def energy_j(self) -> float:
-        return float(sum(self.energy_by_component_j.values()))
-
-
-@dataclass(frozen=True)
-class Plan:
-    mission: str
-    mission_hash: str
-    computer: str
-    clock_mhz: float
-    objective: str
-    status: str  # "optimal"; "infeasible" for `least_energy_plan` beyond the budget
-    quality: float
-    energy_j: float
-    budget_j: float
-    minimum_energy_j: float
+    plan: Plan  # what the plan file holds
+    mission: ir.CheckedMission
+    objective: str  # "maximize_quality" or "minimize_energy"
+    quality: float  # [0, 1]
+    minimum_energy_j: float  # least energy the mission can be flown with [J]
     shadow_price: float  # quality per extra Wh of budget at this plan
-    defaults_used: tuple[str, ...]
     time_source: str  # "timeline" (static walk) or "simulation" (measured occupancy)
     solver_status: str
     solve_s: float
     solver_iterations: int | None
-    states: tuple[StatePlan, ...]
+    state_quality: tuple[float | None, ...]  # weighted quality of each state's device sensors
     confidence: object | None = None  # planner.confidence.Confidence of a plan at a confidence
-
-    @property
-    def components_j(self) -> dict[str, float]:
-        total: dict[str, float] = {}
-        for state in self.states:
-            for k, v in state.energy_by_component_j.items():
-                total[k] = total.get(k, 0.0) + v
-        return total
+    status: str = "optimal"  # "infeasible": `least_energy_plan`, beyond the budget
 
 
 def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
@@ -138,7 +98,7 @@ def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
 
 def plan_mission(mission: ir.CheckedMission, hardware: Hardware | None = None, *,
                  budget_j: float | None = None,
-                 occupancy_s: dict[str, float] | None = None) -> Plan:
+                 occupancy_s: dict[str, float] | None = None) -> PlanResult:
     """Plan a checked mission. `hardware` defaults to the mission's annotations,
     `budget_j` [J] to (1 - reserve) x battery; `occupancy_s` (state -> seconds measured
     in simulation) replaces the static timeline. Raises InfeasibleBudget or PlanningError."""
@@ -146,7 +106,7 @@ def plan_mission(mission: ir.CheckedMission, hardware: Hardware | None = None, *
     return solve_plan(model, budget_j)
 
 
-def solve_plan(model: PlanModel, budget_j: float | None = None) -> Plan:
+def solve_plan(model: PlanModel, budget_j: float | None = None) -> PlanResult:
     """The plan of a prepared model at `budget_j` [J] (default: the hardware's budget)."""
     hardware = model.inputs.hardware
     origin = "" if budget_j is not None or not hardware.reserve_fraction else (
@@ -205,7 +165,7 @@ def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
                   price if price >= _NO_PRICE else 0.0)
 
 
-def least_energy_plan(model: PlanModel, budget_j: float) -> Plan:
+def least_energy_plan(model: PlanModel, budget_j: float) -> PlanResult:
     """The plan that needs the least energy: what the mission costs at the least when
     `budget_j` [J] cannot buy it (status "infeasible" then). PlanningError when the
     annotations cannot all hold."""
@@ -213,9 +173,9 @@ def least_energy_plan(model: PlanModel, budget_j: float) -> Plan:
     if not least.optimal:
         raise PlanningError("the mission's annotations cannot all hold together")
     minimum = realised_energy_j(model.inputs, least)
-    plan = assemble(model.inputs, Choice(_snapped(model.inputs, least), budget_j, minimum, 0.0))
+    result = assemble(model.inputs, Choice(_snapped(model.inputs, least), budget_j, minimum, 0.0))
     short = least.model_energy_j > budget_j * (1 + 1e-9)
-    return replace(plan, status="infeasible") if short else plan
+    return replace(result, status="infeasible") if short else result
 
 
 def _check_budget(inputs: PlanInputs, needed: Solution, budget_j: float, origin: str) -> None:
@@ -344,15 +304,11 @@ def _state_quality(inputs: PlanInputs, sol: Solution, s: int) -> float | None:
     return float(sum(w * u for w, u in terms) / weight) if weight > 0 else None
 
 
-def _round9(x: float) -> float:
-    """The value as the plan file writes it (9 significant digits)."""
-    return float(format(float(x), ".9g"))
-
-
-def assemble(inputs: PlanInputs, choice: Choice) -> Plan:
-    """The plan of a chosen solution, state by state."""
+def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
+    """The plan of a chosen solution, state by state, every number as its file holds it."""
     hardware, sol = inputs.hardware, choice.solution
     energies = state_energy_j(inputs, sol)
+    components = list(dict.fromkeys(k for e in energies for k in e))
     modes = _chosen_modes(inputs, sol)
     duty = duty_fractions(inputs, sol)
     times = state_times_s(inputs, sol)
@@ -367,39 +323,38 @@ def assemble(inputs: PlanInputs, choice: Choice) -> Plan:
         by_sensor = {inputs.duty_sensor[p]: float(duty[p])
                      for p in np.flatnonzero(inputs.duty_state == s)}
         by_sensor.update({n: d for st, n, d, _, _ in inputs.fixed if st == s and d < 1.0})
-        sensors = []
-        for use in state.sensors:
-            if use.name not in by_sensor:
-                continue
-            d = by_sensor[use.name]
-            sensors.append(SensorPlan(use.name, SENSOR_BY_NAME[use.name].device or "", d,
-                                      _round9(period), _round9(d * period)))
+        sensors = tuple(SensorPlan(use.name, as_written(period),
+                                   as_written(by_sensor[use.name] * period))
+                        for use in state.sensors if use.name in by_sensor)
         rows = np.flatnonzero(inputs.prof_state == s)
         shares = np.clip(sol.share[rows], 0.0, 1.0)
         shares = shares / shares.sum()
         profiles = tuple(
-            ProfilePlan(p.index, p.kind, float(f), p.speed_mps, p.pitch_rad, p.ballast_cc)
+            ProfilePlan(p.index, float(f), p.pitch_rad, p.ballast_cc, p.speed_mps)
             for p, f in zip((inputs.profiles[r] for r in rows), shares, strict=True))
         inflections = float(sum(inputs.profiles[r].inflections_per_s * f * t
                                 for r, f in zip(rows, shares, strict=True)))
         if s in legs:
             profiles, inflections = _transit_profile(inputs, sol, legs[s], profiles[0])
-        states.append(StatePlan(state.name, t, visits, hardware.modes[modes[s]].clock_mhz,
-                                _round9(cycle), tuple(sensors), profiles, energies[s],
-                                inflections, _state_quality(inputs, sol, s)))
-    defaults = tuple(dict.fromkeys([*_describe_defaults(inputs), *inputs.notes]))
-    return Plan(
-        mission=inputs.mission.name, mission_hash=inputs.mission.hash,
-        computer=hardware.board.name, clock_mhz=hardware.board.clock_mhz,
-        objective=inputs.mission.objective.sense, status="optimal",
-        quality=float(sol.quality),
-        energy_j=float(sum(sum(e.values()) for e in energies)), budget_j=choice.budget_j,
-        minimum_energy_j=choice.minimum_j, shadow_price=choice.shadow_price,
-        defaults_used=defaults,
-        time_source=inputs.occupancy.source, solver_status=sol.status, solve_s=sol.solve_s,
-        solver_iterations=sol.iterations,
-        states=tuple(states),
-    )
+        energy = {c: as_written(energies[s].get(c, 0.0)) for c in components}
+        states.append(StatePlan(
+            state.name, as_written(hardware.modes[modes[s]].clock_mhz), as_written(cycle),
+            as_written(t), visits, as_written(inflections), energy, sensors,
+            tuple(ProfilePlan(p.index, as_written(p.share), as_written(p.pitch_rad),
+                              as_written(p.ballast_cc), as_written(p.speed_mps))
+                  for p in profiles)))
+    notes = dict.fromkeys([*_describe_defaults(inputs), *inputs.notes])
+    plan = Plan(inputs.mission.name, inputs.mission.hash, hardware.board.name,
+                as_written(hardware.board.clock_mhz), as_written(choice.budget_j),
+                as_written(sum(s.energy_j for s in states)), tuple(states),
+                tuple(Assumption.from_note(note) for note in notes))
+    return PlanResult(
+        plan=plan, mission=inputs.mission, objective=inputs.mission.objective.sense,
+        quality=float(sol.quality), minimum_energy_j=choice.minimum_j,
+        shadow_price=choice.shadow_price, time_source=inputs.occupancy.source,
+        solver_status=sol.status, solve_s=sol.solve_s, solver_iterations=sol.iterations,
+        state_quality=tuple(_state_quality(inputs, sol, s)
+                            for s in range(len(inputs.mission.states))))
 
 
 def _transit_profile(inputs: PlanInputs, sol: Solution, i: int,

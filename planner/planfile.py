@@ -1,8 +1,15 @@
-"""The plan file (docs/plan-format.md): written canonically, read back strictly.
+"""The plan (docs/plan-format.md): one type, `Plan`, written canonically and read back
+strictly.
+
+A plan is what the planner decided (per state: the clock, the sensors' power windows,
+the profiles' shares and glide) and what it predicts (per state: time, visits,
+inflections and energy by component; the budget; the assumptions the prediction rests
+on). `plan_mission` makes one, the plan file holds one, the C runtime flies one and the
+simulator checks a flight against one, with nothing else beside it.
 
 The writer produces exactly the bytes the C runtime expects; the reader enforces every
-rule of the format and raises `PlanFileError` naming the line, so tests can check that
-what we write is what the runtime will accept.
+rule of the format (the C reader's rules, line for line) and raises `PlanFileError`
+naming the line, so tests can check that what we write is what the runtime accepts.
 """
 
 from __future__ import annotations
@@ -15,22 +22,27 @@ from pathlib import Path
 
 from gliderplan.contract import (
     MAX_NAME_LENGTH,
+    MAX_PLAN_ASSUMPTIONS,
     MAX_PLAN_BYTES,
+    MAX_PLAN_COMPONENTS,
     MAX_PLAN_LINE_BYTES,
     MAX_PLAN_SENSORS,
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
+    PLAN_FORMAT_VERSION,
 )
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.language import ir
 from gliderplan.language.ir import CheckedMission
-from gliderplan.planner.plan import Plan
+from gliderplan.language.registry import SENSOR_BY_NAME
 
-VERSION = 1
+MISSION_SUBJECT = "mission"  # the subject of an assumption about the whole mission
 _NAME = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME_LENGTH - 1}}}\Z")
 _NUMBER = re.compile(r"-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?\Z")
 _COUNT = re.compile(r"[0-9]+\Z")
 _HEX64 = re.compile(r"[0-9a-f]{64}\Z")
 _HEX8 = re.compile(r"[0-9a-f]{8}\Z")
+_NOTE = re.compile(rf"([A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME_LENGTH - 1}}}): (.+)\Z")
 
 
 class PlanFileError(GliderplanError, ValueError):
@@ -65,78 +77,136 @@ def number(x: float) -> str:
     return text
 
 
-# ---- the contents of a plan file -------------------------------------------------------
+def as_written(x: float) -> float:
+    """`x` as the plan file holds it (9 significant digits): a plan made in memory equals
+    the plan read back from its file."""
+    return float(number(x))
+
+
+# ---- the plan --------------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class SensorLine:
+class SensorPlan:
+    """A sensor whose power the plan manages: on for the first `on_s` of every `period_s`
+    [s], counted from entry into the state."""
+
     name: str
     period_s: float
     on_s: float
 
+    @property
+    def duty(self) -> float:
+        """Fraction of the time the sensor is powered [1]."""
+        return self.on_s / self.period_s
+
+    @property
+    def device(self) -> str:
+        """The power-model device behind the sensor ("" for a flight sensor)."""
+        return SENSOR_BY_NAME[self.name].device or ""
+
 
 @dataclass(frozen=True)
-class ProfileLine:
-    index: int
-    share: float
+class ProfilePlan:
+    """One alternative of a state's `flightprofile a | b | ...`, as the plan flies it."""
+
+    index: int  # position in the state's list of alternatives
+    share: float  # fraction of each profile cycle spent flying it [1]
     pitch_rad: float
-    ballast_cc: float
-    speed_mps: float
+    ballast_cc: float  # pumped volume either side of neutral [cc]
+    speed_mps: float  # planned horizontal speed [m/s]
 
 
 @dataclass(frozen=True)
-class StateBlock:
+class StatePlan:
+    """What the plan sets in one state and what it predicts of it."""
+
     name: str
     clock_mhz: float
-    cycle_s: float
-    sensors: tuple[SensorLine, ...]
-    profiles: tuple[ProfileLine, ...]
-    line: int = field(default=0, compare=False)  # where the block starts in the file
+    cycle_s: float  # period over which the profiles alternate [s]
+    time_s: float  # predicted time in the state over the whole mission [s]
+    visits: int  # predicted visits
+    inflections: float  # predicted inflections over the mission
+    energy_by_component_j: dict[str, float]  # predicted energy [J] per component
+    sensors: tuple[SensorPlan, ...]
+    profiles: tuple[ProfilePlan, ...]
+    line: int = field(default=0, compare=False)  # where the block starts in its file
+
+    @property
+    def energy_j(self) -> float:
+        return float(sum(self.energy_by_component_j.values()))
 
 
 @dataclass(frozen=True)
-class PlanFile:
+class Assumption:
+    """Something the prediction rests on that the flight may prove wrong. `subject` is a
+    state, a device or another NAME it concerns, or "mission"."""
+
+    subject: str
+    text: str
+
+    @classmethod
+    def from_note(cls, note: str) -> Assumption:
+        """The planner's notes read "subject: what was assumed"; one without a subject
+        concerns the mission."""
+        match = _NOTE.match(note)
+        return cls(match[1], match[2]) if match else cls(MISSION_SUBJECT, note)
+
+    def __str__(self) -> str:
+        return self.text if self.subject == MISSION_SUBJECT else f"{self.subject}: {self.text}"
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The plan of a mission: what to fly in each state and what it will cost."""
+
     mission: str
-    hash: str
-    computer: str
-    clock_mhz: float
-    budget_j: float
-    predicted_j: float
-    states: tuple[StateBlock, ...]
+    mission_hash: str  # CheckedMission.hash of the mission it was made for
+    computer: str  # board preset or a user board's name
+    clock_mhz: float  # the board's default clock
+    budget_j: float  # usable energy [J] = (1 - reserve) x battery
+    predicted_j: float  # predicted energy of the whole mission [J]
+    states: tuple[StatePlan, ...]  # in the mission's order
+    assumptions: tuple[Assumption, ...] = ()
+
+    @property
+    def components(self) -> tuple[str, ...]:
+        """The energy components the prediction names, in the file's order."""
+        return tuple(dict.fromkeys(k for s in self.states for k in s.energy_by_component_j))
+
+    @property
+    def components_j(self) -> dict[str, float]:
+        """Predicted energy [J] per component over the mission."""
+        return {c: float(sum(s.energy_by_component_j.get(c, 0.0) for s in self.states))
+                for c in self.components}
 
 
-def _rounded(x: float) -> float:
-    return float(number(x))
+# ---- writing ---------------------------------------------------------------------------
 
-
-def plan_file_of(plan: Plan) -> PlanFile:
-    """The plan file's contents, with every number as it will be written."""
-    blocks = []
+def write_plan_bytes(plan: Plan) -> bytes:
+    """The bytes of the plan's file, checksum line included. PlanFileError if no plan file
+    can carry the plan (too many states, a name that is not a NAME, ...)."""
+    components = plan.components
+    lines = [f"GPPLAN {PLAN_FORMAT_VERSION}", f"mission {plan.mission}",
+             f"hash {plan.mission_hash}", f"computer {plan.computer} {number(plan.clock_mhz)}",
+             f"budget_j {number(plan.budget_j)}", f"predicted_j {number(plan.predicted_j)}",
+             f"components {' '.join(components)}", f"assumptions {len(plan.assumptions)}"]
+    lines += [f"assume {a.subject} {a.text}" for a in plan.assumptions]
+    lines.append(f"states {len(plan.states)}")
     for s in plan.states:
-        sensors = tuple(SensorLine(x.name, _rounded(x.period_s), _rounded(x.on_s))
-                        for x in s.sensors)
-        profiles = tuple(ProfileLine(p.index, _rounded(p.share), _rounded(p.pitch_rad),
-                                     _rounded(p.ballast_cc), _rounded(p.speed_mps))
-                         for p in s.profiles)
-        blocks.append(StateBlock(s.name, _rounded(s.clock_mhz), _rounded(s.cycle_s),
-                                 sensors, profiles))
-    return PlanFile(plan.mission, plan.mission_hash, plan.computer, _rounded(plan.clock_mhz),
-                    _rounded(plan.budget_j), _rounded(plan.energy_j), tuple(blocks))
-
-
-def render(contents: PlanFile) -> bytes:
-    """The bytes of a plan file, checksum line included."""
-    lines = [f"GPPLAN {VERSION}", f"mission {contents.mission}", f"hash {contents.hash}",
-             f"computer {contents.computer} {number(contents.clock_mhz)}",
-             f"budget_j {number(contents.budget_j)}",
-             f"predicted_j {number(contents.predicted_j)}", f"states {len(contents.states)}"]
-    for b in contents.states:
-        lines.append(f"state {b.name} {number(b.clock_mhz)} {number(b.cycle_s)} "
-                     f"{len(b.sensors)} {len(b.profiles)}")
-        lines += [f"sensor {x.name} {number(x.period_s)} {number(x.on_s)}" for x in b.sensors]
+        lines.append(f"state {s.name} {number(s.clock_mhz)} {number(s.cycle_s)} "
+                     f"{len(s.sensors)} {len(s.profiles)}")
+        lines.append(f"predict {number(s.time_s)} {s.visits} {number(s.inflections)}")
+        lines.append("energy " + " ".join(number(s.energy_by_component_j.get(c, 0.0))
+                                          for c in components))
+        lines += [f"sensor {x.name} {number(x.period_s)} {number(x.on_s)}" for x in s.sensors]
         lines += [f"profile {p.index} {number(p.share)} {number(p.pitch_rad)} "
-                  f"{number(p.ballast_cc)} {number(p.speed_mps)}" for p in b.profiles]
+                  f"{number(p.ballast_cc)} {number(p.speed_mps)}" for p in s.profiles]
         lines.append("end")
-    body = "".join(line + "\n" for line in lines).encode("ascii")
+    try:
+        body = "".join(line + "\n" for line in lines).encode("ascii")
+    except UnicodeEncodeError as err:
+        raise PlanFileError(0, f"no plan file can carry this plan: {err.object[:60]!r} is "
+                            "not ASCII (docs/plan-format.md)") from None
     data = body + f"crc32 {zlib.crc32(body):08x}\n".encode("ascii")
     # The writer must never emit what the reader (and the runtime) would refuse.
     try:
@@ -147,11 +217,6 @@ def render(contents: PlanFile) -> bytes:
     return data
 
 
-def write_plan_bytes(plan: Plan) -> bytes:
-    """The plan file of a plan."""
-    return render(plan_file_of(plan))
-
-
 # ---- reading strictly ------------------------------------------------------------------
 
 class _Cursor:
@@ -159,15 +224,18 @@ class _Cursor:
         self.lines = lines
         self.at = 0
 
-    def next(self, keyword: str, n_fields: int) -> list[str]:
-        """The fields after `keyword` on the next line, which must have `n_fields` of them."""
+    def next(self, keyword: str, n_fields: int | None) -> list[str]:
+        """The fields after `keyword` on the next line, which must have `n_fields` of them
+        (None: one or more)."""
         if self.at >= len(self.lines):
             raise PlanFileError(self.at + 1, f"expected a '{keyword}' line, the file ends")
         self.at += 1
         fields = self.lines[self.at - 1].split(" ")
         if fields[0] != keyword:
             raise PlanFileError(self.at, f"expected '{keyword}', found '{fields[0]}'")
-        if len(fields) != n_fields + 1:
+        if n_fields is None and len(fields) < 2:
+            raise PlanFileError(self.at, f"'{keyword}' takes at least one field, found none")
+        if n_fields is not None and len(fields) != n_fields + 1:
             raise PlanFileError(self.at, f"'{keyword}' takes {n_fields} fields, "
                                 f"found {len(fields) - 1}")
         return fields[1:]
@@ -177,10 +245,13 @@ class _Cursor:
             raise PlanFileError(self.at, f"{text!r} is not a NAME")
         return text
 
-    def number(self, text: str, what: str) -> float:
+    def number(self, text: str, what: str, low: float = -math.inf) -> float:
+        """A NUMBER >= `low`."""
         if not _NUMBER.match(text) or not math.isfinite(float(text)):
             raise PlanFileError(self.at, f"{what}: {text!r} is not a NUMBER")
-        return float(text)
+        value = float(text)
+        self.check(value >= low, f"{what} must be >= {low:g}")
+        return value
 
     def count(self, text: str, what: str, low: int, high: int) -> int:
         if not _COUNT.match(text):
@@ -215,25 +286,50 @@ def _split_lines(data: bytes) -> list[str]:
     return [raw.decode("ascii") for raw in lines]
 
 
-def read_plan_bytes(data: bytes) -> PlanFile:
-    """Parse a plan file strictly; PlanFileError names the first line that breaks a rule."""
+def read_plan_bytes(data: bytes, mission: CheckedMission | None = None,
+                    path: str = "") -> Plan:
+    """Parse a plan file strictly; with `mission`, check that it is a plan for that
+    mission as the C runtime does (name, hash, states, each state's profiles and logged
+    sensors). PlanFileError (`path:line: ...`) names the first line that breaks a rule."""
+    try:
+        return _read(data, mission)
+    except PlanFileError as err:
+        raise PlanFileError(err.line, err.message, path) from None
+
+
+def _read(data: bytes, mission: CheckedMission | None) -> Plan:
     lines = _split_lines(data)
     cur = _Cursor(lines)
     version = cur.next("GPPLAN", 1)[0]
-    cur.check(version == str(VERSION), f"unsupported version {version!r} (expected {VERSION})")
-    mission = cur.name(cur.next("mission", 1)[0])
+    cur.check(version == str(PLAN_FORMAT_VERSION),
+              f"unsupported version {version!r} (expected {PLAN_FORMAT_VERSION})")
+    name = cur.name(cur.next("mission", 1)[0])
+    if mission is not None:
+        cur.check(name == mission.name, f"plan for mission {name!r}, not {mission.name!r}")
     digest = cur.next("hash", 1)[0]
     cur.check(bool(_HEX64.match(digest)), "hash must be 64 lowercase hex digits")
+    if mission is not None:
+        cur.check(digest == mission.hash,
+                  "plan made for another version of the mission (hash differs)")
     computer, clock = cur.next("computer", 2)
     computer = cur.name(computer)
     clock_mhz = cur.number(clock, "clock")
     cur.check(clock_mhz > 0, "the clock must be > 0 MHz")
-    budget = cur.number(cur.next("budget_j", 1)[0], "budget_j")
-    cur.check(budget >= 0, "budget_j must be >= 0")
-    predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j")
-    cur.check(predicted >= 0, "predicted_j must be >= 0")
+    budget = cur.number(cur.next("budget_j", 1)[0], "budget_j", 0.0)
+    predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j", 0.0)
+    components = [cur.name(c) for c in cur.next("components", None)]
+    cur.check(len(components) <= MAX_PLAN_COMPONENTS,
+              f"{len(components)} components, more than {MAX_PLAN_COMPONENTS}")
+    cur.check(len(set(components)) == len(components), "a component is named twice")
+    n_assumptions = cur.count(cur.next("assumptions", 1)[0], "assumptions", 0,
+                              MAX_PLAN_ASSUMPTIONS)
+    assumptions = tuple(_assumption(cur) for _ in range(n_assumptions))
     n_states = cur.count(cur.next("states", 1)[0], "states", 1, MAX_STATES)
-    blocks = [_state_block(cur) for _ in range(n_states)]
+    if mission is not None:
+        cur.check(n_states == len(mission.states),
+                  f"{n_states} states, the mission has {len(mission.states)}")
+    states = tuple(_state_block(cur, components, None if mission is None
+                                else mission.states[i]) for i in range(n_states))
     (checksum,) = cur.next("crc32", 1)
     cur.check(bool(_HEX8.match(checksum)), "crc32 must be 8 lowercase hex digits")
     body = data[: data.rfind(b"crc32 ")]
@@ -242,30 +338,57 @@ def read_plan_bytes(data: bytes) -> PlanFile:
               f"{zlib.crc32(body):08x}")
     if cur.at != len(lines):
         raise PlanFileError(cur.at + 1, "extra line after crc32")
-    return PlanFile(mission, digest, computer, clock_mhz, budget, predicted, tuple(blocks))
+    return Plan(name, digest, computer, clock_mhz, budget, predicted, states, assumptions)
 
 
-def _state_block(cur: _Cursor) -> StateBlock:
+def _assumption(cur: _Cursor) -> Assumption:
+    """`assume SUBJECT TEXT`: TEXT is the rest of the line."""
+    words = cur.next("assume", None)
+    cur.check(len(words) >= 2, "'assume' takes a SUBJECT and a TEXT")
+    return Assumption(cur.name(words[0]), " ".join(words[1:]))
+
+
+def _state_block(cur: _Cursor, components: list[str], state: ir.State | None) -> StatePlan:
+    """A state block; `state`, the mission's, is what it must fit (None: no mission)."""
     name, clock, cycle, n_sensors, n_profiles = cur.next("state", 5)
     start = cur.at
     name = cur.name(name)
+    if state is not None:
+        cur.check(name == state.name, f"state {name!r} where the mission has {state.name!r}")
     clock_mhz, cycle_s = cur.number(clock, "clock"), cur.number(cycle, "cycle")
     cur.check(clock_mhz > 0 and cycle_s > 0, "clock and cycle must be > 0")
     n_sensors = cur.count(n_sensors, "sensors", 0, MAX_PLAN_SENSORS)
     n_profiles = cur.count(n_profiles, "profiles", 1, MAX_PROFILE_ALTERNATIVES)
-    sensors = []
+    if state is not None:
+        cur.check(n_profiles == len(state.profiles), f"state {name}: {n_profiles} profiles, "
+                  f"the mission's state has {len(state.profiles)}")
+    time_s, visits, inflections = cur.next("predict", 3)
+    prediction = (cur.number(time_s, "predicted time", 0.0),
+                  cur.count(visits, "predicted visits", 0, 999_999_999),
+                  cur.number(inflections, "predicted inflections", 0.0))
+    energy = {c: cur.number(j, f"energy of {c}", 0.0)
+              for c, j in zip(components, cur.next("energy", len(components)), strict=True)}
+    logged = [use.name for use in state.sensors] if state is not None else None
+    sensors, after = [], 0
     for _ in range(n_sensors):
         sensor, period, on = cur.next("sensor", 3)
+        sensor = cur.name(sensor)
         period_s, on_s = cur.number(period, "period"), cur.number(on, "on time")
         cur.check(period_s > 0 and 0 <= on_s <= period_s, "need 0 <= ON_S <= PERIOD_S, "
                   "PERIOD_S > 0")
-        sensors.append(SensorLine(cur.name(sensor), period_s, on_s))
+        if logged is not None:
+            cur.check(sensor in logged, f"state {name}: sensor {sensor!r} is not logged by "
+                      "the state")
+            cur.check(sensor in logged[after:], f"state {name}: sensor lines out of the "
+                      "state's order")
+            after = logged.index(sensor, after) + 1
+        sensors.append(SensorPlan(sensor, period_s, on_s))
     profiles = []
     for i in range(n_profiles):
         index, share, pitch, ballast, speed = cur.next("profile", 5)
         cur.check(cur.count(index, "index", 0, MAX_PROFILE_ALTERNATIVES - 1) == i,
                   f"profile index {index} out of order (expected {i})")
-        line = ProfileLine(i, cur.number(share, "share"), cur.number(pitch, "pitch"),
+        line = ProfilePlan(i, cur.number(share, "share"), cur.number(pitch, "pitch"),
                            cur.number(ballast, "ballast"), cur.number(speed, "speed"))
         cur.check(0 <= line.share <= 1, "share must lie in [0, 1]")
         cur.check(0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
@@ -274,24 +397,8 @@ def _state_block(cur: _Cursor) -> StateBlock:
     cur.check(abs(sum(p.share for p in profiles) - 1.0) <= 1e-6,
               f"state {name}: profile shares sum to {sum(p.share for p in profiles):.9g}, not 1")
     cur.next("end", 0)
-    return StateBlock(name, clock_mhz, cycle_s, tuple(sensors), tuple(profiles), start)
-
-
-def check_against_mission(contents: PlanFile, mission: CheckedMission) -> None:
-    """The checks that need the compiled mission: name, hash and state names."""
-    mission_name, mission_hash = mission.name, mission.hash
-    state_names = tuple(s.name for s in mission.states)
-    if contents.mission != mission_name:
-        raise PlanFileError(2, f"plan for mission {contents.mission!r}, not {mission_name!r}")
-    if contents.hash != mission_hash:
-        raise PlanFileError(3, "plan made for another version of the mission (hash differs)")
-    if len(contents.states) != len(state_names):
-        raise PlanFileError(7, f"{len(contents.states)} states, the mission has "
-                            f"{len(state_names)}")
-    for block, name in zip(contents.states, state_names, strict=True):
-        if block.name != name:
-            raise PlanFileError(block.line, f"state {block.name!r} where the mission has "
-                                f"{name!r}")
+    return StatePlan(name, clock_mhz, cycle_s, *prediction, energy, tuple(sensors),
+                     tuple(profiles), start)
 
 
 def read_plan_data(path: str | Path) -> bytes:
@@ -304,14 +411,17 @@ def read_plan_data(path: str | Path) -> bytes:
         raise PlanFileError(0, f"cannot read the plan: {err.strerror}", str(path)) from None
 
 
-def read_plan_file(path: str | Path, mission: CheckedMission | None = None) -> PlanFile:
-    """Read a plan file strictly (and, given the mission's name, hash and states, check
-    that it is for that mission). Errors are PlanFileError with `path:line:` first."""
+def load_plan(path: str | Path, mission: CheckedMission) -> Plan:
+    """The plan in `path` for `mission`, to fly: PlanFileError if there is no such file,
+    PlanRejected (naming the file and line) if it is not a plan for `mission`."""
     data = read_plan_data(path)
     try:
-        contents = read_plan_bytes(data)
-        if mission is not None:
-            check_against_mission(contents, mission)
+        return read_plan_bytes(data, mission, str(path))
     except PlanFileError as err:
-        raise PlanFileError(err.line, err.message, str(path)) from None
-    return contents
+        raise PlanRejected(str(err)) from None
+
+
+def read_plan_file(path: str | Path, mission: CheckedMission | None = None) -> Plan:
+    """Read a plan file strictly (and, given `mission`, check that it is a plan for it).
+    Errors are PlanFileError with `path:line:` first."""
+    return read_plan_bytes(read_plan_data(path), mission, str(path))

@@ -1,55 +1,59 @@
-"""The plan report: JSON for the simulator and for tools, a table for people."""
+"""The plan report: JSON for tools, a table for people (the plan itself is in its file)."""
 
 from __future__ import annotations
 
 import math
 
-from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, Plan, StatePlan
+from gliderplan.language import ir
+from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, PlanResult
+from gliderplan.planner.planfile import StatePlan
 
 REPORT_VERSION = 1
 
 
-def _state_json(s: StatePlan) -> dict:
+def _state_json(result: PlanResult, s: int) -> dict:
+    state, kinds = result.plan.states[s], result.mission.states[s].profiles
     return {
-        "name": s.name,
-        "time_s": s.time_s,
-        "visits": s.visits,
-        "clock_mhz": s.clock_mhz,
-        "cycle_s": s.cycle_s,
-        "energy_j": s.energy_j,
-        "energy_by_component_j": dict(s.energy_by_component_j),
-        "inflections": s.inflections,
-        "profiles": [{"index": p.index, "kind": p.kind, "share": p.share,
+        "name": state.name,
+        "time_s": state.time_s,
+        "visits": state.visits,
+        "clock_mhz": state.clock_mhz,
+        "cycle_s": state.cycle_s,
+        "energy_j": state.energy_j,
+        "energy_by_component_j": dict(state.energy_by_component_j),
+        "inflections": state.inflections,
+        "profiles": [{"index": p.index, "kind": kinds[p.index].kind, "share": p.share,
                       "speed_mps": p.speed_mps, "pitch_rad": p.pitch_rad,
-                      "ballast_cc": p.ballast_cc} for p in s.profiles],
+                      "ballast_cc": p.ballast_cc} for p in state.profiles],
         "sensors": [{"name": x.name, "device": x.device, "duty": x.duty,
-                     "period_s": x.period_s, "on_s": x.on_s} for x in s.sensors],
-        "quality": s.quality,
+                     "period_s": x.period_s, "on_s": x.on_s} for x in state.sensors],
+        "quality": result.state_quality[s],
     }
 
 
-def report_json(plan: Plan) -> dict:
+def report_json(result: PlanResult) -> dict:
     """The JSON report (planner/README.md documents every field)."""
+    plan = result.plan
     return {
         "report_version": REPORT_VERSION,
         "mission": plan.mission,
         "hash": plan.mission_hash,
-        "status": plan.status,
-        "objective": plan.objective,
-        "quality": plan.quality,
-        "energy_j": plan.energy_j,
+        "status": result.status,
+        "objective": result.objective,
+        "quality": result.quality,
+        "energy_j": plan.predicted_j,
         "budget_j": plan.budget_j,
-        "minimum_energy_j": plan.minimum_energy_j,
-        "shadow_price": plan.shadow_price,
+        "minimum_energy_j": result.minimum_energy_j,
+        "shadow_price": result.shadow_price,
         "shadow_price_unit": "quality per Wh",
         "computer": {"board": plan.computer, "clock_mhz": plan.clock_mhz},
-        "defaults_used": list(plan.defaults_used),
-        "time_source": plan.time_source,
-        "solver": {"name": "CLARABEL", "status": plan.solver_status,
-                   "time_s": plan.solve_s, "iterations": plan.solver_iterations},
+        "assumptions": [{"subject": a.subject, "text": a.text} for a in plan.assumptions],
+        "time_source": result.time_source,
+        "solver": {"name": "CLARABEL", "status": result.solver_status,
+                   "time_s": result.solve_s, "iterations": result.solver_iterations},
         "components_j": plan.components_j,
-        "states": [_state_json(s) for s in plan.states],
-        "confidence": plan.confidence.to_json() if plan.confidence is not None else None,
+        "states": [_state_json(result, s) for s in range(len(plan.states))],
+        "confidence": result.confidence.to_json() if result.confidence is not None else None,
     }
 
 
@@ -73,44 +77,46 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
     return [fmt.format(*header), *(fmt.format(*r) for r in rows)]
 
 
-def _does(s: StatePlan) -> str:
+def _does(state: StatePlan, kinds: tuple[ir.Profile, ...]) -> str:
     flying = ", ".join(
-        f"{p.kind}#{p.index} {100 * p.share:.0f}% @ {p.speed_mps:.2f} m/s"
-        for p in s.profiles if p.share > 5e-4)
-    sensors = ", ".join(f"{x.name} {100 * x.duty:.0f}%" for x in s.sensors)
+        f"{kinds[p.index].kind}#{p.index} {100 * p.share:.0f}% @ {p.speed_mps:.2f} m/s"
+        for p in state.profiles if p.share > 5e-4)
+    sensors = ", ".join(f"{x.name} {100 * x.duty:.0f}%" for x in state.sensors)
     return flying + (f"; {sensors}" if sensors else "")
 
 
-def report_text(plan: Plan) -> str:
+def report_text(result: PlanResult) -> str:
     """A readable summary: what each state does, energy by component, quality, price."""
-    lines = [f"mission {plan.mission}: {plan.objective.replace('_', ' ')} on "
+    plan = result.plan
+    lines = [f"mission {plan.mission}: {result.objective.replace('_', ' ')} on "
              f"{plan.computer} @ {plan.clock_mhz:g} MHz",
-             f"quality {plan.quality:.4f}   energy {_wh(plan.energy_j)} Wh of a "
-             f"{_wh(plan.budget_j)} Wh budget ({100 * plan.energy_j / plan.budget_j:.1f} %)"
-             f"   minimum {_wh(plan.minimum_energy_j)} Wh",
-             f"shadow price {plan.shadow_price:.4g} quality per extra Wh"
-             + ("  (the budget is not the limit)" if plan.shadow_price < 1e-9 else ""),
+             f"quality {result.quality:.4f}   energy {_wh(plan.predicted_j)} Wh of a "
+             f"{_wh(plan.budget_j)} Wh budget ({100 * plan.predicted_j / plan.budget_j:.1f} %)"
+             f"   minimum {_wh(result.minimum_energy_j)} Wh",
+             f"shadow price {result.shadow_price:.4g} quality per extra Wh"
+             + ("  (the budget is not the limit)" if result.shadow_price < 1e-9 else ""),
              "", "what each state does:"]
-    if plan.confidence is not None:
-        c = plan.confidence
+    if result.confidence is not None:
+        c = result.confidence
         lines.insert(3, f"confidence {c.achieved:.3g} (asked {c.requested:g}): the budget "
                         f"holds in all {c.scenarios} simulated scenarios; {c.method}, risk "
                         f"{c.risk:g}, {c.dimension} decisions, {c.support} scenarios active; "
                         "the shadow price is at this confidence")
     lines += _table(["state", "time h", "clock", "plan"],
-                    [[s.name, f"{s.time_s / 3600:.2f}", f"{s.clock_mhz:g}", _does(s)]
-                     for s in plan.states])
+                    [[s.name, f"{s.time_s / 3600:.2f}", f"{s.clock_mhz:g}",
+                      _does(s, m.profiles)]
+                     for s, m in zip(plan.states, result.mission.states, strict=True)])
     components = list(plan.components_j)
     lines += ["", "energy by component [Wh]:"]
     rows = [[s.name, *(_wh(s.energy_by_component_j.get(c, 0.0)) for c in components),
-             _wh(s.energy_j), "-" if s.quality is None or math.isnan(s.quality)
-             else f"{s.quality:.3f}"] for s in plan.states]
+             _wh(s.energy_j), "-" if q is None or math.isnan(q) else f"{q:.3f}"]
+            for s, q in zip(plan.states, result.state_quality, strict=True)]
     rows.append(["total", *(_wh(plan.components_j[c]) for c in components),
-                 _wh(plan.energy_j), f"{plan.quality:.3f}"])
+                 _wh(plan.predicted_j), f"{result.quality:.3f}"])
     lines += _table(["state", *components, "total", "quality"], rows)
-    if plan.defaults_used:
+    if plan.assumptions:
         lines += ["", "defaults and assumptions used:"]
-        lines += [f"  - {d}" for d in plan.defaults_used]
-    lines.append(f"\nsolver: {plan.solver_status}, {plan.solver_iterations} iterations, "
-                 f"{1000 * plan.solve_s:.1f} ms")
+        lines += [f"  - {a}" for a in plan.assumptions]
+    lines.append(f"\nsolver: {result.solver_status}, {result.solver_iterations} iterations, "
+                 f"{1000 * result.solve_s:.1f} ms")
     return "\n".join(lines) + "\n"

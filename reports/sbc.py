@@ -46,7 +46,7 @@ def _clock(result: BoardResult) -> float | None:
 
 def board_json(result: BoardResult) -> dict[str, Any]:
     """One board: its data file's figures as given, and what it costs on the mission."""
-    board, energy, plan = result.board, result.energy, result.plan
+    board, energy, planned = result.board, result.energy, result.planned
     sleep = board.sleep
     return {
         "description": board.description,
@@ -60,7 +60,7 @@ def board_json(result: BoardResult) -> dict[str, Any]:
         "wakes_on": list(sleep.wakes_on) if sleep else [],
         "boot_time_s": board.boot_s,
         "boot_energy_j": board.boot_j,
-        "status": plan.status,
+        "status": planned.status,
         "board_energy_j": energy.total_j,
         "active_j": energy.active_j,
         "idle_j": energy.idle_j,
@@ -68,9 +68,9 @@ def board_json(result: BoardResult) -> dict[str, Any]:
         "wake_j": energy.wake_j,
         "boot_j": energy.boot_j,
         "share_of_mission": result.share,
-        "mission_energy_j": plan.energy_j,
-        "minimum_energy_j": plan.minimum_energy_j,
-        "quality": plan.quality,
+        "mission_energy_j": planned.plan.predicted_j,
+        "minimum_energy_j": planned.minimum_energy_j,
+        "quality": planned.quality,
         "endurance_days": result.endurance_days,
         "assumptions": dict(result.assumptions),
     }
@@ -109,7 +109,7 @@ def boards_frame(comparison: Comparison) -> pd.DataFrame:
                                          if k not in ("description", "clocks_mhz", "wakes_on",
                                                       "assumptions")},
                      "board_energy_wh": _wh(r.energy.total_j),
-                     "mission_energy_wh": _wh(r.plan.energy_j)})
+                     "mission_energy_wh": _wh(r.planned.plan.predicted_j)})
     return pd.DataFrame(rows)
 
 
@@ -181,15 +181,15 @@ def comparison_text(comparison: Comparison) -> str:
                      _num(_wh(e.active_j)), _num(_wh(e.idle_j)),
                      _num(_wh(e.sleep_j + e.wake_j)), _num(_wh(e.boot_j)),
                      f"{100 * r.share:.1f} %",
-                     _num(_wh(r.plan.energy_j)) + (" (over)" if r.plan.status != "optimal"
-                                                   else ""),
-                     _num(r.plan.quality, ".4f"), _num(r.endurance_days, ".1f")])
+                     _num(_wh(r.planned.plan.predicted_j))
+                     + (" (over)" if r.planned.status != "optimal" else ""),
+                     _num(r.planned.quality, ".4f"), _num(r.endurance_days, ".1f")])
     lines += _table(header, rows)
     lines.append("* an assumption, not a measurement (below)")
     cheapest = min(c.boards, key=lambda r: r.energy.total_j)
     lines += ["", f"cheapest board on this mission: {cheapest.name} "
               f"({_wh(cheapest.energy.total_j):.3g} Wh)"]
-    over = [r.name for r in c.boards if r.plan.status != "optimal"]
+    over = [r.name for r in c.boards if r.planned.status != "optimal"]
     if over:
         lines.append(f"over the battery on: {', '.join(over)} (the least-energy plan shown)")
     lines += ["", "crossovers (workload at which the ranking changes, cheapest first):"]

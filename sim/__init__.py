@@ -7,7 +7,8 @@ with a COMMAND that the glider flies for one tick. The runtime is the Python ref
 executor (executor.py, pilot.py, compiled.py: language/semantics.py plus the library
 routines of docs/pilot.md) or the compiled C runtime over a pseudo-terminal
 (emulator.py). energy.py integrates every component's energy over the run and checks
-it against the plan (planfile.py reads plans); outputs.py and plots.py write a run's
+it against the plan, whose file carries the prediction (`planner.planfile.Plan`: the
+simulator never plans); outputs.py and plots.py write a run's
 files; flight.py flies one run. `run_mission` (run.py) is the whole pipeline of
 `gliderplan sim` as one Python call:
 

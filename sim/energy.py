@@ -4,8 +4,8 @@ Every component is integrated over the run's ticks with `power_models.timeline` 
 vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
 pitch motor, the surface and Iridium phases, the computer at the clock of each state
 from its workload per tick, and each sensor device from its on/off timeline (with a
-warm-up at every switch-on). The plan check compares the run with the plan's prediction
-per state (prediction.py).
+warm-up at every switch-on). `check_flight` compares the run with the plan's prediction
+per state, which the plan file carries.
 
 A run that spends more than the plan's budget by more than `PLAN_TOLERANCE` violates the
 plan; the states that overran their prediction are named as the cause. A run within its
@@ -17,22 +17,18 @@ plan's prediction was wrong.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
+from gliderplan.planner.planfile import Plan
 from gliderplan.power_models import load_board, load_sensor
 from gliderplan.power_models.catalog import preset_names
 from gliderplan.power_models.timeline import Timeline, energy_by_component_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunRecord
-from gliderplan.sim.prediction import StatePrediction
-
-if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
-    from gliderplan.sim.planfile import Plan
 
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
 DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
@@ -111,10 +107,12 @@ def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
     return per_tick
 
 
-# ---- the plan's prediction -------------------------------------------------------------
+# ---- the flight against its plan -------------------------------------------------------
 
 @dataclass(frozen=True)
-class PlanCheck:
+class FlightCheck:
+    """The verdict on a flight against its plan's budget and per-state prediction."""
+
     verdict: str  # "pass", "over prediction", "violation" or "no plan"
     budget_j: float | None
     predicted_j: float | None
@@ -128,44 +126,42 @@ class PlanCheck:
                 "tolerance": self.tolerance, "causes": list(self.causes)}
 
 
-def check_plan(energy: RunEnergy, plan: Plan | None,
-               predictions: dict[str, StatePrediction] | None,
-               tolerance: float = PLAN_TOLERANCE) -> PlanCheck:
+def check_flight(energy: RunEnergy, plan: Plan | None,
+                 tolerance: float = PLAN_TOLERANCE) -> FlightCheck:
     """Did the run stay within the plan's budget? Causes: states that overran their
-    predicted energy, with inflections and time planned against flown."""
+    predicted energy, with inflections and time planned against flown and what the plan
+    assumed of the state; without such a state, the states that spent most."""
     simulated = energy.total_j
     if plan is None:
-        return PlanCheck("no plan", None, None, simulated, tolerance, ())
+        return FlightCheck("no plan", None, None, simulated, tolerance, ())
     causes = []
-    for name, used in energy.by_state_j.items():
-        predicted = (predictions or {}).get(name)
-        if predicted is None:
-            continue
-        flown = sum(used.values())
-        if flown <= predicted.energy_j * (1.0 + tolerance):
+    for predicted in plan.states:
+        name = predicted.name
+        used = energy.by_state_j.get(name)
+        flown = sum(used.values()) if used else 0.0
+        if used is None or flown <= predicted.energy_j * (1.0 + tolerance):
             continue
         excess = {k: used[k] - v for k, v in predicted.energy_by_component_j.items() if k in used}
         most = max(excess, key=excess.get, default=None)
         detail = [f"{name}: {flown / 1e3:.1f} kJ spent, {predicted.energy_j / 1e3:.1f} kJ planned"
                   + (f" ({most} +{excess[most] / 1e3:.1f} kJ)" if most and excess[most] > 0
                      else "")]
-        if predicted.inflections is not None and \
-                energy.inflections_by_state[name] > predicted.inflections * (1.0 + tolerance):
+        if energy.inflections_by_state[name] > predicted.inflections * (1.0 + tolerance):
             detail.append(f"{predicted.inflections:.0f} inflections planned, "
                           f"{energy.inflections_by_state[name]} flown")
-        if predicted.time_s is not None and \
-                energy.time_by_state_s[name] > predicted.time_s * (1.0 + tolerance):
+        if energy.time_by_state_s[name] > predicted.time_s * (1.0 + tolerance):
             detail.append(f"{predicted.time_s / 3600:.2f} h planned, "
                           f"{energy.time_by_state_s[name] / 3600:.2f} h flown")
+        detail += [f"the plan assumed: {a.text}" for a in plan.assumptions if a.subject == name]
         causes.append((flown - predicted.energy_j, "; ".join(detail)))
     causes.sort(reverse=True)
     over_budget = simulated > plan.budget_j * (1.0 + tolerance)
-    if over_budget and not causes:  # no per-state prediction to blame: name the spenders
+    if over_budget and not causes:  # no state overran its prediction: name the spenders
         spent = sorted(((sum(v.values()), k) for k, v in energy.by_state_j.items()),
                        reverse=True)
         causes = [(0.0, f"{simulated / 1e3:.1f} kJ spent against a budget of "
                         f"{plan.budget_j / 1e3:.1f} kJ; most in " + ", ".join(
                             f"{name} ({joules / 1e3:.1f} kJ)" for joules, name in spent[:3]))]
     verdict = "violation" if over_budget else "over prediction" if causes else "pass"
-    return PlanCheck(verdict, plan.budget_j, plan.predicted_j,
-                     simulated, tolerance, tuple(text for _, text in causes))
+    return FlightCheck(verdict, plan.budget_j, plan.predicted_j, simulated, tolerance,
+                       tuple(text for _, text in causes))

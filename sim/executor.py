@@ -30,8 +30,8 @@ from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim import compiled, pilot
 
-if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
-    from gliderplan.sim.planfile import Plan
+if TYPE_CHECKING:
+    from gliderplan.planner.planfile import Plan
 
 # COMMAND's `transition` of each kind the reference semantics reports.
 _KIND_CODES = {"start": TransitionKind.START, **TRANSITION_BY_ACTION}

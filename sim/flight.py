@@ -11,8 +11,8 @@ from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
 
-if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
-    from gliderplan.sim.planfile import Plan
+if TYPE_CHECKING:
+    from gliderplan.planner.planfile import Plan
 
 RUNTIMES = ("python", "c")
 

@@ -22,10 +22,10 @@ import numpy as np
 from gliderplan.contract import TICK_S
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.vehicle import Vehicle
-from gliderplan.sim.energy import RunEnergy, account, check_plan
+from gliderplan.sim.energy import RunEnergy, account, check_flight
 from gliderplan.sim.loop import RunConfig, RunRecord
-from gliderplan.sim.prediction import StatePrediction
 from gliderplan.sim.scenarios import ScenarioSpec, draw_scenario
 
 BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending it is cheap
@@ -39,8 +39,7 @@ class Job:
     """Everything a worker needs to fly scenarios of one run (pickled once per batch)."""
 
     mission: ir.CheckedMission
-    plan: object | None  # sim.planfile.Plan: the schedules flown (None: sensors always on)
-    predictions: dict[str, StatePrediction] | None  # the plan's prediction per state
+    plan: Plan | None  # the schedules flown and their prediction (None: sensors always on)
     vehicle: Vehicle  # the nominal vehicle the scenarios draw around
     spec: ScenarioSpec
     budget_j: float  # the plan's budget (else the mission's usable battery energy) [J]
@@ -65,11 +64,11 @@ def fly_scenario(job: Job, index: int) -> dict:
     record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
                  robust_tracker=job.robust_tracker)
     energy = account(record, job.mission, scenario.vehicle, job.plan)
-    check = check_plan(energy, job.plan, job.predictions)
+    check = check_flight(energy, job.plan)
     budget = job.budget_j * scenario.usable_fraction
     spent = np.cumsum(sum(energy.per_tick_j.values()))
     over = np.flatnonzero(spent > budget)
-    component, excess = _most_overrun(energy, job.predictions)
+    component, excess = _most_overrun(energy, job.plan)
     names = record.state_names
     return {
         "scenario": index,
@@ -100,19 +99,15 @@ def _end_state(record: RunRecord) -> str:
     return names[int(state[-1])] if len(state) and 0 <= state[-1] < len(names) else ""
 
 
-def _most_overrun(energy: RunEnergy, predictions: dict[str, StatePrediction] | None
-                  ) -> tuple[str, float]:
+def _most_overrun(energy: RunEnergy, plan: Plan | None) -> tuple[str, float]:
     """The component whose energy exceeded the plan's prediction by the most [J] (its
-    excess; negative when every component stayed under), or, without a prediction, the
+    excess; negative when every component stayed under), or, without a plan, the
     largest consumer and its energy."""
     flown = energy.by_component_j()
-    if not predictions:
+    if plan is None:
         name = max(flown, key=flown.get, default="")
         return name, flown.get(name, 0.0)
-    predicted: dict[str, float] = {}
-    for p in predictions.values():
-        for k, v in p.energy_by_component_j.items():
-            predicted[k] = predicted.get(k, 0.0) + v
+    predicted = plan.components_j
     excess = {k: flown.get(k, 0.0) - predicted.get(k, 0.0) for k in {*flown, *predicted}}
     name = max(sorted(excess), key=excess.get)
     return name, excess[name]

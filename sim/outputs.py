@@ -11,9 +11,9 @@ import numpy as np
 from gliderplan.contract import NO_STATE
 from gliderplan.language.registry import SENSORS
 from gliderplan.language.semantics import Transition
-from gliderplan.sim.energy import PlanCheck, RunEnergy
+from gliderplan.planner.planfile import Plan
+from gliderplan.sim.energy import FlightCheck, RunEnergy
 from gliderplan.sim.loop import RunRecord
-from gliderplan.sim.prediction import StatePrediction
 
 TRACE_HEADER = "time_s,kind,from_state,to_state,stack_depth"
 
@@ -67,13 +67,15 @@ def parquet_bytes(table) -> bytes:
     return sink.getvalue()
 
 
-def summary(record: RunRecord, energy: RunEnergy, check: PlanCheck,
-            predictions: dict[str, StatePrediction] | None, meta: dict) -> str:
-    """Energy by component and by state, predicted against simulated, the verdict."""
+def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan | None,
+            meta: dict) -> str:
+    """Energy by component and by state, predicted against simulated, the verdict, and
+    what the plan's prediction assumed."""
+    predictions = {s.name: s for s in plan.states} if plan is not None else {}
     states = {}
     for name in record.state_names:
         simulated = energy.by_state_j.get(name)
-        predicted = (predictions or {}).get(name)
+        predicted = predictions.get(name)
         if simulated is None and predicted is None:
             continue
         entry: dict = {
@@ -99,5 +101,7 @@ def summary(record: RunRecord, energy: RunEnergy, check: PlanCheck,
         "energy_by_component_j": energy.by_component_j(),
         "states": states,
         "plan_check": check.to_json(),
+        "plan_assumptions": [{"subject": a.subject, "text": a.text}
+                             for a in (plan.assumptions if plan is not None else ())],
     }
     return json.dumps(data, indent=2, sort_keys=False, allow_nan=False) + "\n"

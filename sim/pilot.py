@@ -22,7 +22,7 @@ from gliderplan.contract import (
 from gliderplan.sim.geo import bearing_rad, ddmm_to_degrees, offset_m
 
 if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
-    from gliderplan.sim.planfile import StatePlan
+    from gliderplan.planner.planfile import StatePlan
 
 DIVE, CLIMB = 0, 1
 

@@ -8,9 +8,9 @@ import io
 import numpy as np
 
 from gliderplan.contract import NO_STATE
+from gliderplan.planner.planfile import Plan
 from gliderplan.sim.energy import RunEnergy
 from gliderplan.sim.loop import RunRecord
-from gliderplan.sim.prediction import StatePrediction
 
 BUDGET_LINE_SPAN = 3.0  # draw the budget line only if it lies within 3x the energy spent
 
@@ -70,10 +70,10 @@ def depth_png(record: RunRecord) -> bytes:
     return _png(fig, plt)
 
 
-def energy_png(record: RunRecord, energy: RunEnergy,
-               predictions: dict[str, StatePrediction] | None, budget_j: float | None) -> bytes:
+def energy_png(record: RunRecord, energy: RunEnergy, plan: Plan | None) -> bytes:
     """Cumulative energy by component against the plan: each state's predicted energy
-    spent at its predicted rate along the simulated states, up to its predicted time."""
+    spent at its predicted rate along the simulated states, up to its predicted time, and
+    the plan's budget."""
     plt = _figure()
     c = record.columns
     t, unit = _time_axis(c["time_s"])
@@ -81,14 +81,14 @@ def energy_png(record: RunRecord, energy: RunEnergy,
     parts = sorted(energy.per_tick_j.items(), key=lambda kv: -kv[1].sum())
     ax.stackplot(t, *[np.cumsum(v) / 1e3 for _, v in parts], labels=[k for k, _ in parts],
                  alpha=0.8)
-    if predictions:
+    budget_j = plan.budget_j if plan is not None else None
+    if plan is not None:
         # each state spends its predicted energy at its predicted rate, for no longer
         # than the time the plan gave it
         state = c["state"].astype(int)
         planned = np.zeros(len(state))
-        for i, name in enumerate(record.state_names):
-            p = predictions.get(name)
-            if p is None or not p.time_s:
+        for i, p in enumerate(plan.states):
+            if not p.time_s:
                 continue
             time_in_state = np.cumsum(state == i) * record.tick_s
             planned += p.energy_j / p.time_s * np.minimum(time_in_state, p.time_s)

@@ -14,11 +14,11 @@ from gliderplan.contract import TICK_S
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.files import write_atomically
 from gliderplan.language.ir import CheckedMission
+from gliderplan.planner.planfile import Plan, load_plan
 
-if TYPE_CHECKING:  # numpy, pandas and the planner: loaded when a run starts
-    from gliderplan.sim.energy import PlanCheck, RunEnergy
+if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
+    from gliderplan.sim.energy import FlightCheck, RunEnergy
     from gliderplan.sim.loop import RunRecord
-    from gliderplan.sim.planfile import Plan
     from gliderplan.sim.vehicle import Current
 
 RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png")
@@ -32,7 +32,7 @@ class RunResult:
 
     record: RunRecord  # the transition trace and one row per tick
     energy: RunEnergy  # every component's energy, per tick and per state [J]
-    check: PlanCheck  # the flight against the plan ("no plan" without one)
+    check: FlightCheck  # the flight against the plan ("no plan" without one)
     plan: Plan | None
     files: tuple[Path, ...]  # the run's files, written atomically
 
@@ -67,7 +67,6 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim.flight import fly
     from gliderplan.sim.loop import RunConfig
     from gliderplan.sim.ocean import load_ocean
-    from gliderplan.sim.prediction import plan_predictions
     from gliderplan.sim.science import NOISE_PRESETS
     from gliderplan.sim.vehicle import Current
 
@@ -84,43 +83,26 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                        noise=NOISE_PRESETS[noise], current=current or Current())
     vehicle = load_vehicle(mission.vehicle)
     water = load_ocean(ocean, Path(ocean_logs) if ocean_logs else None)
-    plan, predictions, predicted_by = None, None, "none"
-    if plan_path is not None:
-        plan = _read_plan(plan_path, mission)
-        predictions, predicted_by = plan_predictions(plan_path, mission)
+    plan = None if plan_path is None else load_plan(plan_path, mission)
     record = fly(mission, water, config, vehicle, plan, None if plan_path is None
                  else str(plan_path), runtime, robust_tracker=tracker == "robust",
                  progress=progress)
     if not len(record.columns["time_s"]):
         raise KeyboardInterrupt  # nothing flown, nothing to write
     used = accounting.account(record, mission, vehicle, plan)
-    check = accounting.check_plan(used, plan, predictions)
+    check = accounting.check_flight(used, plan)
     meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
             "ocean": ocean, "noise": noise, "tracker": tracker, "seed": seed,
-            "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
-            "prediction": predicted_by}
+            "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path)}
     contents = {
         "trace.csv": outputs.trace_csv(record.trace),
         "timeseries.parquet": outputs.parquet_bytes(
             outputs.timeseries_table(record, used, mission.battery.energy_j)),
-        "summary.json": outputs.summary(record, used, check, predictions, meta),
+        "summary.json": outputs.summary(record, used, check, plan, meta),
         "depth.png": plots.depth_png(record),
-        "energy.png": plots.energy_png(record, used, predictions,
-                                       plan.budget_j if plan else None),
+        "energy.png": plots.energy_png(record, used, plan),
     }
     for name in RUN_FILES:
         write_atomically(out / name, contents[name])
     return RunResult(record, used, check, plan, tuple(out / name for name in RUN_FILES))
 
-
-def _read_plan(path: str | Path, mission: CheckedMission) -> Plan:
-    """The plan for `mission` in `path`: PlanFileError if there is no such file,
-    PlanRejected (naming the file and line) if it is not a plan for `mission`."""
-    from gliderplan.planner.planfile import PlanRejected, read_plan_data
-    from gliderplan.sim.planfile import PlanFileError, parse_plan
-
-    data = read_plan_data(path)
-    try:
-        return parse_plan(data, str(path), mission)
-    except PlanFileError as err:
-        raise PlanRejected(str(err)) from None

@@ -40,7 +40,7 @@ def compare_json(*args: str) -> dict:
 def computer_j(mission, spec: str, cycles: float) -> float:
     """The computer's energy in the plan `gliderplan plan --computer spec` makes."""
     plan = plan_mission(mission, load_hardware(mission, computer=spec, cycles_per_tick=cycles))
-    return plan.components_j["computer"]
+    return plan.plan.components_j["computer"]
 
 
 def test_the_three_boards_with_table_i_figures_and_the_data_files_idle_powers():
@@ -127,7 +127,7 @@ def test_an_energy_crossover_agrees_with_the_planner_on_either_side(tmp_path):
     # where the two boards' energies meet, from their figures alone: per tick each costs
     # idle x tick + (active - idle) x cycles / clock, plus one boot per mission
     mission = check_file(SURVEY).mission
-    ticks = sum(s.time_s for s in plan_mission(mission).states) / TICK_S
+    ticks = sum(s.time_s for s in plan_mission(mission).plan.states) / TICK_S
     slow, fast = (2.2, 2.7, 133e6, 54.0), (2.0, 10.0, 1e9, 10.0)
 
     def energy(board, w):
@@ -165,7 +165,7 @@ def test_the_comparison_as_a_library_call():
     comparison = compare_boards(mission, ["ts7800@500"], battery="2kWh")
     (board,) = comparison.boards
     assert board.name == "ts7800@500" and comparison.battery_j == pytest.approx(7.2e6)
-    assert board.energy.total_j == pytest.approx(board.plan.components_j["computer"])
+    assert board.energy.total_j == pytest.approx(board.planned.plan.components_j["computer"])
 
 
 @pytest.mark.parametrize(("args", "message"), [

@@ -309,22 +309,24 @@ def test_a_killed_runtime_resumes_with_the_same_trace(binary, line, tmp_path):
 # ---- plans ---------------------------------------------------------------------------
 
 
-def make_plan(mission_hash: str, version: int = 1, temp_period_s: float = 60,
+def make_plan(mission_hash: str, version: int = 2, temp_period_s: float = 60,
               temp_on_s: float = 15, s2_clock_mhz: int = 300) -> bytes:
     """A plan for Fig. 2 written by hand from docs/plan-format.md."""
     body = (f"GPPLAN {version}\nmission sampleMission\nhash {mission_hash}\n"
-            "computer ts7800 300\nbudget_j 6630000\npredicted_j 9876.5\nstates 3\n"
-            "state s1 300 600 0 1\nprofile 0 1 0.3 150 0.31\nend\n"
-            f"state s2 {s2_clock_mhz} 600 1 1\nsensor temp {temp_period_s:g} {temp_on_s:g}\n"
-            "profile 0 1 0.4 200 0.3\nend\n"
-            "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n").encode()
+            "computer ts7800 300\nbudget_j 6630000\npredicted_j 9876.5\ncomponents hotel\n"
+            "assumptions 0\nstates 3\n"
+            "state s1 300 600 0 1\npredict 1000 2 20\nenergy 3950\nprofile 0 1 0.3 150 0.31\nend\n"
+            f"state s2 {s2_clock_mhz} 600 1 1\npredict 1000 1 12\nenergy 3950\n"
+            f"sensor temp {temp_period_s:g} {temp_on_s:g}\nprofile 0 1 0.4 200 0.3\nend\n"
+            "state s3 300 600 0 1\npredict 500 1 5\nenergy 1976.5\n"
+            "profile 0 1 0.454 230 0.31\nend\n").encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
 
 
 def bad_plans(mission_hash: str) -> dict[str, tuple[bytes, str]]:
     good = make_plan(mission_hash)
     other = make_plan("0" * 64)
-    wrong_version = make_plan(mission_hash, version=2)
+    wrong_version = make_plan(mission_hash, version=1)
     bad_crc = good[:-3] + (b"00\n" if good[-3:] != b"00\n" else b"11\n")
     return {
         "truncated": (good[: len(good) // 2], "truncated"),

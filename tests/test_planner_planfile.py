@@ -4,18 +4,19 @@ from __future__ import annotations
 
 import re
 import zlib
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
-from gliderplan.contract import ExitCode
+from gliderplan.contract import VEHICLE_COMPONENTS, Component, ExitCode
 from gliderplan.language import check_source
 from gliderplan.language.source import read_mission
 from gliderplan.planner.plan import plan_mission
 from gliderplan.planner.planfile import (
+    Assumption,
     PlanFileError,
     number,
-    plan_file_of,
     read_plan_bytes,
     read_plan_file,
     write_plan_bytes,
@@ -34,44 +35,63 @@ def mission(path: str):
 @pytest.fixture(scope="module")
 def annotated():
     m = mission("examples/fig2_annotated.mission")
-    return m, plan_mission(m)
+    return m, plan_mission(m).plan
 
 
 @pytest.mark.parametrize("path", EXAMPLES)
 def test_bytes_follow_the_format(path):
     m = mission(path)
-    data = write_plan_bytes(plan_mission(m))
+    data = write_plan_bytes(plan_mission(m).plan)
     assert data.endswith(b"\n") and b"\r" not in data and b"\t" not in data
     assert all(0x20 <= b <= 0x7E or b == 0x0A for b in data)
     lines = data.decode("ascii").split("\n")[:-1]
     assert all(0 < len(line) + 1 <= 255 and "  " not in line and line == line.strip()
                for line in lines)
-    assert lines[:2] == ["GPPLAN 1", f"mission {m.name}"]
+    assert lines[:2] == ["GPPLAN 2", f"mission {m.name}"]
     assert lines[2] == f"hash {m.hash}"
-    assert lines[6] == f"states {len(m.states)}"
+    assert f"states {len(m.states)}" in lines
     assert [line.split()[1] for line in lines if line.startswith("state ")] == \
         [s.name for s in m.states]
     body = data[: data.rindex(b"crc32 ")]
     assert lines[-1] == f"crc32 {zlib.crc32(body):08x}"
     number_re = re.compile(r"-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?\Z")
     for line in lines:
-        if line.startswith(("sensor ", "profile ", "budget_j ", "predicted_j ")):
+        if line.startswith(("sensor ", "profile ", "budget_j ", "predicted_j ", "predict ",
+                            "energy ")):
             assert all(number_re.match(f) for f in line.split()[2 if line[0] == "s" else 1:])
 
 
 @pytest.mark.parametrize("path", EXAMPLES)
 def test_round_trip_gives_the_same_plan(path):
-    plan = plan_mission(mission(path))
-    assert read_plan_bytes(write_plan_bytes(plan)) == plan_file_of(plan)
+    m = mission(path)
+    plan = plan_mission(m).plan
+    assert read_plan_bytes(write_plan_bytes(plan), m) == plan
 
 
-def test_sensor_lines_realise_the_duties(annotated):
-    _, plan = annotated
-    contents = read_plan_bytes(write_plan_bytes(plan))
-    for state, block in zip(plan.states, contents.states, strict=True):
-        assert [s.name for s in block.sensors] == [s.name for s in state.sensors]
-        for planned, line in zip(state.sensors, block.sensors, strict=True):
-            assert line.on_s / line.period_s == pytest.approx(planned.duty, abs=1e-8)
+def test_the_file_alone_carries_the_prediction(annotated):
+    m, plan = annotated
+    back = read_plan_bytes(write_plan_bytes(plan), m)
+    assert back.components[:6] == (*VEHICLE_COMPONENTS, Component.COMPUTER)
+    assert set(back.components[6:]) == {"ctd", "optode"}  # the devices the mission logs
+    for state in back.states:
+        assert state.time_s > 0 and state.visits >= 1 and state.inflections > 0
+        assert state.energy_by_component_j[Component.HOTEL] > 0
+    assert sum(s.energy_j for s in back.states) == pytest.approx(back.predicted_j, rel=1e-8)
+    assert back.budget_j == plan.budget_j > back.predicted_j
+
+
+def test_assumptions_travel_in_the_file_with_their_subject():
+    m = mission("examples/fig2.mission")  # unannotated: the defaults are assumptions
+    plan = plan_mission(m).plan
+    assert Assumption("mission", "vehicle slocum_g2_shallow (default)") in plan.assumptions
+    assert read_plan_bytes(write_plan_bytes(plan)).assumptions == plan.assumptions
+    assert Assumption.from_note("s2: planned at its expect upper bound (60 s per visit)") == \
+        Assumption("s2", "planned at its expect upper bound (60 s per visit)")
+    assert str(Assumption.from_note("no sensor is marked `duty auto`: every sensor runs")) == \
+        "no sensor is marked `duty auto`: every sensor runs"
+    accented = replace(plan, assumptions=(Assumption("s1", "d\u00e9faut"),))
+    with pytest.raises(PlanFileError, match="no plan file can carry this plan"):
+        write_plan_bytes(accented)
 
 
 def test_numbers_have_nine_significant_digits():
@@ -93,19 +113,25 @@ def _mutate(data: bytes, old: bytes, new: bytes, fix_crc: bool = True) -> bytes:
 
 
 @pytest.mark.parametrize("old,new,line,message", [
-    (b"GPPLAN 1", b"GPPLAN 2", 1, "version"),
+    (b"GPPLAN 2", b"GPPLAN 1", 1, "version"),
     (b"mission sampleMission", b"mission 9bad", 2, "NAME"),
     (b"budget_j ", b"budget_j  ", 5, "one space"),
-    (b"states 3", b"states 65", 7, "out of range"),
-    (b"\nend\n", b"\nend \n", 11, "one space"),
-    (b"sensor temp 300 300", b"sensor temp 300 301", 9, "ON_S"),
-    (b"profile 0 1 ", b"profile 0 0.5 ", 10, "sum to"),
-    (b"profile 0 1 ", b"profile 1 1 ", 10, "out of order"),
+    (b"components hotel pump", b"components hotel hotel", 7, "named twice"),
+    (b"assumptions 0", b"assumptions 1", 9, "expected 'assume'"),
+    (b"states 3", b"states 65", 9, "out of range"),
+    (b"predict 1000 2", b"predict -1000 2", 11, "predicted time must be >= 0"),
+    (b"predict 1000 2", b"predict 1000 2.5", 11, "COUNT"),
+    (b"energy 2410 ", b"energy ", 12, "takes 8 fields"),
+    (b"energy 2410 ", b"energy -2410 ", 12, "energy of hotel must be >= 0"),
+    (b"\nend\n", b"\nend \n", 15, "one space"),
+    (b"sensor temp 300 300", b"sensor temp 300 301", 13, "ON_S"),
+    (b"profile 0 1 ", b"profile 0 0.5 ", 14, "sum to"),
+    (b"profile 0 1 ", b"profile 1 1 ", 14, "out of order"),
     (b"computer ts7800 300", b"computer ts7800 inf", 4, "NUMBER"),
     (b"budget_j ", b"budget_j -", 5, "budget_j must be >= 0"),
     (b"predicted_j ", b"predicted_j -", 6, "predicted_j must be >= 0"),
-    (b"\nend\n", b"\nfin\n", 11, "expected 'end'"),
-    (b"sensor temp 300 300", b"sensor temp 300", 9, "3 fields"),
+    (b"\nend\n", b"\nfin\n", 15, "expected 'end'"),
+    (b"sensor temp 300 300", b"sensor temp 300", 13, "3 fields"),
 ])
 def test_reader_rejects_and_names_the_line(annotated, old, new, line, message):
     _, plan = annotated
@@ -147,12 +173,9 @@ def test_read_plan_file_checks_the_mission(tmp_path, annotated):
 
 
 @pytest.mark.parametrize("path", EXAMPLES)
-def test_the_simulators_reader_accepts_our_files(tmp_path, path):
-    from gliderplan.sim.planfile import read_plan
-
+def test_our_files_fit_their_mission(tmp_path, path):
     m = mission(path)
-    plan = plan_mission(m)
+    plan = plan_mission(m).plan
     out = tmp_path / "x.plan"
     out.write_bytes(write_plan_bytes(plan))
-    theirs = read_plan(out, m)
-    assert [s.name for s in theirs.states] == [s.name for s in plan.states]
+    assert read_plan_file(out, m) == plan

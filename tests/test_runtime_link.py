@@ -104,12 +104,14 @@ def transitions(commands: list[p.Command]) -> list[str]:
 
 
 def make_plan(s2_temp_on_s: float = 15, hash_: str = FIG2_HASH) -> bytes:
-    body = (f"GPPLAN 1\nmission sampleMission\nhash {hash_}\ncomputer ts7800 300\n"
-            "budget_j 180000\npredicted_j 9876.5\nstates 3\n"
-            "state s1 300 600 0 1\nprofile 0 1 0.3 150 0.31\nend\n"
-            f"state s2 300 600 1 1\nsensor temp 60 {s2_temp_on_s:g}\n"
-            "profile 0 1 0.4 200 0.3\nend\n"
-            "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n").encode()
+    body = (f"GPPLAN 2\nmission sampleMission\nhash {hash_}\ncomputer ts7800 300\n"
+            "budget_j 180000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\nstates 3\n"
+            "state s1 300 600 0 1\npredict 1000 2 20\nenergy 3950\n"
+            "profile 0 1 0.3 150 0.31\nend\n"
+            "state s2 300 600 1 1\npredict 1000 1 12\nenergy 3950\n"
+            f"sensor temp 60 {s2_temp_on_s:g}\nprofile 0 1 0.4 200 0.3\nend\n"
+            "state s3 300 600 0 1\npredict 500 1 5\nenergy 1976.5\n"
+            "profile 0 1 0.454 230 0.31\nend\n").encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
 
 
@@ -209,8 +211,8 @@ def test_plans_over_the_link_are_checked_and_a_bad_one_keeps_the_last(binary, gl
     ("plan", "message"),
     [
         (make_plan(hash_="1" * 64), "fig2.plan line 3: hash does not match the compiled mission"),
-        (make_plan()[:-1], "fig2.plan line 18: no final LF (truncated file)"),
-        (make_plan().replace(b"GPPLAN 1", b"GPPLAN 2"), "line 18: checksum mismatch"),
+        (make_plan()[:-1], "fig2.plan line 26: no final LF (truncated file)"),
+        (make_plan().replace(b"GPPLAN 2", b"GPPLAN 1"), "line 26: checksum mismatch"),
         (None, "fig2.plan: cannot read the plan file (no such file)"),
     ],
     ids=["wrong-hash", "truncated", "edited", "missing"],

@@ -63,11 +63,13 @@ def write_plan(path: Path, mission_path: Path) -> Path:
     from gliderplan.language import check_file
 
     mission = check_file(str(mission_path)).mission
-    body = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
-            "budget_j 1000000\npredicted_j 100000\nstates 2\n"
-            "state survey 300 1200 2 2\nsensor temp 60 20\nsensor oxygen 300 100\n"
+    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+            "budget_j 1000000\npredicted_j 100000\ncomponents hotel\nassumptions 0\nstates 2\n"
+            "state survey 300 1200 2 2\npredict 30000 1 200\nenergy 90000\n"
+            "sensor temp 60 20\nsensor oxygen 300 100\n"
             "profile 0 0.6 0.4 150 0.25\nprofile 1 0.4 0.454 233 0.32\nend\n"
-            "state fix 300 600 0 1\nprofile 0 1 0.454 200 0.3\nend\n").encode()
+            "state fix 300 600 0 1\npredict 3000 1 0\nenergy 10000\n"
+            "profile 0 1 0.454 200 0.3\nend\n").encode()
     path.write_bytes(body + f"crc32 {zlib.crc32(body):08x}\n".encode())
     return path
 

@@ -16,10 +16,10 @@ from gliderplan.contract import FLIGHT_SENSORS_MASK, NO_STATE
 from gliderplan.language import check_file, check_source, ir
 from gliderplan.language.codegen_c import default_ballast_cc
 from gliderplan.language.registry import SENSORS
+from gliderplan.planner.planfile import PlanFileError, read_plan_bytes
 from gliderplan.sim import compiled, pilot
 from gliderplan.sim.executor import PythonRuntime
 from gliderplan.sim.geo import ddmm_to_degrees, offset_m
-from gliderplan.sim.planfile import PlanFileError, parse_plan
 from gliderplan.sim.science import powered_mask
 
 REPO = Path(__file__).resolve().parents[1]
@@ -140,19 +140,21 @@ end
 
 
 def plan_text(mission: ir.CheckedMission, body: str, *, crc: str | None = None) -> bytes:
-    head = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
-            f"budget_j 180000\npredicted_j 9876.5\nstates 1\n{body}")
+    head = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+            "budget_j 180000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\n"
+            f"states 1\n{body}")
     data = head.encode()
     return data + f"crc32 {crc or format(zlib.crc32(data), '08x')}\n".encode()
 
 
-GOOD_BLOCK = ("state a 300 600 2 2\nsensor temp 60 15\nsensor oxygen 100 100\n"
+GOOD_BLOCK = ("state a 300 600 2 2\npredict 100000 1 800\nenergy 9876.5\n"
+              "sensor temp 60 15\nsensor oxygen 100 100\n"
               "profile 0 0.75 0.4 150 0.3\nprofile 1 0.25 0.454 230 0.31\nend\n")
 
 
 def test_the_plan_schedule_powers_sensors_and_alternates_profiles():
     mission = mission_from(PLAN_MISSION)
-    plan = parse_plan(plan_text(mission, GOOD_BLOCK), "p.plan", mission)
+    plan = read_plan_bytes(plan_text(mission, GOOD_BLOCK), mission, "p.plan")
     executor = PythonRuntime(mission, plan, 200.0)
     temp_bit, oxygen_bit = 1 << 9, 1 << 12
     seen = {}
@@ -189,24 +191,24 @@ def resealed(data: bytes) -> bytes:
     (lambda d: d.replace(b"hash ", b"hash 0"), 3, "hash"),
     (lambda d: d.replace(b"state a 300 600 2 2", b"state a 300 600 2 1")
      .replace(b"profile 1 0.25 0.454 230 0.31\n", b"")
-     .replace(b"profile 0 0.75", b"profile 0 1"), 8, "1 profiles, the mission's state has 2"),
-    (lambda d: d.replace(b"sensor oxygen", b"sensor salinity"), 8,
+     .replace(b"profile 0 0.75", b"profile 0 1"), 10, "1 profiles, the mission's state has 2"),
+    (lambda d: d.replace(b"sensor oxygen", b"sensor salinity"), 14,
      "sensor 'salinity' is not logged by the state"),
     (lambda d: d.replace(b"sensor temp 60 15\nsensor oxygen 100 100",
-                         b"sensor oxygen 100 100\nsensor temp 60 15"), 8,
+                         b"sensor oxygen 100 100\nsensor temp 60 15"), 14,
      "out of the state's order"),
 ])
 def test_a_plan_that_does_not_fit_the_mission_is_rejected_naming_the_line(mutate, line, message):
     mission = mission_from(PLAN_MISSION)
     with pytest.raises(PlanFileError) as err:
-        parse_plan(resealed(mutate(plan_text(mission, GOOD_BLOCK))), "p.plan", mission)
+        read_plan_bytes(resealed(mutate(plan_text(mission, GOOD_BLOCK))), mission, "p.plan")
     assert str(err.value).startswith(f"p.plan:{line}:") and message in str(err.value)
 
 
 def test_a_plan_with_a_wrong_checksum_is_rejected():
     mission = mission_from(PLAN_MISSION)
-    with pytest.raises(PlanFileError, match=r"p.plan:14: checksum mismatch"):
-        parse_plan(plan_text(mission, GOOD_BLOCK, crc="00000000"), "p.plan", mission)
+    with pytest.raises(PlanFileError, match=r"p.plan:18: checksum mismatch"):
+        read_plan_bytes(plan_text(mission, GOOD_BLOCK, crc="00000000"), mission, "p.plan")
 
 
 def test_sweep_flies_east_west_lines_across_the_hull_alternating():

@@ -30,7 +30,7 @@ FILES = {"scenarios.parquet", "summary.json", "energy.png", "exhaustion.png"}
 
 def _job(seed: int = 7, budget_j: float = 60e3) -> montecarlo.Job:
     mission = check_file(str(FIG2)).mission
-    return montecarlo.Job(mission, None, None, load_vehicle(mission.vehicle), read_spec(),
+    return montecarlo.Job(mission, None, load_vehicle(mission.vehicle), read_spec(),
                           budget_j, seed, 2600.0)
 
 

@@ -35,9 +35,13 @@ def predicted_components_j(time_s: float) -> dict[str, float]:
     }
 
 
+ASSUMED = "planned at its expect upper bound (3600 s per visit)"
+
+
 def write_plan(tmp_path: Path, budget_j: float, planned_s: float,
                board: tuple[str, float] = ("ts7800", 300.0)) -> Path:
-    """A plan for the survey and its report (`<plan>.json`) predicting `planned_s`."""
+    """A plan for the survey predicting `planned_s` in it, written by hand from
+    docs/plan-format.md: the prediction travels in the plan file, nothing beside it."""
     mission = check_file(str(MISSION)).mission
     components = predicted_components_j(planned_s)
     vehicle = load_vehicle("slocum_g2_shallow")
@@ -46,16 +50,16 @@ def write_plan(tmp_path: Path, budget_j: float, planned_s: float,
     predicted = sum(components.values())
     u = float(vehicle.glide(PITCH_RAD, BALLAST_CC)[0])
     name, clock = board
-    body = (f"GPPLAN 1\nmission {mission.name}\nhash {mission.hash}\ncomputer {name} {clock:g}\n"
-            f"budget_j {budget_j:.9g}\npredicted_j {predicted:.9g}\nstates 1\n"
-            f"state survey {clock:g} 600 1 1\nsensor temp 600 600\n"
-            f"profile 0 1 {PITCH_RAD} {BALLAST_CC:.9g} {u:.9g}\nend\n").encode()
+    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer {name} {clock:g}\n"
+            f"budget_j {budget_j:.9g}\npredicted_j {predicted:.9g}\n"
+            f"components {' '.join(components)}\nassumptions 1\nassume survey {ASSUMED}\n"
+            f"states 1\nstate survey {clock:g} 600 1 1\n"
+            f"predict {planned_s:.9g} 1 {inflections:.9g}\n"
+            f"energy {' '.join(format(j, '.9g') for j in components.values())}\n"
+            f"sensor temp 600 600\nprofile 0 1 {PITCH_RAD} {BALLAST_CC:.9g} {u:.9g}\nend\n"
+            ).encode()
     plan = tmp_path / "survey.plan"
     plan.write_bytes(body + f"crc32 {zlib.crc32(body):08x}\n".encode())
-    report = {"budget_j": budget_j, "energy_j": predicted,
-              "states": [{"name": "survey", "energy_by_component_j": components,
-                          "inflections": inflections, "time_s": planned_s}]}
-    (tmp_path / "survey.plan.json").write_text(json.dumps(report))
     return plan
 
 
@@ -86,6 +90,8 @@ def test_an_under_budgeted_plan_is_a_violation_with_its_cause(tmp_path, capsys):
     assert cause.startswith("survey: ")
     assert "21 inflections planned, 6" in cause  # ~62 flown in three hours
     assert "1.00 h planned, 3.00 h flown" in cause
+    assert f"the plan assumed: {ASSUMED}" in cause  # what the prediction rested on
+    assert summary["plan_assumptions"] == [{"subject": "survey", "text": ASSUMED}]
     assert "plan check: violation" in err and "survey:" in err
 
 
@@ -100,21 +106,25 @@ def test_a_plan_for_another_mission_is_refused(tmp_path, capsys):
     assert not (tmp_path / "run").exists()
 
 
-def test_a_broken_plan_report_is_a_clear_error(tmp_path, capsys):
+def test_a_plan_whose_prediction_lacks_a_component_is_rejected_naming_the_line(
+        tmp_path, capsys):
     plan = write_plan(tmp_path, 120e3, 10800.0)
-    (tmp_path / "survey.plan.json").write_text('{"states": [{"name": "survey"}]}')
+    body = plan.read_bytes()
+    body = body[: body.rindex(b"crc32 ")]
+    energy = next(line for line in body.split(b"\n") if line.startswith(b"energy "))
+    body = body.replace(energy, energy.rsplit(b" ", 1)[0])
+    plan.write_bytes(body + f"crc32 {zlib.crc32(body):08x}\n".encode())
     code = main(["sim", str(MISSION), "--plan", str(plan), "-o", str(tmp_path / "run")])
     err = capsys.readouterr().err
     assert code == 1
-    assert "survey.plan.json: states[0]: needs a name and energy_by_component_j" in err
+    assert "plan rejected: " in err and "survey.plan:13: 'energy' takes 4 fields, found 3" in err
+    assert not (tmp_path / "run").exists()
 
 
-def test_without_a_report_a_violation_names_the_states_that_spent_most(tmp_path, capsys):
-    plan = write_plan(tmp_path, 40e3, 3600.0)
-    (tmp_path / "survey.plan.json").unlink()
-    code, summary, _ = simulate(tmp_path, plan, capsys)
+def test_over_budget_with_no_state_over_its_prediction_names_the_spenders(tmp_path, capsys):
+    # the prediction is right (three hours), the budget under it
+    code, summary, _ = simulate(tmp_path, write_plan(tmp_path, 40e3, 10800.0), capsys)
     assert code == 3
-    assert summary["prediction"] == "none"  # the planner would not make this plan
     (cause,) = summary["plan_check"]["causes"]
     assert cause.startswith("71.") and "against a budget of 40.0 kJ; most in survey (71." \
         in cause
@@ -139,17 +149,15 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 def planner_plan(tmp_path: Path, budget_j: float | None = None,
                  occupancy_s: dict[str, float] | None = None) -> Path:
-    """The planner's plan (and report) for the survey mission, as `gliderplan plan -o`
-    writes them; `occupancy_s` tells it how long the survey will last."""
+    """The planner's plan file for the survey mission (no report beside it);
+    `occupancy_s` tells it how long the survey will last."""
     from gliderplan.planner.plan import plan_mission
     from gliderplan.planner.planfile import write_plan_bytes
-    from gliderplan.planner.report import report_json
 
     plan = plan_mission(check_file(str(MISSION)).mission, budget_j=budget_j,
-                        occupancy_s=occupancy_s)
+                        occupancy_s=occupancy_s).plan
     path = tmp_path / "survey.plan"
     path.write_bytes(write_plan_bytes(plan))
-    (tmp_path / "survey.plan.json").write_text(json.dumps(report_json(plan)))
     return path
 
 
@@ -185,12 +193,24 @@ def test_the_annotated_fig2_flies_its_plan_within_the_prediction(tmp_path, capsy
         ["s1", "s2", "s3"]
 
 
-def test_without_its_report_the_planner_s_plan_is_predicted_by_planning_again(tmp_path, capsys):
+def test_the_simulator_checks_a_flight_against_the_plan_file_alone(tmp_path, capsys,
+                                                                    monkeypatch):
+    from gliderplan.planner import plan as planner
+    from gliderplan.planner.planfile import read_plan_file
+
     plan = planner_plan(tmp_path)
-    (tmp_path / "survey.plan.json").unlink()
+    predicted = read_plan_file(plan).states[0]
+
+    def no_planning(*args, **kwargs):
+        raise AssertionError("the simulator planned again")
+
+    monkeypatch.setattr(planner, "plan_mission", no_planning)
+    monkeypatch.setattr(planner, "solve_plan", no_planning)
     code, summary, _ = simulate(tmp_path, plan, capsys)
-    assert code == 0 and summary["prediction"] == "replanned"
+    assert code == 0
     survey = summary["states"]["survey"]
+    assert survey["predicted_by_component_j"] == predicted.energy_by_component_j
+    assert survey["predicted_time_s"] == predicted.time_s
     assert survey["simulated_j"] == pytest.approx(survey["predicted_j"], rel=0.05)
 
 

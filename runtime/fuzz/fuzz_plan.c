@@ -33,7 +33,8 @@ static int has_crc_line(const uint8_t *data, size_t size)
 
 static void check_accepted(const gp_mission *mission)
 {
-    if (plan.n_states != mission->n_states || !(plan.budget_j >= 0)) {
+    if (plan.n_states != mission->n_states || !(plan.budget_j >= 0) || !(plan.predicted_j >= 0)
+        || plan.n_components == 0 || plan.n_components > GP_MAX_PLAN_COMPONENTS) {
         abort();
     }
     for (unsigned s = 0; s < plan.n_states; s++) {

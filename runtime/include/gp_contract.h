@@ -22,6 +22,9 @@
 #define GP_MAX_PLAN_SENSORS 16  /**< `sensor` lines of one state block of a plan file */
 #define GP_MAX_PLAN_BYTES 65536  /**< size of a plan file [bytes] */
 #define GP_MAX_PLAN_LINE_BYTES 255  /**< length of a plan-file line, its LF included [bytes] */
+#define GP_MAX_PLAN_COMPONENTS 16  /**< energy components a plan predicts (its `components` line) */
+#define GP_MAX_PLAN_ASSUMPTIONS 255  /**< `assume` lines of a plan file (a uint8_t count) */
+#define GP_PLAN_FORMAT_VERSION 2  /**< the plan file's `GPPLAN` line (docs/plan-format.md) */
 
 /* ---- the library routines (docs/pilot.md) */
 

@@ -30,9 +30,13 @@ typedef struct {
     gp_plan_profile profiles[GP_MAX_PROFILE_ALTERNATIVES];
 } gp_plan_state;
 
+/** A plan as the runtime keeps it: what it flies. The per-state prediction and the
+ *  assumptions are checked for their form and left to the simulator and to people. */
 typedef struct {
     char computer[GP_MAX_NAME_LENGTH + 1];
     double clock_mhz, budget_j, predicted_j;
+    uint8_t n_components;            /**< energy columns of each state's prediction */
+    uint8_t n_assumptions;
     uint8_t n_states;
     gp_plan_state states[GP_MAX_STATES];
 } gp_plan;

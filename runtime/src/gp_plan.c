@@ -11,7 +11,8 @@
 
 #include "gp_crc.h"
 
-#define MAX_FIELDS 8
+#define MAX_FIELDS (GP_MAX_PLAN_COMPONENTS + 1) /* the `components` and `energy` lines */
+#define MAX_VISITS 999999999                    /* a COUNT has at most 9 digits */
 #define SHARE_TOLERANCE 1e-6
 #define HALF_PI 1.57079632679489661923
 /* printf arguments for "%.*s" of a field, at most a name's length of it */
@@ -41,8 +42,9 @@ static int fail(reader *r, const char *format, ...)
     return -1;
 }
 
-/* Split the next line into fields; the byte rules were checked before. */
-static int next_line(reader *r)
+/* Split the next line into fields; the byte rules were checked before. With
+ * `text_from` > 0, the words from that field on are one TEXT field (`assume`). */
+static int next_line(reader *r, int text_from)
 {
     r->line_no++;
     const char *line = r->text + r->pos;
@@ -66,10 +68,14 @@ static int next_line(reader *r)
             return fail(r, "fields must be separated by exactly one space, without "
                            "leading or trailing spaces");
         }
-        if (r->n_fields == MAX_FIELDS) {
+        if (text_from > 0 && r->n_fields == text_from + 1) {
+            field *text = &r->fields[text_from];  /* one more word of the TEXT */
+            text->len = (size_t)(line + j - text->start);
+        } else if (r->n_fields == MAX_FIELDS) {
             return fail(r, "too many fields");
+        } else {
+            r->fields[r->n_fields++] = (field){line + i, j - i};
         }
-        r->fields[r->n_fields++] = (field){line + i, j - i};
         i = j + 1;
     }
     return 0;
@@ -80,23 +86,36 @@ static int field_is(const field *f, const char *word)
     return f->len == strlen(word) && memcmp(f->start, word, f->len) == 0;
 }
 
-/* Next line must be `keyword` with n_fields fields in all. */
-static int expect(reader *r, const char *keyword, int n_fields)
+/* Next line must be `keyword` with min_fields..max_fields fields in all (the keyword
+ * counted); `text_from` as for next_line. */
+static int expect_fields(reader *r, const char *keyword, int min_fields, int max_fields,
+                         int text_from)
 {
     if (r->pos >= r->len) {
         r->line_no++;
         return fail(r, "missing '%s' line (truncated file)", keyword);
     }
-    if (next_line(r) < 0) {
+    if (next_line(r, text_from) < 0) {
         return -1;
     }
     if (!field_is(&r->fields[0], keyword)) {
         return fail(r, "expected a '%s' line, found '%.*s'", keyword, SHOWN(&r->fields[0]));
     }
-    if (r->n_fields != n_fields) {
-        return fail(r, "'%s' takes %d fields, found %d", keyword, n_fields - 1, r->n_fields - 1);
+    if (r->n_fields < min_fields || r->n_fields > max_fields) {
+        if (min_fields == max_fields) {
+            return fail(r, "'%s' takes %d fields, found %d", keyword, min_fields - 1,
+                        r->n_fields - 1);
+        }
+        return fail(r, "'%s' takes %d to %d fields, found %d", keyword, min_fields - 1,
+                    max_fields - 1, r->n_fields - 1);
     }
     return 0;
+}
+
+/* Next line must be `keyword` with n_fields fields in all. */
+static int expect(reader *r, const char *keyword, int n_fields)
+{
+    return expect_fields(r, keyword, n_fields, n_fields, 0);
 }
 
 static int is_name(const field *f)
@@ -254,18 +273,71 @@ static int check_bytes(reader *r, size_t *crc_line_start)
     return 0;
 }
 
+/* A NUMBER >= 0 in field `index`. */
+static int amount_field(reader *r, int index, const char *what, double *out)
+{
+    if (number_field(r, index, what, out) < 0) {
+        return -1;
+    }
+    if (!(*out >= 0)) {
+        return fail(r, "%s must be >= 0", what);
+    }
+    return 0;
+}
+
+/* `components NAME...`: the energy columns of every state's `energy` line, distinct. */
+static int read_components(reader *r, gp_plan *plan)
+{
+    if (expect_fields(r, "components", 2, GP_MAX_PLAN_COMPONENTS + 1, 0) < 0) {
+        return -1;
+    }
+    for (int i = 1; i < r->n_fields; i++) {
+        if (name_field(r, i, "component") < 0) {
+            return -1;
+        }
+        for (int k = 1; k < i; k++) {
+            if (r->fields[k].len == r->fields[i].len
+                && memcmp(r->fields[k].start, r->fields[i].start, r->fields[i].len) == 0) {
+                return fail(r, "component '%.*s' named twice", SHOWN(&r->fields[i]));
+            }
+        }
+    }
+    plan->n_components = (uint8_t)(r->n_fields - 1);
+    return 0;
+}
+
+/* `assumptions COUNT` and COUNT lines `assume SUBJECT TEXT`: what the prediction rests
+ * on, for people; the runtime only checks their form. */
+static int read_assumptions(reader *r, gp_plan *plan)
+{
+    int count;
+    if (expect(r, "assumptions", 2) < 0
+        || count_field(r, 1, "assumptions", 0, GP_MAX_PLAN_ASSUMPTIONS, &count) < 0) {
+        return -1;
+    }
+    for (int i = 0; i < count; i++) {
+        if (expect_fields(r, "assume", 3, 3, 2) < 0 || name_field(r, 1, "SUBJECT") < 0) {
+            return -1;
+        }
+    }
+    plan->n_assumptions = (uint8_t)count;
+    return 0;
+}
+
 static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
 {
     int count;
-    if (next_line(r) < 0) {
+    char version[12];
+    snprintf(version, sizeof version, "%d", GP_PLAN_FORMAT_VERSION);
+    if (next_line(r, 0) < 0) {
         return -1;
     }
     if (r->n_fields != 2 || !field_is(&r->fields[0], "GPPLAN")) {
-        return fail(r, "expected 'GPPLAN 1': not a plan file");
+        return fail(r, "expected 'GPPLAN %s': not a plan file", version);
     }
-    if (!field_is(&r->fields[1], "1")) {
-        return fail(r, "plan format version '%.*s', this runtime reads version 1",
-                    SHOWN(&r->fields[1]));
+    if (!field_is(&r->fields[1], version)) {
+        return fail(r, "plan format version '%.*s', this runtime reads version %s",
+                    SHOWN(&r->fields[1]), version);
     }
     if (expect(r, "mission", 2) < 0 || name_field(r, 1, "mission name") < 0) {
         return -1;
@@ -302,6 +374,9 @@ static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
     }
     if (!(plan->predicted_j >= 0)) {
         return fail(r, "predicted_j must be >= 0");
+    }
+    if (read_components(r, plan) < 0 || read_assumptions(r, plan) < 0) {
+        return -1;
     }
     if (expect(r, "states", 2) < 0 || count_field(r, 1, "states", 1, GP_MAX_STATES, &count) < 0) {
         return -1;
@@ -382,7 +457,30 @@ static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
     return 0;
 }
 
-static int read_state(reader *r, const gp_mission *mission, int s, gp_plan_state *out)
+/* `predict TIME_S VISITS INFLECTIONS` and `energy J...`: what the plan predicts of the
+ * state; the simulator checks a flight against it, the runtime only its form. */
+static int read_prediction(reader *r, int n_components)
+{
+    double amount;
+    int visits;
+    if (expect(r, "predict", 4) < 0 || amount_field(r, 1, "TIME_S", &amount) < 0
+        || count_field(r, 2, "VISITS", 0, MAX_VISITS, &visits) < 0
+        || amount_field(r, 3, "INFLECTIONS", &amount) < 0) {
+        return -1;
+    }
+    if (expect(r, "energy", n_components + 1) < 0) {
+        return -1;
+    }
+    for (int i = 1; i <= n_components; i++) {
+        if (amount_field(r, i, "energy", &amount) < 0) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static int read_state(reader *r, const gp_mission *mission, int n_components, int s,
+                      gp_plan_state *out)
 {
     const gp_state *state = &mission->states[s];
     int n_sensors, n_profiles, logged_from = 0;
@@ -405,6 +503,9 @@ static int read_state(reader *r, const gp_mission *mission, int s, gp_plan_state
     if (n_profiles != state->n_profiles) {
         return fail(r, "%d profiles, state '%.32s' has %d", n_profiles, state->name,
                     state->n_profiles);
+    }
+    if (read_prediction(r, n_components) < 0) {
+        return -1;
     }
     out->n_sensors = (uint8_t)n_sensors;
     out->n_profiles = (uint8_t)n_profiles;
@@ -447,12 +548,12 @@ int gp_plan_read(const char *text, size_t len, const gp_mission *mission, gp_pla
         return -1;
     }
     for (int s = 0; s < plan.n_states; s++) {
-        if (read_state(&r, mission, s, &plan.states[s]) < 0) {
+        if (read_state(&r, mission, plan.n_components, s, &plan.states[s]) < 0) {
             return -1;
         }
     }
     if (r.pos < r.len) {
-        next_line(&r);
+        next_line(&r, 0);
         return fail(&r, "extra line after the last state block");
     }
     *out = plan;

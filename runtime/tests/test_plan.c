@@ -9,22 +9,32 @@
 #include "gp_test.h"
 
 #define GOOD_BODY                                                                   \
-    "GPPLAN 1\n"                                                                    \
+    "GPPLAN 2\n"                                                                    \
     "mission sampleMission\n"                                                       \
     "hash 5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9\n"       \
     "computer ts7800 300\n"                                                         \
     "budget_j 180000\n"                                                             \
-    "predicted_j 9876.5\n"                                                          \
+    "predicted_j 10203\n"                                                           \
+    "components hotel pump ctd\n"                                                   \
+    "assumptions 2\n"                                                               \
+    "assume mission vehicle slocum_g2_shallow (default)\n"                          \
+    "assume s2 planned at its expect upper bound (3600 s per visit)\n"              \
     "states 3\n"                                                                    \
     "state s1 300 600 0 1\n"                                                        \
+    "predict 1000 2 19.8\n"                                                         \
+    "energy 2410 1540 0\n"                                                          \
     "profile 0 1 0.454 230 0.31\n"                                                  \
     "end\n"                                                                         \
     "state s2 200 600 2 1\n"                                                        \
+    "predict 1000 1 12.4\n"                                                         \
+    "energy 2410 1585 240\n"                                                        \
     "sensor depth 60 0\n"                                                           \
     "sensor temp 60 15\n"                                                           \
     "profile 0 1 0.4 200 0.3\n"                                                     \
     "end\n"                                                                         \
     "state s3 300 600 0 1\n"                                                        \
+    "predict 500 1 4.7\n"                                                           \
+    "energy 1205 813 0\n"                                                           \
     "profile 0 1 0.454 230 0.31\n"                                                  \
     "end\n"
 
@@ -67,6 +77,8 @@ void test_plan_should_accept_a_good_plan(void)
     CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &plan, error), 0);
     CHECK_INT(error[0], 0);
     CHECK_INT(plan.n_states, 3);
+    CHECK_INT(plan.n_components, 3);
+    CHECK_INT(plan.n_assumptions, 2);
     CHECK(strcmp(plan.computer, "ts7800") == 0);
     CHECK_NEAR(plan.budget_j, 180000, 0);
     CHECK_NEAR(plan.states[1].clock_mhz, 200, 0);
@@ -81,8 +93,9 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
     static const struct {
         const char *from, *to, *message;
     } rows[] = {
-        {"GPPLAN 1", "GPPLAN 2", "line 1: plan format version '2'"},
-        {"GPPLAN 1", "GPPLAN", "line 1: expected 'GPPLAN 1'"},
+        {"GPPLAN 2", "GPPLAN 1",
+         "line 1: plan format version '1', this runtime reads version 2"},
+        {"GPPLAN 2", "GPPLAN", "line 1: expected 'GPPLAN 2'"},
         {"mission sampleMission", "mission other", "line 2: plan is for mission 'other'"},
         {"mission sampleMission", "mission 9lives", "line 2: mission name is not a NAME"},
         {"hash 5db9", "hash 6db9", "line 3: hash does not match"},
@@ -94,38 +107,57 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"budget_j 180000", "budget_j 1e999", "line 5: budget_j 1e999 is not finite"},
         {"budget_j 180000", "budget_j 0x10", "line 5: budget_j '0x10' is not a NUMBER"},
         {"budget_j 180000", "budget_j -180000", "line 5: budget_j must be >= 0"},
-        {"predicted_j 9876.5", "predicted_j -1", "line 6: predicted_j must be >= 0"},
-        {"predicted_j 9876.5\n", "", "line 6: expected a 'predicted_j' line, found 'states'"},
-        {"states 3", "states 4", "line 7: plan has 4 states, mission 'sampleMission' has 3"},
-        {"states 3", "states 65", "line 7: states 65 outside 1..64"},
-        {"states 3", "states -3", "line 7: states '-3' is not a COUNT"},
-        {"state s1 300 600 0 1", "state s1 300 600 0 2", "line 8: 2 profiles, state 's1' has 1"},
-        {"state s1 300 600 0 1", "state s1 300 0 0 1", "line 8: CLOCK_MHZ and CYCLE_S"},
-        {"state s1 300 600 0 1", "state s1 300 600 0", "line 8: 'state' takes 5 fields, found 4"},
-        {"profile 0 1 0.454", "profile 0 0.9 0.454", "line 10: shares of state 's1' sum to 0.9"},
-        {"profile 0 1 0.454", "profile 1 1 0.454", "line 9: profile INDEX 1 out of order"},
-        {"profile 0 1 0.454", "profile 0 1 1.6", "line 9: PITCH_RAD 1.6 outside (0, pi/2)"},
-        {"profile 0 1 0.454 230", "profile 0 1 0.454 0", "line 9: BALLAST_CC and SPEED_MPS"},
-        {"profile 0 1 0.454", "profile 0 1.5 0.454", "line 9: SHARE 1.5 outside [0, 1]"},
-        {"state s2", "state s9", "line 11: state 's9' where the mission has 's2'"},
-        {"sensor temp 60 15", "sensor oxygen 60 15", "line 13: sensor 'oxygen' is not logged"},
+        {"predicted_j 10203", "predicted_j -1", "line 6: predicted_j must be >= 0"},
+        {"predicted_j 10203\n", "", "line 6: expected a 'predicted_j' line, found 'components'"},
+        {"components hotel pump ctd", "components hotel pump hotel",
+         "line 7: component 'hotel' named twice"},
+        {"components hotel pump ctd", "components", "line 7: 'components' takes 1 to 16 fields"},
+        {"components hotel pump ctd", "components 9x", "line 7: component is not a NAME"},
+        {"assumptions 2", "assumptions 3", "line 11: expected a 'assume' line, found 'states'"},
+        {"assumptions 2", "assumptions 256", "line 8: assumptions 256 outside 0..255"},
+        {"assume s2 planned at its expect upper bound (3600 s per visit)", "assume s2",
+         "line 10: 'assume' takes 2 fields, found 1"},
+        {"assume mission", "assume 9mission", "line 9: SUBJECT is not a NAME"},
+        {" (default)", "  (default)", "line 9: fields must be separated by exactly one space"},
+        {"states 3", "states 4", "line 11: plan has 4 states, mission 'sampleMission' has 3"},
+        {"states 3", "states 65", "line 11: states 65 outside 1..64"},
+        {"states 3", "states -3", "line 11: states '-3' is not a COUNT"},
+        {"state s1 300 600 0 1", "state s1 300 600 0 2", "line 12: 2 profiles, state 's1' has 1"},
+        {"state s1 300 600 0 1", "state s1 300 0 0 1", "line 12: CLOCK_MHZ and CYCLE_S"},
+        {"state s1 300 600 0 1", "state s1 300 600 0", "line 12: 'state' takes 5 fields, found 4"},
+        {"predict 1000 2 19.8", "predict -1 2 19.8", "line 13: TIME_S must be >= 0"},
+        {"predict 1000 2 19.8", "predict 1000 2.5 19.8", "line 13: VISITS '2.5' is not a COUNT"},
+        {"predict 1000 2 19.8", "predict 1000 2", "line 13: 'predict' takes 3 fields, found 2"},
+        {"energy 2410 1540 0", "energy 2410 1540", "line 14: 'energy' takes 3 fields, found 2"},
+        {"energy 2410 1540 0", "energy 2410 -1540 0", "line 14: energy must be >= 0"},
+        {"energy 2410 1540 0\n", "", "line 14: expected a 'energy' line, found 'profile'"},
+        {"profile 0 1 0.454", "profile 0 0.9 0.454", "line 16: shares of state 's1' sum to 0.9"},
+        {"profile 0 1 0.454", "profile 1 1 0.454", "line 15: profile INDEX 1 out of order"},
+        {"profile 0 1 0.454", "profile 0 1 1.6", "line 15: PITCH_RAD 1.6 outside (0, pi/2)"},
+        {"profile 0 1 0.454 230", "profile 0 1 0.454 0", "line 15: BALLAST_CC and SPEED_MPS"},
+        {"profile 0 1 0.454", "profile 0 1.5 0.454", "line 15: SHARE 1.5 outside [0, 1]"},
+        {"state s2", "state s9", "line 17: state 's9' where the mission has 's2'"},
+        {"sensor temp 60 15", "sensor oxygen 60 15", "line 21: sensor 'oxygen' is not logged"},
         {"sensor depth 60 0\nsensor temp", "sensor temp 60 15\nsensor depth",
-         "line 13: sensor 'depth' is not logged by state 's2' (or out of order)"},
-        {"sensor temp 60 15", "sensor temp 60 61", "line 13: need PERIOD_S > 0"},
-        {"sensor temp 60 15", "sensor temp 0 0", "line 13: need PERIOD_S > 0"},
-        {"end\nstate s3", "ende\nstate s3", "line 15: expected a 'end' line, found 'ende'"},
-        {"end\nstate s3", "end x\nstate s3", "line 15: 'end' takes 0 fields, found 1"},
+         "line 21: sensor 'depth' is not logged by state 's2' (or out of order)"},
+        {"sensor temp 60 15", "sensor temp 60 61", "line 21: need PERIOD_S > 0"},
+        {"sensor temp 60 15", "sensor temp 0 0", "line 21: need PERIOD_S > 0"},
+        {"end\nstate s3", "ende\nstate s3", "line 23: expected a 'end' line, found 'ende'"},
+        {"end\nstate s3", "end x\nstate s3", "line 23: 'end' takes 0 fields, found 1"},
         {"budget_j 180000", "budget_j  180000", "line 5: fields must be separated by exactly"},
         {"budget_j 180000", "budget_j 180000 ", "line 5: fields must be separated by exactly"},
         {"budget_j 180000\n", "budget_j 180000\n\n", "line 6: empty line"},
         {"budget_j 180000\n", "budget_j 180000\r\n", "line 5: byte 0x0d is not allowed"},
         {"budget_j 180000", "budget_j\t180000", "line 5: byte 0x09 is not allowed"},
         {"budget_j 180000", "budget_j 18\xe9", "line 5: byte 0xe9 is not allowed"},
-        {"state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n",
-         "state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\nend\n",
-         "line 19: extra line after the last state block"},
-        {"state s3 300 600 0 1\nprofile 0 1 0.454 230 0.31\nend\n", "state s3 300 600 0 1\n",
-         "line 17: missing 'profile' line (truncated file)"},
+        {"state s3 300 600 0 1\npredict 500 1 4.7\nenergy 1205 813 0\n"
+         "profile 0 1 0.454 230 0.31\nend\n",
+         "state s3 300 600 0 1\npredict 500 1 4.7\nenergy 1205 813 0\n"
+         "profile 0 1 0.454 230 0.31\nend\nend\n",
+         "line 29: extra line after the last state block"},
+        {"state s3 300 600 0 1\npredict 500 1 4.7\nenergy 1205 813 0\n"
+         "profile 0 1 0.454 230 0.31\nend\n", "state s3 300 600 0 1\n",
+         "line 25: missing 'predict' line (truncated file)"},
     };
     char error[GP_PLAN_ERROR_LEN];
     for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
@@ -161,7 +193,7 @@ void test_plan_should_reject_truncated_and_corrupted_files(void)
     CHECK_INT(read_text(len - 1, error), -1);   /* final LF missing */
     CHECK_CONTAINS(error, "no final LF (truncated file)");
     CHECK_INT(read_text(strlen(GOOD_BODY), error), -1);  /* crc32 line lost */
-    CHECK_CONTAINS(error, "line 18: the last line is not 'crc32 HEX8' (truncated file)");
+    CHECK_CONTAINS(error, "line 28: the last line is not 'crc32 HEX8' (truncated file)");
     CHECK_INT(read_text(0, error), -1);
     CHECK_CONTAINS(error, "empty file");
     for (size_t cut = 1; cut < len; cut += 7) {  /* every cut is refused, none crashes */
@@ -169,7 +201,7 @@ void test_plan_should_reject_truncated_and_corrupted_files(void)
     }
     text[20] = 'X';  /* a changed byte the checksum catches */
     CHECK_INT(read_text(len, error), -1);
-    CHECK_CONTAINS(error, "line 19: checksum mismatch");
+    CHECK_CONTAINS(error, "line 29: checksum mismatch");
     len = with_crc(GOOD_BODY);
     text[len - 2] = 'g';
     CHECK_INT(read_text(len, error), -1);
