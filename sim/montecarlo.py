@@ -241,3 +241,85 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
         else {},
         "wall_s": result.wall_s,
     }
+
+
+# ---- the command ------------------------------------------------------------------------
+
+MONTECARLO_FILES = ("scenarios.parquet", "summary.json", "energy.png", "exhaustion.png")
+MAX_SCENARIOS = 1_000_000
+DEFAULT_DURATION_S = 30 * 86400.0  # a run of a mission without a horizon ends here
+
+
+@dataclass(frozen=True)
+class MonteCarloRun:
+    """A Monte Carlo run of a mission: its scenarios, what they say, the files written."""
+
+    result: MonteCarloResult
+    summary: dict  # summary.json: the probability that the budget holds, quantiles, ...
+    files: tuple  # of pathlib.Path: MONTECARLO_FILES in the output directory
+
+
+def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int,
+                       plan_path=None, workers: int = 1, scheduler: str | None = None,
+                       seed: int = 0, scenario_file=None, duration_s: float | None = None,
+                       tracker: str = "robust",
+                       progress: Callable[[int, int], None] | None = None) -> MonteCarloRun:
+    """Fly `mission` (and the plan in `plan_path`: its budget and prediction; without one
+    every sensor a state logs is on and the budget is the mission's usable battery) in
+    `scenarios` scenarios drawn from `scenario_file` (default: the shipped one) from
+    `seed`, on `workers` processes or the Dask `scheduler` ("local" or "tcp://HOST:PORT"),
+    each run ending at `duration_s` [s] (default: the mission's horizon, else 30 days);
+    write MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`).
+    Raises KeyboardInterrupt only if no scenario finished: an interrupted run keeps and
+    writes those that did (`MonteCarloRun.result.interrupted`)."""
+    import json
+    from pathlib import Path
+
+    from gliderplan.contract.errors import UsageError
+    from gliderplan.contract.files import write_atomically
+    from gliderplan.planner.planfile import load_plan
+    from gliderplan.power_models import load_vehicle
+    from gliderplan.sim import plots
+    from gliderplan.sim.backends import scenario_executor
+    from gliderplan.sim.outputs import parquet_bytes
+    from gliderplan.sim.scenarios import read_spec
+
+    if not 1 <= scenarios <= MAX_SCENARIOS:
+        raise UsageError(f"--scenarios {scenarios}: must be between 1 and {MAX_SCENARIOS:,}")
+    if workers < 1:
+        raise UsageError(f"--workers {workers}: must be at least 1")
+    out = Path(output_dir)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: not a directory")
+    duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_DURATION_S
+    spec = read_spec(scenario_file)
+    plan = None if plan_path is None else load_plan(plan_path, mission)
+    budget_j = plan.budget_j if plan is not None else \
+        mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
+    job = Job(mission, plan, load_vehicle(mission.vehicle), spec, budget_j, seed, duration,
+              robust_tracker=tracker == "robust")
+    with scenario_executor(workers, scheduler) as executor:
+        result = run_montecarlo(job, scenarios, executor, workers, progress)
+    if not result.rows:
+        raise KeyboardInterrupt  # nothing finished, nothing to write
+    import pyarrow as pa
+
+    table = result.table()
+    meta = {"mission": mission.name, "mission_hash": mission.hash,
+            "plan": None if plan_path is None else str(plan_path),
+            "scenario_file": spec.source, "seed": seed, "run_limit_s": duration,
+            "budget_j": budget_j, "workers": workers,
+            "scheduler": scheduler or ("local pool" if workers > 1 else "none")}
+    stated = summary(result, meta)
+    contents = {
+        "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table, preserve_index=False)),
+        "summary.json": json.dumps(stated, indent=2) + "\n",
+        "energy.png": plots.energy_histogram_png(
+            table["energy_j"].to_numpy(float), table["budget_j"].to_numpy(float), budget_j,
+            stated["probability_budget_holds"]),
+        "exhaustion.png": plots.exhaustion_png(
+            table["exhausted_s"].to_numpy(float), table["duration_s"].to_numpy(float)),
+    }
+    for name in MONTECARLO_FILES:
+        write_atomically(out / name, contents[name])
+    return MonteCarloRun(result, stated, tuple(out / name for name in MONTECARLO_FILES))

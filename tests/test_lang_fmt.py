@@ -186,6 +186,24 @@ def test_fmt_leaves_a_file_with_syntax_errors_alone(tmp_path, capsys):
     assert path.read_text() == source
 
 
+def test_format_file_is_the_fmt_command_as_one_call(tmp_path):
+    from gliderplan.contract import ExitCode
+    from gliderplan.language.diagnostics import MissionError
+    from gliderplan.language.formatter import format_file
+    from gliderplan.language.source import SourceError
+
+    path = tmp_path / "m.mission"
+    path.write_text("mission m # keep me\nstate s begin flightprofile surface end\n")
+    assert format_file(path) == (path.read_text(), format_source(path.read_text()))
+    path.write_text("mission m\nstate s begin flightprofile surface\n")
+    with pytest.raises(MissionError, match="does not parse") as bad:
+        format_file(path)
+    assert f"{path}:2:7: error: state 's' has no 'end'" in bad.value.details
+    with pytest.raises(SourceError) as missing:
+        format_file(tmp_path / "none.mission")
+    assert missing.value.exit_code == ExitCode.USAGE
+
+
 @pytest.mark.parametrize("make", [lambda p: p, lambda p: p / "missing.mission"])
 def test_fmt_bad_path_is_usage_error(tmp_path, capsys, make):
     assert main(["fmt", str(make(tmp_path))]) == 2

@@ -169,3 +169,14 @@ def test_bad_usage_exits_2(tmp_path, capsys):
                   ["--scenarios", "2", "--plan", str(tmp_path / "none.plan")]):
         assert main(["montecarlo", str(FIG2), *extra, "-o", str(tmp_path / "mc")]) == 2
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_montecarlo_mission_is_the_command_as_one_call(tmp_path):
+    from gliderplan.sim.montecarlo import montecarlo_mission
+
+    mission = check_file(str(FIG2)).checked()
+    run = montecarlo_mission(mission, tmp_path / "mc", scenarios=3, seed=7, duration_s=2600.0)
+    assert {p.name for p in run.files} == FILES and all(p.is_file() for p in run.files)
+    assert [r["scenario"] for r in run.result.rows] == [0, 1, 2]
+    assert json.loads((tmp_path / "mc" / "summary.json").read_text()) == run.summary
+    assert run.summary["scenarios"] == 3 and run.summary["seed"] == 7
