@@ -73,6 +73,11 @@ def _cycle_collector_paused() -> Iterator[None]:
     try:
         yield
     finally:
+        # What was built would all be scanned by the next young collection (it was
+        # allocated while the collector was paused): hand it to the oldest generation,
+        # which freeze and unfreeze do without visiting an object.
+        gc.freeze()
+        gc.unfreeze()
         if was_enabled:
             gc.enable()
 

@@ -199,3 +199,32 @@ def test_rendering_splits_the_source_once_however_many_diagnostics():
     last = never_entered[-1].span.line
     assert f"m.mission:{last}:7: warning: state 'spare299' is never entered" in text
     assert f"{last:>5} | state spare299\n" in text
+
+
+def test_checking_leaves_the_cycle_collector_as_it_found_it():
+    """check_source pauses Python's cycle collector while it builds its trees; afterwards
+    the collector runs as before, on what was there before as on what comes after."""
+    import gc
+    import weakref
+
+    class Node:
+        pass
+
+    def cycle() -> weakref.ref:
+        a, b = Node(), Node()
+        a.other, b.other = b, a
+        return weakref.ref(a)
+
+    before = cycle()
+    assert gc.isenabled()
+    assert check_source(_TEMPLATE.format(**_DEFAULTS), "m.mission").ok
+    assert gc.isenabled()
+    after = cycle()
+    gc.collect()
+    assert before() is None and after() is None
+    gc.disable()
+    try:
+        check_source(_TEMPLATE.format(**_DEFAULTS), "m.mission")
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
