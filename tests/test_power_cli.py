@@ -106,3 +106,21 @@ def test_bad_input_is_a_clear_error(capsys, argv, code, message):
     assert result == code
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+def test_the_tables_are_python_calls():
+    from gliderplan.contract.errors import UsageError
+    from gliderplan.power_models import tables
+
+    assert tables.presets("board") == {"board": ["ts5500", "ts7800"]}
+    data = tables.energy_per_km("slocum_g3", min_depth_m=5, max_depths_m=[20, 100],
+                                speeds_mps=[0.2, 0.3])
+    vehicle = load_vehicle("slocum_g3")
+    ballast = vehicle.ballast_for_speed(0.3, data["pitch_rad"])
+    expected = vehicle.energy_per_km_j(5, 100, data["pitch_rad"], ballast) / 1e3
+    assert data["energy_per_km_kj"][1][1] == pytest.approx(float(expected))
+    hungry = tables.optimal_speeds([1.0, 4.0], "slocum_g3")["rows"]
+    assert hungry[0]["speed_mps"] < hungry[1]["speed_mps"]  # a hungrier load flies faster
+    assert tables.model_figures("board", "ts7800", 500.0)["name"] == "ts7800"
+    with pytest.raises(UsageError, match="--clock only applies to a board"):
+        tables.model_figures("sensor", "ctd", 300.0)
