@@ -4,11 +4,12 @@ lark's bare parse of the same text.
     .venv/bin/python bench/bench_check_scale.py [--states 5000 50000] [--runs 5]
                                                 [--shape survey|fig2]
 
-The mission is a chain of states. `survey` states (the default) have a route, two
-alternative profiles, four sensors (two duty auto), a variable assignment and two
-events (a call to a shared surfacing state, a goto to the next state); `fig2` states
-are shaped like the paper's s1 (route, one profile, three sensors, two events). The
-last state exits.
+The mission is a chain of states, far more than the runtime holds: `check` runs every
+pass in full and refuses it with that one error (exit 1). `survey` states (the
+default) have a route, two alternative profiles, four sensors (two duty auto), a
+variable assignment and two events (a call to a shared surfacing state, a goto to the
+next state); `fig2` states are shaped like the paper's s1 (route, one profile, three
+sensors, two events). The last state exits.
 
 For each size: the median wall and CPU time of `gliderplan check FILE` as a user runs
 it (a fresh process each run), and beside it where the CPU time goes, measured in this
@@ -36,6 +37,7 @@ from pathlib import Path
 
 from whole_process import gliderplan, load_average, median_of
 
+from gliderplan.contract import MAX_STATES, ExitCode
 from gliderplan.language.checker import check
 from gliderplan.language.parser import _lark, parse
 
@@ -117,10 +119,13 @@ def main() -> None:
             text = make(states)
             path = Path(tmp) / f"scale{states}.mission"
             path.write_text(text)
-            whole = median_of({"check": gliderplan("check", str(path))}, args.runs)["check"]
+            whole = median_of({"check": gliderplan("check", str(path))}, args.runs,
+                              exit_code=ExitCode.BAD_INPUT)["check"]
             syntax = parse(text)
             mission, diagnostics = check(syntax, None)
-            assert mission is not None and not any(d.is_error for d in diagnostics)
+            errors = [d.message for d in diagnostics if d.is_error]
+            assert errors == [f"the mission has {states + (args.shape == 'survey')} states, "
+                              f"more than the {MAX_STATES} the runtime holds"], errors[:3]
             parse_s = median_cpu_s(lambda t=text: parse(t), args.runs)
             check_s = median_cpu_s(lambda s=syntax: check(s, None), args.runs)
             del syntax, mission

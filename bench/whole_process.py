@@ -34,29 +34,33 @@ def gliderplan(*args: str) -> list[str]:
     return command + list(args)
 
 
-def run_once(command: list[str]) -> Timing:
-    """Wall and CPU time of one run; the command must succeed (its output is dropped)."""
+def run_once(command: list[str], exit_code: int = 0) -> Timing:
+    """Wall and CPU time of one run; the command must exit with `exit_code` (its output
+    is dropped)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                           env=ENV)
     wall = time.perf_counter() - start
-    if done.returncode != 0:
-        sys.exit(f"{' '.join(command)} failed:\n{done.stderr.decode(errors='replace')}")
+    if done.returncode != exit_code:
+        sys.exit(f"{' '.join(command)} exited {done.returncode}, not {exit_code}:\n"
+                 f"{done.stderr.decode(errors='replace')}")
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return Timing(wall, cpu)
 
 
-def median_of(commands: dict[str, list[str]], runs: int) -> dict[str, Timing]:
+def median_of(commands: dict[str, list[str]], runs: int,
+              exit_code: int = 0) -> dict[str, Timing]:
     """Median wall and CPU time of each command over `runs` runs, taken in turn (so that
-    a change in the machine's load falls on all of them alike), after one warm-up run."""
+    a change in the machine's load falls on all of them alike), after one warm-up run;
+    each must exit with `exit_code`."""
     for command in commands.values():
-        run_once(command)
+        run_once(command, exit_code)
     times: dict[str, list[Timing]] = {name: [] for name in commands}
     for _ in range(runs):
         for name, command in commands.items():
-            times[name].append(run_once(command))
+            times[name].append(run_once(command, exit_code))
     return {name: Timing(statistics.median(t.wall_s for t in found),
                          statistics.median(t.cpu_s for t in found))
             for name, found in times.items()}

@@ -14,6 +14,7 @@ from gliderplan.contract import MAX_STACK_DEPTH
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
 from gliderplan.language.flow import check_flow
+from gliderplan.language.limits import check_sizes
 from gliderplan.language.registry import (
     FUNCTIONS,
     PROFILES,
@@ -61,7 +62,10 @@ class _Checker:
     def run(self) -> ir.CheckedMission | None:
         fields = self.declarations()
         states = self.states()
-        if self.error_count():
+        lowered = not self.error_count()
+        # Read off the tree whatever else is wrong, and no reason to skip the flow analysis.
+        self.diagnostics.extend(check_sizes(self.mission))
+        if not lowered:
             return None
         mission = ir.CheckedMission(name=self.mission.name.text, states=tuple(states), **fields)
         spans = {s.name.text: s for s in self.mission.states}
@@ -578,7 +582,10 @@ def _signature(params: tuple[ParamSpec, ...], min_points: int, max_points: int) 
 
 def check(mission: ast.Mission, stack_depth: int | None = None
           ) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
-    """Check a parsed mission; the IR is None when there are errors."""
+    """Check a parsed mission; the IR is None when there are errors. `stack_depth`
+    replaces the mission's own (1 to the runtime's MAX_STACK_DEPTH)."""
+    if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
+        raise ValueError(f"a stack depth of {stack_depth} is outside 1..{MAX_STACK_DEPTH}")
     checker = _Checker(mission, stack_depth)
     checked = checker.run()
     return checked, sorted(checker.diagnostics, key=lambda d: (d.span.line, d.span.column))

@@ -14,6 +14,9 @@ import pytest
 
 from gliderplan import contract
 from gliderplan.contract.c_header import c_header
+from gliderplan.language import check_source
+from gliderplan.language.codegen_c import generate_c
+from gliderplan.language.registry import PROFILES, ROUTES
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADER = ROOT / "runtime" / "include" / "gp_contract.h"
@@ -75,3 +78,83 @@ def test_no_c_file_redefines_a_fact_of_the_header(path):
     assert not defined & names, f"{path.name} defines {sorted(defined & names)} again"
     # the sensor array is indexed by name (GP_SENSOR_*), never by a bare number
     assert not re.search(r"sensors\[\d+\]", text), f"{path.name} indexes sensors by number"
+
+
+# ---- check refuses what the runtime or the plan file cannot hold --------------------
+
+
+def _source(states: int = 1, variables: int = 0, events: int = 1, alternatives: int = 1,
+            mission: str = "m", state: str = "s") -> str:
+    """A mission of the given size: line 1 the name, then the variables, then the states."""
+    lines = [f"mission {mission}", *(f"var v{i} = {i}" for i in range(variables))]
+    for k in range(states):
+        lines += [f"state {state}{k}", "begin",
+                  "  flightprofile " + " | ".join(["surface"] * alternatives),
+                  "  sensors missiontime", "  events",
+                  *(f"    case missiontime > {i} exit" for i in range(events)), "end"]
+    return "\n".join(lines) + "\n"
+
+
+def _errors(source: str) -> list[tuple[int, int, str]]:
+    result = check_source(source, "m.mission")
+    return [(d.span.line, d.span.column, d.message) for d in result.diagnostics if d.is_error]
+
+
+LIMITS = [  # (what, sizes at the limit, one more, where the error points, its message)
+    ("states", {"states": contract.MAX_STATES}, {"states": contract.MAX_STATES + 1},
+     (2 + 7 * contract.MAX_STATES, 7), f"the mission has {contract.MAX_STATES + 1} states, "
+     f"more than the {contract.MAX_STATES} the runtime holds"),
+    ("variables", {"variables": contract.MAX_VARIABLES},
+     {"variables": contract.MAX_VARIABLES + 1}, (2 + contract.MAX_VARIABLES, 5),
+     f"the mission has {contract.MAX_VARIABLES + 1} variables, more than the "
+     f"{contract.MAX_VARIABLES} the runtime holds"),
+    ("events", {"events": contract.MAX_EVENTS_PER_STATE},
+     {"events": contract.MAX_EVENTS_PER_STATE + 1}, (7 + contract.MAX_EVENTS_PER_STATE, 5),
+     f"state 's0' has {contract.MAX_EVENTS_PER_STATE + 1} events, more than the "
+     f"{contract.MAX_EVENTS_PER_STATE} the runtime holds"),
+    ("alternatives", {"alternatives": contract.MAX_PROFILE_ALTERNATIVES},
+     {"alternatives": contract.MAX_PROFILE_ALTERNATIVES + 1},
+     (4, 17 + 10 * contract.MAX_PROFILE_ALTERNATIVES),
+     f"state 's0' has {contract.MAX_PROFILE_ALTERNATIVES + 1} flight-profile alternatives, "
+     f"more than the {contract.MAX_PROFILE_ALTERNATIVES} the runtime holds"),
+    ("mission name", {"mission": "m" * contract.MAX_NAME_LENGTH},
+     {"mission": "m" * (contract.MAX_NAME_LENGTH + 1)}, (1, 9),
+     f"mission name '{'m' * (contract.MAX_NAME_LENGTH + 1)}' has "
+     f"{contract.MAX_NAME_LENGTH + 1} characters, more than the {contract.MAX_NAME_LENGTH} a "
+     "plan file holds"),
+    ("state name", {"state": "s" * (contract.MAX_NAME_LENGTH - 1)},
+     {"state": "s" * contract.MAX_NAME_LENGTH}, (2, 7),
+     f"state name '{'s' * contract.MAX_NAME_LENGTH}0' has {contract.MAX_NAME_LENGTH + 1} "
+     f"characters, more than the {contract.MAX_NAME_LENGTH} a plan file holds"),
+]
+
+
+@pytest.mark.parametrize(("what", "fits", "too_big", "where", "message"), LIMITS,
+                         ids=[case[0] for case in LIMITS])
+def test_check_refuses_one_past_each_limit_at_its_line(what, fits, too_big, where, message):
+    assert _errors(_source(**fits)) == []
+    assert _errors(_source(**too_big)) == [(*where, message)]
+
+
+@pytest.mark.parametrize(("what", "fits"), [(case[0], case[1]) for case in LIMITS[:4]],
+                         ids=[case[0] for case in LIMITS[:4]])
+def test_what_check_accepts_at_a_limit_the_code_generator_accepts(what, fits):
+    mission = check_source(_source(**fits), "m.mission").mission
+    assert "const gp_mission gp_mission_table" in generate_c(mission)
+
+
+def test_a_size_error_does_not_hide_the_flow_analysis():
+    source = _source(states=contract.MAX_STATES + 1).replace(
+        "    case missiontime > 0 exit\n", "    case missiontime > 0 return\n", 1)
+    messages = [m for _, _, m in _errors(source)]
+    assert len(messages) == 2 and "'return' in state 's0' can run with an empty stack" in \
+        messages[0] and "states, more than the" in messages[1]
+
+
+def test_the_vocabulary_fits_the_runtime_and_the_plan_file():
+    assert all(len(p.params) <= contract.MAX_PROFILE_ARGS for p in PROFILES.values())
+    assert all(r.max_points <= contract.MAX_ROUTE_POINTS for r in ROUTES.values())
+    # a plan's state block lists the sensors with a device: at most every such sensor
+    assert sum(1 for s in contract.SENSORS if s.device) <= contract.MAX_PLAN_SENSORS
+    assert [s.index for s in contract.SENSORS] == list(range(contract.N_SENSORS)) \
+        and contract.N_SENSORS <= 32
