@@ -42,10 +42,14 @@ class CodegenError(GliderplanError):
     """The mission uses something the C runtime cannot hold (the message says what and where)."""
 
 
-def generate_c(mission: ir.CheckedMission) -> str:
-    """The C source of the mission's tables, ready to compile with the runtime."""
+def generate_c(mission: ir.CheckedMission, default_ballast_cc: float) -> str:
+    """The C source of the mission's tables, ready to compile with the runtime.
+
+    `default_ballast_cc` [cc] is the pumped volume flown where no plan sets one
+    (`Vehicle.unplanned_ballast_cc` of the mission's vehicle).
+    """
     _check_limits(mission)
-    return _MissionWriter(mission).write()
+    return _MissionWriter(mission, default_ballast_cc).write()
 
 
 def read_mask(mission: ir.CheckedMission) -> int:
@@ -64,21 +68,6 @@ def read_mask(mission: ir.CheckedMission) -> int:
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}
     return sum(1 << SENSOR_BY_NAME[name].index for name in names)
-
-
-def default_ballast_cc(mission: ir.CheckedMission) -> float:
-    """Pumped volume [cc] flown without a plan: the vehicle's full pump stroke.
-
-    The vehicle model's nominal flight (its calibration log, a yo at ~26 deg pitch)
-    pumps the whole stroke either side of neutral, `max_ballast_cc`.
-    """
-    from gliderplan.power_models.errors import ModelFileError
-    from gliderplan.power_models.vehicle import load_vehicle
-
-    try:
-        return load_vehicle(mission.vehicle).max_ballast_cc
-    except (ModelFileError, OSError) as err:
-        raise CodegenError(f"vehicle {mission.vehicle!r}: {err}") from err
 
 
 # ---- expressions -------------------------------------------------------------------
@@ -215,8 +204,9 @@ def _route_param(route: ir.Route) -> float:
 class _MissionWriter:
     """Writes the C file, one `visit_*` per part of the mission, each returning lines."""
 
-    def __init__(self, mission: ir.CheckedMission):
+    def __init__(self, mission: ir.CheckedMission, default_ballast_cc: float):
         self.mission = mission
+        self.default_ballast_cc = default_ballast_cc
         self.expressions = ExpressionWriter()
 
     def write(self) -> str:
@@ -332,7 +322,7 @@ class _MissionWriter:
             f"    .n_vars = {len(mission.variables)},",
             f"    .stack_depth = {mission.stack_depth},",
             f"    .read_mask = 0x{read_mask(mission):08x}u,",
-            f"    .default_ballast_cc = {c_double(default_ballast_cc(mission))},",
+            f"    .default_ballast_cc = {c_double(self.default_ballast_cc)},",
             "    .sensor_names = sensor_names,",
             "};",
         ]

@@ -84,6 +84,13 @@ class Vehicle:
         inverse); the planner turns a planned speed into a buoyancy command with it."""
         return flight.ballast_for_speed(self.flight, u_mps, pitch_rad)
 
+    @property
+    def unplanned_ballast_cc(self) -> float:
+        """Pumped volume [cc] flown without a plan: the full stroke, as the vehicle's
+        nominal flight (its calibration log, a yo at ~26 deg pitch) pumps it either side
+        of neutral. Compiled into a mission as its default ballast."""
+        return self.max_ballast_cc
+
     def max_speed_mps(self, pitch_rad: Array | float) -> Array:
         """Horizontal speed [m s-1] at the largest buoyancy volume."""
         return self.glide(pitch_rad, self.max_ballast_cc)[0]

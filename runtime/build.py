@@ -177,22 +177,29 @@ def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
 
 
 def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = "host",
-                    plan_path: str | Path | None = None) -> Path:
+                    plan_path: str | Path | None = None,
+                    default_ballast_cc: float | None = None) -> Path:
     """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>: the
     pipeline of `gliderplan compile`. With `plan_path`, the plan is first checked by the
     runtime's own reader (`runtime_accepts`) and then copied beside the binary.
 
-    A build with the same inputs is copied from the cache instead of compiled again.
-    Raises CodegenError for a mission the runtime cannot hold, PlanRejected for a plan
-    it would refuse, BuildError otherwise.
+    `default_ballast_cc` [cc], flown where no plan sets one, is by default the
+    `unplanned_ballast_cc` of the mission's vehicle. A build with the same inputs is
+    copied from the cache instead of compiled again. Raises CodegenError for a mission
+    the runtime cannot hold, PlanRejected for a plan it would refuse, ModelFileError for
+    a vehicle that cannot be loaded, BuildError otherwise.
     """
     board = find_target(target)
+    if default_ballast_cc is None:
+        from gliderplan.power_models import load_vehicle
+
+        default_ballast_cc = load_vehicle(mission.vehicle).unplanned_ballast_cc
     if plan_path is not None:
         from gliderplan.planner.planfile import read_plan_data
 
         plan = read_plan_data(plan_path)
-        runtime_accepts(mission, plan_path)
-    source = generate_c(mission)
+        runtime_accepts(mission, plan_path, default_ballast_cc)
+    source = generate_c(mission, default_ballast_cc)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     c_path = out / f"{mission.name}.c"
@@ -242,10 +249,11 @@ def _copy_atomically(source: Path, destination: Path) -> None:
 # ---- checking a plan with the runtime's own reader ----------------------------------
 
 
-def runtime_accepts(mission: CheckedMission, plan_path: str | Path,
+def runtime_accepts(mission: CheckedMission, plan_path: str | Path, default_ballast_cc: float,
                     timeout_s: float = 10.0) -> None:
-    """Start the mission's host binary on the plan over a pty; it must get as far as HELLO,
-    else PlanRejected with the runtime's own message.
+    """Start the mission's host binary (`default_ballast_cc` as for `compile_mission`) on the
+    plan over a pty; it must get as far as HELLO, else PlanRejected with the runtime's own
+    message.
 
     The runtime reads its plan before it talks to the science computer, so the same
     strict reader that will run on the board decides, not a second implementation, and
@@ -258,7 +266,7 @@ def runtime_accepts(mission: CheckedMission, plan_path: str | Path,
 
     with tempfile.TemporaryDirectory(prefix="gliderplan-plan-") as tmp:
         work = Path(tmp)
-        binary = compile_mission(mission, work, "host")
+        binary = compile_mission(mission, work, "host", default_ballast_cc=default_ballast_cc)
         master, slave = os.openpty()
         try:
             process = subprocess.Popen(

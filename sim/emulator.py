@@ -120,14 +120,15 @@ def _indices(mask: int) -> tuple[int, ...]:
 
 
 def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None,
-                    naive_tracker: bool = False) -> CRuntime:
-    """Compile the mission for the host (cached) and start it against the emulator."""
+                    default_ballast_cc: float, naive_tracker: bool = False) -> CRuntime:
+    """Compile the mission for the host (cached) and start it against the emulator;
+    `default_ballast_cc` [cc] is flown where no plan sets one."""
     from gliderplan.language.codegen_c import CodegenError
     from gliderplan.runtime.build import BuildError, compile_mission
 
     work = Path(tempfile.mkdtemp(prefix="gliderplan-sim-"))
     try:
-        binary = compile_mission(mission, work, "host")
+        binary = compile_mission(mission, work, "host", default_ballast_cc=default_ballast_cc)
     except (CodegenError, BuildError) as err:
         shutil.rmtree(work, ignore_errors=True)
         raise EmulatorError(str(err)) from None

@@ -28,17 +28,17 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     """
     science = make_science(mission, ocean, config, vehicle)
     if runtime == "python":
-        from gliderplan.language.codegen_c import default_ballast_cc
         from gliderplan.sim.executor import PythonRuntime
 
         # without a plan: the same buoyancy volume the compiler gives the C runtime
-        executor = PythonRuntime(mission, plan, default_ballast_cc(mission), robust_tracker)
+        executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker)
         return simulate(mission, executor, science, config, progress)
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
     from gliderplan.sim.emulator import start_c_runtime
 
-    c_runtime = start_c_runtime(mission, plan_path, naive_tracker=not robust_tracker)
+    c_runtime = start_c_runtime(mission, plan_path, vehicle.unplanned_ballast_cc,
+                                naive_tracker=not robust_tracker)
     try:
         return simulate(mission, c_runtime, science, config, progress)
     finally:

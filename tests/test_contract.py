@@ -140,7 +140,7 @@ def test_check_refuses_one_past_each_limit_at_its_line(what, fits, too_big, wher
                          ids=[case[0] for case in LIMITS[:4]])
 def test_what_check_accepts_at_a_limit_the_code_generator_accepts(what, fits):
     mission = check_source(_source(**fits), "m.mission").mission
-    assert "const gp_mission gp_mission_table" in generate_c(mission)
+    assert "const gp_mission gp_mission_table" in generate_c(mission, 200.0)
 
 
 def test_a_size_error_does_not_hide_the_flow_analysis():

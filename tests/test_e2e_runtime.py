@@ -230,6 +230,17 @@ def test_a_ts5500_build_needs_musl_for_the_i486_and_says_how_to_build_it(monkeyp
     assert Path(script).is_file() and script.endswith("musl-i486.sh")
 
 
+def test_compile_takes_the_default_ballast_from_the_mission_s_vehicle(tmp_path, capsys):
+    broken = tmp_path / "glider.toml"
+    broken.write_text("kind = 'vehicle'\n")
+    mission = tmp_path / "m.mission"
+    mission.write_text(FIG2.read_text().replace("mission sampleMission\n",
+                                                f'mission sampleMission\nvehicle "{broken}"\n'))
+    assert main(["compile", str(mission), "-o", str(tmp_path / "out")]) == 1
+    assert "glider.toml" in capsys.readouterr().err
+    assert not (tmp_path / "out" / "sampleMission").exists()
+
+
 def test_a_compiler_failure_is_a_clear_error_and_caches_nothing(monkeypatch, tmp_path, capsys):
     (tmp_path / "bin").mkdir()
     fake = tmp_path / "bin" / "cc"

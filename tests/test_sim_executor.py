@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 
 from gliderplan.contract import FLIGHT_SENSORS_MASK, NO_STATE
 from gliderplan.language import check_file, check_source, ir
-from gliderplan.language.codegen_c import default_ballast_cc
 from gliderplan.language.registry import SENSORS
 from gliderplan.planner.planfile import PlanFileError, read_plan_bytes
+from gliderplan.power_models import load_vehicle
 from gliderplan.sim import compiled, pilot
 from gliderplan.sim.executor import PythonRuntime
 from gliderplan.sim.geo import ddmm_to_degrees, offset_m
@@ -173,11 +173,12 @@ def test_the_plan_schedule_powers_sensors_and_alternates_profiles():
 
 def test_without_a_plan_every_logged_sensor_is_on_and_the_default_ballast_flies():
     mission = mission_from(PLAN_MISSION)
-    executor = PythonRuntime(mission, None, default_ballast_cc(mission))
+    ballast_cc = load_vehicle(mission.vehicle).unplanned_ballast_cc
+    executor = PythonRuntime(mission, None, ballast_cc)
     command = executor.step(0, powered_mask(0), readings(missiontime=0.0, depth=0.0))
     logged = sum(1 << i for i in (0, 1, 9, 12))
     assert command.sensor_power == logged
-    assert command.ballast_cc == -default_ballast_cc(mission) == -233.0
+    assert command.ballast_cc == -ballast_cc == -233.0
     assert command.profile == 0
 
 
