@@ -19,6 +19,8 @@ CASES = [
     ("missing mission file", [
         ["check", "none.mission"], ["fmt", "none.mission"], ["plan", "none.mission"],
         ["compile", "none.mission", "-o", "out"], ["sim", "none.mission", "-o", "out"],
+        ["montecarlo", "none.mission", "--scenarios", "2", "-o", "out"],
+        ["compare-sbc", "none.mission"],
     ], ExitCode.USAGE, "none.mission: no such file"),
     ("a directory for a mission", [
         ["check", "."], ["fmt", "."], ["plan", "."], ["compile", ".", "-o", "out"],
@@ -36,13 +38,16 @@ CASES = [
     ("missing plan file", [
         ["compile", FIG2, "--plan", "none.plan", "-o", "out"],
         ["sim", FIG2, "--plan", "none.plan", "-o", "out"],
+        ["montecarlo", FIG2, "--plan", "none.plan", "--scenarios", "2", "-o", "out"],
     ], ExitCode.USAGE, "none.plan: no such file"),
     ("a plan that breaks the format", [
         ["compile", FIG2, "--plan", "{broken}", "-o", "out"],
         ["sim", FIG2, "--plan", "{broken}", "-o", "out"],
+        ["montecarlo", FIG2, "--plan", "{broken}", "--scenarios", "2", "-o", "out"],
     ], ExitCode.BAD_INPUT, "plan rejected: "),
     ("unknown board preset", [
         ["plan", FIG2, "--computer", "ts9000"], ["power", "show", "board", "ts9000"],
+        ["compare-sbc", FIG2, "--computer", "ts9000"],
     ], ExitCode.USAGE, "unknown board preset"),
     ("a clock the board does not have", [
         ["plan", FIG2, "--computer", "ts7800@400"], ["power", "show", "board", "ts7800@400"],
