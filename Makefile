@@ -18,7 +18,8 @@ $(STAMP): pyproject.toml
 
 # The whole pipeline on the built-in examples: check, plan under the battery budget,
 # compile mission and plan to C, fly them on the simulated glider over a
-# pseudo-terminal, and sweep the survey's quality against its budget.
+# pseudo-terminal, sweep the survey's quality against its budget, and write the
+# tradeoff report of the annotated Fig. 2 mission.
 DEMO := out/demo
 GP := $(BIN)/gliderplan
 demo: $(STAMP)
@@ -30,6 +31,9 @@ demo: $(STAMP)
 	@echo "demo: plan and report in $(DEMO)/fig2.plan{,.json}; binary in $(DEMO)/build;"
 	@echo "      flight (trace.csv, summary.json, depth.png, energy.png) in $(DEMO)/run;"
 	@echo "      Pareto sweep (pareto.csv, pareto.png, computers.csv, batteries.csv) in $(DEMO)/sweep"
+	$(GP) report examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan --run $(DEMO)/run \
+		-o $(DEMO)/report
+	@echo "report of the annotated Fig. 2 mission (open it in a browser): $(DEMO)/report/report.html"
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -244,7 +244,7 @@ def energy_plot(comparison: Comparison, fmt: str = "png") -> bytes:
     ax.set_ylabel("board energy on the mission [Wh]")
     ax.set_title(f"{comparison.mission}: board energy against workload (ends where a "
                  "board cannot keep up)", fontsize=9)
-    ax.grid(alpha=0.3, which="both")
+    ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
     return render(fig, fmt)
 

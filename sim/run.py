@@ -46,7 +46,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 ocean: str = "bench", ocean_logs: str | Path | None = None,
                 noise: str = "ctd", tracker: str = "robust", current: Current | None = None,
                 seed: int = 0, tick_s: float = TICK_S, duration_s: float | None = None,
-                progress: Callable[[float, float], None] | None = None) -> RunResult:
+                progress: Callable[[float, float], None] | None = None,
+                plots: bool = True) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
@@ -56,6 +57,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
     `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
     horizon, else 30 days). `progress(done_s, total_s)` is called on long runs.
+    `plots`: False leaves out depth.png and energy.png (a caller that draws its own).
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -63,7 +65,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     """
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import energy as accounting
-    from gliderplan.sim import outputs, plots
+    from gliderplan.sim import outputs
+    from gliderplan.sim import plots as drawing
     from gliderplan.sim.flight import fly
     from gliderplan.sim.loop import RunConfig
     from gliderplan.sim.ocean import load_ocean
@@ -99,10 +102,12 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         "timeseries.parquet": outputs.parquet_bytes(
             outputs.timeseries_table(record, used, mission.battery.energy_j)),
         "summary.json": outputs.summary(record, used, check, plan, meta),
-        "depth.png": plots.depth_png(record),
-        "energy.png": plots.energy_png(record, used, plan),
     }
-    for name in RUN_FILES:
+    if plots:
+        contents["depth.png"] = drawing.depth_png(record)
+        contents["energy.png"] = drawing.energy_png(record, used, plan)
+    written = [name for name in RUN_FILES if name in contents]
+    for name in written:
         write_atomically(out / name, contents[name])
-    return RunResult(record, used, check, plan, tuple(out / name for name in RUN_FILES))
+    return RunResult(record, used, check, plan, tuple(out / name for name in written))
 

@@ -2,7 +2,8 @@
 # Installs the system packages the tests need (`make test` runs this first): the
 # TS-7800 (ARMv5TE) and TS-5500 (i486) toolchains, qemu-user to run their builds on the
 # boards' CPU models, valgrind for the runtime bench, clang with libFuzzer for the fuzz
-# tests, and musl built for the i486 (runtime/musl-i486.sh).
+# tests, musl built for the i486 (runtime/musl-i486.sh), and chromium for the report's
+# browser test (Playwright, from the test extra, drives it).
 #
 # Another package manager holding the lock is waited for (LOCK_WAIT_S), not a reason to
 # give up. Under CI=true whatever cannot be installed fails the run (exit 1); elsewhere

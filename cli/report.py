@@ -1,0 +1,42 @@
+"""`gliderplan report`: one offline HTML page of a mission's tradeoffs, and the CSV behind it.
+
+  report MISSION [--plan PLAN] [--run RUNDIR] [--montecarlo DIR] -o DIR
+
+Writes DIR/report.html (self-contained: figures inline, no network) with the summary and
+verdict, the Pareto curve, energy by state and component, plan against simulation, the
+depth and temperature profile, the board comparison, the sensitivity to each model
+figure and, when given, the Monte Carlo distribution; and one CSV file per figure.
+Without --plan the mission is planned now (the plan is written into DIR); without --run
+the plan is flown now on the simulated glider (into DIR/run).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from gliderplan.cli.common import add_mission_argument, load_mission
+
+ORDER = 70
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_mission_argument(parser)
+    parser.add_argument("--plan", metavar="PLAN",
+                        help="a plan made by `gliderplan plan -o PLAN` (its PLAN.json beside "
+                             "it); default: plan now")
+    parser.add_argument("--run", metavar="RUNDIR",
+                        help="a `gliderplan sim` run of that plan; default: fly it now")
+    parser.add_argument("--montecarlo", metavar="DIR",
+                        help="a `gliderplan montecarlo` result to show")
+    parser.add_argument("-o", "--output", metavar="DIR", required=True,
+                        help="directory for report.html and its CSV files")
+
+
+def run(args: argparse.Namespace) -> int:
+    mission = load_mission(args)
+    from gliderplan.reports.report import make_report
+
+    report = make_report(mission, args.output, plan_path=args.plan, run_dir=args.run,
+                         montecarlo_dir=args.montecarlo, source=args.mission)
+    print(f"wrote {report.html} ({len(report.files) - 1} CSV and plan files beside it)")
+    return 0

@@ -1,0 +1,431 @@
+"""`make_report`: the offline tradeoff report of one mission, the pipeline of `gliderplan report`.
+
+It plans the mission (or reads the plan given), sweeps quality against budget, flies the
+plan on the simulated glider (or reads a run given), compares the boards, moves every
+model figure by its uncertainty, and writes `report.html` (one self-contained page) and
+the CSV file behind every figure into one directory.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gliderplan.contract import TICK_S
+from gliderplan.contract.errors import UsageError
+from gliderplan.contract.files import write_atomically
+from gliderplan.language.ir import CheckedMission
+from gliderplan.reports import charts
+from gliderplan.reports.html import Section, Table, esc, facts_html, page
+
+J_PER_WH = 3600.0
+SWEEP_POINTS = 20  # budgets on the Pareto curve
+PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
+HTML = "report.html"
+SECTIONS = ("summary", "pareto", "energy", "plan-vs-simulation", "profile", "sbc",
+            "sensitivity", "montecarlo")
+
+
+@dataclass(frozen=True)
+class Report:
+    html: Path
+    files: tuple[Path, ...]  # every file written, the page first
+    sections: tuple[str, ...]  # ids of the page's sections, in order
+
+
+def _wh(joules: float) -> float:
+    return joules / J_PER_WH
+
+
+def _json(path: Path, what: str) -> dict:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise UsageError(f"{path}: no such file ({what})") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise UsageError(f"{path}: cannot read {what}: {err}") from None
+    if not isinstance(data, dict):
+        raise UsageError(f"{path}: {what}: expected a JSON object")
+    return data
+
+
+# ---- the plan ------------------------------------------------------------------------
+
+def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Path
+                 ) -> tuple[dict, Path, list[Path]]:
+    """(the planner's JSON report of the plan, the plan file, files written): the plan
+    given with its report beside it (PLAN.json), or the plan made now, written to `out`."""
+    from gliderplan.planner.plan import solve_plan
+    from gliderplan.planner.planfile import read_plan_file, write_plan_bytes
+    from gliderplan.planner.report import report_json
+
+    if plan_path is not None:
+        read_plan_file(plan_path, mission)  # a plan for this mission, or a clear error
+        report = _json(Path(f"{plan_path}.json"), "the plan's report, written beside it by "
+                       "`gliderplan plan -o PLAN`")
+        if report.get("hash") != mission.hash or not isinstance(report.get("states"), list):
+            raise UsageError(f"{plan_path}.json: not the report of a plan for this mission")
+        return report, plan_path, []
+    result = solve_plan(model)
+    path = out / f"{mission.name}.plan"
+    report = report_json(result)
+    write_atomically(path, write_plan_bytes(result.plan))
+    write_atomically(f"{path}.json", json.dumps(report, indent=2) + "\n")
+    return report, path, [path, Path(f"{path}.json")]
+
+
+def _energy_frame(report: dict) -> pd.DataFrame:
+    """Energy [Wh] of each state by component (energy_by_state.csv)."""
+    components = list(report["components_j"])
+    rows = [{"state": s["name"],
+             **{f"{c}_wh": _wh(s["energy_by_component_j"].get(c, 0.0)) for c in components},
+             "total_wh": _wh(s["energy_j"])} for s in report["states"]]
+    return pd.DataFrame(rows)
+
+
+# ---- the run ---------------------------------------------------------------------------
+
+def _read_run(mission: CheckedMission, run_dir: Path) -> tuple[dict, pd.DataFrame]:
+    """(summary.json, time series) of a `gliderplan sim` run of `mission`."""
+    import pyarrow.parquet as pq
+
+    summary = _json(run_dir / "summary.json", "the run's summary, written by `gliderplan sim`")
+    if summary.get("mission_hash") != mission.hash:
+        raise UsageError(f"{run_dir}: a run of another mission (or of another version of it)")
+    try:
+        series = pq.read_table(run_dir / "timeseries.parquet",
+                               columns=["time_s", "depth_m", "temperature_c", "state"]
+                               ).to_pandas()
+    except (OSError, KeyError, ValueError) as err:
+        raise UsageError(f"{run_dir}/timeseries.parquet: cannot read the run's time "
+                         f"series: {err}") from None
+    return summary, series
+
+
+def _plan_vs_sim_frame(summary: dict, report: dict) -> pd.DataFrame:
+    """Per state: predicted and simulated energy [Wh] and time [h] (plan_vs_simulation.csv)."""
+    flown = summary.get("states", {})
+    rows = []
+    for state in report["states"]:
+        sim = flown.get(state["name"], {})
+        rows.append({"state": state["name"], "predicted_wh": _wh(state["energy_j"]),
+                     "simulated_wh": _wh(sim.get("simulated_j", 0.0)),
+                     "predicted_h": state["time_s"] / 3600.0,
+                     "simulated_h": sim.get("time_s", 0.0) / 3600.0})
+    frame = pd.DataFrame(rows)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frame["difference_pct"] = 100 * (frame["simulated_wh"] / frame["predicted_wh"] - 1)
+    return frame
+
+
+def _profile_frame(series: pd.DataFrame) -> pd.DataFrame:
+    """Depth and water temperature against time (profile.csv), every k-th tick."""
+    step = max(1, math.ceil(len(series) / PROFILE_ROWS))
+    thin = series.iloc[::step]
+    return pd.DataFrame({"time_h": thin["time_s"].to_numpy() / 3600.0,
+                         "depth_m": thin["depth_m"].to_numpy(),
+                         "temperature_c": thin["temperature_c"].to_numpy(),
+                         "state": thin["state"].astype(str).to_numpy()})
+
+
+# ---- Monte Carlo ----------------------------------------------------------------------
+
+def _montecarlo(directory: Path, mission: CheckedMission) -> tuple[pd.DataFrame, dict]:
+    """(one row per scenario in Wh and h: montecarlo.csv, the summary) of a
+    `gliderplan montecarlo` result directory."""
+    summary = _json(directory / "summary.json", "the Monte Carlo summary, written by "
+                    "`gliderplan montecarlo`")
+    if summary.get("mission_hash") != mission.hash:
+        raise UsageError(f"{directory}: Monte Carlo of another mission (or of another "
+                         "version of it)")
+    try:
+        table = pd.read_parquet(directory / "scenarios.parquet",
+                                columns=["scenario", "energy_j", "budget_j", "held",
+                                         "duration_s", "exhausted_s", "quality", "ended"])
+    except (OSError, KeyError, ValueError) as err:
+        raise UsageError(f"{directory}/scenarios.parquet: cannot read the scenarios: "
+                         f"{err}") from None
+    frame = pd.DataFrame({
+        "scenario": table["scenario"], "energy_wh": table["energy_j"] / J_PER_WH,
+        "budget_wh": table["budget_j"] / J_PER_WH, "held": table["held"],
+        "duration_h": table["duration_s"] / 3600.0,
+        "exhausted_h": table["exhausted_s"] / 3600.0, "quality": table["quality"],
+        "ended": table["ended"]})
+    return frame, summary
+
+
+# ---- the page ---------------------------------------------------------------------------
+
+def make_report(mission: CheckedMission, output_dir: str | Path, *,
+                plan_path: str | Path | None = None, run_dir: str | Path | None = None,
+                montecarlo_dir: str | Path | None = None, source: str = "",
+                sweep_points: int = SWEEP_POINTS) -> Report:
+    """Write the report of `mission` into `output_dir`: report.html and its CSV files.
+
+    `plan_path`: a plan made by `gliderplan plan -o PLAN` (its report PLAN.json beside
+    it); without one the mission is planned now and the plan written beside the page.
+    `run_dir`: a `gliderplan sim` run of that plan; without one the plan is flown now
+    into `output_dir`/run. `montecarlo_dir`: a `gliderplan montecarlo` result, shown
+    when given. `source`: the mission file's name, for the summary. Raises a
+    GliderplanError for any input that cannot be used."""
+    from gliderplan.planner.compare import compare_boards
+    from gliderplan.planner.hardware import load_hardware
+    from gliderplan.planner.plan import prepare
+    from gliderplan.planner.sensitivity import sensitivity
+    from gliderplan.planner.sweep import pareto
+    from gliderplan.reports import sbc
+
+    out = Path(output_dir)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: not a directory (report writes several files there)")
+    for given, what in ((run_dir, "--run"), (montecarlo_dir, "--montecarlo")):
+        if given is not None and not Path(given).is_dir():
+            raise UsageError(f"{what} {given}: no such directory")
+    # what was given is read first: a wrong directory fails before anything is computed
+    flown = _read_run(mission, Path(run_dir)) if run_dir else None
+    carlo = _montecarlo(Path(montecarlo_dir), mission) if montecarlo_dir else None
+    hardware = load_hardware(mission)
+    _, model = prepare(mission, hardware)
+    report, plan_file, written = _plan_report(
+        mission, model, Path(plan_path) if plan_path else None, out)
+    frontier = pareto(model, sweep_points)
+    tornado = sensitivity(model)
+    comparison = compare_boards(mission)
+    run_path = Path(run_dir) if run_dir else out / "run"
+    run_origin = "the run given"
+    if flown is None:
+        from gliderplan.sim import run_mission
+
+        run_mission(mission, run_path, plan_path=plan_file, plots=False)
+        flown = _read_run(mission, run_path)
+        run_origin = ("flown now on the simulated glider (Python executor, bench ocean) "
+                      f"into {run_path}")
+    summary, series = flown
+
+    tables = {
+        "pareto.csv": frontier,
+        "energy_by_state.csv": _energy_frame(report),
+        "plan_vs_simulation.csv": _plan_vs_sim_frame(summary, report),
+        "profile.csv": _profile_frame(series),
+        "sbc_boards.csv": sbc.boards_frame(comparison),
+        "sbc_workload.csv": sbc.workload_frame(comparison),
+        "sbc_crossovers.csv": sbc.crossovers_frame(comparison),
+        "sensitivity.csv": _sensitivity_frame(tornado),
+    }
+    if carlo is not None:
+        tables["montecarlo.csv"] = carlo[0]
+    sections = [
+        _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
+        _pareto_section(frontier, report),
+        _energy_section(tables["energy_by_state.csv"]),
+        _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
+        _profile_section(tables["profile.csv"], len(series)),
+        _sbc_section(comparison, tables),
+        _sensitivity_section(tornado, tables["sensitivity.csv"]),
+    ]
+    if carlo is not None:
+        sections.append(_montecarlo_section(*carlo, Path(montecarlo_dir)))
+    for name, frame in tables.items():
+        path = out / name
+        write_atomically(path, frame.to_csv(index=False))
+        written.append(path)
+    title = f"{mission.name}: tradeoff report"
+    subtitle = (f"mission {source or mission.name} (hash {mission.hash[:12]}), planned on "
+                f"{report['computer']['board']} @ {report['computer']['clock_mhz']:g} MHz; "
+                "every figure's numbers are in the CSV file named under it")
+    html_path = out / HTML
+    write_atomically(html_path, page(title, subtitle, sections))
+    return Report(html_path, (html_path, *written), tuple(s.id for s in sections))
+
+
+# ---- sections ---------------------------------------------------------------------------
+
+def _verdict(summary: dict) -> str:
+    check = summary.get("plan_check", {})
+    verdict = check.get("verdict", "no plan")
+    simulated, predicted, budget = (check.get(k) for k in ("simulated_j", "predicted_j",
+                                                           "budget_j"))
+    text = f'<span class="verdict-{esc(verdict.replace(" ", "-"))}">{esc(verdict)}</span>'
+    if simulated is not None and predicted:
+        text += (f": simulated {_wh(simulated):,.4g} Wh against {_wh(predicted):,.4g} Wh "
+                 f"predicted ({100 * (simulated / predicted - 1):+.1f} %)")
+    if simulated is not None and budget:
+        text += f" and a budget of {_wh(budget):,.4g} Wh ({100 * simulated / budget:.1f} % used)"
+    causes = check.get("causes") or []
+    if causes:
+        text += "; " + esc("; ".join(causes))
+    return text
+
+
+def _summary_section(mission: CheckedMission, source: str, hardware, report: dict,
+                     plan_file: Path, summary: dict, run_origin: str) -> Section:
+    budget = report["budget_j"]
+    facts = [
+        ("mission", esc(f"{mission.name} ({source})" if source else mission.name)),
+        ("states", esc(", ".join(s.name for s in mission.states))),
+        ("vehicle", esc(hardware.vehicle.name)),
+        ("computer", esc(f"{report['computer']['board']} @ "
+                         f"{report['computer']['clock_mhz']:g} MHz")),
+        ("battery", esc(f"{_wh(hardware.battery_j):,.4g} Wh, reserve "
+                        f"{100 * hardware.reserve_fraction:.3g} %")),
+        ("budget", esc(f"{_wh(budget):,.4g} Wh usable")),
+        ("objective", esc(report["objective"].replace("_", " "))),
+        ("predicted energy", esc(f"{_wh(report['energy_j']):,.4g} Wh "
+                                 f"({100 * report['energy_j'] / budget:.1f} % of the budget); "
+                                 f"least possible {_wh(report['minimum_energy_j']):,.4g} Wh")),
+        ("predicted quality", esc(f"{report['quality']:.4f} (0 to 1)")),
+        ("shadow price", esc(f"{report['shadow_price']:.4g} quality per extra Wh")),
+        ("plan", esc(str(plan_file))),
+        ("verdict of the simulated run", _verdict(summary)),
+    ]
+    notes = [f"planning assumption ({a['subject']}): {a['text']}"
+             for a in report.get("assumptions", [])]
+    notes.append(f"run: {run_origin}; ocean {summary.get('ocean', '?')}, noise "
+                 f"{summary.get('noise', '?')}, seed {summary.get('seed', '?')}")
+    return Section("summary", "Summary", (facts_html(facts),), notes=tuple(notes))
+
+
+def _pareto_section(frontier: pd.DataFrame, report: dict) -> Section:
+    svg = charts.pareto(frontier, _wh(report["budget_j"]), _wh(report["energy_j"]),
+                        report["quality"])
+    text = (f"<p>The best quality each energy budget buys, from the least the mission needs "
+            f"to where more energy buys nothing. The plan sits at "
+            f"{_wh(report['energy_j']):,.4g} Wh with quality {report['quality']:.4f}; there "
+            f"one more Wh buys {report['shadow_price']:.4g} quality (the shadow price of the "
+            "budget).</p>")
+    table = Table(frontier[["budget_wh", "quality", "shadow_price", "status"]],
+                  {"budget_wh": "budget [Wh]", "quality": "quality [1]",
+                   "shadow_price": "shadow price [quality per Wh]"},
+                  {"quality": ".4f", "shadow_price": ".4g", "budget_wh": ",.4g"})
+    return Section("pareto", "Quality against budget (Pareto curve)", (text,), svg,
+                   "Quality against the energy budget; dashed: the shadow price; star: the plan.",
+                   ("pareto.csv",), (table,))
+
+
+def _energy_section(frame: pd.DataFrame) -> Section:
+    headers = {c: f"{c.removesuffix('_wh')} [Wh]" for c in frame.columns if c != "state"}
+    return Section("energy", "Energy by state and component",
+                   ("<p>What each state of the plan costs, by component: the vehicle's hotel "
+                    "load, pump, pitch motor, surface and Iridium, the computer, and each "
+                    "sensor device.</p>",),
+                   charts.energy_by_state(frame), "Predicted energy of each state [Wh].",
+                   ("energy_by_state.csv",),
+                   (Table(frame, {"state": "state", **headers},
+                          dict.fromkeys(headers, ",.3g")),))
+
+
+def _plan_vs_sim_section(frame: pd.DataFrame, summary: dict, run_path: Path,
+                         origin: str) -> Section:
+    text = (f"<p>The plan's prediction of each state against the simulated flight "
+            f"({esc(origin)}). Verdict: {_verdict(summary)}.</p>")
+    headers = {"predicted_wh": "predicted [Wh]", "simulated_wh": "simulated [Wh]",
+               "predicted_h": "planned time [h]", "simulated_h": "flown time [h]",
+               "difference_pct": "difference [%]"}
+    return Section("plan-vs-simulation", "Plan against simulation", (text,),
+                   charts.plan_vs_simulation(frame),
+                   "Predicted and simulated energy of each state [Wh].",
+                   ("plan_vs_simulation.csv",),
+                   (Table(frame, headers, {**dict.fromkeys(headers, ",.3g"),
+                                           "difference_pct": "+.1f"}),),
+                   (f"run files: {run_path}",))
+
+
+def _profile_section(frame: pd.DataFrame, ticks: int) -> Section:
+    every = "" if len(frame) == ticks else f" (every {math.ceil(ticks / len(frame))}th tick)"
+    return Section("profile", "Depth and temperature", (
+        f"<p>The simulated dive profile coloured by the water temperature the glider met, "
+        f"the mission's states as bands: {ticks:,} ticks of {TICK_S:g} s{every}.</p>",),
+        charts.profile(frame), "Depth [m] against mission time [h].", ("profile.csv",))
+
+
+def _sbc_section(comparison, tables: dict[str, pd.DataFrame]) -> Section:
+    from gliderplan.reports import sbc
+
+    boards = tables["sbc_boards.csv"]
+    shown = boards[["board", "active_power_w", "idle_power_w", "board_energy_wh",
+                    "share_of_mission", "mission_energy_wh", "quality", "endurance_days"]]
+    headers = {"active_power_w": "active [W]", "idle_power_w": "idle [W]",
+               "board_energy_wh": "board energy [Wh]", "share_of_mission": "share [1]",
+               "mission_energy_wh": "mission energy [Wh]", "quality": "quality [1]",
+               "endurance_days": "endurance [d]"}
+    cheapest = min(comparison.boards, key=lambda r: r.energy.total_j)
+    flips = "; ".join(f"at {sbc.cycles_text(x.cycles_per_tick)} {x.reason} "
+                      f"({sbc.equivalents_text(x)})" for x in comparison.crossovers)
+    text = (f"<p>The TS-5500 and the TS-7800 at 300 and 500 MHz on this mission at the same "
+            f"battery and workload ({comparison.cycles_per_tick:,.0f} cycles per tick): "
+            f"cheapest is {esc(cheapest.name)}. Where the ranking changes: "
+            f"{esc(flips) or 'nowhere up to the fastest board'}.</p>",
+            "<p>Below the tables: every figure the comparison rests on that is an assumption "
+            "rather than a measurement.</p>")
+    crossings = tables["sbc_crossovers.csv"]
+    return Section("sbc", "Single-board computers", text, sbc.energy_plot(comparison, "svg")
+                   .decode("utf-8"), "Board energy on the mission against the workload per "
+                   "tick; dashed: crossovers.", ("sbc_boards.csv", "sbc_workload.csv",
+                                                  "sbc_crossovers.csv"),
+                   (Table(shown, headers, {"share_of_mission": ".3f", "quality": ".4f",
+                                           "endurance_days": ".1f"}),
+                    Table(crossings[["cycles_per_tick", "ranking_before", "ranking_after",
+                                     "reason"]], {"cycles_per_tick": "workload [cycles/tick]",
+                                                  "ranking_before": "cheapest first, below",
+                                                  "ranking_after": "above"},
+                          {"cycles_per_tick": ",.0f"})),
+                   tuple(sbc.assumption_lines(comparison)))
+
+
+def _sensitivity_frame(tornado) -> pd.DataFrame:
+    return pd.DataFrame([{
+        "figure": s.figure, "value": s.value, "unit": s.unit, "step": s.step, "basis": s.basis,
+        "energy_down_wh": _wh(s.energy_j[0]), "energy_up_wh": _wh(s.energy_j[1]),
+        "quality_down": s.quality[0], "quality_up": s.quality[1]} for s in tornado.swings])
+
+
+def _sensitivity_section(tornado, frame: pd.DataFrame) -> Section:
+    top = frame.iloc[0]["figure"] if len(frame) else "-"
+    text = (f"<p>The plan made again with each model figure moved down and up by its "
+            f"uncertainty (one standard deviation where calibration gives one, else 20 %), "
+            f"at the same budget. Largest effect first: {esc(top)}. Quality shown as a gap "
+            "(no bar) means the budget could not buy the mission with that figure.</p>")
+    headers = {"energy_down_wh": "energy, figure down [Wh]",
+               "energy_up_wh": "energy, figure up [Wh]", "quality_down": "quality, down",
+               "quality_up": "quality, up", "step": "moved by"}
+    return Section("sensitivity", "Sensitivity: which assumption matters most", (text,),
+                   charts.tornado(frame, _wh(tornado.energy_j), tornado.quality),
+                   f"Mission energy and quality with each figure moved; the line is the plan "
+                   f"({_wh(tornado.energy_j):,.4g} Wh, quality {tornado.quality:.4f}).",
+                   ("sensitivity.csv",),
+                   (Table(frame, headers, {**dict.fromkeys(headers, ",.4g"),
+                                           "value": ",.4g"}),))
+
+
+def _montecarlo_section(frame: pd.DataFrame, summary: dict, directory: Path) -> Section:
+    n = summary.get("scenarios", len(frame))
+    p = summary.get("probability_budget_holds")
+    low, high = summary.get("probability_interval_95", [math.nan, math.nan])
+    energy, duration = summary.get("energy_j", {}), summary.get("duration_s", {})
+
+    def spread(values: dict, factor: float, unit: str) -> str:
+        return ", ".join(f"{k} {v / factor:,.4g} {unit}" for k, v in values.items()) or "-"
+
+    facts = [
+        ("scenarios", esc(f"{n:,} flown (seed {summary.get('seed', '?')}, "
+                          f"{summary.get('scenario_file', '?')})")),
+        ("budget holds", esc("-" if p is None else f"in {100 * p:.1f} % of the scenarios "
+                             f"(95 % interval {100 * low:.1f} to {100 * high:.1f} %)")),
+        ("energy", esc(spread(energy, J_PER_WH, "Wh"))),
+        ("duration", esc(spread(duration, 3600.0, "h"))),
+        ("battery exhausted before the end", esc(f"{summary.get('exhausted_before_end', 0)} "
+                                                 "scenarios")),
+        ("plan flown", esc(summary.get("plan") or "none: every sensor always on")),
+    ]
+    budget = summary.get("budget_j")
+    figure = charts.histogram(frame["energy_wh"].to_numpy(float),
+                              budget / J_PER_WH if budget else None, "mission energy [Wh]")
+    return Section("montecarlo", "Monte Carlo: will the battery last?",
+                   (facts_html(facts),), figure,
+                   "Mission energy over the scenarios; dashed: the plan's budget.",
+                   ("montecarlo.csv",), notes=(f"results: {directory}",))

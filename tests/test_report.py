@@ -1,0 +1,207 @@
+"""`gliderplan report`: the page a scientist opens, checked in a real browser (headless
+Chromium driven by Playwright), its CSV files, its sensitivity numbers, and bad input.
+
+The browser test keeps a screenshot of the page as a test artifact in
+out/test-artifacts/report.png (and the page's PDF print beside it).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from gliderplan.cli.common import check_file
+from gliderplan.planner.hardware import load_hardware
+from gliderplan.planner.plan import plan_mission
+from gliderplan.power_models.vehicle import with_figures
+
+ROOT = Path(__file__).resolve().parents[1]
+ANNOTATED = str(ROOT / "examples" / "fig2_annotated.mission")
+ARTIFACTS = ROOT / "out" / "test-artifacts"
+CHROMIUM = "/usr/bin/chromium"
+SECTIONS = ["summary", "pareto", "energy", "plan-vs-simulation", "profile", "sbc",
+            "sensitivity", "montecarlo"]
+CSV = ["pareto.csv", "energy_by_state.csv", "plan_vs_simulation.csv", "profile.csv",
+       "sbc_boards.csv", "sbc_workload.csv", "sbc_crossovers.csv", "sensitivity.csv",
+       "montecarlo.csv"]
+SCENARIOS = 6
+# Arguments for a browser run as root in a container, with nothing in the background.
+BROWSER_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                "--disable-component-update", "--disable-sync", "--no-first-run"]
+
+
+def gliderplan(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "gliderplan.cli", *args],
+                          capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def report_dir(tmp_path_factory) -> Path:
+    """The report of the annotated Fig. 2, planned and flown by `report` itself, with a
+    small Monte Carlo of the same plan."""
+    work = tmp_path_factory.mktemp("montecarlo")
+    plan = work / "fig2.plan"
+    assert gliderplan("plan", ANNOTATED, "-o", str(plan)).returncode == 0
+    carlo = gliderplan("montecarlo", ANNOTATED, "--plan", str(plan), "--scenarios",
+                       str(SCENARIOS), "--workers", "1", "-o", str(work / "mc"))
+    assert carlo.returncode == 0, carlo.stderr
+    out = tmp_path_factory.mktemp("report")
+    run = gliderplan("report", ANNOTATED, "--montecarlo", str(work / "mc"), "-o", str(out))
+    assert run.returncode == 0, run.stderr
+    assert f"wrote {out / 'report.html'}" in run.stdout
+    return out
+
+
+def test_the_page_is_one_offline_file_with_every_section(report_dir):
+    page = (report_dir / "report.html").read_text()
+    assert len(page.encode()) < 2_000_000
+    for section in SECTIONS:
+        assert f'<section id="{section}">' in page
+    # nothing to fetch: no external script, style, font or image
+    assert not re.search(r'(src|href)="(https?:)?//', page)
+    assert "@import" not in page and "url(http" not in page
+    assert 'http-equiv="Content-Security-Policy"' in page
+    # numbers carry units; the verdict compares the run with the prediction
+    for text in ("[Wh]", "[W]", "[h]", "quality per extra Wh", "% used", "predicted ("):
+        assert text in page
+    assert "(examples/" in page or ANNOTATED in page
+
+
+def test_every_figure_has_its_csv_and_the_plan_and_run_are_kept(report_dir):
+    for name in CSV:
+        frame = pd.read_csv(report_dir / name)
+        assert len(frame) > 0, name
+    assert (report_dir / "sampleMission.plan").is_file()
+    summary = json.loads((report_dir / "run" / "summary.json").read_text())
+    flown = pd.read_csv(report_dir / "plan_vs_simulation.csv").set_index("state")
+    for state, entry in summary["states"].items():
+        assert flown.loc[state, "simulated_wh"] == pytest.approx(entry["simulated_j"] / 3600)
+    scenarios = pd.read_csv(report_dir / "montecarlo.csv")
+    assert len(scenarios) == SCENARIOS and scenarios["energy_wh"].gt(0).all()
+    page = (report_dir / "report.html").read_text()
+    assert "of the scenarios (95 % interval" in page
+    energy = pd.read_csv(report_dir / "energy_by_state.csv")
+    planned = json.loads((report_dir / "sampleMission.plan.json").read_text())
+    assert energy["total_wh"].sum() == pytest.approx(planned["energy_j"] / 3600)
+
+
+def test_sensitivity_is_the_plan_made_again_with_the_figure_moved(report_dir):
+    table = pd.read_csv(report_dir / "sensitivity.csv").set_index("figure")
+    row = table.loc["vehicle hotel_power"]
+    assert row["basis"].startswith("20 %")
+    mission = check_file(ANNOTATED).mission
+    hardware = load_hardware(mission)
+    raised = hardware.vehicle.hotel_w * 1.2
+    assert row["value"] + row["step"] == pytest.approx(raised)
+    from dataclasses import replace
+
+    up = plan_mission(mission, replace(hardware, vehicle=with_figures(
+        hardware.vehicle, {"hotel_power": raised})))
+    assert row["energy_up_wh"] == pytest.approx(up.plan.predicted_j / 3600, rel=1e-6)
+    assert row["energy_up_wh"] > row["energy_down_wh"]
+    names = list(table.index)
+    assert any(n.startswith("board ts7800 idle_power") for n in names)
+    assert any(n.startswith("sensor ctd on_power") for n in names)
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    """Headless Chromium (the distribution's) under Playwright; skipped (failed under
+    CI=true) when either is missing: `make test` installs both."""
+    playwright = pytest.importorskip("playwright.sync_api", reason="pip install playwright "
+                                     "(the test extra)")
+    if shutil.which(CHROMIUM) is None:
+        pytest.skip("chromium not installed (make sysdeps)")
+    with playwright.sync_playwright() as driver:
+        context = driver.chromium.launch_persistent_context(
+            str(tmp_path_factory.mktemp("chromium-profile")), executable_path=CHROMIUM,
+            headless=True, args=BROWSER_ARGS, viewport={"width": 1200, "height": 900})
+        yield context
+        context.close()
+
+
+def test_the_page_in_chromium_has_no_error_no_request_and_no_empty_figure(report_dir,
+                                                                         browser):
+    page = browser.new_page()
+    problems, requests = [], []
+    page.on("console", lambda m: problems.append(f"console {m.type}: {m.text}")
+            if m.type in ("error", "warning") else None)
+    page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+    page.on("requestfailed", lambda r: problems.append(f"failed request: {r.url}"))
+    page.on("request", lambda r: requests.append(r.url))
+    url = (report_dir / "report.html").as_uri()
+    page.goto(url, wait_until="load")
+    assert page.eval_on_selector_all("main > section", "s => s.map(e => e.id)") == SECTIONS
+    figures = page.eval_on_selector_all("figure[data-figure]", """figs => figs.map(f => {
+        const svg = f.querySelector("svg"); const box = svg.getBoundingClientRect();
+        return [f.dataset.figure, box.width, box.height,
+                svg.querySelectorAll("path, use, image, rect").length];
+    })""")
+    assert [f[0] for f in figures] == [s for s in SECTIONS if s != "summary"]
+    for name, width, height, marks in figures:
+        assert width > 300 and height > 150, name
+        assert marks > 20, f"{name}: an empty figure ({marks} marks)"
+    # tables sort: the boards by board energy, largest first on the second click
+    header = page.locator("#sbc table").first.locator("th", has_text="board energy")
+    header.click()
+    header.click()
+    energies = [float(v) for v in page.eval_on_selector_all(
+        "#sbc table:first-of-type tbody td:nth-child(4)", "c => c.map(e => e.dataset.v)")]
+    assert energies == sorted(energies, reverse=True)
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / "report.png"), full_page=True)
+    page.emulate_media(media="print")  # prints well: no navigation, figures whole
+    assert page.eval_on_selector("nav", "n => getComputedStyle(n).display") == "none"
+    (ARTIFACTS / "report.pdf").write_bytes(page.pdf(format="A4"))
+    page.close()
+    assert problems == []
+    assert requests == [url]  # the page itself, nothing else
+    assert (ARTIFACTS / "report.png").stat().st_size > 50_000
+
+
+def test_a_plan_and_a_run_given_are_used_as_they_are(tmp_path):
+    plan = tmp_path / "fig2.plan"
+    assert gliderplan("plan", ANNOTATED, "-o", str(plan)).returncode == 0
+    assert gliderplan("sim", ANNOTATED, "--plan", str(plan), "-o", str(tmp_path / "run")
+                      ).returncode == 0
+    out = tmp_path / "report"
+    run = gliderplan("report", ANNOTATED, "--plan", str(plan), "--run", str(tmp_path / "run"),
+                     "-o", str(out))
+    assert run.returncode == 0, run.stderr
+    assert not (out / "run").exists() and not (out / "sampleMission.plan").exists()
+    page = (out / "report.html").read_text()
+    assert str(plan) in page
+    assert 'id="montecarlo"' not in page  # only with --montecarlo
+
+
+@pytest.mark.parametrize(("args", "code", "message"), [
+    (["--run", "no/such/run"], 2, "no such directory"),
+    (["--montecarlo", "no/such/dir"], 2, "no such directory"),
+    (["--plan", "no/such.plan"], 2, "no such file"),
+    ([], 2, "-o"),
+])
+def test_bad_usage_is_one_line(tmp_path, args, code, message):
+    out = [] if not args else ["-o", str(tmp_path / "out")]
+    run = gliderplan("report", ANNOTATED, *args, *out)
+    assert run.returncode == code
+    assert message in run.stderr and "Traceback" not in run.stderr
+
+
+def test_results_of_another_mission_are_refused(tmp_path):
+    other = ROOT / "examples" / "fig2.mission"
+    assert gliderplan("sim", str(other), "-o", str(tmp_path / "run")).returncode == 0
+    run = gliderplan("report", ANNOTATED, "--run", str(tmp_path / "run"),
+                     "-o", str(tmp_path / "out"))
+    assert run.returncode == 2 and "another mission" in run.stderr
+    assert gliderplan("montecarlo", str(other), "--scenarios", "2", "--workers", "1",
+                      "-o", str(tmp_path / "mc")).returncode == 0
+    run = gliderplan("report", ANNOTATED, "--montecarlo", str(tmp_path / "mc"),
+                     "-o", str(tmp_path / "out"))
+    assert run.returncode == 2 and "another mission" in run.stderr
