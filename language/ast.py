@@ -7,7 +7,7 @@ are normalised by the checker, not here.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, dataclass_transform
+from typing import Any, ClassVar, NamedTuple, dataclass_transform
 
 
 @dataclass_transform(eq_default=True)
@@ -59,8 +59,11 @@ class Node:
         raise AttributeError(f"{type(self).__name__} is immutable")
 
 
-class Span(Node):
-    """1-based line and column of the first character, and of the one after the last."""
+class Span(NamedTuple):
+    """1-based line and column of the first character, and of the one after the last.
+
+    A named tuple, not a Node: a large mission has hundreds of thousands of spans, and
+    a tuple of four numbers takes half the memory of a record with its own dict."""
 
     line: int
     column: int
