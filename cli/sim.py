@@ -18,20 +18,20 @@ import sys
 from gliderplan.cli.common import add_mission_argument, load_mission
 from gliderplan.contract import TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
+from gliderplan.contract.units import UNITS
 
 ORDER = 60
-_DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(s|min|h|d)\s*$")
-_DURATION_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
+_DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]+)\s*$")
 LONG_RUN_TICKS = 100_000  # progress on stderr for runs longer than this
 
 
 def parse_duration_s(text: str) -> float:
     """'3600s', '90min', '6h', '30d' -> seconds; UsageError otherwise."""
     match = _DURATION.match(text)
-    if match is None:
+    if match is None or match[2] not in UNITS["time"]:
         raise UsageError(f"--duration {text!r}: expected a number with a unit: "
-                         "s, min, h or d (e.g. 3600s, 90min, 6h, 30d)")
-    seconds = float(match[1]) * _DURATION_UNITS[match[2]]
+                         f"{', '.join(UNITS['time'])} (e.g. 3600s, 90min, 6h, 30d)")
+    seconds = float(match[1]) * UNITS["time"][match[2]]
     if not math.isfinite(seconds) or seconds <= 0.0:
         raise UsageError(f"--duration {text!r}: must be a positive time")
     return seconds

@@ -22,7 +22,7 @@ from gliderplan.language.registry import (
     SENSOR_BY_NAME,
     ParamSpec,
 )
-from gliderplan.language.units import UnitProblem, to_si
+from gliderplan.language.units import UnitProblem, normalise
 
 _ACTIONS = ("goto", "call", "return", "exit")
 T = TypeVar("T")
@@ -46,12 +46,12 @@ class _Checker:
     def error_count(self) -> int:
         return sum(d.is_error for d in self.diagnostics)
 
-    def si(self, quantity: ast.Quantity, *dimensions: str) -> tuple[float, str] | None:
+    def quantity(self, quantity: ast.Quantity, *dimensions: str) -> tuple[float, str] | None:
         if not math.isfinite(quantity.value):
             self.error(f"{quantity.text} is too large for a number", quantity.span)
             return None
         try:
-            return to_si(quantity.value, quantity.unit.text if quantity.unit else None,
+            return normalise(quantity.value, quantity.unit.text if quantity.unit else None,
                          dimensions)
         except UnitProblem as problem:
             span = quantity.unit.span if quantity.unit else quantity.span
@@ -95,8 +95,8 @@ class _Checker:
                 case ast.ComputerDecl():
                     self.preset_known("board", decl.board, decl.is_file)
                     clock_mhz = None
-                    if decl.clock is not None and (hz := self.si(decl.clock, "frequency")):
-                        clock_mhz = hz[0] / 1e6
+                    if decl.clock is not None and (mhz := self.quantity(decl.clock, "clock")):
+                        clock_mhz = mhz[0]
                         if clock_mhz <= 0:
                             self.error("clock must be positive", decl.clock.span)
                     fields["computer"] = ir.Computer(decl.board.text, clock_mhz)
@@ -104,7 +104,7 @@ class _Checker:
                     if (battery := self.battery(decl)) is not None:
                         fields["battery"] = battery
                 case ast.HorizonDecl():
-                    if (horizon := self.si(decl.duration, "time")) is not None:
+                    if (horizon := self.quantity(decl.duration, "time")) is not None:
                         if horizon[0] <= 0:
                             self.error("horizon must be positive", decl.duration.span)
                         fields["horizon_s"] = horizon[0]
@@ -148,9 +148,9 @@ class _Checker:
                        f"{hint}; or give a file as \"path/to/{kind}.toml\"")
 
     def battery(self, decl: ast.BatteryDecl) -> ir.Battery | None:
-        capacity = self.si(decl.capacity, "energy", "charge")
+        capacity = self.quantity(decl.capacity, "energy", "charge")
         reserve = 0.0
-        if decl.reserve is not None and (fraction := self.si(decl.reserve, "fraction")):
+        if decl.reserve is not None and (fraction := self.quantity(decl.reserve, "fraction")):
             reserve = fraction[0]
             if not 0 <= reserve < 1:
                 self.error("reserve must be at least 0 % and below 100 %", decl.reserve.span,
@@ -164,7 +164,7 @@ class _Checker:
                            f"write e.g. '{decl.capacity.text} {decl.capacity.unit.text} "
                            "at 14.4 V'")
                 return None
-            if (volts := self.si(decl.voltage, "voltage")) is None:
+            if (volts := self.quantity(decl.voltage, "voltage")) is None:
                 return None
             energy_j *= volts[0]
         elif decl.voltage is not None:
@@ -400,7 +400,7 @@ class _Checker:
         return uses
 
     def expect(self, item: ast.ExpectItem) -> tuple[float, float] | None:
-        low, high = self.si(item.low, "time"), self.si(item.high, "time")
+        low, high = self.quantity(item.low, "time"), self.quantity(item.high, "time")
         if low is None or high is None:
             return None
         if not 0 <= low[0] <= high[0]:

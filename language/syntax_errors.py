@@ -16,7 +16,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from gliderplan.language import ast
 from gliderplan.language.diagnostics import Diagnostic, closest, error
-from gliderplan.language.units import UNITS
+from gliderplan.language.units import ANNOTATION_UNITS
 
 # How terminals with a pattern read in a message (keywords read as themselves).
 _TERMINAL_WORDS = {
@@ -37,7 +37,7 @@ MISSION_SHAPE = ("a mission starts with 'mission NAME', then optional declaratio
                  "'state NAME begin ... end'")
 
 # Units people write after numbers that must be plain (SI) in arguments and conditions.
-_UNIT_WORDS = ({u for dim in UNITS.values() for u in dim}
+_UNIT_WORDS = ({u for dim in ANNOTATION_UNITS.values() for u in dim}
                | {"m", "km", "cm", "deg", "degrees", "rad", "degC", "C", "sec", "secs",
                   "seconds", "minutes", "hours", "hr", "mps"})
 

@@ -1,15 +1,19 @@
-"""Units the annotations accept, normalised to SI, with hints for a wrong or missing unit."""
+"""Units the annotations accept, normalised to the code's units, with hints for a wrong or
+missing unit. The units and their factors are the contract's one table
+(`gliderplan.contract.units`): a unit means the same in a mission as in a data file."""
 
 from __future__ import annotations
 
-# dimension -> unit -> factor to SI (J, s, Hz, fraction, V, C)
-UNITS: dict[str, dict[str, float]] = {
-    "energy": {"J": 1.0, "kJ": 1e3, "MJ": 1e6, "Wh": 3600.0, "kWh": 3.6e6},
-    "charge": {"Ah": 3600.0, "mAh": 3.6},
-    "time": {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0},
-    "frequency": {"MHz": 1e6, "GHz": 1e9},
-    "fraction": {"%": 0.01},
-    "voltage": {"V": 1.0},
+import re
+
+from gliderplan.contract.units import UNITS as _TABLE
+
+_SPELLABLE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|%")  # what the grammar reads after a number
+# dimension -> unit -> factor to the code's unit (J, C, s, MHz, fraction, V), for the
+# dimensions annotations use and the units a mission can spell
+ANNOTATION_UNITS: dict[str, dict[str, float]] = {
+    dimension: {u: f for u, f in _TABLE[dimension].items() if _SPELLABLE.fullmatch(u)}
+    for dimension in ("energy", "charge", "time", "clock", "fraction", "voltage")
 }
 
 
@@ -22,9 +26,11 @@ class UnitProblem(Exception):
         self.hint = hint
 
 
-def to_si(value: float, unit: str | None, dimensions: tuple[str, ...]) -> tuple[float, str]:
-    """(value in SI, dimension it matched), or raise UnitProblem naming what was expected."""
-    accepted = {u: (factor, dim) for dim in dimensions for u, factor in UNITS[dim].items()}
+def normalise(value: float, unit: str | None, dimensions: tuple[str, ...]) -> tuple[float, str]:
+    """(value in the code's unit, dimension it matched), or raise UnitProblem naming what
+    was expected."""
+    accepted = {u: (factor, dim) for dim in dimensions
+                for u, factor in ANNOTATION_UNITS[dim].items()}
     examples = ", ".join(accepted)
     if unit is None:
         first = next(iter(accepted))
@@ -44,7 +50,7 @@ def to_si(value: float, unit: str | None, dimensions: tuple[str, ...]) -> tuple[
 
 
 def _dimension_words(dimensions: tuple[str, ...]) -> str:
-    return " or ".join(dimensions)
+    return " or ".join("clock frequency" if d == "clock" else d for d in dimensions)
 
 
 def _number(value: float) -> str:

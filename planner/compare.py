@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S, Component
+from gliderplan.contract.units import to_model_unit
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware, HardwareError, load_hardware
 from gliderplan.planner.inputs import build_inputs
@@ -38,7 +39,6 @@ from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.board import Board, board_spec
 from gliderplan.power_models.computation import equivalents
 from gliderplan.power_models.datafile import file_entries
-from gliderplan.power_models.units import to_model_unit
 
 COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
 SECONDS_PER_DAY = 86400.0

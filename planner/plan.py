@@ -14,6 +14,7 @@ import numpy as np
 
 from gliderplan.contract import VEHICLE_COMPONENTS, Component
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.units import J_PER_WH
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
 from gliderplan.planner.hardware import Hardware, load_hardware
@@ -39,7 +40,6 @@ from gliderplan.planner.planfile import (
     as_written,
 )
 
-J_PER_WH = 3600.0
 _ON_EDGE = 1e-6  # a duty this close to 0 or 1 does not cycle (no warm-ups)
 _SHARE_EDGE = 1e-5  # a profile share this small is solver noise (5 ms of a 500 s state)
 _NO_PRICE = 1e-9  # quality per Wh below which the budget is not what limits the plan
@@ -373,7 +373,7 @@ def _describe_defaults(inputs: PlanInputs) -> list[str]:
     values = {
         "vehicle": f"vehicle {mission.vehicle}",
         "computer": f"computer {hw.board.name} @ {hw.board.clock_mhz:g} MHz",
-        "battery": f"battery {hw.battery_j / 3.6e6:.4g} kWh reserve "
+        "battery": f"battery {hw.battery_j / (1e3 * J_PER_WH):.4g} kWh reserve "
                    f"{100 * hw.reserve_fraction:g} %",
         "objective": "objective maximize quality",
     }

@@ -9,31 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from gliderplan.contract.units import C_PER_AH, J_PER_WH, UNITS
 from gliderplan.power_models.catalog import resolve
 from gliderplan.power_models.datafile import read_model_file
-from gliderplan.power_models.units import UNITS
-
-J_PER_WH = 3600.0
-
-
-def wh_to_j(wh: float) -> float:
-    """Watt-hours to joules."""
-    return wh * J_PER_WH
-
-
-def kwh_to_j(kwh: float) -> float:
-    """Kilowatt-hours to joules."""
-    return kwh * 1e3 * J_PER_WH
-
-
-def mj_to_j(mj: float) -> float:
-    """Megajoules to joules."""
-    return mj * 1e6
-
-
-def ah_to_j(ah: float, volts: float) -> float:
-    """Charge [Ah] delivered at `volts` [V] to energy [J]."""
-    return ah * volts * J_PER_WH
 
 
 def j_to_wh(joules: float) -> float:
@@ -43,7 +21,7 @@ def j_to_wh(joules: float) -> float:
 
 def j_to_ah(joules: float, volts: float) -> float:
     """Energy [J] to the charge [Ah] it takes at `volts` [V]."""
-    return joules / (volts * J_PER_WH)
+    return joules / volts / C_PER_AH
 
 
 def energy_to_j(value: float, unit: str, volts: float | None = None) -> float:
@@ -53,7 +31,7 @@ def energy_to_j(value: float, unit: str, volts: float | None = None) -> float:
     if unit in UNITS["charge"]:
         if volts is None or volts <= 0.0:
             raise ValueError(f"a charge in {unit} needs a positive voltage to become energy")
-        return ah_to_j(value * UNITS["charge"][unit], volts)
+        return value * UNITS["charge"][unit] * volts  # C x V = J
     accepted = ", ".join([*UNITS["energy"], *UNITS["charge"]])
     raise ValueError(f"unit {unit!r} is not an energy or a charge (use one of {accepted})")
 
@@ -97,7 +75,7 @@ def read_battery_file(path: Path) -> Battery:
     if top.has("energy"):
         energy = top.quantity("energy", "energy", positive=True)
     else:
-        energy = ah_to_j(top.quantity("capacity", "charge", positive=True), volts)
+        energy = top.quantity("capacity", "charge", positive=True) * volts  # C x V = J
     battery = Battery(
         name=top.text("name"),
         description=top.text("description", ""),

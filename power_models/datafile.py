@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from gliderplan.contract.units import UNITS, accepted_units, to_model_unit
 from gliderplan.power_models.errors import ModelFileError
-from gliderplan.power_models.units import UNITS, accepted_units, to_model_unit
 
 
 @dataclass(frozen=True)

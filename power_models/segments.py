@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract.units import C_PER_AH
 from gliderplan.power_models.slocum_log import FlightLog
 
 GLIDE, SURFACE, IRIDIUM, PUMP, PITCH = range(5)
@@ -102,4 +103,4 @@ def interval_energy_j(log: FlightLog) -> np.ndarray:
 def counter_energy_j(log: FlightLog) -> float:
     """Energy [J] the coulomb counter records over the log: sum of dQ x V."""
     volts = 0.5 * (log.battery_v[1:] + log.battery_v[:-1])
-    return float(np.sum(np.diff(log.charge_ah) * 3600.0 * volts))
+    return float(np.sum(np.diff(log.charge_ah) * C_PER_AH * volts))

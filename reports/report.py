@@ -19,11 +19,11 @@ import pandas as pd
 from gliderplan.contract import TICK_S
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.files import write_atomically
+from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
 from gliderplan.reports.html import Section, Table, esc, facts_html, page
 
-J_PER_WH = 3600.0
 SWEEP_POINTS = 20  # budgets on the Pareto curve
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"

@@ -13,11 +13,11 @@ import pandas as pd
 
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
 from gliderplan.contract.files import write_atomically
+from gliderplan.contract.units import J_PER_WH
 from gliderplan.planner.compare import BoardResult, Comparison, Crossover
 from gliderplan.power_models.computation import load_computations
 from gliderplan.reports.figures import pyplot, render
 
-J_PER_WH = 3600.0
 FILES = ("boards.csv", "workload.csv", "crossovers.csv", "sbc.png")
 
 # What every comparison rests on besides the boards' own figures.

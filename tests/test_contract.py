@@ -13,16 +13,19 @@ from pathlib import Path
 import pytest
 
 from gliderplan import contract
+from gliderplan.contract import units
 from gliderplan.contract.c_header import c_header
 from gliderplan.language import check_source
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.registry import PROFILES, ROUTES
+from gliderplan.planner.hardware import parse_battery
+from gliderplan.power_models.battery import read_battery_file
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADER = ROOT / "runtime" / "include" / "gp_contract.h"
-PACKAGES = ("cli", "language", "planner", "power_models", "runtime", "sim")
-CONTRACT_NAMES = frozenset(name for name in vars(contract) if not name.startswith("_")
-                           and name[0].isupper())
+PACKAGES = ("cli", "language", "planner", "power_models", "reports", "runtime", "sim")
+CONTRACT_NAMES = frozenset(name for module in (contract, units) for name in vars(module)
+                           if not name.startswith("_") and name[0].isupper())
 
 
 def test_the_committed_header_is_the_one_the_contract_generates():
@@ -156,5 +159,24 @@ def test_the_vocabulary_fits_the_runtime_and_the_plan_file():
     assert all(r.max_points <= contract.MAX_ROUTE_POINTS for r in ROUTES.values())
     # a plan's state block lists the sensors with a device: at most every such sensor
     assert sum(1 for s in contract.SENSORS if s.device) <= contract.MAX_PLAN_SENSORS
+    devices = {s.device for s in contract.SENSORS if s.device}
+    # a plan's `components` line: the vehicle's, the computer and every device
+    assert len(contract.VEHICLE_COMPONENTS) + 1 + len(devices) <= contract.MAX_PLAN_COMPONENTS
     assert [s.index for s in contract.SENSORS] == list(range(contract.N_SENSORS)) \
         and contract.N_SENSORS <= 32
+
+
+def test_a_unit_means_the_same_in_a_mission_a_data_file_and_an_option(tmp_path):
+    source = "mission m\nbattery 10 Ah at 14.4 V\nstate s begin flightprofile surface end\n"
+    from_mission = check_source(source, "m.mission").mission.battery.energy_j
+    pack = tmp_path / "pack.toml"
+    pack.write_text('kind = "battery"\nname = "pack"\n'
+                    'voltage = { value = 14.4, unit = "V", source = "test" }\n'
+                    'capacity = { value = 10, unit = "Ah", source = "test" }\n'
+                    'usable_fraction = { value = 1, unit = "1", source = "test" }\n')
+    from_file = read_battery_file(pack).energy_j
+    from_option = parse_battery("10Ah@14.4V")[0]
+    assert from_mission == from_file == from_option == pytest.approx(10 * 3600 * 14.4)
+    clock = check_source("mission m\ncomputer ts7800 @ 0.5 GHz\nstate s begin flightprofile "
+                         "surface end\n", "m.mission").mission.computer.clock_mhz
+    assert clock == 500.0

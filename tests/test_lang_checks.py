@@ -90,7 +90,7 @@ CASES = [
      "error: reserve must be at least 0 % and below 100 %"),
     ({"decl": "horizon 36"}, "error: missing unit: expected time"),
     ({"decl": "horizon 0 h"}, "error: horizon must be positive"),
-    ({"decl": "computer ts7800 @ 300"}, "error: missing unit: expected frequency"),
+    ({"decl": "computer ts7800 @ 300"}, "error: missing unit: expected clock frequency"),
     ({"decl": "sensor temp duty >= 0.8 duty <= 0.2"},
      "error: duty bounds of 'temp' contradict each other: at least 0.8 but at most 0.2"),
     ({"decl": "sensor temp duty >= 1.5"}, "error: duty must lie between 0 and 1"),

@@ -1,16 +1,18 @@
-"""Units a model data file may use, grouped by dimension, with their factor to the model's unit.
+"""The units gliderplan reads, grouped by dimension, with their factor to the code's unit.
 
-Every number in a data file carries its unit; the loader converts it to the unit the
-code works in (SI, except cc for pumped volume and MHz for clocks, the units pilots use)
-and refuses a unit of the wrong dimension, so "240 mW" and "0.24 W" both load and
-"240 mAh" for a power is an error that names the key.
+One table for every reader: a model data file, a command-line option and a mission's
+annotations (through `language.units`) mean the same by each unit. The code works in SI,
+except cc for pumped volume and MHz for clocks, the units pilots use. Every number in a
+data file carries its unit; the loader converts it and refuses a unit of the wrong
+dimension, so "240 mW" and "0.24 W" both load and "240 mAh" for a power is an error that
+names the key.
 """
 
 from __future__ import annotations
 
 import math
 
-# dimension -> {unit spelling: factor that turns a value in that unit into the model's unit}
+# dimension -> {unit spelling: factor that turns a value in that unit into the code's unit}
 UNITS: dict[str, dict[str, float]] = {
     "power": {"W": 1.0, "mW": 1e-3, "kW": 1e3},
     "energy": {"J": 1.0, "kJ": 1e3, "MJ": 1e6, "Wh": 3600.0, "kWh": 3.6e6},
@@ -31,12 +33,16 @@ UNITS: dict[str, dict[str, float]] = {
     "pump_per_volume_depth": {"J/(cc m)": 1.0},
     "energy_per_byte": {"J/B": 1.0},
     "voltage": {"V": 1.0},
-    "charge": {"Ah": 1.0, "mAh": 1e-3},
+    "charge": {"Ah": 3600.0, "mAh": 3.6},  # [C]
     "dimensionless": {"1": 1.0},
     "fraction": {"1": 1.0, "%": 0.01},
     "cycles_per_clock": {"cycles/clock": 1.0},
     "cycles": {"cycles": 1.0, "Mcycles": 1e6},
 }
+
+
+J_PER_WH = UNITS["energy"]["Wh"]
+C_PER_AH = UNITS["charge"]["Ah"]
 
 
 def to_model_unit(value: float, unit: str, dimension: str) -> float:
