@@ -20,11 +20,15 @@ RUNTIMES = ("python", "c")
 def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Vehicle,
         plan: Plan | None = None, plan_path: str | None = None, runtime: str = "python",
         robust_tracker: bool = True,
-        progress: Callable[[float, float], None] | None = None) -> RunRecord:
+        progress: Callable[[float, float], None] | None = None,
+        tick_by_tick: bool = False) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends.
 
-    The C runtime reads its plan from `plan_path` (the file `plan` was read from);
-    raises emulator.EmulatorError when it cannot be built or started.
+    The Python executor flies runs of ticks at once where nothing can happen between them
+    (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
+    the reference loop instead. The C runtime reads its plan from `plan_path` (the file
+    `plan` was read from); raises emulator.EmulatorError when it cannot be built or
+    started.
     """
     science = make_science(mission, ocean, config, vehicle)
     if runtime == "python":
@@ -32,7 +36,12 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
         # without a plan: the same buoyancy volume the compiler gives the C runtime
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker)
-        return simulate(mission, executor, science, config, progress)
+        if tick_by_tick:
+            return simulate(mission, executor, science, config, progress)
+        from gliderplan.sim.fast import FastForward
+
+        return simulate(mission, executor, science, config, progress,
+                        FastForward(mission, executor, science))
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
     from gliderplan.sim.emulator import start_c_runtime

@@ -69,19 +69,73 @@ def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float
     return 0.0, 0.0
 
 
+# One row per tick: the glider before the tick's step, the COMMAND that answered it, the
+# step's outputs. Python numbers in the tick-by-tick loop, these types in the record.
+COLUMN_TYPES: dict[str, type] = {
+    "depth_m": np.float64, "pitch_rad": np.float64, "temperature_c": np.float64,
+    "temp_reading_c": np.float64, "state": np.int64, "stack_depth": np.int64,
+    "profile": np.int64, "sensor_power": np.int64, "phase": np.int64,
+    "pumped_out_cc": np.float64, "pumped_in_cc": np.float64, "inflection": np.bool_,
+    "lat_deg": np.float64, "lon_deg": np.float64,
+}
+
+
+class Columns:
+    """The record's columns as they grow: rows appended one tick at a time (`rows`, lists
+    of Python numbers) and runs of ticks appended as arrays (`extend`), both written into
+    arrays sized for the whole run."""
+
+    def __init__(self, ticks: int) -> None:
+        self.rows: dict[str, list] = {k: [] for k in COLUMN_TYPES}
+        self._arrays = {k: np.empty(ticks, t) for k, t in COLUMN_TYPES.items()}
+        self._filled = 0
+
+    def _flush_rows(self) -> None:
+        n = min(len(v) for v in self.rows.values())  # an interrupted tick's row is not whole
+        at = self._filled
+        for key, values in self.rows.items():
+            if n:
+                self._arrays[key][at:at + n] = values[:n]
+            values.clear()  # the same list: appends bound to it stay valid
+        self._filled += n
+
+    def extend(self, ticks: int, run: dict[str, np.ndarray | float]) -> None:
+        """Append a run of ticks: per column an array of `ticks` values, or one value
+        for them all."""
+        if any(self.rows.values()):
+            self._flush_rows()
+        at = self._filled
+        for key, array in self._arrays.items():
+            array[at:at + ticks] = run[key]
+        self._filled += ticks
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Every column over the ticks whose rows are complete (an interruption may have
+        left the last tick's row half written)."""
+        self._flush_rows()
+        return {k: v[:self._filled] for k, v in self._arrays.items()}
+
+
+class FastForward(Protocol):
+    def __call__(self, tick: int, last_tick: int, columns: Columns) -> int:
+        """Fly ticks `tick`.. ahead in one go, as the tick-by-tick loop would, appending
+        their rows; the number flown (0: the loop must fly `tick` itself)."""
+        ...
+
+
 def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceComputer,
-             config: RunConfig,
-             progress: Callable[[float, float], None] | None = None) -> RunRecord:
-    """Run the loop until the mission exits, the runtime faults or the duration ends."""
+             config: RunConfig, progress: Callable[[float, float], None] | None = None,
+             fast_forward: FastForward | None = None) -> RunRecord:
+    """Run the loop until the mission exits, the runtime faults or the duration ends.
+    With `fast_forward`, the ticks on which nothing can happen are flown in runs by it,
+    the others one by one here."""
     names = tuple(s.name for s in mission.states)
     glider = science.glider
     tick_s = config.tick_s
     last_tick = int(math.floor(config.duration_s / tick_s + 1e-9))
     trace: list[Transition] = []
-    cols: dict[str, list] = {k: [] for k in (
-        "depth_m", "pitch_rad", "temperature_c", "temp_reading_c", "state", "stack_depth",
-        "profile", "sensor_power", "phase", "pumped_out_cc", "pumped_in_cc", "inflection",
-        "lat_deg", "lon_deg")}
+    columns = Columns(last_tick + 1)
+    cols = columns.rows
     depth_c, pitch_c, temp_c = cols["depth_m"], cols["pitch_rad"], cols["temperature_c"]
     reading_c = cols["temp_reading_c"]
     state_c, stack_c, profile_c = cols["state"], cols["stack_depth"], cols["profile"]
@@ -91,8 +145,19 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     ended = "duration"
     pack, unpack = _COMMAND_F32.pack, _COMMAND_F32.unpack
     readings, runtime_step, apply = science.readings, runtime.step, science.apply
+    tick = 0
+    last_state = NO_STATE
     try:
-        for tick in range(last_tick + 1):
+        while tick <= last_tick:
+            if fast_forward is not None and tick:
+                flown = fast_forward(tick, last_tick, columns)
+                if flown:
+                    if progress is not None and (tick + flown) // PROGRESS_TICKS \
+                            > tick // PROGRESS_TICKS:
+                        progress((tick + flown) * tick_s, last_tick * tick_s)
+                    tick += flown
+                    if tick > last_tick:
+                        break
             mask, values = readings(tick)
             depth_c.append(glider.depth_m)
             pitch_c.append(glider.pitch_rad)
@@ -104,7 +169,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 cmd = runtime_step(tick, mask, values)
             except MissionFault as fault:
                 ended = f"fault: {fault}"
-                _close_row(cols, state_c[-1] if state_c else NO_STATE)
+                _close_row(cols, last_state)
                 break
             time_s = tick * tick_s
             if tick == 0:
@@ -113,6 +178,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 trace.append(Transition(
                     time_s, ACTION_OF_KIND[cmd.transition], names[cmd.from_state],
                     "" if cmd.to_state == NO_STATE else names[cmd.to_state], cmd.stack_depth))
+            last_state = cmd.state
             state_c.append(cmd.state)
             stack_c.append(cmd.stack_depth)
             profile_c.append(cmd.profile)
@@ -133,23 +199,14 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
             infl_c.append(glider.inflection)
             if progress is not None and tick % PROGRESS_TICKS == 0 and tick:
                 progress(time_s, last_tick * tick_s)
+            tick += 1
     except KeyboardInterrupt:  # keep what was flown: the caller writes it out
         ended = "interrupted"
-        _drop_partial_tick(cols, trace, tick_s)
-    n = len(state_c)
-    columns = {
-        "time_s": np.arange(n, dtype=float) * tick_s,
-        **{k: np.asarray(v[:n]) for k, v in cols.items()},
-    }
-    return RunRecord(trace, columns, names, tick_s, ended, glider.surfacings)
-
-
-def _drop_partial_tick(cols: dict[str, list], trace: list[Transition], tick_s: float) -> None:
-    """After an interruption mid-tick: keep only the ticks whose rows are complete."""
-    n = min(len(v) for v in cols.values())
-    for values in cols.values():
-        del values[n:]
-    trace[:] = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
+    arrays = columns.arrays()
+    n = len(arrays["state"])
+    trace = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
+    return RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
+                     tick_s, ended, glider.surfacings)
 
 
 def _close_row(cols: dict[str, list], state: int) -> None:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,6 +63,56 @@ NOISE_PRESETS: dict[str, SensorNoise] = {
 }
 
 
+class Draws:
+    """Random numbers drawn from a generator a block at a time, one row per tick: row i is
+    the same whether the rows are taken one by one (`next`) or as an array of a run of
+    ticks (`peek`, then `skip`), so a run flown either way sees the same noise."""
+
+    def __init__(self, draw_block: Callable[[], np.ndarray]) -> None:
+        self._draw_block = draw_block
+        self._blocks: list[np.ndarray] = []  # the current block and any drawn after it
+        self._rows: list = []  # the current block as Python numbers (for `next`)
+        self._at = _NOISE_BLOCK  # row of the current block taken next
+
+    def next(self):
+        """The next row, as Python numbers."""
+        at = self._at
+        if at == _NOISE_BLOCK:
+            if self._blocks:
+                del self._blocks[0]
+            if not self._blocks:
+                self._blocks.append(self._draw_block())
+            self._rows, at = self._blocks[0].tolist(), 0
+        self._at = at + 1
+        if self._rows:
+            return self._rows[at]
+        return self._blocks[0][at].tolist()  # a block entered by `skip`: row by row
+
+    def peek(self, count: int) -> np.ndarray:
+        """The next `count` rows as an array, without taking them."""
+        if self._at == _NOISE_BLOCK:
+            self._blocks, self._rows, self._at = self._blocks[1:], [], 0
+        while len(self._blocks) * _NOISE_BLOCK - self._at < max(count, 1):
+            self._blocks.append(self._draw_block())
+        first = self._blocks[0][self._at:self._at + count]
+        if len(first) == count:
+            return first
+        return np.concatenate([first, *self._blocks[1:]])[:count]
+
+    def skip(self, count: int) -> None:
+        """Take `count` rows (after `peek` has drawn them)."""
+        blocks, self._at = divmod(self._at + count, _NOISE_BLOCK)
+        if blocks:
+            del self._blocks[:blocks]
+            self._rows = []
+
+
+def _spike_signs(rng: np.random.Generator, probability: float) -> np.ndarray:
+    """A block of spike signs: 0, or -1 and +1 alike, with the spike probability."""
+    u = rng.random((_NOISE_BLOCK, 2))
+    return np.where(u[:, 0] < probability, np.where(u[:, 1] < 0.5, -1.0, 1.0), 0.0)
+
+
 @functools.cache
 def powered_mask(sensor_power: int) -> int:
     """Sensors sent in a tick: those without a device plus every sensor of a device that
@@ -84,37 +135,23 @@ class ScienceComputer:
         self._lag_keep = math.exp(-tick_s / noise.temperature_lag_s) \
             if noise.temperature_lag_s > 0.0 else 0.0
         self._ctd_temp = math.nan
-        self._noise: list[tuple[float, float]] = []
-        # spikes come from a stream of their own: a run without them draws as before
-        self._spike_rng = np.random.default_rng([seed, 1]) \
-            if noise.spike_probability > 0.0 else None
-        self._spikes: list[float] = []
         self._flicker_c = noise.flicker_c if self.rng.random() < 0.5 else -noise.flicker_c
+        # (temperature, depth) standard normal draws, one row per tick
+        self.normal = Draws(lambda: self.rng.standard_normal((_NOISE_BLOCK, 2)))
+        # spikes come from a stream of their own: a run without them draws as before
+        self.spikes: Draws | None = None
+        if noise.spike_probability > 0.0:
+            spike_rng = np.random.default_rng([seed, 1])
+            self.spikes = Draws(lambda: _spike_signs(spike_rng, noise.spike_probability))
         self.water_temperature_c = math.nan  # at the glider, this tick (for the record)
         self.ctd_temperature_c = math.nan  # the CTD's reading sent this tick; NaN: CTD off
-
-    def _draws(self) -> tuple[float, float]:
-        """(temperature, depth) standard normal draws for one tick."""
-        if not self._noise:
-            self._noise = self.rng.standard_normal((_NOISE_BLOCK, 2)).tolist()
-            self._noise.reverse()
-        return self._noise.pop()
-
-    def _spike_c(self) -> float:
-        """This reading's spike [degC]: 0, or +-spike_c with the spike probability."""
-        if not self._spikes:
-            u = self._spike_rng.random((_NOISE_BLOCK, 2))
-            hit = u[:, 0] < self.noise.spike_probability
-            self._spikes = np.where(hit, np.where(u[:, 1] < 0.5, -1.0, 1.0), 0.0).tolist()
-            self._spikes.reverse()
-        return self.noise.spike_c * self._spikes.pop()
 
     def readings(self, tick: int) -> tuple[int, list[float]]:
         """(mask, values): the sensor array at `tick` (all 17 values [registry units]) and
         which of them the SENSORS frame carries."""
         g, noise = self.glider, self.noise
         time_s = tick * self.tick_s
-        z_temp, z_depth = self._draws()
+        z_temp, z_depth = self.normal.next()
         temp, salinity = self.ocean.water_at(g.depth_m, time_s)
         self.water_temperature_c = temp
         ctd = self._ctd_temp
@@ -122,8 +159,8 @@ class ScienceComputer:
         self._ctd_temp = ctd
         self._flicker_c = -self._flicker_c
         measured = ctd + noise.temperature_sigma_c * z_temp + self._flicker_c
-        if self._spike_rng is not None:
-            measured += self._spike_c()
+        if self.spikes is not None:
+            measured += self.noise.spike_c * self.spikes.next()
         depth = max(0.0, g.depth_m + noise.depth_sigma_m * z_depth)
         c = self.glider.current
         values = [
@@ -136,12 +173,84 @@ class ScienceComputer:
         self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan
         return mask, values
 
+    def ctd_along(self, depth_m: np.ndarray, time_s: np.ndarray) -> CtdRun:
+        """`readings`' CTD over a run of ticks at these depths [m] and times [s], bit for
+        bit, without advancing: the fast executor's (`commit_ctd` advances)."""
+        noise = self.noise
+        count = len(depth_m)
+        water, salinity = self.ocean.water_along(depth_m, time_s)
+        lagged = first_order_lag(water, self._ctd_temp, self._lag_keep)
+        odd = np.arange(count) % 2 == 1
+        flicker = np.where(odd, self._flicker_c, -self._flicker_c)
+        z_temp = self.normal.peek(count)[:, 0]
+        measured = lagged + noise.temperature_sigma_c * z_temp + flicker
+        if self.spikes is not None:
+            measured = measured + noise.spike_c * self.spikes.peek(count)
+        return CtdRun(water, salinity, measured, lagged, flicker)
+
+    def commit_ctd(self, run: CtdRun, count: int, last_reading_c: float) -> None:
+        """Advance past the first `count` ticks of `run` (their random numbers too)."""
+        self._ctd_temp = float(run.lagged_c[count - 1])
+        self._flicker_c = float(run.flicker_c[count - 1])
+        self.water_temperature_c = float(run.water_c[count - 1])
+        self.ctd_temperature_c = last_reading_c
+        self.normal.skip(count)
+        if self.spikes is not None:
+            self.spikes.skip(count)
+
     def apply(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
               heading_rad: float, flags: int, sensor_power: int) -> None:
         """Fly one tick under a COMMAND and switch the sensors it powers."""
         self.sensor_power = sensor_power
         self.glider.step(depth_target_m, pitch_rad, ballast_cc, heading_rad,
                          bool(flags & 8), bool(flags & 1))
+
+
+@dataclass(frozen=True)
+class CtdRun:
+    """The CTD over a run of ticks (`ScienceComputer.ctd_along`)."""
+
+    water_c: np.ndarray  # water temperature at the glider [degC]
+    salinity_psu: np.ndarray
+    measured_c: np.ndarray  # the reading the CTD makes, sent or not [degC]
+    lagged_c: np.ndarray  # the sensor's lagged temperature before noise [degC]
+    flicker_c: np.ndarray
+
+
+LAG_ITERATIONS = 12  # sweeps of the lag's fixed point before the rest is summed in a loop
+
+
+def first_order_lag(water_c: np.ndarray, before_c: float, keep: float) -> np.ndarray:
+    """The CTD's lagged temperature each tick, `readings`' recursion
+    c[i] = w[i] + (c[i-1] - w[i]) * keep (c = w where the one before is NaN), bit for bit.
+
+    Solved as a fixed point: every sweep recomputes all values from the previous sweep's,
+    and a sweep that changes nothing has found the recursion's own values (the first
+    value is exact after one sweep, the first two after two, ...). With keep << 1 (a
+    CTD much faster than the tick) an error shrinks by `keep` per sweep and a handful of
+    sweeps settle every bit; a slow sensor falls back to the loop where the sweeps stop."""
+    n = len(water_c)
+    if n == 0:
+        return np.empty(0)
+    lagged = water_c.copy()
+    settled = 0  # lagged[:settled] hold their final values
+    previous = np.empty(n)
+    for _ in range(LAG_ITERATIONS):
+        previous[0] = before_c
+        previous[1:] = lagged[:-1]
+        swept = np.where(previous != previous, water_c, water_c + (previous - water_c) * keep)
+        changed = np.flatnonzero(swept[settled:] != lagged[settled:])
+        lagged[settled:] = swept[settled:]
+        if not len(changed):
+            return lagged
+        settled += int(changed[0])
+    c = float(lagged[settled - 1]) if settled else before_c
+    rest = []
+    for w in water_c[settled:].tolist():
+        c = w if c != c else w + (c - w) * keep
+        rest.append(c)
+    lagged[settled:] = rest
+    return lagged
 
 
 def conductivity_s_m(temperature_c: float, salinity_psu: float) -> float:

@@ -16,13 +16,20 @@ One `GliderSim` is stepped once per tick; it is mutable for speed (a 30-day run 
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
+from gliderplan.contract import EARTH_RADIUS_M
 from gliderplan.power_models.flight import glide_geometry, net_buoyancy_cc
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.sim import libm
 from gliderplan.sim.geo import move_degrees
+
+_RAD = math.pi / 180.0
 
 SURFACE_DEPTH_M = 0.3  # shallower than this the antenna is out of the water
 HOVER_RATE_M_S = 0.05  # assumption: small buoyancy corrections move a hovering glider slowly
@@ -35,6 +42,50 @@ class Current:
 
     north_mps: float = 0.0
     east_mps: float = 0.0
+
+
+Positions = tuple[float, float, float, float]  # dead-reckoned lat, lon, true lat, lon [deg]
+MAX_SETTLE_TICKS = 64  # a command whose actuators have not settled by then is flown tick by tick
+
+
+@dataclass(frozen=True)
+class Glide:
+    """The ticks of a glider under one command below the surface (`GliderSim.glide_from`):
+    row i < settled is the i-th tick, row `settled` every tick after (the actuators have
+    settled and the speed does not change with depth). Per row: depth change [m],
+    distance through the water [m], the step's outputs, the pitch [rad] and the
+    actuators at the start of the tick."""
+
+    dz_m: np.ndarray
+    distance_m: np.ndarray
+    phase: np.ndarray
+    pumped_out_cc: np.ndarray
+    pumped_in_cc: np.ndarray
+    inflection: np.ndarray
+    pitch_rad: np.ndarray
+    actuators: list[tuple[float, float, float, float]]
+    settled: int
+
+
+def _moves(start: tuple[float, float], north_m: np.ndarray, east_m: np.ndarray,
+           moved: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`move_degrees` from `start` [deg] by each (north, east) [m] in turn where `moved`:
+    the positions before each move and after the last. Sums in order (cumsum), so the
+    bits are those of moving one tick at a time; a tick that does not move adds -0.0,
+    which changes no number."""
+    lat = np.empty(len(north_m) + 1)
+    lat[0] = start[0]
+    np.copyto(lat[1:], north_m / (EARTH_RADIUS_M * _RAD))
+    np.copyto(lat[1:], -0.0, where=~moved)
+    np.add.accumulate(lat, out=lat)
+    cos_lat = libm.cos(lat[:-1] * _RAD)
+    lon = np.empty(len(north_m) + 1)
+    lon[0] = start[1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.divide(east_m, EARTH_RADIUS_M * cos_lat * _RAD, out=lon[1:])
+    np.copyto(lon[1:], -0.0, where=~moved)
+    np.add.accumulate(lon, out=lon)
+    return lat, lon
 
 
 class GliderSim:
@@ -83,17 +134,32 @@ class GliderSim:
     def step(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
              heading_rad: float, heading_valid: bool, surface: bool) -> None:
         """Fly one tick under a command (COMMAND fields, docs/protocol.md)."""
-        dt = self.tick_s
-        v = self.vehicle
         self.pumped_out_cc = self.pumped_in_cc = 0.0
         self.inflection = False
         if heading_valid:
             self.heading_rad = heading_rad
         if surface and self.depth_m <= SURFACE_DEPTH_M:
-            self._at_surface(dt)
+            self._at_surface(self.tick_s)
             return
         self.surface_time_s = -1.0
+        dz, distance, hovering = self.below_surface(depth_target_m, pitch_rad, ballast_cc)
+        self.depth_m = self.depth_m + dz if hovering else max(0.0, self.depth_m + dz)
+        self._drift(distance, self.tick_s)
 
+    @property
+    def speed_depends_on_depth(self) -> bool:
+        """Whether the hull's compressibility makes the glide speed change with depth."""
+        flight = self.vehicle.flight
+        return flight.hull_volume_cc * flight.compressibility_per_pa != 0.0
+
+    def below_surface(self, depth_target_m: float, pitch_rad: float, ballast_cc: float
+                      ) -> tuple[float, float, bool]:
+        """One tick under water: the battery, the pump and the turn move toward the command
+        (outputs and internal state updated), then the glider glides (or hovers, on zero
+        buoyancy). Returns (depth change [m], distance through the water [m], hovering);
+        a glide's depth is clamped at the surface by the caller, a hover's is not."""
+        dt = self.tick_s
+        v = self.vehicle
         # battery: toward the commanded pitch at the motor's rate
         dp = pitch_rad - self.pitch_rad
         max_dp = PITCH_RATE_RAD_S * dt
@@ -127,13 +193,93 @@ class GliderSim:
         if ballast_cc == 0.0 and self.ballast_cc == 0.0:
             # hovering: small buoyancy corrections toward the target depth
             step_m = min(abs(depth_target_m - self.depth_m), HOVER_RATE_M_S * dt)
-            self.depth_m += math.copysign(step_m, depth_target_m - self.depth_m)
-            u = 0.0
-        else:
-            u, w = self._speeds(abs(pitch_rad), self.ballast_cc)
-            rising = self.ballast_cc > 0.0
-            self.depth_m = max(0.0, self.depth_m + (-w if rising else w) * glide_s)
-        self._drift(u * glide_s, dt)
+            return math.copysign(step_m, depth_target_m - self.depth_m), 0.0, True
+        u, w = self._speeds(abs(pitch_rad), self.ballast_cc)
+        return (-w if self.ballast_cc > 0.0 else w) * glide_s, u * glide_s, False
+
+    @property
+    def actuators(self) -> tuple[float, float, float, float]:
+        """What the next tick's battery, pump and turn start from: (pitch [rad], pumped
+        volume [cc], sign of the last inflection, turn time left [s])."""
+        return self.pitch_rad, self.ballast_cc, self._turning_to, self._turn_left_s
+
+    @actuators.setter
+    def actuators(self, values: tuple[float, float, float, float]) -> None:
+        self.pitch_rad, self.ballast_cc, self._turning_to, self._turn_left_s = values
+
+    # ---- runs of ticks, for the fast executor: `step`'s results, bit for bit ----------
+
+    def glide_from(self, actuators: tuple[float, float, float, float], pitch_rad: float,
+                   ballast_cc: float) -> Glide | None:
+        """The ticks under water under one gliding command from `actuators`: `step` on a
+        scratch copy until the battery, the pump and the turn have settled (the speed must
+        not depend on depth). None if the glider would hover or does not settle."""
+        scratch = copy.copy(self)
+        scratch.actuators = actuators
+        rows, starts = [], []
+        for _ in range(MAX_SETTLE_TICKS):
+            before = scratch.actuators
+            scratch.pumped_out_cc = scratch.pumped_in_cc = 0.0
+            scratch.inflection = False
+            dz, distance, hovering = scratch.below_surface(0.0, pitch_rad, ballast_cc)
+            if hovering:
+                return None
+            rows.append((dz, distance, scratch.phase, scratch.pumped_out_cc,
+                         scratch.pumped_in_cc, scratch.inflection, before[0]))
+            starts.append(before)
+            if scratch.actuators == before:
+                return Glide(*(np.array(c) for c in zip(*rows, strict=True)), actuators=starts,
+                             settled=len(rows) - 1)
+        return None
+
+    def surface_along(self, count: int, surface_time_s: float
+                      ) -> tuple[np.ndarray, np.ndarray, int]:
+        """`count` ticks at the surface, the first at `surface_time_s` [s] into the
+        surfacing (< 0: it begins): (phase of each tick, time at the surface after each
+        [s], the tick of the GPS fix or -1), as `_at_surface` counts them."""
+        v = self.vehicle
+        first = max(surface_time_s, 0.0)
+        elapsed = np.add.accumulate(np.concatenate([[first], np.full(count, self.tick_s)]))
+        before, after = elapsed[:-1], elapsed[1:]
+        in_call = (v.surface_s <= before) & (before < v.surface_s + v.iridium_s)
+        fix = np.flatnonzero((before < v.surface_s) & (v.surface_s <= after))
+        return (np.where(in_call, IRIDIUM, SURFACE), after,
+                int(fix[0]) if len(fix) else -1)
+
+    @property
+    def positions(self) -> Positions:
+        return (self.dr_lat_deg, self.dr_lon_deg, self.lat_deg, self.lon_deg)
+
+    @positions.setter
+    def positions(self, values: Positions) -> None:
+        self.dr_lat_deg, self.dr_lon_deg, self.lat_deg, self.lon_deg = values
+
+    def drift_along(self, distance_m: np.ndarray, heading_rad: np.ndarray, fix_at: int = -1,
+                    start: Positions | None = None
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Positions [deg] before each of the ticks and after the last (dead reckoned lat
+        and lon, true lat and lon): `_drift` along `distance_m` [m] on `heading_rad` [rad]
+        each tick from `start` (default: where the glider is), with the GPS fix of
+        `_at_surface` (dead reckoning set to the true position) on tick `fix_at` (-1:
+        none)."""
+        dr_lat0, dr_lon0, lat0, lon0 = self.positions if start is None else start
+        north = distance_m * libm.cos(heading_rad)
+        east = distance_m * libm.sin(heading_rad)
+        moved = (north != 0.0) | (east != 0.0)
+        c = self.current
+        if c.north_mps == 0.0 and c.east_mps == 0.0:  # true = dead reckoning: a fix moves none
+            dr_lat, dr_lon = _moves((dr_lat0, dr_lon0), north, east, moved)
+            return dr_lat, dr_lon, dr_lat, dr_lon
+        lat, lon = _moves((lat0, lon0), north + c.north_mps * self.tick_s,
+                          east + c.east_mps * self.tick_s, np.ones(len(north), bool))
+        if fix_at < 0:
+            dr_lat, dr_lon = _moves((dr_lat0, dr_lon0), north, east, moved)
+            return dr_lat, dr_lon, lat, lon
+        head = _moves((dr_lat0, dr_lon0), north[:fix_at], east[:fix_at], moved[:fix_at])
+        tail = _moves((lat[fix_at], lon[fix_at]), north[fix_at:], east[fix_at:],
+                      moved[fix_at:])
+        return (np.concatenate([head[0], tail[0][1:]]), np.concatenate([head[1], tail[1][1:]]),
+                lat, lon)
 
     def _at_surface(self, dt: float) -> None:
         """GPS fix, then the Iridium call, then wait (antenna up)."""

@@ -1,6 +1,12 @@
-"""Differential test: every example mission and every simulator mission, flown once by the
-Python executor and once by the compiled C runtime over a pty against the same simulated
-glider, gives the same trace.csv (and, through the same glider, the same dive profile)."""
+"""Differential tests.
+
+1. Every example mission and every simulator mission, flown once by the Python executor
+   and once by the compiled C runtime over a pty against the same simulated glider,
+   gives the same trace.csv (and, through the same glider, the same dive profile).
+2. The fast executor (runs of ticks at once, sim/fast.py) and the tick-by-tick reference
+   fly every example, every simulator mission and random missions alike: the same
+   transition trace and every per-tick record, bit for bit.
+"""
 
 from __future__ import annotations
 
@@ -8,10 +14,20 @@ import shutil
 import zlib
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from gliderplan.cli.main import main
+from gliderplan.language import check_file, check_source
+from gliderplan.power_models import load_vehicle
+from gliderplan.sim.flight import fly
+from gliderplan.sim.loop import RunConfig
+from gliderplan.sim.ocean import load_ocean
+from gliderplan.sim.science import NOISE_PRESETS
+from gliderplan.sim.vehicle import Current
 
 REPO = Path(__file__).resolve().parents[1]
 MISSIONS = sorted((REPO / "examples").glob("*.mission")) + sorted(
@@ -21,6 +37,7 @@ RUN_OPTIONS = {
     "sim_first_sea_run.mission": ["--ocean", "sea-trial"],
     "sim_sea_trial.mission": ["--ocean", "sea-trial", "--noise", "nonmonotonic"],
     "sim_month.mission": ["--duration", "1d"],
+    "survey_month.mission": ["--duration", "1d"],
 }
 
 needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc)")
@@ -113,3 +130,131 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
     assert c_trace == python_trace
     for column in ("depth_m", "profile", "temp_on", "oxygen_on"):
         assert python[column].equals(c[column]), column
+
+
+# ---- the fast executor against the tick-by-tick reference ------------------------------
+
+def flown_alike(mission, config: RunConfig, ocean: str = "bench", plan=None) -> None:
+    """Fly `mission` tick by tick and in runs; the two flights must be the same."""
+    vehicle = load_vehicle(mission.vehicle)
+    reference = fly(mission, load_ocean(ocean), config, vehicle, plan, tick_by_tick=True)
+    fast = fly(mission, load_ocean(ocean), config, vehicle, plan)
+    assert fast.trace == reference.trace
+    assert (fast.ended, fast.surfacings) == (reference.ended, reference.surfacings)
+    assert fast.columns.keys() == reference.columns.keys()
+    for name, column in reference.columns.items():
+        ours = fast.columns[name]
+        assert ours.dtype == column.dtype and ours.shape == column.shape, name
+        assert np.array_equal(ours.view(np.uint8), column.view(np.uint8)), name
+
+
+# (ocean, noise, current north/east [m/s], duration [s]) each mission is flown in
+FAST_CASES = [("bench", "ctd", (0.0, 0.0), 2 * 86400.0),
+              ("sea-trial", "nonmonotonic", (0.08, -0.05), 6 * 3600.0)]
+
+
+@pytest.mark.parametrize("case", FAST_CASES, ids=["bench", "sea-trial-current"])
+@pytest.mark.parametrize("path", MISSIONS, ids=lambda p: p.name)
+def test_the_fast_executor_flies_every_mission_as_the_reference(path, case):
+    ocean, noise, (north, east), duration_s = case
+    mission = check_file(str(path)).mission
+    config = RunConfig(duration_s=min(duration_s, mission.horizon_s or duration_s), seed=11,
+                       noise=NOISE_PRESETS[noise], current=Current(north, east))
+    flown_alike(mission, config, ocean)
+
+
+@pytest.mark.parametrize("name", ["fig2_annotated.mission", "thermocline_survey.mission",
+                                  "survey_month.mission"])
+def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, tmp_path):
+    from gliderplan.planner.planfile import load_plan
+
+    path = REPO / "examples" / name
+    plan_path = tmp_path / "mission.plan"
+    assert main(["plan", str(path), "-o", str(plan_path)]) == 0
+    mission = check_file(str(path)).mission
+    config = RunConfig(duration_s=min(86400.0, mission.horizon_s), seed=3,
+                       noise=NOISE_PRESETS["ctd"], current=Current(0.03, 0.1))
+    flown_alike(mission, config, "sea-trial", load_plan(plan_path, mission))
+
+
+def test_the_fast_executor_flies_a_hand_written_schedule_as_the_reference(tmp_path):
+    from gliderplan.planner.planfile import load_plan
+
+    path = REPO / "tests" / "missions" / "sim_alternating.mission"
+    mission = check_file(str(path)).mission
+    plan = load_plan(write_plan(tmp_path / "alternating.plan", path), mission)
+    flown_alike(mission, RunConfig(duration_s=14400.0, seed=5), "bench", plan)
+
+
+# Random missions: three states (a start state that calls one and goes to the other),
+# every profile and route the simulator flies, conditions on time, depth, temperature,
+# position and variables, assignments; flown in random water with random noise.
+_PROFILES = st.one_of(
+    st.builds(lambda lo, band, p, q: f"yo({lo}, {lo + band}, {p}, {q})",
+              st.integers(0, 8), st.integers(2, 50), st.sampled_from([".3", ".454", ".6"]),
+              st.sampled_from([".3", ".454", ".6"])),
+    st.just("yo(top, bottom, .454, .454)"),
+    st.just("surface"),
+    st.builds(lambda d: f"hover({d})", st.integers(0, 20)),
+    st.builds(lambda lo, hi, t: f"thermotrackyo({lo}, {hi}, .454, .454, {t}, 6)",
+              st.integers(1, 5), st.integers(20, 60), st.integers(1, 6)),
+)
+_ROUTES = st.sampled_from([
+    "noheading", "nav(3910.5, -7349.8058)", "nav(3910.2, -7349.9)",
+    "waypoints((3910.5, -7349.8), (3910.1, -7349.2), (3909.8, -7350.0))",
+    "sweep(150, (3910.0, -7350.0), (3910.0, -7349.6), (3910.3, -7349.6))",
+])
+_CONDITIONS = st.sampled_from([
+    "missiontime >= {t}", "depth > {d}", "depth < {d} && missiontime > 300",
+    "temp < {c}", "temp > {c} || depth > 30", "missiontime >= a", "depth > b",
+    "lat < 3910.3", "lon > -7349.7", "!(depth < {d}) && temp < {c}",
+    "abs(depth - b) < 1", "max(temp, 0) > {c} && missiontime >= {t}",
+])
+_ASSIGNMENTS = st.sampled_from([
+    "", "set a = missiontime + {t} ", "set b = depth + 3 ", "set top = max(depth - 5, 1), "
+    "bottom = depth + 5 ", "set a = missiontime + 600, b = b + 1 ",
+])
+
+
+@st.composite
+def random_missions(draw) -> str:
+    def condition() -> str:
+        return draw(_CONDITIONS).format(t=draw(st.integers(60, 9000)),
+                                        d=draw(st.integers(1, 40)),
+                                        c=draw(st.integers(8, 23)))
+
+    def assignment() -> str:
+        return draw(_ASSIGNMENTS).format(t=draw(st.integers(60, 3600)))
+
+    end = draw(st.integers(1800, 10800))
+    states = []
+    for name, events in (
+            ("s0", [f"case {condition()} {assignment()}call s1",
+                    f"case {condition()} {assignment()}goto s2",
+                    f"case {condition()} {assignment() or 'set a = a + 1 '}"]),
+            ("s1", [f"case {condition()} {assignment()}return"]),
+            ("s2", [f"case {condition()} {assignment()}goto s0"])):
+        profiles = " | ".join(draw(st.lists(_PROFILES, min_size=1, max_size=2)))
+        duty = draw(st.sampled_from(["", " duty auto"]))
+        states.append(
+            f"state {name}\nbegin\n  flightroute {draw(_ROUTES)}\n"
+            f"  flightprofile {profiles}\n"
+            f"  sensors missiontime, depth, pitch, lat, lon, temp{duty}, oxygen{duty}\n"
+            f"  events\n    case missiontime >= {end} exit\n    "
+            + "\n    ".join(events) + "\nend\n")
+    return ("mission random\nvar a = 900\nvar b = 10\nvar top = 4\nvar bottom = 25\n"
+            + "\n".join(states))
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(source=random_missions(), ocean=st.sampled_from(["bench", "sea-trial", "uniform"]),
+       noise=st.sampled_from(["none", "ctd", "nonmonotonic"]),
+       current=st.tuples(st.sampled_from([0.0, 0.05, -0.12]), st.sampled_from([0.0, 0.07])),
+       seed=st.integers(0, 2**31), tick_s=st.sampled_from([4.0, 2.0, 3.7]))
+def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean, noise,
+                                                                  current, seed, tick_s):
+    result = check_source(source, "random.mission")
+    assert result.mission is not None, result.render()
+    config = RunConfig(tick_s=tick_s, duration_s=12000.0, seed=seed,
+                       noise=NOISE_PRESETS[noise], current=Current(*current))
+    flown_alike(result.mission, config, ocean)

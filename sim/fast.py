@@ -1,0 +1,843 @@
+"""The fast executor: the reference executor's flight computed a run of ticks at a time.
+
+`FastForward` is offered each tick by the loop (sim/loop.py) and flies as many ticks as
+it can in one go, exactly as `PythonRuntime` (sim/executor.py) flying the simulated
+glider and science computer tick by tick would: the same transition trace and every
+per-tick record bit for bit. It leaves to the loop the ticks on which something happens
+that a run does not compute: an event fires, the plan switches to another profile
+alternative, a waypoint is reached, a state's or profile's first tick; and every tick
+of a profile the runs do not cover (thermotrackyo, hover, arguments that read sensors)
+or of a glider whose speed changes with depth (hull compressibility).
+
+A run of ticks, in order:
+1. the schedule: profile alternative and sensor power from the time in the state;
+2. the flight: a yo leg after leg, each leg's depths the running sum (cumsum, the same
+   additions in the same order) of the depth changes of `GliderSim.glide_from` (the
+   actuators settling, then steady), the depth readings with their noise giving the tick
+   the leg turns; a surfacing: the climb, then the ticks at the surface;
+3. the CTD along those depths (its lag is a recursion, one number at a time);
+4. the events: every condition over the run's readings at once; the run ends before
+   the first tick on which one holds;
+5. the route: a heading comes from this tick's position and sets the next one, through
+   the readings' binary32 rounding. Iterated from a first guess until no heading
+   changes: that fixed point is the sequential solution itself, and every iteration
+   settles at least the ticks up to its first change. Near the last waypoint, where the
+   glider circles and the iteration would crawl, the route is flown one tick at a time.
+The run's length adapts: twice what the last run flew, so that work computed past an
+event is bounded by the work kept.
+"""
+
+from __future__ import annotations
+
+import bisect
+import copy
+import itertools
+import math
+import operator
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+
+from gliderplan.contract import FLIGHT_SENSORS_MASK, SURFACE_PITCH_RAD, WAYPOINT_RADIUS_M
+from gliderplan.language import ir
+from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.sim import compiled, pilot
+from gliderplan.sim.executor import PythonRuntime
+from gliderplan.sim.geo import (
+    bearing_binary32_array,
+    ddmm_to_degrees_array,
+    degrees_to_ddmm,
+    degrees_to_ddmm_array,
+    offset_m_array,
+)
+from gliderplan.sim.loop import Columns
+from gliderplan.sim.science import (
+    BATTERY_V,
+    BOTTOM_DEPTH_M,
+    DEVICE_MASKS,
+    ScienceComputer,
+    powered_mask,
+)
+from gliderplan.sim.vehicle import SURFACE_DEPTH_M, Glide
+
+MIN_RUN_TICKS = 64
+MAX_RUN_TICKS = 16384
+MAX_BACKOFF_TICKS = 16
+NAV_ITERATIONS = 10  # iterations of the route before the rest is flown one tick at a time
+MIN_NAV_WINDOW, MAX_NAV_WINDOW = 64, 4096  # ticks of the route iterated at once
+NEAR_WAYPOINT_M = 3.0 * WAYPOINT_RADIUS_M  # closer, the route is flown tick by tick
+
+_COMMAND_F32 = struct.Struct("<4f")
+_ONE_F32 = struct.Struct("<f")
+_DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY = (
+    SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "heading", "temp",
+                                      "conductivity", "salinity"))
+_NAV_SENSORS = frozenset({_LAT, _LON, _HEADING})
+_TEMP_BIT = 1 << _TEMP
+_DIVE, _CLIMB = pilot.DIVE, pilot.CLIMB
+
+
+def _f32(x: np.ndarray) -> np.ndarray:
+    """Through the link: binary32 and back, as struct's 'f' rounds."""
+    return np.asarray(x, np.float64).astype(np.float32).astype(np.float64)
+
+
+def _f32_scalar(x: float) -> float:
+    return _ONE_F32.unpack(_ONE_F32.pack(x))[0]
+
+
+def _command_f32(pitch_rad: float, ballast_cc: float) -> tuple[float, float]:
+    """A COMMAND's pitch and ballast as the glider receives them (binary32)."""
+    _, pitch, ballast, _ = _COMMAND_F32.unpack(_COMMAND_F32.pack(0.0, pitch_rad, ballast_cc,
+                                                                 0.0))
+    return pitch, ballast
+
+
+@dataclass
+class _Flight:
+    """The glider over a run of `count` ticks (arrays of the tick's start, step outputs)."""
+
+    count: int
+    depth_m: np.ndarray  # count + 1: before each tick and after the last
+    pitch_rad: np.ndarray
+    phase: np.ndarray
+    pumped_out_cc: np.ndarray
+    pumped_in_cc: np.ndarray
+    inflection: np.ndarray
+    distance_m: np.ndarray
+    legs: list[tuple[int, int, Glide, int]]  # (first tick, ticks, glide, leg) under water
+    surface_from: int  # first tick at the surface (count: none)
+    surface_time_s: np.ndarray  # after each tick at the surface
+    fix_at: int  # the GPS fix's tick, or -1
+    surface_starts: bool  # the surfacing begins in this run
+
+    def actuators_at(self, tick: int, before: tuple) -> tuple:
+        """The glider's actuators at the start of `tick` of the run (`before`: at its
+        first tick)."""
+        for first, ticks, glide, _ in reversed(self.legs):
+            if first < tick:
+                return _after(glide, min(tick - first, ticks))
+        return before
+
+
+def _after(glide: Glide, ticks: int) -> tuple:
+    """Actuators after `ticks` ticks of a glide."""
+    return glide.actuators[min(ticks, glide.settled)]
+
+
+class FastForward:
+    """Runs of ticks for `sim.loop.simulate`, flown as `runtime` would fly them."""
+
+    def __init__(self, mission: ir.CheckedMission, runtime: PythonRuntime,
+                 science: ScienceComputer) -> None:
+        self.ex, self.science, self.glider = runtime, science, science.glider
+        self.tick_s = science.tick_s
+        self.run_ticks = MIN_RUN_TICKS
+        self.nav_window = 256
+        self._backoff = 0  # ticks left to the loop after a run that flew none
+        self._resume = 0
+        self._glides: dict[tuple, Glide | None] = {}
+        self._changes: dict[int, np.ndarray] = {}  # per glide: its depth changes, long
+        self._change_lists: dict[int, list[float]] = {}
+        self._sums: dict[int, list[float]] = {}
+        # each state's events by the stage of a run at which their readings are known
+        self._events = [_staged(s.events) for s in mission.states]
+        # the sensors whose last value the executor reads: the mission's conditions,
+        # assignments and profile arguments, the time of entry, the routines and routes
+        expressions = [x for s in mission.states for e in s.events
+                       for x in (e.condition, *(a.value for a in e.assignments))]
+        expressions += [a for s in mission.states for p in s.profiles for a in p.args]
+        self._executor_reads = sorted(compiled.sensors_read(expressions)
+                                      | {0, _DEPTH, _LAT, _LON, _TEMP})
+        self._covered = [[_covered(p) for p in s.profiles] for s in mission.states]
+        self._depth_free = not self.glider.speed_depends_on_depth
+        self._ocean = hasattr(science.ocean, "water_along")
+        c = self.glider.current
+        self._current_reading = math.hypot(c.north_mps, c.east_mps)
+
+    def __call__(self, tick: int, last_tick: int, columns: Columns) -> int:
+        ex = self.ex
+        machine = ex.machine
+        if tick < self._resume or machine is None or machine.state is None \
+                or ex.profile_k < 0 or not (self._depth_free and self._ocean) \
+                or not self._covered[ex.state_i][ex.profile_k] \
+                or not isinstance(ex.route, _ROUTES):
+            return 0
+        flown = self._run(tick, min(self.run_ticks, last_tick - tick + 1), columns)
+        self.run_ticks = min(MAX_RUN_TICKS, max(MIN_RUN_TICKS, 2 * flown))
+        # a run that could not fly a tick is not tried again for a while: where events
+        # fire tick after tick (an assignment on every tick near the surface, say) the
+        # loop's own ticks are cheaper
+        self._backoff = 0 if flown else min(MAX_BACKOFF_TICKS, 2 * self._backoff + 1)
+        self._resume = tick + flown + self._backoff
+        return flown
+
+    # ---- one run ----------------------------------------------------------------------
+
+    def _run(self, tick: int, count: int, columns: Columns) -> int:
+        ex, sci = self.ex, self.science
+        i, k = ex.state_i, ex.profile_k
+        state_plan = ex.plan.states[i] if ex.plan is not None else None
+        time_s = np.arange(tick, tick + count) * self.tick_s
+        missiontime = _f32(time_s)
+        t_in = missiontime - ex.entry_time_s
+        if state_plan is not None and sum(p.share > 0.0 for p in state_plan.profiles) > 1:
+            count = _first(pilot.profile_indices(state_plan, t_in) != k, count)
+        power = (np.full(count, ex.constant_power[i], np.int64)
+                 if ex.constant_power[i] is not None
+                 else pilot.sensor_power_masks(ex.power_tables[i], t_in[:count]))
+        sent = _powered(np.concatenate([[sci.sensor_power], power[:-1]]))
+        values = _Readings(self, missiontime, sent)
+        events = self._events[i]
+        count = self._until_event(events[_SCHEDULE], values, count)
+        if count == 0:
+            return 0
+        flight = self._flight(i, k, state_plan, count)
+        if flight is None or flight.count == 0:
+            return 0
+        count = flight.count
+        values.flight = flight
+        noise = sci.normal.peek(count)
+        depth = flight.depth_m[:count]
+        values.depth_reading = _f32(_positive(depth + sci.noise.depth_sigma_m * noise[:, 1]))
+        count = self._until_event(events[_FLIGHT], values, count)
+        if count == 0:
+            return 0
+        ctd = values.ctd = sci.ctd_along(depth[:count], time_s[:count])
+        count = self._until_event(events[_CTD], values, count)
+        if count == 0:
+            return 0
+        nav = values.nav = self._route(flight, count)
+        count = self._until_event(events[_NAV], values, nav.count)
+        if count == 0:
+            return 0
+
+        # the run stands: its rows, then everything a reference tick reads, as after it
+        temp_reading = np.where(sent[:count] & _TEMP_BIT != 0, ctd.measured_c[:count], np.nan)
+        columns.extend(count, {
+            "depth_m": depth[:count], "pitch_rad": flight.pitch_rad[:count],
+            "temperature_c": ctd.water_c[:count], "temp_reading_c": temp_reading,
+            "state": i, "stack_depth": len(ex.machine.stack), "profile": k,
+            "sensor_power": power[:count], "phase": flight.phase[:count],
+            "pumped_out_cc": flight.pumped_out_cc[:count],
+            "pumped_in_cc": flight.pumped_in_cc[:count],
+            "inflection": flight.inflection[:count],
+            "lat_deg": nav.lat[:count], "lon_deg": nav.lon[:count],
+        })
+        sci.commit_ctd(ctd, count, float(temp_reading[-1]))
+        sci.sensor_power = int(power[count - 1])
+        every = int(np.bitwise_and.reduce(sent[:count]))
+        some = int(np.bitwise_or.reduce(sent[:count]))
+        for index in self._executor_reads:
+            if some >> index & 1:
+                last = count - 1 if every >> index & 1 else \
+                    _last(sent[:count] >> index & 1 != 0)
+                ex.s[index] = values.sensor_at(index, last)
+        self._commit_glider(flight, nav, count)
+        return count
+
+    def _until_event(self, events: tuple | None, values: _Readings, count: int) -> int:
+        """The run's ticks before the first on which one of `events` (a checker and the
+        sensors it reads) fires."""
+        if events is None:
+            return count
+        fires, wanted = events
+        s = {index: values.held(index, count) for index in wanted}
+        return _first(fires(s, self.ex.machine.variables, count), count)
+
+    def _commit_glider(self, flight: _Flight, nav: _Route, count: int) -> None:
+        g, ex = self.glider, self.ex
+        g.actuators = flight.actuators_at(count, g.actuators)
+        g.depth_m = float(flight.depth_m[count])
+        g.positions = nav.positions_at(count)
+        if nav.heading is not None:
+            g.heading_rad = float(nav.heading[count - 1])
+        last = count - 1
+        g.phase = int(flight.phase[last])
+        g.pumped_out_cc = float(flight.pumped_out_cc[last])
+        g.pumped_in_cc = float(flight.pumped_in_cc[last])
+        g.inflection = bool(flight.inflection[last])
+        if count > flight.surface_from:
+            g.surface_time_s = float(flight.surface_time_s[count - 1 - flight.surface_from])
+            g.surfacings += flight.surface_starts
+        else:
+            g.surface_time_s = -1.0
+        if isinstance(ex.routine, pilot.Yo):
+            ex.routine.leg = next(leg for first, _, _, leg in reversed(flight.legs)
+                                  if first < count)
+
+    # ---- the flight --------------------------------------------------------------------
+
+    def _flight(self, i: int, k: int, state_plan, count: int) -> _Flight | None:
+        ex = self.ex
+        profile = ex.state.profiles[k]
+        args = ex.constant_args[i][k] or ex.argument_fns[i][k](ex.s, ex.machine.variables)
+        if state_plan is not None:
+            pitch, ballast = state_plan.profiles[k].pitch_rad, state_plan.profiles[k].ballast_cc
+        else:
+            pitch, ballast = None, ex.default_ballast_cc
+        if profile.kind == "yo":
+            return self._yo(args, pitch, ballast, count)
+        return self._surfacing(ballast, count)
+
+    def _glide(self, actuators: tuple, command: tuple[float, float]) -> Glide | None:
+        key = (actuators, command)
+        if key not in self._glides:
+            self._glides[key] = self.glider.glide_from(actuators, *command)
+        return self._glides[key]
+
+    def _yo(self, args: tuple[float, ...], pitch: float | None, ballast: float,
+            count: int) -> _Flight | None:
+        """A yo over the run: the legs' turning ticks predicted in double precision, then
+        certified all at once on the exact depths (each the running sum, in order, of
+        the depth changes, as the glider adds them) and readings (through binary32).
+        From the first leg whose turn the certificate refutes, that leg is flown exactly
+        and the rest predicted again: every round certifies at least one more leg, and a
+        refuted prediction needs a reading within a millionth of the band's edge."""
+        low, high = args[0], args[1]
+        commands = {leg: _command_f32(*pilot._yo_command(leg, low, high, args, pitch,
+                                                         ballast)[1:3])
+                    for leg in (_DIVE, _CLIMB)}
+        sci, g = self.science, self.glider
+        # the depth sensor's error each tick, as `readings` adds it to the depth
+        noise_array = sci.noise.depth_sigma_m * sci.normal.peek(count + 1)[:, 1]
+        noise = noise_array.tolist()
+        spread = float(np.abs(noise_array).max())
+        edges = {_DIVE: high, _CLIMB: low}
+        x = g.depth_m + noise[0]
+        reading = _f32_scalar(x if x > 0.0 else 0.0)
+        leg = self.ex.routine.leg
+        if leg == _DIVE and reading >= high:
+            leg = _CLIMB
+        elif leg == _CLIMB and reading <= low:
+            leg = _DIVE
+        legs: list[tuple[int, int, Glide, int]] = []
+        j, depth, actuators, exact = 0, g.depth_m, g.actuators, False
+        while True:
+            while j < count:
+                glide = self._glide(actuators, commands[leg])
+                if glide is None:
+                    break
+                if exact:  # the leg the certificate refuted: tick by tick in binary32
+                    ticks, leg_depths, stop = self._leg(glide, depth, noise, j, spread,
+                                                        edges[leg], leg == _DIVE, count - j)
+                    exact = False
+                    if stop:  # clamped at the surface: the run ends before that tick
+                        if ticks:
+                            legs.append((j, ticks, glide, leg))
+                        j += ticks
+                        break
+                    end_depth = leg_depths[ticks]
+                else:
+                    ticks, change = self._predict(glide, depth, noise, j, spread, edges[leg],
+                                                  leg == _DIVE, count - j)
+                    end_depth = depth + change
+                legs.append((j, ticks, glide, leg))
+                depth = end_depth
+                actuators = _after(glide, ticks)
+                j += ticks
+                leg = _CLIMB if leg == _DIVE else _DIVE
+            if not legs:
+                return None
+            flight = self._assemble(j, legs, None, surface=None)
+            refuted = self._refuted(flight, noise_array, edges)
+            if refuted is None:
+                return flight
+            # legs before the refuted one stand; fly it exactly, predict the rest again
+            first = legs[refuted][0]
+            leg = legs[refuted][3]
+            del legs[refuted:]
+            j, depth, exact = first, float(flight.depth_m[first]), True
+            actuators = flight.actuators_at(first, g.actuators)
+
+    def _predict(self, glide: Glide, depth: float, noise: list[float], first: int,
+                 spread: float, edge: float, diving: bool, limit: int) -> tuple[int, float]:
+        """The ticks of a yo leg (at most `limit`) and its depth change, predicted in double
+        precision: the first later tick whose depth plus its noise reaches `edge`."""
+        sums = self._sums.get(id(glide))
+        if sums is None:
+            sums = self._sums[id(glide)] = list(itertools.accumulate(glide.dz_m.tolist(),
+                                                                     initial=0.0))
+        settled = min(glide.settled, limit)
+        for t in range(1, settled + 1):
+            x = depth + sums[t] + noise[first + t]
+            if t < limit and ((x >= edge) if diving else (x <= edge)):
+                return t, sums[t]
+        if settled == limit:
+            return limit, sums[limit]
+        base = depth + sums[glide.settled]
+        step = sums[glide.settled + 1] - sums[glide.settled]
+        start = settled + 1
+        if step != 0.0 and (step > 0.0) == diving:  # skip the ticks that cannot reach it
+            near = edge - spread if diving else edge + spread
+            start = max(start, settled + int((near - base) / step))
+        for t in range(start, limit):
+            x = base + (t - settled) * step + noise[first + t]
+            if (x >= edge) if diving else (x <= edge):
+                return t, base + (t - settled) * step - depth
+        return limit, base + (limit - settled) * step - depth
+
+    def _refuted(self, flight: _Flight, noise: np.ndarray, edges: dict[int, float]
+                 ) -> int | None:
+        """The first leg whose turn, or a tick within it, the exact depths and readings
+        contradict (a depth below the surface counts), or None: every turn stands."""
+        legs, n = flight.legs, flight.count
+        depth = flight.depth_m
+        ends = np.array([first + ticks for first, ticks, _, _ in legs])
+        lengths = np.diff(np.concatenate([[0], ends]))
+        diving = np.repeat([leg == _DIVE for _, _, _, leg in legs], lengths)[:n - 1]
+        edge = np.repeat([edges[leg] for _, _, _, leg in legs], lengths)[:n - 1]
+        x = depth[1:n] + noise[1:n]
+        reading = _f32(np.where(x > 0.0, x, 0.0))
+        turns = np.zeros(n, bool)
+        turns[ends[ends < n] - 1] = True
+        wrong = depth[1:n + 1] < 0.0  # wrong[w]: tick w (of the leg holding it) refuted
+        wrong[:n - 1] |= np.where(diving, reading >= edge, reading <= edge) != turns[:n - 1]
+        bad = int(wrong.argmax())
+        if not wrong[bad]:
+            return None
+        return int(np.searchsorted(ends, bad, side="right"))
+
+    def _surfacing(self, ballast: float, count: int) -> _Flight | None:
+        g = self.glider
+        command = _command_f32(SURFACE_PITCH_RAD, ballast)
+        legs: list[tuple[int, int, Glide, int]] = []
+        depths: list[np.ndarray] = []
+        depth = g.depth_m
+        climb = 0
+        if depth > SURFACE_DEPTH_M:
+            glide = self._glide(g.actuators, command)
+            if glide is None:
+                return None
+            profile = self._depths(glide, depth, count)
+            up = np.flatnonzero(profile[1:] <= SURFACE_DEPTH_M)
+            climb = int(up[0]) + 1 if len(up) else count
+            if climb < count:  # the last climbing tick is clamped at the surface
+                profile[climb] = max(0.0, float(profile[climb]))
+            legs.append((0, climb, glide, 0))
+            depths.append(profile[:climb])
+            depth = float(profile[climb])
+        at_surface = count - climb
+        surface_time = g.surface_time_s if climb == 0 else -1.0
+        phases, after, fix = g.surface_along(at_surface, surface_time)
+        if at_surface:
+            depths.append(np.concatenate([[depth], np.zeros(at_surface - 1)]))
+            depth = 0.0
+        flight = self._assemble(climb, legs, np.concatenate([*depths, [depth]]),
+                                surface=(at_surface, phases, after))
+        flight.fix_at = climb + fix if fix >= 0 else -1
+        flight.surface_starts = surface_time < 0.0
+        return flight
+
+    def _assemble(self, ticks: int, legs: list, depth_m: np.ndarray | None,
+                  surface: tuple | None) -> _Flight:
+        """The per-tick arrays of the legs under water, then of the ticks at the surface
+        (`depth_m`: before each tick and after the last; None: the legs' running sum
+        from where the glider is)."""
+        tables: dict[int, int] = {}
+        glides: list[Glide] = []
+        for _, _, glide, _ in legs:
+            if id(glide) not in tables:
+                tables[id(glide)] = sum(len(x.dz_m) for x in glides)
+                glides.append(glide)
+        if legs:
+            starts = np.array([first for first, _, _, _ in legs])
+            lengths = np.array([n for _, n, _, _ in legs])
+            base = np.repeat([tables[id(gl)] for _, _, gl, _ in legs], lengths)
+            settled = np.repeat([gl.settled for _, _, gl, _ in legs], lengths)
+            offset = np.arange(ticks) - np.repeat(starts, lengths)
+            rows = base + np.minimum(offset, settled)
+
+            def column(name: str) -> np.ndarray:
+                return np.concatenate([getattr(gl, name) for gl in glides])[rows]
+        else:
+            def column(name: str) -> np.ndarray:
+                return np.empty(0)
+        pitch = column("pitch_rad")
+        phase = column("phase")
+        out, inn = column("pumped_out_cc"), column("pumped_in_cc")
+        inflection = column("inflection").astype(bool)
+        distance = column("distance_m")
+        if depth_m is None:
+            depth_m = np.empty(ticks + 1)
+            depth_m[0] = self.glider.depth_m
+            depth_m[1:] = column("dz_m")
+            np.add.accumulate(depth_m, out=depth_m)
+        surface_time = np.empty(0)
+        count = ticks
+        if surface is not None and surface[0]:
+            n, phases, surface_time = surface
+            g = self.glider
+            held_pitch = g.actuators[0] if not legs else _after(legs[-1][2], legs[-1][1])[0]
+            pitch = np.concatenate([pitch, np.full(n, held_pitch)])
+            phase = np.concatenate([phase, phases])
+            out = np.concatenate([out, np.zeros(n)])
+            inn = np.concatenate([inn, np.zeros(n)])
+            inflection = np.concatenate([inflection, np.zeros(n, bool)])
+            distance = np.concatenate([distance, np.zeros(n)])
+            count += n
+        return _Flight(count, depth_m, pitch, phase, out, inn, inflection, distance, legs,
+                       ticks, surface_time, -1, False)
+
+    def _leg(self, glide: Glide, depth: float, noise: list[float], first: int,
+             spread: float, edge: float, diving: bool, limit: int
+             ) -> tuple[int, list[float], bool]:
+        """Ticks of one yo leg from `depth` on tick `first` (at most `limit`), its depths
+        before each tick and after, and whether the run must stop after it.
+
+        The leg ends on the first later tick whose depth reading (depth plus that tick's
+        `noise`, at most `spread` in size, through binary32) reaches the band's `edge`.
+        Depths are running sums, added in order as the glider adds them; where they run
+        steadily one way, bisection finds the ticks near the edge and only those are
+        decided in binary32, as the routine decides. A depth the glider would clamp at
+        the surface stops the run before the tick that clamps (the loop flies it)."""
+        changes = self._change_lists.get(id(glide))
+        if changes is None:
+            changes = self._change_lists[id(glide)] = glide.dz_m.tolist()
+        settled = min(glide.settled, limit)
+        depths = list(itertools.accumulate(changes[:settled], initial=depth))
+        margin = spread + 1e-6 * max(1.0, abs(edge))  # beyond which no reading can reach it
+        near = edge - margin if diving else edge + margin
+
+        def ends(t: int) -> tuple[int, list[float], bool] | None:
+            """The leg's end if tick t ends it (a clamp or a turn)."""
+            d = depths[t]
+            if d < 0.0:
+                return t - 1, depths, True
+            if ((d >= near) if diving else (d <= near)) and t < limit \
+                    and _reaches(d + noise[first + t], edge, diving):
+                return t, depths, False
+            return None
+
+        for t in range(1, settled + 1):  # settling: tick by tick
+            if (end := ends(t)) is not None:
+                return end
+        if settled == limit:
+            return limit, depths, False
+        step = changes[glide.settled]
+        if step == 0.0 or (step > 0.0) != diving:  # not moving toward the edge: scan it all
+            guess = limit - settled
+        else:
+            guess = int((edge - depths[-1]) / step) + 8
+        while True:
+            n = min(max(guess, 8), limit - settled)
+            depths = depths[:settled + 1]
+            depths += itertools.accumulate(itertools.repeat(step, n), initial=depths[-1])
+            del depths[settled + 1]  # accumulate's `initial` repeats the last depth
+            start = settled + 1
+            if guess < limit - settled and near >= 0.0:  # steadily toward the edge: bisect
+                start = max(start, bisect.bisect_left(depths, near, lo=settled) if diving else
+                            bisect.bisect_left(depths, -near, lo=settled, key=operator.neg))
+            for t in range(start, settled + n + 1):
+                if (end := ends(t)) is not None:
+                    return end
+            if settled + n == limit:
+                return limit, depths, False
+            guess = 2 * n
+
+    def _depths(self, glide: Glide, depth: float, ticks: int) -> np.ndarray:
+        """Depths before each of `ticks` ticks of a glide from `depth`, and after the last:
+        the running sum of the depth changes, added in order as the glider adds them."""
+        changes = self._changes.get(id(glide))
+        if changes is None or len(changes) <= ticks:
+            n = max(2 * ticks + 2, 512)
+            changes = np.concatenate([[0.0], glide.dz_m[np.minimum(np.arange(n),
+                                                                    glide.settled)]])
+            self._changes[id(glide)] = changes
+        depths = changes[:ticks + 1].copy()
+        depths[0] = depth
+        return np.add.accumulate(depths, out=depths)
+
+    # ---- the route ---------------------------------------------------------------------
+
+    def _route(self, flight: _Flight, count: int) -> _Route:
+        g, route = self.glider, self.ex.route
+        distance = flight.distance_m[:count]
+        fix = flight.fix_at if flight.fix_at < count else -1
+        if isinstance(route, pilot.NoHeading):
+            positions = g.drift_along(distance, np.full(count, g.heading_rad), fix)
+            return _Route(count, None, *positions)
+        target = route.points[route.k]
+        can_advance = route.k + 1 < len(route.points)
+        dr_lat, dr_lon, lat, lon = (np.empty(count + 1) for _ in range(4))
+        dr_lat[0], dr_lon[0], lat[0], lon[0] = g.positions
+        positions = (dr_lat, dr_lon, lat, lon)
+        heading, steer = np.empty(count), np.empty(count)
+        north, east = np.empty(count), np.empty(count)
+        lat_r, lon_r = np.empty(count), np.empty(count)
+        settled = 0  # ticks whose heading and the position after them are final
+        while settled < count:
+            here = _steer(*_readings(dr_lat[settled:settled + 1], dr_lon[settled:settled + 1]),
+                          target)
+            if math.hypot(float(here[1][0]), float(here[2][0])) < NEAR_WAYPOINT_M:
+                end = min(count, settled + MIN_NAV_WINDOW)
+                iterations = None
+            else:
+                end = min(count, settled + self.nav_window)
+                iterations, end = self._settle_window(settled, end, distance, fix, target,
+                                                      positions, heading, steer, north,
+                                                      east, lat_r, lon_r)
+            if iterations is None:  # near the waypoint, or it did not settle: tick by tick
+                reached = self._route_ticks(flight, settled, end, positions, heading)
+                if reached < end:
+                    return _Route(reached, heading, *positions)
+                self.nav_window = max(MIN_NAV_WINDOW, self.nav_window // 2)
+            else:
+                if can_advance:  # screened with numpy, decided as the route decides
+                    close = np.flatnonzero(np.hypot(north[settled:end], east[settled:end])
+                                           <= WAYPOINT_RADIUS_M * (1.0 + 1e-9))
+                    for j in (settled + close).tolist():
+                        if math.hypot(float(north[j]), float(east[j])) <= WAYPOINT_RADIUS_M:
+                            return _Route(j, heading, *positions)
+                grow = iterations <= NAV_ITERATIONS // 2
+                self.nav_window = min(MAX_NAV_WINDOW, 2 * self.nav_window) if grow else \
+                    max(MIN_NAV_WINDOW, self.nav_window // 2)
+            settled = end
+        return _Route(count, heading, *positions)
+
+    def _settle_window(self, first: int, end: int, distance: np.ndarray, fix: int,
+                       target: tuple[float, float], positions: tuple, heading: np.ndarray,
+                       steer: np.ndarray, north: np.ndarray, east: np.ndarray,
+                       lat_r: np.ndarray, lon_r: np.ndarray) -> tuple[int | None, int]:
+        """Headings and positions of ticks first..end-1, the position before `first`
+        final: iterated to the fixed point. Returns the number of iterations (None if it
+        did not settle, leaving the position before `first` as it was) and the end of
+        the window, which stops short where the glider comes near the waypoint. A heading
+        is recomputed only where its reading changed."""
+        g = self.glider
+        guess = heading[first - 1] if first else _steer(
+            *_readings(positions[0][:1], positions[1][:1]), target)[0][0]
+        heading[first:end] = guess
+        settled = first
+        for iteration in range(1, NAV_ITERATIONS + 1):
+            start = tuple(float(p[settled]) for p in positions)
+            tail = g.drift_along(distance[settled:end], heading[settled:end],
+                                 fix - settled if settled <= fix < end else -1, start)
+            for p, t in zip(positions, tail, strict=True):
+                p[settled:end + 1] = t
+            lat_new, lon_new = _readings(positions[0][settled:end], positions[1][settled:end])
+            if iteration == 1:
+                changed = settled + np.arange(end - settled)
+            else:
+                changed = settled + np.flatnonzero((lat_new != lat_r[settled:end])
+                                                   | (lon_new != lon_r[settled:end]))
+            lat_r[settled:end], lon_r[settled:end] = lat_new, lon_new
+            if len(changed):
+                steer[changed], north[changed], east[changed] = _steer(
+                    lat_r[changed], lon_r[changed], target)
+            if iteration == 1:  # stop short of the waypoint's neighbourhood
+                end = first + _first(np.hypot(north[first:end], east[first:end])
+                                     < NEAR_WAYPOINT_M, end - first)
+                if end == first:
+                    return None, first + 1
+            differ = settled + _first(steer[settled:end] != heading[settled:end], end - settled)
+            if differ == end:
+                return iteration, end
+            heading[differ:end] = steer[differ:end]
+            settled = differ
+        return None, end
+
+    def _route_ticks(self, flight: _Flight, first: int, end: int, positions: tuple,
+                     heading: np.ndarray) -> int:
+        """Ticks first..end-1 of the route one at a time, from the final position before
+        `first`: the route's own heading (on a copy), the glider's own drift (on a
+        scratch copy). Returns the tick that reaches a waypoint, else `end`."""
+        scratch = copy.copy(self.glider)
+        scratch.positions = tuple(float(p[first]) for p in positions)
+        route = copy.copy(self.ex.route)
+        k = route.k
+        distance = flight.distance_m[first:end].tolist()
+        for j in range(first, end):
+            h = _f32_scalar(route.heading(_f32_scalar(degrees_to_ddmm(scratch.dr_lat_deg)),
+                                          _f32_scalar(degrees_to_ddmm(scratch.dr_lon_deg)))[0])
+            if route.k != k:
+                return j
+            heading[j] = scratch.heading_rad = h
+            if j == flight.fix_at:
+                scratch.dr_lat_deg, scratch.dr_lon_deg = scratch.lat_deg, scratch.lon_deg
+            scratch._drift(distance[j - first], self.tick_s)
+            for p, value in zip(positions, scratch.positions, strict=True):
+                p[j + 1] = value
+        return end
+
+
+_ROUTES = (pilot.NoHeading, pilot.Waypoints)
+
+
+@dataclass
+class _Route:
+    """Headings flown (None: the route gives none) and positions over a run."""
+
+    count: int
+    heading: np.ndarray | None
+    dr_lat: np.ndarray  # count + 1 values: before each tick and after the last
+    dr_lon: np.ndarray
+    lat: np.ndarray
+    lon: np.ndarray
+
+    def positions_at(self, tick: int) -> tuple[float, float, float, float]:
+        return (float(self.dr_lat[tick]), float(self.dr_lon[tick]), float(self.lat[tick]),
+                float(self.lon[tick]))
+
+
+class _Readings:
+    """The sensor array over a run: each sensor's value per tick as the science computer
+    sends it (through binary32), and as the executor holds it (a sensor not sent keeps
+    its last value). Filled in as the run is computed: flight, CTD, route."""
+
+    def __init__(self, fast: FastForward, missiontime: np.ndarray, sent: np.ndarray) -> None:
+        self.fast, self.missiontime, self.sent = fast, missiontime, sent
+        self.flight: _Flight | None = None
+        self.depth_reading: np.ndarray | None = None
+        self.ctd = None
+        self.nav: _Route | None = None
+
+    def sensor(self, index: int, first: int, stop: int) -> np.ndarray:
+        """Sensor `index`'s value sent at ticks first..stop-1 (binary32)."""
+        if index == 0:
+            return self.missiontime[first:stop]
+        f, ctd, g = self.flight, self.ctd, self.fast.glider
+        n = stop - first
+        match index:
+            case 1:
+                return self.depth_reading[first:stop]
+            case 2:
+                return _f32(f.pitch_rad[first:stop])
+            case 4:  # the glider's heading at the tick's start: the last one steered
+                steered = None if self.nav is None else self.nav.heading
+                if steered is None:
+                    return np.full(n, _f32_scalar(g.heading_rad))
+                return _f32(np.concatenate([[g.heading_rad], steered])[first:stop])
+            case 5:
+                return _f32(BOTTOM_DEPTH_M - f.depth_m[first:stop])
+            case 6 | 7:
+                degrees = (self.nav.dr_lat if index == _LAT else self.nav.dr_lon)[first:stop]
+                return _f32(degrees_to_ddmm_array(degrees))
+            case 8:
+                return np.full(n, _f32_scalar(BATTERY_V))
+            case 9:
+                return _f32(ctd.measured_c[first:stop])
+            case 10:
+                from gliderplan.sim.science import conductivity_s_m
+
+                return _f32(conductivity_s_m(ctd.measured_c[first:stop],
+                                             ctd.salinity_psu[first:stop]))
+            case 11:
+                return _f32(ctd.salinity_psu[first:stop])
+            case 15:
+                return np.full(n, _f32_scalar(self.fast._current_reading))
+        return np.full(n, _f32_scalar(_CONSTANT_READINGS[index]))
+
+    def sensor_at(self, index: int, tick: int) -> float:
+        """Sensor `index`'s value sent at one tick of the run (binary32)."""
+        if index in _CONSTANT_READINGS:
+            return _F32_CONSTANTS[index]
+        f = self.flight
+        match index:
+            case 0:
+                return float(self.missiontime[tick])
+            case 1:
+                return float(self.depth_reading[tick])
+            case 2:
+                return _f32_scalar(float(f.pitch_rad[tick]))
+            case 5:
+                return _f32_scalar(BOTTOM_DEPTH_M - float(f.depth_m[tick]))
+            case 6 | 7:
+                nav = self.nav
+                return _f32_scalar(degrees_to_ddmm(float(
+                    (nav.dr_lat if index == _LAT else nav.dr_lon)[tick])))
+            case 8:
+                return _F32_BATTERY
+        return float(self.sensor(index, tick, tick + 1)[0])
+
+    def held(self, index: int, count: int) -> np.ndarray:
+        """Sensor `index` as the executor holds it over the first `count` ticks."""
+        values = self.sensor(index, 0, count)
+        sent = self.sent[:count] >> index & 1 != 0
+        if sent.all():
+            return values
+        before = self.fast.ex.s[index]
+        last = np.maximum.accumulate(np.where(sent, np.arange(count), -1))
+        return np.where(last >= 0, values[np.maximum(last, 0)], before)
+
+
+# The stages of a run after which readings are known: the schedule (missiontime), the
+# flight (depth, pitch, altitude, the fixed readings), the CTD, the route (position, heading).
+_SCHEDULE, _FLIGHT, _CTD, _NAV = range(4)
+_STAGE_OF = {0: _SCHEDULE, _TEMP: _CTD, _CONDUCTIVITY: _CTD, _SALINITY: _CTD, _LAT: _NAV,
+             _LON: _NAV, _HEADING: _NAV}
+
+
+def _staged(events: tuple[ir.Event, ...]) -> list[tuple | None]:
+    """The events in groups by the stage at which all they read is known: for each stage,
+    a checker of the group and the sensors it reads (None: no event)."""
+    groups: list[list[ir.Event]] = [[] for _ in range(4)]
+    for event in events:
+        read = compiled.sensors_read([event.condition])
+        groups[max((_STAGE_OF.get(s, _FLIGHT) for s in read), default=_SCHEDULE)].append(event)
+    return [(compiled.firing_ticks(g), compiled.sensors_read([e.condition for e in g]))
+            if g else None for g in groups]
+
+
+# the science computer's fixed readings (sim/science.py, `readings`)
+_CONSTANT_READINGS = {3: 0.0, 12: 250.0, 13: 1.0, 14: 0.001, 16: 0.0}
+_F32_CONSTANTS = {k: _f32_scalar(v) for k, v in _CONSTANT_READINGS.items()}
+_F32_BATTERY = _f32_scalar(BATTERY_V)
+
+
+def _covered(profile: ir.Profile) -> bool:
+    """Whether runs of ticks compute this profile (else it is flown tick by tick)."""
+    return profile.kind in ("yo", "surface") and not compiled.sensors_read(profile.args)
+
+
+def _readings(dr_lat: np.ndarray, dr_lon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The lat and lon readings [DDMM.MMMM, binary32] of dead-reckoned positions [deg]."""
+    return _f32(degrees_to_ddmm_array(dr_lat)), _f32(degrees_to_ddmm_array(dr_lon))
+
+
+def _steer(lat_r: np.ndarray, lon_r: np.ndarray, target: tuple[float, float]
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The route's heading [rad, binary32 as the COMMAND carries it] toward `target` [deg]
+    from lat and lon readings, and the (north, east) offsets [m] it is taken from."""
+    north, east = offset_m_array(ddmm_to_degrees_array(lat_r), ddmm_to_degrees_array(lon_r),
+                                 *target)
+    return bearing_binary32_array(north, east), north, east
+
+
+def _reaches(depth_m: float, edge: float, diving: bool) -> bool:
+    """Whether the reading of this depth (clamped at 0, through binary32) reaches a yo
+    band's edge: decided in double precision where binary32's rounding (6e-8 relative)
+    cannot change the answer."""
+    reading = depth_m if depth_m > 0.0 else 0.0
+    if abs(reading - edge) <= 1e-6 * max(1.0, abs(edge)):
+        reading = _f32_scalar(reading)
+    return reading >= edge if diving else reading <= edge
+
+
+def _positive(x: np.ndarray) -> np.ndarray:
+    """max(0.0, x) as Python picks: x if x > 0 else 0.0."""
+    return np.where(x > 0.0, x, 0.0)
+
+
+def _powered(sensor_power: np.ndarray) -> np.ndarray:
+    """`powered_mask` of each COMMAND's sensor power."""
+    if (sensor_power == sensor_power[0]).all():
+        return np.full(len(sensor_power), powered_mask(int(sensor_power[0])), np.int64)
+    mask = np.full(len(sensor_power), FLIGHT_SENSORS_MASK, np.int64)
+    for bits in DEVICE_MASKS.values():
+        mask |= np.where(sensor_power & bits != 0, bits, 0)
+    return mask
+
+
+def _first(flags: np.ndarray, default: int) -> int:
+    """Index of the first true flag, else `default`."""
+    if not len(flags):
+        return default
+    at = int(np.argmax(flags))  # stops at the first true one
+    return at if flags[at] else default
+
+
+def _last(flags: np.ndarray) -> int:
+    hit = np.flatnonzero(flags)
+    return int(hit[-1]) if len(hit) else -1
