@@ -1,11 +1,13 @@
-/* Table-driven CRCs: framing costs more than the mission's step, so the CRC-16 takes
- * two bytes per round (two lookups); the CRC-32 of plans and checkpoints one byte.
- * The tables are filled on first use (static memory, nothing allocated). */
+/* CRCs by slicing: four table lookups take four bytes through the register at once
+ * (Kounavis and Berry's slicing-by-N, here N = 4 to suit the boards' 32-bit CPUs), so
+ * a byte costs two to three instructions instead of a table-driven loop's six or seven.
+ * Table k holds the register's change for a byte followed by k zero bytes. The tables
+ * (2 KiB for the CRC-16, 4 KiB for the CRC-32) are filled on first use: static memory,
+ * nothing allocated. */
 #include "gp_crc.h"
 
-static uint16_t crc16_table[256];      /* one byte through the register */
-static uint16_t crc16_table_hi[256];   /* a byte followed by a zero byte */
-static uint32_t crc32_table[256];
+static uint16_t crc16_table[4][256];  /* not reflected: the register shifts left */
+static uint32_t crc32_table[4][256];  /* reflected: the register shifts right */
 static int tables_ready;
 
 static void fill_tables(void)
@@ -17,13 +19,16 @@ static void fill_tables(void)
             c16 = (c16 & 0x8000u) ? (uint16_t)((c16 << 1) ^ 0x1021u) : (uint16_t)(c16 << 1);
             c32 = (c32 & 1u) ? (c32 >> 1) ^ 0xEDB88320u : c32 >> 1;
         }
-        crc16_table[i] = c16;
-        crc32_table[i] = c32;
+        crc16_table[0][i] = c16;
+        crc32_table[0][i] = c32;
     }
-    /* The CRC is linear, so two bytes (hi, lo) through the register give
-     * table_hi[hi] ^ table[lo] with table_hi[i] = (table[i] << 8) ^ table[table[i] >> 8]. */
-    for (uint32_t i = 0; i < 256; i++) {
-        crc16_table_hi[i] = (uint16_t)((crc16_table[i] << 8) ^ crc16_table[crc16_table[i] >> 8]);
+    for (int k = 1; k < 4; k++) {  /* one more zero byte through the register */
+        for (uint32_t i = 0; i < 256; i++) {
+            uint16_t c16 = crc16_table[k - 1][i];
+            uint32_t c32 = crc32_table[k - 1][i];
+            crc16_table[k][i] = (uint16_t)((c16 << 8) ^ crc16_table[0][c16 >> 8]);
+            crc32_table[k][i] = (c32 >> 8) ^ crc32_table[0][c32 & 0xFFu];
+        }
     }
     tables_ready = 1;
 }
@@ -34,13 +39,16 @@ uint16_t gp_crc16(const uint8_t *data, size_t len)
         fill_tables();
     }
     uint16_t crc = 0xFFFFu;
-    size_t i = 0;
-    for (; i + 1 < len; i += 2) {
-        crc ^= (uint16_t)((data[i] << 8) | data[i + 1]);
-        crc = crc16_table_hi[crc >> 8] ^ crc16_table[crc & 0xFFu];
+    const uint8_t *p = data, *end = data + len;
+    for (; end - p >= 4; p += 4) {
+        /* the register's two bytes meet the first two data bytes; the last two have
+         * nothing to meet yet */
+        uint16_t x = (uint16_t)(crc ^ ((p[0] << 8) | p[1]));
+        crc = (uint16_t)(crc16_table[3][x >> 8] ^ crc16_table[2][x & 0xFFu]
+                         ^ crc16_table[1][p[2]] ^ crc16_table[0][p[3]]);
     }
-    if (i < len) {
-        crc = (uint16_t)((crc << 8) ^ crc16_table[((crc >> 8) ^ data[i]) & 0xFFu]);
+    for (; p < end; p++) {
+        crc = (uint16_t)((crc << 8) ^ crc16_table[0][(crc >> 8) ^ *p]);
     }
     return crc;
 }
@@ -51,8 +59,15 @@ uint32_t gp_crc32(uint32_t crc, const uint8_t *data, size_t len)
         fill_tables();
     }
     crc = ~crc;
-    for (size_t i = 0; i < len; i++) {
-        crc = (crc >> 8) ^ crc32_table[(crc ^ data[i]) & 0xFFu];
+    const uint8_t *p = data, *end = data + len;
+    for (; end - p >= 4; p += 4) {  /* bytes, not a word load: any alignment, any endianness */
+        uint32_t x = crc ^ ((uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16)
+                            | ((uint32_t)p[3] << 24));
+        crc = crc32_table[3][x & 0xFFu] ^ crc32_table[2][(x >> 8) & 0xFFu]
+            ^ crc32_table[1][(x >> 16) & 0xFFu] ^ crc32_table[0][x >> 24];
+    }
+    for (; p < end; p++) {
+        crc = (crc >> 8) ^ crc32_table[0][(crc ^ *p) & 0xFFu];
     }
     return ~crc;
 }

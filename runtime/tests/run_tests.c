@@ -36,7 +36,7 @@
     X(test_schedule_should_alternate_profiles_and_power_windows)            \
     X(test_schedule_should_give_the_remainder_to_the_last_nonzero_share)    \
     X(test_crc_should_match_catalogue_check_values)                         \
-    X(test_crc16_should_equal_the_bitwise_definition)                       \
+    X(test_crcs_should_equal_their_bitwise_definitions)                     \
     X(test_cobs_should_encode_the_reference_examples)                       \
     X(test_command_should_round_trip_through_a_frame)                       \
     X(test_sensors_should_update_only_the_masked_values)                    \

@@ -36,16 +36,37 @@ static uint16_t crc16_bitwise(const uint8_t *data, size_t len)
     return crc;
 }
 
-void test_crc16_should_equal_the_bitwise_definition(void)
+/* CRC-32/ISO-HDLC one bit at a time, continued from `crc`: the reference for the sliced one. */
+static uint32_t crc32_bitwise(uint32_t crc, const uint8_t *data, size_t len)
 {
-    uint8_t data[300];
+    crc = ~crc;
+    for (size_t i = 0; i < len; i++) {
+        crc ^= data[i];
+        for (int bit = 0; bit < 8; bit++) {
+            crc = (crc & 1u) ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
+        }
+    }
+    return ~crc;
+}
+
+/* Every length (a multiple of the slice or not) at every alignment, and a CRC-32 taken
+ * in two pieces split anywhere. */
+void test_crcs_should_equal_their_bitwise_definitions(void)
+{
+    uint8_t data[304];
     unsigned seed = 99;
     for (int round = 0; round < 500; round++) {
-        size_t len = gp_test_random(&seed) % sizeof data;  /* odd and even lengths */
-        for (size_t i = 0; i < len; i++) {
+        size_t offset = gp_test_random(&seed) % 4;
+        size_t len = gp_test_random(&seed) % (sizeof data - offset);
+        for (size_t i = 0; i < offset + len; i++) {
             data[i] = (uint8_t)gp_test_random(&seed);
         }
-        CHECK_INT(gp_crc16(data, len), crc16_bitwise(data, len));
+        const uint8_t *p = data + offset;
+        CHECK_INT(gp_crc16(p, len), crc16_bitwise(p, len));
+        uint32_t whole = crc32_bitwise(0, p, len);
+        CHECK_INT(gp_crc32(0, p, len), whole);
+        size_t split = len ? gp_test_random(&seed) % len : 0;
+        CHECK_INT(gp_crc32(gp_crc32(0, p, split), p + split, len - split), whole);
     }
 }
 
