@@ -149,6 +149,45 @@ def test_a_killed_runtime_resumes_from_its_checkpoint(binary, glider, tmp_path):
     assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE
 
 
+def newest_record(checkpoint: Path) -> int:
+    """Offset of the checkpoint's newest record (runtime/README.md: a header, then two
+    slots of the size the header gives; a record starts with its sequence number)."""
+    data = checkpoint.read_bytes()
+    slot = int.from_bytes(data[72:76], "little")
+    seqs = [int.from_bytes(data[at:at + 4], "little") for at in (slot, 2 * slot)]
+    return slot * (1 + seqs.index(max(seqs)))
+
+
+def test_a_checkpoint_torn_by_a_crash_gives_way_to_the_one_before(binary, glider, tmp_path):
+    """Killed while writing the checkpoint of the call into s2 (tick 50): its COMMAND never
+    went out and the record is torn. The science computer, without an answer, moves on to
+    tick 51. The restarted runtime resumes from the record before (in s1), drops the
+    call's line from the event log and makes the call on tick 51: the log and the
+    COMMANDs tell the same story."""
+    glider.start(binary, "--state-dir", str(tmp_path))
+    link = glider.link()
+    link.wait_hello()
+    before = fly(link, 0, 50)
+    assert before[-1].transition == TransitionKind.CALL
+    glider.process.send_signal(signal.SIGKILL)
+    glider.process.wait(5)
+    checkpoint = tmp_path / "checkpoint"
+    data = bytearray(checkpoint.read_bytes())
+    torn = newest_record(checkpoint)
+    data[torn + 20:torn + 40] = bytes(20)
+    checkpoint.write_bytes(bytes(data))
+
+    process = glider.start(binary, "--state-dir", str(tmp_path))
+    link.wait_hello()
+    after = fly(link, 51, 400)
+    assert (after[0].transition, after[0].from_state, after[0].state) == (
+        TransitionKind.CALL, 0, 1)
+    late_call = ["510 call s1 s2 1", *FIG2_TRACE[2:]]
+    assert transitions(before[:-1] + after) == [FIG2_TRACE[0], *late_call]
+    assert process.wait(10) == 0
+    assert (tmp_path / "events.log").read_text().splitlines() == [FIG2_TRACE[0], *late_call]
+
+
 def test_corrupted_frames_are_naked_and_the_trace_survives(binary, glider):
     process = glider.start(binary)
     link = glider.link()

@@ -53,7 +53,7 @@ static uint8_t crash_release[GP_MAX_FRAME];  /* RELEASE (internal error), framed
 static size_t crash_release_len;
 static gp_plan plan;
 static char plan_text[GP_MAX_PLAN_BYTES + 1];
-static uint8_t checkpoint_buf[GP_CHECKPOINT_SIZE];
+static gp_checkpoint checkpoint = {-1, 0};
 
 static void say(const link_state *s, const char *message)
 {
@@ -111,6 +111,7 @@ static int release(link_state *s, gp_release_reason reason, int status)
     if (s->events_fd >= 0) {
         close(s->events_fd);
     }
+    gp_checkpoint_close(&checkpoint);
     return status;
 }
 
@@ -133,33 +134,25 @@ static int load_plan(link_state *s, const char *path, char *message)
     return 0;
 }
 
-/* Resume from the state directory's checkpoint (and its plan) if there is one. */
+/* Resume from the state directory's checkpoint (and its plan) if there is one; else the
+ * checkpoint file comes into being holding the state before the first tick. */
 static int load_state(link_state *s, char *message)
 {
     const char *dir = s->args->state_dir;
-    char path[GP_PATH_MAX];
     if (mkdir(dir, 0755) < 0 && errno != EEXIST) {
         snprintf(message, ERROR_LEN, "%.200s: cannot create the state directory: %s", dir,
                  strerror(errno));
         return -1;
     }
-    if (gp_path_join(dir, "checkpoint", path) < 0) {
-        snprintf(message, ERROR_LEN, "state directory path too long");
-        return -1;
-    }
-    long len = gp_read_file(path, checkpoint_buf, sizeof checkpoint_buf);
-    if (len == -1) {
-        return 0;
-    }
-    const char *problem = len < 0 ? "unreadable"
-        : gp_checkpoint_decode(s->mission, checkpoint_buf, (size_t)len, &runtime);
-    if (problem) {
-        snprintf(message, ERROR_LEN, "%.180s: %s; remove it to start the mission afresh", path,
-                 problem);
+    int resumed;
+    const char *problem;
+    if (gp_checkpoint_open(&checkpoint, dir, s->mission, &runtime, &resumed, &problem) < 0) {
+        snprintf(message, ERROR_LEN, "%.180s/checkpoint: %s%s", dir, problem,
+                 resumed ? "; remove it to start the mission afresh" : "");
         return -1;
     }
     char plan_path[GP_PATH_MAX];  /* a plan adopted over the link outlives a restart */
-    if (gp_path_join(dir, "plan", plan_path) == 0 && access(plan_path, F_OK) == 0) {
+    if (resumed && gp_path_join(dir, "plan", plan_path) == 0 && access(plan_path, F_OK) == 0) {
         return load_plan(s, plan_path, message);
     }
     return 0;
@@ -211,9 +204,7 @@ static int persist(link_state *s, const gp_tick_report *report)
     if (s->args->state_dir && report->changed) {
         off_t size = lseek(s->events_fd, 0, SEEK_END);
         runtime.events_log_bytes = size < 0 ? 0 : (uint32_t)size;
-        gp_checkpoint_encode(s->mission, &runtime, checkpoint_buf);
-        return gp_write_atomically(s->args->state_dir, "checkpoint", checkpoint_buf,
-                                   sizeof checkpoint_buf);
+        return gp_checkpoint_store(&checkpoint, s->mission, &runtime);
     }
     return 0;
 }

@@ -1,5 +1,6 @@
-/* Crash safety: a checkpoint is either the old or the new one (rename is atomic),
- * and its CRC catches a file damaged outside the runtime. */
+/* Crash safety: the checkpoint's records alternate between two slots, so a write torn
+ * by a crash never touches the newest intact record, and each record's CRC-32 tells a
+ * torn one apart; the file itself comes into being whole (rename is atomic). */
 #define _POSIX_C_SOURCE 200809L
 #include "gp_store.h"
 
@@ -11,89 +12,253 @@
 
 #include "gp_crc.h"
 
-static void put_u32(uint8_t *p, uint32_t v)
+/* ---- records ------------------------------------------------------------------ */
+
+/* Fields in the board's own byte order (all three targets are little-endian): a record
+ * is read back only by the build that wrote it, which the header's slot size and the
+ * mission hash check. */
+typedef struct {
+    uint8_t *at;
+} writer;
+
+static void put(writer *w, const void *value, size_t n)
 {
-    for (int i = 0; i < 4; i++) {
-        p[i] = (uint8_t)(v >> (8 * i));
-    }
+    memcpy(w->at, value, n);
+    w->at += n;
 }
 
-static uint32_t get_u32(const uint8_t *p)
+typedef struct {
+    const uint8_t *at, *end;
+    int short_read;  /* a field ran past the record */
+} reader;
+
+static void get(reader *r, void *value, size_t n)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+    if ((size_t)(r->end - r->at) < n) {
+        r->short_read = 1;
+        memset(value, 0, n);
+        return;
+    }
+    memcpy(value, r->at, n);
+    r->at += n;
 }
 
-void gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uint8_t *buf)
+static void put_command(writer *w, const gp_command *c)
 {
-    memcpy(buf, GP_CHECKPOINT_MAGIC, 8);
-    memset(buf + 8, 0, 64);
-    if (mission->hash) {
-        memcpy(buf + 8, mission->hash, strnlen(mission->hash, 64));
-    }
-    put_u32(buf + 72, (uint32_t)GP_CHECKPOINT_STATE_SIZE);
-    memcpy(buf + 76, rt, GP_CHECKPOINT_STATE_SIZE);
-    size_t body = 76 + GP_CHECKPOINT_STATE_SIZE;
-    put_u32(buf + body, gp_crc32(0, buf, body));
+    put(w, &c->tick, 4);
+    const uint8_t bytes[7] = {c->state, c->stack_depth, c->transition, c->from, c->to,
+                              c->profile, c->flags};
+    put(w, bytes, sizeof bytes);
+    put(w, &c->depth_target_m, 4);
+    put(w, &c->pitch_rad, 4);
+    put(w, &c->ballast_cc, 4);
+    put(w, &c->heading_rad, 4);
+    put(w, &c->sensor_power, 4);
+    put(w, &c->event_count, 4);
 }
 
-const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *buf, size_t len,
-                                 gp_runtime *rt)
+static void get_command(reader *r, gp_command *c)
 {
-    size_t body = 76 + GP_CHECKPOINT_STATE_SIZE;
-    if (len < 8 || memcmp(buf, GP_CHECKPOINT_MAGIC, 8) != 0) {
-        return "not a checkpoint of this runtime version";
+    uint8_t bytes[7];
+    get(r, &c->tick, 4);
+    get(r, bytes, sizeof bytes);
+    c->state = bytes[0];
+    c->stack_depth = bytes[1];
+    c->transition = bytes[2];
+    c->from = bytes[3];
+    c->to = bytes[4];
+    c->profile = bytes[5];
+    c->flags = bytes[6];
+    get(r, &c->depth_target_m, 4);
+    get(r, &c->pitch_rad, 4);
+    get(r, &c->ballast_cc, 4);
+    get(r, &c->heading_rad, 4);
+    get(r, &c->sensor_power, 4);
+    get(r, &c->event_count, 4);
+}
+
+size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uint32_t seq,
+                            uint8_t *record)
+{
+    writer w = {record + 6};  /* after the sequence number and the length */
+    const gp_machine *m = &rt->machine;
+    const gp_pilot *pilot = &rt->pilot;
+    uint8_t depth = m->depth <= GP_MAX_STACK_DEPTH ? m->depth : GP_MAX_STACK_DEPTH;
+    uint8_t n_vars = mission->n_vars <= GP_MAX_VARIABLES ? mission->n_vars : GP_MAX_VARIABLES;
+    uint8_t n_window = pilot->n_window <= GP_TRACK_WINDOW ? pilot->n_window : GP_TRACK_WINDOW;
+    uint8_t n_recent = pilot->n_recent <= 3 ? pilot->n_recent : 3;
+    const uint8_t head[6] = {rt->started, m->state, depth, n_vars, rt->profile,
+                             rt->has_command};
+    put(&w, head, sizeof head);
+    put(&w, m->stack, depth);
+    put(&w, &m->event_count, 4);
+    put(&w, &rt->events_log_bytes, 4);
+    put(&w, &rt->entry_time_s, 8);
+    put(&w, m->vars, 8u * n_vars);
+    for (int i = 0; i < GP_N_SENSORS; i++) {  /* only what the mission reads */
+        if ((mission->read_mask >> i) & 1u) {
+            put(&w, &rt->sensors[i], 8);
+        }
     }
-    if (len != GP_CHECKPOINT_SIZE || get_u32(buf + 72) != GP_CHECKPOINT_STATE_SIZE) {
-        return "truncated, or written by another build of the runtime";
+    const uint8_t pilot_head[4] = {pilot->leg, pilot->detected, n_window, n_recent};
+    put(&w, pilot_head, sizeof pilot_head);
+    put(&w, &pilot->lo_m, 8);
+    put(&w, &pilot->hi_m, 8);
+    put(&w, &pilot->previous_c, 8);
+    put(&w, pilot->recent_c, 8u * n_recent);
+    put(&w, pilot->window, sizeof pilot->window[0] * n_window);
+    put(&w, &rt->route.next, 2);
+    put_command(&w, &rt->last_command);
+    size_t len = (size_t)(w.at - record) + 4;
+    memcpy(record, &seq, 4);
+    uint16_t len16 = (uint16_t)len;
+    memcpy(record + 4, &len16, 2);
+    uint32_t crc = gp_crc32(0, record, len - 4);
+    memcpy(record + len - 4, &crc, 4);
+    return len;
+}
+
+const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *record, size_t len,
+                                 uint32_t *seq, gp_runtime *rt)
+{
+    uint16_t size;
+    if (len < 6 + 4) {
+        return "record truncated";
     }
-    if (gp_crc32(0, buf, body) != get_u32(buf + body)) {
-        return "checksum mismatch (damaged file)";
+    memcpy(&size, record + 4, 2);
+    if (size < 6 + 4 || size > len || size > GP_CHECKPOINT_MAX_RECORD) {
+        return "record truncated, or its length damaged";
     }
-    char hash[64] = {0};
-    if (mission->hash) {
-        memcpy(hash, mission->hash, strnlen(mission->hash, 64));
-    }
-    if (memcmp(buf + 8, hash, 64) != 0) {
-        return "written by another mission";
+    uint32_t crc;
+    memcpy(&crc, record + size - 4, 4);
+    if (gp_crc32(0, record, size - 4u) != crc) {
+        return "checksum mismatch (damaged record)";
     }
     static gp_runtime loaded;  /* 5 KiB: static, not on a small board's stack */
-    memset(&loaded, 0, sizeof loaded);
-    memcpy(&loaded, buf + 76, GP_CHECKPOINT_STATE_SIZE);
-    if (loaded.machine.state != GP_EXITED && loaded.machine.state >= mission->n_states) {
-        return "state index outside the mission";
-    }
-    if (loaded.machine.depth > mission->stack_depth || loaded.pilot.n_window > GP_TRACK_WINDOW
-        || loaded.pilot.n_recent > 3 || loaded.route.n_waypoints > GP_MAX_SWEEP_WAYPOINTS
-        || loaded.route.next >= GP_MAX_SWEEP_WAYPOINTS
-        || (loaded.profile >= GP_MAX_PROFILE_ALTERNATIVES && loaded.profile != GP_NO_PROFILE)) {
+    gp_runtime_init(&loaded);
+    gp_machine *m = &loaded.machine;
+    gp_pilot *pilot = &loaded.pilot;
+    reader r = {record + 6, record + size - 4, 0};
+    uint8_t head[6];
+    get(&r, head, sizeof head);
+    loaded.started = head[0];
+    m->state = head[1];
+    m->depth = head[2];
+    loaded.profile = head[4];
+    loaded.has_command = head[5];
+    if (head[3] != mission->n_vars || m->depth > mission->stack_depth
+        || m->depth > GP_MAX_STACK_DEPTH) {
         return "counts outside their bounds";
     }
-    for (int i = 0; i < loaded.machine.depth; i++) {
-        if (loaded.machine.stack[i] >= mission->n_states) {
+    get(&r, m->stack, m->depth);
+    get(&r, &m->event_count, 4);
+    get(&r, &loaded.events_log_bytes, 4);
+    get(&r, &loaded.entry_time_s, 8);
+    get(&r, m->vars, 8u * mission->n_vars);
+    for (int i = 0; i < GP_N_SENSORS; i++) {
+        if ((mission->read_mask >> i) & 1u) {
+            get(&r, &loaded.sensors[i], 8);
+        }
+    }
+    uint8_t pilot_head[4];
+    get(&r, pilot_head, sizeof pilot_head);
+    pilot->leg = pilot_head[0];
+    pilot->detected = pilot_head[1];
+    pilot->n_window = pilot_head[2];
+    pilot->n_recent = pilot_head[3];
+    if (pilot->n_window > GP_TRACK_WINDOW || pilot->n_recent > 3) {
+        return "counts outside their bounds";
+    }
+    get(&r, &pilot->lo_m, 8);
+    get(&r, &pilot->hi_m, 8);
+    get(&r, &pilot->previous_c, 8);
+    get(&r, pilot->recent_c, 8u * pilot->n_recent);
+    get(&r, pilot->window, sizeof pilot->window[0] * pilot->n_window);
+    get(&r, &loaded.route.next, 2);
+    get_command(&r, &loaded.last_command);
+    if (r.short_read || r.at != r.end) {
+        return "record length disagrees with its counts";
+    }
+    if (m->state != GP_EXITED && m->state >= mission->n_states) {
+        return "state index outside the mission";
+    }
+    if (loaded.profile >= GP_MAX_PROFILE_ALTERNATIVES && loaded.profile != GP_NO_PROFILE) {
+        return "counts outside their bounds";
+    }
+    for (int i = 0; i < m->depth; i++) {
+        if (m->stack[i] >= mission->n_states) {
             return "stacked state outside the mission";
         }
     }
-    if (loaded.machine.state < mission->n_states) {
-        gp_route_fill(&loaded.route, &mission->states[loaded.machine.state].route);
+    if (m->state < mission->n_states) {
+        gp_route_fill(&loaded.route, &mission->states[m->state].route);
         if (loaded.route.next >= loaded.route.n_waypoints && loaded.route.next > 0) {
             return "waypoint index outside the route";
         }
     }
+    memcpy(seq, record, 4);
     *rt = loaded;
     return NULL;
 }
 
-int gp_path_join(const char *dir, const char *name, char *out)
+/* ---- the checkpoint file --------------------------------------------------------- */
+
+static uint8_t record_buf[GP_CHECKPOINT_MAX_RECORD];
+
+static void encode_header(const gp_mission *mission, uint8_t *header)
 {
-    int n = snprintf(out, GP_PATH_MAX, "%s/%s", dir, name);
-    return (n < 0 || n >= GP_PATH_MAX) ? -1 : 0;
+    uint32_t slot = GP_CHECKPOINT_SLOT_BYTES;
+    memcpy(header, GP_CHECKPOINT_MAGIC, 8);
+    memset(header + 8, 0, 64);
+    if (mission->hash) {
+        memcpy(header + 8, mission->hash, strnlen(mission->hash, 64));
+    }
+    memcpy(header + 72, &slot, 4);
+    uint32_t crc = gp_crc32(0, header, 76);
+    memcpy(header + 76, &crc, 4);
 }
 
-static int write_all(int fd, const void *data, size_t len)
+static const char *check_header(const gp_mission *mission, const uint8_t *header, long len)
+{
+    uint8_t expected[GP_CHECKPOINT_HEADER_BYTES];
+    if (len < 8 || memcmp(header, GP_CHECKPOINT_MAGIC, 8) != 0) {
+        return "not a checkpoint of this runtime version";
+    }
+    encode_header(mission, expected);
+    if (len < GP_CHECKPOINT_HEADER_BYTES || memcmp(header + 72, expected + 72, 4) != 0) {
+        return "truncated, or written by another build of the runtime";
+    }
+    uint32_t crc;
+    memcpy(&crc, header + 76, 4);
+    if (gp_crc32(0, header, 76) != crc) {
+        return "checksum mismatch in its header (damaged file)";
+    }
+    if (memcmp(header + 8, expected + 8, 64) != 0) {
+        return "written by another mission";
+    }
+    return NULL;
+}
+
+static off_t slot_offset(uint32_t seq)
+{
+    return (off_t)GP_CHECKPOINT_SLOT_BYTES * (1 + (seq & 1u));
+}
+
+static ssize_t read_at(int fd, void *buf, size_t len, off_t offset)
+{
+    ssize_t n;
+    do {
+        n = pread(fd, buf, len, offset);
+    } while (n < 0 && errno == EINTR);
+    return n;
+}
+
+/* All of `data` at `offset`, or at the end with a negative offset (the event log). */
+static int write_at(int fd, const void *data, size_t len, off_t offset)
 {
     const uint8_t *p = data;
     while (len > 0) {
-        ssize_t n = write(fd, p, len);
+        ssize_t n = offset < 0 ? write(fd, p, len) : pwrite(fd, p, len, offset);
         if (n < 0 && errno == EINTR) {
             continue;
         }
@@ -102,11 +267,20 @@ static int write_all(int fd, const void *data, size_t len)
         }
         p += n;
         len -= (size_t)n;
+        offset = offset < 0 ? offset : offset + n;
     }
     return 0;
 }
 
-int gp_write_atomically(const char *dir, const char *name, const void *data, size_t len)
+/* Pieces of a file written whole: temporary file, fsync, rename, fsync of the
+ * directory. What lies between the pieces reads as zeros. */
+typedef struct {
+    off_t offset;
+    const void *data;
+    size_t len;
+} piece;
+
+static int replace_file(const char *dir, const char *name, const piece *pieces, int n_pieces)
 {
     char path[GP_PATH_MAX], tmp[GP_PATH_MAX + 8];
     if (gp_path_join(dir, name, path) < 0) {
@@ -118,7 +292,11 @@ int gp_write_atomically(const char *dir, const char *name, const void *data, siz
     if (fd < 0) {
         return -1;
     }
-    if (write_all(fd, data, len) < 0 || fsync(fd) < 0) {
+    int failed = 0;
+    for (int i = 0; i < n_pieces && !failed; i++) {
+        failed = write_at(fd, pieces[i].data, pieces[i].len, pieces[i].offset) < 0;
+    }
+    if (failed || fsync(fd) < 0) {
         int saved = errno;
         close(fd);
         unlink(tmp);
@@ -134,6 +312,111 @@ int gp_write_atomically(const char *dir, const char *name, const void *data, siz
         close(dir_fd);
     }
     return 0;
+}
+
+int gp_write_atomically(const char *dir, const char *name, const void *data, size_t len)
+{
+    const piece whole = {0, data, len};
+    return replace_file(dir, name, &whole, 1);
+}
+
+/* The file as it comes into being: the header, and `rt` as record 1 in slot 1; slot 0
+ * holds no record yet (zeros fail the CRC). */
+static int create_checkpoint(const char *dir, const gp_mission *mission, const gp_runtime *rt)
+{
+    uint8_t header[GP_CHECKPOINT_HEADER_BYTES];
+    encode_header(mission, header);
+    size_t len = gp_checkpoint_encode(mission, rt, 1, record_buf);
+    const piece pieces[] = {{0, header, sizeof header}, {slot_offset(1), record_buf, len}};
+    return replace_file(dir, "checkpoint", pieces, 2);
+}
+
+/* The newest intact record of an open file into `rt`; NULL, or what is wrong. */
+static const char *load_newest(int fd, const gp_mission *mission, gp_runtime *rt,
+                               uint32_t *seq)
+{
+    uint8_t header[GP_CHECKPOINT_HEADER_BYTES];
+    const char *problem = check_header(mission, header,
+                                       (long)read_at(fd, header, sizeof header, 0));
+    if (problem) {
+        return problem;
+    }
+    uint32_t claimed[2] = {0, 0};  /* sequence numbers as the slots claim them */
+    for (uint32_t slot = 0; slot < 2; slot++) {
+        if (read_at(fd, &claimed[slot], 4, slot_offset(slot)) != 4) {
+            claimed[slot] = 0;
+        }
+    }
+    uint32_t first = claimed[1] > claimed[0] ? 1 : 0;  /* the newer one, if it is intact */
+    for (uint32_t slot = first, tries = 0; tries < 2; tries++, slot ^= 1u) {
+        ssize_t n = read_at(fd, record_buf, sizeof record_buf, slot_offset(slot));
+        const char *why = gp_checkpoint_decode(mission, record_buf, n < 0 ? 0 : (size_t)n,
+                                               seq, rt);
+        if (!why) {
+            return NULL;
+        }
+        problem = problem ? problem : why;  /* the newer one's: a torn write, or none */
+    }
+    return problem;
+}
+
+int gp_checkpoint_open(gp_checkpoint *cp, const char *dir, const gp_mission *mission,
+                       gp_runtime *rt, int *resumed, const char **problem)
+{
+    char path[GP_PATH_MAX];
+    cp->fd = -1;
+    cp->seq = 1;
+    *resumed = 0;
+    *problem = "state directory path too long";
+    if (gp_path_join(dir, "checkpoint", path) < 0) {
+        return -1;
+    }
+    int fd = open(path, O_RDWR);
+    if (fd < 0 && errno == ENOENT) {
+        if (create_checkpoint(dir, mission, rt) < 0 || (fd = open(path, O_RDWR)) < 0) {
+            *problem = strerror(errno);
+            return -1;
+        }
+        cp->fd = fd;
+        return 0;
+    }
+    if (fd < 0) {
+        *problem = strerror(errno);
+        return -1;
+    }
+    *resumed = 1;
+    *problem = load_newest(fd, mission, rt, &cp->seq);
+    if (*problem) {
+        close(fd);
+        return -1;
+    }
+    cp->fd = fd;
+    return 0;
+}
+
+int gp_checkpoint_store(gp_checkpoint *cp, const gp_mission *mission, const gp_runtime *rt)
+{
+    uint32_t seq = cp->seq + 1;
+    size_t len = gp_checkpoint_encode(mission, rt, seq, record_buf);
+    if (write_at(cp->fd, record_buf, len, slot_offset(seq)) < 0 || fdatasync(cp->fd) < 0) {
+        return -1;
+    }
+    cp->seq = seq;
+    return 0;
+}
+
+void gp_checkpoint_close(gp_checkpoint *cp)
+{
+    if (cp->fd >= 0) {
+        close(cp->fd);
+        cp->fd = -1;
+    }
+}
+
+int gp_path_join(const char *dir, const char *name, char *out)
+{
+    int n = snprintf(out, GP_PATH_MAX, "%s/%s", dir, name);
+    return (n < 0 || n >= GP_PATH_MAX) ? -1 : 0;
 }
 
 long gp_read_file(const char *path, void *buf, size_t cap)
@@ -187,5 +470,5 @@ int gp_events_append(int fd, const gp_mission *mission, double time_s, const cha
     if (n < 0 || (size_t)n >= sizeof line) {
         return -1;
     }
-    return (write_all(fd, line, (size_t)n) < 0 || fsync(fd) < 0) ? -1 : 0;
+    return (write_at(fd, line, (size_t)n, -1) < 0 || fsync(fd) < 0) ? -1 : 0;
 }

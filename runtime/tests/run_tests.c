@@ -45,8 +45,10 @@
     X(test_reader_should_split_one_chunk_into_its_frames)                   \
     X(test_random_bytes_should_never_crash_the_reader)                      \
     X(test_hello_should_carry_the_raw_mission_hash)                         \
-    X(test_checkpoint_should_round_trip)                                    \
-    X(test_checkpoint_should_refuse_damaged_and_foreign_files)              \
+    X(test_checkpoint_should_round_trip_what_is_in_use)                     \
+    X(test_checkpoint_should_refuse_damaged_and_foreign_records)            \
+    X(test_checkpoint_file_should_resume_from_the_newest_intact_record)     \
+    X(test_checkpoint_should_survive_kill_9_at_any_point)                   \
     X(test_atomic_write_should_replace_the_file_whole)                      \
     X(test_event_log_should_append_one_line_per_transition)                 \
     X(test_runtime_should_fly_fig2_and_report_each_transition)              \

@@ -142,14 +142,15 @@ void test_runtime_should_follow_the_plan_schedule(void)
 void test_runtime_should_resume_from_a_checkpoint_with_the_same_trace(void)
 {
     static gp_runtime rt, resumed;
-    static uint8_t buf[GP_CHECKPOINT_SIZE];
+    static uint8_t record[GP_CHECKPOINT_MAX_RECORD];
     gp_run_options options = {NULL, 0};
     row rows[16];
     gp_runtime_init(&rt);
     int n = run(&rt, &options, 0, 50, rows, 0, NULL);  /* up to the call into s2 */
-    gp_checkpoint_encode(&gp_mission_table, &rt, buf);
+    size_t len = gp_checkpoint_encode(&gp_mission_table, &rt, 2, record);
     run(&rt, &options, 51, 120, rows, n, NULL);        /* then it "crashes" at tick 120 */
-    CHECK(gp_checkpoint_decode(&gp_mission_table, buf, sizeof buf, &resumed) == NULL);
+    uint32_t seq;
+    CHECK(gp_checkpoint_decode(&gp_mission_table, record, len, &seq, &resumed) == NULL);
     CHECK_INT(resumed.machine.state, 1);
     CHECK_NEAR(resumed.entry_time_s, 500, 0);
     n = run(&resumed, &options, 121, 399, rows, n, NULL);

@@ -1,8 +1,13 @@
-/* Checkpoint and event log: a round trip, damaged and foreign checkpoints refused,
+/* Checkpoint and event log: a record's round trip, damaged and foreign records and
+ * files refused, a torn record giving way to the one before, kill -9 at random moments,
  * the atomic write leaving no temporary file, the log's line format. */
 #define _POSIX_C_SOURCE 200809L
 #include <fcntl.h>
+#include <signal.h>
+#include <stddef.h>
 #include <stdlib.h>
+#include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "gp_store.h"
@@ -15,6 +20,14 @@ static char *temp_dir(void)
     return mkdtemp(path);
 }
 
+static void remove_dir(const char *dir)
+{
+    char path[GP_PATH_MAX];
+    gp_path_join(dir, "checkpoint", path);
+    unlink(path);
+    rmdir(dir);
+}
+
 static void sample_runtime(gp_runtime *rt)
 {
     gp_runtime_init(rt);
@@ -25,48 +38,202 @@ static void sample_runtime(gp_runtime *rt)
     rt->machine.event_count = 7;
     rt->entry_time_s = 500;
     rt->sensors[0] = 812;
+    rt->sensors[9] = 14.5;
     rt->pilot.lo_m = 12.5;
     rt->pilot.hi_m = 16.5;
     rt->pilot.n_window = 2;
     rt->pilot.window[1] = (gp_reading){14.0, 11.5};
+    rt->pilot.n_recent = 1;
+    rt->pilot.recent_c[0] = 11.25;
     rt->profile = 0;
     rt->last_command.tick = 81;
+    rt->last_command.pitch_rad = 0.454f;
     rt->has_command = 1;
 }
 
-void test_checkpoint_should_round_trip(void)
+static const char *or_none(const char *problem) { return problem ? problem : "(none)"; }
+
+void test_checkpoint_should_round_trip_what_is_in_use(void)
 {
-    static gp_runtime rt, back;
-    static uint8_t buf[GP_CHECKPOINT_SIZE];
+    static gp_runtime rt, back, expected;
+    static uint8_t record[GP_CHECKPOINT_MAX_RECORD];
     sample_runtime(&rt);
-    gp_checkpoint_encode(&gp_mission_table, &rt, buf);
-    CHECK(gp_checkpoint_decode(&gp_mission_table, buf, sizeof buf, &back) == NULL);
-    CHECK(memcmp(&rt, &back, sizeof rt) == 0);
-    CHECK_INT(back.machine.state, 1);
+    rt.sensors[5] = 3;  /* Fig. 2 does not read the altitude: not kept */
+    size_t len = gp_checkpoint_encode(&gp_mission_table, &rt, 42, record);
+    CHECK(len < 200);  /* the whole runtime state is 1.9 KiB */
+    uint32_t seq = 0;
+    CHECK(gp_checkpoint_decode(&gp_mission_table, record, len, &seq, &back) == NULL);
+    CHECK_INT(seq, 42);
+    expected = rt;
+    expected.sensors[5] = NAN;
+    CHECK(memcmp(&expected, &back, offsetof(gp_runtime, route)) == 0);
+    CHECK_INT(back.route.next, 0);
     CHECK_NEAR(back.pilot.window[1].temp_c, 11.5, 0);
-    CHECK(isnan(back.sensors[5]));
+    CHECK(back.last_command.pitch_rad == rt.last_command.pitch_rad);
+    /* the slot's bytes after the record do not matter: its length field says where it ends */
+    memset(record + len, 0xA5, sizeof record - len);
+    CHECK(gp_checkpoint_decode(&gp_mission_table, record, sizeof record, &seq, &back) == NULL);
 }
 
-void test_checkpoint_should_refuse_damaged_and_foreign_files(void)
+void test_checkpoint_should_refuse_damaged_and_foreign_records(void)
 {
     static gp_runtime rt, back;
-    static uint8_t buf[GP_CHECKPOINT_SIZE];
+    static uint8_t record[GP_CHECKPOINT_MAX_RECORD];
+    uint32_t seq;
     sample_runtime(&rt);
-    gp_checkpoint_encode(&gp_mission_table, &rt, buf);
-    CHECK_CONTAINS(gp_checkpoint_decode(&gp_mission_table, buf, sizeof buf - 1, &back),
-                   "truncated");
-    buf[100] ^= 1;
-    CHECK_CONTAINS(gp_checkpoint_decode(&gp_mission_table, buf, sizeof buf, &back), "checksum");
-    buf[100] ^= 1;
+    size_t len = gp_checkpoint_encode(&gp_mission_table, &rt, 3, record);
+    CHECK_CONTAINS(or_none(gp_checkpoint_decode(&gp_mission_table, record, len - 1, &seq,
+                                                &back)), "truncated");
+    record[30] ^= 1;
+    CHECK_CONTAINS(or_none(gp_checkpoint_decode(&gp_mission_table, record, len, &seq, &back)),
+                   "checksum");
+    CHECK_INT(back.machine.event_count, 0);  /* untouched by a refused record */
+    memset(record, 0, sizeof record);  /* a slot never written */
+    CHECK(gp_checkpoint_decode(&gp_mission_table, record, sizeof record, &seq, &back) != NULL);
+    rt.machine.state = 9;  /* well-formed but outside the mission: refused too */
+    len = gp_checkpoint_encode(&gp_mission_table, &rt, 3, record);
+    CHECK_CONTAINS(or_none(gp_checkpoint_decode(&gp_mission_table, record, len, &seq, &back)),
+                   "outside the mission");
+}
+
+static void corrupt_byte(const char *dir, off_t offset)
+{
+    char path[GP_PATH_MAX];
+    gp_path_join(dir, "checkpoint", path);
+    int fd = open(path, O_RDWR);
+    uint8_t byte = 0;
+    CHECK(pread(fd, &byte, 1, offset) == 1);
+    byte ^= 0x40;
+    CHECK(pwrite(fd, &byte, 1, offset) == 1);
+    close(fd);
+}
+
+static uint32_t reopen(const char *dir, const gp_mission *mission, int *resumed,
+                       const char **problem)
+{
+    static gp_runtime rt;
+    gp_checkpoint cp;
+    gp_runtime_init(&rt);
+    if (gp_checkpoint_open(&cp, dir, mission, &rt, resumed, problem) < 0) {
+        return 0;
+    }
+    gp_checkpoint_close(&cp);
+    return rt.machine.event_count;
+}
+
+void test_checkpoint_file_should_resume_from_the_newest_intact_record(void)
+{
+    static gp_runtime rt;
+    char *dir = temp_dir();
+    gp_checkpoint cp;
+    int resumed = -1;
+    const char *problem = NULL;
+    CHECK(dir != NULL);
+    sample_runtime(&rt);
+    rt.machine.event_count = 0;
+    CHECK_INT(gp_checkpoint_open(&cp, dir, &gp_mission_table, &rt, &resumed, &problem), 0);
+    CHECK_INT(resumed, 0);  /* created, holding the state as it was */
+    for (uint32_t count = 1; count <= 3; count++) {  /* records 2, 3, 4: slots 0, 1, 0 */
+        rt.machine.event_count = count;
+        CHECK_INT(gp_checkpoint_store(&cp, &gp_mission_table, &rt), 0);
+    }
+    gp_checkpoint_close(&cp);
+    CHECK_INT(reopen(dir, &gp_mission_table, &resumed, &problem), 3);
+    CHECK_INT(resumed, 1);
+
+    /* a write torn in the newest record (slot 0): the one before it */
+    corrupt_byte(dir, GP_CHECKPOINT_SLOT_BYTES + 20);
+    CHECK_INT(reopen(dir, &gp_mission_table, &resumed, &problem), 2);
+    /* the next record goes over the torn one, never over the one resumed from */
+    gp_runtime_init(&rt);
+    CHECK_INT(gp_checkpoint_open(&cp, dir, &gp_mission_table, &rt, &resumed, &problem), 0);
+    rt.machine.event_count = 5;
+    CHECK_INT(gp_checkpoint_store(&cp, &gp_mission_table, &rt), 0);
+    gp_checkpoint_close(&cp);
+    CHECK_INT(reopen(dir, &gp_mission_table, &resumed, &problem), 5);
+
+    /* both records damaged, the header damaged, another mission: refused */
+    corrupt_byte(dir, 2 * GP_CHECKPOINT_SLOT_BYTES + 20);
+    corrupt_byte(dir, GP_CHECKPOINT_SLOT_BYTES + 20);
+    CHECK_INT(reopen(dir, &gp_mission_table, &resumed, &problem), 0);
+    CHECK_CONTAINS(or_none(problem), "checksum mismatch (damaged record)");
+    corrupt_byte(dir, 40);
+    reopen(dir, &gp_mission_table, &resumed, &problem);
+    CHECK_CONTAINS(or_none(problem), "header");
+    corrupt_byte(dir, 40);
     gp_mission other = gp_mission_table;
     other.hash = "0000000000000000000000000000000000000000000000000000000000000000";
-    CHECK_CONTAINS(gp_checkpoint_decode(&other, buf, sizeof buf, &back), "another mission");
-    CHECK_CONTAINS(gp_checkpoint_decode(&gp_mission_table, (const uint8_t *)"GPPLAN 1", 8,
-                                        &back), "not a checkpoint");
-    rt.machine.state = 9;  /* well-formed but outside the mission: refused too */
-    gp_checkpoint_encode(&gp_mission_table, &rt, buf);
-    CHECK_CONTAINS(gp_checkpoint_decode(&gp_mission_table, buf, sizeof buf, &back),
-                   "outside the mission");
+    reopen(dir, &other, &resumed, &problem);
+    CHECK_CONTAINS(or_none(problem), "another mission");
+    remove_dir(dir);
+}
+
+/* A child resumes from the file and stores records as fast as it can, and is killed
+ * with SIGKILL at a random moment (encoding, writing or waiting for the disk), over and
+ * over: every time, the file opens on an intact record, the last one the child said it
+ * had stored or the one it was storing. */
+void test_checkpoint_should_survive_kill_9_at_any_point(void)
+{
+    char *dir = temp_dir();
+    unsigned seed = 2024;
+    uint32_t previous = 0;  /* the count the child starts from: the last one resumed */
+    CHECK(dir != NULL);
+    for (int round = 0; round < 50; round++) {
+        int done_pipe[2];
+        CHECK(pipe(done_pipe) == 0);
+        pid_t child = fork();
+        if (child == 0) {
+            static gp_runtime rt;
+            gp_checkpoint cp;
+            int resumed;
+            const char *problem;
+            close(done_pipe[0]);
+            gp_runtime_init(&rt);
+            if (gp_checkpoint_open(&cp, dir, &gp_mission_table, &rt, &resumed, &problem) < 0) {
+                _exit(1);
+            }
+            for (;;) {  /* every field follows from the count: a mixed record shows */
+                uint32_t count = rt.machine.event_count + 1;
+                rt.machine.event_count = count;
+                rt.entry_time_s = count;
+                rt.sensors[0] = 2.0 * count;
+                rt.pilot.n_window = (uint8_t)(count % GP_TRACK_WINDOW);
+                rt.pilot.window[rt.pilot.n_window / 2].depth_m = count;
+                rt.last_command.tick = count;
+                if (gp_checkpoint_store(&cp, &gp_mission_table, &rt) < 0
+                    || write(done_pipe[1], &count, sizeof count) != sizeof count) {
+                    _exit(1);
+                }
+            }
+        }
+        close(done_pipe[1]);
+        struct timespec pause = {0, (long)(gp_test_random(&seed) % 5000) * 1000L};
+        nanosleep(&pause, NULL);
+        kill(child, SIGKILL);
+        int status;
+        waitpid(child, &status, 0);
+        uint32_t stored = 0, count;
+        while (read(done_pipe[0], &count, sizeof count) == sizeof count) {
+            stored = count;
+        }
+        close(done_pipe[0]);
+        static gp_runtime back;
+        gp_checkpoint cp;
+        int resumed;
+        const char *problem = NULL;
+        gp_runtime_init(&back);
+        CHECK_INT(gp_checkpoint_open(&cp, dir, &gp_mission_table, &back, &resumed, &problem), 0);
+        gp_checkpoint_close(&cp);
+        count = back.machine.event_count;
+        uint32_t floor = stored > previous ? stored : previous;
+        CHECK(count >= floor && count <= floor + 1);  /* at most one unreported store */
+        previous = count;
+        CHECK_NEAR(back.entry_time_s, count, 0);
+        CHECK(count == 0 ? isnan(back.sensors[0]) : back.sensors[0] == 2.0 * count);
+        CHECK_INT(back.pilot.n_window, count % GP_TRACK_WINDOW);
+        CHECK_INT(back.last_command.tick, count);
+    }
+    remove_dir(dir);
 }
 
 void test_atomic_write_should_replace_the_file_whole(void)
