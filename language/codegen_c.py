@@ -34,8 +34,8 @@ _ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
                 "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP"}
 _HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep"})
 # Sensors every compiled mission reads: the state timers and the plan's schedule run on
-# missiontime, every profile steers on depth and pitch.
-_ALWAYS_READ = ("missiontime", "depth", "pitch")
+# missiontime, every profile turns on depth (pitch is commanded, never read).
+_ALWAYS_READ = ("missiontime", "depth")
 
 
 class CodegenError(GliderplanError):

@@ -3,13 +3,24 @@
 #include "gp_route.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #define GP_PI 3.14159265358979323846
 
+/* floor(|x| / 100) + fmod(|x|, 100) / 60 with its sign, as the reference computes it.
+ * The minutes are fmod's, exactly, without fmod (a hundred instructions twice a tick):
+ * with q = floor(|x| / 100), |x| - 100 q is exact (Sterbenz: 100 q and |x| lie within
+ * a factor of two, or q = 0), and the rounded quotient is never below the true one, so
+ * at most once too high, when the difference is negative and 100 more is the remainder. */
 double gp_ddmm_to_deg(double ddmm)
 {
     double magnitude = fabs(ddmm);
-    double deg = floor(magnitude / 100.0) + fmod(magnitude, 100.0) / 60.0;
+    double hundreds = floor(magnitude / 100.0);
+    double minutes = magnitude - 100.0 * hundreds;
+    if (minutes < 0) {
+        minutes += 100.0;
+    }
+    double deg = hundreds + minutes / 60.0;
     return ddmm < 0 ? -deg : deg;
 }
 
@@ -20,11 +31,14 @@ void gp_offset_m(const double from[2], const double to[2], double *north_m, doub
     *east_m = (to[1] - from[1]) * scale * cos(from[0] * GP_PI / 180.0);
 }
 
+/* @param distance_m NULL when the distance is not wanted (a nav route never arrives) */
 static double heading_to(const double from[2], const double to[2], double *distance_m)
 {
     double north, east;
     gp_offset_m(from, to, &north, &east);
-    *distance_m = hypot(north, east);
+    if (distance_m) {
+        *distance_m = hypot(north, east);
+    }
     double heading = atan2(east, north);
     return heading < 0 ? heading + 2.0 * GP_PI : heading;
 }
@@ -175,11 +189,11 @@ int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, do
         return 0;
     }
     double here[2] = {gp_ddmm_to_deg(lat_ddmm), gp_ddmm_to_deg(lon_ddmm)};
-    double distance_m;
-    double heading = heading_to(here, rs->waypoints[rs->next], &distance_m);
+    int arrives = route->kind != GP_ROUTE_NAV;
+    double distance_m = 0;
+    double heading = heading_to(here, rs->waypoints[rs->next], arrives ? &distance_m : NULL);
     /* One waypoint per tick at most; after the last, hold the heading to it. */
-    if (route->kind != GP_ROUTE_NAV && distance_m <= GP_WAYPOINT_RADIUS_M
-        && rs->next + 1 < rs->n_waypoints) {
+    if (arrives && distance_m <= GP_WAYPOINT_RADIUS_M && rs->next + 1 < rs->n_waypoints) {
         rs->next++;
         heading = heading_to(here, rs->waypoints[rs->next], &distance_m);
     }

@@ -18,6 +18,7 @@
     X(test_tracker_should_turn_at_the_band_and_reset_a_lost_band)           \
     X(test_tracker_should_ignore_missing_readings)                          \
     X(test_ddmm_should_convert_to_degrees)                                  \
+    X(test_ddmm_should_equal_the_fmod_definition)                           \
     X(test_nav_should_head_to_its_point)                                    \
     X(test_noheading_and_missing_fix_should_give_no_heading)                \
     X(test_waypoints_should_advance_within_50_m_and_hold_the_last)          \

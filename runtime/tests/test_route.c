@@ -26,6 +26,33 @@ static void local_point(double lat0, double lon0, double north_m, double east_m,
     out[1] = deg_to_ddmm(lon0 + east_m / (scale * cos(lat0 * PI / 180.0)));
 }
 
+/* The definition, with the C library's fmod: what the reference (sim/geo.py) computes. */
+static double ddmm_by_fmod(double ddmm)
+{
+    double magnitude = fabs(ddmm);
+    double deg = floor(magnitude / 100.0) + fmod(magnitude, 100.0) / 60.0;
+    return ddmm < 0 ? -deg : deg;
+}
+
+/* Bit for bit, on random positions and on the values next to every hundred, where the
+ * rounded quotient can land on the next whole number. */
+void test_ddmm_should_equal_the_fmod_definition(void)
+{
+    unsigned seed = 7;
+    for (int i = 0; i < 200000; i++) {
+        double x = (gp_test_random(&seed) / 4294967296.0 - 0.5) * 36000.0;
+        CHECK(gp_ddmm_to_deg(x) == ddmm_by_fmod(x));
+    }
+    for (int k = 0; k <= 180; k++) {
+        double x = 100.0 * k;
+        for (int step = 0; step < 8; step++) {
+            CHECK(gp_ddmm_to_deg(x) == ddmm_by_fmod(x));
+            CHECK(gp_ddmm_to_deg(-x) == ddmm_by_fmod(-x));
+            x = nextafter(x, 0.0);
+        }
+    }
+}
+
 void test_ddmm_should_convert_to_degrees(void)
 {
     CHECK_NEAR(gp_ddmm_to_deg(3910.5), 39.175, 1e-12);

@@ -172,7 +172,7 @@ const gp_mission gp_mission_table = {
     .var_initial = NULL,
     .n_vars = 0,
     .stack_depth = 8,
-    .read_mask = 0x000002c7u,
+    .read_mask = 0x000002c3u,
     .default_ballast_cc = 233.0,
     .sensor_names = sensor_names,
 };
