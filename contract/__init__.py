@@ -120,12 +120,12 @@ VEHICLE_COMPONENTS: tuple[str, ...] = (Component.HOTEL, Component.PUMP, Componen
 
 # ---- the serial link (docs/protocol.md) ---------------------------------------------
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2  # 2: COMMANDs as changes against a base, SENSORS without a mask
 MAX_PAYLOAD = 240  # [bytes] of one frame's payload
 MAX_WIRE = 250  # [bytes] of COBS before the delimiter that a receiver accepts
 PLAN_PIECE = 200  # [bytes] of plan file per PLAN frame
 MAX_LINK_PLAN = 65535  # [bytes] of a plan sent over the link (PLAN's `total` is a u16)
-COMMAND_SIZE = 36  # [bytes] of a COMMAND payload
+COMMAND_MAX_SIZE = 38  # [bytes] of a COMMAND payload that carries every field
 BAUD = 115200  # 8N1: 10 bits per byte on the line
 
 
@@ -164,6 +164,33 @@ FLAG_SURFACE = 1 << 0  # go to (or stay at) the surface
 FLAG_DONE = 1 << 1  # the mission exited
 FLAG_CLIMBING = 1 << 2  # else diving
 FLAG_HEADING = 1 << 3  # `heading_rad` is valid
+
+# SENSORS's `flags`; the other bits are reserved (0), and a SENSORS with one set is dropped.
+SENSORS_MASK = 1 << 0  # a u32 mask follows; else the values are those of HELLO's read_mask
+SENSORS_RESYNC = 1 << 1  # answer with a whole COMMAND: the last one could not be applied
+
+
+class CommandField(IntEnum):
+    """A COMMAND's fields in wire order: bit i of its `fields` says that field i follows.
+    The names are those of `protocol.Command`; append only (it is a wire format)."""
+
+    STATE = 0  # u8 state index after the tick, NO_STATE once exited
+    STACK_DEPTH = 1  # u8 stack depth after the tick
+    TRANSITION = 2  # u8 TransitionKind of the tick (NONE on most)
+    FROM_STATE = 3  # u8 state the transition left, NO_STATE: none
+    TO_STATE = 4  # u8 state the transition entered, NO_STATE: none
+    PROFILE = 5  # u8 index of the flight-profile alternative flown
+    FLAGS = 6  # u8 FLAG_* bits
+    DEPTH_TARGET_M = 7  # f32 [m]
+    PITCH_RAD = 8  # f32 [rad], positive nose up
+    BALLAST_CC = 9  # f32 [cc] pumped from neutral, positive buoyant
+    HEADING_RAD = 10  # f32 [rad] true, clockwise from north (valid with FLAG_HEADING)
+    SENSOR_POWER = 11  # u32 bit i: power sensor i's device
+    EVENT_COUNT = 12  # u32 events fired so far
+
+
+# struct format of each COMMAND field, in CommandField order
+COMMAND_FIELD_FORMATS = "BBBBBBBffffII"
 
 
 class ReleaseReason(IntEnum):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import inspect
 import re
+import struct
 from enum import IntEnum
 
 from gliderplan import contract
@@ -29,15 +30,20 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "SURFACE_PITCH_RAD", "TRACK_WINDOW", "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (
         "PROTOCOL_VERSION", "MAX_PAYLOAD", "MAX_WIRE", "PLAN_PIECE", "MAX_LINK_PLAN",
-        "COMMAND_SIZE", "NO_STATE")),
+        "COMMAND_MAX_SIZE", "NO_STATE")),
 )
 LINE_LENGTH = 100
 HEX = frozenset({"NO_STATE"})  # byte values written in hex, as docs/protocol.md has them
-FLAGS = ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING")
+# Bits of a message's flags byte, as C enumerations.
+FLAGS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("COMMAND's flags", ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING")),
+    ("SENSORS's flags", ("SENSORS_MASK", "SENSORS_RESYNC")),
+)
 # Enumeration -> (C type name, prefix of its members).
 ENUMS: tuple[tuple[type[IntEnum], str, str], ...] = (
     (contract.MessageType, "gp_msg_type", "GP_MSG_"),
     (contract.TransitionKind, "gp_transition_kind", "GP_TR_"),
+    (contract.CommandField, "gp_command_field", "GP_CMD_"),
     (contract.ReleaseReason, "gp_release_reason", "GP_RELEASE_"),
     (contract.RuntimeExit, "gp_exit_status", "GP_EXIT_"),
 )
@@ -106,10 +112,16 @@ def c_header() -> str:
               "enum {",
               *(_noted(f"    {sensor_index(s.name)} = {s.index},",
                        f"{s.description} [{s.unit}]") for s in contract.SENSORS),
-              "};", "", "/* ---- COMMAND's flags */", "", "enum {"]
-    lines += [_noted(f"    GP_{name} = {getattr(contract, name)}u,", notes[name])
-              for name in FLAGS]
-    lines += ["};", ""]
+              "};", ""]
+    for title, names in FLAGS:
+        lines += [f"/* ---- {title} */", "", "enum {"]
+        lines += [_noted(f"    GP_{name} = {getattr(contract, name)}u,", notes[name])
+                  for name in names]
+        lines += ["};", ""]
+    sizes = ", ".join(str(struct.calcsize(f)) for f in contract.COMMAND_FIELD_FORMATS)
+    lines += ["/** Bytes of each COMMAND field on the wire, in gp_command_field order. */",
+              f"#define GP_COMMAND_FIELD_BYTES {{{sizes}}}",
+              f"#define GP_N_COMMAND_FIELDS {len(contract.CommandField)}", ""]
     for enum, type_name, prefix in ENUMS:
         notes = _comments(enum)
         lines += [f"/** {(enum.__doc__ or '').strip().splitlines()[0]} */", "typedef enum {"]

@@ -2,18 +2,19 @@
 
 Framing (COBS + CRC-16/CCITT-FALSE), the seven messages, and `Link`: a small driver
 that plays the science computer over a serial port (pyserial's, or `FdPort` over a pty
-master) for the simulator's emulator and the end-to-end tests.
+master) for the simulator's emulator and the end-to-end tests. A COMMAND travels as the
+changes against a COMMAND the science computer holds (`CommandUpdate`); `Link` keeps
+the last ones it received and applies each update to its base.
 """
 
 from __future__ import annotations
 
 import binascii
-import fcntl
+import functools
 import math
 import os
 import select
 import struct
-import termios
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -21,7 +22,8 @@ from typing import NamedTuple, Protocol, cast
 
 from gliderplan.contract import (
     BAUD,
-    COMMAND_SIZE,
+    COMMAND_FIELD_FORMATS,
+    COMMAND_MAX_SIZE,
     FLAG_DONE,
     MAX_LINK_PLAN,
     MAX_PAYLOAD,
@@ -29,10 +31,14 @@ from gliderplan.contract import (
     N_SENSORS,
     PLAN_PIECE,
     PROTOCOL_VERSION,
+    SENSORS_MASK,
+    SENSORS_RESYNC,
+    CommandField,
     MessageType,
 )
 
 HEADER = struct.Struct("<BBBBH")  # version, type, seq, ack, length
+READ_CHUNK = 4096  # [bytes] taken from the port at once: whatever has arrived
 MAX_PACKET = HEADER.size + MAX_PAYLOAD + 2  # 248 bytes decoded
 
 
@@ -110,30 +116,26 @@ def cobs_encode(data: bytes) -> bytes:
 
 def cobs_decode(data: bytes) -> bytes:
     """Inverse of cobs_encode; raises CobsError on a zero byte or a block past the end."""
+    if 0 in data:
+        raise CobsError("zero byte inside a COBS frame")
     out = bytearray()
     i, size = 0, len(data)
-    while i < size:
+    while i < size:  # one round per block: its bytes are copied at C speed
         code = data[i]
-        if code == 0:
-            raise CobsError("zero byte inside a COBS frame")
         end = i + code
-        if end > size:
-            raise CobsError("COBS block runs past the end of the frame")
-        block = data[i + 1:end]
-        if 0 in block:
-            raise CobsError("zero byte inside a COBS frame")
-        out += block
+        out += data[i + 1:end]
         i = end
         if code != 0xFF and i < size:
             out.append(0)
+    if i != size:
+        raise CobsError("COBS block runs past the end of the frame")
     return bytes(out)
 
 
 # ---- frames ------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Frame:
+class Frame(NamedTuple):  # a tuple: the closed loop makes two per tick
     type: int
     seq: int
     ack: int
@@ -158,8 +160,8 @@ def parse_packet(packet: bytes) -> Frame:
     """Check a decoded packet and return its frame; raises a ProtocolError subclass."""
     if len(packet) < HEADER.size + 2:
         raise LengthError(f"packet of {len(packet)} bytes is shorter than a header and CRC")
-    body, crc = packet[:-2], struct.unpack(">H", packet[-2:])[0]
-    if crc16_ccitt_false(body) != crc:
+    body = packet[:-2]
+    if crc16_ccitt_false(body) != int.from_bytes(packet[-2:], "big"):
         raise CrcError("CRC-16 mismatch")
     version, kind, seq, ack, length = HEADER.unpack_from(body)
     if version != PROTOCOL_VERSION:
@@ -249,12 +251,29 @@ class Hello:
         return cls(read_mask, bytes(payload[6:38]), name, n_sensors, protocol)
 
 
-@dataclass(frozen=True)
-class Sensors:
-    """One tick's readings: sensor index -> value (sent as f32, in increasing index order)."""
+@functools.cache
+def _indices(mask: int) -> tuple[int, ...]:
+    """The set bits of a mask, lowest first."""
+    return tuple(i for i in range(32) if mask >> i & 1)
+
+
+@functools.cache
+def _f32s(count: int) -> struct.Struct:
+    return struct.Struct(f"<{count}f")
+
+
+_SENSORS_HEAD = struct.Struct("<IB")  # tick, flags
+_MASK = struct.Struct("<I")
+
+
+class Sensors(NamedTuple):
+    """One tick's readings: sensor index -> value (f32 on the wire, in increasing index
+    order). The frame leaves the mask out when the readings are exactly the sensors of
+    HELLO's `read_mask`. `resync`: ask for a whole COMMAND (the last update had no base)."""
 
     tick: int
     values: Mapping[int, float]
+    resync: bool = False
 
     TYPE = MessageType.SENSORS
 
@@ -262,29 +281,44 @@ class Sensors:
     def mask(self) -> int:
         return sum(1 << i for i in self.values)
 
-    def pack(self) -> bytes:
-        indices = sorted(self.values)
-        if indices and not 0 <= indices[0] <= indices[-1] < 32:
+    def pack(self, read_mask: int | None = None) -> bytes:
+        """The payload; `read_mask` is the runtime's (HELLO), None: always send the mask."""
+        mask = self.mask
+        if mask >> 32:
             raise ValueError("sensor indices must lie in 0..31")
-        return (struct.pack("<II", self.tick, self.mask)
-                + struct.pack(f"<{len(indices)}f", *(self.values[i] for i in indices)))
+        flags = SENSORS_RESYNC if self.resync else 0
+        indices = _indices(mask)
+        values = _f32s(len(indices)).pack(*(self.values[i] for i in indices))
+        if mask == read_mask:
+            return _SENSORS_HEAD.pack(self.tick, flags) + values
+        return _SENSORS_HEAD.pack(self.tick, flags | SENSORS_MASK) + _MASK.pack(mask) + values
 
     @classmethod
-    def unpack(cls, payload: bytes) -> Sensors:
-        if len(payload) < 8:
+    def unpack(cls, payload: bytes, read_mask: int | None = None) -> Sensors:
+        if len(payload) < _SENSORS_HEAD.size:
             raise LengthError(f"SENSORS payload of {len(payload)} bytes is too short")
-        tick, mask = struct.unpack_from("<II", payload)
-        indices = [i for i in range(32) if mask >> i & 1]
-        _expect_size("SENSORS", payload, 8 + 4 * len(indices))
-        values = struct.unpack_from(f"<{len(indices)}f", payload, 8)
-        return cls(tick, dict(zip(indices, values, strict=True)))
-
-
-_COMMAND = struct.Struct("<IBBBBBBBBffffII")
-assert _COMMAND.size == COMMAND_SIZE
+        tick, flags = _SENSORS_HEAD.unpack_from(payload)
+        if flags & ~(SENSORS_MASK | SENSORS_RESYNC):
+            raise LengthError(f"SENSORS with reserved flags 0x{flags:02x}")
+        at = _SENSORS_HEAD.size
+        if flags & SENSORS_MASK:
+            if len(payload) < at + 4:
+                raise LengthError(f"SENSORS payload of {len(payload)} bytes is too short")
+            mask = _MASK.unpack_from(payload, at)[0]
+            at += 4
+        elif read_mask is None:
+            raise LengthError("SENSORS without a mask, and no read mask to read it by")
+        else:
+            mask = read_mask
+        indices = _indices(mask)
+        _expect_size("SENSORS", payload, at + 4 * len(indices))
+        values = _f32s(len(indices)).unpack_from(payload, at)
+        return cls(tick, dict(zip(indices, values, strict=True)), bool(flags & SENSORS_RESYNC))
 
 
 class Command(NamedTuple):  # a tuple: the simulator builds one per tick
+    """A COMMAND whole: the runtime's answer to one tick (docs/protocol.md)."""
+
     tick: int
     state: int  # NO_STATE once exited
     stack_depth: int
@@ -302,23 +336,84 @@ class Command(NamedTuple):  # a tuple: the simulator builds one per tick
 
     TYPE = MessageType.COMMAND
 
-    def pack(self) -> bytes:
-        return _COMMAND.pack(self.tick, self.state, self.stack_depth, self.transition,
-                             self.from_state, self.to_state, self.profile, self.flags, 0,
-                             self.depth_target_m, self.pitch_rad, self.ballast_cc,
-                             self.heading_rad, self.sensor_power, self.event_count)
-
-    @classmethod
-    def unpack(cls, payload: bytes) -> Command:
-        _expect_size("COMMAND", payload, _COMMAND.size)
-        (tick, state, depth, transition, source, target, profile, flags, _reserved,
-         depth_target, pitch, ballast, heading, power, events) = _COMMAND.unpack(payload)
-        return cls(tick, state, depth, transition, source, target, profile, flags,
-                   depth_target, pitch, ballast, heading, power, events)
+    def pack(self, base: Command | None = None) -> bytes:
+        """The payload of this COMMAND as its changes against `base` (None: the zero
+        COMMAND, i.e. sent whole)."""
+        return CommandUpdate.between(self, base).pack()
 
     @property
     def done(self) -> bool:
         return bool(self.flags & FLAG_DONE)
+
+
+assert tuple(field.name.lower() for field in CommandField) == Command._fields[1:]
+ZERO_COMMAND = Command(0, *(0.0 if f == "f" else 0 for f in COMMAND_FIELD_FORMATS))
+_FIELDS = tuple(struct.Struct("<" + f) for f in COMMAND_FIELD_FORMATS)
+_COMMAND_HEAD = struct.Struct("<IBH")  # tick, base, fields
+assert _COMMAND_HEAD.size + sum(f.size for f in _FIELDS) == COMMAND_MAX_SIZE
+
+
+@functools.cache
+def _fields_struct(fields: int) -> struct.Struct:
+    """The values of the fields a `fields` mask names, in field order."""
+    return struct.Struct("<" + "".join(COMMAND_FIELD_FORMATS[i] for i in _indices(fields)))
+
+
+class CommandUpdate(NamedTuple):
+    """A COMMAND as it travels: the fields that differ from a base COMMAND, `base` ticks
+    back (0: from the zero COMMAND, which makes it a whole one)."""
+
+    tick: int
+    base: int
+    fields: int  # bit i: CommandField i follows
+    values: tuple[int | float, ...]  # of those fields, in field order
+
+    TYPE = MessageType.COMMAND
+
+    @classmethod
+    def between(cls, command: Command, base: Command | None = None) -> CommandUpdate:
+        """The update that turns `base` (None: the zero COMMAND) into `command`; fields are
+        compared as they travel (f32 bits)."""
+        back = 0 if base is None else command.tick - base.tick
+        if not 0 <= back <= 0xFF or (base is not None and back == 0):
+            raise ValueError(f"a base {back} ticks back cannot be named (1..255)")
+        old = ZERO_COMMAND if base is None else base
+        fields, values = 0, []
+        for i, field in enumerate(_FIELDS):
+            new = command[i + 1]
+            if field.pack(new) != field.pack(old[i + 1]):
+                fields |= 1 << i
+                values.append(new)
+        return cls(command.tick, back, fields, tuple(values))
+
+    def pack(self) -> bytes:
+        return (_COMMAND_HEAD.pack(self.tick, self.base, self.fields)
+                + _fields_struct(self.fields).pack(*self.values))
+
+    @classmethod
+    def unpack(cls, payload: bytes) -> CommandUpdate:
+        if len(payload) < _COMMAND_HEAD.size:
+            raise LengthError(f"COMMAND payload of {len(payload)} bytes is too short")
+        tick, base, fields = _COMMAND_HEAD.unpack_from(payload)
+        if fields >> len(_FIELDS):
+            raise LengthError(f"COMMAND with unknown fields 0x{fields:04x}")
+        values = _fields_struct(fields)
+        _expect_size("COMMAND", payload, _COMMAND_HEAD.size + values.size)
+        return cls(tick, base, fields, values.unpack_from(payload, _COMMAND_HEAD.size))
+
+    def apply(self, base: Command) -> Command:
+        """The COMMAND this update makes of `base` (the zero COMMAND when `base` is 0)."""
+        whole = list(base)
+        whole[0] = self.tick
+        for i, value in zip(_indices(self.fields), self.values, strict=True):
+            whole[i + 1] = value
+        return Command._make(whole)
+
+
+class Unresolved(NamedTuple):
+    """A COMMAND update for `tick` whose base this side does not hold."""
+
+    tick: int
 
 
 @dataclass(frozen=True)
@@ -389,8 +484,8 @@ class Nak:
         return cls()
 
 
-Message = Hello | Sensors | Command | Release | Plan | PlanStatus | Nak
-MESSAGES: dict[int, type] = {m.TYPE: m for m in (Hello, Sensors, Command, Release, Plan,
+Message = Hello | Sensors | CommandUpdate | Release | Plan | PlanStatus | Nak
+MESSAGES: dict[int, type] = {m.TYPE: m for m in (Hello, Sensors, CommandUpdate, Release, Plan,
                                                  PlanStatus, Nak)}
 
 
@@ -415,46 +510,49 @@ class Port(Protocol):
 
     def fileno(self) -> int: ...
 
-    @property
-    def in_waiting(self) -> int: ...
-
     def read(self, size: int = 1) -> bytes: ...
 
     def write(self, data: bytes) -> int | None: ...
 
 
 class FdPort:
-    """A Port over a raw file descriptor, e.g. the master side of os.openpty()."""
+    """A Port over a raw file descriptor, e.g. the master side of os.openpty(), or the
+    descriptor of a port pyserial opened (non-blocking: a read takes what is there in
+    one system call, where pyserial's own read makes three)."""
 
     def __init__(self, fd: int, timeout: float | None = None) -> None:
         self.fd = fd
         self.timeout = timeout
+        self._nonblocking = not os.get_blocking(fd)
 
     def fileno(self) -> int:
         return self.fd
 
-    @property
-    def in_waiting(self) -> int:
-        """Bytes ready to read (0 on a pty master with no slave open)."""
-        try:
-            count = fcntl.ioctl(self.fd, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return struct.unpack("i", count)[0]
-
     def read(self, size: int = 1) -> bytes:
+        """Up to `size` bytes: what is there, else what arrives within the timeout."""
+        if self._nonblocking:
+            try:
+                return os.read(self.fd, size)
+            except BlockingIOError:
+                pass
+            except OSError:  # pty master with no slave open: nothing to read yet
+                return b""
         ready, _, _ = select.select([self.fd], [], [], self.timeout)
         if not ready:
             return b""
         try:
             return os.read(self.fd, size)
-        except OSError:  # pty master with no slave open: nothing to read yet
+        except OSError:
             return b""
 
     def write(self, data: bytes) -> int:
         view = memoryview(data)
         while view:
-            written = os.write(self.fd, view)
+            try:
+                written = os.write(self.fd, view)
+            except BlockingIOError:  # a non-blocking line that is full: wait for room
+                select.select([], [self.fd], [])
+                continue
             view = view[written:]
         return len(data)
 
@@ -464,7 +562,9 @@ class Link:
 
     Re-sends the same frame (same seq) on a NAK or after `retransmit_s` without an
     answer; gives up (LinkTimeoutError) after `max_retries` + 1 timeouts without one.
-    Answers every dropped frame with NAK.
+    Answers every dropped frame with NAK. Applies each COMMAND update to the COMMAND it
+    names as its base (the last two received are kept); for an update whose base it
+    does not hold it sends the tick's SENSORS again asking for a whole COMMAND (resync).
     """
 
     def __init__(self, port: Port, retransmit_s: float = 0.2, max_retries: int = 25) -> None:
@@ -474,11 +574,14 @@ class Link:
         self.seq = 0
         self.ack = 0
         self.dropped = 0  # frames received that failed to parse
+        self.resyncs = 0  # COMMAND updates whose base was missing
         self.hello: Hello | None = None
         self.release: Release | None = None
         self.plan_status: PlanStatus | None = None
+        self.command: Command | None = None  # the newest COMMAND received
+        self._recent: dict[int, Command] = {}  # tick -> COMMAND: the bases updates may name
         self._reader = FrameReader()
-        self._inbox: list[tuple[Frame, Message]] = []
+        self._inbox: list[Message] = []
 
     # -- low level
 
@@ -489,48 +592,74 @@ class Link:
         self.port.write(wire)
         return wire
 
-    def receive(self, timeout_s: float) -> Message | None:
-        """The next valid message within timeout_s, or None. NAKs every dropped frame."""
+    def receive(self, timeout_s: float) -> Message | Command | Unresolved | None:
+        """The next valid message within timeout_s, or None. NAKs every dropped frame.
+        A COMMAND comes whole (`Command`), applied to its base, or as `Unresolved`; a late
+        copy of an older COMMAND whose base is gone is passed over."""
         deadline = time.monotonic() + timeout_s
-        while not self._inbox:
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                return None
-            # wait here rather than in read(): a pyserial port reconfigures the line (a
-            # tcsetattr) on every change of its timeout
-            ready, _, _ = select.select([self.port], [], [], remaining)
-            if not ready:
+        while True:
+            while not self._inbox:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return None
+                self._read(remaining)
+            message = self._note(self._inbox.pop(0))
+            if message is not None:
+                return message
+
+    def _read(self, timeout_s: float) -> None:
+        """Whatever arrives within timeout_s, parsed into the inbox."""
+        # wait here rather than in read(): a pyserial port reconfigures the line (a
+        # tcsetattr) on every change of its timeout
+        ready, _, _ = select.select([self.port], [], [], timeout_s)
+        if not ready:
+            return
+        try:
+            data = self.port.read(READ_CHUNK)
+        except OSError as err:  # pyserial's SerialException: the other end hung up
+            raise LinkError(f"the serial line hung up ({err})") from None
+        for item in self._reader.feed(data):
+            if isinstance(item, ProtocolError):
+                self._drop()
                 continue
             try:
-                data = self.port.read(max(1, self.port.in_waiting))
-            except OSError as err:  # pyserial's SerialException: the other end hung up
-                raise LinkError(f"the serial line hung up ({err})") from None
-            for item in self._reader.feed(data):
-                if isinstance(item, ProtocolError):
-                    self._drop()
-                    continue
-                try:
-                    message = unpack_message(item)
-                except ProtocolError:
-                    self._drop()
-                    continue
-                self.ack = item.seq
-                self._inbox.append((item, message))
-        _, message = self._inbox.pop(0)
-        self._note(message)
-        return message
+                message = unpack_message(item)
+            except ProtocolError:
+                self._drop()
+                continue
+            self.ack = item.seq
+            self._inbox.append(message)
 
     def _drop(self) -> None:
         self.dropped += 1
         self.send(Nak())
 
-    def _note(self, message: Message) -> None:
+    def _note(self, message: Message) -> Message | Command | Unresolved | None:
+        if isinstance(message, CommandUpdate):
+            return self._apply(message)
         if isinstance(message, Hello):
             self.hello = message
         elif isinstance(message, Release):
             self.release = message
         elif isinstance(message, PlanStatus):
             self.plan_status = message
+        return message
+
+    def _apply(self, update: CommandUpdate) -> Command | Unresolved | None:
+        base = ZERO_COMMAND if update.base == 0 else self._recent.get(update.tick - update.base)
+        newest = self.command
+        if base is None:
+            if newest is not None and update.tick <= newest.tick:
+                return None  # a late copy of an answer already applied
+            self.resyncs += 1
+            return Unresolved(update.tick)
+        command = update.apply(base)
+        if newest is None or command.tick > newest.tick:
+            self._recent = {command.tick: command}
+            if newest is not None:
+                self._recent[newest.tick] = newest
+            self.command = command
+        return command
 
     # -- the science computer's dialogue
 
@@ -545,8 +674,10 @@ class Link:
                 raise LinkReleasedError(message.reason)
         raise LinkTimeoutError(f"no HELLO within {timeout_s:g} s")
 
-    def _exchange(self, wire: bytes, answered: type, match=lambda message: True) -> Message:
+    def _exchange(self, wire: bytes, answered: type, match=lambda message: True,
+                  resync=None) -> Message:
         """Write `wire`, re-send it on NAK or silence, until an `answered` message matches.
+        An unresolved COMMAND update for a matching tick makes `resync()` the wire.
 
         Gives up after `max_retries` + 1 retransmission timeouts in all: NAKs re-send at
         once but do not use up the budget, since a burst of them (one per damaged frame
@@ -567,6 +698,9 @@ class Link:
                     raise LinkReleasedError(message.reason)
                 if isinstance(message, Nak):
                     break
+                if isinstance(message, Unresolved) and resync is not None and match(message):
+                    wire = resync()
+                    break
             if time.monotonic() >= give_up:
                 raise LinkTimeoutError(f"no {answered.__name__} within {self.max_retries + 1} "
                                        f"retransmission timeouts")
@@ -578,10 +712,16 @@ class Link:
         """
         if not isinstance(values, Mapping):
             values = {i: v for i, v in enumerate(values) if not math.isnan(v)}
-        self.seq = (self.seq + 1) & 0xFF
-        wire = build_frame(Frame(MessageType.SENSORS, self.seq, self.ack,
-                                 Sensors(tick, values).pack()))
-        return self._exchange(wire, Command, lambda command: command.tick == tick)
+        read_mask = self.hello.read_mask if self.hello is not None else None
+
+        def frame(resync: bool = False) -> bytes:
+            self.seq = (self.seq + 1) & 0xFF
+            payload = Sensors(tick, values, resync).pack(read_mask)
+            return build_frame(Frame(MessageType.SENSORS, self.seq, self.ack, payload))
+
+        command = self._exchange(frame(), Command, lambda answer: answer.tick == tick,
+                                 resync=lambda: frame(resync=True))
+        return cast(Command, command)
 
     def send_plan(self, plan: bytes) -> PlanStatus:
         """Send a plan file in PLAN pieces; return the runtime's PLAN_STATUS.

@@ -35,7 +35,7 @@ class CRuntime:
         import serial
 
         from gliderplan.contract import BAUD
-        from gliderplan.runtime.protocol import Link, LinkError
+        from gliderplan.runtime.protocol import FdPort, Link, LinkError
 
         self._work = work_dir
         self.exited = False
@@ -51,8 +51,11 @@ class CRuntime:
         self.process = subprocess.Popen(command, stdin=subprocess.DEVNULL,
                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         try:
+            # pyserial opens and sets up the line (raw 115200 8N1, non-blocking); the link
+            # reads and writes its descriptor directly: one system call each way per
+            # frame, where pyserial's read and write add two select calls and an ioctl
             self.port = serial.Serial(self._peer_path(), BAUD, timeout=0)
-            self.link = Link(self.port)
+            self.link = Link(FdPort(self.port.fileno()))
             hello = self.link.wait_hello(HELLO_TIMEOUT_S)
         except (EmulatorError, LinkError, serial.SerialException) as err:
             self.close()
@@ -61,13 +64,15 @@ class CRuntime:
         if hello.mission_hash.hex() != mission.hash:
             self.close()
             raise EmulatorError("the runtime was compiled for another mission (hash differs)")
+        self._read_mask = hello.read_mask
 
     def step(self, tick: int, mask: int, values: list[float]):
-        """Send one tick's SENSORS (the sensors in `mask`), return the runtime's COMMAND."""
+        """Send one tick's SENSORS (those of `mask` the runtime reads: HELLO's read mask),
+        return the runtime's COMMAND."""
         from gliderplan.contract import NO_STATE
         from gliderplan.runtime.protocol import LinkError, LinkReleasedError
 
-        carried = {i: values[i] for i in _indices(mask)}
+        carried = {i: values[i] for i in _indices(mask & self._read_mask)}
         try:
             command = self.link.step(tick, carried)
             self.exited = command.state == NO_STATE

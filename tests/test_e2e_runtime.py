@@ -29,7 +29,7 @@ import pytest
 import serial
 
 from gliderplan.cli.main import main
-from gliderplan.contract import NO_STATE, ReleaseReason
+from gliderplan.contract import NO_STATE, PROTOCOL_VERSION, ReleaseReason
 from gliderplan.language import check_source, semantics
 from gliderplan.language.codegen_c import read_mask
 from gliderplan.language.registry import SENSORS
@@ -286,7 +286,7 @@ def test_corrupted_frames_are_rejected_and_change_nothing(binary, line, tmp_path
         # Each would be tick 250 (missiontime 2500: exit) if the runtime believed it.
         packet = bytearray(_sensors_frame(link, 250))
         bad_crc = bytes(packet[:-1]) + bytes([packet[-1] ^ 0x01])
-        bad_version = bytes([2]) + bytes(packet[1:-2])
+        bad_version = bytes([PROTOCOL_VERSION + 1]) + bytes(packet[1:-2])
         bad_version += p.crc16_ccitt_false(bad_version).to_bytes(2, "big")
         truncated = bytes(packet[:-5])
         for wire in (bad_crc, bad_version, truncated):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import random
+import select
 import shutil
 import signal
 import subprocess
@@ -140,10 +141,13 @@ def test_a_killed_runtime_resumes_from_its_checkpoint(binary, glider, tmp_path):
     with open(tmp_path / "events.log", "a") as log:  # as if killed between log and checkpoint
         log.write("1010 return s2 s1 0\n")
 
+    tap = Tap(glider.master)
+    link = p.Link(tap, retransmit_s=0.2, max_retries=20)
     process = glider.start(binary, "--state-dir", str(tmp_path))
     link.wait_hello()
     after = fly(link, 101, 400)
     assert after[0].state == 1 and after[0].stack_depth == 1  # not a fresh start
+    assert [u.base for u in tap.updates()[:2]] == [0, 1]  # whole after the restart
     assert transitions(before + after) == FIG2_TRACE
     assert process.wait(10) == 0
     assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE
@@ -203,12 +207,95 @@ def test_corrupted_frames_are_naked_and_the_trace_survives(binary, glider):
     assert process.wait(10) == 0
 
 
+class Tap(p.FdPort):
+    """The science computer's port, keeping every byte it read."""
+
+    def __init__(self, fd: int) -> None:
+        super().__init__(fd)
+        self.received = bytearray()
+
+    def read(self, size: int = 1) -> bytes:
+        data = super().read(size)
+        self.received += data
+        return data
+
+    def updates(self) -> list[p.CommandUpdate]:
+        """The COMMANDs read so far, as they travelled."""
+        frames = p.FrameReader().feed(bytes(self.received))
+        return [p.CommandUpdate.unpack(f.payload) for f in frames
+                if isinstance(f, p.Frame) and f.type == p.MessageType.COMMAND]
+
+
+def test_commands_travel_as_their_changes_against_the_tick_before(binary, glider):
+    process = glider.start(binary)
+    tap = Tap(glider.master)
+    link = p.Link(tap, retransmit_s=0.2, max_retries=20)
+    link.wait_hello()
+    commands = fly(link, 0, 400)
+    assert transitions(commands) == FIG2_TRACE  # the changes applied make the same trace
+    updates = tap.updates()
+    assert [u.tick for u in updates] == [c.tick for c in commands]
+    assert updates[0].base == 0  # the first is whole
+    assert {u.base for u in updates[1:]} == {1}
+    pairs = zip(commands[:-1], commands[1:], strict=True)
+    assert [p.CommandUpdate.between(c, b) for b, c in pairs] == updates[1:]
+    sizes = [len(u.pack()) for u in updates[1:]]
+    assert min(sizes) == 7  # the tick and its base: nothing changed
+    assert sum(sizes) / len(sizes) < 12
+    assert process.wait(10) == 0
+
+
+def _lose_the_answer(link: p.Link, master: int, tick: int) -> None:
+    """Send the SENSORS of `tick` and throw its COMMAND away, as a noisy line would."""
+    link.seq = (link.seq + 1) & 0xFF
+    os.write(master, p.build_frame(p.Frame(p.MessageType.SENSORS, link.seq, link.ack,
+                                           p.Sensors(tick, readings(tick)).pack())))
+    answer = b""
+    while not answer.endswith(b"\x00"):
+        ready, _, _ = select.select([master], [], [], 5.0)
+        assert ready, "no COMMAND"
+        answer += os.read(master, 1)
+
+
+def test_a_lost_command_is_sent_again_against_what_the_science_computer_holds(binary,
+                                                                              glider):
+    process = glider.start(binary)
+    tap = Tap(glider.master)
+    link = p.Link(tap, retransmit_s=0.2, max_retries=20)
+    link.wait_hello()
+    commands = fly(link, 0, 49)
+    _lose_the_answer(link, glider.master, 50)  # the call into s2
+    commands += fly(link, 50, 400)  # tick 50 again: the runtime answers without a step
+    assert transitions(commands) == FIG2_TRACE
+    assert commands[50].event_count == 1 and link.resyncs == 0
+    assert tap.updates()[50].base == 1  # against COMMAND 49, which the science holds
+    assert process.wait(10) == 0
+
+
+def test_a_science_computer_that_lost_its_commands_gets_a_whole_one(binary, glider):
+    """A science computer restarted mid-mission holds no COMMAND: the runtime's next
+    update names a base it lacks, it asks for a resync, and the runtime sends the COMMAND
+    whole."""
+    process = glider.start(binary)
+    commands = fly(glider.link(), 0, 60)
+    tap = Tap(glider.master)
+    restarted = p.Link(tap, retransmit_s=0.2, max_retries=20)
+    commands += fly(restarted, 61, 400)
+    assert transitions(commands) == FIG2_TRACE
+    assert restarted.resyncs == 1
+    first, again = tap.updates()[:2]
+    # against COMMAND 59, the last one the old science computer acknowledged; then whole
+    assert (first.tick, again.tick) == (61, 61) and (first.base, again.base) == (2, 0)
+    assert process.wait(10) == 0
+
+
 def test_a_repeated_sensors_frame_gets_the_same_command_without_a_step(binary, glider):
     glider.start(binary)
     link = glider.link()
     link.wait_hello()
     fly(link, 0, 49)
-    wire = p.build_frame(p.Frame(p.MessageType.SENSORS, 77, 0, p.Sensors(50, readings(50)).pack()))
+    wire = p.build_frame(p.Frame(p.MessageType.SENSORS, 77, link.ack,
+                                 p.Sensors(50, readings(50)).pack()))
     answers = []
     for _ in range(2):  # tick 50 is the call into s2: stepping twice would call again
         os.write(glider.master, wire)

@@ -36,13 +36,13 @@
 
 /* ---- the serial link (docs/protocol.md) */
 
-#define GP_PROTOCOL_VERSION 1
+#define GP_PROTOCOL_VERSION 2  /**< 2: COMMANDs as changes against a base, SENSORS without a mask */
 #define GP_MAX_PAYLOAD 240  /**< [bytes] of one frame's payload */
 #define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
 /** [bytes] of a plan sent over the link (PLAN's `total` is a u16) */
 #define GP_MAX_LINK_PLAN 65535
-#define GP_COMMAND_SIZE 36  /**< [bytes] of a COMMAND payload */
+#define GP_COMMAND_MAX_SIZE 38  /**< [bytes] of a COMMAND payload that carries every field */
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
@@ -80,6 +80,18 @@ enum {
     GP_FLAG_HEADING = 8u,  /**< `heading_rad` is valid */
 };
 
+/* ---- SENSORS's flags */
+
+enum {
+    /** a u32 mask follows; else the values are those of HELLO's read_mask */
+    GP_SENSORS_MASK = 1u,
+    GP_SENSORS_RESYNC = 2u,  /**< answer with a whole COMMAND: the last one could not be applied */
+};
+
+/** Bytes of each COMMAND field on the wire, in gp_command_field order. */
+#define GP_COMMAND_FIELD_BYTES {1, 1, 1, 1, 1, 1, 1, 4, 4, 4, 4, 4, 4}
+#define GP_N_COMMAND_FIELDS 13
+
 /** The type byte of a frame's header. */
 typedef enum {
     GP_MSG_HELLO = 0x01, GP_MSG_SENSORS = 0x02, GP_MSG_COMMAND = 0x03, GP_MSG_RELEASE = 0x04,
@@ -91,6 +103,23 @@ typedef enum {
     GP_TR_NONE = 0, GP_TR_START = 1, GP_TR_GOTO = 2, GP_TR_CALL = 3, GP_TR_RETURN = 4,
     GP_TR_EXIT = 5,
 } gp_transition_kind;
+
+/** A COMMAND's fields in wire order: bit i of its `fields` says that field i follows. */
+typedef enum {
+    GP_CMD_STATE = 0,  /**< u8 state index after the tick, NO_STATE once exited */
+    GP_CMD_STACK_DEPTH = 1,  /**< u8 stack depth after the tick */
+    GP_CMD_TRANSITION = 2,  /**< u8 TransitionKind of the tick (NONE on most) */
+    GP_CMD_FROM_STATE = 3,  /**< u8 state the transition left, NO_STATE: none */
+    GP_CMD_TO_STATE = 4,  /**< u8 state the transition entered, NO_STATE: none */
+    GP_CMD_PROFILE = 5,  /**< u8 index of the flight-profile alternative flown */
+    GP_CMD_FLAGS = 6,  /**< u8 FLAG_* bits */
+    GP_CMD_DEPTH_TARGET_M = 7,  /**< f32 [m] */
+    GP_CMD_PITCH_RAD = 8,  /**< f32 [rad], positive nose up */
+    GP_CMD_BALLAST_CC = 9,  /**< f32 [cc] pumped from neutral, positive buoyant */
+    GP_CMD_HEADING_RAD = 10,  /**< f32 [rad] true, clockwise from north (valid with FLAG_HEADING) */
+    GP_CMD_SENSOR_POWER = 11,  /**< u32 bit i: power sensor i's device */
+    GP_CMD_EVENT_COUNT = 12,  /**< u32 events fired so far */
+} gp_command_field;
 
 /** RELEASE's `reason`: why the runtime gave control back to the glider. */
 typedef enum {

@@ -36,7 +36,7 @@
      + 8 * GP_MAX_VARIABLES + 8 * GP_N_SENSORS                                           \
      + 4 + 8 * 3 + 8 * 3 + 16 * GP_TRACK_WINDOW  /* pilot */                             \
      + 2                                       /* route */                               \
-     + 4 + 7 + 4 * 4 + 4 + 4                   /* last COMMAND */                        \
+     + 1 + GP_COMMAND_MAX_SIZE                 /* last COMMAND */                        \
      + 4)                                      /* CRC-32 */
 
 /** The checkpoint file of a run, open from start-up to exit. */

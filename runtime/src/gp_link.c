@@ -35,11 +35,17 @@ typedef struct {
     gp_frame_reader reader;
     uint8_t seq;                     /* our last frame's seq */
     uint8_t ack;                     /* seq of the last valid frame received */
-    uint8_t last_wire[GP_MAX_FRAME]; /* our last frame, re-sent on NAK */
+    uint8_t last_wire[GP_MAX_FRAME]; /* our last frame, re-sent on NAK; payloads are packed
+                                        into it where the frame will carry them */
     size_t last_len;
+    gp_command sent;                 /* our last COMMAND ... */
+    uint8_t sent_seq, has_sent;      /* ... and its frame's seq */
+    gp_command acked;                /* the last COMMAND the science computer acknowledged */
+    uint8_t has_acked;
     int answered;                    /* a SENSORS frame was answered ... */
     uint8_t answered_seq;            /* ... with this seq */
     double last_valid_s;             /* when the last valid frame arrived */
+    int heard;                       /* a valid frame arrived since the clock was read */
     double hello_due_s;              /* next HELLO, before the first SENSORS */
     int has_plan;
     uint16_t plan_total, plan_received;
@@ -80,10 +86,17 @@ static int open_line(link_state *s, char *message)
     return 0;
 }
 
-static int send_frame(link_state *s, uint8_t type, const uint8_t *payload, size_t len)
+/* Where the next frame's payload is packed: framing seals it where it lies. */
+static uint8_t *outgoing(link_state *s)
+{
+    return s->last_wire + GP_FRAME_PAYLOAD_AT;
+}
+
+/* Send the payload packed at outgoing(s) as a new frame. */
+static int send_frame(link_state *s, uint8_t type, size_t len)
 {
     s->seq = (uint8_t)(s->seq + 1);
-    s->last_len = gp_frame_build(type, s->seq, s->ack, payload, len, s->last_wire);
+    s->last_len = gp_frame_seal(s->last_wire, type, s->seq, s->ack, len);
     return gp_serial_write(s->fd, s->last_wire, s->last_len);
 }
 
@@ -100,8 +113,8 @@ static void send_nak(link_state *s)
 /* Give control back to the glider's own layered control and end with `status`. */
 static int release(link_state *s, gp_release_reason reason, int status)
 {
-    uint8_t payload = (uint8_t)reason;
-    send_frame(s, GP_MSG_RELEASE, &payload, 1);
+    *outgoing(s) = (uint8_t)reason;
+    send_frame(s, GP_MSG_RELEASE, 1);
     tcdrain(s->fd);  /* the RELEASE must reach the line before we close it */
     if (s->own_pty) {
         gp_serial_linger(s->fd, s->args->link_timeout_s);
@@ -209,11 +222,17 @@ static int persist(link_state *s, const gp_tick_report *report)
     return 0;
 }
 
-static int send_command(link_state *s, const gp_command *command)
+/* A COMMAND as its changes against the last one the science computer acknowledged,
+ * or whole (`whole`, or none acknowledged since the start). */
+static int send_command(link_state *s, const gp_command *command, int whole)
 {
-    uint8_t payload[GP_COMMAND_SIZE];
-    gp_command_pack(command, payload);
-    return send_frame(s, GP_MSG_COMMAND, payload, sizeof payload);
+    size_t len = gp_command_pack(command, whole || !s->has_acked ? NULL : &s->acked,
+                                 outgoing(s));
+    int result = send_frame(s, GP_MSG_COMMAND, len);
+    s->sent = *command;
+    s->sent_seq = s->seq;
+    s->has_sent = 1;
+    return result;
 }
 
 /* The planned clock of the current state, written in kHz to --clock-file (a cpufreq
@@ -252,21 +271,28 @@ static void follow_clock(link_state *s)
 static int on_sensors(link_state *s, const gp_frame *frame)
 {
     uint32_t tick;
-    double readings[GP_N_SENSORS];
-    memcpy(readings, runtime.sensors, sizeof readings);
-    if (gp_sensors_unpack(frame, &tick, readings) != GP_FRAME_OK) {
+    uint8_t flags;
+    /* all or nothing: a SENSORS that does not unpack changes no reading */
+    if (gp_sensors_unpack(frame, s->mission->read_mask, &tick, &flags, runtime.sensors)
+        != GP_FRAME_OK) {
         send_nak(s);
         return -1;
+    }
+    int resync = (flags & GP_SENSORS_RESYNC) != 0;
+    if (resync) {  /* the science computer holds no COMMAND we could name as a base */
+        s->has_acked = 0;
+    } else if (s->has_sent && frame->ack == s->sent_seq) {
+        s->acked = s->sent;
+        s->has_acked = 1;
     }
     /* A re-sent SENSORS (same seq), or the tick a checkpoint already answered. */
     if ((s->answered && frame->seq == s->answered_seq)
         || (runtime.has_command && tick == runtime.last_command.tick)) {
         s->answered = 1;
         s->answered_seq = frame->seq;
-        send_command(s, &runtime.last_command);
+        send_command(s, &runtime.last_command, resync);
         return -1;
     }
-    memcpy(runtime.sensors, readings, sizeof readings);
     gp_run_options options = {s->has_plan ? &plan : NULL, (uint8_t)s->args->naive_tracker};
     gp_command command;
     gp_tick_report report;
@@ -289,7 +315,7 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     follow_clock(s);
     s->answered = 1;
     s->answered_seq = frame->seq;
-    send_command(s, &command);
+    send_command(s, &command, resync);
     if (runtime.machine.state == GP_EXITED) {
         return release(s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
     }
@@ -329,16 +355,14 @@ static void on_plan(link_state *s, const gp_frame *frame)
         }
     }
     snprintf(status, sizeof status, "%s", accepted ? "ok" : error);
-    uint8_t payload[GP_MAX_PAYLOAD];
-    size_t n = gp_plan_status_pack(accepted, status, payload);
-    send_frame(s, GP_MSG_PLAN_STATUS, payload, n);
+    send_frame(s, GP_MSG_PLAN_STATUS, gp_plan_status_pack(accepted, status, outgoing(s)));
 }
 
 /* @return -1 to go on, else the exit status */
 static int on_frame(link_state *s, const gp_frame *frame)
 {
     s->ack = frame->seq;
-    s->last_valid_s = gp_now_s();
+    s->heard = 1;  /* the loop stamps it with the clock it reads next */
     switch (frame->type) {
     case GP_MSG_SENSORS:
         return on_sensors(s, frame);
@@ -402,9 +426,7 @@ static void catch_crash_signals(link_state *s)
 
 static int run_link(link_state *s)
 {
-    static uint8_t chunk[READ_CHUNK];
-    uint8_t hello[GP_MAX_PAYLOAD];
-    size_t hello_len = gp_hello_pack(s->mission, hello);
+    static uint8_t chunk[READ_CHUNK];  /* frames that lie whole in it are decoded in it */
     double retransmit_s = s->args->retransmit_ms / 1000.0;
     s->last_valid_s = gp_now_s();
     s->hello_due_s = s->last_valid_s;
@@ -412,6 +434,10 @@ static int run_link(link_state *s)
     catch_crash_signals(s);
     for (;;) {
         double now = gp_now_s();
+        if (s->heard) {
+            s->last_valid_s = now;
+            s->heard = 0;
+        }
         if (stop_signal) {
             say(s, "stopped by a signal; releasing control");
             return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
@@ -421,14 +447,16 @@ static int run_link(link_state *s)
             return release(s, GP_RELEASE_LINK_SILENT, GP_EXIT_LINK_LOST);
         }
         if (!s->answered && now >= s->hello_due_s) {
-            send_frame(s, GP_MSG_HELLO, hello, hello_len);
+            send_frame(s, GP_MSG_HELLO, gp_hello_pack(s->mission, outgoing(s)));
             s->hello_due_s = now + retransmit_s;
         }
         double wait_s = s->last_valid_s + s->args->link_timeout_s - now;
         if (!s->answered && s->hello_due_s - now < wait_s) {
             wait_s = s->hello_due_s - now;
         }
-        long n = gp_serial_read(s->fd, chunk, sizeof chunk, (int)ceil(fmax(wait_s, 0) * 1000));
+        /* whole milliseconds, rounded up: the poll never ends before the deadline */
+        int wait_ms = wait_s > 0 ? (int)(wait_s * 1000.0) + 1 : 0;
+        long n = gp_serial_read(s->fd, chunk, sizeof chunk, wait_ms);
         if (n < 0) {
             say(s, "serial read failed; releasing control");
             return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);

@@ -43,40 +43,6 @@ static void get(reader *r, void *value, size_t n)
     r->at += n;
 }
 
-static void put_command(writer *w, const gp_command *c)
-{
-    put(w, &c->tick, 4);
-    const uint8_t bytes[7] = {c->state, c->stack_depth, c->transition, c->from, c->to,
-                              c->profile, c->flags};
-    put(w, bytes, sizeof bytes);
-    put(w, &c->depth_target_m, 4);
-    put(w, &c->pitch_rad, 4);
-    put(w, &c->ballast_cc, 4);
-    put(w, &c->heading_rad, 4);
-    put(w, &c->sensor_power, 4);
-    put(w, &c->event_count, 4);
-}
-
-static void get_command(reader *r, gp_command *c)
-{
-    uint8_t bytes[7];
-    get(r, &c->tick, 4);
-    get(r, bytes, sizeof bytes);
-    c->state = bytes[0];
-    c->stack_depth = bytes[1];
-    c->transition = bytes[2];
-    c->from = bytes[3];
-    c->to = bytes[4];
-    c->profile = bytes[5];
-    c->flags = bytes[6];
-    get(r, &c->depth_target_m, 4);
-    get(r, &c->pitch_rad, 4);
-    get(r, &c->ballast_cc, 4);
-    get(r, &c->heading_rad, 4);
-    get(r, &c->sensor_power, 4);
-    get(r, &c->event_count, 4);
-}
-
 size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uint32_t seq,
                             uint8_t *record)
 {
@@ -108,7 +74,9 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
     put(&w, pilot->recent_c, 8u * n_recent);
     put(&w, pilot->window, sizeof pilot->window[0] * n_window);
     put(&w, &rt->route.next, 2);
-    put_command(&w, &rt->last_command);
+    uint8_t *command_len = w.at++;  /* the last COMMAND as the link sends it whole */
+    *command_len = (uint8_t)gp_command_pack(&rt->last_command, NULL, w.at);
+    w.at += *command_len;
     size_t len = (size_t)(w.at - record) + 4;
     memcpy(record, &seq, 4);
     uint16_t len16 = (uint16_t)len;
@@ -175,8 +143,11 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     get(&r, pilot->recent_c, 8u * pilot->n_recent);
     get(&r, pilot->window, sizeof pilot->window[0] * pilot->n_window);
     get(&r, &loaded.route.next, 2);
-    get_command(&r, &loaded.last_command);
-    if (r.short_read || r.at != r.end) {
+    uint8_t command_len;
+    get(&r, &command_len, 1);
+    gp_frame command = {GP_MSG_COMMAND, 0, 0, command_len, r.at};
+    if (r.short_read || command_len != r.end - r.at
+        || gp_command_unpack(&command, NULL, &loaded.last_command) != GP_FRAME_OK) {
         return "record length disagrees with its counts";
     }
     if (m->state != GP_EXITED && m->state >= mission->n_states) {

@@ -38,8 +38,9 @@
     X(test_schedule_should_give_the_remainder_to_the_last_nonzero_share)    \
     X(test_crc_should_match_catalogue_check_values)                         \
     X(test_crcs_should_equal_their_bitwise_definitions)                     \
-    X(test_cobs_should_encode_the_reference_examples)                       \
-    X(test_command_should_round_trip_through_a_frame)                       \
+    X(test_cobs_should_encode_the_reference_examples_in_place)              \
+    X(test_command_should_travel_whole_and_as_its_changes)                  \
+    X(test_command_fields_should_have_their_contract_sizes)                 \
     X(test_sensors_should_update_only_the_masked_values)                    \
     X(test_bad_frames_should_be_dropped_with_their_reason)                  \
     X(test_reader_should_resynchronise_after_garbage)                       \

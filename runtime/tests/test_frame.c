@@ -70,7 +70,7 @@ void test_crcs_should_equal_their_bitwise_definitions(void)
     }
 }
 
-void test_cobs_should_encode_the_reference_examples(void)
+void test_cobs_should_encode_the_reference_examples_in_place(void)
 {
     static const struct {
         uint8_t raw[8];
@@ -85,97 +85,186 @@ void test_cobs_should_encode_the_reference_examples(void)
         {{0x11, 0x00, 0x00, 0x00}, 4, {0x02, 0x11, 0x01, 0x01, 0x01}, 5},
     };
     for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
-        uint8_t out[16], back[16];
-        CHECK_INT(gp_cobs_encode(rows[i].raw, rows[i].raw_len, out), rows[i].encoded_len);
-        CHECK(memcmp(out, rows[i].encoded, rows[i].encoded_len) == 0);
-        CHECK_INT(gp_cobs_decode(out, rows[i].encoded_len, back, sizeof back), rows[i].raw_len);
-        CHECK(memcmp(back, rows[i].raw, rows[i].raw_len) == 0);
+        uint8_t buf[16];
+        memset(buf, 0x5A, sizeof buf);
+        memcpy(buf + 1, rows[i].raw, rows[i].raw_len);  /* buf[0]: room for a code byte */
+        CHECK_INT(gp_cobs_encode(buf, rows[i].raw_len), rows[i].encoded_len);
+        CHECK(memcmp(buf, rows[i].encoded, rows[i].encoded_len) == 0);
+        CHECK_INT(buf[rows[i].encoded_len], 0);
+        CHECK_INT(gp_cobs_decode(buf, rows[i].encoded_len), rows[i].raw_len);
+        CHECK(memcmp(buf + 1, rows[i].raw, rows[i].raw_len) == 0);
     }
-    uint8_t long_run[254], out[300], back[300];
-    for (int i = 0; i < 254; i++) {
-        long_run[i] = (uint8_t)(i + 1);
+    /* the longest packet without a zero is one block; a block of 254 bytes (code 0xFF)
+     * would decode to more than a packet can hold */
+    uint8_t run[GP_MAX_PACKET + 2];
+    for (int i = 1; i <= GP_MAX_PACKET + 1; i++) {
+        run[i] = (uint8_t)i;
     }
-    size_t n = gp_cobs_encode(long_run, 254, out);
-    CHECK_INT(n, 256);  /* 0xFF block, then an empty block */
-    CHECK_INT(out[0], 0xFF);
-    CHECK_INT(gp_cobs_decode(out, n, back, sizeof back), 254);
+    CHECK_INT(gp_cobs_encode(run, GP_MAX_PACKET), GP_MAX_PACKET + 1);
+    CHECK_INT(run[0], GP_MAX_PACKET + 1);
+    CHECK_INT(run[GP_MAX_PACKET + 1], 0);  /* the delimiter */
+    CHECK_INT(gp_cobs_decode(run, GP_MAX_PACKET + 1), GP_MAX_PACKET);
+    CHECK_INT(run[GP_MAX_PACKET], GP_MAX_PACKET);
+    uint8_t full_block[] = {0xFF, 1, 2, 3};
+    CHECK_INT(gp_cobs_decode(full_block, sizeof full_block), -1);
 }
 
-void test_command_should_round_trip_through_a_frame(void)
+static gp_frame_error reframe(uint8_t type, const uint8_t *payload, size_t len, uint8_t *wire,
+                              gp_frame *frame)
 {
-    gp_command command = {.tick = 123456, .state = 2, .stack_depth = 1, .transition = 3,
-                          .from = 0, .to = 1, .profile = 1, .flags = GP_FLAG_CLIMBING,
-                          .depth_target_m = 5.5f, .pitch_rad = 0.454f, .ballast_cc = 230,
-                          .heading_rad = 1.25f, .sensor_power = 0x207, .event_count = 9};
-    uint8_t payload[GP_COMMAND_SIZE], wire[GP_MAX_FRAME];
-    CHECK_INT(gp_command_pack(&command, payload), 36);
-    size_t n = gp_frame_build(GP_MSG_COMMAND, 7, 6, payload, sizeof payload, wire);
+    size_t n = gp_frame_build(type, 7, 6, payload, len, wire);
     CHECK_INT(wire[n - 1], 0);
     for (size_t i = 0; i + 1 < n; i++) {
         CHECK(wire[i] != 0);
     }
+    return gp_frame_parse(wire, n - 1, frame);
+}
+
+void test_command_should_travel_whole_and_as_its_changes(void)
+{
+    gp_command base = {.tick = 123455, .state = 2, .stack_depth = 1, .from = GP_NO_STATE,
+                       .to = GP_NO_STATE, .profile = 1, .flags = GP_FLAG_CLIMBING,
+                       .depth_target_m = 5.5f, .pitch_rad = 0.454f, .ballast_cc = 230,
+                       .heading_rad = 1.25f, .sensor_power = 0x207, .event_count = 9};
+    gp_command command = base, back;
+    command.tick = 123456;
+    uint8_t payload[GP_COMMAND_MAX_SIZE], wire[GP_MAX_FRAME];
     gp_frame frame;
-    CHECK_INT(gp_frame_parse(wire, n - 1, &frame), GP_FRAME_OK);
+
+    /* whole: every field that is not zero; it needs no base */
+    size_t len = gp_command_pack(&command, NULL, payload);
+    CHECK_INT(len, 7 + 6 + 4 * 4 + 4 + 4);  /* transition is 0: left out */
+    CHECK_INT(payload[4], 0);
+    CHECK_INT(reframe(GP_MSG_COMMAND, payload, len, wire, &frame), GP_FRAME_OK);
     CHECK_INT(frame.seq, 7);
     CHECK_INT(frame.ack, 6);
-    gp_command back;
-    CHECK_INT(gp_command_unpack(&frame, &back), GP_FRAME_OK);
-    CHECK_INT(back.tick, 123456);
-    CHECK_INT(back.to, 1);
-    CHECK_NEAR(back.pitch_rad, 0.454, 1e-6);  /* f32 on the wire */
-    CHECK_INT(back.sensor_power, 0x207);
-    CHECK_INT(back.event_count, 9);
+    CHECK_INT(gp_command_unpack(&frame, NULL, &back), GP_FRAME_OK);
+    CHECK(memcmp(&back, &command, sizeof back) == 0);
+
+    /* unchanged from the tick before: the tick, its base one tick back, no field */
+    CHECK_INT(gp_command_pack(&command, &base, payload), 7);
+    CHECK_INT(payload[4], 1);
+    /* a turn: three fields change, and a negative zero is not a zero */
+    command.flags = 0;
+    command.depth_target_m = 20.0f;
+    command.pitch_rad = -0.454f;
+    command.ballast_cc = -0.0f;
+    len = gp_command_pack(&command, &base, payload);
+    CHECK_INT(len, 7 + 1 + 4 + 4 + 4);
+    CHECK_INT(reframe(GP_MSG_COMMAND, payload, len, wire, &frame), GP_FRAME_OK);
+    CHECK_INT(gp_command_unpack(&frame, &base, &back), GP_FRAME_OK);
+    CHECK(memcmp(&back, &command, sizeof back) == 0);
+    CHECK(signbit(back.ballast_cc));
+    /* the receiver holds another COMMAND than the base: it cannot apply it */
+    gp_command other = base;
+    other.tick = 123454;
+    CHECK_INT(gp_command_unpack(&frame, &other, &back), GP_FRAME_BASE);
+    CHECK_INT(gp_command_unpack(&frame, NULL, &back), GP_FRAME_BASE);
+    /* a base more than 255 ticks back cannot be named: whole (5 bytes, 4 floats, 2 words) */
+    base.tick = 123456 - 256;
+    len = gp_command_pack(&command, &base, payload);
+    CHECK_INT(len, 7 + 5 + 4 * 4 + 4 + 4);
+    CHECK_INT(payload[4], 0);
+    /* a fields mask with an unknown bit, a length that disagrees with the mask */
+    frame.payload = payload;
+    frame.length = (uint16_t)len;
+    CHECK_INT(gp_command_unpack(&frame, NULL, &back), GP_FRAME_OK);
+    payload[6] |= 0x80;
+    CHECK_INT(gp_command_unpack(&frame, NULL, &back), GP_FRAME_LENGTH);
+    payload[6] &= 0x7F;
+    frame.length--;
+    CHECK_INT(gp_command_unpack(&frame, NULL, &back), GP_FRAME_LENGTH);
+}
+
+/* Each field alone, as the contract sizes it (GP_COMMAND_FIELD_BYTES), reads and packs
+ * back to the same bytes. */
+void test_command_fields_should_have_their_contract_sizes(void)
+{
+    static const uint8_t bytes[GP_N_COMMAND_FIELDS] = GP_COMMAND_FIELD_BYTES;
+    for (int field = 0; field < GP_N_COMMAND_FIELDS; field++) {
+        uint8_t payload[GP_COMMAND_MAX_SIZE] = {9, 0, 0, 0, 0, (uint8_t)(1u << field),
+                                                (uint8_t)((1u << field) >> 8)};
+        memset(payload + 7, 0x41, bytes[field]);
+        gp_frame frame = {GP_MSG_COMMAND, 1, 0, (uint16_t)(7 + bytes[field]), payload};
+        gp_command command;
+        uint8_t again[GP_COMMAND_MAX_SIZE];
+        CHECK_INT(gp_command_unpack(&frame, NULL, &command), GP_FRAME_OK);
+        CHECK_INT(gp_command_pack(&command, NULL, again), 7 + bytes[field]);
+        CHECK(memcmp(again, payload, 7u + bytes[field]) == 0);
+    }
 }
 
 void test_sensors_should_update_only_the_masked_values(void)
 {
     double in[GP_N_SENSORS] = {0}, out[GP_N_SENSORS];
+    const uint32_t read_mask = (1u << 0) | (1u << 9);
+    uint8_t payload[GP_MAX_PAYLOAD];
     in[0] = 500;
     in[9] = 14.25;
     in[1] = 99;  /* not in the mask: must not arrive */
     for (int i = 0; i < GP_N_SENSORS; i++) {
         out[i] = -1;
     }
-    gp_frame frame = {.type = GP_MSG_SENSORS};
-    frame.length = (uint16_t)gp_sensors_pack(42, (1u << 0) | (1u << 9), in, frame.payload);
-    CHECK_INT(frame.length, 16);
+    /* the runtime's read mask: no mask on the wire */
+    gp_frame frame = {.type = GP_MSG_SENSORS, .payload = payload};
+    frame.length = (uint16_t)gp_sensors_pack(42, 0, read_mask, read_mask, in, payload);
+    CHECK_INT(frame.length, 5 + 8);
     uint32_t tick;
-    CHECK_INT(gp_sensors_unpack(&frame, &tick, out), GP_FRAME_OK);
+    uint8_t flags;
+    CHECK_INT(gp_sensors_unpack(&frame, read_mask, &tick, &flags, out), GP_FRAME_OK);
     CHECK_INT(tick, 42);
+    CHECK_INT(flags, 0);
     CHECK_NEAR(out[0], 500, 0);
     CHECK_NEAR(out[9], 14.25, 0);
     CHECK_NEAR(out[1], -1, 0);
     frame.length--;  /* a payload that disagrees with its mask */
-    CHECK_INT(gp_sensors_unpack(&frame, &tick, out), GP_FRAME_LENGTH);
+    CHECK_INT(gp_sensors_unpack(&frame, read_mask, &tick, &flags, out), GP_FRAME_LENGTH);
+    /* another set (the CTD is off): the mask goes with it; a resync request */
+    out[9] = -1;
+    frame.length = (uint16_t)gp_sensors_pack(43, GP_SENSORS_RESYNC, 1u, read_mask, in, payload);
+    CHECK_INT(frame.length, 5 + 4 + 4);
+    CHECK_INT(gp_sensors_unpack(&frame, read_mask, &tick, &flags, out), GP_FRAME_OK);
+    CHECK_INT(flags, GP_SENSORS_MASK | GP_SENSORS_RESYNC);
+    CHECK_NEAR(out[9], -1, 0);
+    payload[4] |= 0x80;  /* a reserved flag: dropped */
+    CHECK_INT(gp_sensors_unpack(&frame, read_mask, &tick, &flags, out), GP_FRAME_LENGTH);
 }
 
 static size_t raw_packet(uint8_t version, uint8_t type, uint16_t length_field,
                          const uint8_t *payload, size_t payload_len, uint8_t *wire)
 {
-    uint8_t packet[GP_MAX_PACKET + 16] = {version, type, 1, 0, (uint8_t)length_field,
-                                          (uint8_t)(length_field >> 8)};
+    uint8_t *packet = wire + 1;
+    packet[0] = version;
+    packet[1] = type;
+    packet[2] = 1;
+    packet[3] = 0;
+    packet[4] = (uint8_t)length_field;
+    packet[5] = (uint8_t)(length_field >> 8);
     memcpy(packet + 6, payload, payload_len);
     uint16_t crc = gp_crc16(packet, 6 + payload_len);
     packet[6 + payload_len] = (uint8_t)(crc >> 8);
     packet[7 + payload_len] = (uint8_t)crc;
-    return gp_cobs_encode(packet, 8 + payload_len, wire);
+    return gp_cobs_encode(wire, 8 + payload_len);
 }
 
 void test_bad_frames_should_be_dropped_with_their_reason(void)
 {
     uint8_t wire[600], payload[4] = {1, 2, 3, 4};
     gp_frame frame;
-    size_t n = raw_packet(2, GP_MSG_NAK, 0, payload, 0, wire);
+    size_t n = raw_packet(GP_PROTOCOL_VERSION + 1, GP_MSG_NAK, 0, payload, 0, wire);
     CHECK_INT(gp_frame_parse(wire, n, &frame), GP_FRAME_VERSION);
-    n = raw_packet(1, 0x42, 0, payload, 0, wire);
+    n = raw_packet(GP_PROTOCOL_VERSION, 0x42, 0, payload, 0, wire);
     CHECK_INT(gp_frame_parse(wire, n, &frame), GP_FRAME_TYPE);
-    n = raw_packet(1, GP_MSG_RELEASE, 3, payload, 4, wire);
+    n = raw_packet(GP_PROTOCOL_VERSION, GP_MSG_RELEASE, 3, payload, 4, wire);
     CHECK_INT(gp_frame_parse(wire, n, &frame), GP_FRAME_LENGTH);
     n = gp_frame_build(GP_MSG_RELEASE, 1, 0, payload, 1, wire) - 1;
     wire[3] ^= 0x20;
     CHECK_INT(gp_frame_parse(wire, n, &frame), GP_FRAME_CRC);
-    CHECK_INT(gp_frame_parse((const uint8_t *)"\x05\x11\x22", 3, &frame), GP_FRAME_COBS);
-    CHECK_INT(gp_frame_parse((const uint8_t *)"\x03\x01\x02", 3, &frame), GP_FRAME_SHORT);
+    uint8_t past_end[] = {0x05, 0x11, 0x22}, zero_inside[] = {0x03, 0x11, 0x00};
+    uint8_t short_packet[] = {0x03, 0x01, 0x02};
+    CHECK_INT(gp_frame_parse(past_end, 3, &frame), GP_FRAME_COBS);
+    CHECK_INT(gp_frame_parse(zero_inside, 3, &frame), GP_FRAME_COBS);
+    CHECK_INT(gp_frame_parse(short_packet, 3, &frame), GP_FRAME_SHORT);
     memset(wire, 1, 300);
     CHECK_INT(gp_frame_parse(wire, 251, &frame), GP_FRAME_TOO_LONG);
     uint8_t big[GP_MAX_PAYLOAD + 1] = {0};
@@ -212,7 +301,7 @@ void test_random_bytes_should_never_crash_the_reader(void)
     gp_frame_reader reader = {0};
     gp_frame frame;
     unsigned seed = 77, frames = 0;
-    uint8_t wire[GP_MAX_FRAME], payload[GP_MAX_PAYLOAD];
+    uint8_t wire[GP_MAX_FRAME], copy[GP_MAX_FRAME], payload[GP_MAX_PAYLOAD];
     for (int i = 0; i < 200000; i++) {
         uint8_t byte = (uint8_t)gp_test_random(&seed);
         if (byte < 8) {
@@ -232,7 +321,8 @@ void test_random_bytes_should_never_crash_the_reader(void)
             payload[j] = (uint8_t)gp_test_random(&seed);
         }
         size_t n = gp_frame_build(GP_MSG_PLAN, (uint8_t)i, 0, payload, len, wire);
-        CHECK_INT(gp_frame_parse(wire, n - 1, &frame), GP_FRAME_OK);
+        memcpy(copy, wire, n);  /* parsing decodes in place */
+        CHECK_INT(gp_frame_parse(copy, n - 1, &frame), GP_FRAME_OK);
         CHECK(frame.length == len && memcmp(frame.payload, payload, len) == 0);
         size_t at = gp_test_random(&seed) % (n - 1);
         uint8_t flip = (uint8_t)(1u << (gp_test_random(&seed) % 8));
