@@ -29,7 +29,7 @@ import pytest
 import serial
 
 from gliderplan.cli.main import main
-from gliderplan.contract import NO_STATE, PROTOCOL_VERSION, ReleaseReason
+from gliderplan.contract import NO_STATE, PROTOCOL_VERSION, ReleaseReason, RuntimeExit
 from gliderplan.language import check_source, semantics
 from gliderplan.language.codegen_c import read_mask
 from gliderplan.language.registry import SENSORS
@@ -165,6 +165,23 @@ def test_fig2_over_a_line_the_runtime_makes_with_a_pyserial_peer(binary, tmp_pat
             process.kill()
             process.wait()
     assert trace(commands) == PAPER_TRACE
+
+
+def test_a_simulated_run_cut_short_stops_the_runtime_cleanly(cache):
+    """The simulator's end of the line closes, then it stops the runtime (SIGTERM): the
+    runtime, which saw its peer hang up, releases and exits 4 instead of napping through
+    the stop signal until the simulator kills it."""
+    from gliderplan.sim.emulator import start_c_runtime
+
+    mission = check_source(FIG2.read_text(), str(FIG2)).mission
+    for _ in range(5):  # the signal can land anywhere in the runtime's wait
+        runtime = start_c_runtime(mission, None, 230.0)
+        for tick in range(3):
+            runtime.step(tick, 0x2C3, [tick * TICK_S, 5.0, 0.0, 0, 0, 0, 3910.0, -7349.0, 0,
+                                       15.0, *[0.0] * 7])
+        runtime.close()
+        assert runtime.process.returncode == RuntimeExit.INTERNAL, runtime.stderr_text()
+        assert "stopped by a signal" in runtime.stderr_text()
 
 
 def test_a_second_compile_comes_from_the_cache(binary, cache, tmp_path):

@@ -29,7 +29,8 @@ void gp_serial_linger(int fd, double max_s);
 int gp_serial_write(int fd, const uint8_t *data, size_t len);
 
 /**
- * @brief Wait up to `timeout_ms` for bytes and read at most `cap`.
+ * @brief Wait up to `timeout_ms` for bytes and read at most `cap`; on a line whose peer
+ *        hung up, wait at most 50 ms (the caller's loop checks its signals and watchdog).
  * @return bytes read (0: none within the timeout or the peer hung up), -1 on error
  */
 long gp_serial_read(int fd, uint8_t *buf, size_t cap, int timeout_ms);

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #define WRITE_ATTEMPTS 1000
+#define HUNG_UP_NAP_MS 50  /* [ms] the longest wait on a line nobody holds */
 
 /* Raw 115200 8N1, no flow control; reads return what is there (VMIN = VTIME = 0). */
 static int make_raw(int fd)
@@ -121,7 +122,9 @@ long gp_serial_read(int fd, uint8_t *buf, size_t cap, int timeout_ms)
         return 0;
     }
     if (!(pfd.revents & POLLIN)) {  /* hung up: nobody is talking, wait as if silent */
-        sleep_ms(timeout_ms);
+        /* in short naps: a stop signal that lands between the poll and the nap must
+         * not wait out a whole link timeout */
+        sleep_ms(timeout_ms < HUNG_UP_NAP_MS ? timeout_ms : HUNG_UP_NAP_MS);
         return 0;
     }
     ssize_t n = read(fd, buf, cap);
