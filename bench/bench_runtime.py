@@ -1,16 +1,26 @@
-"""Runtime bench: instructions per tick, text size, peak RSS and link bytes per tick.
+"""Runtime bench: what one tick costs the glider's computer, and the link, whole process.
 
-    .venv/bin/python bench/bench_runtime.py [--ticks-per-s 1]
+    .venv/bin/python bench/bench_runtime.py [--runs 3] [--tick 4]
 
-Instructions are counted by callgrind over a bench driver that links the runtime's
-library (every runtime/src/*.c but main) with a generated mission and feeds it SENSORS
-frames from memory: `--toggle-collect` counts only the function named, so start-up
-and I/O are excluded. Two counts per mission: the step alone (`gp_runtime_tick`) and
-the whole per-tick CPU work (SENSORS decoded, step, COMMAND encoded). Missions: the
-paper's Fig. 2 (without and with a plan) and a generated mission whose state checks
-200 events every tick. The i486 build (the TS-5500's instruction set) is counted too,
-when its cross compiler is installed. Text size is size(1) of the binaries; peak RSS
-and link bytes come from a Fig. 2 run over a pty against protocol.Link.
+Instructions are callgrind's count of every instruction the mission binary's process
+executes (the dynamic loader, the C library, start-up and exit included) while it flies
+a mission over a pseudo-terminal against `protocol.Link`, with `--state-dir` on as on the
+glider: event log, checkpoints, the link's framing, the mission's step. A second run of
+each binary is stopped (SIGTERM) after its first tick: start-up and exit. Per tick is
+the difference over the ticks between. Instruction counts do not depend on the machine's
+load; the median of --runs runs is printed (they differ by the few instructions of a
+read that found half a frame). callgrind's inclusive counts split the tick into the
+mission's step (`gp_runtime_tick`), the link in (`gp_serial_read`,
+`gp_frame_reader_feed`, `gp_sensors_unpack`), the link out (`gp_command_pack`,
+`gp_frame_seal`, `gp_serial_write`), the checkpoint (`gp_checkpoint_store`) and the
+event log (`gp_events_append`); the rest is the loop and the clock.
+
+Missions: the paper's Fig. 2 (without and with a plan) and a generated mission whose
+state checks 200 events every tick. Readings: a 5-25 m yo (400 s period), a noisy
+thermocline at 12 m, the glider drifting north at 0.3 m/s. Builds: the host's and the
+TS-5500's (i486, musl, under callgrind's x86 tool); the TS-7800's ARM cannot run under
+callgrind here. Also: link bytes per tick each way, peak RSS, text and static RAM
+(.data + .bss) per board.
 """
 
 from __future__ import annotations
@@ -19,117 +29,34 @@ import argparse
 import os
 import re
 import shutil
+import signal
+import statistics
 import subprocess
 import sys
 import tempfile
 import tty
 import zlib
+from dataclasses import dataclass
 from pathlib import Path
 
+from gliderplan.contract import TICK_S
 from gliderplan.language import check_source
 from gliderplan.language.ir import CheckedMission
-from gliderplan.runtime.build import (
-    C_FLAGS,
-    LINK_FLAGS,
-    TARGETS,
-    compile_mission,
-    runtime_sources,
-)
+from gliderplan.runtime.build import C_FLAGS, TARGETS, compile_mission, runtime_sources
 from gliderplan.runtime.protocol import FdPort, Link
 
 ROOT = Path(__file__).resolve().parents[1]
+GOALS = {"instructions_per_tick": 2000, "text_bytes": 64 * 1024, "link_bytes_per_tick": 64}
+# The parts of a tick, by the exported functions callgrind counts inclusively.
+PARTS = {"step": ("gp_runtime_tick",),
+         "link in": ("gp_serial_read", "gp_frame_reader_feed", "gp_sensors_unpack"),
+         "link out": ("gp_command_pack", "gp_frame_seal", "gp_serial_write"),
+         "checkpoint": ("gp_checkpoint_store",),
+         "event log": ("gp_events_append",)}
 TS5500_HZ = 133e6  # AMD Elan SC520 clock
 # Cycles per instruction assumed for the SC520 (a 486 core: ~1-2 for integer work, the
 # x87 adds 8-70 cycles per operation); 4 is a pessimistic average for this mix.
 TS5500_CPI = 4.0
-GOALS = {"instructions_fig2": 2000, "text_bytes": 64 * 1024, "link_bytes_per_tick": 64}
-
-DRIVER = r"""
-#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "gp_frame.h"
-#include "gp_plan.h"
-#include "gp_runtime.h"
-
-/* argv: ticks, seconds per tick, [plan file]. Runs the mission to its end (or `ticks`)
- * on synthetic readings: a 5-25 m yo and a noisy thermocline at 12 m. */
-static gp_runtime runtime;
-static gp_plan plan;
-static char plan_text[65536];
-static gp_frame_reader reader;
-
-/* One tick's CPU work without its system calls. */
-__attribute__((noinline)) int bench_tick(const gp_run_options *options, const uint8_t *wire,
-                                         size_t len, uint8_t *answer, size_t *answer_len)
-{
-    gp_frame frame;
-    size_t used;
-    uint32_t tick;
-    if (gp_frame_reader_feed(&reader, wire, len, &used, &frame) != GP_FRAME_OK
-        || gp_sensors_unpack(&frame, &tick, runtime.sensors) != GP_FRAME_OK) {
-        return -1;
-    }
-    gp_command command;
-    gp_tick_report report;
-    gp_runtime_tick(&runtime, &gp_mission_table, options, tick, &command, &report);
-    uint8_t payload[GP_MAX_PAYLOAD];
-    size_t n = gp_command_pack(&command, payload);
-    *answer_len = gp_frame_build(GP_MSG_COMMAND, frame.seq, frame.seq, payload, n, answer);
-    return (command.flags & GP_FLAG_DONE) != 0;
-}
-
-int main(int argc, char **argv)
-{
-    if (argc < 3) {
-        return 2;
-    }
-    long ticks = strtol(argv[1], NULL, 10);
-    double step_s = strtod(argv[2], NULL);
-    gp_run_options options = {NULL, 0};
-    if (argc > 3) {
-        FILE *f = fopen(argv[3], "rb");
-        char error[GP_PLAN_ERROR_LEN];
-        size_t n = f ? fread(plan_text, 1, sizeof plan_text, f) : 0;
-        if (!f || gp_plan_read(plan_text, n, &gp_mission_table, &plan, error) != 0) {
-            fprintf(stderr, "plan: %s\n", f ? error : "cannot open");
-            return 1;
-        }
-        fclose(f);
-        options.plan = &plan;
-    }
-    gp_runtime_init(&runtime);
-    double readings[GP_N_SENSORS] = {0};
-    uint32_t mask = gp_mission_table.read_mask;
-    long done_at = -1;
-    for (long tick = 0; tick < ticks && done_at < 0; tick++) {
-        double t = (double)tick * step_s;
-        double phase = fmod(t, 400.0) / 200.0;   /* 0..2 */
-        readings[0] = t;
-        readings[1] = 5.0 + 20.0 * (phase < 1.0 ? phase : 2.0 - phase);
-        readings[2] = phase < 1.0 ? -0.45 : 0.45;
-        readings[6] = 3910.4;
-        readings[7] = -7349.7;
-        readings[9] = (readings[1] < 12.0 ? 22.0 : 9.0) + 0.3 * sin(t * 1.7);
-        uint8_t payload[GP_MAX_PAYLOAD], wire[GP_MAX_FRAME], answer[GP_MAX_FRAME];
-        size_t n = gp_sensors_pack((uint32_t)tick, mask, readings, payload);
-        size_t len = gp_frame_build(GP_MSG_SENSORS, (uint8_t)tick, 0, payload, n, wire);
-        size_t answer_len = 0;
-        int result = bench_tick(&options, wire, len, answer, &answer_len);
-        if (result < 0) {
-            fprintf(stderr, "tick %ld: frame refused\n", tick);
-            return 1;
-        }
-        if (result == 1) {
-            done_at = tick;
-        }
-    }
-    printf("%ld\n", done_at < 0 ? ticks : done_at + 1);
-    return 0;
-}
-"""
 
 
 def bench200_source(n_events: int = 200) -> str:
@@ -171,46 +98,15 @@ def fig2_plan(mission: CheckedMission) -> bytes:
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
 
 
-def build_driver(mission_c: Path, out: Path, compiler: list[str], flags: list[str]) -> Path:
-    with runtime_sources() as (include, sources):
-        library = [str(s) for s in sources if s.name != "gp_main.c"]
-        driver = out.parent / "bench_driver.c"
-        driver.write_text(DRIVER)
-        subprocess.run([*compiler, *C_FLAGS, *flags, f"-I{include}", *library, str(mission_c),
-                        str(driver), "-o", str(out), *LINK_FLAGS], check=True)
-    return out
-
-
-def instructions(driver: Path, function: str, ticks: int, step_s: float,
-                 plan: Path | None) -> tuple[int, int]:
-    """(instructions inside `function` and its callees, ticks run) under callgrind."""
-    out = driver.parent / f"callgrind.{function}.out"
-    command = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-               f"--toggle-collect={function}", str(driver), str(ticks), repr(step_s)]
-    done = subprocess.run([*command, *([str(plan)] if plan else [])], capture_output=True,
-                          text=True, check=True)
-    ran = int(done.stdout.split()[-1])
-    totals = re.search(r"^(?:summary|totals): (\d+)", out.read_text(), re.MULTILINE)
-    return int(totals.group(1)), ran
-
-
-def text_bytes(binary: Path, size_tool: str = "size") -> int:
-    lines = subprocess.run([size_tool, str(binary)], capture_output=True, text=True,
-                           check=True).stdout.splitlines()
-    return int(lines[1].split()[0])
-
-
-def runtime_object_text(compiler: list[str], flags: list[str], mission_c: Path,
-                        work: Path) -> int:
-    """Text of the runtime's own objects and the mission (no C library)."""
-    total = 0
-    with runtime_sources() as (include, sources):
-        for source in [*sources, mission_c]:
-            obj = work / f"{source.stem}.o"
-            subprocess.run([*compiler, *C_FLAGS, *flags, f"-I{include}", "-c", str(source),
-                            "-o", str(obj)], check=True)
-            total += text_bytes(obj)
-    return total
+def readings(tick: int, tick_s: float) -> dict[int, float]:
+    """Sensors of one tick: missiontime, a 5-25 m yo, pitch, a position drifting north at
+    0.3 m/s (lat, lon in DDMM.MMMM), a thermocline at 12 m with +-0.3 C of flicker."""
+    t = tick * tick_s
+    phase = t % 400.0 / 200.0
+    depth = 5.0 + 20.0 * (phase if phase < 1.0 else 2.0 - phase)
+    temp = (22.0 if depth < 12.0 else 9.0) + (0.3 if tick % 2 else -0.3)
+    return {0: t, 1: depth, 2: -0.45 if phase < 1.0 else 0.45, 6: 3910.4 + 0.3 * t / 1852.0,
+            7: -7349.7, 9: temp}
 
 
 class CountingPort(FdPort):
@@ -230,40 +126,57 @@ class CountingPort(FdPort):
         return super().write(data)
 
 
-def link_run(binary: Path, step_s: float, work: Path) -> dict[str, float]:
-    """Fly Fig. 2 over a pty; bytes per tick each way and the runtime's peak RSS [KiB]."""
+@dataclass
+class Flight:
+    ticks: int
+    sensors_bytes: list[int]  # written per tick (SENSORS, with any retransmission)
+    command_bytes: list[int]  # read per tick (COMMAND)
+    peak_rss_kib: int
+
+
+def fly(command: list[str], work: Path, tick_s: float, stop_after: int | None = None,
+        pid_to_watch: bool = False) -> Flight:
+    """Fly the binary over a pty with a fresh state directory until the mission exits (or
+    `stop_after` ticks, then SIGTERM); bytes per tick each way."""
+    state = work / "state"
+    shutil.rmtree(state, ignore_errors=True)
     master, slave = os.openpty()
     tty.setraw(slave)
-    process = subprocess.Popen([str(binary), "--device", os.ttyname(slave),
-                                "--state-dir", str(work / "state")])
+    process = subprocess.Popen([*command, "--device", os.ttyname(slave), "--state-dir",
+                                str(state)], stderr=subprocess.PIPE)
     port = CountingPort(master)
-    link = Link(port)
-    link.wait_hello(30)
-    hello_in = port.read_bytes
-    tick, peak_kib = 0, 0
-    while True:
-        readings = {0: tick * step_s, 1: 5.0 + tick % 20, 2: 0.4, 6: 3910.4, 7: -7349.7,
-                    9: 15.0}
-        done = link.step(tick, readings).done
-        peak_kib = max(peak_kib, high_water_kib(process.pid))
-        if done:
-            break
-        tick += 1
-    ticks = tick + 1
-    link.wait_release()
-    _, status, _ = os.wait4(process.pid, 0)
-    os.close(master)
-    os.close(slave)
-    if os.waitstatus_to_exitcode(status) != 0:
-        sys.exit(f"the runtime exited with {os.waitstatus_to_exitcode(status)}")
-    return {"ticks": ticks, "sensors_bytes": port.written_bytes / ticks,
-            "command_bytes": (port.read_bytes - hello_in) / ticks,
-            "peak_rss_kib": peak_kib}
+    link = Link(port, retransmit_s=5.0)  # callgrind is slow to answer: no retransmissions
+    try:
+        hello = link.wait_hello(60)
+        tick, peak_kib = 0, 0
+        sent, received = [], []
+        while True:
+            before_out, before_in = port.written_bytes, port.read_bytes
+            values = {i: v for i, v in readings(tick, tick_s).items()
+                      if hello.read_mask >> i & 1}  # what the runtime reads, as HELLO says
+            done = link.step(tick, values).done
+            sent.append(port.written_bytes - before_out)
+            received.append(port.read_bytes - before_in)
+            if pid_to_watch:
+                peak_kib = max(peak_kib, high_water_kib(process.pid))
+            tick += 1
+            if done or tick == stop_after:
+                break
+        if not done:
+            process.send_signal(signal.SIGTERM)
+        link.wait_release(60)
+        status = process.wait(60)
+    finally:
+        os.close(master)
+        os.close(slave)
+    if status != (0 if done else 4):
+        sys.exit(f"{command[-1]}: exit status {status}: {process.stderr.read().decode()}")
+    process.stderr.close()
+    return Flight(tick, sent, received, peak_kib)
 
 
 def high_water_kib(pid: int) -> int:
-    """VmHWM of a running process [KiB]; 0 once it has gone. (wait4's ru_maxrss would
-    count the forking Python interpreter's pages, not the runtime's.)"""
+    """VmHWM of a running process [KiB]; 0 once it has gone."""
     try:
         status = Path(f"/proc/{pid}/status").read_text()
     except OSError:
@@ -272,13 +185,71 @@ def high_water_kib(pid: int) -> int:
     return int(found.group(1)) if found else 0
 
 
+def callgrind(binary: Path, args: list[str], work: Path, tick_s: float,
+              stop_after: int | None = None) -> tuple[Flight, dict[str, int]]:
+    """A flight under callgrind: (the flight, inclusive instructions per function with
+    "total" for the whole process)."""
+    out = work / "callgrind.out"
+    flight = fly(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+                  str(binary), *args], work, tick_s, stop_after)
+    report = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100",
+                             str(out)], capture_output=True, text=True, check=True).stdout
+    counts = {"total": int(re.search(r"^([\d,]+) +\(100.0%\) +PROGRAM TOTALS", report,
+                                     re.MULTILINE)[1].replace(",", ""))}
+    for found in re.finditer(r"^\s*([\d,]+) \([\d. %]+\)\s+\S*?:(\w+)[ .]", report,
+                             re.MULTILINE):
+        counts.setdefault(found[2], int(found[1].replace(",", "")))
+    return flight, counts
+
+
+def per_tick(binary: Path, args: list[str], work: Path, tick_s: float,
+             runs: int) -> tuple[int, dict[str, float], Flight]:
+    """(start-up and exit, per-tick instructions by part with "tick" the whole, a
+    flight): medians over `runs` pairs of whole and one-tick runs."""
+    samples: dict[str, list[float]] = {}
+    startups = []
+    for _ in range(runs):
+        flight, whole = callgrind(binary, args, work, tick_s)
+        _, first = callgrind(binary, args, work, tick_s, stop_after=1)
+        ticks = flight.ticks - 1
+        samples.setdefault("tick", []).append((whole["total"] - first["total"]) / ticks)
+        for part, functions in PARTS.items():
+            spent = sum(whole.get(f, 0) - first.get(f, 0) for f in functions)
+            samples.setdefault(part, []).append(spent / ticks)
+        startups.append(first["total"])
+    medians = {part: statistics.median(values) for part, values in samples.items()}
+    medians["rest"] = medians["tick"] - sum(medians[p] for p in PARTS)
+    return int(statistics.median(startups)), medians, flight
+
+
+def sizes(binary_or_object: Path) -> tuple[int, int, int]:
+    """(text, data, bss) bytes as size(1) counts them."""
+    lines = subprocess.run(["size", str(binary_or_object)], capture_output=True, text=True,
+                           check=True).stdout.splitlines()
+    text, data, bss = lines[1].split()[:3]
+    return int(text), int(data), int(bss)
+
+
+def runtime_objects(compiler: str, flags: list[str], mission_c: Path,
+                    work: Path) -> tuple[int, int, int]:
+    """(text, data, bss) of the runtime's own objects and the mission (no C library)."""
+    total = [0, 0, 0]
+    with runtime_sources() as (include, sources):
+        for source in [*sources, mission_c]:
+            obj = work / f"{source.stem}.o"
+            subprocess.run([compiler, *C_FLAGS, *flags, f"-I{include}", "-c", str(source),
+                            "-o", str(obj)], check=True)
+            total = [a + b for a, b in zip(total, sizes(obj), strict=True)]
+    return total[0], total[1], total[2]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--ticks-per-s", type=float, default=1.0,
-                        help="tick rate of the synthetic runs (default 1 Hz)")
+    parser.add_argument("--runs", type=int, default=3, help="callgrind runs (median)")
+    parser.add_argument("--tick", type=float, default=TICK_S,
+                        help=f"tick [s] (default {TICK_S:g}, the glider's)")
     args = parser.parse_args()
-    step_s = 1.0 / args.ticks_per_s
-    for tool in ("cc", "valgrind", "size"):
+    for tool in ("cc", "valgrind", "callgrind_annotate", "size"):
         if shutil.which(tool) is None:
             sys.exit(f"bench_runtime: {tool} is not installed")
     fig2 = checked((ROOT / "examples" / "fig2.mission").read_text(), "fig2.mission")
@@ -289,58 +260,63 @@ def main() -> int:
         os.environ.setdefault("GLIDERPLAN_CACHE_DIR", str(work / "cache"))
         plan = work / "fig2.plan"
         plan.write_bytes(fig2_plan(fig2))
-        builds = [("host", ["cc"], [])]
-        if shutil.which("i686-linux-gnu-gcc"):
-            builds.append(("ts5500", ["i686-linux-gnu-gcc"], list(TARGETS["ts5500"].flags)))
-        print(f"instructions per tick ({args.ticks_per_s:g} Hz ticks, callgrind, I/O "
-              "excluded); step = gp_runtime_tick, tick = decode + step + encode")
-        print(f"{'build':8} {'mission':16} {'ticks':>6} {'step':>8} {'tick':>8}")
-        per_tick: dict[tuple[str, str], float] = {}
-        for build, compiler, flags in builds:
-            for label, mission, mission_plan in (("fig2", fig2, None),
-                                                 ("fig2+plan", fig2, plan),
-                                                 ("bench200", bench200, None)):
-                out = work / build / mission.name
-                out.mkdir(parents=True, exist_ok=True)
-                binary = compile_mission(mission, out, "host")  # writes the mission's C
-                driver = build_driver(binary.with_suffix(".c"), out / "driver", compiler, flags)
-                step, ran = instructions(driver, "gp_runtime_tick", 100_000, step_s,
-                                         mission_plan)
-                whole, _ = instructions(driver, "bench_tick", 100_000, step_s, mission_plan)
-                per_tick[build, label] = whole / ran
-                print(f"{build:8} {label:16} {ran:6d} {step / ran:8.0f} {whole / ran:8.0f}")
-        print(f"target for fig2: {GOALS['instructions_fig2']} instructions per tick")
-        host_fig2 = per_tick["host", "fig2"]
-        print(f"bench200 / fig2 (host, tick): {per_tick['host', 'bench200'] / host_fig2:.1f}x")
-        i486 = per_tick.get(("ts5500", "fig2"), host_fig2)
-        share = i486 * TS5500_CPI / TS5500_HZ * args.ticks_per_s
-        print(f"TS-5500 CPU share at {args.ticks_per_s:g} Hz, fig2 "
-              f"({'i486' if ('ts5500', 'fig2') in per_tick else 'host'} instructions, "
-              f"CPI {TS5500_CPI:g}): {100 * share:.4f} %")
+        targets = ["host"] + [t for t in ("ts5500",) if shutil.which(TARGETS[t].compiler)]
+        print(f"instructions per tick, whole process under callgrind, --state-dir on, "
+              f"{args.tick:g} s ticks, median of {args.runs} runs; "
+              f"goal {GOALS['instructions_per_tick']} for Fig. 2")
+        parts = " ".join(f"{p:>10}" for p in [*PARTS, "rest"])
+        print(f"{'build':7} {'mission':10} {'ticks':>5} {'start-up':>9} {'tick':>6} {parts}")
+        fig2_tick = {}
+        for target in targets:
+            for label, mission, options in (("fig2", fig2, []),
+                                            ("fig2+plan", fig2, ["--plan", str(plan)]),
+                                            ("bench200", bench200, [])):
+                binary = compile_mission(mission, work / target / label, target)
+                startup, tick, flight = per_tick(binary, options, work, args.tick, args.runs)
+                if label == "fig2":
+                    fig2_tick[target] = tick["tick"]
+                cells = " ".join(f"{tick[p]:10.0f}" for p in [*PARTS, "rest"])
+                print(f"{target:7} {label:10} {flight.ticks:5d} {startup:9,d} "
+                      f"{tick['tick']:6.0f} {cells}")
+        if "ts5500" in fig2_tick:
+            share = fig2_tick["ts5500"] * TS5500_CPI / TS5500_HZ / args.tick
+            print(f"TS-5500 CPU share, Fig. 2 at one tick per {args.tick:g} s: "
+                  f"{fig2_tick['ts5500']:,.0f} instructions x {TS5500_CPI:g} cycles (assumed) "
+                  f"/ {TS5500_HZ / 1e6:g} MHz = {100 * share:.4f} %")
 
-        print(f"\ntext size (size(1)), Fig. 2; target {GOALS['text_bytes']} B")
-        host = compile_mission(fig2, work / "fig2-host", "host")
-        print(f"  host binary (dynamic libc): {text_bytes(host)} B")
-        print(f"  runtime + mission objects, host: "
-              f"{runtime_object_text(['cc'], [], host.with_suffix('.c'), work)} B")
-        for target in ("ts7800", "ts5500"):
-            compiler = TARGETS[target].compiler
-            if shutil.which(compiler) is None:
-                print(f"  {target}: {compiler} not installed")
+        host = compile_mission(fig2, work / "host" / "fig2", "host")
+        fig2_flight = fly([str(host)], work, args.tick, pid_to_watch=True)
+        # the first tick's COMMAND is whole; the last one's bytes include the RELEASE
+        steady_out = fig2_flight.sensors_bytes[1:-1]
+        steady_in = fig2_flight.command_bytes[1:-1]
+        both = [a + b for a, b in zip(steady_out, steady_in, strict=True)]
+        print(f"\nlink, Fig. 2 over a pty (protocol.Link), {len(both)} ticks between the "
+              f"first and the last: bytes per tick SENSORS {statistics.mean(steady_out):.1f}, "
+              f"COMMAND {statistics.mean(steady_in):.1f}, both {statistics.mean(both):.1f} "
+              f"(goal {GOALS['link_bytes_per_tick']}; most {max(both)}, over the goal on "
+              f"{sum(b > GOALS['link_bytes_per_tick'] for b in both)} ticks); first tick "
+              f"{fig2_flight.sensors_bytes[0]} + {fig2_flight.command_bytes[0]}, last "
+              f"{fig2_flight.sensors_bytes[-1]} + {fig2_flight.command_bytes[-1]} (RELEASE "
+              f"included)")
+        print(f"peak RSS of the runtime (VmHWM, host, dynamic C library): "
+              f"{fig2_flight.peak_rss_kib} KiB")
+
+        print(f"\ntext and static RAM (size(1)), Fig. 2; text goal {GOALS['text_bytes']} B")
+        print(f"{'board':7} {'runtime + mission objects: text':>32} {'data + bss':>11} "
+              f"{'whole binary: text':>19} {'data + bss':>11}")
+        mission_c = host.with_suffix(".c")
+        for target in ("host", "ts7800", "ts5500"):
+            board = TARGETS[target]
+            if shutil.which(board.compiler) is None:
+                print(f"{target:7} {board.compiler} not installed")
                 continue
-            static = compile_mission(fig2, work / f"fig2-{target}", target)
-            flags = [f for f in TARGETS[target].flags if f != "-static"]
-            objects = runtime_object_text([compiler], flags, host.with_suffix(".c"), work)
-            print(f"  {target}: runtime + mission objects {objects} B; static binary with "
-                  f"libc {text_bytes(static)} B")
-
-        print("\nFig. 2 over a pty (protocol.Link), host binary")
-        run = link_run(host, step_s * 10, work)  # 10 s ticks: the run takes ~1 s
-        both = run["sensors_bytes"] + run["command_bytes"]
-        print(f"  ticks {run['ticks']}, bytes per tick: SENSORS {run['sensors_bytes']:.1f}, "
-              f"COMMAND {run['command_bytes']:.1f}, both {both:.1f} "
-              f"(target {GOALS['link_bytes_per_tick']})")
-        print(f"  peak RSS {run['peak_rss_kib']} KiB")
+            flags = [f for f in board.flags if f != "-static"]
+            text, data, bss = runtime_objects(board.compiler, flags, mission_c, work)
+            binary = compile_mission(fig2, work / target / "fig2", target)
+            whole_text, whole_data, whole_bss = sizes(binary)
+            linked = "static" if "-static" in board.flags else "dynamic C library"
+            print(f"{target:7} {text:32,d} {data + bss:11,d} {whole_text:19,d} "
+                  f"{whole_data + whole_bss:11,d}  ({linked})")
     return 0
 
 

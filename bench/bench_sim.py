@@ -1,7 +1,7 @@
 """Benchmark: the simulator's speed with the Python executor and with the C runtime in
 closed loop over a pseudo-terminal.
 
-    .venv/bin/python bench/bench_sim.py [--days 30] [--c-days 1] [--tick 4] [--no-c]
+    .venv/bin/python bench/bench_sim.py [--days 30] [--c-days 1] [--tick 4] [--runs 3] [--no-c]
 
 Mission: tests/missions/sim_month.mission (yo 3-38 m along three waypoints, a surfacing
 with an Iridium call every 6 h, CTD on; exits after 30 days), bench ocean, seed 0.
@@ -10,19 +10,32 @@ with an Iridium call every 6 h, CTD on; exits after 30 days), bench ocean, seed 
    wall second (target: 30 days at 4 s in <= 10 s). Baseline in the same run: the
    reference semantics (`language.semantics.step`, tree-walking `ir.evaluate`) checking
    the events of every one of those ticks, against the executor's compiled checks.
-2. C runtime closed loop: the mission compiled for the host (cached), SENSORS and
-   COMMAND frames over a pty for --c-days: ticks per wall second (target >= 10,000) and
-   the ratio to real time; the Python executor on the same ticks is the baseline.
+2. C runtime closed loop, --c-days at --tick, medians of --runs runs taken in turn:
+   - the whole command the user runs, `gliderplan sim MISSION --runtime c --duration
+     Nd`, against the same command for one tick (start-up, imports, build cache, output
+     files and plots): ticks per wall second of the loop (target >= 10,000), and of the
+     command as a whole;
+   - the loop in this process (`sim.flight.fly`; the runtime is its own process): ticks
+     per wall second, and CPU per tick on each side of the line;
+   - the floor under any such loop: two C processes that only answer each other over a
+     pty with frames of the same sizes (bench/pty_roundtrip.c), as many round trips;
+   - the Python executor on the same ticks, in process; the two traces must agree.
    For comparison, MOOS-IvP's uSimMarine is reported to run 50-300x real time.
 """
 
 from __future__ import annotations
 
 import argparse
+import resource
 import shutil
+import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
+
+from whole_process import gliderplan, load_average, median_of
 
 from gliderplan.language import check_file, semantics
 from gliderplan.language.registry import SENSORS
@@ -31,16 +44,34 @@ from gliderplan.sim import compiled, ocean
 from gliderplan.sim.flight import fly
 from gliderplan.sim.loop import RunConfig, RunRecord
 
-MISSION = Path(__file__).resolve().parents[1] / "tests" / "missions" / "sim_month.mission"
+BENCH = Path(__file__).resolve().parent
+MISSION = BENCH.parent / "tests" / "missions" / "sim_month.mission"
 USIMMARINE_REAL_TIME = (50, 300)  # MOOS-IvP uSimMarine, reported time warp
+# Frame sizes of the loop's usual tick (docs/protocol.md): SENSORS with the mission's
+# five read sensors and no mask, a COMMAND whose heading changed.
+SENSORS_WIRE_BYTES, COMMAND_WIRE_BYTES = 35, 21
 
 
-def timed_run(mission, days: float, tick_s: float, runtime: str) -> tuple[RunRecord, float]:
+def timed_run(mission, days: float, tick_s: float,
+              runtime: str) -> tuple[RunRecord, float, float, float]:
+    """(record, wall [s], CPU of this process [s], CPU of processes it waited for [s])."""
     config = RunConfig(tick_s=tick_s, duration_s=days * 86400.0, seed=0)
     vehicle = load_vehicle(mission.vehicle)
-    start = time.perf_counter()
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu, start = time.process_time(), time.perf_counter()
     record = fly(mission, ocean.bench(), config, vehicle, runtime=runtime)
-    return record, time.perf_counter() - start
+    wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    runtime_cpu = (after.ru_utime - children.ru_utime) + (after.ru_stime - children.ru_stime)
+    return record, wall, cpu, runtime_cpu
+
+
+def pty_floor(binary: Path, round_trips: int) -> tuple[float, float]:
+    """(wall [s], CPU of both processes [s]) of round trips over a pty and nothing else."""
+    done = subprocess.run([str(binary), str(round_trips), str(SENSORS_WIRE_BYTES),
+                           str(COMMAND_WIRE_BYTES)], capture_output=True, text=True, check=True)
+    _, wall, cpu = done.stdout.split()
+    return float(wall), float(cpu)
 
 
 def event_checks(mission, record: RunRecord) -> tuple[float, float]:
@@ -71,11 +102,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--days", type=float, default=30.0)
     parser.add_argument("--c-days", type=float, default=1.0)
     parser.add_argument("--tick", type=float, default=4.0)
+    parser.add_argument("--runs", type=int, default=3, help="runs of the C loop (median)")
     parser.add_argument("--no-c", action="store_true", help="skip the C closed loop")
     args = parser.parse_args(argv)
     mission = check_file(str(MISSION)).mission
 
-    record, wall_s = timed_run(mission, args.days, args.tick, "python")
+    record, wall_s, _, _ = timed_run(mission, args.days, args.tick, "python")
     simulated_s = float(record.columns["time_s"][-1])
     ticks = len(record.columns["time_s"])
     print(f"Python executor: {args.days:g} d at {args.tick:g} s = {ticks} ticks in "
@@ -90,22 +122,51 @@ def main(argv: list[str] | None = None) -> int:
     if shutil.which("cc") is None:
         print("C closed loop: skipped (no C compiler)", file=sys.stderr)
         return 0
+    return c_loop(mission, args)
+
+
+def c_loop(mission, args: argparse.Namespace) -> int:
+    """The C runtime's closed loop: whole command, in process, and the pty's floor."""
     timed_run(mission, 0.01, args.tick, "c")  # compile once (cached) outside the timing
-    c_record, c_wall_s = timed_run(mission, args.c_days, args.tick, "c")
-    py_record, py_wall_s = timed_run(mission, args.c_days, args.tick, "python")
-    if c_record.trace != py_record.trace:
+    with tempfile.TemporaryDirectory(prefix="bench-sim-") as tmp:
+        floor_binary = Path(tmp) / "pty_roundtrip"
+        subprocess.run(["cc", "-O2", "-std=c11", str(BENCH / "pty_roundtrip.c"), "-o",
+                        str(floor_binary)], check=True)
+        command = gliderplan("sim", str(MISSION), "--runtime", "c", "--tick", f"{args.tick:g}")
+        whole = median_of({"run": [*command, "--duration", f"{args.c_days:g}d",
+                                   "-o", str(Path(tmp) / "run")],
+                           "one tick": [*command, "--duration", f"{args.tick:g}s",
+                                        "-o", str(Path(tmp) / "tick")]}, args.runs)
+        samples: dict[str, list[float]] = {}
+        for _ in range(args.runs):  # in turn, so that a change of load falls on all alike
+            record, wall, cpu, runtime_cpu = timed_run(mission, args.c_days, args.tick, "c")
+            ticks = len(record.columns["time_s"])
+            floor_wall, floor_cpu = pty_floor(floor_binary, ticks)
+            for name, value in (("wall", wall), ("cpu", cpu), ("runtime", runtime_cpu),
+                                ("floor", floor_wall), ("floor cpu", floor_cpu)):
+                samples.setdefault(name, []).append(value)
+        py_record, py_wall_s, _, _ = timed_run(mission, args.c_days, args.tick, "python")
+    if record.trace != py_record.trace:
         print("C and Python traces differ!", file=sys.stderr)
         return 1
-    c_ticks = len(c_record.columns["time_s"])
-    rate = c_ticks / c_wall_s
-    warp = rate * args.tick
-    print(f"C runtime over the pty: {c_ticks} ticks in {c_wall_s:.2f} s wall: {rate:,.0f} "
-          f"ticks/s, {warp:,.0f}x real time (uSimMarine: {USIMMARINE_REAL_TIME[0]}-"
-          f"{USIMMARINE_REAL_TIME[1]}x, so {warp / USIMMARINE_REAL_TIME[1]:.0f}-"
-          f"{warp / USIMMARINE_REAL_TIME[0]:.0f}x faster)")
-    print(f"  baseline, Python executor in-process on the same ticks: "
-          f"{c_ticks / py_wall_s:,.0f} ticks/s (C over the pty: "
-          f"{py_wall_s / c_wall_s:.2f}x of it); identical traces")
+    m = {name: statistics.median(values) for name, values in samples.items()}
+    loop_s = whole["run"].wall_s - whole["one tick"].wall_s
+    print(f"\nC runtime in closed loop over a pty, {args.c_days:g} d at {args.tick:g} s = "
+          f"{ticks} ticks, medians of {args.runs} runs, {load_average()}:")
+    print(f"  whole command: {whole['run'].wall_s:.2f} s wall ({whole['run'].cpu_s:.2f} s CPU); "
+          f"for one tick {whole['one tick'].wall_s:.2f} s; the loop {ticks / loop_s:,.0f} "
+          f"ticks/s (target 10,000), the command {ticks / whole['run'].wall_s:,.0f} ticks/s")
+    rate = ticks / m["wall"]
+    print(f"  the loop in process: {rate:,.0f} ticks/s, {rate * args.tick:,.0f}x real time "
+          f"(uSimMarine: {USIMMARINE_REAL_TIME[0]}-{USIMMARINE_REAL_TIME[1]}x); CPU per tick: "
+          f"simulator {m['cpu'] / ticks * 1e6:.1f} us, runtime {m['runtime'] / ticks * 1e6:.1f} "
+          f"us (its system calls and the pty's kernel work included)")
+    print(f"  floor, the pty round trip alone ({SENSORS_WIRE_BYTES} + {COMMAND_WIRE_BYTES} "
+          f"bytes, two C processes): {ticks / m['floor']:,.0f} round trips/s, "
+          f"{m['floor cpu'] / ticks * 1e6:.1f} us CPU each; the loop runs at "
+          f"{m['floor'] / m['wall']:.2f}x of it")
+    print(f"  baseline, Python executor in process on the same ticks: "
+          f"{ticks / py_wall_s:,.0f} ticks/s; identical traces")
     return 0
 
 
