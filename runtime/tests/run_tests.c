@@ -62,7 +62,10 @@
     X(test_linger_should_end_when_the_peer_hangs_up_and_else_at_its_bound)  \
     X(test_now_should_count_clock_ticks_on_a_kernel_without_a_monotonic_clock) \
     X(test_args_should_parse_every_option)                                  \
-    X(test_args_should_refuse_bad_command_lines)
+    X(test_args_should_refuse_bad_command_lines)                            \
+    X(test_sha256_should_match_the_fips_180_examples)                       \
+    X(test_hmac_sha256_should_match_rfc_4231)                               \
+    X(test_tags_should_compare_every_byte)
 
 #define DECLARE(name) void name(void);
 TESTS(DECLARE)
