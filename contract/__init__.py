@@ -34,6 +34,36 @@ MAX_PLAN_COMPONENTS = 16  # energy components a plan predicts (its `components` 
 MAX_PLAN_ASSUMPTIONS = 255  # `assume` lines of a plan file (a uint8_t count)
 PLAN_FORMAT_VERSION = 2  # the plan file's `GPPLAN` line (docs/plan-format.md)
 
+# ---- what a plan may ask for ---------------------------------------------------------
+# A plan's numbers are bounded so that no finite but absurd value (a ballast of 1e300 cc,
+# a clock the board does not have) reaches the vehicle. The vehicle's pump and the
+# board's clocks come from its power-model files through the compiled mission; the
+# bounds below hold for every vehicle. The runtime's reader, `compile --plan` and `sim`
+# refuse a plan past any of them.
+MAX_PLAN_TIME_S = 315_360_000.0  # [s] a cycle, a sensor period, a state's predicted time (10 y)
+MAX_PLAN_SPEED_MPS = 2.0  # [m/s] a planned horizontal speed (a glider makes 0.2-0.5)
+MAX_PLAN_ENERGY_J = 1e10  # [J] a budget or prediction (the largest Slocum pack is 12 MJ)
+MAX_PLAN_INFLECTIONS = 1e9  # a state's predicted inflections (as many as its visits may be)
+MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
+CLOCK_TOLERANCE_MHZ = 1e-6  # [MHz] a plan's clock is the board's within this
+
+
+@dataclass(frozen=True)
+class FlightLimits:
+    """The figures of one vehicle and board that bound a plan: the code generator writes
+    them into the compiled mission (`gp_mission.max_ballast_cc`, `clocks_mhz`), the
+    Python plan reader checks them (`planner.limits.flight_limits` loads them)."""
+
+    default_ballast_cc: float  # [cc] flown where no plan sets one
+    max_ballast_cc: float  # [cc] the pump's volume either side of neutral
+    clocks_mhz: tuple[float, ...]  # [MHz] the board's clocks, slowest first
+
+    def __post_init__(self) -> None:
+        if not 1 <= len(self.clocks_mhz) <= MAX_BOARD_CLOCKS:
+            raise ValueError(f"a board has 1..{MAX_BOARD_CLOCKS} clocks, not "
+                             f"{len(self.clocks_mhz)}")
+
+
 # ---- the sensor array ----------------------------------------------------------------
 
 

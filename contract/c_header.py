@@ -26,6 +26,9 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "MAX_SWEEP_WAYPOINTS", "MAX_NAME_LENGTH", "MAX_PLAN_SENSORS", "MAX_PLAN_BYTES",
         "MAX_PLAN_LINE_BYTES", "MAX_PLAN_COMPONENTS", "MAX_PLAN_ASSUMPTIONS",
         "PLAN_FORMAT_VERSION")),
+    ("what a plan may ask for", (
+        "MAX_PLAN_TIME_S", "MAX_PLAN_SPEED_MPS", "MAX_PLAN_ENERGY_J", "MAX_PLAN_INFLECTIONS",
+        "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ")),
     ("the library routines (docs/pilot.md)", (
         "SURFACE_PITCH_RAD", "TRACK_WINDOW", "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from gliderplan import contract
+from gliderplan.contract import FlightLimits
 from gliderplan.contract.c_header import sensor_index
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
@@ -42,14 +43,15 @@ class CodegenError(GliderplanError):
     """The mission uses something the C runtime cannot hold (the message says what and where)."""
 
 
-def generate_c(mission: ir.CheckedMission, default_ballast_cc: float) -> str:
+def generate_c(mission: ir.CheckedMission, limits: FlightLimits) -> str:
     """The C source of the mission's tables, ready to compile with the runtime.
 
-    `default_ballast_cc` [cc] is the pumped volume flown where no plan sets one
-    (`Vehicle.unplanned_ballast_cc` of the mission's vehicle).
+    `limits` are the vehicle's and the board's (`planner.limits.flight_limits`): the
+    pumped volume flown where no plan sets one, the most a plan may set, the board's
+    clocks; the runtime refuses a plan past them.
     """
     _check_limits(mission)
-    return _MissionWriter(mission, default_ballast_cc).write()
+    return _MissionWriter(mission, limits).write()
 
 
 def read_mask(mission: ir.CheckedMission) -> int:
@@ -204,9 +206,9 @@ def _route_param(route: ir.Route) -> float:
 class _MissionWriter:
     """Writes the C file, one `visit_*` per part of the mission, each returning lines."""
 
-    def __init__(self, mission: ir.CheckedMission, default_ballast_cc: float):
+    def __init__(self, mission: ir.CheckedMission, limits: FlightLimits):
         self.mission = mission
-        self.default_ballast_cc = default_ballast_cc
+        self.limits = limits
         self.expressions = ExpressionWriter()
 
     def write(self) -> str:
@@ -306,6 +308,9 @@ class _MissionWriter:
             initial = ", ".join(c_double(v.initial) for v in mission.variables)
             lines += [f"static const double var_initial[{len(mission.variables)}] = "
                       f"{{{initial}}};", ""]
+        clocks = ", ".join(c_double(c) for c in self.limits.clocks_mhz)
+        lines += [f"static const double board_clocks_mhz[{len(self.limits.clocks_mhz)}] = "
+                  f"{{{clocks}}};", ""]
         lines += ["static const char *const sensor_names[GP_N_SENSORS] = {",
                   *(f'    "{s.name}",' for s in SENSORS), "};", ""]
         lines += [f"static const gp_state states[{len(mission.states)}] = {{"]
@@ -322,7 +327,10 @@ class _MissionWriter:
             f"    .n_vars = {len(mission.variables)},",
             f"    .stack_depth = {mission.stack_depth},",
             f"    .read_mask = 0x{read_mask(mission):08x}u,",
-            f"    .default_ballast_cc = {c_double(self.default_ballast_cc)},",
+            f"    .default_ballast_cc = {c_double(self.limits.default_ballast_cc)},",
+            f"    .max_ballast_cc = {c_double(self.limits.max_ballast_cc)},",
+            "    .clocks_mhz = board_clocks_mhz,",
+            f"    .n_clocks = {len(self.limits.clocks_mhz)},",
             "    .sensor_names = sensor_names,",
             "};",
         ]

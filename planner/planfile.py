@@ -21,15 +21,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gliderplan.contract import (
+    CLOCK_TOLERANCE_MHZ,
     MAX_NAME_LENGTH,
     MAX_PLAN_ASSUMPTIONS,
     MAX_PLAN_BYTES,
     MAX_PLAN_COMPONENTS,
+    MAX_PLAN_ENERGY_J,
+    MAX_PLAN_INFLECTIONS,
     MAX_PLAN_LINE_BYTES,
     MAX_PLAN_SENSORS,
+    MAX_PLAN_SPEED_MPS,
+    MAX_PLAN_TIME_S,
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
     PLAN_FORMAT_VERSION,
+    FlightLimits,
 )
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
@@ -245,12 +251,24 @@ class _Cursor:
             raise PlanFileError(self.at, f"{text!r} is not a NAME")
         return text
 
-    def number(self, text: str, what: str, low: float = -math.inf) -> float:
-        """A NUMBER >= `low`."""
+    def number(self, text: str, what: str, low: float = -math.inf,
+               high: float = math.inf) -> float:
+        """A NUMBER in [`low`, `high`]."""
         if not _NUMBER.match(text) or not math.isfinite(float(text)):
             raise PlanFileError(self.at, f"{what}: {text!r} is not a NUMBER")
         value = float(text)
         self.check(value >= low, f"{what} must be >= {low:g}")
+        self.check(value <= high, f"{what} {value:g} exceeds {high:g}")
+        return value
+
+    def clock(self, text: str, limits: FlightLimits | None) -> float:
+        """A clock [MHz] > 0, and with `limits` one of the board's."""
+        value = self.number(text, "clock")
+        self.check(value > 0, "the clock must be > 0 MHz")
+        if limits is not None:
+            self.check(any(abs(value - c) <= CLOCK_TOLERANCE_MHZ for c in limits.clocks_mhz),
+                       f"clock {value:g} MHz: the board has "
+                       f"{', '.join(f'{c:g}' for c in limits.clocks_mhz)} MHz")
         return value
 
     def count(self, text: str, what: str, low: int, high: int) -> int:
@@ -287,17 +305,18 @@ def _split_lines(data: bytes) -> list[str]:
 
 
 def read_plan_bytes(data: bytes, mission: CheckedMission | None = None,
-                    path: str = "") -> Plan:
+                    path: str = "", limits: FlightLimits | None = None) -> Plan:
     """Parse a plan file strictly; with `mission`, check that it is a plan for that
     mission as the C runtime does (name, hash, states, each state's profiles and logged
-    sensors). PlanFileError (`path:line: ...`) names the first line that breaks a rule."""
+    sensors); with `limits`, that it keeps to the vehicle's pump and the board's clocks.
+    PlanFileError (`path:line: ...`) names the first line that breaks a rule."""
     try:
-        return _read(data, mission)
+        return _read(data, mission, limits)
     except PlanFileError as err:
         raise PlanFileError(err.line, err.message, path) from None
 
 
-def _read(data: bytes, mission: CheckedMission | None) -> Plan:
+def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | None) -> Plan:
     lines = _split_lines(data)
     cur = _Cursor(lines)
     version = cur.next("GPPLAN", 1)[0]
@@ -313,10 +332,9 @@ def _read(data: bytes, mission: CheckedMission | None) -> Plan:
                   "plan made for another version of the mission (hash differs)")
     computer, clock = cur.next("computer", 2)
     computer = cur.name(computer)
-    clock_mhz = cur.number(clock, "clock")
-    cur.check(clock_mhz > 0, "the clock must be > 0 MHz")
-    budget = cur.number(cur.next("budget_j", 1)[0], "budget_j", 0.0)
-    predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j", 0.0)
+    clock_mhz = cur.clock(clock, limits)
+    budget = cur.number(cur.next("budget_j", 1)[0], "budget_j", 0.0, MAX_PLAN_ENERGY_J)
+    predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j", 0.0, MAX_PLAN_ENERGY_J)
     components = [cur.name(c) for c in cur.next("components", None)]
     cur.check(len(components) <= MAX_PLAN_COMPONENTS,
               f"{len(components)} components, more than {MAX_PLAN_COMPONENTS}")
@@ -329,7 +347,7 @@ def _read(data: bytes, mission: CheckedMission | None) -> Plan:
         cur.check(n_states == len(mission.states),
                   f"{n_states} states, the mission has {len(mission.states)}")
     states = tuple(_state_block(cur, components, None if mission is None
-                                else mission.states[i]) for i in range(n_states))
+                                else mission.states[i], limits) for i in range(n_states))
     (checksum,) = cur.next("crc32", 1)
     cur.check(bool(_HEX8.match(checksum)), "crc32 must be 8 lowercase hex digits")
     body = data[: data.rfind(b"crc32 ")]
@@ -348,32 +366,36 @@ def _assumption(cur: _Cursor) -> Assumption:
     return Assumption(cur.name(words[0]), " ".join(words[1:]))
 
 
-def _state_block(cur: _Cursor, components: list[str], state: ir.State | None) -> StatePlan:
-    """A state block; `state`, the mission's, is what it must fit (None: no mission)."""
+def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
+                 limits: FlightLimits | None) -> StatePlan:
+    """A state block; `state`, the mission's, is what it must fit (None: no mission), and
+    `limits` the vehicle's and board's (None: the bounds every vehicle shares)."""
     name, clock, cycle, n_sensors, n_profiles = cur.next("state", 5)
     start = cur.at
     name = cur.name(name)
     if state is not None:
         cur.check(name == state.name, f"state {name!r} where the mission has {state.name!r}")
-    clock_mhz, cycle_s = cur.number(clock, "clock"), cur.number(cycle, "cycle")
-    cur.check(clock_mhz > 0 and cycle_s > 0, "clock and cycle must be > 0")
+    clock_mhz, cycle_s = cur.clock(clock, limits), cur.number(cycle, "cycle", 0.0,
+                                                              MAX_PLAN_TIME_S)
+    cur.check(cycle_s > 0, "cycle must be > 0")
     n_sensors = cur.count(n_sensors, "sensors", 0, MAX_PLAN_SENSORS)
     n_profiles = cur.count(n_profiles, "profiles", 1, MAX_PROFILE_ALTERNATIVES)
     if state is not None:
         cur.check(n_profiles == len(state.profiles), f"state {name}: {n_profiles} profiles, "
                   f"the mission's state has {len(state.profiles)}")
     time_s, visits, inflections = cur.next("predict", 3)
-    prediction = (cur.number(time_s, "predicted time", 0.0),
+    prediction = (cur.number(time_s, "predicted time", 0.0, MAX_PLAN_TIME_S),
                   cur.count(visits, "predicted visits", 0, 999_999_999),
-                  cur.number(inflections, "predicted inflections", 0.0))
-    energy = {c: cur.number(j, f"energy of {c}", 0.0)
+                  cur.number(inflections, "predicted inflections", 0.0, MAX_PLAN_INFLECTIONS))
+    energy = {c: cur.number(j, f"energy of {c}", 0.0, MAX_PLAN_ENERGY_J)
               for c, j in zip(components, cur.next("energy", len(components)), strict=True)}
     logged = [use.name for use in state.sensors] if state is not None else None
     sensors, after = [], 0
     for _ in range(n_sensors):
         sensor, period, on = cur.next("sensor", 3)
         sensor = cur.name(sensor)
-        period_s, on_s = cur.number(period, "period"), cur.number(on, "on time")
+        period_s = cur.number(period, "period", high=MAX_PLAN_TIME_S)
+        on_s = cur.number(on, "on time")
         cur.check(period_s > 0 and 0 <= on_s <= period_s, "need 0 <= ON_S <= PERIOD_S, "
                   "PERIOD_S > 0")
         if logged is not None:
@@ -393,6 +415,12 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None) ->
         cur.check(0 <= line.share <= 1, "share must lie in [0, 1]")
         cur.check(0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
         cur.check(line.ballast_cc > 0 and line.speed_mps > 0, "ballast and speed must be > 0")
+        cur.check(line.speed_mps <= MAX_PLAN_SPEED_MPS,
+                  f"speed {line.speed_mps:g} exceeds {MAX_PLAN_SPEED_MPS:g} m/s")
+        if limits is not None:
+            cur.check(line.ballast_cc <= limits.max_ballast_cc,
+                      f"ballast {line.ballast_cc:g} cc exceeds the vehicle's pump "
+                      f"({limits.max_ballast_cc:g} cc)")
         profiles.append(line)
     cur.check(abs(sum(p.share for p in profiles) - 1.0) <= 1e-6,
               f"state {name}: profile shares sum to {sum(p.share for p in profiles):.9g}, not 1")
@@ -411,14 +439,30 @@ def read_plan_data(path: str | Path) -> bytes:
         raise PlanFileError(0, f"cannot read the plan: {err.strerror}", str(path)) from None
 
 
-def load_plan(path: str | Path, mission: CheckedMission) -> Plan:
+def load_plan(path: str | Path, mission: CheckedMission,
+              limits: FlightLimits | None = None) -> Plan:
     """The plan in `path` for `mission`, to fly: PlanFileError if there is no such file,
-    PlanRejected (naming the file and line) if it is not a plan for `mission`."""
+    PlanRejected (naming the file and line) if it is not a plan for `mission` or breaks
+    `limits` (default: those of the mission's vehicle on the board the plan names, if
+    that is a preset, else on the mission's computer)."""
     data = read_plan_data(path)
     try:
-        return read_plan_bytes(data, mission, str(path))
+        plan = read_plan_bytes(data, mission, str(path))
+        return read_plan_bytes(data, mission, str(path),
+                               limits or plan_board_limits(mission, plan))
     except PlanFileError as err:
         raise PlanRejected(str(err)) from None
+
+
+def plan_board_limits(mission: CheckedMission, plan: Plan) -> FlightLimits:
+    """The limits a simulated flight of `plan` keeps: the mission's vehicle, on the board the
+    plan was made for when that is a preset (the simulator bills that board), else on the
+    mission's computer."""
+    from gliderplan.planner.limits import flight_limits
+    from gliderplan.power_models.catalog import preset_names
+
+    return flight_limits(mission, plan.computer if plan.computer in preset_names("board")
+                         else None)
 
 
 def read_plan_file(path: str | Path, mission: CheckedMission | None = None) -> Plan:

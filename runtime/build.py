@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from gliderplan.contract import FlightLimits
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import write_atomically
 from gliderplan.language.codegen_c import generate_c
@@ -178,28 +179,29 @@ def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
 
 def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = "host",
                     plan_path: str | Path | None = None,
-                    default_ballast_cc: float | None = None) -> Path:
+                    limits: FlightLimits | None = None) -> Path:
     """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>: the
     pipeline of `gliderplan compile`. With `plan_path`, the plan is first checked by the
     runtime's own reader (`runtime_accepts`) and then copied beside the binary.
 
-    `default_ballast_cc` [cc], flown where no plan sets one, is by default the
-    `unplanned_ballast_cc` of the mission's vehicle. A build with the same inputs is
-    copied from the cache instead of compiled again. Raises CodegenError for a mission
-    the runtime cannot hold, PlanRejected for a plan it would refuse, ModelFileError for
-    a vehicle that cannot be loaded, BuildError otherwise.
+    `limits` (the default ballast, the pump's volume, the board's clocks) are by default
+    those of the mission's vehicle on the target's board (the mission's computer for the
+    host). A build with the same inputs is copied from the cache instead of compiled
+    again. Raises CodegenError for a mission the runtime cannot hold, PlanRejected for a
+    plan it would refuse, ModelFileError for a vehicle or board that cannot be loaded,
+    BuildError otherwise.
     """
     board = find_target(target)
-    if default_ballast_cc is None:
-        from gliderplan.power_models import load_vehicle
+    if limits is None:
+        from gliderplan.planner.limits import flight_limits
 
-        default_ballast_cc = load_vehicle(mission.vehicle).unplanned_ballast_cc
+        limits = flight_limits(mission, None if target == "host" else target)
     if plan_path is not None:
         from gliderplan.planner.planfile import read_plan_data
 
         plan = read_plan_data(plan_path)
-        runtime_accepts(mission, plan_path, default_ballast_cc)
-    source = generate_c(mission, default_ballast_cc)
+        runtime_accepts(mission, plan_path, limits)
+    source = generate_c(mission, limits)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     c_path = out / f"{mission.name}.c"
@@ -249,11 +251,10 @@ def _copy_atomically(source: Path, destination: Path) -> None:
 # ---- checking a plan with the runtime's own reader ----------------------------------
 
 
-def runtime_accepts(mission: CheckedMission, plan_path: str | Path, default_ballast_cc: float,
+def runtime_accepts(mission: CheckedMission, plan_path: str | Path, limits: FlightLimits,
                     timeout_s: float = 10.0) -> None:
-    """Start the mission's host binary (`default_ballast_cc` as for `compile_mission`) on the
-    plan over a pty; it must get as far as HELLO, else PlanRejected with the runtime's own
-    message.
+    """Start the mission's host binary (`limits` as for `compile_mission`) on the plan over
+    a pty; it must get as far as HELLO, else PlanRejected with the runtime's own message.
 
     The runtime reads its plan before it talks to the science computer, so the same
     strict reader that will run on the board decides, not a second implementation, and
@@ -266,7 +267,7 @@ def runtime_accepts(mission: CheckedMission, plan_path: str | Path, default_ball
 
     with tempfile.TemporaryDirectory(prefix="gliderplan-plan-") as tmp:
         work = Path(tmp)
-        binary = compile_mission(mission, work, "host", default_ballast_cc=default_ballast_cc)
+        binary = compile_mission(mission, work, "host", limits=limits)
         master, slave = os.openpty()
         try:
             process = subprocess.Popen(

@@ -15,6 +15,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from gliderplan.contract import FlightLimits
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
@@ -124,16 +125,16 @@ def _indices(mask: int) -> tuple[int, ...]:
     return tuple(i for i in range(32) if mask >> i & 1)
 
 
-def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None,
-                    default_ballast_cc: float, naive_tracker: bool = False) -> CRuntime:
-    """Compile the mission for the host (cached) and start it against the emulator;
-    `default_ballast_cc` [cc] is flown where no plan sets one."""
+def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None, limits: FlightLimits,
+                    naive_tracker: bool = False) -> CRuntime:
+    """Compile the mission for the host (cached) with the vehicle's and board's `limits` and
+    start it against the emulator."""
     from gliderplan.language.codegen_c import CodegenError
     from gliderplan.runtime.build import BuildError, compile_mission
 
     work = Path(tempfile.mkdtemp(prefix="gliderplan-sim-"))
     try:
-        binary = compile_mission(mission, work, "host", default_ballast_cc=default_ballast_cc)
+        binary = compile_mission(mission, work, "host", limits=limits)
     except (CodegenError, BuildError) as err:
         shutil.rmtree(work, ignore_errors=True)
         raise EmulatorError(str(err)) from None

@@ -44,10 +44,15 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                         FastForward(mission, executor, science))
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
+    from gliderplan.contract import FlightLimits
+    from gliderplan.planner.limits import flight_limits
+    from gliderplan.planner.planfile import plan_board_limits
     from gliderplan.sim.emulator import start_c_runtime
 
-    c_runtime = start_c_runtime(mission, plan_path, vehicle.unplanned_ballast_cc,
-                                naive_tracker=not robust_tracker)
+    board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
+    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
+                          board.clocks_mhz)  # the vehicle flown: a scenario's may differ
+    c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker)
     try:
         return simulate(mission, c_runtime, science, config, progress)
     finally:

@@ -18,13 +18,16 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
+from gliderplan.contract import FlightLimits
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import CodegenError, c_double, generate_c, read_mask
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.runtime.build import TARGETS
 
 ROOT = Path(__file__).resolve().parents[1]
-BALLAST_CC = 233.0  # the full stroke of the default vehicle, as `compile` passes it
+# the default vehicle's full stroke and the TS-7800's clocks, as `compile` passes them
+LIMITS = FlightLimits(default_ballast_cc=233.0, max_ballast_cc=233.0,
+                      clocks_mhz=(300.0, 500.0))
 EXAMPLES = sorted((ROOT / "examples").glob("*.mission"))
 GOLDEN = ROOT / "tests" / "golden" / "fig2.c"
 INCLUDE = ROOT / "runtime" / "include"
@@ -40,7 +43,7 @@ def checked(path: Path) -> ir.CheckedMission:
 
 
 def test_fig2_matches_the_golden_file():
-    generated = generate_c(checked(ROOT / "examples" / "fig2.mission"), BALLAST_CC)
+    generated = generate_c(checked(ROOT / "examples" / "fig2.mission"), LIMITS)
     if os.environ.get("GLIDERPLAN_REGENERATE_GOLDEN"):
         GOLDEN.parent.mkdir(exist_ok=True)
         GOLDEN.write_text(generated)
@@ -50,14 +53,14 @@ def test_fig2_matches_the_golden_file():
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
 def test_generation_is_deterministic(path):
     # Two independent checks of the same text: nothing may depend on object identity.
-    assert generate_c(checked(path), BALLAST_CC) == generate_c(checked(path), BALLAST_CC)
+    assert generate_c(checked(path), LIMITS) == generate_c(checked(path), LIMITS)
 
 
 @needs_cc
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
 def test_every_example_compiles_without_warnings(path, tmp_path):
     source = tmp_path / f"{path.stem}.c"
-    source.write_text(generate_c(checked(path), BALLAST_CC))
+    source.write_text(generate_c(checked(path), LIMITS))
     done = subprocess.run([CC, *STRICT, "-c", str(source), "-o", str(tmp_path / "m.o")],
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -72,7 +75,7 @@ def test_fig2_reads_the_sensors_its_conditions_profiles_and_routes_need():
 
 
 def test_fig2_tables_name_the_transitions_of_the_paper():
-    text = generate_c(checked(ROOT / "examples" / "fig2.mission"), BALLAST_CC)
+    text = generate_c(checked(ROOT / "examples" / "fig2.mission"), LIMITS)
     assert "{state0_event0_condition, NULL, GP_ACT_GOTO, 2}" in text
     assert "{state0_event1_condition, NULL, GP_ACT_CALL, 1}" in text
     assert "{state1_event0_condition, NULL, GP_ACT_RETURN, 0}" in text
@@ -98,9 +101,11 @@ def test_constants_are_decimal_only_when_the_decimal_is_exact():
     assert c_double(0.454) == "0x1.d0e5604189375p-2 /* 0.454 */"
 
 
-def test_the_default_ballast_is_an_input_not_a_vehicle_file_read():
+def test_the_vehicle_and_board_limits_are_inputs_not_files_read():
     mission = ir.CheckedMission(name="m", states=(_state("s"),), vehicle="no/such/glider.toml")
-    assert "    .default_ballast_cc = 123.5,\n" in generate_c(mission, 123.5)
+    source = generate_c(mission, FlightLimits(123.5, 200.0, (133.0,)))
+    assert "    .default_ballast_cc = 123.5,\n    .max_ballast_cc = 200.0,\n" in source
+    assert "board_clocks_mhz[1] = {133.0};" in source and "    .n_clocks = 1,\n" in source
 
 
 def _mission(states: tuple[ir.State, ...], variables=(), stack_depth=8) -> ir.CheckedMission:
@@ -132,7 +137,7 @@ def _state(name: str, events=(), profiles=None, route=None) -> ir.State:
 )
 def test_missions_beyond_the_runtime_limits_are_refused_with_a_reason(mission, message):
     with pytest.raises(CodegenError, match=message):
-        generate_c(mission, BALLAST_CC)
+        generate_c(mission, LIMITS)
 
 
 # ---- expressions: the compiled C against ir.evaluate ---------------------------------
@@ -247,7 +252,7 @@ def test_compiled_expressions_agree_bit_for_bit_with_the_reference(board, exprs,
     compiler, flags = TARGETS[board].compiler, TARGETS[board].flags
     work = tmp_path_factory.mktemp("exprs")
     mission = _expression_mission(exprs)
-    (work / "mission.c").write_text(generate_c(mission, BALLAST_CC))
+    (work / "mission.c").write_text(generate_c(mission, LIMITS))
     (work / "driver.c").write_text(_DRIVER)
     binary = work / "exprs"
     done = subprocess.run([compiler, *STRICT, *flags, str(work / "mission.c"),

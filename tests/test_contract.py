@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from gliderplan import contract
-from gliderplan.contract import units
+from gliderplan.contract import FlightLimits, units
 from gliderplan.contract.c_header import c_header
 from gliderplan.language import check_source
 from gliderplan.language.codegen_c import generate_c
@@ -143,7 +143,8 @@ def test_check_refuses_one_past_each_limit_at_its_line(what, fits, too_big, wher
                          ids=[case[0] for case in LIMITS[:4]])
 def test_what_check_accepts_at_a_limit_the_code_generator_accepts(what, fits):
     mission = check_source(_source(**fits), "m.mission").mission
-    assert "const gp_mission gp_mission_table" in generate_c(mission, 200.0)
+    limits = FlightLimits(200.0, 233.0, (300.0,))
+    assert "const gp_mission gp_mission_table" in generate_c(mission, limits)
 
 
 def test_a_size_error_does_not_hide_the_flow_analysis():

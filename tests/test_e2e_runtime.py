@@ -171,11 +171,12 @@ def test_a_simulated_run_cut_short_stops_the_runtime_cleanly(cache):
     """The simulator's end of the line closes, then it stops the runtime (SIGTERM): the
     runtime, which saw its peer hang up, releases and exits 4 instead of napping through
     the stop signal until the simulator kills it."""
+    from gliderplan.planner.limits import flight_limits
     from gliderplan.sim.emulator import start_c_runtime
 
     mission = check_source(FIG2.read_text(), str(FIG2)).mission
     for _ in range(5):  # the signal can land anywhere in the runtime's wait
-        runtime = start_c_runtime(mission, None, 230.0)
+        runtime = start_c_runtime(mission, None, flight_limits(mission))
         for tick in range(3):
             runtime.step(tick, 0x2C3, [tick * TICK_S, 5.0, 0.0, 0, 0, 0, 3910.0, -7349.0, 0,
                                        15.0, *[0.0] * 7])
@@ -338,7 +339,7 @@ def test_a_killed_runtime_resumes_with_the_same_trace(binary, line, tmp_path):
 
 
 def make_plan(mission_hash: str, version: int = 2, temp_period_s: float = 60,
-              temp_on_s: float = 15, s2_clock_mhz: int = 300) -> bytes:
+              temp_on_s: float = 15, s2_clock_mhz: int = 300, s3_ballast: str = "230") -> bytes:
     """A plan for Fig. 2 written by hand from docs/plan-format.md."""
     body = (f"GPPLAN {version}\nmission sampleMission\nhash {mission_hash}\n"
             "computer ts7800 300\nbudget_j 6630000\npredicted_j 9876.5\ncomponents hotel\n"
@@ -347,7 +348,7 @@ def make_plan(mission_hash: str, version: int = 2, temp_period_s: float = 60,
             f"state s2 {s2_clock_mhz} 600 1 1\npredict 1000 1 12\nenergy 3950\n"
             f"sensor temp {temp_period_s:g} {temp_on_s:g}\nprofile 0 1 0.4 200 0.3\nend\n"
             "state s3 300 600 0 1\npredict 500 1 5\nenergy 1976.5\n"
-            "profile 0 1 0.454 230 0.31\nend\n").encode()
+            f"profile 0 1 0.454 {s3_ballast} 0.31\nend\n").encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
 
 
@@ -361,10 +362,15 @@ def bad_plans(mission_hash: str) -> dict[str, tuple[bytes, str]]:
         "bad-crc": (bad_crc, "checksum"),
         "other-mission": (other, "hash"),
         "wrong-version": (wrong_version, "version"),
+        # absurd values: the vehicle's pump is +-233 cc, the TS-7800 runs at 300 or 500 MHz
+        "ballast-1e300": (make_plan(mission_hash, s3_ballast="1e300"), "exceeds the vehicle's"),
+        "ballast-5000": (make_plan(mission_hash, s3_ballast="5000"), "5000 exceeds the vehicle"),
+        "clock-133": (make_plan(mission_hash, s2_clock_mhz=133), "clock 133 mhz: the board"),
     }
 
 
-BAD_PLANS = ["truncated", "bad-crc", "other-mission", "wrong-version"]
+BAD_PLANS = ["truncated", "bad-crc", "other-mission", "wrong-version", "ballast-1e300",
+             "ballast-5000", "clock-133"]
 
 
 @pytest.mark.parametrize("case", BAD_PLANS)

@@ -11,6 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gliderplan.cli.main import main
+from gliderplan.contract import FlightLimits
 from gliderplan.language import check_source
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError
@@ -54,7 +55,7 @@ def _front_end_survives(source: str) -> None:
         if _located(d, source):
             assert f"fuzz.mission:{d.span.line}:{d.span.column}: error: " in rendered
     if result.ok:  # check accepts nothing the code generator refuses
-        generate_c(result.mission, 200.0)
+        generate_c(result.mission, FlightLimits(200.0, 233.0, (300.0,)))
     try:
         format_source(source)
     except (MissionSyntaxError, FormatError):

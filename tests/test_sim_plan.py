@@ -226,3 +226,37 @@ def test_a_run_over_its_prediction_says_so_even_within_its_budget(tmp_path, caps
     assert check["verdict"] == "over prediction"
     assert "plan check: over prediction" in err and "over the plan's prediction:" in err
     assert any(c.startswith("track: ") and "(pump +" in c for c in check["causes"])
+
+
+# ---- values no vehicle can fly ---------------------------------------------------------
+
+
+@pytest.mark.parametrize(("edit", "said"), [
+    ((b" 0.454 233 ", b" 0.454 5000 "), ":15: ballast 5000 cc exceeds the vehicle's pump (233 cc)"),
+    ((b" 0.454 233 ", b" 0.454 1e300 "), ":15: ballast 1e+300 cc exceeds the vehicle's pump"),
+    ((b"\ncomputer ts7800 300\n", b"\ncomputer ts7800 133\n"),
+     ":4: clock 133 MHz: the board has 300, 500 MHz"),
+    ((b"\nstate survey 300 600 ", b"\nstate survey 300 1e300 "), ":11: cycle 1e+300 exceeds"),
+], ids=["5000cc", "1e300cc", "133MHz", "cycle"])
+@pytest.mark.parametrize("command", ["sim", "compile"])
+def test_a_plan_no_vehicle_can_fly_is_refused_naming_the_line(tmp_path, capsys, edit, said,
+                                                              command):
+    """Values a plan's CRC vouches for but the vehicle cannot fly (a ballast past the pump,
+    a clock the board lacks, a cycle of 1e300 s): `sim` refuses them as the runtime does,
+    and `compile --plan` because the runtime's own reader refuses them."""
+    plan = write_plan(tmp_path, 120e3, 10800.0)
+    body = plan.read_bytes()
+    body = body[: body.rindex(b"crc32 ")]
+    assert edit[0] in body
+    body = body.replace(*edit)
+    plan.write_bytes(body + f"crc32 {zlib.crc32(body):08x}\n".encode())
+    out = tmp_path / "out"
+    code = main([command, str(MISSION), "--plan", str(plan), "-o", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and len(err) == 1, err
+    where = said.split(":")[1]
+    if command == "sim":
+        assert f"survey.plan{said}" in err[0]
+    else:  # the runtime's reader words it in the plan format's field names
+        assert "survey.plan" in err[0] and f"line {where}: " in err[0]
+    assert not (out / "summary.json").exists() and not (out / "sim_budget").exists()

@@ -26,6 +26,18 @@
 #define GP_MAX_PLAN_ASSUMPTIONS 255  /**< `assume` lines of a plan file (a uint8_t count) */
 #define GP_PLAN_FORMAT_VERSION 2  /**< the plan file's `GPPLAN` line (docs/plan-format.md) */
 
+/* ---- what a plan may ask for */
+
+/** [s] a cycle, a sensor period, a state's predicted time (10 y) */
+#define GP_MAX_PLAN_TIME_S 315360000.0
+#define GP_MAX_PLAN_SPEED_MPS 2.0  /**< [m/s] a planned horizontal speed (a glider makes 0.2-0.5) */
+/** [J] a budget or prediction (the largest Slocum pack is 12 MJ) */
+#define GP_MAX_PLAN_ENERGY_J 10000000000.0
+/** a state's predicted inflections (as many as its visits may be) */
+#define GP_MAX_PLAN_INFLECTIONS 1000000000.0
+#define GP_MAX_BOARD_CLOCKS 8  /**< clocks of one board the compiled mission lists */
+#define GP_CLOCK_TOLERANCE_MHZ 1e-06  /**< [MHz] a plan's clock is the board's within this */
+
 /* ---- the library routines (docs/pilot.md) */
 
 #define GP_SURFACE_PITCH_RAD 0.454  /**< [rad] pitch of the climb to the surface */

@@ -100,6 +100,9 @@ typedef struct {
     uint8_t stack_depth;          /**< 1..GP_MAX_STACK_DEPTH */
     uint32_t read_mask;           /**< sensors the mission reads (bit i: sensor i) */
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
+    double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc] */
+    const double *clocks_mhz;     /**< the clocks of the board it flies on [MHz] */
+    uint8_t n_clocks;             /**< 1..GP_MAX_BOARD_CLOCKS */
     const char *const *sensor_names;  /**< GP_N_SENSORS names, registry order */
 } gp_mission;
 

@@ -42,7 +42,8 @@ typedef struct {
 } gp_plan;
 
 /**
- * @brief Read a plan file strictly against the compiled mission.
+ * @brief Read a plan file strictly against the compiled mission: its form, and its values
+ *        within the contract's bounds, the vehicle's pump and the board's clocks.
  * @param out  filled only on success
  * @param error on failure: "line N: what is wrong" (NUL-terminated, GP_PLAN_ERROR_LEN)
  * @return 0 accepted, -1 rejected

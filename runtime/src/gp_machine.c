@@ -101,6 +101,10 @@ const char *gp_mission_check(const gp_mission *mission)
     if (mission->stack_depth < 1 || mission->stack_depth > GP_MAX_STACK_DEPTH) {
         return "stack depth outside 1..GP_MAX_STACK_DEPTH";
     }
+    if (!(mission->max_ballast_cc > 0) || mission->n_clocks < 1
+        || mission->n_clocks > GP_MAX_BOARD_CLOCKS || !mission->clocks_mhz) {
+        return "no pump volume, or a clock count outside 1..GP_MAX_BOARD_CLOCKS";
+    }
     for (int s = 0; s < mission->n_states; s++) {
         const gp_state *state = &mission->states[s];
         if (state->n_profiles < 1 || state->n_profiles > GP_MAX_PROFILE_ALTERNATIVES

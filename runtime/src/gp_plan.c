@@ -273,8 +273,8 @@ static int check_bytes(reader *r, size_t *crc_line_start)
     return 0;
 }
 
-/* A NUMBER >= 0 in field `index`. */
-static int amount_field(reader *r, int index, const char *what, double *out)
+/* A NUMBER in [0, most] in field `index`. */
+static int amount_field(reader *r, int index, const char *what, double most, double *out)
 {
     if (number_field(r, index, what, out) < 0) {
         return -1;
@@ -282,7 +282,30 @@ static int amount_field(reader *r, int index, const char *what, double *out)
     if (!(*out >= 0)) {
         return fail(r, "%s must be >= 0", what);
     }
+    if (*out > most) {
+        return fail(r, "%s %g exceeds %g", what, *out, most);
+    }
     return 0;
+}
+
+/* A clock [MHz] of the board the mission flies on, in field `index`. */
+static int clock_field(reader *r, int index, const gp_mission *mission, double *out)
+{
+    if (number_field(r, index, "CLOCK_MHZ", out) < 0) {
+        return -1;
+    }
+    for (int i = 0; i < mission->n_clocks; i++) {
+        if (fabs(*out - mission->clocks_mhz[i]) <= GP_CLOCK_TOLERANCE_MHZ) {
+            return 0;
+        }
+    }
+    char clocks[64];
+    int n = 0;
+    for (int i = 0; i < mission->n_clocks && n < (int)sizeof clocks - 16; i++) {
+        n += snprintf(clocks + n, sizeof clocks - (size_t)n, "%s%g", i ? ", " : "",
+                      mission->clocks_mhz[i]);
+    }
+    return fail(r, "clock %g MHz: the board has %s MHz", *out, clocks);
 }
 
 /* `components NAME...`: the energy columns of every state's `energy` line, distinct. */
@@ -354,26 +377,16 @@ static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
                        "version of '%.32s')", mission->name);
     }
     if (expect(r, "computer", 3) < 0 || name_field(r, 1, "computer") < 0
-        || number_field(r, 2, "clock", &plan->clock_mhz) < 0) {
+        || clock_field(r, 2, mission, &plan->clock_mhz) < 0) {
         return -1;
     }
     memcpy(plan->computer, r->fields[1].start, r->fields[1].len);
     plan->computer[r->fields[1].len] = '\0';
-    if (!(plan->clock_mhz > 0)) {
-        return fail(r, "clock must be > 0 MHz");
-    }
-    if (expect(r, "budget_j", 2) < 0 || number_field(r, 1, "budget_j", &plan->budget_j) < 0) {
+    if (expect(r, "budget_j", 2) < 0
+        || amount_field(r, 1, "budget_j", GP_MAX_PLAN_ENERGY_J, &plan->budget_j) < 0
+        || expect(r, "predicted_j", 2) < 0
+        || amount_field(r, 1, "predicted_j", GP_MAX_PLAN_ENERGY_J, &plan->predicted_j) < 0) {
         return -1;
-    }
-    if (!(plan->budget_j >= 0)) {
-        return fail(r, "budget_j must be >= 0");
-    }
-    if (expect(r, "predicted_j", 2) < 0
-        || number_field(r, 1, "predicted_j", &plan->predicted_j) < 0) {
-        return -1;
-    }
-    if (!(plan->predicted_j >= 0)) {
-        return fail(r, "predicted_j must be >= 0");
     }
     if (read_components(r, plan) < 0 || read_assumptions(r, plan) < 0) {
         return -1;
@@ -426,10 +439,14 @@ static int read_sensor(reader *r, const gp_mission *mission, const gp_state *sta
     if (!(out->period_s > 0) || out->on_s < 0 || out->on_s > out->period_s) {
         return fail(r, "need PERIOD_S > 0 and 0 <= ON_S <= PERIOD_S");
     }
+    if (out->period_s > GP_MAX_PLAN_TIME_S) {
+        return fail(r, "PERIOD_S %g exceeds %g", out->period_s, GP_MAX_PLAN_TIME_S);
+    }
     return 0;
 }
 
-static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
+static int read_profile(reader *r, const gp_mission *mission, int expected_index,
+                        gp_plan_profile *out)
 {
     int index;
     if (expect(r, "profile", 6) < 0
@@ -454,6 +471,13 @@ static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
     if (!(out->ballast_cc > 0) || !(out->speed_mps > 0)) {
         return fail(r, "BALLAST_CC and SPEED_MPS must be > 0");
     }
+    if (out->ballast_cc > mission->max_ballast_cc) {
+        return fail(r, "BALLAST_CC %g exceeds the vehicle's pump (%g cc)", out->ballast_cc,
+                    mission->max_ballast_cc);
+    }
+    if (out->speed_mps > GP_MAX_PLAN_SPEED_MPS) {
+        return fail(r, "SPEED_MPS %g exceeds %g", out->speed_mps, GP_MAX_PLAN_SPEED_MPS);
+    }
     return 0;
 }
 
@@ -463,16 +487,17 @@ static int read_prediction(reader *r, int n_components)
 {
     double amount;
     int visits;
-    if (expect(r, "predict", 4) < 0 || amount_field(r, 1, "TIME_S", &amount) < 0
+    if (expect(r, "predict", 4) < 0
+        || amount_field(r, 1, "TIME_S", GP_MAX_PLAN_TIME_S, &amount) < 0
         || count_field(r, 2, "VISITS", 0, MAX_VISITS, &visits) < 0
-        || amount_field(r, 3, "INFLECTIONS", &amount) < 0) {
+        || amount_field(r, 3, "INFLECTIONS", GP_MAX_PLAN_INFLECTIONS, &amount) < 0) {
         return -1;
     }
     if (expect(r, "energy", n_components + 1) < 0) {
         return -1;
     }
     for (int i = 1; i <= n_components; i++) {
-        if (amount_field(r, i, "energy", &amount) < 0) {
+        if (amount_field(r, i, "energy", GP_MAX_PLAN_ENERGY_J, &amount) < 0) {
             return -1;
         }
     }
@@ -491,14 +516,14 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
         return fail(r, "state '%.*s' where the mission has '%.32s'", (int)r->fields[1].len,
                     r->fields[1].start, state->name);
     }
-    if (number_field(r, 2, "CLOCK_MHZ", &out->clock_mhz) < 0
+    if (clock_field(r, 2, mission, &out->clock_mhz) < 0
         || number_field(r, 3, "CYCLE_S", &out->cycle_s) < 0
         || count_field(r, 4, "N_SENSORS", 0, GP_MAX_PLAN_SENSORS, &n_sensors) < 0
         || count_field(r, 5, "N_PROFILES", 1, GP_MAX_PROFILE_ALTERNATIVES, &n_profiles) < 0) {
         return -1;
     }
-    if (!(out->clock_mhz > 0) || !(out->cycle_s > 0)) {
-        return fail(r, "CLOCK_MHZ and CYCLE_S must be > 0");
+    if (!(out->cycle_s > 0) || out->cycle_s > GP_MAX_PLAN_TIME_S) {
+        return fail(r, "CYCLE_S must lie in (0, %g]", GP_MAX_PLAN_TIME_S);
     }
     if (n_profiles != state->n_profiles) {
         return fail(r, "%d profiles, state '%.32s' has %d", n_profiles, state->name,
@@ -516,7 +541,7 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
     }
     double total = 0;
     for (int i = 0; i < n_profiles; i++) {
-        if (read_profile(r, i, &out->profiles[i]) < 0) {
+        if (read_profile(r, mission, i, &out->profiles[i]) < 0) {
             return -1;
         }
         total += out->profiles[i].share;

@@ -65,6 +65,9 @@ static const gp_state states[] = {
     {"s3", {GP_ROUTE_NAV, 1, 0.0, s3_point}, s3_profiles, 1, s3_sensors, 3, s3_events, 1},
 };
 
+/* the TS-7800 and the Slocum G2 shallow glider's pump (+-233 cc) */
+static const double clocks_mhz[] = {300.0, 500.0};
+
 const gp_mission gp_mission_table = {
     .name = "sampleMission",
     .hash = "5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9",
@@ -75,5 +78,8 @@ const gp_mission gp_mission_table = {
     .stack_depth = 8,
     .read_mask = (1u << 0) | (1u << 1) | (1u << 6) | (1u << 7) | (1u << 9),
     .default_ballast_cc = 230.0,
+    .max_ballast_cc = 233.0,
+    .clocks_mhz = clocks_mhz,
+    .n_clocks = 2,
     .sensor_names = sensor_names,
 };

@@ -27,6 +27,9 @@ static const gp_state states[] = {
     {"b", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, hover, 1, NULL, 0, b_events, 1},
 };
 
+/* the TS-7800 and the Slocum G2 shallow glider's pump (+-233 cc) */
+static const double clocks_mhz[] = {300.0, 500.0};
+
 const gp_mission gp_mission_table = {
     .name = "stacker",
     .hash = "0000000000000000000000000000000000000000000000000000000000000001",
@@ -35,5 +38,8 @@ const gp_mission gp_mission_table = {
     .stack_depth = 2,
     .read_mask = 1u,
     .default_ballast_cc = 230.0,
+    .max_ballast_cc = 233.0,
+    .clocks_mhz = clocks_mhz,
+    .n_clocks = 2,
     .sensor_names = sensor_names,
 };

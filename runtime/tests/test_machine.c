@@ -221,4 +221,10 @@ void test_mission_check_should_accept_fig2_and_reject_bad_tables(void)
     bad = vars_mission;
     bad.var_initial = NULL;
     CHECK(gp_mission_check(&bad) != NULL);
+    bad = gp_mission_table;
+    bad.n_clocks = 0;  /* no clock a plan could name */
+    CHECK(gp_mission_check(&bad) != NULL);
+    bad = gp_mission_table;
+    bad.max_ballast_cc = 0;  /* no pump */
+    CHECK(gp_mission_check(&bad) != NULL);
 }

@@ -25,7 +25,7 @@
     "energy 2410 1540 0\n"                                                          \
     "profile 0 1 0.454 230 0.31\n"                                                  \
     "end\n"                                                                         \
-    "state s2 200 600 2 1\n"                                                        \
+    "state s2 500 600 2 1\n"                                                        \
     "predict 1000 1 12.4\n"                                                         \
     "energy 2410 1585 240\n"                                                        \
     "sensor depth 60 0\n"                                                           \
@@ -81,7 +81,7 @@ void test_plan_should_accept_a_good_plan(void)
     CHECK_INT(plan.n_assumptions, 2);
     CHECK(strcmp(plan.computer, "ts7800") == 0);
     CHECK_NEAR(plan.budget_j, 180000, 0);
-    CHECK_NEAR(plan.states[1].clock_mhz, 200, 0);
+    CHECK_NEAR(plan.states[1].clock_mhz, 500, 0);
     CHECK_INT(plan.states[1].n_sensors, 2);
     CHECK_INT(plan.states[1].sensors[1].sensor, 9);
     CHECK_NEAR(plan.states[1].sensors[1].on_s, 15, 0);
@@ -100,7 +100,9 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"mission sampleMission", "mission 9lives", "line 2: mission name is not a NAME"},
         {"hash 5db9", "hash 6db9", "line 3: hash does not match"},
         {"hash 5db9", "hash 5DB9", "line 3: hash needs 64 lowercase hex digits"},
-        {"computer ts7800 300", "computer ts7800 0", "line 4: clock must be > 0"},
+        {"computer ts7800 300", "computer ts7800 0", "line 4: clock 0 MHz: the board has 300, 500"},
+        {"computer ts7800 300", "computer ts5500 133", "line 4: clock 133 MHz: the board has"},
+        {"budget_j 180000", "budget_j 1e300", "line 5: budget_j 1e+300 exceeds 1e+10"},
         {"budget_j 180000", "budget_j 1.5e", "line 5: budget_j '1.5e' is not a NUMBER"},
         {"budget_j 180000", "budget_j .5", "line 5: budget_j '.5' is not a NUMBER"},
         {"budget_j 180000", "budget_j +5", "line 5: budget_j '+5' is not a NUMBER"},
@@ -123,7 +125,10 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"states 3", "states 65", "line 11: states 65 outside 1..64"},
         {"states 3", "states -3", "line 11: states '-3' is not a COUNT"},
         {"state s1 300 600 0 1", "state s1 300 600 0 2", "line 12: 2 profiles, state 's1' has 1"},
-        {"state s1 300 600 0 1", "state s1 300 0 0 1", "line 12: CLOCK_MHZ and CYCLE_S"},
+        {"state s1 300 600 0 1", "state s1 300 0 0 1", "line 12: CYCLE_S must lie in (0, "},
+        {"state s1 300 600 0 1", "state s1 300 1e300 0 1", "line 12: CYCLE_S must lie in (0, "},
+        {"state s1 300 600 0 1", "state s1 1000 600 0 1", "line 12: clock 1000 MHz: the board"},
+        {"predict 1000 2 19.8", "predict 1e99 2 19.8", "line 13: TIME_S 1e+99 exceeds"},
         {"state s1 300 600 0 1", "state s1 300 600 0", "line 12: 'state' takes 5 fields, found 4"},
         {"predict 1000 2 19.8", "predict -1 2 19.8", "line 13: TIME_S must be >= 0"},
         {"predict 1000 2 19.8", "predict 1000 2.5 19.8", "line 13: VISITS '2.5' is not a COUNT"},
@@ -135,6 +140,12 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"profile 0 1 0.454", "profile 1 1 0.454", "line 15: profile INDEX 1 out of order"},
         {"profile 0 1 0.454", "profile 0 1 1.6", "line 15: PITCH_RAD 1.6 outside (0, pi/2)"},
         {"profile 0 1 0.454 230", "profile 0 1 0.454 0", "line 15: BALLAST_CC and SPEED_MPS"},
+        {"profile 0 1 0.454 230", "profile 0 1 0.454 1e300",
+         "line 15: BALLAST_CC 1e+300 exceeds the vehicle's pump (233 cc)"},
+        {"profile 0 1 0.454 230", "profile 0 1 0.454 5000",
+         "line 15: BALLAST_CC 5000 exceeds the vehicle's pump (233 cc)"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 40",
+         "line 15: SPEED_MPS 40 exceeds 2"},
         {"profile 0 1 0.454", "profile 0 1.5 0.454", "line 15: SHARE 1.5 outside [0, 1]"},
         {"state s2", "state s9", "line 17: state 's9' where the mission has 's2'"},
         {"sensor temp 60 15", "sensor oxygen 60 15", "line 21: sensor 'oxygen' is not logged"},
@@ -142,6 +153,7 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
          "line 21: sensor 'depth' is not logged by state 's2' (or out of order)"},
         {"sensor temp 60 15", "sensor temp 60 61", "line 21: need PERIOD_S > 0"},
         {"sensor temp 60 15", "sensor temp 0 0", "line 21: need PERIOD_S > 0"},
+        {"sensor temp 60 15", "sensor temp 1e12 15", "line 21: PERIOD_S 1e+12 exceeds"},
         {"end\nstate s3", "ende\nstate s3", "line 23: expected a 'end' line, found 'ende'"},
         {"end\nstate s3", "end x\nstate s3", "line 23: 'end' takes 0 fields, found 1"},
         {"budget_j 180000", "budget_j  180000", "line 5: fields must be separated by exactly"},

@@ -111,6 +111,8 @@ static const double state2_route_points[1][2] = {
 
 static const uint8_t state2_sensors[3] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH};
 
+static const double board_clocks_mhz[2] = {300.0, 500.0};
+
 static const char *const sensor_names[GP_N_SENSORS] = {
     "missiontime",
     "depth",
@@ -174,5 +176,8 @@ const gp_mission gp_mission_table = {
     .stack_depth = 8,
     .read_mask = 0x000002c3u,
     .default_ballast_cc = 233.0,
+    .max_ballast_cc = 233.0,
+    .clocks_mhz = board_clocks_mhz,
+    .n_clocks = 2,
     .sensor_names = sensor_names,
 };
