@@ -1,11 +1,14 @@
 """`gliderplan plan`: plan duty cycles, flight profiles and computer clock under a battery budget.
 
   plan MISSION [--battery 1.2kWh] [--computer ts7800@300] [-o PLANFILE] [--json]
+       [--sign KEYFILE [--seq N]]
   plan MISSION --sweep N -o DIR     pareto.csv, computers.csv, batteries.csv, pareto.png
 
 With -o the plan file (docs/plan-format.md) is written to PLANFILE and its report to
-PLANFILE.json. A budget below what the mission needs exits 1 with the minimum energy
-and the largest consumers.
+PLANFILE.json; with --sign KEYFILE the plan file is signed for the vehicle holding that key
+(docs/plan-format.md, "Signed plans"). The report gives the plan's upload size in bytes. A
+budget below what the mission needs exits 1 with the minimum energy and the largest
+consumers.
 """
 
 from __future__ import annotations
@@ -49,12 +52,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --confidence: the distributions to draw from")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
                         help="with --confidence: worker processes (default: one per core)")
+    parser.add_argument("--sign", metavar="KEYFILE",
+                        help="sign the plan with the vehicle's key (gliderplan keygen)")
+    parser.add_argument("--seq", type=int, metavar="N",
+                        help="with --sign: the plan's sequence number, above every plan "
+                             "signed before (default: the time in seconds since 1970)")
     add_cycles_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     if args.sweep is not None and not args.output:
         raise UsageError("--sweep needs -o DIR for its CSV files and plot")
+    if args.seq is not None and args.sign is None:
+        raise UsageError("--seq goes with --sign KEYFILE")
     mission = load_mission(args)
     if args.sweep is not None:
         return _sweep(mission, args)
@@ -69,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
                            output=args.output, confidence=args.confidence,
                            scenarios=args.scenarios, seed=args.seed, risk=args.risk,
                            scenario_file=args.scenario_file, workers=args.workers,
-                           progress=progress)
+                           progress=progress, sign=args.sign, seq=args.seq)
     except InfeasibleBudget as short:  # the report says so too; the error is for main
         if args.json:
             print(json.dumps(infeasible_json(short), indent=2))

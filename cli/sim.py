@@ -65,6 +65,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", metavar="T",
                         help="end the run here if the mission has not exited (3600s, 90min, "
                              "6h, 30d; default: the mission's horizon, else 30d)")
+    parser.add_argument("--key", metavar="KEYFILE",
+                        help="the key provisioned on the simulated vehicle (gliderplan "
+                             "keygen): the plan must be signed with it (plan --sign); with "
+                             "--runtime c it is uploaded over the link and the runtime checks it")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
                         help="directory for the run's files")
 
@@ -96,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
             mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
             ocean_logs=args.ocean_logs, noise=args.noise, tracker=args.tracker,
             current=_current(args.current), seed=args.seed, tick_s=args.tick,
-            duration_s=duration_s, progress=progress)
+            duration_s=duration_s, progress=progress, key_path=args.key)
     finally:
         if progress is not None:
             progress.finish()

@@ -64,6 +64,10 @@ class FlightLimits:
                              f"{len(self.clocks_mhz)}")
 
 
+# ---- signed plans (docs/plan-format.md) ---------------------------------------------
+PLAN_KEY_BYTES = 32  # [bytes] of the HMAC-SHA256 key provisioned on the vehicle
+MAX_PLAN_SEQUENCE = 4_294_967_295  # a signed plan's `seq` (a u32); 1 is the first
+
 # ---- the sensor array ----------------------------------------------------------------
 
 

@@ -29,6 +29,7 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("what a plan may ask for", (
         "MAX_PLAN_TIME_S", "MAX_PLAN_SPEED_MPS", "MAX_PLAN_ENERGY_J", "MAX_PLAN_INFLECTIONS",
         "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ")),
+    ("signed plans", ("PLAN_KEY_BYTES", "MAX_PLAN_SEQUENCE")),
     ("the library routines (docs/pilot.md)", (
         "SURFACE_PITCH_RAD", "TRACK_WINDOW", "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (

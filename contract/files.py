@@ -8,8 +8,13 @@ import tempfile
 from pathlib import Path
 
 
-def write_atomically(path: str | Path, data: str | bytes) -> None:
-    """Write a result file so that a crash leaves either the old file or the new one."""
+def write_atomically(path: str | Path, data: str | bytes, *, private: bool = False,
+                     replace: bool = True) -> None:
+    """Write a result file so that a crash leaves either the old file or the new one.
+
+    `private`: readable by its owner only (mode 0600: a key). `replace=False`: an existing
+    file is left alone and FileExistsError raised (the new file appears whole or not at
+    all; a hard link is how an atomic no-clobber create is done on POSIX)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     mode = "wb" if isinstance(data, bytes) else "w"
@@ -19,11 +24,17 @@ def write_atomically(path: str | Path, data: str | bytes) -> None:
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; results are for sharing
-        os.replace(tmp, path)
+        if not private:
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; results are for sharing
+        if replace:
+            os.replace(tmp, path)
+        else:
+            os.link(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    if not replace:
+        Path(tmp).unlink()
 
 
 def _umask() -> int:

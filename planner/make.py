@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -30,7 +30,8 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
               output: str | Path | None = None,
               confidence: float | None = None, scenarios: int | None = None, seed: int = 0,
               risk: float = 1e-3, scenario_file: str | Path | None = None, workers: int = 1,
-              progress: Callable[[float, float], None] | None = None) -> PlanResult:
+              progress: Callable[[float, float], None] | None = None,
+              sign: str | Path | None = None, seq: int | None = None) -> PlanResult:
     """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
     preset) and `computer` ("ts7800@500"; "ts7800" lets the planner pick the clock) in
     its place; `cycles_per_tick` [cycles] is the board's work every tick. With
@@ -38,7 +39,9 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     `scenarios` simulated scenarios (default: as many as the confidence needs at `risk`)
     drawn from `scenario_file` (default: the shipped one) from `seed`, flown by `workers`
     processes (planner/confidence.py). With `output`, write the plan file there and its
-    JSON report beside it (`output`.json), atomically. The result holds the plan
+    JSON report beside it (`output`.json), atomically; with `sign` (a key file) the plan
+    file is signed as plan number `seq` (default: `signing.default_sequence()`). The
+    result holds the plan
     (`.plan`, what the file holds) and what its solve tells (quality, minimum energy,
     shadow price, the confidence). Raises InfeasibleBudget (with the minimum energy and
     the largest consumers), PlanningError, HardwareError or ModelFileError."""
@@ -67,6 +70,13 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
                 mission, hardware, confidence, scenarios=scenarios, seed=seed, risk=risk,
                 spec=spec, executor=executor, workers=workers, progress=progress)
     data = write_plan_bytes(result.plan)
+    if sign is not None:
+        from gliderplan.planner.signing import default_sequence, read_key, sign_plan
+
+        seq = default_sequence() if seq is None else seq
+        data = sign_plan(data, read_key(sign), seq)
+        result = replace(result, plan=replace(result.plan, seq=seq))
+    result = replace(result, upload_bytes=len(data))
     if output is not None:
         write_atomically(output, data)
         write_atomically(f"{output}.json", json.dumps(report_json(result), indent=2) + "\n")

@@ -81,6 +81,7 @@ class PlanResult:
     state_quality: tuple[float | None, ...]  # weighted quality of each state's device sensors
     confidence: object | None = None  # planner.confidence.Confidence of a plan at a confidence
     status: str = "optimal"  # "infeasible": `least_energy_plan`, beyond the budget
+    upload_bytes: int = 0  # [bytes] of the plan file as sent to the glider (0: not written)
 
 
 def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,

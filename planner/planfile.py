@@ -30,6 +30,7 @@ from gliderplan.contract import (
     MAX_PLAN_INFLECTIONS,
     MAX_PLAN_LINE_BYTES,
     MAX_PLAN_SENSORS,
+    MAX_PLAN_SEQUENCE,
     MAX_PLAN_SPEED_MPS,
     MAX_PLAN_TIME_S,
     MAX_PROFILE_ALTERNATIVES,
@@ -48,6 +49,7 @@ _NUMBER = re.compile(r"-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?\Z")
 _COUNT = re.compile(r"[0-9]+\Z")
 _HEX64 = re.compile(r"[0-9a-f]{64}\Z")
 _HEX8 = re.compile(r"[0-9a-f]{8}\Z")
+_SEQUENCE = re.compile(r"[1-9][0-9]{0,9}\Z")
 _NOTE = re.compile(rf"([A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME_LENGTH - 1}}}): (.+)\Z")
 
 
@@ -173,6 +175,7 @@ class Plan:
     predicted_j: float  # predicted energy of the whole mission [J]
     states: tuple[StatePlan, ...]  # in the mission's order
     assumptions: tuple[Assumption, ...] = ()
+    seq: int = field(default=0, compare=False)  # a signed plan's sequence number, 0: unsigned
 
     @property
     def components(self) -> tuple[str, ...]:
@@ -309,7 +312,9 @@ def read_plan_bytes(data: bytes, mission: CheckedMission | None = None,
     """Parse a plan file strictly; with `mission`, check that it is a plan for that
     mission as the C runtime does (name, hash, states, each state's profiles and logged
     sensors); with `limits`, that it keeps to the vehicle's pump and the board's clocks.
-    PlanFileError (`path:line: ...`) names the first line that breaks a rule."""
+    A signed plan's `seq` and `hmac` lines are checked for their form only
+    (`planner.signing` checks the tag). PlanFileError (`path:line: ...`) names the first
+    line that breaks a rule."""
     try:
         return _read(data, mission, limits)
     except PlanFileError as err:
@@ -354,9 +359,27 @@ def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | No
     cur.check(int(checksum, 16) == zlib.crc32(body),
               f"checksum mismatch: the file says {checksum}, its bytes give "
               f"{zlib.crc32(body):08x}")
+    seq = _signature_form(cur)
     if cur.at != len(lines):
-        raise PlanFileError(cur.at + 1, "extra line after crc32")
-    return Plan(name, digest, computer, clock_mhz, budget, predicted, states, assumptions)
+        raise PlanFileError(cur.at + 1, "extra line after crc32" if not seq
+                            else "extra line after hmac")
+    return Plan(name, digest, computer, clock_mhz, budget, predicted, states, assumptions, seq)
+
+
+def _signature_form(cur: _Cursor) -> int:
+    """A signed plan's `seq COUNT` and `hmac HEX64` lines after crc32: the sequence number
+    (0: no such lines)."""
+    if cur.at == len(cur.lines) or not cur.lines[cur.at].startswith("seq "):
+        if cur.at < len(cur.lines) and cur.lines[cur.at].startswith("hmac "):
+            raise PlanFileError(cur.at + 1, "a signed plan needs 'seq COUNT' before its "
+                                "'hmac' line")
+        return 0
+    (seq,) = cur.next("seq", 1)
+    cur.check(bool(_SEQUENCE.match(seq)), f"seq {seq!r} is not a COUNT from 1")
+    cur.check(int(seq) <= MAX_PLAN_SEQUENCE, f"seq {seq} exceeds {MAX_PLAN_SEQUENCE}")
+    (tag,) = cur.next("hmac", 1)
+    cur.check(bool(_HEX64.match(tag)), "hmac must be 64 lowercase hex digits")
+    return int(seq)
 
 
 def _assumption(cur: _Cursor) -> Assumption:

@@ -54,6 +54,8 @@ def report_json(result: PlanResult) -> dict:
         "components_j": plan.components_j,
         "states": [_state_json(result, s) for s in range(len(plan.states))],
         "confidence": result.confidence.to_json() if result.confidence is not None else None,
+        "upload": {"bytes": result.upload_bytes, "signed": result.plan.seq > 0,
+                   "seq": result.plan.seq},
     }
 
 
@@ -119,4 +121,7 @@ def report_text(result: PlanResult) -> str:
         lines += [f"  - {a}" for a in plan.assumptions]
     lines.append(f"\nsolver: {result.solver_status}, {result.solver_iterations} iterations, "
                  f"{1000 * result.solve_s:.1f} ms")
+    if result.upload_bytes:
+        lines.append(f"upload: {result.upload_bytes} bytes, "
+                     + (f"signed (seq {plan.seq})" if plan.seq else "unsigned"))
     return "\n".join(lines) + "\n"

@@ -32,7 +32,7 @@ class CRuntime:
     """The compiled runtime over a pty, answering one SENSORS frame per `step`."""
 
     def __init__(self, binary: Path, mission: ir.CheckedMission, plan_path: str | None,
-                 naive_tracker: bool, work_dir: Path) -> None:
+                 naive_tracker: bool, work_dir: Path, key_path: str | None = None) -> None:
         import serial
 
         from gliderplan.contract import BAUD
@@ -45,7 +45,9 @@ class CRuntime:
         # the runtime makes the pty and names its other end; no --state-dir: a simulated
         # run needs no checkpoint to resume from
         command = [str(binary), "--device", "pty"]
-        if plan_path is not None:
+        if key_path is not None:  # the key provisioned on the vehicle: the plan is uploaded
+            command += ["--key", str(Path(key_path).resolve())]
+        elif plan_path is not None:
             command += ["--plan", str(Path(plan_path).resolve())]
         if naive_tracker:
             command.append("--naive-tracker")
@@ -66,6 +68,24 @@ class CRuntime:
             self.close()
             raise EmulatorError("the runtime was compiled for another mission (hash differs)")
         self._read_mask = hello.read_mask
+        if key_path is not None and plan_path is not None:
+            self._upload(plan_path)
+
+    def _upload(self, plan_path: str) -> None:
+        """Send the plan over the link, as at the surface, before the first tick; the
+        vehicle's verdict decides (PlanRejected with its reason)."""
+        from gliderplan.planner.planfile import PlanRejected, read_plan_data
+        from gliderplan.runtime.protocol import LinkError
+
+        try:
+            status = self.link.send_plan(read_plan_data(plan_path))
+        except LinkError as err:
+            self.close()
+            raise EmulatorError(f"the runtime did not answer the plan ({err}): "
+                                f"{self.stderr_text()}") from None
+        if not status.accepted:
+            self.close()
+            raise PlanRejected(f"{plan_path} {status.message} (said the vehicle)")
 
     def step(self, tick: int, mask: int, values: list[float]):
         """Send one tick's SENSORS (those of `mask` the runtime reads: HELLO's read mask),
@@ -126,9 +146,10 @@ def _indices(mask: int) -> tuple[int, ...]:
 
 
 def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None, limits: FlightLimits,
-                    naive_tracker: bool = False) -> CRuntime:
+                    naive_tracker: bool = False, key_path: str | None = None) -> CRuntime:
     """Compile the mission for the host (cached) with the vehicle's and board's `limits` and
-    start it against the emulator."""
+    start it against the emulator. With `key_path` the key is provisioned on the runtime
+    and the plan is uploaded over the link, signed, rather than read at start-up."""
     from gliderplan.language.codegen_c import CodegenError
     from gliderplan.runtime.build import BuildError, compile_mission
 
@@ -138,4 +159,4 @@ def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None, limits: F
     except (CodegenError, BuildError) as err:
         shutil.rmtree(work, ignore_errors=True)
         raise EmulatorError(str(err)) from None
-    return CRuntime(binary, mission, plan_path, naive_tracker, work)
+    return CRuntime(binary, mission, plan_path, naive_tracker, work, key_path)

@@ -21,14 +21,15 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         plan: Plan | None = None, plan_path: str | None = None, runtime: str = "python",
         robust_tracker: bool = True,
         progress: Callable[[float, float], None] | None = None,
-        tick_by_tick: bool = False) -> RunRecord:
+        tick_by_tick: bool = False, key_path: str | None = None) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends.
 
     The Python executor flies runs of ticks at once where nothing can happen between them
     (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
     the reference loop instead. The C runtime reads its plan from `plan_path` (the file
-    `plan` was read from); raises emulator.EmulatorError when it cannot be built or
-    started.
+    `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
+    uploaded over the link; raises emulator.EmulatorError when it cannot be built or
+    started, PlanRejected when it refuses the plan.
     """
     science = make_science(mission, ocean, config, vehicle)
     if runtime == "python":
@@ -52,7 +53,8 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
     limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
                           board.clocks_mhz)  # the vehicle flown: a scenario's may differ
-    c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker)
+    c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
+                                key_path=key_path)
     try:
         return simulate(mission, c_runtime, science, config, progress)
     finally:

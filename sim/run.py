@@ -47,7 +47,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 noise: str = "ctd", tracker: str = "robust", current: Current | None = None,
                 seed: int = 0, tick_s: float = TICK_S, duration_s: float | None = None,
                 progress: Callable[[float, float], None] | None = None,
-                plots: bool = True) -> RunResult:
+                plots: bool = True, key_path: str | Path | None = None) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
@@ -58,6 +58,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
     horizon, else 30 days). `progress(done_s, total_s)` is called on long runs.
     `plots`: False leaves out depth.png and energy.png (a caller that draws its own).
+    `key_path`: the key provisioned on the simulated vehicle; the plan must be signed with
+    it (the C runtime gets it uploaded over the link and checks it itself).
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -87,9 +89,18 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     vehicle = load_vehicle(mission.vehicle)
     water = load_ocean(ocean, Path(ocean_logs) if ocean_logs else None)
     plan = None if plan_path is None else load_plan(plan_path, mission)
+    if key_path is not None:
+        if plan_path is None:
+            raise UsageError("--key: the key checks a plan's signature; give --plan too")
+        from gliderplan.planner.planfile import read_plan_data
+        from gliderplan.planner.signing import check_signature, read_key
+
+        key = read_key(key_path)
+        if runtime == "python":  # the C runtime checks for itself
+            check_signature(read_plan_data(plan_path), key, str(plan_path))
     record = fly(mission, water, config, vehicle, plan, None if plan_path is None
                  else str(plan_path), runtime, robust_tracker=tracker == "robust",
-                 progress=progress)
+                 progress=progress, key_path=None if key_path is None else str(key_path))
     if not len(record.columns["time_s"]):
         raise KeyboardInterrupt  # nothing flown, nothing to write
     used = accounting.account(record, mission, vehicle, plan)

@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from gliderplan.contract import NO_STATE, ReleaseReason, TransitionKind
+from gliderplan.planner.signing import sign_plan
 from gliderplan.runtime import protocol as p
 
 RUNTIME = Path(__file__).resolve().parents[1] / "runtime"
@@ -104,16 +105,32 @@ def transitions(commands: list[p.Command]) -> list[str]:
             f"{c.stack_depth}" for c in commands if c.transition]
 
 
-def make_plan(s2_temp_on_s: float = 15, hash_: str = FIG2_HASH) -> bytes:
+def make_plan(s2_temp_on_s: float = 15, hash_: str = FIG2_HASH, s1_pitch: float = 0.3) -> bytes:
     body = (f"GPPLAN 2\nmission sampleMission\nhash {hash_}\ncomputer ts7800 300\n"
             "budget_j 180000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\nstates 3\n"
             "state s1 300 600 0 1\npredict 1000 2 20\nenergy 3950\n"
-            "profile 0 1 0.3 150 0.31\nend\n"
+            f"profile 0 1 {s1_pitch:g} 150 0.31\nend\n"
             "state s2 300 600 1 1\npredict 1000 1 12\nenergy 3950\n"
             f"sensor temp 60 {s2_temp_on_s:g}\nprofile 0 1 0.4 200 0.3\nend\n"
             "state s3 300 600 0 1\npredict 500 1 5\nenergy 1976.5\n"
             "profile 0 1 0.454 230 0.31\nend\n").encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
+
+
+KEY = bytes(range(32))
+
+
+@pytest.fixture
+def key_file(tmp_path) -> str:
+    """The vehicle's key, as `gliderplan keygen` writes one (mode 0600)."""
+    path = tmp_path / "vehicle.key"
+    path.write_text(KEY.hex() + "\n")
+    path.chmod(0o600)
+    return str(path)
+
+
+def signed(seq: int, **changes) -> bytes:
+    return sign_plan(make_plan(**changes), KEY, seq)
 
 
 def test_fig2_over_the_serial_link_gives_the_papers_trace(binary, glider, tmp_path):
@@ -307,25 +324,28 @@ def test_a_repeated_sensors_frame_gets_the_same_command_without_a_step(binary, g
     assert answers[0].transition == TransitionKind.CALL and answers[0].event_count == 1
 
 
-def test_plans_over_the_link_are_checked_and_a_bad_one_keeps_the_last(binary, glider, tmp_path):
+def test_plans_over_the_link_are_checked_and_a_bad_one_keeps_the_last(binary, glider, tmp_path,
+                                                                      key_file):
     plan_file = tmp_path / "fig2.plan"
-    plan_file.write_bytes(make_plan(s2_temp_on_s=15))
-    process = glider.start(binary, "--plan", str(plan_file))
+    plan_file.write_bytes(signed(1, s2_temp_on_s=15))
+    state = tmp_path / "state"
+    process = glider.start(binary, "--plan", str(plan_file), "--key", key_file,
+                           "--state-dir", str(state))
     link = glider.link()
     link.wait_hello()
     commands = fly(link, 0, 50)
     assert abs(commands[0].pitch_rad) == pytest.approx(0.3)  # the plan's pitch in s1
 
-    damaged = bytearray(make_plan(s2_temp_on_s=30))
-    damaged[40] ^= 1
+    damaged = bytearray(signed(2, s2_temp_on_s=30))
+    damaged[40] ^= 1  # line noise, or an attacker's edit: the tag no longer matches
     status = link.send_plan(bytes(damaged))
-    assert not status.accepted and "checksum mismatch" in status.message
-    status = link.send_plan(make_plan(hash_="0" * 64))
+    assert not status.accepted and "line 28: the signature does not match" in status.message
+    status = link.send_plan(signed(2, hash_="0" * 64))  # signed, but for another mission
     assert not status.accepted and "line 3: hash does not match" in status.message
     commands += fly(link, 51, 53)  # s2 entered at 500 s: temp on for 15 s of 60 s
     assert [c.sensor_power >> 9 & 1 for c in commands[50:54]] == [1, 1, 0, 0]
 
-    status = link.send_plan(make_plan(s2_temp_on_s=30))
+    status = link.send_plan(signed(3, s2_temp_on_s=30))
     assert status.accepted and status.message == "ok"
     commands += fly(link, 54, 400)  # the new window, from t_in 40 s: 30 s of every 60 s
     assert [c.sensor_power >> 9 & 1 for c in commands[54:59]] == [0, 0, 1, 1, 1]
@@ -383,19 +403,19 @@ def test_a_stopped_or_crashed_runtime_releases_control(binary, glider, signal_nu
     assert process.wait(10) == 4
 
 
-def test_a_plan_adopted_over_the_link_outlives_a_restart(binary, glider, tmp_path):
+def test_a_plan_adopted_over_the_link_outlives_a_restart(binary, glider, tmp_path, key_file):
     state = tmp_path / "state"
-    glider.start(binary, "--state-dir", str(state))
+    glider.start(binary, "--state-dir", str(state), "--key", key_file)
     link = glider.link()
     link.wait_hello()
     commands = fly(link, 0, 3)
     assert abs(commands[-1].pitch_rad) == pytest.approx(0.454)  # no plan: the profile's
-    assert link.send_plan(make_plan()).accepted
+    assert link.send_plan(signed(5)).accepted
     commands = fly(link, 4, 60)
     assert abs(commands[0].pitch_rad) == pytest.approx(0.3)
     glider.process.send_signal(signal.SIGKILL)
     glider.process.wait(5)
-    process = glider.start(binary, "--state-dir", str(state))
+    process = glider.start(binary, "--state-dir", str(state), "--key", key_file)
     link.wait_hello()
     commands = fly(link, 61, 400)
     # t_in 110, 120, 130, 140, 150 s: the plan powers temp for 15 s of every 60 s
@@ -412,8 +432,8 @@ def test_hello_repeats_until_the_first_sensors(binary, glider):
     assert fly(link, 0, 0)[0].transition == TransitionKind.START
 
 
-def test_plan_pieces_out_of_order_are_ignored(binary, glider):
-    glider.start(binary)
+def test_plan_pieces_out_of_order_are_ignored(binary, glider, key_file):
+    glider.start(binary, "--key", key_file)
     link = glider.link()
     link.wait_hello()
     fly(link, 0, 2)
@@ -424,7 +444,82 @@ def test_plan_pieces_out_of_order_are_ignored(binary, glider):
     while (message := link.receive(0.5)) is not None:
         answers.append(message)
     assert not any(isinstance(m, (p.PlanStatus, p.Nak)) for m in answers)
-    assert link.send_plan(make_plan()).accepted
+    assert link.send_plan(signed(1)).accepted
+
+
+def test_without_a_key_no_plan_over_the_link_is_flown(binary, glider, tmp_path):
+    """A forged plan with its CRC recomputed was once accepted over the link: now a
+    runtime without a key refuses every plan that comes over it, and says why."""
+    state = tmp_path / "state"
+    process = glider.start(binary, "--state-dir", str(state))
+    link = glider.link()
+    link.wait_hello()
+    commands = fly(link, 0, 3)
+    for plan in (make_plan(), signed(7)):
+        status = link.send_plan(plan)
+        assert not status.accepted and "no key is provisioned on this vehicle" in status.message
+    commands += fly(link, 4, 400)
+    assert all(abs(c.pitch_rad) != pytest.approx(0.3) for c in commands)
+    assert transitions(commands) == FIG2_TRACE
+    assert process.wait(10) == 0
+    assert "plan over the link rejected (seq 0): no key" in process.stderr.read()
+    log = (state / "plans.log").read_text().splitlines()
+    assert [line.split(" ", 3)[1:3] for line in log] == [["rejected", "0"]] * 2
+
+
+def test_with_a_key_unsigned_replayed_and_reused_plans_are_refused(binary, glider, tmp_path,
+                                                                  key_file):
+    state = tmp_path / "state"
+    process = glider.start(binary, "--key", key_file, "--state-dir", str(state))
+    link = glider.link()
+    link.wait_hello()
+    commands = fly(link, 0, 3)
+    status = link.send_plan(make_plan())  # a forger without the key: CRC right, no tag
+    assert not status.accepted and "line 26: the plan is not signed" in status.message
+    assert link.send_plan(signed(10)).accepted
+    assert link.send_plan(signed(10)).accepted  # the plan in force, sent again
+    status = link.send_plan(signed(9, s2_temp_on_s=30))  # an old plan, replayed
+    assert not status.accepted and "seq 9 is older than the plan in force (seq 10)" in (
+        status.message)
+    status = link.send_plan(signed(10, s2_temp_on_s=30))
+    assert not status.accepted and "seq 10 is the plan in force's, but this is another" in (
+        status.message)
+    commands += fly(link, 4, 400)
+    assert transitions(commands) == FIG2_TRACE
+    assert [c.sensor_power >> 9 & 1 for c in commands[50:54]] == [1, 1, 0, 0]  # seq 10's
+    assert process.wait(10) == 0
+    log = [line.split(" ", 3)[1:3] for line in (state / "plans.log").read_text().splitlines()]
+    assert log == [["rejected", "0"], ["accepted", "10"], ["accepted", "10"], ["rejected", "0"],
+                   ["rejected", "0"]]
+
+
+@pytest.mark.parametrize(("stored", "flown", "said"), [
+    (3, 0.3, "newer than --plan (seq 2)"), (1, 0.4, "older than the plan in force"),
+    (None, 0.4, "the signature does not match")], ids=["newer", "older", "tampered"])
+def test_on_resume_a_stored_plan_replaces_plan_only_if_signed_and_newer(
+        binary, glider, tmp_path, key_file, stored, flown, said):
+    """`--plan` (seq 2, pitch 0.4 in s1) against the plan the state directory kept from
+    the link: a newer one is flown; an older or tampered one gives way, and it says so."""
+    state = tmp_path / "state"
+    glider.start(binary, "--state-dir", str(state), "--key", key_file)
+    link = glider.link()
+    link.wait_hello()
+    fly(link, 0, 3)
+    glider.process.send_signal(signal.SIGKILL)
+    glider.process.wait(5)
+    on_disk = signed(stored) if stored else bytearray(signed(4))
+    if not stored:
+        on_disk[200] ^= 1
+    (state / "plan").write_bytes(bytes(on_disk))
+    plan_file = tmp_path / "fig2.plan"
+    plan_file.write_bytes(signed(2, s1_pitch=0.4))
+    process = glider.start(binary, "--state-dir", str(state), "--key", key_file,
+                           "--plan", str(plan_file))
+    link.wait_hello()
+    commands = fly(link, 4, 400)
+    assert abs(commands[0].pitch_rad) == pytest.approx(flown)
+    assert process.wait(10) == 0
+    assert said in process.stderr.read()
 
 
 def test_a_mission_fault_releases_control_and_is_logged(build, glider, tmp_path):

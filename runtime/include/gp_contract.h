@@ -38,6 +38,11 @@
 #define GP_MAX_BOARD_CLOCKS 8  /**< clocks of one board the compiled mission lists */
 #define GP_CLOCK_TOLERANCE_MHZ 1e-06  /**< [MHz] a plan's clock is the board's within this */
 
+/* ---- signed plans */
+
+#define GP_PLAN_KEY_BYTES 32  /**< [bytes] of the HMAC-SHA256 key provisioned on the vehicle */
+#define GP_MAX_PLAN_SEQUENCE 4294967295  /**< a signed plan's `seq` (a u32); 1 is the first */
+
 /* ---- the library routines (docs/pilot.md) */
 
 #define GP_SURFACE_PITCH_RAD 0.454  /**< [rad] pitch of the climb to the surface */

@@ -19,6 +19,7 @@ typedef struct {
     const char *plan_path;       /**< NULL: no plan */
     const char *state_dir;       /**< NULL: no checkpoint, no event log */
     const char *clock_path;      /**< NULL: the clock is left alone; else gets kHz */
+    const char *key_path;        /**< NULL: no key, plans over the link are refused */
     double link_timeout_s;       /**< default 10 */
     int retransmit_ms;           /**< default 200 */
     int naive_tracker;

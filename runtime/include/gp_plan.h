@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "gp_mission.h"
+#include "gp_sha256.h"
 
 #define GP_PLAN_ERROR_LEN 160
 
@@ -38,18 +39,32 @@ typedef struct {
     uint8_t n_components;            /**< energy columns of each state's prediction */
     uint8_t n_assumptions;
     uint8_t n_states;
+    uint8_t is_signed;               /**< the file ends in `seq` and `hmac` lines */
+    uint32_t seq;                    /**< a signed plan's sequence number (1..), else 0 */
+    uint8_t tag[GP_SHA256_SIZE];     /**< a signed plan's HMAC-SHA256 tag */
     gp_plan_state states[GP_MAX_STATES];
 } gp_plan;
 
+/** What a plan must show to be flown when the vehicle holds a key. */
+typedef struct {
+    uint8_t key[GP_PLAN_KEY_BYTES];  /**< provisioned on the vehicle */
+    uint32_t last_seq;               /**< sequence of the plan in force, 0: none signed */
+    uint8_t last_tag[GP_SHA256_SIZE];  /**< its tag */
+} gp_plan_auth;
+
 /**
- * @brief Read a plan file strictly against the compiled mission: its form, and its values
- *        within the contract's bounds, the vehicle's pump and the board's clocks.
+ * @brief Read a plan file strictly against the compiled mission: its form, its values
+ *        within the contract's bounds, the vehicle's pump and the board's clocks, and
+ *        with a key its signature.
+ * @param auth NULL: no key; a signed plan's tag is read but not checked. Else the plan
+ *             must be signed with auth->key, with a sequence number above auth->last_seq
+ *             or, to send the plan in force again, equal to it with the same tag.
  * @param out  filled only on success
  * @param error on failure: "line N: what is wrong" (NUL-terminated, GP_PLAN_ERROR_LEN)
  * @return 0 accepted, -1 rejected
  */
-int gp_plan_read(const char *text, size_t len, const gp_mission *mission, gp_plan *out,
-                 char error[GP_PLAN_ERROR_LEN]);
+int gp_plan_read(const char *text, size_t len, const gp_mission *mission,
+                 const gp_plan_auth *auth, gp_plan *out, char error[GP_PLAN_ERROR_LEN]);
 
 /** What the schedule sets at time `t_in_s` in a state. */
 typedef struct {

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "gp_frame.h"
+#include "gp_key.h"
 #include "gp_mission.h"
 #include "gp_plan.h"
 #include "gp_runtime.h"
@@ -60,6 +61,8 @@ static size_t crash_release_len;
 static gp_plan plan;
 static char plan_text[GP_MAX_PLAN_BYTES + 1];
 static gp_checkpoint checkpoint = {-1, 0};
+static gp_plan_auth auth;                  /* with --key: what the next plan must show */
+static const gp_plan_auth *plan_auth;      /* &auth with --key, else NULL */
 
 static void say(const link_state *s, const char *message)
 {
@@ -130,6 +133,26 @@ static int release(link_state *s, gp_release_reason reason, int status)
 
 /* ---- start-up ---------------------------------------------------------------- */
 
+/* The key provisioned on the vehicle: from now on every plan must be signed with it. */
+static int load_key(const char *path, char *message)
+{
+    if (gp_key_load(path, auth.key, message, ERROR_LEN) < 0) {
+        return -1;
+    }
+    plan_auth = &auth;
+    return 0;
+}
+
+/* A plan just accepted: with a key, the next one must be newer. */
+static void adopt_plan(link_state *s)
+{
+    s->has_plan = 1;
+    if (plan_auth && plan.is_signed) {
+        auth.last_seq = plan.seq;
+        memcpy(auth.last_tag, plan.tag, sizeof auth.last_tag);
+    }
+}
+
 static int load_plan(link_state *s, const char *path, char *message)
 {
     long len = gp_read_file(path, plan_text, GP_MAX_PLAN_BYTES);
@@ -139,12 +162,43 @@ static int load_plan(link_state *s, const char *path, char *message)
         return -1;
     }
     char error[GP_PLAN_ERROR_LEN];
-    if (gp_plan_read(plan_text, (size_t)len, s->mission, &plan, error) < 0) {
+    if (gp_plan_read(plan_text, (size_t)len, s->mission, plan_auth, &plan, error) < 0) {
         snprintf(message, ERROR_LEN, "%.80s %.170s", path, error);
         return -1;
     }
-    s->has_plan = 1;
+    adopt_plan(s);
     return 0;
+}
+
+/* A plan adopted over the link outlives a restart, but only as a plan that would be
+ * accepted over the link now: signed with the key and newer than --plan. Anything else
+ * gives way to --plan, and the runtime says so. */
+static void resume_plan(link_state *s, const char *path)
+{
+    char message[ERROR_LEN];
+    if (access(path, F_OK) != 0) {
+        return;
+    }
+    if (!plan_auth) {
+        snprintf(message, sizeof message, "%.200s: not flown: without --key no plan from the "
+                 "link is trusted", path);
+        say(s, message);
+        return;
+    }
+    uint32_t before = s->has_plan ? auth.last_seq : 0;
+    if (load_plan(s, path, message) < 0) {
+        char note[ERROR_LEN + 64];
+        snprintf(note, sizeof note, "%.400s; flying %s", message,
+                 s->has_plan ? "--plan" : "without a plan");
+        say(s, note);
+        return;
+    }
+    if (before != 0 && plan.seq != before) {
+        snprintf(message, sizeof message, "%.200s: flying the plan received over the link "
+                 "(seq %lu), newer than --plan (seq %lu)", path, (unsigned long)plan.seq,
+                 (unsigned long)before);
+        say(s, message);
+    }
 }
 
 /* Resume from the state directory's checkpoint (and its plan) if there is one; else the
@@ -164,9 +218,9 @@ static int load_state(link_state *s, char *message)
                  resumed ? "; remove it to start the mission afresh" : "");
         return -1;
     }
-    char plan_path[GP_PATH_MAX];  /* a plan adopted over the link outlives a restart */
-    if (resumed && gp_path_join(dir, "plan", plan_path) == 0 && access(plan_path, F_OK) == 0) {
-        return load_plan(s, plan_path, message);
+    char plan_path[GP_PATH_MAX];
+    if (resumed && gp_path_join(dir, "plan", plan_path) == 0) {
+        resume_plan(s, plan_path);
     }
     return 0;
 }
@@ -322,6 +376,33 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     return -1;
 }
 
+/* What became of a plan sent over the link: on stderr, and appended to the state
+ * directory's plans.log (`time_s accepted|rejected seq message`), which outlives a
+ * restart as the event log does. */
+static void note_plan(link_state *s, int accepted, const char *status)
+{
+    char line[ERROR_LEN];
+    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
+    snprintf(line, sizeof line, "plan over the link %s (seq %lu): %.300s",
+             accepted ? "accepted" : "rejected", (unsigned long)(accepted ? plan.seq : 0), status);
+    say(s, line);
+    char path[GP_PATH_MAX];
+    if (!s->args->state_dir || gp_path_join(s->args->state_dir, "plans.log", path) < 0) {
+        return;
+    }
+    int fd = open(path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        return;
+    }
+    int n = snprintf(line, sizeof line, "%.17g %s %lu %.300s\n", isnan(time_s) ? 0 : time_s,
+                     accepted ? "accepted" : "rejected",
+                     (unsigned long)(accepted ? plan.seq : 0), status);
+    if (n > 0 && write(fd, line, (size_t)n) == n) {
+        fsync(fd);
+    }
+    close(fd);
+}
+
 /* Assemble PLAN pieces sent in order from offset 0; read the plan when complete. */
 static void on_plan(link_state *s, const gp_frame *frame)
 {
@@ -346,15 +427,20 @@ static void on_plan(link_state *s, const gp_frame *frame)
     }
     s->plan_received = 0;
     char error[GP_PLAN_ERROR_LEN], status[GP_MAX_PAYLOAD];
-    int accepted = gp_plan_read(plan_text, total, s->mission, &plan, error) == 0;
-    if (accepted) {
-        s->has_plan = 1;
+    int accepted = 0;
+    if (!plan_auth) {
+        snprintf(error, sizeof error, "no key is provisioned on this vehicle: plans over the "
+                 "link are refused (start the runtime with --key FILE)");
+    } else if (gp_plan_read(plan_text, total, s->mission, plan_auth, &plan, error) == 0) {
+        accepted = 1;
+        adopt_plan(s);
         if (s->args->state_dir
             && gp_write_atomically(s->args->state_dir, "plan", plan_text, total) < 0) {
             say(s, "warning: cannot store the new plan in the state directory");
         }
     }
     snprintf(status, sizeof status, "%s", accepted ? "ok" : error);
+    note_plan(s, accepted, status);
     send_frame(s, GP_MSG_PLAN_STATUS, gp_plan_status_pack(accepted, status, outgoing(s)));
 }
 
@@ -492,6 +578,7 @@ int gp_main(int argc, char **argv)
     }
     gp_runtime_init(&runtime);
     if (gp_args_parse(argc, argv, &args, message, sizeof message) < 0
+        || (args.key_path && load_key(args.key_path, message) < 0)
         || (args.plan_path && load_plan(&s, args.plan_path, message) < 0)
         || (args.state_dir && (load_state(&s, message) < 0 || open_events(&s, message) < 0))) {
         say(&s, message);

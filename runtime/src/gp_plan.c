@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "gp_crc.h"
+#include "gp_sha256.h"
 
 #define MAX_FIELDS (GP_MAX_PLAN_COMPONENTS + 1) /* the `components` and `energy` lines */
 #define MAX_VISITS 999999999                    /* a COUNT has at most 9 digits */
@@ -221,8 +222,107 @@ static int matches(const field *f, const char *name)
 
 /* ---- the file ---------------------------------------------------------------- */
 
-/* Bytes, line lengths, final LF, final crc32 line and the checksum. */
-static int check_bytes(reader *r, size_t *crc_line_start)
+/* The value of `n` lowercase hex digits (already checked) into bytes or a u32. */
+static uint8_t hex_digit(char c)
+{
+    return (uint8_t)(c <= '9' ? c - '0' : c - 'a' + 10);
+}
+
+/* `line` (without its LF) is `keyword ` and a field; the field into r->fields[0]. */
+static int tail_line(reader *r, const char *line, size_t len, const char *keyword)
+{
+    size_t k = strlen(keyword);
+    if (len <= k + 1 || memcmp(line, keyword, k) != 0 || line[k] != ' ') {
+        return 0;
+    }
+    r->fields[0] = (field){line + k + 1, len - k - 1};
+    return 1;
+}
+
+/* `seq COUNT` of a signed plan: 1..GP_MAX_PLAN_SEQUENCE, no leading zero. */
+static int sequence_field(reader *r, uint32_t *out)
+{
+    const field *f = &r->fields[0];
+    uint64_t value = 0;
+    if (f->len > 10 || digits(f->start, 0, f->len) != f->len || f->start[0] == '0') {
+        return fail(r, "seq '%.*s' is not a COUNT from 1", SHOWN(f));
+    }
+    for (size_t i = 0; i < f->len; i++) {
+        value = value * 10 + (uint64_t)(f->start[i] - '0');
+    }
+    if (value > GP_MAX_PLAN_SEQUENCE) {
+        return fail(r, "seq %.*s exceeds %lu", SHOWN(f), (unsigned long)GP_MAX_PLAN_SEQUENCE);
+    }
+    *out = (uint32_t)value;
+    return 0;
+}
+
+/* Where the lines at the end of a file lie: [start, end) without the LF. */
+typedef struct {
+    size_t start, end;
+} span;
+
+/* A signed plan ends in `seq COUNT` and `hmac HEX64` after its crc32 line: the HMAC-SHA256
+ * of every byte before the hmac line under the vehicle's key. Checked before anything
+ * else is read, so that nobody without the key gets the reader to look at their bytes.
+ * `tail`: the last three lines, the last at tail[2]; `n_lines` in the file. On success
+ * `crc` is the span of the crc32 line and r->line_no its number. */
+static int check_signature(reader *r, const span tail[3], int n_lines,
+                           const gp_plan_auth *auth, gp_plan *plan, span *crc)
+{
+    const char *hmac_line = r->text + tail[2].start;
+    r->line_no = n_lines;
+    *crc = tail[2];
+    if (!tail_line(r, hmac_line, tail[2].end - tail[2].start, "hmac")) {
+        if (auth != NULL) {
+            return fail(r, "the plan is not signed, and this runtime holds a key: it flies "
+                           "signed plans only (gliderplan plan --sign KEYFILE)");
+        }
+        return 0;
+    }
+    if (hex_field(r, 0, 2 * GP_SHA256_SIZE, "hmac") < 0) {
+        return -1;
+    }
+    for (int i = 0; i < GP_SHA256_SIZE; i++) {
+        plan->tag[i] = (uint8_t)(hex_digit(hmac_line[5 + 2 * i]) << 4
+                                 | hex_digit(hmac_line[6 + 2 * i]));
+    }
+    r->line_no = n_lines - 1;
+    if (n_lines < 3 || !tail_line(r, r->text + tail[1].start, tail[1].end - tail[1].start, "seq")) {
+        return fail(r, "a signed plan needs 'seq COUNT' before its 'hmac' line");
+    }
+    if (sequence_field(r, &plan->seq) < 0) {
+        return -1;
+    }
+    if (auth != NULL) {
+        gp_hmac_sha256 mac;
+        uint8_t tag[GP_SHA256_SIZE];
+        gp_hmac_sha256_init(&mac, auth->key, GP_PLAN_KEY_BYTES);
+        gp_hmac_sha256_update(&mac, r->text, tail[2].start);
+        gp_hmac_sha256_final(&mac, tag);
+        if (!gp_tags_equal(tag, plan->tag)) {
+            r->line_no = n_lines;
+            return fail(r, "the signature does not match: the plan was changed after it was "
+                           "signed, or signed with another key");
+        }
+        if (plan->seq < auth->last_seq) {
+            return fail(r, "seq %lu is older than the plan in force (seq %lu): a replayed "
+                           "plan", (unsigned long)plan->seq, (unsigned long)auth->last_seq);
+        }
+        if (plan->seq == auth->last_seq && !gp_tags_equal(tag, auth->last_tag)) {
+            return fail(r, "seq %lu is the plan in force's, but this is another plan: each "
+                           "plan needs a new seq", (unsigned long)plan->seq);
+        }
+    }
+    plan->is_signed = 1;
+    r->line_no = n_lines - 2;
+    *crc = tail[0];
+    return 0;
+}
+
+/* Bytes, line lengths, final LF, the signature, the final crc32 line and the checksum. */
+static int check_bytes(reader *r, const gp_plan_auth *auth, gp_plan *plan,
+                       size_t *crc_line_start)
 {
     r->line_no = 1;
     if (r->len == 0) {
@@ -231,7 +331,9 @@ static int check_bytes(reader *r, size_t *crc_line_start)
     if (r->len > GP_MAX_PLAN_BYTES) {
         return fail(r, "file of %zu bytes exceeds %d", r->len, GP_MAX_PLAN_BYTES);
     }
-    size_t line_start = 0, last_line_start = 0;
+    size_t line_start = 0;
+    span tail[3] = {{0, 0}, {0, 0}, {0, 0}};  /* the last three lines */
+    int n_lines = 0;
     for (size_t i = 0; i < r->len; i++) {
         unsigned char c = (unsigned char)r->text[i];
         if (c != '\n' && (c < 0x20 || c > 0x7E)) {
@@ -241,8 +343,11 @@ static int check_bytes(reader *r, size_t *crc_line_start)
             return fail(r, "longer than %d bytes", GP_MAX_PLAN_LINE_BYTES);
         }
         if (c == '\n') {
-            last_line_start = line_start;
+            tail[0] = tail[1];
+            tail[1] = tail[2];
+            tail[2] = (span){line_start, i};
             line_start = i + 1;
+            n_lines++;
             if (i + 1 < r->len) {
                 r->line_no++;
             }
@@ -251,9 +356,13 @@ static int check_bytes(reader *r, size_t *crc_line_start)
     if (r->text[r->len - 1] != '\n') {
         return fail(r, "no final LF (truncated file)");
     }
-    const char *last = r->text + last_line_start;
-    size_t last_len = r->len - last_line_start - 1;
-    if (last_len != 6 + 8 || memcmp(last, "crc32 ", 6) != 0) {
+    span crc;
+    if (check_signature(r, tail, n_lines, auth, plan, &crc) < 0) {
+        return -1;
+    }
+    const char *last = r->text + crc.start;
+    if ((plan->is_signed && n_lines < 3) || crc.end - crc.start != 6 + 8
+        || memcmp(last, "crc32 ", 6) != 0) {
         return fail(r, "the last line is not 'crc32 HEX8' (truncated file)");
     }
     r->fields[0] = (field){last + 6, 8};
@@ -262,14 +371,14 @@ static int check_bytes(reader *r, size_t *crc_line_start)
     }
     uint32_t stated = 0;
     for (int i = 6; i < 14; i++) {
-        stated = stated << 4 | (uint32_t)(last[i] <= '9' ? last[i] - '0' : last[i] - 'a' + 10);
+        stated = stated << 4 | hex_digit(last[i]);
     }
-    uint32_t computed = gp_crc32(0, (const uint8_t *)r->text, last_line_start);
+    uint32_t computed = gp_crc32(0, (const uint8_t *)r->text, crc.start);
     if (stated != computed) {
         return fail(r, "checksum mismatch: the file says %08x, its bytes give %08x", stated,
                     (unsigned)computed);
     }
-    *crc_line_start = last_line_start;
+    *crc_line_start = crc.start;
     return 0;
 }
 
@@ -555,8 +664,8 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
     return 0;
 }
 
-int gp_plan_read(const char *text, size_t len, const gp_mission *mission, gp_plan *out,
-                 char error[GP_PLAN_ERROR_LEN])
+int gp_plan_read(const char *text, size_t len, const gp_mission *mission,
+                 const gp_plan_auth *auth, gp_plan *out, char error[GP_PLAN_ERROR_LEN])
 {
     /* Static: a plan is ~40 KiB, too big for a small board's stack. Not reentrant. */
     static gp_plan plan;
@@ -564,7 +673,7 @@ int gp_plan_read(const char *text, size_t len, const gp_mission *mission, gp_pla
     size_t crc_line_start = 0;
     error[0] = '\0';
     memset(&plan, 0, sizeof plan);
-    if (check_bytes(&r, &crc_line_start) < 0) {
+    if (check_bytes(&r, auth, &plan, &crc_line_start) < 0) {
         return -1;
     }
     r.line_no = 0;

@@ -65,7 +65,11 @@
     X(test_args_should_refuse_bad_command_lines)                            \
     X(test_sha256_should_match_the_fips_180_examples)                       \
     X(test_hmac_sha256_should_match_rfc_4231)                               \
-    X(test_tags_should_compare_every_byte)
+    X(test_tags_should_compare_every_byte)                                  \
+    X(test_signed_plan_should_carry_the_tag_gliderplan_plan_sign_writes)    \
+    X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \
+    X(test_signed_plan_should_have_a_well_formed_tail)                      \
+    X(test_key_file_should_be_64_hex_digits_readable_by_its_owner_only)
 
 #define DECLARE(name) void name(void);
 TESTS(DECLARE)

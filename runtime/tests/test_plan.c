@@ -66,7 +66,7 @@ static size_t variant(const char *from, const char *to)
 static int read_text(size_t len, char *error)
 {
     static gp_plan plan;
-    return gp_plan_read(text, len, &gp_mission_table, &plan, error);
+    return gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error);
 }
 
 void test_plan_should_accept_a_good_plan(void)
@@ -74,7 +74,7 @@ void test_plan_should_accept_a_good_plan(void)
     static gp_plan plan;
     char error[GP_PLAN_ERROR_LEN];
     size_t len = with_crc(GOOD_BODY);
-    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &plan, error), 0);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), 0);
     CHECK_INT(error[0], 0);
     CHECK_INT(plan.n_states, 3);
     CHECK_INT(plan.n_components, 3);
@@ -226,7 +226,7 @@ void test_plan_should_reject_a_file_over_64_kib(void)
     char error[GP_PLAN_ERROR_LEN];
     static gp_plan plan;
     memset(big, 'a', sizeof big);
-    CHECK_INT(gp_plan_read(big, sizeof big, &gp_mission_table, &plan, error), -1);
+    CHECK_INT(gp_plan_read(big, sizeof big, &gp_mission_table, NULL, &plan, error), -1);
     CHECK_CONTAINS(error, "exceeds 65536");
 }
 
@@ -234,10 +234,10 @@ void test_plan_should_keep_the_last_good_plan_on_rejection(void)
 {
     static gp_plan plan;
     char error[GP_PLAN_ERROR_LEN];
-    CHECK_INT(gp_plan_read(text, with_crc(GOOD_BODY), &gp_mission_table, &plan, error), 0);
+    CHECK_INT(gp_plan_read(text, with_crc(GOOD_BODY), &gp_mission_table, NULL, &plan, error), 0);
     size_t len = variant("budget_j 180000", "budget_j 1");
     text[30] ^= 1;  /* and break its checksum */
-    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &plan, error), -1);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), -1);
     CHECK_NEAR(plan.budget_j, 180000, 0);
 }
 
@@ -259,9 +259,127 @@ void test_random_bytes_should_never_crash_the_plan_reader(void)
         if (round % 2 == 0) {
             memcpy(text, body, sizeof GOOD_BODY - 1);
         }
-        int result = gp_plan_read(text, len, &gp_mission_table, &plan, error);
+        int result = gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error);
         CHECK(result == 0 || strncmp(error, "line ", 5) == 0);
     }
+}
+
+/* ---- signed plans ---------------------------------------------------------------- */
+
+/* Append `seq N` and the `hmac` line, signed with `key`, to the `len` bytes in `text`. */
+static size_t with_signature(size_t len, unsigned long seq, const uint8_t *key)
+{
+    len += (size_t)sprintf(text + len, "seq %lu\n", seq);
+    gp_hmac_sha256 mac;
+    uint8_t tag[GP_SHA256_SIZE];
+    gp_hmac_sha256_init(&mac, key, GP_PLAN_KEY_BYTES);
+    gp_hmac_sha256_update(&mac, text, len);
+    gp_hmac_sha256_final(&mac, tag);
+    len += (size_t)sprintf(text + len, "hmac ");
+    for (int i = 0; i < GP_SHA256_SIZE; i++) {
+        len += (size_t)sprintf(text + len, "%02x", tag[i]);
+    }
+    return len + (size_t)sprintf(text + len, "\n");
+}
+
+static void test_key(gp_plan_auth *auth)
+{
+    memset(auth, 0, sizeof *auth);
+    for (int i = 0; i < GP_PLAN_KEY_BYTES; i++) {
+        auth->key[i] = (uint8_t)i;
+    }
+}
+
+void test_signed_plan_should_carry_the_tag_gliderplan_plan_sign_writes(void)
+{
+    /* The tag Python's hmac module gives for this plan, seq 7, key 00 01 .. 1f: the
+     * runtime and `gliderplan plan --sign` agree on what is signed. */
+    static gp_plan plan;
+    static gp_plan_auth auth;
+    char error[GP_PLAN_ERROR_LEN];
+    test_key(&auth);
+    size_t len = with_crc(GOOD_BODY);
+    len += (size_t)sprintf(text + len, "seq 7\nhmac %s\n",
+                           "13f422b03cb8e1e681bf215f69ab405116f12966f3af0e4aeb7f5e94162d7286");
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), 0);
+    CHECK_INT(plan.is_signed, 1);
+    CHECK_INT(plan.seq, 7);
+    CHECK_INT(plan.tag[0], 0x13);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), 0);  /* no key */
+    auth.key[31] ^= 1;  /* another vehicle's key */
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 31: the signature does not match");
+}
+
+void test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans(void)
+{
+    static gp_plan plan;
+    static gp_plan_auth auth;
+    char error[GP_PLAN_ERROR_LEN];
+    test_key(&auth);
+    CHECK_INT(gp_plan_read(text, with_crc(GOOD_BODY), &gp_mission_table, &auth, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 29: the plan is not signed, and this runtime holds a key");
+
+    size_t len = with_signature(with_crc(GOOD_BODY), 5, auth.key);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), 0);
+    auth.last_seq = plan.seq;
+    memcpy(auth.last_tag, plan.tag, sizeof plan.tag);
+    /* the plan in force again (a retransmission) is accepted */
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), 0);
+
+    /* tampered: a value changed and the CRC recomputed, the tag left as it was */
+    static char signed_text[sizeof text];
+    memcpy(signed_text, text, len);
+    size_t tail = len - strlen(strstr(signed_text, "seq 5\n"));
+    size_t body = variant("profile 0 1 0.454 230", "profile 0 1 0.454 231");
+    memmove(text + body, signed_text + tail, len - tail);
+    CHECK_INT(gp_plan_read(text, body + len - tail, &gp_mission_table, &auth, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 31: the signature does not match: the plan was changed");
+    CHECK_INT(plan.seq, 5);  /* the last good plan stays */
+
+    CHECK_INT(gp_plan_read(text, with_signature(with_crc(GOOD_BODY), 4, auth.key),
+                           &gp_mission_table, &auth, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 30: seq 4 is older than the plan in force (seq 5): a replayed");
+    CHECK_INT(gp_plan_read(text, with_signature(variant("budget_j 180000", "budget_j 1"), 5,
+                                                auth.key),
+                           &gp_mission_table, &auth, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 30: seq 5 is the plan in force's, but this is another plan");
+    CHECK_INT(gp_plan_read(text, with_signature(variant("hash 5db9", "hash 6db9"), 6, auth.key),
+                           &gp_mission_table, &auth, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 3: hash does not match");  /* signed, for another mission */
+    CHECK_INT(gp_plan_read(text, with_signature(variant("budget_j 180000", "budget_j 1"), 6,
+                                                auth.key),
+                           &gp_mission_table, &auth, &plan, error), 0);
+    CHECK_INT(plan.seq, 6);
+    CHECK_NEAR(plan.budget_j, 1, 0);
+}
+
+void test_signed_plan_should_have_a_well_formed_tail(void)
+{
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    static const struct {
+        const char *tail, *message;
+    } rows[] = {
+        {"seq 0\nhmac " "00000000000000000000000000000000" "00000000000000000000000000000000\n",
+         "line 30: seq '0' is not a COUNT from 1"},
+        {"seq 4294967296\nhmac " "0000000000000000000000000000000000000000000000000000000000000000\n",
+         "line 30: seq 4294967296 exceeds 4294967295"},
+        {"seq 07\nhmac " "0000000000000000000000000000000000000000000000000000000000000000\n",
+         "line 30: seq '07' is not a COUNT from 1"},
+        {"hmac 0000000000000000000000000000000000000000000000000000000000000000\n",
+         "line 29: a signed plan needs 'seq COUNT' before its 'hmac' line"},
+        {"seq 7\nhmac 00\n", "line 31: hmac needs 64 lowercase hex digits"},
+        {"seq 7\n", "line 30: the last line is not 'crc32 HEX8'"},
+    };
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        size_t len = with_crc(GOOD_BODY);
+        len += (size_t)sprintf(text + len, "%s", rows[i].tail);
+        CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), -1);
+        CHECK_CONTAINS(error, rows[i].message);
+    }
+    CHECK_INT(gp_plan_read("hmac x\n", 7, &gp_mission_table, NULL, &plan, error), -1);
+    CHECK_INT(gp_plan_read("seq 1\nhmac x\n", 13, &gp_mission_table, NULL, &plan, error), -1);
 }
 
 /* ---- schedule ------------------------------------------------------------------ */

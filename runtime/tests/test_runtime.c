@@ -121,7 +121,7 @@ void test_runtime_should_follow_the_plan_schedule(void)
     memcpy(text, body, len);
     len += (size_t)sprintf(text + len, "crc32 %08x\n",
                            (unsigned)gp_crc32(0, (const uint8_t *)body, len));
-    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &plan, error), 0);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), 0);
     row rows[16];
     gp_run_options options = {&plan, 0};
     gp_runtime_init(&rt);
