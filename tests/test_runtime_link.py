@@ -10,6 +10,7 @@ import select
 import shutil
 import signal
 import subprocess
+import time
 import tty
 import zlib
 from collections.abc import Iterator
@@ -562,3 +563,64 @@ def test_random_frames_and_bytes_never_derail_the_runtime(binary, glider):
     commands += fly(link, 61, 400)
     assert transitions(commands) == FIG2_TRACE
     assert process.wait(10) == 0
+
+
+def test_a_stale_sensors_frame_is_not_stepped_again(binary, glider):
+    """A copy of an older tick's SENSORS (delayed or duplicated on the line) arriving with
+    a new seq was once stepped again, running mission time backwards: now it is ignored,
+    and the mission flies on as if it had never come."""
+    process = glider.start(binary)
+    link = glider.link()
+    link.wait_hello()
+    commands = fly(link, 0, 60)  # the call into s2 was tick 50
+    for tick in (50, 0, 59):
+        os.write(glider.master, p.build_frame(p.Frame(p.MessageType.SENSORS, 200 + tick,
+                                                      link.ack,
+                                                      p.Sensors(tick, readings(tick)).pack())))
+    assert link.receive(1.0) is None  # no answer: nothing stepped, nothing sent
+    commands += fly(link, 61, 400)
+    assert transitions(commands) == FIG2_TRACE
+    assert [c.event_count for c in commands[59:62]] == [1, 1, 1]
+    assert process.wait(10) == 0
+    assert "3 stale SENSORS ignored" in process.stderr.read()
+
+
+def test_a_kill_before_the_first_checkpoint_logs_start_once(binary, glider, tmp_path):
+    """Killed after tick 0's `start` reached the event log but before its checkpoint:
+    the state directory holds the checkpoint written at start-up, before any tick. The
+    restarted runtime drops the logged line and starts again: `start` is logged once
+    (it was logged twice before the checkpoint came into being at start-up)."""
+    glider.start(binary, "--state-dir", str(tmp_path))
+    link = glider.link()
+    link.wait_hello()
+    at_start_up = (tmp_path / "checkpoint").read_bytes()
+    before = fly(link, 0, 0)
+    glider.process.send_signal(signal.SIGKILL)
+    glider.process.wait(5)
+    assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE[:1]
+    (tmp_path / "checkpoint").write_bytes(at_start_up)  # the tick's record never landed
+
+    process = glider.start(binary, "--state-dir", str(tmp_path))
+    link.wait_hello()
+    after = fly(link, 1, 400)
+    assert after[0].transition == TransitionKind.START  # tick 1 is the mission's first
+    assert process.wait(10) == 0
+    assert before[0].transition == TransitionKind.START
+    restarted_trace = ["10 start - s1 0", *FIG2_TRACE[1:]]
+    assert transitions(after) == restarted_trace
+    assert (tmp_path / "events.log").read_text().splitlines() == restarted_trace
+
+
+@pytest.mark.parametrize("ending", ["watchdog", "SIGTERM"])
+def test_a_peer_that_stops_reading_never_blocks_the_runtime(binary, glider, ending):
+    """The science computer stops reading while the runtime keeps writing (HELLO every
+    millisecond here) until the line is full. The runtime blocked for good in its write
+    once, deaf to its watchdog and to SIGTERM; now a full line costs frames, and the
+    watchdog releases (exit 3) or SIGTERM stops it (exit 4) within seconds."""
+    timeout_s = 3 if ending == "watchdog" else 600
+    process = glider.start(binary, "--retransmit-ms", "1", "--link-timeout-s", str(timeout_s))
+    time.sleep(4.0)  # the runtime fills the line (in about a second); nobody reads it
+    assert process.poll() is None or ending == "watchdog"
+    if ending == "SIGTERM":
+        process.send_signal(signal.SIGTERM)
+    assert process.wait(10) == (3 if ending == "watchdog" else 4)

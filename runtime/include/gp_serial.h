@@ -25,8 +25,16 @@ int gp_serial_open_pty(char *peer_path, size_t cap);
  */
 void gp_serial_linger(int fd, double max_s);
 
-/** @brief Write all bytes (bounded retries); @return 0, or -1. */
+/**
+ * @brief Write all bytes, waiting for room on a full line at most 1 s in all.
+ * @return 0, or -1: an error, the bound passed (the peer stopped reading), or a signal
+ *         arrived while waiting (the caller's loop looks at its stop signals)
+ */
 int gp_serial_write(int fd, const uint8_t *data, size_t len);
+
+/** @brief Wait (at most `max_s`, less if a signal arrives) until the bytes written have
+ *         left the line's output queue. */
+void gp_serial_drain(int fd, double max_s);
 
 /**
  * @brief Wait up to `timeout_ms` for bytes and read at most `cap`; on a line whose peer

@@ -10,7 +10,6 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include "gp_frame.h"
@@ -51,6 +50,7 @@ typedef struct {
     int has_plan;
     uint16_t plan_total, plan_received;
     uint32_t dropped;                /* frames dropped (bad CRC, COBS, ...) */
+    uint32_t stale;                  /* SENSORS of a tick older than the last answered */
 } link_state;
 
 static gp_runtime runtime;
@@ -116,9 +116,13 @@ static void send_nak(link_state *s)
 /* Give control back to the glider's own layered control and end with `status`. */
 static int release(link_state *s, gp_release_reason reason, int status)
 {
+    if (s->dropped || s->stale) {
+        fprintf(stderr, "%s: link: %lu damaged frames dropped, %lu stale SENSORS ignored\n",
+                s->prog, (unsigned long)s->dropped, (unsigned long)s->stale);
+    }
     *outgoing(s) = (uint8_t)reason;
     send_frame(s, GP_MSG_RELEASE, 1);
-    tcdrain(s->fd);  /* the RELEASE must reach the line before we close it */
+    gp_serial_drain(s->fd, 1.0);  /* the RELEASE must reach the line before we close it */
     if (s->own_pty) {
         gp_serial_linger(s->fd, s->args->link_timeout_s);
     }
@@ -201,16 +205,29 @@ static void resume_plan(link_state *s, const char *path)
     }
 }
 
-/* Resume from the state directory's checkpoint (and its plan) if there is one; else the
- * checkpoint file comes into being holding the state before the first tick. */
+/* The state directory: the event log, then the checkpoint. Resume from the checkpoint
+ * (and its plan) if there is one; else the checkpoint comes into being holding the state
+ * before the first tick, and the place in the log where this mission's lines begin. */
 static int load_state(link_state *s, char *message)
 {
     const char *dir = s->args->state_dir;
+    char path[GP_PATH_MAX];
     if (mkdir(dir, 0755) < 0 && errno != EEXIST) {
         snprintf(message, ERROR_LEN, "%.200s: cannot create the state directory: %s", dir,
                  strerror(errno));
         return -1;
     }
+    if (gp_path_join(dir, "events.log", path) < 0) {
+        snprintf(message, ERROR_LEN, "state directory path too long");
+        return -1;
+    }
+    s->events_fd = open(path, O_WRONLY | O_CREAT | O_APPEND, 0644);
+    off_t size = s->events_fd < 0 ? -1 : lseek(s->events_fd, 0, SEEK_END);
+    if (size < 0) {
+        snprintf(message, ERROR_LEN, "%.200s: %s", path, strerror(errno));
+        return -1;
+    }
+    runtime.events_log_bytes = (uint32_t)size;
     int resumed;
     const char *problem;
     if (gp_checkpoint_open(&checkpoint, dir, s->mission, &runtime, &resumed, &problem) < 0) {
@@ -218,33 +235,17 @@ static int load_state(link_state *s, char *message)
                  resumed ? "; remove it to start the mission afresh" : "");
         return -1;
     }
-    char plan_path[GP_PATH_MAX];
-    if (resumed && gp_path_join(dir, "plan", plan_path) == 0) {
-        resume_plan(s, plan_path);
-    }
-    return 0;
-}
-
-static int open_events(link_state *s, char *message)
-{
-    char path[GP_PATH_MAX];
-    if (gp_path_join(s->args->state_dir, "events.log", path) < 0) {
-        snprintf(message, ERROR_LEN, "state directory path too long");
-        return -1;
-    }
-    s->events_fd = open(path, O_WRONLY | O_CREAT | O_APPEND, 0644);
-    if (s->events_fd < 0) {
-        snprintf(message, ERROR_LEN, "%.200s: %s", path, strerror(errno));
-        return -1;
-    }
     /* Lines logged after the checkpoint belong to a tick the resumed runtime steps
-     * again: drop them, so that every transition is logged exactly once. */
-    off_t size = lseek(s->events_fd, 0, SEEK_END);
-    if (runtime.started && size > (off_t)runtime.events_log_bytes
+     * again (the first tick too: killed between its `start` and its checkpoint): drop
+     * them, so that every transition is logged exactly once. */
+    if (resumed && size > (off_t)runtime.events_log_bytes
         && ftruncate(s->events_fd, (off_t)runtime.events_log_bytes) < 0) {
         snprintf(message, ERROR_LEN, "%.200s: cannot drop lines after the checkpoint: %s", path,
                  strerror(errno));
         return -1;
+    }
+    if (resumed && gp_path_join(dir, "plan", path) == 0) {
+        resume_plan(s, path);
     }
     return 0;
 }
@@ -338,6 +339,13 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     } else if (s->has_sent && frame->ack == s->sent_seq) {
         s->acked = s->sent;
         s->has_acked = 1;
+    }
+    /* A stale SENSORS (a copy of an older tick, delayed or duplicated on the line, with a
+     * seq of its own): stepping it would run mission time backwards. Not answered: the
+     * science computer no longer waits for that tick. */
+    if (runtime.has_command && tick < runtime.last_command.tick) {
+        s->stale++;
+        return -1;
     }
     /* A re-sent SENSORS (same seq), or the tick a checkpoint already answered. */
     if ((s->answered && frame->seq == s->answered_seq)
@@ -580,7 +588,7 @@ int gp_main(int argc, char **argv)
     if (gp_args_parse(argc, argv, &args, message, sizeof message) < 0
         || (args.key_path && load_key(args.key_path, message) < 0)
         || (args.plan_path && load_plan(&s, args.plan_path, message) < 0)
-        || (args.state_dir && (load_state(&s, message) < 0 || open_events(&s, message) < 0))) {
+        || (args.state_dir && load_state(&s, message) < 0)) {
         say(&s, message);
         return GP_EXIT_BAD_INPUT;
     }

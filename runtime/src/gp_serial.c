@@ -1,6 +1,7 @@
 /* POSIX serial I/O. A hung-up peer (the other end of a pty closed, or not yet opened)
  * reads as silence, so the watchdog, not an error path, decides when to give control
- * back. */
+ * back. The line is non-blocking both ways: a peer that stops reading costs a frame,
+ * never the runtime's loop (its watchdog and its stop signals). */
 #define _XOPEN_SOURCE 700 /* posix_openpt, grantpt, unlockpt, ptsname */
 #include "gp_serial.h"
 
@@ -9,12 +10,14 @@
 #include <poll.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
 #include <sys/times.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
-#define WRITE_ATTEMPTS 1000
+#define WRITE_WAIT_MS 1000  /* [ms] the longest a frame waits for room on the line */
+#define DRAIN_NAP_MS 10     /* [ms] between looks at the output queue */
 #define HUNG_UP_NAP_MS 50  /* [ms] the longest wait on a line nobody holds */
 
 /* Raw 115200 8N1, no flow control; reads return what is there (VMIN = VTIME = 0). */
@@ -49,7 +52,7 @@ static int close_keeping_errno(int fd)
 
 int gp_serial_open(const char *path)
 {
-    int fd = open(path, O_RDWR | O_NOCTTY);
+    int fd = open(path, O_RDWR | O_NOCTTY | O_NONBLOCK);
     if (fd < 0) {
         return -1;
     }
@@ -64,7 +67,7 @@ int gp_serial_open_pty(char *peer_path, size_t cap)
     }
     const char *name = NULL;
     if (grantpt(fd) < 0 || unlockpt(fd) < 0 || (name = ptsname(fd)) == NULL
-        || make_raw(fd) < 0) {
+        || make_raw(fd) < 0 || fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK) < 0) {
         return close_keeping_errno(fd);
     }
     size_t len = strlen(name);
@@ -93,16 +96,39 @@ void gp_serial_linger(int fd, double max_s)
 
 int gp_serial_write(int fd, const uint8_t *data, size_t len)
 {
-    for (int attempt = 0; len > 0 && attempt < WRITE_ATTEMPTS; attempt++) {
+    double give_up = gp_now_s() + WRITE_WAIT_MS / 1000.0;
+    while (len > 0) {
         ssize_t n = write(fd, data, len);
         if (n > 0) {
             data += n;
             len -= (size_t)n;
-        } else if (n < 0 && errno != EINTR && errno != EAGAIN) {
+            continue;
+        }
+        if (n < 0 && errno != EAGAIN && errno != EINTR) {
+            return -1;
+        }
+        /* the line is full: wait for room, but a signal or the bound ends the wait */
+        int wait_ms = (int)((give_up - gp_now_s()) * 1000.0);
+        struct pollfd pfd = {.fd = fd, .events = POLLOUT};
+        if (wait_ms <= 0 || poll(&pfd, 1, wait_ms) <= 0) {
             return -1;
         }
     }
-    return len == 0 ? 0 : -1;
+    return 0;
+}
+
+void gp_serial_drain(int fd, double max_s)
+{
+    int queued = 0;
+    for (double until = gp_now_s() + max_s; gp_now_s() < until;) {
+        if (ioctl(fd, TIOCOUTQ, &queued) < 0 || queued <= 0) {
+            return;
+        }
+        struct timespec nap = {0, DRAIN_NAP_MS * 1000000L};
+        if (nanosleep(&nap, NULL) < 0) {
+            return;  /* a signal: the caller is on its way out */
+        }
+    }
 }
 
 static void sleep_ms(int ms)
