@@ -705,6 +705,32 @@ static uint32_t logged_mask(const gp_state *state)
     return mask;
 }
 
+/* Shares of the cycle in index order; the last alternative with a share takes any
+ * rounding remainder. Where one alternative has the whole cycle (most states) that is
+ * the answer at any time, and the fmod (~55 instructions a tick) is not needed. */
+static int alternative_at(const gp_plan_state *ps, double t_in_s)
+{
+    int n_flown = 0, last_nonzero = 0;
+    for (int i = 0; i < ps->n_profiles; i++) {
+        if (ps->profiles[i].share > 0) {
+            n_flown++;
+            last_nonzero = i;
+        }
+    }
+    if (n_flown < 2) {
+        return last_nonzero;
+    }
+    double c = fmod(t_in_s, ps->cycle_s), start = 0;
+    for (int i = 0; i < ps->n_profiles; i++) {
+        double length = ps->profiles[i].share * ps->cycle_s;
+        if (ps->profiles[i].share > 0 && c >= start && c < start + length) {
+            return i;
+        }
+        start += length;
+    }
+    return last_nonzero;
+}
+
 void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
                  double default_ballast_cc, gp_schedule_now *out)
 {
@@ -722,19 +748,7 @@ void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
             out->sensor_power &= ~bit;
         }
     }
-    double c = fmod(t_in_s, ps->cycle_s), start = 0;
-    int chosen = -1, last_nonzero = 0;
-    for (int i = 0; i < ps->n_profiles; i++) {
-        double length = ps->profiles[i].share * ps->cycle_s;
-        if (ps->profiles[i].share > 0) {
-            last_nonzero = i;
-            if (chosen < 0 && c >= start && c < start + length) {
-                chosen = i;
-            }
-        }
-        start += length;
-    }
-    out->profile = (uint8_t)(chosen < 0 ? last_nonzero : chosen);
+    out->profile = (uint8_t)alternative_at(ps, t_in_s);
     out->pitch_rad = ps->profiles[out->profile].pitch_rad;
     out->ballast_cc = ps->profiles[out->profile].ballast_cc;
 }

@@ -432,6 +432,10 @@ void test_schedule_should_give_the_remainder_to_the_last_nonzero_share(void)
     CHECK_INT(now.profile, 1);
     gp_plan_state only_second = {.cycle_s = 100, .n_profiles = 2,
                                  .profiles = {{0, 0.4, 200, 0.3}, {1, 0.3, 150, 0.25}}};
-    gp_schedule(&scheduled, &only_second, 0, 230, &now);
-    CHECK_INT(now.profile, 1);
+    static const double times_s[] = {0, 50, 99.99999, 100, 3600.25, 1e9 + 0.5};
+    for (unsigned i = 0; i < sizeof times_s / sizeof times_s[0]; i++) {
+        gp_schedule(&scheduled, &only_second, times_s[i], 230, &now);
+        CHECK_INT(now.profile, 1);
+        CHECK_NEAR(now.ballast_cc, 150, 0);
+    }
 }
