@@ -1,6 +1,7 @@
 """`gliderplan sim`: fly a mission (and its plan) on the simulated glider and check its energy.
 
-Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.png.
+Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.png;
+with --runtime c and --state-dir DIR the runtime's own checkpoint and events.log in DIR.
 Without --plan every sensor a state logs is always on. Exit status 3: the run spent
 more than the plan's budget (a plan violation; summary.json names the cause). A run
 within its budget in which a state spent more than 5 % over its prediction says "plan
@@ -45,6 +46,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runtime", choices=("python", "c"), default="python",
                         help="python: the reference executor (default); c: the compiled "
                              "runtime over a pseudo-terminal")
+    parser.add_argument("--state-dir", metavar="DIR",
+                        help="with --runtime c: the runtime keeps its checkpoints and event "
+                             "log in DIR as on the glider (created if missing; must hold no "
+                             "checkpoint)")
     parser.add_argument("--ocean", default="bench", metavar="FILE|PRESET",
                         help="bench (default), sea-trial, north-sea, uniform, or a CSV file "
                              "depth_m,temperature_c[,salinity_psu][,time_s]")
@@ -100,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
             mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
             ocean_logs=args.ocean_logs, noise=args.noise, tracker=args.tracker,
             current=_current(args.current), seed=args.seed, tick_s=args.tick,
-            duration_s=duration_s, progress=progress, key_path=args.key)
+            duration_s=duration_s, progress=progress, key_path=args.key,
+            state_dir=args.state_dir)
     finally:
         if progress is not None:
             progress.finish()

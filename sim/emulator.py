@@ -32,7 +32,8 @@ class CRuntime:
     """The compiled runtime over a pty, answering one SENSORS frame per `step`."""
 
     def __init__(self, binary: Path, mission: ir.CheckedMission, plan_path: str | None,
-                 naive_tracker: bool, work_dir: Path, key_path: str | None = None) -> None:
+                 naive_tracker: bool, work_dir: Path, key_path: str | None = None,
+                 state_dir: str | Path | None = None) -> None:
         import serial
 
         from gliderplan.contract import BAUD
@@ -42,13 +43,15 @@ class CRuntime:
         self.exited = False
         self.port: serial.Serial | None = None
         self._stderr: str | None = None
-        # the runtime makes the pty and names its other end; no --state-dir: a simulated
-        # run needs no checkpoint to resume from
+        # the runtime makes the pty and names its other end; a state directory only when
+        # asked for: a simulated run needs no checkpoint to resume from
         command = [str(binary), "--device", "pty"]
         if key_path is not None:  # the key provisioned on the vehicle: the plan is uploaded
             command += ["--key", str(Path(key_path).resolve())]
         elif plan_path is not None:
             command += ["--plan", str(Path(plan_path).resolve())]
+        if state_dir is not None:
+            command += ["--state-dir", str(Path(state_dir).resolve())]
         if naive_tracker:
             command.append("--naive-tracker")
         self.process = subprocess.Popen(command, stdin=subprocess.DEVNULL,
@@ -146,10 +149,12 @@ def _indices(mask: int) -> tuple[int, ...]:
 
 
 def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None, limits: FlightLimits,
-                    naive_tracker: bool = False, key_path: str | None = None) -> CRuntime:
+                    naive_tracker: bool = False, key_path: str | None = None,
+                    state_dir: str | Path | None = None) -> CRuntime:
     """Compile the mission for the host (cached) with the vehicle's and board's `limits` and
     start it against the emulator. With `key_path` the key is provisioned on the runtime
-    and the plan is uploaded over the link, signed, rather than read at start-up."""
+    and the plan is uploaded over the link, signed, rather than read at start-up. The
+    runtime keeps its checkpoints and event log in `state_dir` if given."""
     from gliderplan.language.codegen_c import CodegenError
     from gliderplan.runtime.build import BuildError, compile_mission
 
@@ -159,4 +164,4 @@ def start_c_runtime(mission: ir.CheckedMission, plan_path: str | None, limits: F
     except (CodegenError, BuildError) as err:
         shutil.rmtree(work, ignore_errors=True)
         raise EmulatorError(str(err)) from None
-    return CRuntime(binary, mission, plan_path, naive_tracker, work, key_path)
+    return CRuntime(binary, mission, plan_path, naive_tracker, work, key_path, state_dir)

@@ -4,6 +4,7 @@ ocean, flown by the Python executor or by the compiled C runtime over a pty."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from gliderplan.language import ir
@@ -21,15 +22,17 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         plan: Plan | None = None, plan_path: str | None = None, runtime: str = "python",
         robust_tracker: bool = True,
         progress: Callable[[float, float], None] | None = None,
-        tick_by_tick: bool = False, key_path: str | None = None) -> RunRecord:
+        tick_by_tick: bool = False, key_path: str | None = None,
+        state_dir: str | Path | None = None) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends.
 
     The Python executor flies runs of ticks at once where nothing can happen between them
     (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
     the reference loop instead. The C runtime reads its plan from `plan_path` (the file
     `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
-    uploaded over the link; raises emulator.EmulatorError when it cannot be built or
-    started, PlanRejected when it refuses the plan.
+    uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
+    given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
+    when it refuses the plan.
     """
     science = make_science(mission, ocean, config, vehicle)
     if runtime == "python":
@@ -54,7 +57,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
                           board.clocks_mhz)  # the vehicle flown: a scenario's may differ
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
-                                key_path=key_path)
+                                key_path=key_path, state_dir=state_dir)
     try:
         return simulate(mission, c_runtime, science, config, progress)
     finally:

@@ -41,13 +41,32 @@ class RunResult:
         return self.record.ended == "interrupted"
 
 
+# What the C runtime keeps in its state directory (runtime/README.md)
+RUNTIME_STATE_FILES = ("checkpoint", "events.log", "plan", "plans.log")
+
+
+def check_state_dir(state_dir: Path, runtime: str) -> None:
+    """Refuse a state directory a simulated run cannot use: UsageError naming it."""
+    if runtime != "c":
+        raise UsageError(f"--state-dir {state_dir}: only the C runtime keeps one "
+                         "(--runtime c)")
+    if state_dir.exists() and not state_dir.is_dir():
+        raise UsageError(f"--state-dir {state_dir}: not a directory")
+    earlier = [name for name in RUNTIME_STATE_FILES if (state_dir / name).exists()]
+    if earlier:
+        raise UsageError(f"--state-dir {state_dir}: holds an earlier flight's "
+                         f"{', '.join(earlier)}, which the runtime would resume or extend; "
+                         "name an empty or new directory")
+
+
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, runtime: str = "python",
                 ocean: str = "bench", ocean_logs: str | Path | None = None,
                 noise: str = "ctd", tracker: str = "robust", current: Current | None = None,
                 seed: int = 0, tick_s: float = TICK_S, duration_s: float | None = None,
                 progress: Callable[[float, float], None] | None = None,
-                plots: bool = True, key_path: str | Path | None = None) -> RunResult:
+                plots: bool = True, key_path: str | Path | None = None,
+                state_dir: str | Path | None = None) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
@@ -60,6 +79,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `plots`: False leaves out depth.png and energy.png (a caller that draws its own).
     `key_path`: the key provisioned on the simulated vehicle; the plan must be signed with
     it (the C runtime gets it uploaded over the link and checks it itself).
+    `state_dir`: the C runtime keeps its checkpoints and event log there, as on the glider
+    (its fdatasyncs included); a directory that holds an earlier flight's files is refused,
+    since the runtime would resume that flight against a glider that starts afresh.
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -83,6 +105,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
+    if state_dir is not None:
+        check_state_dir(Path(state_dir), runtime)
     duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_DURATION_S
     config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
                        noise=NOISE_PRESETS[noise], current=current or Current())
@@ -100,7 +124,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
             check_signature(read_plan_data(plan_path), key, str(plan_path))
     record = fly(mission, water, config, vehicle, plan, None if plan_path is None
                  else str(plan_path), runtime, robust_tracker=tracker == "robust",
-                 progress=progress, key_path=None if key_path is None else str(key_path))
+                 progress=progress, key_path=None if key_path is None else str(key_path),
+                 state_dir=state_dir)
     if not len(record.columns["time_s"]):
         raise KeyboardInterrupt  # nothing flown, nothing to write
     used = accounting.account(record, mission, vehicle, plan)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import pandas as pd
@@ -127,6 +128,40 @@ def test_rerunning_into_the_same_directory_replaces_the_files(tmp_path):
     assert main(["sim", str(FIG2), "-o", str(out)]) == 0
     assert (out / "trace.csv").read_text().endswith("2500,exit,s3,,0\n")
     assert {p.name for p in out.iterdir()} == FILES  # no temporary files left behind
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) for the runtime")
+def test_the_c_runtime_keeps_its_state_directory_when_asked(tmp_path, capsys):
+    out, state = tmp_path / "run", tmp_path / "state"
+    assert main(["sim", str(FIG2), "--runtime", "c", "--state-dir", str(state),
+                 "-o", str(out)]) == 0, capsys.readouterr().err
+    # the runtime's own event log says what the simulator's trace says
+    rows = (out / "trace.csv").read_text().splitlines()[1:]
+    assert (state / "events.log").read_text().splitlines() == [
+        " ".join(field or "-" for field in row.split(",")) for row in rows]
+    assert (state / "checkpoint").stat().st_size > 0
+    assert {p.name for p in out.iterdir()} == FILES
+
+    # a second flight into it would resume the first one's checkpoint: refused
+    again = tmp_path / "again"
+    assert main(["sim", str(FIG2), "--runtime", "c", "--state-dir", str(state),
+                 "-o", str(again)]) == 2
+    err = capsys.readouterr().err
+    assert f"--state-dir {state}: holds an earlier flight's checkpoint, events.log," in err
+    assert "Traceback" not in err and not again.exists()
+
+
+def test_only_the_c_runtime_keeps_a_state_directory(tmp_path, capsys):
+    out, state = tmp_path / "run", tmp_path / "state"
+    assert main(["sim", str(FIG2), "--state-dir", str(state), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"--state-dir {state}: only the C runtime keeps one (--runtime c)" in err
+    assert not out.exists() and not state.exists()
+    state.write_text("not a directory")
+    assert main(["sim", str(FIG2), "--runtime", "c", "--state-dir", str(state),
+                 "-o", str(out)]) == 2
+    assert f"--state-dir {state}: not a directory" in capsys.readouterr().err
+    assert not out.exists()
 
 
 LOGS = REPO.parent / "shared" / "data" / "slocum-logs"
