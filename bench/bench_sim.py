@@ -14,7 +14,9 @@ with an Iridium call every 6 h, CTD on; exits after 30 days), bench ocean, seed 
    - the whole command the user runs, `gliderplan sim MISSION --runtime c --duration
      Nd`, against the same command for one tick (start-up, imports, build cache, output
      files and plots): ticks per wall second of the loop (target >= 10,000), and of the
-     command as a whole;
+     command as a whole; without a state directory (the command's default), with
+     `--state-dir` on the disk as on the glider (checkpoints fdatasync'd), and with it in
+     /dev/shm (memory, where fdatasync costs nothing); the checkpoints written;
    - the loop in this process (`sim.flight.fly`; the runtime is its own process): ticks
      per wall second, and CPU per tick on each side of the line;
    - the floor under any such loop: two C processes that only answer each other over a
@@ -26,6 +28,7 @@ with an Iridium call every 6 h, CTD on; exits after 30 days), bench ocean, seed 
 from __future__ import annotations
 
 import argparse
+import os
 import resource
 import shutil
 import statistics
@@ -64,6 +67,28 @@ def timed_run(mission, days: float, tick_s: float,
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     runtime_cpu = (after.ru_utime - children.ru_utime) + (after.ru_stime - children.ru_stime)
     return record, wall, cpu, runtime_cpu
+
+
+def state_dirs(tmp: Path) -> dict[str, Path | None]:
+    """Where the runtime keeps its state in the whole command: nowhere (`gliderplan sim`'s
+    default), on the disk that holds the run (as on the glider: every checkpoint is
+    fdatasync'd before its COMMAND goes), and in memory (/dev/shm, where fdatasync returns
+    at once), which tells the disk's share from the rest of the checkpoints' cost."""
+    where: dict[str, Path | None] = {"no state dir": None,
+                                     "--state-dir on disk": tmp / "state"}
+    if Path("/dev/shm").is_dir():
+        where["--state-dir in /dev/shm"] = Path(f"/dev/shm/bench-sim-state-{os.getpid()}")
+    return where
+
+
+def checkpoints_written(state_dir: Path) -> int:
+    """Checkpoint records a flight wrote after its first (runtime/README.md: a header,
+    then two slots of the size at byte 72, each record opening with its sequence number;
+    native byte order)."""
+    data = (state_dir / "checkpoint").read_bytes()
+    slot = int.from_bytes(data[72:76], sys.byteorder)
+    return max(int.from_bytes(data[at:at + 4], sys.byteorder)
+               for at in (slot, 2 * slot) if len(data) >= at + 4) - 1
 
 
 def pty_floor(binary: Path, round_trips: int) -> tuple[float, float]:
@@ -133,10 +158,20 @@ def c_loop(mission, args: argparse.Namespace) -> int:
         subprocess.run(["cc", "-O2", "-std=c11", str(BENCH / "pty_roundtrip.c"), "-o",
                         str(floor_binary)], check=True)
         command = gliderplan("sim", str(MISSION), "--runtime", "c", "--tick", f"{args.tick:g}")
-        whole = median_of({"run": [*command, "--duration", f"{args.c_days:g}d",
-                                   "-o", str(Path(tmp) / "run")],
-                           "one tick": [*command, "--duration", f"{args.tick:g}s",
-                                        "-o", str(Path(tmp) / "tick")]}, args.runs)
+        where = state_dirs(Path(tmp))
+        commands, fresh = {}, {}  # fresh: each command's state directory, emptied each run
+        for setting, state in where.items():
+            for kind, duration in (("run", f"{args.c_days:g}d"), ("tick", f"{args.tick:g}s")):
+                name, options = f"{kind}, {setting}", []
+                if state is not None:
+                    fresh[name] = Path(f"{state}-{kind}")
+                    options = ["--state-dir", str(fresh[name])]
+                commands[name] = [*command, "--duration", duration, *options, "-o",
+                                  str(Path(tmp) / kind)]
+        whole = median_of(commands, args.runs, fresh=fresh)
+        checkpoints = checkpoints_written(fresh["run, --state-dir on disk"])
+        for directory in fresh.values():
+            shutil.rmtree(directory, ignore_errors=True)
         samples: dict[str, list[float]] = {}
         for _ in range(args.runs):  # in turn, so that a change of load falls on all alike
             record, wall, cpu, runtime_cpu = timed_run(mission, args.c_days, args.tick, "c")
@@ -150,12 +185,19 @@ def c_loop(mission, args: argparse.Namespace) -> int:
         print("C and Python traces differ!", file=sys.stderr)
         return 1
     m = {name: statistics.median(values) for name, values in samples.items()}
-    loop_s = whole["run"].wall_s - whole["one tick"].wall_s
     print(f"\nC runtime in closed loop over a pty, {args.c_days:g} d at {args.tick:g} s = "
           f"{ticks} ticks, medians of {args.runs} runs, {load_average()}:")
-    print(f"  whole command: {whole['run'].wall_s:.2f} s wall ({whole['run'].cpu_s:.2f} s CPU); "
-          f"for one tick {whole['one tick'].wall_s:.2f} s; the loop {ticks / loop_s:,.0f} "
-          f"ticks/s (target 10,000), the command {ticks / whole['run'].wall_s:,.0f} ticks/s")
+    loops = {}
+    for setting in where:
+        run, tick = whole[f"run, {setting}"], whole[f"tick, {setting}"]
+        loops[setting] = run.wall_s - tick.wall_s
+        print(f"  whole command, {setting}: {run.wall_s:.2f} s wall ({run.cpu_s:.2f} s CPU); "
+              f"for one tick {tick.wall_s:.2f} s; the loop {ticks / loops[setting]:,.0f} "
+              f"ticks/s (target 10,000), the command {ticks / run.wall_s:,.0f} ticks/s")
+    extra_ms = 1e3 * (loops["--state-dir on disk"] - loops["no state dir"])
+    print(f"  the state directory on disk: {checkpoints} checkpoints written (each "
+          f"fdatasync'd), {extra_ms:.0f} ms more loop: {extra_ms / max(checkpoints, 1):.2f} ms "
+          "per checkpoint")
     rate = ticks / m["wall"]
     print(f"  the loop in process: {rate:,.0f} ticks/s, {rate * args.tick:,.0f}x real time "
           f"(uSimMarine: {USIMMARINE_REAL_TIME[0]}-{USIMMARINE_REAL_TIME[1]}x); CPU per tick: "

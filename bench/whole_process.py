@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import NamedTuple
 
@@ -50,17 +52,23 @@ def run_once(command: list[str], exit_code: int = 0) -> Timing:
     return Timing(wall, cpu)
 
 
-def median_of(commands: dict[str, list[str]], runs: int,
-              exit_code: int = 0) -> dict[str, Timing]:
+def median_of(commands: dict[str, list[str]], runs: int, exit_code: int = 0,
+              fresh: Mapping[str, Path] | None = None) -> dict[str, Timing]:
     """Median wall and CPU time of each command over `runs` runs, taken in turn (so that
     a change in the machine's load falls on all of them alike), after one warm-up run;
-    each must exit with `exit_code`."""
-    for command in commands.values():
-        run_once(command, exit_code)
+    each must exit with `exit_code`. `fresh[name]`: a directory removed before each run
+    of that command (one that will not write over an earlier run's)."""
+    def run(name: str) -> Timing:
+        if fresh and name in fresh:
+            shutil.rmtree(fresh[name], ignore_errors=True)
+        return run_once(commands[name], exit_code)
+
+    for name in commands:
+        run(name)
     times: dict[str, list[Timing]] = {name: [] for name in commands}
     for _ in range(runs):
-        for name, command in commands.items():
-            times[name].append(run_once(command, exit_code))
+        for name in commands:
+            times[name].append(run(name))
     return {name: Timing(statistics.median(t.wall_s for t in found),
                          statistics.median(t.cpu_s for t in found))
             for name, found in times.items()}
