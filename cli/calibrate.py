@@ -1,8 +1,10 @@
-"""`gliderplan calibrate`: fit a vehicle's energy figures to real Slocum logs.
+"""`gliderplan calibrate`: fit a vehicle to real Slocum logs, and check it forward.
 
-Reads .dbd/.ebd files with dbdreader, fits hotel, surface, Iridium, pump and pitch
-energy, and with `--validate` fits on one part of the record and predicts the
-coulomb-counter energy of the other (`gliderplan.power_models.calibrate`).
+Reads .dbd/.ebd files with dbdreader and fits every figure the logs support (energy, flight
+with gliderflight against the CTD's density, pitch, turn times, surfacing), each with its
+bootstrap standard deviation; `--validate` fits the earlier whole dives and forecasts the
+later ones from the fit alone, and replays the held-out half
+(`gliderplan.power_models.calibrate`).
 """
 
 from __future__ import annotations
@@ -39,13 +41,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--validate",
         action="store_true",
-        help="fit on one part of the record, predict the other, report the error",
+        help="fit the earlier whole dives, forecast the later ones forward, compare with the "
+        "coulomb counter",
     )
     parser.add_argument(
         "--max-error",
         type=float,
         metavar="FRACTION",
-        help="with --validate: exit 1 if |relative error| exceeds this",
+        help="with --validate: exit 1 if the forecast's |energy error| exceeds this",
     )
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
@@ -59,53 +62,78 @@ def run(args: argparse.Namespace) -> int:
                        output=args.output, name=args.name)
     print(json.dumps(result.report, indent=2) if args.json else _text(result.report))
     if args.max_error is not None and abs(result.relative_error) > args.max_error:
-        raise GliderplanError(f"validation error {result.relative_error:+.1%} exceeds "
+        raise GliderplanError(f"forecast energy error {result.relative_error:+.1%} exceeds "
                               f"--max-error {args.max_error:.1%}")
     return 0
 
 
-def _speed_lines(rows: list[dict]) -> list[str]:
-    return [
-        f"  {s['direction']:5s} log {s['log_w_mps']:.3f} m/s  model {s['model_w_mps']:.3f} m/s  "
-        f"({s['relative_error']:+.1%}, {s['samples']} samples)"
-        for s in rows
-    ]
-
-
 def _text(report: dict) -> str:
     lines = [
-        f"logs: {', '.join(report['logs'])} ({report['duration_s']:.0f} s)",
+        f"logs: {', '.join(report['logs'])} ({report['duration_s']:.0f} s, "
+        f"{report['dives']} dives, {report['bootstrap_refits']} bootstrap refits)",
         "",
-        f"{'figure':36s} {'value':>10s} {'unit':9s} basis",
+        f"{'figure':34s} {'value':>11s} {'sd':>9s} {'unit':9s} basis",
     ]
-    for c in report["coefficients"]:
-        mark = "" if c["fitted"] else " (kept from base)"
-        lines.append(f"{c['key']:36s} {c['value']:10.4g} {c['unit']:9s} {c['basis']}{mark}")
+    for f in report["figures"]:
+        mark = "" if f["fitted"] else " (kept from base)"
+        sd = f"{f['sd']:9.3g}" if f["sd"] is not None else f"{'':9s}"
+        lines.append(f"{f['key']:34s} {f['value']:11.5g} {sd} {f['unit']:9s} {f['basis']}{mark}")
     ins = report["in_sample"]
     lines += [
         "",
-        f"pump model RMS error over {report['pump_events']} runs: {report['pump_rms_j']:.1f} J",
+        f"pump model RMS error over {report['pump_events']} runs: {report['pump_rms_j']:.1f} J; "
+        f"flight model RMS vertical-speed error: {report['flight_rms_w_mps']:.4f} m/s",
         f"in-sample energy: predicted {ins['predicted_j']:.0f} J, coulomb counter "
         f"{ins['measured_j']:.0f} J ({ins['relative_error']:+.2%})",
     ]
-    if "validation" in report:
+    if "forecast" in report:
+        lines += [""] + _forecast_text(report["forecast"])
         val = report["validation"]
         parts = ", ".join(f"{k} {v:.0f} J" for k, v in val["predicted_by_component_j"].items())
         lines += [
             "",
-            f"validation ({val['split']}, {val['duration_s']:.0f} s held out):",
-            f"  predicted        {val['predicted_j']:9.0f} J  ({parts})",
-            f"  measured         {val['measured_j']:9.0f} J  (coulomb counter x battery)",
-            f"  relative error   {val['relative_error']:+9.2%}",
-            "",
-            "vertical speed, held-out part (flight model at the log's pitch and volume):",
+            f"replay ({val['split']}, {val['duration_s']:.0f} s held out; uses that part's own "
+            "durations, pumped volumes and Iridium time, so it is not a forecast):",
+            f"  predicted {val['predicted_j']:.0f} J ({parts}), measured "
+            f"{val['measured_j']:.0f} J: {val['relative_error']:+.2%}",
         ]
-        lines += _speed_lines(report["vertical_speed"])
-        lines += [
-            f"  with a trim of {report['trim_offset_cc']:+.1f} cc (positive: light), "
-            "fitted on the fit part:"
-        ]
-        lines += _speed_lines(report["vertical_speed_trimmed"])
     if "output" in report:
         lines += ["", f"wrote {report['output']}"]
     return "\n".join(lines)
+
+
+def _forecast_text(f: dict) -> list[str]:
+    c = f["command"]
+    lo, hi = f["energy_interval_j"]
+    speed = f["vertical_speed_mps"]
+    lines = [
+        f"forward forecast: fit on {f['fit']}; forecast {f['forecast']}",
+        f"  given: yo {c['yo_band_m'][0]:.1f}-{c['yo_band_m'][1]:.1f} m, pitch "
+        f"{c['dive_pitch_rad']:.3f}/{c['climb_pitch_rad']:.3f} rad, {c['ballast_cc']:.0f} cc, "
+        f"surface after {c['dives_before_surfacing']} dives, the fit part's CTD",
+        f"  energy     predicted {f['predicted_j']:7.0f} J  measured {f['measured_j']:7.0f} J  "
+        f"{f['energy_relative_error']:+.2%}  (90 % interval {lo:.0f}-{hi:.0f} J)",
+        f"  time       predicted {f['time_s']['predicted']:7.0f} s  measured "
+        f"{f['time_s']['measured']:7.0f} s  {f['time_relative_error']:+.2%}",
+        f"  yo period  predicted {f['yo_period_s']['predicted']:7.0f} s  measured "
+        f"{f['yo_period_s']['measured']:7.0f} s  {f['yo_period_relative_error']:+.2%}",
+    ]
+    for kind in ("dive", "climb"):
+        lines.append(
+            f"  {kind:5s} w    predicted {speed[kind]['predicted']:7.3f} m/s measured "
+            f"{speed[kind]['measured']:7.3f} m/s {f['vertical_speed_relative_error'][kind]:+.2%}"
+        )
+    bias = f["counter_bias"]
+    lines.append(f"  coulomb counter vs current sensor on the fit part: {bias['relative']:+.2%} "
+                 f"(one counter step is {bias['counter_step_j']:.0f} J)")
+    if f["figures_from_base"]:
+        lines.append(f"  not fitted on the fit part, from the base: "
+                     f"{', '.join(f['figures_from_base'])}")
+    stay = f["surface_stay"]
+    if stay is not None:
+        lines.append(
+            f"  the record's surface stay after it (not part of the forecast): base figures "
+            f"predict {stay['predicted_j']:.0f} J, measured {stay['measured_j']:.0f} J "
+            f"({stay['relative_error']:+.1%}; from the base: "
+            f"{', '.join(stay['figures_from_base']) or 'none'})")
+    return lines

@@ -138,7 +138,8 @@ def _energy_text(data: dict) -> str:
         f"{data['vehicle']}: energy per km [kJ] at {math.degrees(data['pitch_rad']):.1f} deg "
         f"pitch, hotel {data['hotel_w']:.2f} W",
         "yo [m]    " + "".join(f"{u:>9.2f}" for u in data["speed_mps"]) + "   (speed m/s)",
-        "ballast   " + "".join(f"{b:>9.0f}" for b in data["ballast_cc"]) + "   (cc)",
+        "ballast   " + "".join(f"{b:>9.0f}" for b in data["ballast_cc"][-1])
+        + "   (cc, deepest yo)",
     ]
     for high, line in zip(data["max_depth_m"], data["energy_per_km_kj"], strict=True):
         cells = "".join(f"{v:>9.1f}" if v is not None else f"{'-':>9s}" for v in line)

@@ -54,6 +54,8 @@ class Transit:
     inflections_per_m: np.ndarray  # (n_t,) [m-1]
     min_pace: np.ndarray  # (n_t,) 1 / fastest speed [s m-1]
     pitch_rad: np.ndarray  # (n_t,)
+    min_depth_m: np.ndarray  # (n_t,) the leg's yo band
+    max_depth_m: np.ndarray  # (n_t,)
 
     @property
     def size(self) -> int:
@@ -84,11 +86,11 @@ def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occ
         rows.append((mission.state_index[name], length, load, k, c0, e,
                      float(vehicle.turn_s_per_m(low, high, pitch)),
                      e / vehicle.pitch_energy_j if vehicle.pitch_energy_j else 0.0,
-                     1.0 / float(vehicle.max_speed_mps(pitch)), pitch))
+                     1.0 / float(vehicle.max_speed_mps(pitch)), pitch, low, high))
         notes.append(f"{name}: transit leg of {length / 1000:.3g} km; its time follows "
                      "from the planned speed (later states keep their nominal-speed times)")
     cols = [np.array(c, float) for c in zip(*rows, strict=True)] if rows else \
-        [np.zeros(0)] * 10
+        [np.zeros(0)] * 12
     return Transit(cols[0].astype(int), *cols[1:])
 
 
@@ -211,6 +213,9 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
     quality_min = {p.sensor: p.quality_min for p in mission.sensor_preferences
                    if p.quality_min > 0.0}
     cols = list(zip(*duty, strict=True)) if duty else [()] * 7
+    held = set(hardware.vehicle.hotel_includes)  # counted once: in the hotel load
+    notes += [f"{name}: in the vehicle's hotel load, not added again"
+              for name in dict.fromkeys(k[1] for k in devs) if name in held]
     return PlanInputs(
         mission=mission, hardware=hardware, occupancy=occupancy,
         states=tuple(s.name for s in mission.states),
@@ -220,11 +225,12 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
         weight=np.array(cols[4], float), duty_lo=np.array(cols[5], float),
         duty_hi=np.array(cols[6], float), fixed=tuple(fixed),
         dev_state=np.array([k[0] for k in devs], int), dev_name=tuple(k[1] for k in devs),
-        dev_power_w=np.array([hardware.devices[k[1]].on_power_w for k in devs], float),
+        dev_power_w=np.array([0.0 if k[1] in held else hardware.devices[k[1]].on_power_w
+                              for k in devs], float),
         dev_lo=np.array(dev_lo, float),
         dev_hi=np.array([1.0 if a else lo for a, lo in zip(dev_auto, dev_lo, strict=True)]),
-        dev_warmup_j=np.array([hardware.devices[k[1]].warmup_j if auto else 0.0
-                               for k, auto in zip(devs, dev_auto, strict=True)], float),
+        dev_warmup_j=np.array([hardware.devices[k[1]].warmup_j if auto and k[1] not in held
+                               else 0.0 for k, auto in zip(devs, dev_auto, strict=True)], float),
         prof_state=np.array(prof_state, int), profiles=tuple(profiles),
         mode_state=np.repeat(np.arange(n_s), len(powers)),
         mode_power_w=np.tile(powers, n_s),

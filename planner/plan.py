@@ -363,7 +363,8 @@ def _transit_profile(inputs: PlanInputs, sol: Solution, i: int,
     """The planned speed of transit leg `i`, the buoyancy that flies it, its inflections."""
     tr, vehicle = inputs.transit, inputs.hardware.vehicle
     speed = 1.0 / float(sol.pace[i])
-    ballast = float(vehicle.ballast_for_speed(speed, tr.pitch_rad[i]))
+    ballast = min(float(vehicle.yo_ballast_cc(speed, tr.pitch_rad[i], tr.min_depth_m[i],
+                                              tr.max_depth_m[i])), vehicle.max_ballast_cc)
     planned = replace(profile, share=1.0, speed_mps=speed, ballast_cc=ballast)
     return (planned,), float(tr.length_m[i] * tr.inflections_per_m[i])
 

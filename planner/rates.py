@@ -75,7 +75,8 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
             notes.append(f"{where}: arguments unknown before flight; planned as a yo "
                          f"{low:g}-{high:g} m (the vehicle's nominal)")
         speed = float(vehicle.optimal_speed_mps(fixed_load_w, low, high, pitch))
-        ballast = float(vehicle.ballast_for_speed(speed, pitch))
+        ballast = min(float(vehicle.yo_ballast_cc(speed, pitch, low, high)),
+                      vehicle.max_ballast_cc)
         per_hour = float(vehicle.inflections_per_hour(low, high, pitch, ballast))
         actuators_w = float(vehicle.profile_power_w(low, high, pitch, ballast))
         pitch_w = vehicle.pitch_energy_j * per_hour / 3600.0
@@ -115,7 +116,10 @@ def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
 
 def mode_powers(hardware: Hardware) -> np.ndarray:
     """Mean power [W] of each clock the planner may choose; NaN for a clock that cannot
-    keep up with the runtime's workload."""
-    return np.array([np.nan if (p := computer_power_w(m, hardware.cycles_per_tick)) is None
-                     else p
-                     for m in hardware.modes])
+    keep up with the runtime's workload; 0 for the others when the vehicle's hotel load
+    already holds the computer."""
+    powers = np.array([np.nan if (p := computer_power_w(m, hardware.cycles_per_tick)) is None
+                       else p
+                       for m in hardware.modes])
+    held = Component.COMPUTER in hardware.vehicle.hotel_includes
+    return np.where(np.isnan(powers), np.nan, 0.0) if held else powers

@@ -122,19 +122,30 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
         ):
             coeffs.append(Coefficient(key, value, unit, False, "no pump-out runs"))
 
-    a_in = base.pump_in_j_per_cc
+    a_in, b_in = base.pump_in_j_per_cc, base.pump_in_j_per_cc_m
     if inward:
-        excess_in = [_event_excess_j(energy, dt, e.start, e.stop, hotel) for e in inward]
-        a_in = max(sum(excess_in) / sum(e.volume_cc for e in inward), 0.0)
+        excess_in = np.array([_event_excess_j(energy, dt, e.start, e.stop, hotel)
+                              for e in inward])
+        volume_in = np.array([e.volume_cc for e in inward])
+        depth_in = np.array([e.depth_m for e in inward])
+        a_in = max(float(np.sum(excess_in - b_in * volume_in * depth_in) / volume_in.sum()), 0.0)
+        span = f"{depth_in.min():.1f}-{depth_in.max():.1f} m"
         coeffs.append(
             Coefficient(
-                "pump_in_energy_per_volume", a_in, "J/cc", True, f"{len(inward)} pump-in runs"
+                "pump_in_energy_per_volume", a_in, "J/cc", True,
+                f"{len(inward)} pump-in runs at {span}, depth term from the base",
             )
         )
-    else:
         coeffs.append(
-            Coefficient("pump_in_energy_per_volume", a_in, "J/cc", False, "no pump-in runs")
+            Coefficient("pump_in_energy_per_volume_depth", b_in, "J/(cc m)", False,
+                        f"pump-in depths span only {span}")
         )
+    else:
+        for key, value, unit in (
+            ("pump_in_energy_per_volume", a_in, "J/cc"),
+            ("pump_in_energy_per_volume_depth", b_in, "J/(cc m)"),
+        ):
+            coeffs.append(Coefficient(key, value, unit, False, "no pump-in runs"))
 
     pitch = base.pitch_energy_j
     inflections = len(parts.pump_events)
@@ -149,7 +160,7 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
                 pitch,
                 "J",
                 True,
-                f"{len(parts.pitch_events)} battery moves outside pump runs "
+                f"{len(parts.pitch_events)} battery move(s) outside pump runs "
                 f"over {inflections} inflections",
             )
         )
@@ -265,98 +276,3 @@ def validate(log: FlightLog, base: Vehicle) -> Validation:
         measured_j=seg.counter_energy_j(split.validate),
         duration_s=float(split.validate.t_s[-1] - split.validate.t_s[0]),
     )
-
-
-@dataclass(frozen=True)
-class SpeedComparison:
-    """Vertical speed of the log against the flight model, for dives or for climbs."""
-
-    direction: str  # "dive" or "climb"
-    samples: int
-    log_w_mps: float  # mean |dz/dt| of steady glide
-    model_w_mps: float  # mean model w at the log's own pitch and pumped volume
-    pitch_rad: float
-    ballast_cc: float
-
-    @property
-    def relative_error(self) -> float:
-        return (self.model_w_mps - self.log_w_mps) / self.log_w_mps
-
-
-STEADY_MIN_DEPTH_M = 3.0  # below the surface layer
-STEADY_MIN_PITCH_RAD = 0.2  # flying, not turning over at an inflection
-
-
-def _steady_glides(log: FlightLog) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Steady-glide intervals of the log: |pitch| [rad], |pumped volume| [cc], |w| [m s-1]
-    and direction (+1 climb, -1 dive), one entry per interval."""
-    parts = seg.segment(log)
-    dt = np.diff(log.t_s)
-    w_log = np.diff(log.depth_m) / np.where(dt > 0, dt, np.nan)  # positive down
-    pitch = 0.5 * (log.pitch_rad[1:] + log.pitch_rad[:-1])
-    ballast = 0.5 * (log.ballast_cc[1:] + log.ballast_cc[:-1])
-    depth = np.minimum(log.depth_m[1:], log.depth_m[:-1])
-    direction = np.sign(pitch)
-    steady = (
-        (parts.phase == seg.GLIDE)
-        & (depth > STEADY_MIN_DEPTH_M)
-        & (dt > 0)
-        & (np.abs(pitch) > STEADY_MIN_PITCH_RAD)
-        & (np.sign(ballast) == direction)
-        & (np.sign(w_log) == -direction)  # climbing means depth decreasing
-    )
-    return (
-        np.abs(pitch[steady]),
-        np.abs(ballast[steady]),
-        np.abs(w_log[steady]),
-        direction[steady],
-    )
-
-
-def _effective_volume_cc(volume: np.ndarray, direction: np.ndarray, trim_cc: float) -> np.ndarray:
-    """Buoyancy volume with a trim offset: a glider `trim_cc` light climbs on more buoyancy
-    and dives on less."""
-    return np.maximum(volume + direction * trim_cc, 0.0)
-
-
-def fit_trim_offset_cc(log: FlightLog, vehicle: Vehicle) -> float:
-    """Buoyancy trim [cc] (positive: light) that best matches the log's vertical speeds.
-
-    The flight model assumes a glider neutral at zero pumped volume; a real one is trimmed
-    a little light or heavy, which makes its dives and climbs differ. Least squares over
-    a 0.5 cc grid within half the largest pumped volume.
-    """
-    pitch, volume, w_log, direction = _steady_glides(log)
-    if pitch.size == 0:
-        return 0.0
-    grid = np.arange(-vehicle.max_ballast_cc / 2, vehicle.max_ballast_cc / 2 + 0.25, 0.5)
-    volumes = _effective_volume_cc(volume[None, :], direction[None, :], grid[:, None])
-    _, w_model = vehicle.glide(pitch[None, :], volumes)
-    return float(grid[np.argmin(np.sum((w_model - w_log) ** 2, axis=1))])
-
-
-def compare_vertical_speeds(
-    log: FlightLog, vehicle: Vehicle, trim_cc: float = 0.0
-) -> list[SpeedComparison]:
-    """Vertical speed of steady glides in the log vs the flight model at the same pitch and
-    pumped volume (plus a trim offset [cc], positive light), for dives and for climbs."""
-    pitch, volume, w_log, direction = _steady_glides(log)
-    rows = []
-    for name, sign in (("dive", -1.0), ("climb", 1.0)):
-        mask = direction == sign
-        if not mask.any():
-            continue
-        _, w_model = vehicle.glide(
-            pitch[mask], _effective_volume_cc(volume[mask], direction[mask], trim_cc)
-        )
-        rows.append(
-            SpeedComparison(
-                name,
-                int(mask.sum()),
-                float(np.mean(w_log[mask])),
-                float(np.mean(w_model)),
-                float(np.mean(pitch[mask])),
-                float(np.mean(volume[mask])),
-            )
-        )
-    return rows

@@ -1,8 +1,13 @@
-"""`calibrate`: a vehicle's energy figures fitted to real Slocum logs, the pipeline of
-`gliderplan calibrate`: read the .dbd/.ebd files (dbdreader), fit hotel, surface,
-Iridium, pump and pitch energy (calibration.py), and with `validate` fit on one part of
-the record and predict the coulomb-counter energy of the other; write the calibrated
-vehicle file."""
+"""`calibrate`: a vehicle fitted to real Slocum logs, the pipeline of `gliderplan calibrate`.
+
+Read the .dbd/.ebd files (dbdreader, the CTD's density with gsw), fit every figure the
+logs support with its bootstrap uncertainty (vehicle_fit.py: energy, flight with
+gliderflight, pitch, turn times, surfacing), and with `validate` check the fit two ways:
+forward (forecast_check.py: fit the earlier dives, forecast the later ones from the fit
+alone) and the older replay (calibration.validate: the held-out part's own timeline with
+the fitted figures). Write the calibrated vehicle file: every fitted figure with its sd and
+its own source, the figures' correlation, and the devices its hotel load holds.
+"""
 
 from __future__ import annotations
 
@@ -14,11 +19,14 @@ from pathlib import Path
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import write_atomically
 from gliderplan.power_models import calibration
+from gliderplan.power_models import segments as seg
 from gliderplan.power_models.catalog import resolve
 from gliderplan.power_models.errors import ModelFileError
+from gliderplan.power_models.forecast_check import ForwardCheck, check_forward, stay_from_base
 from gliderplan.power_models.model_writer import to_toml
 from gliderplan.power_models.slocum_log import FlightLog, read_flight_log
 from gliderplan.power_models.vehicle import Vehicle, load_vehicle, read_vehicle_file
+from gliderplan.power_models.vehicle_fit import Figure, VehicleFit, figure_unit, fit_vehicle
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,31}")
 
@@ -30,33 +38,35 @@ class Calibration:
 
     vehicle: Vehicle
     report: dict
-    relative_error: float | None  # held-out energy, predicted against measured; None unvalidated
+    relative_error: float | None  # the forward forecast's energy error; None unvalidated
 
 
 def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_g2_shallow",
               validate: bool = False, output: str | Path | None = None,
               name: str | None = None) -> Calibration:
-    """Fit `base`'s energy figures (a preset or a .toml file) to the logs (files or
-    directories; `cache`: dbdreader's .cac directory, default the logs' cac/). With
-    `validate`, fit on one part and predict the other. With `output` (a .toml path), write
-    the base's file with the fitted figures, named `name` (default: the file's stem).
-    Raises LogError, ModelFileError, or UsageError for an output that is not a .toml."""
+    """Fit `base` (a preset or a .toml file) to the logs (files or directories; `cache`:
+    dbdreader's .cac directory, default the logs' cac/). With `validate`, fit the earlier
+    whole dives and forecast the later ones, and replay the held-out half. With `output`
+    (a .toml path), write the calibrated vehicle, named `name` (default: the file's stem).
+    Raises LogError, ModelFileError, CalibrationError, or UsageError for an output that is
+    not a .toml."""
     if output is not None and not str(output).endswith(".toml"):
         raise UsageError(f"{output}: the output file must end in .toml")
     vehicle = load_vehicle(base)
     log = read_flight_log(logs, cache)
-    fit = calibration.fit_energy(log, vehicle)
+    fit = fit_vehicle(log, vehicle)
     whole = calibration.predict_energy_j(log, fit.vehicle)
-    measured = calibration.seg.counter_energy_j(log)
+    measured = seg.counter_energy_j(log)
     report: dict = {
         "logs": [Path(f).name for f in log.files],
         "duration_s": float(log.t_s[-1]),
-        "coefficients": [
-            {"key": c.key, "value": c.value, "unit": c.unit, "fitted": c.fitted, "basis": c.basis}
-            for c in fit.coefficients
-        ],
-        "pump_events": fit.pump_events,
-        "pump_rms_j": fit.pump_rms_j,
+        "dives": fit.dives,
+        "bootstrap_refits": fit.resamples,
+        "figures": [_figure_json(f) for f in fit.figures],
+        "hotel_includes": list(log.payload),
+        "pump_events": fit.energy.pump_events,
+        "pump_rms_j": fit.energy.pump_rms_j,
+        "flight_rms_w_mps": fit.flight.rms_w_mps,
         "in_sample": {
             "predicted_j": sum(whole.values()),
             "measured_j": measured,
@@ -65,62 +75,117 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
     }
     relative_error = None
     if validate:
-        result = calibration.validate(log, vehicle)
-        trim_cc = calibration.fit_trim_offset_cc(result.parts.fit, result.fit.vehicle)
-        relative_error = result.relative_error
-        report["relative_error"] = relative_error
+        replay = calibration.validate(log, vehicle)
+        forward = check_forward(log, vehicle)
+        relative_error = forward.energy_relative_error
+        report["relative_error"] = replay.relative_error
         report["validation"] = {
-            "split": result.split,
-            "duration_s": result.duration_s,
-            "predicted_j": sum(result.predicted_j.values()),
-            "predicted_by_component_j": result.predicted_j,
-            "measured_j": result.measured_j,
-            "relative_error": relative_error,
+            "kind": "replay: the held-out part's own timeline (durations, pumped volumes, "
+                    "Iridium time) with the fitted figures",
+            "split": replay.split,
+            "duration_s": replay.duration_s,
+            "predicted_j": sum(replay.predicted_j.values()),
+            "predicted_by_component_j": replay.predicted_j,
+            "measured_j": replay.measured_j,
+            "relative_error": replay.relative_error,
         }
-        report["vertical_speed"] = _speed_rows(result.parts.validate, result.fit.vehicle, 0.0)
-        report["trim_offset_cc"] = trim_cc
-        report["vertical_speed_trimmed"] = _speed_rows(result.parts.validate,
-                                                       result.fit.vehicle, trim_cc)
+        report["forecast"] = _forecast_json(forward)
     if output is not None:
-        report["output"] = str(_write_vehicle(Path(output), name, base, fit, log.files))
+        report["output"] = str(_write_vehicle(Path(output), name, base, fit, log))
     return Calibration(fit.vehicle, report, relative_error)
 
 
-def _speed_rows(log: FlightLog, vehicle: Vehicle, trim_cc: float) -> list[dict]:
-    return [
-        {
-            "direction": s.direction,
-            "samples": s.samples,
-            "log_w_mps": s.log_w_mps,
-            "model_w_mps": s.model_w_mps,
-            "relative_error": s.relative_error,
-            "pitch_rad": s.pitch_rad,
-            "ballast_cc": s.ballast_cc,
-        }
-        for s in calibration.compare_vertical_speeds(log, vehicle, trim_cc)
-    ]
+def _figure_json(figure: Figure) -> dict:
+    return {"key": figure.key, "value": figure.value, "unit": figure_unit(figure.key),
+            "sd": figure.sd, "fitted": figure.fitted, "basis": figure.basis}
 
 
-def _write_vehicle(output: Path, name: str | None, base: str, fit: calibration.EnergyFit,
-                   files: tuple[str, ...]) -> Path:
-    """Write the base vehicle's file with the fitted figures replaced."""
+def _relative(predicted: float, measured: float) -> float:
+    return predicted / measured - 1.0
+
+
+def _forecast_json(check: ForwardCheck) -> dict:
+    f, o, c = check.forecast, check.observed, check.command
+    speeds = {k: {"predicted": check.predicted_w_mps[k], "measured": o.w_mps[k]}
+              for k in ("dive", "climb")}
+    stay = None
+    if check.stay_measured_j is not None:
+        stay = {"predicted_j": check.stay_predicted_j, "measured_j": check.stay_measured_j,
+                "relative_error": _relative(check.stay_predicted_j, check.stay_measured_j),
+                "figures_from_base": list(stay_from_base(check))}
+    return {
+        "energy_relative_error": check.energy_relative_error,
+        "measured_j": o.energy_j,
+        "predicted_j": f.energy_j,
+        "energy_interval_j": list(check.interval_j),
+        "yo_period_relative_error": _relative(f.yo_period_s, o.yo_period_s),
+        "vertical_speed_relative_error": {k: _relative(v["predicted"], v["measured"])
+                                          for k, v in speeds.items()},
+        "time_relative_error": _relative(f.time_to_surface_s, o.time_s),
+        "fit": f"dives 1-{check.fit_dives} (0-{check.cut_s:.0f} s)",
+        "forecast": f"dives {check.fit_dives + 1}-{check.fit_dives + check.later_dives} "
+                    f"({check.cut_s:.0f} s to the surface), from the fit alone",
+        "command": {"yo_band_m": [c.top_m, c.bottom_m], "dive_pitch_rad": c.dive_pitch_rad,
+                    "climb_pitch_rad": c.climb_pitch_rad, "ballast_cc": c.ballast_cc,
+                    "dives_before_surfacing": c.dives_per_surfacing},
+        "time_s": {"predicted": f.time_to_surface_s, "measured": o.time_s},
+        "yo_period_s": {"predicted": f.yo_period_s, "measured": o.yo_period_s},
+        "vertical_speed_mps": speeds,
+        "speed_band_m": list(check.speed_band_m),
+        "yos": {"predicted": f.yos, "measured": o.yos,
+                "note": "dives before the surfacing: a command of the schedule"},
+        "predicted_by_component_j": f.energy_by_component_j,
+        "figures_from_base": list(check.from_base),
+        "counter_bias": {"relative": check.counter_bias, "counter_step_j": check.counter_step_j,
+                         "note": "coulomb counter / current sensor - 1 on the fit part: the "
+                                 "fit uses the current sensor, the truth the counter"},
+        "surface_stay": stay,
+    }
+
+
+def _log_names(log: FlightLog) -> str:
+    return ", ".join(dict.fromkeys(Path(f).stem for f in log.files))
+
+
+def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
+                   log: FlightLog) -> Path:
+    """Write the base vehicle's file with every fitted figure replaced (value, sd, what it
+    was fitted from), the fit's correlation and the devices the hotel load holds."""
     with open(resolve("vehicle", base), "rb") as handle:
         data = tomllib.load(handle)
     name = name or re.sub(r"[^A-Za-z0-9_]", "_", output.stem)
     if not _NAME.fullmatch(name):
         raise UsageError(f"vehicle name {name!r} must match [A-Za-z_][A-Za-z0-9_]{{0,31}}")
+    logs = _log_names(log)
     data["name"] = name
-    data["description"] = f"calibrated from {', '.join(Path(f).name for f in files)}"
-    for c in fit.coefficients:
-        if c.fitted:
-            data[c.key] = {
-                "value": float(f"{c.value:.6g}"),
-                "unit": c.unit,
-                "source": f"gliderplan calibrate: {c.basis}",
-            }
+    data["description"] = f"calibrated from {', '.join(Path(f).name for f in log.files)}"
+    for figure in fit.figures:
+        if not figure.fitted:
+            continue
+        entry = {"value": float(f"{figure.value:.6g}"), "unit": figure_unit(figure.key),
+                 "source": f"gliderplan calibrate on {logs}: {figure.basis}"}
+        if figure.sd is not None:
+            entry["sd"] = float(f"{figure.sd:.3g}")
+        table, key = (data["flight"], figure.key[7:]) if figure.key.startswith("flight.") \
+            else (data, figure.key)
+        table[key] = entry
+    if log.payload:
+        data["hotel_includes"] = {
+            "devices": list(log.payload),
+            "source": f"gliderplan calibrate on {logs}: science sensors logging while it "
+                      "glided, so their power is in the fitted hotel load",
+        }
+    u = fit.vehicle.uncertainty
+    if u is not None:
+        data["uncertainty"] = {
+            "figures": list(u.keys),
+            "correlation": [[round(float(x), 3) for x in row] for row in u.correlation],
+            "source": u.source,
+        }
     header = (
         f"Vehicle calibrated by gliderplan calibrate (base: {base}).\n"
-        "Fitted figures say what they were fitted from; the others are the base's."
+        "Fitted figures say what they were fitted from and carry their bootstrap standard\n"
+        "deviation (sd); the others are the base's."
     )
     try:
         write_atomically(output, to_toml(data, header))

@@ -19,13 +19,23 @@ def _toml_value(value: Any) -> str:
         return json.dumps(value)  # a JSON string is a valid TOML basic string
     if isinstance(value, dict):
         return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
+    if isinstance(value, list | tuple) and value and isinstance(value[0], list | tuple):
+        return "[\n" + "".join(f"  {_toml_value(row)},\n" for row in value) + "]"
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {type(value).__name__} to a model file")
+
+
+def _is_table(entry: dict[str, Any]) -> bool:
+    """A [table] (holds figures or a matrix), not an inline one such as a figure."""
+    return any(isinstance(v, dict) or (isinstance(v, list) and v and isinstance(v[0], list))
+               for v in entry.values())
 
 
 def to_toml(data: dict[str, Any], header: str = "") -> str:
     """TOML text of a model file: top-level keys, then one level of [tables]."""
     lines = [f"# {line}" for line in header.splitlines()]
-    tables = {k: v for k, v in data.items() if isinstance(v, dict) and "value" not in v}
+    tables = {k: v for k, v in data.items() if isinstance(v, dict) and _is_table(v)}
     for key, value in data.items():
         if key not in tables:
             lines.append(f"{key} = {_toml_value(value)}")

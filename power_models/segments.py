@@ -32,6 +32,7 @@ class PumpEvent:
     volume_cc: float  # magnitude pumped
     outward: bool  # True: pumped out (buoyancy up), against sea pressure
     depth_m: float  # mean depth while pumping
+    moving: int  # first sample the pump is seen moving: where and when the turn begins
 
 
 @dataclass(frozen=True)
@@ -79,6 +80,7 @@ def segment(log: FlightLog) -> Segmentation:
                 abs(float(change)),
                 change > 0.0,
                 float(np.mean(log.depth_m[first:last])),
+                int(start),
             )
         )
         in_event[first : last - 1] = True

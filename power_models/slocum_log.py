@@ -1,13 +1,15 @@
 """Reading Slocum flight logs (.dbd/.ebd and their cache files) with dbdreader.
 
-Returns the time series the power calibration needs, on the flight computer's sample
-times, in SI units (volumes in cc): depth, pitch, pumped volume, coulomb counter and
-current, battery voltage, Iridium and actuator-motion flags.
+Returns the time series the calibration needs, on the flight computer's sample times, in
+SI units (volumes in cc): depth, pitch, pumped volume, coulomb counter and current,
+battery voltage, Iridium and actuator-motion flags, what the glider was commanded (pitch,
+pumped volume, climb and dive targets), and the water's in-situ density from the science
+computer's CTD (TEOS-10; NaN where the CTD had no reading).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +28,18 @@ _SERIES = (
     ("m_is_battpos_moving", "battpos_moving"),
 )
 REQUIRED_VARIABLES = tuple(name for name, _ in _SERIES) + ("m_battery",)
+# optional: what the pilot commanded, and the CTD (density for the flight model)
+_COMMANDS = (("c_ballast_pumped", "commanded_ballast_cc"), ("c_pitch", "commanded_pitch_rad"))
+_TARGETS = (("c_climb_target_depth", "climb_target_m"), ("c_dive_target_depth", "dive_target_m"))
+CTD_VARIABLES = ("sci_water_pressure", "sci_water_temp", "sci_water_cond")
+_POSITION = ("m_gps_lat", "m_gps_lon")
+# science instruments (the prefix of their variables) -> the power-model device they are
+_PAYLOAD = (
+    ("sci_ctd41cp", "ctd"), ("sci_oxy3835", "optode"), ("sci_oxy4", "optode"),
+    ("sci_bb3slo", "optics"), ("sci_flbbcd", "optics"), ("sci_flntu", "optics"),
+    ("sci_bbfl2s", "optics"),
+)
+MIN_PAYLOAD_READINGS = 10
 
 
 class LogError(GliderplanError):
@@ -48,6 +62,19 @@ class FlightLog:
     iridium_on: np.ndarray  # bool
     pump_moving: np.ndarray  # bool
     battpos_moving: np.ndarray  # bool
+    density_kg_m3: np.ndarray  # in-situ, from the CTD; NaN without a reading
+    commanded_ballast_cc: np.ndarray  # NaN where nothing was commanded
+    commanded_pitch_rad: np.ndarray
+    climb_target_m: float = float("nan")
+    dive_target_m: float = float("nan")
+    payload: tuple[str, ...] = ()  # devices that logged readings (their power is in the log)
+
+    # the per-sample series, in the order of the fields above
+    SERIES = (
+        "t_s", "depth_m", "pitch_rad", "ballast_cc", "current_a", "charge_ah", "battery_v",
+        "iridium_on", "pump_moving", "battpos_moving", "density_kg_m3",
+        "commanded_ballast_cc", "commanded_pitch_rad",
+    )
 
     def power_w(self) -> np.ndarray:
         """Instantaneous electrical power [W] from the current sensor and battery voltage."""
@@ -55,22 +82,8 @@ class FlightLog:
 
     def slice(self, start: int, stop: int) -> FlightLog:
         """Samples start..stop-1 (times stay relative to the whole log's start)."""
-        cut = {
-            name: getattr(self, name)[start:stop]
-            for name in (
-                "t_s",
-                "depth_m",
-                "pitch_rad",
-                "ballast_cc",
-                "current_a",
-                "charge_ah",
-                "battery_v",
-                "iridium_on",
-                "pump_moving",
-                "battpos_moving",
-            )
-        }
-        return FlightLog(self.files, self.start_epoch_s, **cut)
+        cut = {name: getattr(self, name)[start:stop] for name in self.SERIES}
+        return replace(self, **cut)
 
 
 def expand_log_paths(paths: list[str]) -> list[str]:
@@ -108,6 +121,7 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         logs = dbdreader.MultiDBD(filenames=files, cacheDir=cache)
         synced = logs.get_sync(*(name for name, _ in _SERIES))
         volt_t, volt = logs.get("m_battery")
+        optional = _optional_series(logs, np.asarray(synced[0], float))
     except dbdreader.DbdError as err:
         raise LogError(f"cannot read the logs: {err}") from None
     except (OSError, ValueError) as err:
@@ -120,8 +134,9 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         for (_, field), values in zip(_SERIES, synced[1:], strict=True)
     }
     good = np.all([np.isfinite(v) for v in series.values()], axis=0)
-    t = t[good]
     series = {k: v[good] for k, v in series.items()}
+    series |= {k: v[good] for k, v in optional.items() if isinstance(v, np.ndarray)}
+    t = t[good]
     return FlightLog(
         files=tuple(files),
         start_epoch_s=float(t[0]),
@@ -135,4 +150,76 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         iridium_on=series["iridium_on"] > 0.5,
         pump_moving=series["pump_moving"] > 0.5,
         battpos_moving=series["battpos_moving"] > 0.5,
+        density_kg_m3=series["density_kg_m3"],
+        commanded_ballast_cc=series["commanded_ballast_cc"],
+        commanded_pitch_rad=series["commanded_pitch_rad"],
+        **{k: v for k, v in optional.items() if not isinstance(v, np.ndarray)},
     )
+
+
+def _read(logs, name: str) -> tuple[np.ndarray, np.ndarray] | None:  # noqa: ANN001
+    """(times, values) of an optional variable, None if the logs do not hold it."""
+    import dbdreader
+
+    try:
+        t, v = logs.get(name)
+    except dbdreader.DbdError:
+        return None
+    return (np.asarray(t, float), np.asarray(v, float)) if np.size(t) else None
+
+
+def _optional_series(logs, t: np.ndarray) -> dict:  # noqa: ANN001
+    """Commands, targets and the CTD's density on the flight samples' times `t` [epoch s]."""
+    from gliderplan.power_models.seawater import in_situ_density_kg_m3
+
+    out: dict[str, np.ndarray | float | tuple[str, ...]] = {}
+    for name, field in _COMMANDS:
+        found = _read(logs, name)
+        # a command holds until the next one; NaN before the first
+        out[field] = np.full(t.size, np.nan) if found is None else _held(found, t)
+    for name, field in _TARGETS:
+        found = _read(logs, name)
+        if found is not None:
+            out[field] = float(found[1][-1])
+    out["payload"] = _payload(logs)
+    out["density_kg_m3"] = np.full(t.size, np.nan)
+    ctd = [_read(logs, name) for name in CTD_VARIABLES]
+    if all(c is not None for c in ctd):
+        pressure_t, pressure_bar = ctd[0]
+        temp = np.interp(pressure_t, *ctd[1])
+        cond = np.interp(pressure_t, *ctd[2])
+        real = (cond > 0.0) & (pressure_bar >= 0.0)  # 0 is the science computer's "no data"
+        if real.sum() >= 2:
+            lat, lon = (_median(_read(logs, name)) for name in _POSITION)
+            rho = in_situ_density_kg_m3(temp[real], cond[real], pressure_bar[real] * 10.0,
+                                        lat, lon)
+            out["density_kg_m3"] = np.interp(t, pressure_t[real], rho, np.nan, np.nan)
+    return out
+
+
+def _payload(logs) -> tuple[str, ...]:  # noqa: ANN001
+    """Devices of the science instruments that logged readings (not only an installed flag)."""
+    names = [n for kind in logs.parameterNames.values() for n in kind]
+    logged = []
+    for prefix, device in _PAYLOAD:
+        for name in (n for n in names if n.startswith(prefix + "_")
+                     and not n.endswith("_is_installed")):
+            found = _read(logs, name)
+            if found is not None and np.count_nonzero(found[1]) >= MIN_PAYLOAD_READINGS:
+                logged.append(device)
+                break
+    return tuple(dict.fromkeys(logged))
+
+
+def _held(found: tuple[np.ndarray, np.ndarray], t: np.ndarray) -> np.ndarray:
+    times, values = found
+    index = np.searchsorted(times, t, side="right") - 1
+    return np.where(index >= 0, values[np.maximum(index, 0)], np.nan)
+
+
+def _median(found: tuple[np.ndarray, np.ndarray] | None) -> float:
+    """Median of a position series [deg]; 0 without fixes (the position changes the
+    absolute salinity, hence the density, by ~0.01 kg m-3 at most)."""
+    if found is None or not np.isfinite(found[1]).any():
+        return 0.0
+    return float(np.nanmedian(found[1]))

@@ -94,7 +94,8 @@ def _derived(kind: str, model: object) -> list[dict]:
         row(f"optimal speed for its own hotel load, yo {low:g}-{high:g} m", best, "m/s"),
         row(
             "energy per km at that speed",
-            model.energy_per_km_j(low, high, pitch, model.ballast_for_speed(best, pitch)) / 1e3,
+            model.energy_per_km_j(low, high, pitch, min(
+                float(model.yo_ballast_cc(best, pitch, low, high)), model.max_ballast_cc)) / 1e3,
             "kJ",
         ),
         row("surfacing with Iridium", model.surfacing_with_iridium_j, "J"),
@@ -137,9 +138,11 @@ def energy_per_km(vehicle: str = DEFAULT_VEHICLE, *, min_depth_m: float | None =
     hotel = model.hotel_w if hotel_w is None else hotel_w
     if hotel < 0.0:
         raise UsageError("--hotel-w must be >= 0 W")
-    ballast = model.ballast_for_speed(np.array(speeds), pitch)
+    # the neutral volume for each speed plus the trim offset of each band (yo_ballast_cc)
+    ballast = model.yo_ballast_cc(np.array(speeds)[None, :], pitch, low, np.array(highs)[:, None])
     reachable = ballast <= model.max_ballast_cc
-    grid = model.energy_per_km_j(low, np.array(highs)[:, None], pitch, ballast[None, :], hotel)
+    flown = np.minimum(ballast, model.max_ballast_cc)
+    grid = model.energy_per_km_j(low, np.array(highs)[:, None], pitch, flown, hotel)
     return {
         "vehicle": model.name,
         "pitch_rad": pitch,
@@ -147,11 +150,11 @@ def energy_per_km(vehicle: str = DEFAULT_VEHICLE, *, min_depth_m: float | None =
         "min_depth_m": low,
         "max_depth_m": highs,
         "speed_mps": speeds,
-        "ballast_cc": [float(b) for b in ballast],
+        "ballast_cc": [[float(b) for b in line] for line in ballast],
         "max_ballast_cc": model.max_ballast_cc,
         "energy_per_km_kj": [
-            [float(e) / 1e3 if ok else None for e, ok in zip(line, reachable, strict=True)]
-            for line in grid
+            [float(e) / 1e3 if ok else None for e, ok in zip(line, fits, strict=True)]
+            for line, fits in zip(grid, reachable, strict=True)
         ],
     }
 
@@ -169,7 +172,8 @@ def optimal_speeds(hotel_w: list[float], vehicle: str = DEFAULT_VEHICLE, *,
     for high in highs:
         for hotel in hotel_w:
             u = float(model.optimal_speed_mps(hotel, low, high, pitch))
-            ballast = float(model.ballast_for_speed(u, pitch))
+            ballast = min(float(model.yo_ballast_cc(u, pitch, low, high)),
+                          model.max_ballast_cc)
             rows.append(
                 {
                     "min_depth_m": low,

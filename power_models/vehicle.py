@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gliderplan.contract import Component
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
@@ -71,10 +72,29 @@ class Vehicle:
     pump_in_j_per_cc_m: float = 0.0  # b_in: pump-in energy per cc per metre (< 0: pressure helps)
     top_turn_s: float = 0.0  # time an inflection at the top of a yo takes beyond its pump run
     bottom_turn_s: float = 0.0  # the same at the bottom
+    dive_pitch_error_rad: float = 0.0  # |flown| - |commanded| pitch of a dive (servo deadband)
+    climb_pitch_error_rad: float = 0.0  # the same for a climb
     hotel_includes: tuple[str, ...] = ()  # devices ("ctd", "computer", ...) in the hotel load
     uncertainty: Uncertainty | None = field(default=None, compare=False)
 
+    def neutral(self) -> Vehicle:
+        """The same glider trimmed neutral in uniform water of its reference density, its
+        hull not compressible, turning while it pumps and flying the pitch it is commanded:
+        the symmetric steady-glide model (DESIGN.md section 8) for which the closed forms
+        (`transit_coefficient`, `optimal_speed_mps`) are exact."""
+        params = replace(self.flight, trim_cc=0.0, compressibility_per_pa=0.0)
+        return replace(self, flight=params, top_turn_s=0.0, bottom_turn_s=0.0,
+                       dive_pitch_error_rad=0.0, climb_pitch_error_rad=0.0)
+
     # ---- flight -------------------------------------------------------------------
+    def flown_pitch_rad(
+        self, dive_pitch_rad: Array | float, climb_pitch_rad: Array | float
+    ) -> tuple[Array, Array]:
+        """Pitch [rad] (magnitudes) the glider flies when commanded these for its dives and
+        climbs: its pitch servo stops inside a deadband, often on the same side."""
+        return (np.asarray(dive_pitch_rad, float) + self.dive_pitch_error_rad,
+                np.asarray(climb_pitch_rad, float) + self.climb_pitch_error_rad)
+
     def glide(self, pitch_rad: Array | float, ballast_cc: Array | float) -> tuple[Array, Array]:
         """Horizontal and vertical speed (u, w) [m s-1] from pitch [rad] and volume [cc]."""
         return flight.glide(self.flight, pitch_rad, ballast_cc)
@@ -90,6 +110,26 @@ class Vehicle:
         nominal flight (its calibration log, a yo at ~26 deg pitch) pumps it either side
         of neutral. Compiled into a mission as its default ballast."""
         return self.max_ballast_cc
+
+    def trim_offset_cc(self, min_depth_m: Array | float, max_depth_m: Array | float) -> Array:
+        """The largest |net buoyancy| [cc] at zero pumped volume over a yo band: what the
+        pump must overcome before the glider dives (or climbs) at all."""
+        ends = np.stack(np.broadcast_arrays(np.asarray(min_depth_m, float),
+                                            np.asarray(max_depth_m, float)))
+        return np.max(np.abs(flight.net_buoyancy_cc(self.flight, 0.0, ends)), axis=0)
+
+    def yo_ballast_cc(
+        self,
+        u_mps: Array | float,
+        pitch_rad: Array | float,
+        min_depth_m: Array | float,
+        max_depth_m: Array | float,
+    ) -> Array:
+        """Pumped volume [cc] either side of neutral for a yo planned at horizontal speed
+        `u_mps` [m s-1]: the neutral glider's volume for that speed plus the trim offset,
+        so that the slower direction still flies it (it may exceed `max_ballast_cc`)."""
+        return self.ballast_for_speed(u_mps, pitch_rad) + self.trim_offset_cc(
+            min_depth_m, max_depth_m)
 
     def max_speed_mps(self, pitch_rad: Array | float) -> Array:
         """Horizontal speed [m s-1] at the largest buoyancy volume."""
@@ -145,9 +185,9 @@ class Vehicle:
         ):
             raise ValueError("a yo needs 0 <= min_depth < max_depth")
         dive, climb = (
-            flight.glide_leg(self.flight, min_depth_m, max_depth_m, pitch_rad, ballast_cc, up,
-                             ocean)
-            for up in (False, True)
+            flight.glide_leg(self.flight, min_depth_m, max_depth_m, pitch, ballast_cc, up, ocean)
+            for pitch, up in zip(self.flown_pitch_rad(pitch_rad, pitch_rad), (False, True),
+                                 strict=True)
         )
         pumped = 2.0 * np.asarray(ballast_cc, float)
         time = dive.time_s + climb.time_s + self.turn_s(ballast_cc)
@@ -284,6 +324,8 @@ FIGURES: dict[str, tuple[str, str, dict]] = {
     "surfacing_energy": ("surfacing_fixed_j", "energy", {}),
     "top_turn_time": ("top_turn_s", "time", {"default": 0.0}),
     "bottom_turn_time": ("bottom_turn_s", "time", {"default": 0.0}),
+    "dive_pitch_error": ("dive_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
+    "climb_pitch_error": ("climb_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
     "nominal_pitch": (
         "nominal_pitch_rad", "angle", {"positive": True, "maximum": np.pi / 2 * 0.999}
     ),
@@ -351,7 +393,7 @@ def _hotel_includes(top: Table) -> tuple[str, ...]:
     table = top.table("hotel_includes")
     devices = table.text_list("devices")
     table.text("source")
-    known = {*preset_names("sensor"), "computer"}
+    known = {*preset_names("sensor"), Component.COMPUTER}
     for device in devices:
         if device not in known:
             raise table.error("devices", f"unknown device {device!r}; expected one of "

@@ -4,8 +4,10 @@ Every component is integrated over the run's ticks with `power_models.timeline` 
 vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
 pitch motor, the surface and Iridium phases, the computer at the clock of each state
 from its workload per tick, and each sensor device from its on/off timeline (with a
-warm-up at every switch-on). `check_flight` compares the run with the plan's prediction
-per state, which the plan file carries.
+warm-up at every switch-on), except what the vehicle's hotel load already holds
+(`hotel_includes`: a fitted hotel load measured with the CTD logging has it inside).
+`check_flight` compares the run with the plan's prediction per state, which the plan file
+carries.
 
 A run that spends more than the plan's budget by more than `PLAN_TOLERANCE` violates the
 plan; the states that overran their prediction are named as the cause. A run within its
@@ -62,11 +64,13 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
                         pumped_out_cc=c["pumped_out_cc"], pumped_in_cc=c["pumped_in_cc"],
                         inflection=c["inflection"].astype(bool))
     parts = energy_by_component_j(timeline, vehicle)
-    parts[Component.COMPUTER] = _computer_j(state, dt, mission, plan)
+    held = vehicle.hotel_includes  # devices whose power the hotel load already holds
+    parts[Component.COMPUTER] = _computer_j(state, dt, mission, plan) * (
+        Component.COMPUTER not in held)
     power = c["sensor_power"].astype(np.int64)
     for device in DEVICES:
         on = (power & DEVICE_BITS[device]) != 0
-        if on.any():
+        if on.any() and device not in held:
             device_timeline = Timeline(dt, timeline.phase, timeline.depth_m, np.zeros(len(on)),
                                        np.zeros(len(on)), np.zeros(len(on), bool),
                                        sensor_on=on[None, :])

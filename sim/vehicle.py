@@ -160,7 +160,10 @@ class GliderSim:
         a glide's depth is clamped at the surface by the caller, a hover's is not."""
         dt = self.tick_s
         v = self.vehicle
-        # battery: toward the commanded pitch at the motor's rate
+        # battery: toward the pitch the servo settles at for the command, at the motor's rate
+        if pitch_rad != 0.0:
+            error = v.climb_pitch_error_rad if pitch_rad > 0.0 else v.dive_pitch_error_rad
+            pitch_rad = math.copysign(abs(pitch_rad) + error, pitch_rad)
         dp = pitch_rad - self.pitch_rad
         max_dp = PITCH_RATE_RAD_S * dt
         self.pitch_rad = pitch_rad if abs(dp) <= max_dp else self.pitch_rad + math.copysign(

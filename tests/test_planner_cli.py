@@ -133,7 +133,7 @@ def test_sweep_writes_csvs_and_plot(tmp_path):
     boards = pd.read_csv(tmp_path / "sweep" / "computers.csv")
     assert list(boards["computer"]) == ["ts5500@133", "ts7800@300", "ts7800@500"]
     assert boards["minimum_energy_j"].is_monotonic_increasing  # faster boards draw more
-    # the mission's 15 Wh pack is too small for the TS-7800 at 500 MHz
+    # the mission's 13.5 Wh pack is too small for the TS-7800 at 500 MHz
     assert list(boards["status"]) == ["optimal", "optimal", "infeasible"]
     assert boards["computer_j"].iloc[0] < boards["computer_j"].iloc[1]
     packs = pd.read_csv(tmp_path / "sweep" / "batteries.csv")

@@ -35,7 +35,7 @@ def _hold_rate(tmp_path: Path, plan: Path, name: str) -> float:
 def test_fresh_scenarios_hold_the_budget_as_often_as_the_plan_says(tmp_path, capsys):
     confident = tmp_path / "confident.plan"
     nominal = tmp_path / "nominal.plan"
-    common = [str(SEPARABLE), "--battery", "16Wh"]
+    common = [str(SEPARABLE), "--battery", "13Wh"]
     assert main(["plan", *common, "-o", str(nominal)]) == 0
     assert main(["plan", *common, "--confidence", "0.8", "--seed", "1", "--workers", "2",
                  "-o", str(confident)]) == 0
@@ -65,7 +65,7 @@ def test_bad_confidence_options_exit_2(capsys, extra, message):
 
 
 def test_a_budget_no_plan_can_keep_says_so(capsys):
-    code = main(["plan", str(SEPARABLE), "--battery", "13Wh", "--confidence", "0.8",
+    code = main(["plan", str(SEPARABLE), "--battery", "11.5Wh", "--confidence", "0.8",
                  "--scenarios", "30", "--workers", "1"])
     err = capsys.readouterr().err
     assert code == 1 and "Traceback" not in err

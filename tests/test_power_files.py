@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import math
+import re
+import tomllib
+
 import pytest
 
 from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
-from gliderplan.power_models.catalog import preset_path
+from gliderplan.power_models.catalog import DATA_DIR, preset_path
 from gliderplan.power_models.errors import ModelFileError
 
 
@@ -46,7 +50,7 @@ def test_units_are_converted(tmp_path):
         (
             "vehicle",
             "slocum_g3",
-            'value = 1.155, unit = "W"',
+            'value = 1.158, unit = "W"',
             'value = 1.155, unit = "Wh"',
             "hotel_power",
             "not a unit of power",
@@ -54,8 +58,8 @@ def test_units_are_converted(tmp_path):
         (
             "vehicle",
             "slocum_g3",
-            'value = 1.155, unit = "W"',
-            'value = -1.155, unit = "W"',
+            'value = 1.158, unit = "W"',
+            'value = -1.158, unit = "W"',
             "hotel_power",
             "must be >= 0",
         ),
@@ -161,11 +165,11 @@ def test_broken_or_missing_files(tmp_path):
 
 def test_a_figure_may_carry_its_standard_deviation_in_its_own_unit(tmp_path):
     path = _copy_with(
-        tmp_path, "vehicle", "slocum_g3", 'value = 1.155, unit = "W"',
-        'value = 1155, unit = "mW", sd = 50'
+        tmp_path, "vehicle", "slocum_g3", 'value = 1.158, unit = "W"',
+        'value = 1158, unit = "mW", sd = 50'
     )
     vehicle = load_vehicle(str(path))
-    assert vehicle.hotel_w == pytest.approx(1.155)
+    assert vehicle.hotel_w == pytest.approx(1.158)
     assert vehicle.uncertainty.keys == ("hotel_power",)
     assert vehicle.uncertainty.sd == pytest.approx([0.05])
     assert load_vehicle("slocum_g3").uncertainty is None
@@ -175,22 +179,83 @@ UNCERTAINTY = '\n[uncertainty]\nfigures = ["hotel_power"]\ncorrelation = [[{}]]\
 
 
 @pytest.mark.parametrize(
-    ("sd", "tail", "head", "key", "message"),
+    ("sd", "tail", "key", "message"),
     [
-        (", sd = -1", "", "", "hotel_power", "sd must be a finite number >= 0"),
-        ("", UNCERTAINTY.format(1), "", "uncertainty.figures", "no sd next to the figure"),
-        (", sd = 0.1", UNCERTAINTY.format(0.5), "", "uncertainty.correlation",
+        (", sd = -1", "", "hotel_power", "sd must be a finite number >= 0"),
+        ("", UNCERTAINTY.format(1), "uncertainty.figures", "no sd next to the figure"),
+        (", sd = 0.1", UNCERTAINTY.format(0.5), "uncertainty.correlation",
          "expected a symmetric 1 x 1 matrix"),
-        ("", "", 'hotel_includes = { devices = ["ctd", "sonar"], source = "x" }\n',
-         "hotel_includes.devices", "unknown device 'sonar'"),
     ],
 )
-def test_uncertainty_and_hotel_contents_are_checked(tmp_path, sd, tail, head, key, message):
-    path = _copy_with(tmp_path, "vehicle", "slocum_g3", 'value = 1.155, unit = "W"',
-                      f'value = 1.155, unit = "W"{sd}')
-    text = path.read_text().replace("hotel_power = ", head + "hotel_power = ", 1)
-    path.write_text(text + tail)
+def test_uncertainty_is_checked(tmp_path, sd, tail, key, message):
+    path = _copy_with(tmp_path, "vehicle", "slocum_g3", 'value = 1.158, unit = "W"',
+                      f'value = 1.158, unit = "W"{sd}')
+    path.write_text(path.read_text() + tail)
     with pytest.raises(ModelFileError) as caught:
         load_vehicle(str(path))
     assert str(caught.value).startswith(f"{path}: {key}: ")
     assert message in str(caught.value)
+
+
+def test_the_hotel_load_names_known_devices(tmp_path):
+    path = _copy_with(tmp_path, "vehicle", "slocum_g3", "devices = []",
+                      'devices = ["ctd", "sonar"]')
+    with pytest.raises(ModelFileError, match=r"hotel_includes\.devices: unknown device 'sonar'"):
+        load_vehicle(str(path))
+    assert load_vehicle("slocum_g2_shallow").hotel_includes == ("ctd", "optics")
+
+
+# ---- every preset figure agrees with the numbers its source quotes ------------------------
+_NUMBER = r"[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?"
+
+
+def _quoted(source: str, unit: str) -> list[float]:
+    """Numbers the source gives in `unit`: "32 cc/s", a range "3-38 m" (both ends), a
+    spread "+-233 cc" (its size)."""
+    number = rf"(\+-)?({_NUMBER})"
+    pattern = (rf"(?<![\w.]){number}(?:\s*(?:-|\.\.|to)\s*{number})?"
+               rf"\s*{re.escape(unit)}(?![\w/])")
+    found = []
+    for spread, first, spread2, second in re.findall(pattern, source):
+        found.append(abs(float(first)) if spread else float(first))
+        if second:
+            found.append(abs(float(second)) if spread2 else float(second))
+    return found
+
+
+def _figures(name, prefix, table):
+    for key, item in table.items():
+        if isinstance(item, dict) and "value" in item:
+            yield name, prefix + key, item
+        elif isinstance(item, dict):
+            yield from _figures(name, f"{prefix}{key}.", item)
+        elif isinstance(item, list):
+            for i, sub in enumerate(item):
+                if isinstance(sub, dict):
+                    yield from _figures(name, f"{prefix}{key}[{i}].", sub)
+
+
+def _preset_figures():
+    for path in sorted(DATA_DIR.glob("*.toml")):
+        with open(path, "rb") as handle:
+            yield from _figures(path.name, "", tomllib.load(handle))
+
+
+QUOTING = [(f, k, e) for f, k, e in _preset_figures() if _quoted(e["source"], e["unit"])]
+
+
+@pytest.mark.parametrize(("file", "key", "entry"), QUOTING,
+                         ids=[f"{f}:{k}" for f, k, _ in QUOTING])
+def test_a_preset_figure_is_a_number_its_source_quotes(file, key, entry):
+    quoted = _quoted(entry["source"], entry["unit"])
+    assert any(math.isclose(entry["value"], q, rel_tol=1e-3) for q in quoted), (
+        f"{file}: {key} = {entry['value']} {entry['unit']}, but its source quotes "
+        f"{quoted}: {entry['source']}")
+
+
+def test_the_source_check_reads_ranges_and_spreads():
+    assert _quoted("shallow pump +-233 cc (the log: -231..+234 cc)", "cc") == [233, -231, 234]
+    assert len(QUOTING) > 20  # most figures quote their number
+    assert _quoted("yo 3-38 m; 2.4888 J/cc", "m") == [3, 38]
+    assert _quoted("oil in E = dV (-0.17935 + ...), i.e. 0.17935 J/cc and -0.005574 J/(cc m)",
+                   "J/(cc m)") == [-0.005574]

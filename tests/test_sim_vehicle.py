@@ -14,7 +14,7 @@ from gliderplan.power_models.segments import GLIDE, IRIDIUM, PUMP, SURFACE
 from gliderplan.sim.geo import offset_m
 from gliderplan.sim.vehicle import Current, GliderSim
 
-VEHICLE = load_vehicle("slocum_g2_shallow")
+VEHICLE = load_vehicle("slocum_g2_shallow").neutral()  # speeds: `glide` at the pumped volume
 PITCH, BALLAST = 0.454, 233.0
 
 
@@ -61,9 +61,10 @@ def test_surfacing_takes_a_fix_then_makes_the_iridium_call():
         phases.append(g.phase)
     at_surface = [p for p in phases if p in (SURFACE, IRIDIUM)]
     assert g.surfacings == 1 and g.depth_m == 0.0
-    assert at_surface.count(IRIDIUM) == VEHICLE.iridium_s / 10.0
+    fix, call = VEHICLE.surface_s, VEHICLE.iridium_s  # ticks that start in the call:
+    assert at_surface.count(IRIDIUM) == sum(fix <= 10 * k < fix + call for k in range(60))
     first_call = at_surface.index(IRIDIUM)
-    assert first_call == VEHICLE.surface_s / 10.0  # the GPS fix comes first
+    assert first_call == math.ceil(fix / 10.0)  # the GPS fix comes first
     assert all(p == SURFACE for p in at_surface[first_call + at_surface.count(IRIDIUM):])
 
 

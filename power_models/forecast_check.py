@@ -1,0 +1,246 @@
+"""Forward validation: calibrate on a log's earlier whole dives, forecast the later ones from
+what a pilot knows before flying them, and compare with the coulomb counter.
+
+The forecast is given the later part's commanded yo band, pitch and pumped volume, its
+surfacing schedule (the number of dives before the glider climbs to the surface: a
+command of the yo behaviour) and the ocean (the fit part's CTD). Durations, speeds, yo
+periods, pumped volumes and energies of the later part are outputs, never inputs. The
+bottom of the band is the dive target or, when the sea floor stopped the dives before
+it, the depth the fit part's dives turned at (the floor less the altimeter's clearance).
+
+The forecast ends where the later part's last dive does: the glider back at the
+surface. What follows in the record (the GPS fix and Iridium calls) needs surfacing
+figures the fit part cannot show when it holds no call; it is forecast with the base
+vehicle's figures and reported apart, with those figures named.
+
+Truth is the coulomb counter (m_coulomb_amphr_total x m_battery); the fit integrates the
+current sensor (m_coulomb_current x m_battery), so the two are compared on the fit part
+and the bias is stated with the counter's resolution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gliderplan.power_models import segments as seg
+from gliderplan.power_models.dives import Dive, split_dives
+from gliderplan.power_models.draws import (
+    DEFAULT_DRAWS,
+    DEFAULT_SEED,
+    draw_vehicles,
+    prediction_spread,
+)
+from gliderplan.power_models.flight import glide_leg
+from gliderplan.power_models.forecast import Forecast, YoCommand, energy_interval_j, forecast
+from gliderplan.power_models.slocum_log import FlightLog
+from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.power_models.vehicle_fit import (
+    BOOTSTRAP_RESAMPLES,
+    CalibrationError,
+    VehicleFit,
+    commanded_volume_cc,
+    fit_vehicle,
+)
+
+SPEED_BAND_MARGIN = 0.15  # vertical speeds are compared on the band less 15 % at each end
+MIN_FIT_DIVES = 2
+
+
+@dataclass(frozen=True)
+class Observed:
+    """What the later part did (measured), for the forecast's outputs."""
+
+    time_s: float  # from the cut to the arrival at the surface
+    energy_j: float  # coulomb counter over that span
+    yo_period_s: float  # mean time between successive turns of a kind
+    w_mps: dict[str, float]  # mean vertical speed of dives / climbs over the speed band
+    yos: int
+
+
+@dataclass(frozen=True)
+class ForwardCheck:
+    fit_dives: int
+    later_dives: int
+    cut_s: float  # record time where the later part starts
+    calibration: VehicleFit  # of the fit part
+    command: YoCommand
+    forecast: Forecast
+    interval_j: tuple[float, float]
+    observed: Observed
+    speed_band_m: tuple[float, float]
+    predicted_w_mps: dict[str, float]
+    counter_bias: float  # counter / current-sensor energy - 1 over the fit part
+    counter_step_j: float  # the counter's resolution over the fit part [J]
+    from_base: tuple[str, ...]  # figures the forecast uses that the fit part did not give
+    stay_predicted_j: float | None  # the record's remaining surface stay, base figures
+    stay_measured_j: float | None
+
+    @property
+    def energy_relative_error(self) -> float:
+        return self.forecast.energy_j / self.observed.energy_j - 1.0
+
+
+def _band(log: FlightLog, fit: list[Dive], later: list[Dive]) -> tuple[float, float]:
+    """The commanded yo band of the later part: the climb target (else the depth the fit
+    part turned at the top) and the dive target, or where the fit part's dives turned
+    when the sea floor stopped them short of it."""
+    tops = [log.depth_m[d.top_turn.moving] for d in fit if d.top_turn is not None
+            and log.depth_m[d.top_turn.moving] >= seg.SURFACE_DEPTH_M]
+    bottoms = [log.depth_m[d.bottom_turn.moving] for d in fit if d.bottom_turn is not None]
+    if not bottoms:
+        raise CalibrationError("the fit part holds no bottom turn")
+    top = log.climb_target_m if np.isfinite(log.climb_target_m) else float(np.mean(tops))
+    turned = float(np.mean(bottoms))
+    target = log.dive_target_m if np.isfinite(log.dive_target_m) else turned
+    return top, min(target, turned)
+
+
+def _command(log: FlightLog, fit: list[Dive], later: list[Dive]) -> YoCommand:
+    start, stop = later[0].start, later[-1].stop
+    pitch = np.abs(log.commanded_pitch_rad[start:stop])
+    pitch = pitch[np.isfinite(pitch)]
+    if not pitch.size:
+        raise CalibrationError("the later part holds no commanded pitch (c_pitch)")
+    down = pitch[log.commanded_pitch_rad[start:stop][np.isfinite(
+        log.commanded_pitch_rad[start:stop])] < 0]
+    up = pitch[log.commanded_pitch_rad[start:stop][np.isfinite(
+        log.commanded_pitch_rad[start:stop])] > 0]
+    top, bottom = _band(log, fit, later)
+    volume = commanded_volume_cc(log, start, later[-1].bottom_turn.start
+                                 if later[-1].bottom_turn else stop)
+    return YoCommand(top, bottom, float(np.median(down if down.size else pitch)),
+                     float(np.median(up if up.size else pitch)), volume, len(later))
+
+
+def _arrival(log: FlightLog, later: list[Dive]) -> int:
+    """Sample where the last dive's climb reaches the surface."""
+    last = later[-1]
+    if last.bottom_turn is None:
+        raise CalibrationError("the record ends before its last dive turns at the bottom")
+    after = np.flatnonzero(log.depth_m[last.bottom_turn.stop:] < seg.SURFACE_DEPTH_M)
+    if not after.size:
+        raise CalibrationError("the record ends before the glider is back at the surface")
+    return last.bottom_turn.stop + int(after[0])
+
+
+def _observed(log: FlightLog, later: list[Dive], cut: int, arrival: int,
+              band: tuple[float, float]) -> Observed:
+    t, z = log.t_s, log.depth_m
+    turns = {"top": [d.top_turn for d in later if d.top_turn is not None],
+             "bottom": [d.bottom_turn for d in later if d.bottom_turn is not None]}
+    periods = [t[b.moving] - t[a.moving] for events in turns.values()
+               for a, b in zip(events[:-1], events[1:], strict=True)]
+    speeds: dict[str, list[float]] = {"dive": [], "climb": []}
+    for k, dive in enumerate(later):
+        halves = [("dive", dive.top_turn, dive.bottom_turn)]
+        if k + 1 < len(later):  # the last climb goes to the surface on more buoyancy
+            halves.append(("climb", dive.bottom_turn, later[k + 1].top_turn))
+        for kind, first, second in halves:
+            if first is None or second is None:
+                continue
+            span = slice(first.stop, second.start)
+            depth, time = z[span], t[span]
+            if kind == "climb":
+                depth, time = depth[::-1], time[::-1]
+            if depth.size < 2 or depth.min() > band[0] or depth.max() < band[1]:
+                continue
+            crossing = np.interp(band, np.maximum.accumulate(depth), time)
+            speeds[kind].append((band[1] - band[0]) / abs(crossing[1] - crossing[0]))
+    segment = log.slice(cut, arrival + 1)
+    return Observed(
+        time_s=float(t[arrival] - t[cut]),
+        energy_j=seg.counter_energy_j(segment),
+        yo_period_s=float(np.mean(periods)) if periods else float("nan"),
+        w_mps={k: float(np.mean(v)) if v else float("nan") for k, v in speeds.items()},
+        yos=len(later),
+    )
+
+
+def _bias(log: FlightLog) -> tuple[float, float]:
+    """(counter / current-sensor energy - 1, one counter step [J]) over `log`."""
+    counter = seg.counter_energy_j(log)
+    current = float(seg.interval_energy_j(log).sum())
+    steps = np.diff(log.charge_ah)
+    step_ah = float(np.min(steps[steps > 0])) if (steps > 0).any() else 0.0
+    return counter / current - 1.0, step_ah * 3600.0 * float(np.mean(log.battery_v))
+
+
+FORECAST_KEYS = (
+    "hotel_power", "pump_out_energy_per_volume", "pump_out_energy_per_volume_depth",
+    "pump_in_energy_per_volume", "pump_in_energy_per_volume_depth", "pump_rate",
+    "max_ballast", "pitch_energy", "top_turn_time", "bottom_turn_time", "dive_pitch_error",
+    "climb_pitch_error", "flight.drag_cd0", "flight.trim_volume", "flight.compressibility",
+    "flight.water_density", "flight.hull_volume", "flight.wing_area", "flight.lift_slope_wing",
+    "flight.lift_slope_hull", "flight.drag_cd1",
+)
+STAY_KEYS = ("surface_power", "surface_time", "iridium_power", "iridium_time",
+             "surfacing_energy")
+
+
+def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
+                  resamples: int = BOOTSTRAP_RESAMPLES) -> ForwardCheck:
+    """Fit the first `fit_share` of the record's whole dives, forecast the rest."""
+    dives = split_dives(log)
+    fit_count = max(MIN_FIT_DIVES, round(fit_share * len(dives)))
+    if len(dives) - fit_count < 1:
+        raise CalibrationError(
+            f"the record holds {len(dives)} whole dives: too few to fit {MIN_FIT_DIVES} and "
+            "forecast at least one")
+    fit, later = dives[:fit_count], dives[fit_count:]
+    cut = later[0].start
+    fit_log = log.slice(0, cut + 1)
+    calibration = fit_vehicle(fit_log, base, resamples)
+    command = _command(log, fit, later)
+    arrival = _arrival(log, later)
+    observed = _observed(log, later, cut, arrival, _speed_band(command))
+    vehicle = calibration.vehicle
+    predicted = forecast(vehicle, command, calibration.ocean)
+    bias, step = _bias(fit_log)
+    rng = np.random.default_rng(DEFAULT_SEED)
+    drawn = draw_vehicles(vehicle, DEFAULT_DRAWS, rng, prediction_spread(len(fit), len(later)))
+    # the counter is read at both ends of the span: each reading is off by up to a step
+    quantisation = step * (rng.random(len(drawn)) - rng.random(len(drawn)))
+    interval = energy_interval_j(drawn, command, calibration.ocean, noise_j=quantisation)
+    band = _speed_band(command)
+    pitch = vehicle.flown_pitch_rad(command.dive_pitch_rad, command.climb_pitch_rad)
+    predicted_w = {
+        kind: float(glide_leg(vehicle.flight, *band, pitch[up], command.ballast_cc, bool(up),
+                              calibration.ocean).w_mps)
+        for kind, up in (("dive", 0), ("climb", 1))
+    }
+    fitted = {f.key for f in calibration.figures if f.fitted}
+    stay_pred = stay_meas = None
+    if arrival < log.t_s.size - 1:
+        stay = log.slice(arrival, log.t_s.size)
+        span = float(stay.t_s[-1] - stay.t_s[0])
+        stay_pred = _stay_energy_j(vehicle, span)
+        stay_meas = seg.counter_energy_j(stay)
+    return ForwardCheck(
+        fit_dives=len(fit), later_dives=len(later), cut_s=float(log.t_s[cut]),
+        calibration=calibration, command=command, forecast=predicted, interval_j=interval,
+        observed=observed, speed_band_m=band, predicted_w_mps=predicted_w,
+        counter_bias=bias, counter_step_j=step,
+        from_base=tuple(k for k in FORECAST_KEYS if k not in fitted),
+        stay_predicted_j=stay_pred, stay_measured_j=stay_meas,
+    )
+
+
+def stay_from_base(check: ForwardCheck) -> tuple[str, ...]:
+    fitted = {f.key for f in check.calibration.figures if f.fitted}
+    return tuple(k for k in STAY_KEYS if k not in fitted)
+
+
+def _stay_energy_j(vehicle: Vehicle, span_s: float) -> float:
+    """Energy [J] of `span_s` at the surface: the GPS fix, the Iridium call, then waiting."""
+    fix = min(span_s, vehicle.surface_s)
+    call = min(span_s - fix, vehicle.iridium_s)
+    wait = span_s - fix - call
+    return (vehicle.surfacing_fixed_j + vehicle.surface_w * (fix + wait)
+            + vehicle.iridium_w * call)
+
+
+def _speed_band(command: YoCommand) -> tuple[float, float]:
+    margin = SPEED_BAND_MARGIN * (command.bottom_m - command.top_m)
+    return command.top_m + margin, command.bottom_m - margin

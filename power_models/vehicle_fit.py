@@ -1,0 +1,248 @@
+"""Calibrating a vehicle to a Slocum log: every figure the log supports, each with the
+evidence behind it and, from a bootstrap over whole dives, how sure it is.
+
+- energy: hotel, surface and Iridium power, pump and pitch energy (`calibration.py`, from
+  the current sensor);
+- flight: drag Cd0, trim and hull compressibility (`flight_fit.py`, with gliderflight and
+  the CTD's density), the pitch the glider flies when commanded a pitch (its pitch servo
+  stops inside a deadband), and the turn times: how much longer each half-yo takes than
+  the steady glide between its turns and its pump run;
+- surfacing: time at the surface before the Iridium call, and the call's length.
+
+The bootstrap resamples whole dives with replacement, refits, and gives each figure's
+standard deviation and the figures' correlation; a figure seen once (one surfacing) has
+no spread to measure and gets none.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from gliderplan.contract.errors import GliderplanError
+from gliderplan.power_models import segments as seg
+from gliderplan.power_models.calibration import EnergyFit, fit_energy
+from gliderplan.power_models.dives import Dive, concatenate, split_dives
+from gliderplan.power_models.flight import DensityProfile, glide_leg
+from gliderplan.power_models.flight_fit import FlightFit, FlightFitError, fit_flight, steady_glides
+from gliderplan.power_models.seawater import density_profile
+from gliderplan.power_models.slocum_log import FlightLog
+from gliderplan.power_models.vehicle import FIGURES, Uncertainty, Vehicle, with_figures
+
+BOOTSTRAP_RESAMPLES = 40
+SEED = 2014
+SURFACING_KEYS = ("surface_power", "iridium_power", "surface_time", "iridium_time")
+MIN_PITCH_SAMPLES = 10  # steady samples a half-yo needs to tell its pitch
+
+
+class CalibrationError(GliderplanError):
+    """The log cannot support a calibration; the message says why."""
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One figure of the calibrated vehicle [model unit], keyed as in the data file."""
+
+    key: str
+    value: float
+    fitted: bool  # False: the log cannot support it, kept from the base vehicle
+    basis: str  # what it was fitted from, or why it was kept
+    sd: float | None = None  # bootstrap standard deviation [model unit]
+
+
+@dataclass(frozen=True)
+class VehicleFit:
+    vehicle: Vehicle  # the fitted figures, with their uncertainty
+    figures: tuple[Figure, ...]
+    energy: EnergyFit
+    flight: FlightFit
+    ocean: DensityProfile  # the water the log flew through (its CTD)
+    dives: int
+    resamples: int  # bootstrap refits that succeeded
+
+    def figure(self, key: str) -> Figure:
+        return next(f for f in self.figures if f.key == key)
+
+
+def commanded_volume_cc(log: FlightLog, start: int, stop: int) -> float:
+    """Median commanded pumped volume [cc] (magnitude) over samples [start, stop), or the
+    measured one where the log holds no command."""
+    command = np.abs(log.commanded_ballast_cc[start:stop])
+    command = command[np.isfinite(command)]
+    if command.size:
+        return float(np.median(command))
+    return float(np.median(np.abs(log.ballast_cc[start:stop])))
+
+
+def _pitch_errors(log: FlightLog) -> list[Figure]:
+    """|Flown pitch| - |commanded pitch| [rad] of the last steady dive and climb: the pitch
+    servo stops anywhere inside its deadband and carries its battery position from one
+    half-yo to the next (servo memory), so the latest half-yo is the best guess of the next
+    (the bootstrap's resamples then spread it as much as half-yos differ)."""
+    steady = steady_glides(log) & np.isfinite(log.commanded_pitch_rad)
+    figures = []
+    for key, sign in (("dive_pitch_error", -1.0), ("climb_pitch_error", 1.0)):
+        mine = steady & (np.sign(log.pitch_rad) == sign)
+        runs = np.split(np.flatnonzero(mine), np.flatnonzero(np.diff(np.flatnonzero(mine)) > 1)
+                        + 1) if mine.any() else []
+        runs = [r for r in runs if r.size >= MIN_PITCH_SAMPLES]
+        if not runs:
+            figures.append(Figure(key, 0.0, False, "no steady half-yo with a commanded pitch"))
+            continue
+        last = runs[-1]
+        error = np.abs(log.pitch_rad[last]) - np.abs(log.commanded_pitch_rad[last])
+        figures.append(Figure(key, float(np.mean(error)), True,
+                              f"flown minus commanded pitch of the last of {len(runs)} "
+                              f"half-yos ({last.size} steady samples)"))
+    return figures
+
+
+def _turn_times(log: FlightLog, dives: list[Dive], vehicle: Vehicle,
+                ocean: DensityProfile) -> list[Figure]:
+    """Time each half-yo takes beyond its steady glide (at the flown pitch, through the
+    log's water) and its pump run: the top turn from the dives, the bottom turn from the
+    climbs. Turns at the surface (leaving it) are a different manoeuvre and left out."""
+    samples: dict[str, list[float]] = {"top_turn_time": [], "bottom_turn_time": []}
+    t, z = log.t_s, log.depth_m
+    for k, dive in enumerate(dives):
+        top, bottom = dive.top_turn, dive.bottom_turn
+        if bottom is None:
+            continue
+        after = dives[k + 1].top_turn if k + 1 < len(dives) else None
+        halves = []
+        if top is not None and z[top.moving] >= seg.SURFACE_DEPTH_M:
+            halves.append(("top_turn_time", top, bottom, False))
+        if after is not None and z[after.moving] >= seg.SURFACE_DEPTH_M:
+            halves.append(("bottom_turn_time", bottom, after, True))
+        for key, first, second, up in halves:
+            low, high = sorted((float(z[first.moving]), float(z[second.moving])))
+            if high - low < 1.0 or z[first.stop:second.moving].min() < seg.SURFACE_DEPTH_M:
+                continue  # no glide between, or a surfacing in between
+            volume = commanded_volume_cc(log, first.stop, second.start)
+            command = np.abs(log.commanded_pitch_rad[first.stop:second.moving])
+            command = command[np.isfinite(command)]
+            if not command.size:
+                command = np.abs(log.pitch_rad[first.stop:second.moving])
+            pitch = vehicle.flown_pitch_rad(float(np.median(command)), float(np.median(command)))
+            leg = glide_leg(vehicle.flight, low, high, pitch[1 if up else 0], volume, up, ocean)
+            pump = float(vehicle.pump_time_s(first.volume_cc))
+            samples[key].append(t[second.moving] - t[first.moving] - float(leg.time_s) - pump)
+    figures = []
+    for key, values in samples.items():
+        if values:
+            # below 0 the glider glides on while it pumps; it never turns in less than that
+            figures.append(Figure(key, max(float(np.mean(values)), 0.0), True,
+                                  f"{len(values)} half-yos: time beyond the steady glide "
+                                  "and the pump run (at least 0)"))
+        else:
+            figures.append(Figure(key, 0.0, False, "no whole half-yo between turns"))
+    return figures
+
+
+def _surfacings(log: FlightLog, parts: seg.Segmentation) -> list[Figure]:
+    """Time at the surface before the first Iridium call, and the calls' total time, of
+    each surfacing that does not start with the record."""
+    at_surface = np.isin(parts.phase, (seg.SURFACE, seg.IRIDIUM))
+    edges = np.diff(np.concatenate(([0], at_surface.astype(np.int8), [0])))
+    dt = np.diff(log.t_s)
+    before, calls, ended = [], [], False
+    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        calling = parts.phase[start:stop] == seg.IRIDIUM
+        if start == 0 or not calling.any():
+            continue
+        first_call = start + int(np.argmax(calling))
+        before.append(float(dt[start:first_call].sum()))
+        calls.append(float(dt[start:stop][calling].sum()))
+        ended = ended or stop == parts.phase.size
+    if not calls:
+        return [Figure(k, 0.0, False, "no surfacing with an Iridium call")
+                for k in ("surface_time", "iridium_time")]
+    cut = "; the record ends during the last one: at least this long" if ended else ""
+    return [
+        Figure("surface_time", float(np.mean(before)), True,
+               f"{len(before)} surfacing(s): time at the surface before the Iridium call"),
+        Figure("iridium_time", float(np.mean(calls)), True,
+               f"{len(calls)} surfacing(s): Iridium call time{cut}"),
+    ]
+
+
+def fit_once(log: FlightLog, base: Vehicle, ocean: DensityProfile | None = None
+             ) -> tuple[Vehicle, list[Figure], EnergyFit, FlightFit]:
+    """One fit of every figure the log supports; the others stay as in `base`."""
+    parts = seg.segment(log)
+    if ocean is None:
+        ocean = log_ocean(log)
+    energy = fit_energy(log, base)
+    flight = fit_flight(log, base.flight)
+    figures = [Figure(c.key, c.value, c.fitted, c.basis) for c in energy.coefficients]
+    steady = f"{flight.samples} steady-glide samples (gliderflight, CTD density)"
+    figures += [
+        Figure("flight.drag_cd0", flight.params.drag_cd0, True, steady),
+        Figure("flight.trim_volume", flight.params.trim_cc, True, steady),
+        Figure("flight.compressibility", flight.params.compressibility_per_pa, True, steady),
+        Figure("flight.water_density", flight.params.rho_kg_m3, True,
+               f"mean in-situ density (TEOS-10) of the CTD over {flight.samples} steady-glide "
+               "samples: the water the trim is given in"),
+    ]
+    figures += _pitch_errors(log)
+    vehicle = with_figures(energy.vehicle, {f.key: f.value for f in figures if f.fitted})
+    vehicle = replace(vehicle, flight=flight.params)
+    figures += _turn_times(log, split_dives(log, parts), vehicle, ocean)
+    figures += _surfacings(log, parts)
+    vehicle = with_figures(vehicle, {f.key: f.value for f in figures if f.fitted})
+    return vehicle, figures, energy, flight
+
+
+def log_ocean(log: FlightLog) -> DensityProfile:
+    """The water column the log flew through, from its CTD (1 m bins)."""
+    if not np.isfinite(log.density_kg_m3).any():
+        raise CalibrationError("the logs hold no CTD readings (sci_water_temp, sci_water_cond, "
+                               "sci_water_pressure): the flight model needs the water's density")
+    return density_profile(log.depth_m, log.density_kg_m3)
+
+
+def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMPLES,
+                seed: int = SEED) -> VehicleFit:
+    """Fit `log` and bootstrap the fit over its whole dives (`resamples` refits)."""
+    ocean = log_ocean(log)
+    try:
+        vehicle, figures, energy, flight = fit_once(log, base, ocean)
+    except FlightFitError as err:
+        raise CalibrationError(str(err)) from None
+    dives = split_dives(log)
+    spread_keys = [f.key for f in figures if f.fitted and f.key not in SURFACING_KEYS]
+    start = replace(base, flight=vehicle.flight)
+    rng = np.random.default_rng(seed)
+    draws = []
+    for _ in range(resamples if len(dives) >= 2 else 0):
+        picked = [dives[i] for i in rng.integers(0, len(dives), len(dives))]
+        try:
+            _, refit, _, _ = fit_once(concatenate(log, picked), start, ocean)
+        except (FlightFitError, ValueError):
+            continue  # a resample without enough steady glides: it says nothing
+        values = {f.key: f.value for f in refit if f.fitted}
+        if all(k in values for k in spread_keys):
+            draws.append([values[k] for k in spread_keys])
+    samples = np.array(draws).reshape(len(draws), len(spread_keys))
+    sd = samples.std(axis=0, ddof=1) if len(draws) >= 3 else np.zeros(len(spread_keys))
+    varying = sd > 1e-9 * np.abs(samples.mean(axis=0)) if len(draws) else sd > 0.0
+    keys = tuple(k for k, v in zip(spread_keys, varying, strict=True) if v)
+    spread = dict(zip(keys, sd[varying], strict=True))
+    figures = [replace(f, sd=spread.get(f.key)) for f in figures]
+    uncertainty = None
+    if keys:
+        correlation = np.atleast_2d(np.corrcoef(samples[:, varying], rowvar=False))
+        uncertainty = Uncertainty(
+            keys, sd[varying], correlation,
+            f"gliderplan calibrate: bootstrap over {len(dives)} dives, {len(draws)} refits")
+    return VehicleFit(replace(vehicle, uncertainty=uncertainty), tuple(figures), energy,
+                       flight, ocean, len(dives), len(draws))
+
+
+def figure_unit(key: str) -> str:
+    """The model's unit of a figure, as a data file writes it."""
+    from gliderplan.power_models.units import UNITS
+
+    dimension = FIGURES[key][1]
+    return next(u for u, factor in UNITS[dimension].items() if factor == 1.0)
