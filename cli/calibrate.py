@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 
 from gliderplan.contract.errors import GliderplanError, UsageError
 
@@ -46,11 +47,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--max-error",
-        type=float,
+        type=_fraction,
         metavar="FRACTION",
         help="with --validate: exit 1 if the forecast's |energy error| exceeds this",
     )
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
+
+
+def _fraction(text: str) -> float:
+    """An error bound (argparse type): a finite number >= 0; NaN would pass every forecast."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"expected a finite fraction >= 0 (0.03 is 3 %), "
+                                         f"got {text!r}")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:

@@ -12,6 +12,7 @@ its own source, the figures' correlation, and the devices its hotel load holds.
 from __future__ import annotations
 
 import re
+import tempfile
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +27,13 @@ from gliderplan.power_models.forecast_check import ForwardCheck, check_forward, 
 from gliderplan.power_models.model_writer import to_toml
 from gliderplan.power_models.slocum_log import FlightLog, read_flight_log
 from gliderplan.power_models.vehicle import Vehicle, load_vehicle, read_vehicle_file
-from gliderplan.power_models.vehicle_fit import Figure, VehicleFit, figure_unit, fit_vehicle
+from gliderplan.power_models.vehicle_fit import (
+    CalibrationError,
+    Figure,
+    VehicleFit,
+    figure_unit,
+    fit_vehicle,
+)
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,31}")
 
@@ -187,12 +194,23 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
         "Fitted figures say what they were fitted from and carry their bootstrap standard\n"
         "deviation (sd); the others are the base's."
     )
+    text = to_toml(data, header)
+    _check_loads(text, output)
     try:
-        write_atomically(output, to_toml(data, header))
+        write_atomically(output, text)
     except OSError as err:
         raise GliderplanError(f"{output}: cannot write: {err.strerror}") from None
-    try:
-        read_vehicle_file(output)
-    except ModelFileError as err:
-        raise GliderplanError(f"the written file does not load: {err}") from None
     return output
+
+
+def _check_loads(text: str, output: Path) -> None:
+    """Refuse, before `output` is touched, a calibrated vehicle that would not load (a
+    figure the logs drove out of its range): the user keeps the file they had."""
+    with tempfile.TemporaryDirectory() as scratch:
+        candidate = Path(scratch) / output.name
+        candidate.write_text(text)
+        try:
+            read_vehicle_file(candidate)
+        except ModelFileError as err:
+            raise CalibrationError(f"{output}: not written: the calibrated {err.key or 'file'} "
+                                   f"{err.message}") from None

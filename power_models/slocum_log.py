@@ -40,6 +40,11 @@ _PAYLOAD = (
     ("sci_bbfl2s", "optics"),
 )
 MIN_PAYLOAD_READINGS = 10
+# the last byte of a .dbd/.ebd file: the end-of-file tag after its last data cycle (each cycle
+# starts with b"d"); a file cut short (an interrupted transfer) ends in a partial cycle, which
+# dbdreader decodes into garbage: times that run backwards, absurd readings
+END_OF_FILE_TAG = b"X"
+_TAGGED_SUFFIXES = {".dbd", ".ebd"}
 
 
 class LogError(GliderplanError):
@@ -122,11 +127,15 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         synced = logs.get_sync(*(name for name, _ in _SERIES))
         volt_t, volt = logs.get("m_battery")
         optional = _optional_series(logs, np.asarray(synced[0], float))
-    except dbdreader.DbdError as err:
-        raise LogError(f"cannot read the logs: {err}") from None
-    except (OSError, ValueError) as err:
-        raise LogError(f"cannot read the logs: {err}") from None
+    except (dbdreader.DbdError, OSError, ValueError) as err:
+        raise LogError(f"cannot read the logs: {' '.join(str(err).split())}") from None
+    for name in files:
+        _check_complete(name)
     t = np.asarray(synced[0], float)
+    ctd_t = optional.pop("ctd_t")
+    if _steps_back(t) or _steps_back(ctd_t):
+        raise LogError(f"{_file_whose_clock_steps_back(logs)}: its time runs backwards: "
+                       "a corrupt file (remove it and calibrate on the others)")
     if t.size < 10 or volt_t.size < 2:
         raise LogError("the logs hold too few samples to calibrate (need at least 10)")
     series = {
@@ -157,6 +166,33 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
     )
 
 
+def _check_complete(name: str) -> None:
+    """Refuse a .dbd/.ebd file that does not end with its end-of-file tag: one cut short."""
+    if Path(name).suffix.lower() not in _TAGGED_SUFFIXES:
+        return
+    with open(name, "rb") as handle:
+        handle.seek(0, 2)
+        handle.seek(max(handle.tell() - 1, 0))
+        if handle.read(1) != END_OF_FILE_TAG:
+            raise LogError(f"{name}: truncated: the file does not end with the end-of-file tag "
+                           f"{END_OF_FILE_TAG.decode()!r} (an interrupted transfer?); fetch it "
+                           "again or calibrate without it")
+
+
+def _steps_back(t: np.ndarray) -> bool:
+    """Whether sample times [s] are not finite or ever decrease (a negative duration)."""
+    return bool(t.size) and not (np.all(np.isfinite(t)) and np.all(np.diff(t) >= 0.0))
+
+
+def _file_whose_clock_steps_back(logs) -> str:  # noqa: ANN001
+    """The first file of the MultiDBD `logs` whose own time variable steps back."""
+    for dbd in logs.dbds["eng"] + logs.dbds["sci"]:
+        t, _ = dbd.get(dbd.timeVariable)
+        if _steps_back(np.asarray(t, float)):
+            return dbd.filename
+    return ", ".join(logs.filenames)
+
+
 def _read(logs, name: str) -> tuple[np.ndarray, np.ndarray] | None:  # noqa: ANN001
     """(times, values) of an optional variable, None if the logs do not hold it."""
     import dbdreader
@@ -183,9 +219,11 @@ def _optional_series(logs, t: np.ndarray) -> dict:  # noqa: ANN001
             out[field] = float(found[1][-1])
     out["payload"] = _payload(logs)
     out["density_kg_m3"] = np.full(t.size, np.nan)
+    out["ctd_t"] = np.empty(0)
     ctd = [_read(logs, name) for name in CTD_VARIABLES]
     if all(c is not None for c in ctd):
         pressure_t, pressure_bar = ctd[0]
+        out["ctd_t"] = pressure_t
         temp = np.interp(pressure_t, *ctd[1])
         cond = np.interp(pressure_t, *ctd[2])
         real = (cond > 0.0) & (pressure_bar >= 0.0)  # 0 is the science computer's "no data"

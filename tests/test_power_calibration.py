@@ -138,12 +138,20 @@ def test_max_error_turns_a_poor_fit_into_a_failure(capsys):
     [
         (["calibrate", "nowhere.dbd"], 2, "nowhere.dbd: no such file"),
         (["calibrate", ".", "--max-error", "0.05"], 2, "--max-error needs --validate"),
+        # NaN would pass every forecast (|error| > nan is never true)
+        (["calibrate", ".", "--validate", "--max-error", "nan"], 2, "got 'nan'"),
+        (["calibrate", ".", "--validate", "--max-error", "inf"], 2, "got 'inf'"),
+        (["calibrate", ".", "--validate", "--max-error", "-0.01"], 2, "got '-0.01'"),
         (["calibrate", ".", "-o", "out.txt"], 2, "must end in .toml"),
         (["calibrate", ".", "--base", "slocum_g9"], 2, "unknown vehicle preset"),
     ],
 )
 def test_calibrate_bad_input(capsys, argv, code, message):
-    assert main(argv) == code
+    try:
+        result = main(argv)
+    except SystemExit as exit_:  # argparse rejects a malformed value before run()
+        result = exit_.code
+    assert result == code
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
 
@@ -153,6 +161,65 @@ def test_calibrate_rejects_a_file_that_is_not_a_log(capsys, tmp_path):
     bogus.write_bytes(b"not a log")
     assert main(["calibrate", str(bogus)]) == 1
     assert "cannot read the logs" in capsys.readouterr().err
+
+
+def _copy_logs(tmp_path: Path) -> Path:
+    copy = tmp_path / "logs"
+    copy.mkdir()
+    for log in LOGS.glob("*.?bd"):
+        (copy / log.name).write_bytes(log.read_bytes())
+    return copy
+
+
+def _cut(path: Path, fraction: float) -> None:
+    """Cut a log file short, as an interrupted transfer leaves it."""
+    data = path.read_bytes()
+    path.write_bytes(data[: int(len(data) * fraction)])
+
+
+@needs_logs
+@pytest.mark.parametrize("victim", ["sebastian-2014-204-05-000.dbd",
+                                    "sebastian-2014-204-05-001.ebd"])
+def test_a_truncated_log_is_refused_and_nothing_is_written(capsys, tmp_path, victim):
+    logs = _copy_logs(tmp_path)
+    _cut(logs / victim, 0.6)
+    out = tmp_path / "mine.toml"
+    code = main(["calibrate", str(logs), "--cache", str(LOGS / "cac"), "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert err.count("\n") == 1 and f"{logs / victim}: truncated" in err, err
+    assert not out.exists()
+
+
+@needs_logs
+def test_a_log_whose_time_runs_backwards_is_refused(capsys, tmp_path):
+    # cut inside the last data cycle, then given the end-of-file tag back: the cut cycle
+    # decodes into a time near 0, and every duration across it would be negative
+    logs = _copy_logs(tmp_path)
+    victim = logs / "sebastian-2014-204-05-001.dbd"
+    _cut(victim, 2 / 3)
+    victim.write_bytes(victim.read_bytes() + b"X")
+    out = tmp_path / "mine.toml"
+    code = main(["calibrate", str(logs), "--cache", str(LOGS / "cac"), "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and f"{victim}: its time runs backwards" in err, err
+    assert not out.exists()
+
+
+def test_a_calibration_that_would_not_load_leaves_the_output_alone(capsys, tmp_path,
+                                                                    monkeypatch):
+    from gliderplan.power_models import log_calibration
+
+    # a pump that gives energy back: the fitted pump-out energy per cc comes out negative
+    monkeypatch.setattr(sg, "PUMP_OUT_J_PER_CC", -2.0)
+    monkeypatch.setattr(log_calibration, "read_flight_log", lambda *_: _synthetic_log())
+    out = tmp_path / "mine.toml"
+    out.write_text("the pilot's earlier file\n")
+    code = main(["calibrate", str(tmp_path), "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert f"{out}: not written: the calibrated pump_out_energy_per_volume must be >= 0" in err
+    assert out.read_text() == "the pilot's earlier file\n"
 
 
 @needs_logs
