@@ -167,6 +167,10 @@ class Leg:
     w_mps: Array
     distance_m: Array
 
+    def __getitem__(self, k: int) -> Leg:
+        """The k-th leg of a solution broadcast over several (`glide_leg` with arrays)."""
+        return Leg(*(np.asarray(x)[k] for x in (self.time_s, self.w_mps, self.distance_m)))
+
 
 def glide_leg(
     params: FlightParams,

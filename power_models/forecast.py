@@ -104,25 +104,27 @@ def surfacing_cycle(
     surface; and the yo's dive and climb legs."""
     c, v = command, vehicle
     pitch_down, pitch_up = v.flown_pitch_rad(c.dive_pitch_rad, c.climb_pitch_rad)
-    dive = flight.glide_leg(v.flight, c.top_m, c.bottom_m, pitch_down, c.ballast_cc, False, ocean)
-    climb = flight.glide_leg(v.flight, c.top_m, c.bottom_m, pitch_up, c.ballast_cc, True, ocean)
     up = max(v.max_ballast_cc, c.ballast_cc)
-    to_surface = flight.glide_leg(v.flight, 0.0, c.bottom_m, pitch_up, up, True, ocean)
+    # one glide solution per pitch, for [the yo's band, the band from the surface]
+    downs = flight.glide_leg(v.flight, [c.top_m, 0.0], c.bottom_m, pitch_down, c.ballast_cc,
+                             False, ocean)
+    ups = flight.glide_leg(v.flight, [c.top_m, 0.0], c.bottom_m, pitch_up, [c.ballast_cc, up],
+                           True, ocean)
+    dive, first, climb, to_surface = downs[0], downs[1], ups[0], ups[1]
     yo = 2.0 * c.ballast_cc
+    # the dives between the first and the last are alike: their phases are computed once
+    middle = [_turn(v, "top turn", c.top_m, yo, True), _glide(v, "dive", dive, 1.0),
+              _turn(v, "bottom turn", c.bottom_m, yo, False), _glide(v, "climb", climb)]
     phases = []
     for k in range(c.dives_per_surfacing):
-        last = k == c.dives_per_surfacing - 1
+        cycle = list(middle)
         if k == 0 and first_from_surface:
-            first = flight.glide_leg(v.flight, 0.0, c.bottom_m, pitch_down, c.ballast_cc, False,
-                                     ocean)
-            phases += [_turn(v, "top turn", 0.0, up + c.ballast_cc, True),
-                       _glide(v, "dive", first, 1.0)]
-        else:
-            phases += [_turn(v, "top turn", c.top_m, yo, True), _glide(v, "dive", dive, 1.0)]
-        phases.append(_turn(v, "bottom turn", c.bottom_m, c.ballast_cc + (up if last else
-                                                                           c.ballast_cc), False))
-        phases.append(_glide(v, "climb to the surface", to_surface, surfacings=1.0) if last
-                      else _glide(v, "climb", climb))
+            cycle[:2] = [_turn(v, "top turn", 0.0, up + c.ballast_cc, True),
+                         _glide(v, "dive", first, 1.0)]
+        if k == c.dives_per_surfacing - 1:
+            cycle[2:] = [_turn(v, "bottom turn", c.bottom_m, c.ballast_cc + up, False),
+                         _glide(v, "climb to the surface", to_surface, surfacings=1.0)]
+        phases += cycle
     phases.append(Phase("GPS fix", v.surface_s,
                         {Component.SURFACE: v.surface_w * v.surface_s + v.surfacing_fixed_j}))
     phases.append(Phase("Iridium call", v.iridium_s,
