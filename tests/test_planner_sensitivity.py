@@ -4,6 +4,7 @@ made again at the same budget, the figure that matters most first."""
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -33,10 +34,13 @@ end
 
 
 def mission_with(tmp_path: Path, battery: float, hotel_sd: float | None = None):
+    """The preset glider (its hotel load's sd `hotel_sd` [W] instead of the calibrated one)
+    flying a 10 h survey on a `battery` [Wh]."""
     text = preset_path("vehicle", "slocum_g2_shallow").read_text()
     if hotel_sd is not None:
-        text = text.replace('hotel_power = { value = 2.41, unit = "W",',
-                            f'hotel_power = {{ value = 2.41, unit = "W", sd = {hotel_sd},', 1)
+        text, found = re.subn(r"^(hotel_power = \{.*sd = )[-+.e0-9]+", rf"\g<1>{hotel_sd}", text,
+                              count=1, flags=re.MULTILINE)
+        assert found, "the preset's hotel_power carries no sd"
     vehicle = tmp_path / "glider.toml"
     vehicle.write_text(text)
     source = MISSION.format(vehicle=vehicle, battery=battery)
@@ -50,23 +54,23 @@ def test_a_stated_uncertainty_is_used_and_the_biggest_effect_comes_first(tmp_pat
     swings = {s.figure: s for s in tornado.swings}
     hotel = swings["vehicle hotel_power"]
     assert hotel.step == pytest.approx(0.8) and hotel.basis.startswith("1 sd")
-    assert swings["vehicle pitch_energy"].basis.startswith("20 %")
+    assert swings["vehicle pump_rate"].basis.startswith("20 %")  # the file gives it no sd
     # +-0.8 W of hotel load moves more than the computer idle power +-20 % (0.51 W)
     assert tornado.swings[0].figure == "vehicle hotel_power"
     # the swing is the plan made again with the figure moved, nothing else
     hardware = load_hardware(mission)
     low = plan_mission(mission, replace(hardware, vehicle=with_figures(
-        hardware.vehicle, {"hotel_power": 2.41 - 0.8})))
+        hardware.vehicle, {"hotel_power": hardware.vehicle.hotel_w - 0.8})))
     assert hotel.energy_j[0] == pytest.approx(low.plan.predicted_j, rel=1e-6)
     assert hotel.energy_j[0] < tornado.energy_j < hotel.energy_j[1]
 
 
 def test_a_figure_the_budget_cannot_buy_shows_as_no_quality(tmp_path):
-    mission = mission_with(tmp_path, 1000.0)
+    mission = mission_with(tmp_path, 1000.0, hotel_sd=0.8)
     least = plan_mission(mission).minimum_energy_j
-    tight = mission_with(tmp_path, 1.02 * least / 3600)  # 2 % above the least energy
+    tight = mission_with(tmp_path, 1.02 * least / 3600, hotel_sd=0.8)  # 2 % above the least
     _, model = prepare(tight, load_hardware(tight))
     hotel = {s.figure: s for s in sensitivity(model).swings}["vehicle hotel_power"]
-    assert math.isnan(hotel.quality[1])  # 20 % more hotel load: over the budget
+    assert math.isnan(hotel.quality[1])  # 0.8 W more hotel load: over the budget
     assert hotel.energy_j[1] > tight.battery.energy_j
     assert not math.isnan(hotel.quality[0])

@@ -96,10 +96,12 @@ def test_every_figure_has_its_csv_and_the_plan_and_run_are_kept(report_dir):
 def test_sensitivity_is_the_plan_made_again_with_the_figure_moved(report_dir):
     table = pd.read_csv(report_dir / "sensitivity.csv").set_index("figure")
     row = table.loc["vehicle hotel_power"]
-    assert row["basis"].startswith("20 %")
+    assert row["basis"].startswith("1 sd")  # the calibrated preset states its spread
     mission = check_file(ANNOTATED).mission
     hardware = load_hardware(mission)
-    raised = hardware.vehicle.hotel_w * 1.2
+    spread = dict(zip(hardware.vehicle.uncertainty.keys, hardware.vehicle.uncertainty.sd,
+                      strict=True))
+    raised = hardware.vehicle.hotel_w + spread["hotel_power"]
     assert row["value"] + row["step"] == pytest.approx(raised)
     from dataclasses import replace
 
