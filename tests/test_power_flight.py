@@ -27,6 +27,20 @@ def test_glide_speeds_at_26_degrees_match_the_derived_figures(ballast_cc, u_mps,
     assert w == pytest.approx(w_mps, rel=0.10)
 
 
+@pytest.mark.parametrize("cd0", [0.02, 0.15, 1.0])
+def test_the_angle_of_attack_balances_lift_and_drag(vehicle, cd0):
+    # the steady glide's balance, Cd = CL tan(pitch + alpha), to double precision
+    params = dataclasses.replace(vehicle.flight, drag_cd0=cd0)
+    pitch = np.linspace(0.02, 1.5, 300)
+    alpha = flight.angle_of_attack_rad(params, pitch)
+    assert np.all((alpha > 0) & (pitch + alpha < math.pi / 2))
+    drag = params.drag_cd0 + params.drag_cd1_per_rad2 * alpha**2
+    lift = (params.lift_wing_per_rad + params.lift_hull_per_rad) * alpha
+    np.testing.assert_allclose(drag / (lift * np.tan(pitch + alpha)), 1.0, rtol=1e-12)
+    assert flight.angle_of_attack_rad(params, 0.45) == pytest.approx(
+        alpha[np.searchsorted(pitch, 0.45)], abs=0.01)  # a scalar solves alike
+
+
 def test_glide_is_vectorised_and_ballast_for_speed_inverts_it(vehicle):
     pitch = np.radians([15.0, 20.0, 26.0, 35.0])[:, None]
     ballast = np.array([50.0, 150.0, 300.0])[None, :]
