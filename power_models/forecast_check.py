@@ -32,7 +32,7 @@ from gliderplan.power_models.draws import (
     draw_vehicles,
     prediction_spread,
 )
-from gliderplan.power_models.flight import glide_leg
+from gliderplan.power_models.flight import DensityProfile, glide_leg
 from gliderplan.power_models.forecast import Forecast, YoCommand, energy_interval_j, forecast
 from gliderplan.power_models.slocum_log import FlightLog
 from gliderplan.power_models.vehicle import Vehicle
@@ -42,6 +42,7 @@ from gliderplan.power_models.vehicle_fit import (
     VehicleFit,
     commanded_volume_cc,
     fit_vehicle,
+    log_ocean,
 )
 
 SPEED_BAND_MARGIN = 0.15  # vertical speeds are compared on the band less 15 % at each end
@@ -179,9 +180,21 @@ STAY_KEYS = ("surface_power", "surface_time", "iridium_power", "iridium_time",
              "surfacing_energy")
 
 
-def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
-                  resamples: int = BOOTSTRAP_RESAMPLES) -> ForwardCheck:
-    """Fit the first `fit_share` of the record's whole dives, forecast the rest."""
+@dataclass(frozen=True)
+class LaterPart:
+    """What a forward check asks: the record cut at a whole dive, the later dives'
+    commands, and what the glider did flying them."""
+
+    fit: list[Dive]
+    later: list[Dive]
+    cut: int  # first sample of the later part
+    arrival: int  # sample where its last climb reaches the surface
+    command: YoCommand
+    observed: Observed
+
+
+def later_part(log: FlightLog, fit_share: float = 0.5) -> LaterPart:
+    """Cut the record after the first `fit_share` of its whole dives."""
     dives = split_dives(log)
     fit_count = max(MIN_FIT_DIVES, round(fit_share * len(dives)))
     if len(dives) - fit_count < 1:
@@ -189,27 +202,53 @@ def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
             f"the record holds {len(dives)} whole dives: too few to fit {MIN_FIT_DIVES} and "
             "forecast at least one")
     fit, later = dives[:fit_count], dives[fit_count:]
-    cut = later[0].start
+    command = _command(log, fit, later)
+    cut, arrival = later[0].start, _arrival(log, later)
+    observed = _observed(log, later, cut, arrival, _speed_band(command))
+    return LaterPart(fit, later, cut, arrival, command, observed)
+
+
+def predicted_w_mps(vehicle: Vehicle, command: YoCommand,
+                    ocean: DensityProfile | None) -> dict[str, float]:
+    """Mean vertical speed [m s-1] of a dive and a climb across the speed band."""
+    band = _speed_band(command)
+    pitch = vehicle.flown_pitch_rad(command.dive_pitch_rad, command.climb_pitch_rad)
+    return {kind: float(glide_leg(vehicle.flight, *band, pitch[up], command.ballast_cc,
+                                  bool(up), ocean).w_mps)
+            for kind, up in (("dive", 0), ("climb", 1))}
+
+
+def check_as_given(log: FlightLog, vehicle: Vehicle, fit_share: float = 0.5) -> dict[str, float]:
+    """Relative errors (predicted / measured - 1) of `vehicle` as it is, fitted on nothing,
+    forecasting the later part through the earlier part's water: `energy`, `yo_period`,
+    `dive` and `climb` (vertical speeds). What a preset predicts for a glider it was not
+    fitted on."""
+    part = later_part(log, fit_share)
+    ocean = log_ocean(log.slice(0, part.cut + 1))
+    predicted = forecast(vehicle, part.command, ocean)
+    w = predicted_w_mps(vehicle, part.command, ocean)
+    o = part.observed
+    return {"energy": predicted.energy_j / o.energy_j - 1.0,
+            "yo_period": predicted.yo_period_s / o.yo_period_s - 1.0,
+            **{kind: w[kind] / o.w_mps[kind] - 1.0 for kind in ("dive", "climb")}}
+
+
+def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
+                  resamples: int = BOOTSTRAP_RESAMPLES) -> ForwardCheck:
+    """Fit the first `fit_share` of the record's whole dives, forecast the rest."""
+    part = later_part(log, fit_share)
+    command, cut, arrival = part.command, part.cut, part.arrival
     fit_log = log.slice(0, cut + 1)
     calibration = fit_vehicle(fit_log, base, resamples)
-    command = _command(log, fit, later)
-    arrival = _arrival(log, later)
-    observed = _observed(log, later, cut, arrival, _speed_band(command))
     vehicle = calibration.vehicle
     predicted = forecast(vehicle, command, calibration.ocean)
     bias, step = _bias(fit_log)
     rng = np.random.default_rng(DEFAULT_SEED)
-    drawn = draw_vehicles(vehicle, DEFAULT_DRAWS, rng, prediction_spread(len(fit), len(later)))
+    drawn = draw_vehicles(vehicle, DEFAULT_DRAWS, rng,
+                          prediction_spread(len(part.fit), len(part.later)))
     # the counter is read at both ends of the span: each reading is off by up to a step
     quantisation = step * (rng.random(len(drawn)) - rng.random(len(drawn)))
     interval = energy_interval_j(drawn, command, calibration.ocean, noise_j=quantisation)
-    band = _speed_band(command)
-    pitch = vehicle.flown_pitch_rad(command.dive_pitch_rad, command.climb_pitch_rad)
-    predicted_w = {
-        kind: float(glide_leg(vehicle.flight, *band, pitch[up], command.ballast_cc, bool(up),
-                              calibration.ocean).w_mps)
-        for kind, up in (("dive", 0), ("climb", 1))
-    }
     fitted = {f.key for f in calibration.figures if f.fitted}
     stay_pred = stay_meas = None
     if arrival < log.t_s.size - 1:
@@ -218,9 +257,10 @@ def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
         stay_pred = _stay_energy_j(vehicle, span)
         stay_meas = seg.counter_energy_j(stay)
     return ForwardCheck(
-        fit_dives=len(fit), later_dives=len(later), cut_s=float(log.t_s[cut]),
+        fit_dives=len(part.fit), later_dives=len(part.later), cut_s=float(log.t_s[cut]),
         calibration=calibration, command=command, forecast=predicted, interval_j=interval,
-        observed=observed, speed_band_m=band, predicted_w_mps=predicted_w,
+        observed=part.observed, speed_band_m=_speed_band(command),
+        predicted_w_mps=predicted_w_mps(vehicle, command, calibration.ocean),
         counter_bias=bias, counter_step_j=step,
         from_base=tuple(k for k in FORECAST_KEYS if k not in fitted),
         stay_predicted_j=stay_pred, stay_measured_j=stay_meas,

@@ -26,7 +26,7 @@ from gliderplan.power_models.catalog import preset_path
 from gliderplan.power_models.draws import draw_figures, prediction_spread
 from gliderplan.power_models.flight_fit import fit_flight, steady_glides
 from gliderplan.power_models.forecast import YoCommand, forecast
-from gliderplan.power_models.forecast_check import check_forward
+from gliderplan.power_models.forecast_check import check_as_given, check_forward
 from gliderplan.power_models.seawater import density_profile, in_situ_density_kg_m3
 from gliderplan.power_models.vehicle import Uncertainty, figure_value
 
@@ -270,3 +270,24 @@ def test_the_planner_flies_the_calibrated_model_over_the_log_s_yo_band(real_repo
     neutral_yo_s = 7200.0 / vehicle.neutral().inflections_per_hour(
         3, 36, profile.pitch_rad, profile.ballast_cc)
     assert planned_yo_s > 1.1 * neutral_yo_s
+
+
+@needs_logs
+def test_a_preset_not_fitted_on_the_glider_misses_what_its_calibration_hits():
+    from gliderplan.power_models.slocum_log import read_flight_log
+
+    log = read_flight_log([str(LOGS)])
+    calibrated = load_vehicle("slocum_g2_shallow")
+    uncalibrated = calibrated.neutral()  # the same energy figures, flight as before calibration
+    uncalibrated = dataclasses.replace(uncalibrated, flight=dataclasses.replace(
+        uncalibrated.flight, rho_kg_m3=1025.0, drag_cd0=0.15))
+    own = check_as_given(log, calibrated)
+    assert abs(own["energy"]) < 0.03 and all(abs(own[k]) < 0.10 for k in ("yo_period", "dive",
+                                                                           "climb")), own
+    other = check_as_given(log, load_vehicle("slocum_g3"))
+    assert other["energy"] > 0.20, other  # another glider's figures (power_models/README.md)
+    flat = check_as_given(log, uncalibrated)
+    assert abs(flat["energy"]) > 0.05, flat
+    # neutral at 1025 kg/m3 is heavy in the log's lighter water: dives fast, climbs slowly
+    for error in (other, flat):
+        assert error["dive"] > 0.5 and error["climb"] < -0.2, error
