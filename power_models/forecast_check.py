@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract.units import C_PER_AH
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.dives import Dive, split_dives
 from gliderplan.power_models.draws import (
@@ -165,7 +166,7 @@ def _bias(log: FlightLog) -> tuple[float, float]:
     current = float(seg.interval_energy_j(log).sum())
     steps = np.diff(log.charge_ah)
     step_ah = float(np.min(steps[steps > 0])) if (steps > 0).any() else 0.0
-    return counter / current - 1.0, step_ah * 3600.0 * float(np.mean(log.battery_v))
+    return counter / current - 1.0, step_ah * C_PER_AH * float(np.mean(log.battery_v))
 
 
 FORECAST_KEYS = (

@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.units import UNITS
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.calibration import EnergyFit, fit_energy
 from gliderplan.power_models.dives import Dive, concatenate, split_dives
@@ -242,7 +243,5 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
 
 def figure_unit(key: str) -> str:
     """The model's unit of a figure, as a data file writes it."""
-    from gliderplan.power_models.units import UNITS
-
     dimension = FIGURES[key][1]
     return next(u for u, factor in UNITS[dimension].items() if factor == 1.0)
