@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import shutil
 import zlib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -135,8 +136,11 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
 # ---- the fast executor against the tick-by-tick reference ------------------------------
 
 def flown_alike(mission, config: RunConfig, ocean: str = "bench", plan=None) -> None:
-    """Fly `mission` tick by tick and in runs; the two flights must be the same."""
+    """Fly `mission` tick by tick and in runs; the two flights must be the same. The
+    mission's vehicle flies with an incompressible hull: the fast executor leaves a glider
+    whose speed changes with depth to the tick-by-tick loop, and would fly nothing here."""
     vehicle = load_vehicle(mission.vehicle)
+    vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
     reference = fly(mission, load_ocean(ocean), config, vehicle, plan, tick_by_tick=True)
     fast = fly(mission, load_ocean(ocean), config, vehicle, plan)
     assert fast.trace == reference.trace
