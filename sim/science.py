@@ -102,6 +102,8 @@ class Draws:
     def skip(self, count: int) -> None:
         """Take `count` rows (after `peek` has drawn them)."""
         blocks, self._at = divmod(self._at + count, _NOISE_BLOCK)
+        if blocks and self._at == 0:  # at the end of a block, as before the first draw
+            blocks, self._at = blocks - 1, _NOISE_BLOCK
         if blocks:
             del self._blocks[:blocks]
             self._rows = []

@@ -9,7 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from gliderplan.language import check_file, ir
@@ -102,6 +102,8 @@ def test_the_ctd_lag_over_a_run_is_the_recursion(water, before, keep):
 
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.integers(0, 5000), min_size=1, max_size=8))
+@example([4096]).via("a run ending on a block's end")
+@example([0, 4096, 0, 8192]).via("nothing taken, and whole blocks")
 def test_random_numbers_are_the_same_taken_one_by_one_or_in_runs(takes):
     def stream() -> Draws:
         rng = np.random.default_rng(5)
