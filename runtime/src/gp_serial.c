@@ -96,7 +96,7 @@ void gp_serial_linger(int fd, double max_s)
 
 int gp_serial_write(int fd, const uint8_t *data, size_t len)
 {
-    double give_up = gp_now_s() + WRITE_WAIT_MS / 1000.0;
+    double give_up = 0;  /* set when the line is first found full: most writes never wait */
     while (len > 0) {
         ssize_t n = write(fd, data, len);
         if (n > 0) {
@@ -108,7 +108,11 @@ int gp_serial_write(int fd, const uint8_t *data, size_t len)
             return -1;
         }
         /* the line is full: wait for room, but a signal or the bound ends the wait */
-        int wait_ms = (int)((give_up - gp_now_s()) * 1000.0);
+        double now = gp_now_s();
+        if (give_up == 0) {
+            give_up = now + WRITE_WAIT_MS / 1000.0;
+        }
+        int wait_ms = (int)((give_up - now) * 1000.0);
         struct pollfd pfd = {.fd = fd, .events = POLLOUT};
         if (wait_ms <= 0 || poll(&pfd, 1, wait_ms) <= 0) {
             return -1;
