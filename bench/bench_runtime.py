@@ -42,6 +42,7 @@ from pathlib import Path
 from gliderplan.contract import TICK_S
 from gliderplan.language import check_source
 from gliderplan.language.ir import CheckedMission
+from gliderplan.planner.limits import flight_limits
 from gliderplan.runtime.build import C_FLAGS, TARGETS, compile_mission, runtime_sources
 from gliderplan.runtime.protocol import FdPort, Link
 
@@ -84,16 +85,18 @@ def checked(source: str, name: str) -> CheckedMission:
     return result.mission
 
 
-def fig2_plan(mission: CheckedMission) -> bytes:
-    """A plan by hand (docs/plan-format.md): a CTD duty of 1/4 in s2, two alternating
-    yos in s1 so that the schedule has work every tick."""
-    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+def fig2_plan(mission: CheckedMission, target: str) -> bytes:
+    """A plan by hand (docs/plan-format.md) for the board of build `target` at its fastest
+    clock: a CTD duty of 1/4 in s2; one profile per state."""
+    board = mission.computer.board if target == "host" else target
+    mhz = f"{flight_limits(mission, board).clocks_mhz[-1]:g}"
+    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer {board} {mhz}\n"
             "budget_j 6630000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\nstates 3\n"
-            "state s1 300 600 0 1\npredict 1000 2 20\nenergy 3950\n"
+            f"state s1 {mhz} 600 0 1\npredict 1000 2 20\nenergy 3950\n"
             "profile 0 1 0.3 150 0.31\nend\n"
-            "state s2 300 600 1 1\npredict 1000 1 12\nenergy 3950\n"
+            f"state s2 {mhz} 600 1 1\npredict 1000 1 12\nenergy 3950\n"
             "sensor temp 60 15\nprofile 0 1 0.4 200 0.3\nend\n"
-            "state s3 300 600 0 1\npredict 500 1 5\nenergy 1976.5\n"
+            f"state s3 {mhz} 600 0 1\npredict 500 1 5\nenergy 1976.5\n"
             "profile 0 1 0.454 230 0.31\nend\n").encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
 
@@ -258,8 +261,6 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="bench-runtime-") as tmp:
         work = Path(tmp)
         os.environ.setdefault("GLIDERPLAN_CACHE_DIR", str(work / "cache"))
-        plan = work / "fig2.plan"
-        plan.write_bytes(fig2_plan(fig2))
         targets = ["host"] + [t for t in ("ts5500",) if shutil.which(TARGETS[t].compiler)]
         print(f"instructions per tick, whole process under callgrind, --state-dir on, "
               f"{args.tick:g} s ticks, median of {args.runs} runs; "
@@ -268,6 +269,8 @@ def main() -> int:
         print(f"{'build':7} {'mission':10} {'ticks':>5} {'start-up':>9} {'tick':>6} {parts}")
         fig2_tick = {}
         for target in targets:
+            plan = work / f"fig2-{target}.plan"
+            plan.write_bytes(fig2_plan(fig2, target))
             for label, mission, options in (("fig2", fig2, []),
                                             ("fig2+plan", fig2, ["--plan", str(plan)]),
                                             ("bench200", bench200, [])):
