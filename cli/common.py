@@ -33,6 +33,17 @@ def cycles_per_tick(text: str) -> float:
     return value
 
 
+def seed(text: str) -> int:
+    """A random seed (argparse type): an integer >= 0, as numpy's SeedSequence takes."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
 def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cycles-per-tick", type=cycles_per_tick, metavar="N",
                         default=RUNTIME_CYCLES_PER_TICK,

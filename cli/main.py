@@ -15,6 +15,7 @@ import argparse
 import importlib
 import os
 import pkgutil
+import select
 import sys
 from collections.abc import Sequence
 from types import ModuleType
@@ -76,19 +77,36 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = argv[0] if argv and not argv[0].startswith("-") else None
     args = build_parser(command).parse_args(argv)
     try:
-        return int(args._run(args))
+        code = int(args._run(args))
+        sys.stdout.flush()  # here, where a reader that went away is handled below
+        return code
     except GliderplanError as err:
         return report(args.command, err)
     except KeyboardInterrupt:
         print(f"gliderplan {args.command}: interrupted", file=sys.stderr)
         return ExitCode.INTERRUPTED
     except Exception as err:  # a bug: say so plainly; the traceback only on request
+        if isinstance(err, BrokenPipeError) and _stdout_reader_gone():
+            # Like `cat | head`: no message, and nothing more to print. Python flushes
+            # stdout once more at exit, which would fail again: point it at /dev/null.
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return ExitCode.BROKEN_PIPE
         if os.environ.get("GLIDERPLAN_DEBUG"):
             raise
         print(f"gliderplan {args.command}: internal error: {type(err).__name__}: {err}\n"
               "  (this is a bug in gliderplan; rerun with GLIDERPLAN_DEBUG=1 for details)",
               file=sys.stderr)
         return ExitCode.INTERNAL
+
+
+def _stdout_reader_gone() -> bool:
+    """True if stdout is a pipe whose reading end is closed (poll says POLLERR then)."""
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(events & select.POLLERR for _, events in poller.poll(0))
+    except (AttributeError, OSError, ValueError):  # no stdout, or no poll on this system
+        return False
 
 
 def report(command: str, err: GliderplanError) -> ExitCode:

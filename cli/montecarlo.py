@@ -19,7 +19,7 @@ import json
 import os
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.cli.common import add_mission_argument, load_mission, seed
 from gliderplan.contract import ExitCode
 
 ORDER = 65
@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
                         help="worker processes (default: one per core; 1 flies in this "
                              "process)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="seed of the run (default 0)")
     parser.add_argument("--scenario-file", metavar="FILE",
                         help="the distributions to draw from (TOML; default: the shipped "
                              "summer shelf sea)")

@@ -18,7 +18,7 @@ import json
 import os
 import sys
 
-from gliderplan.cli.common import add_cycles_argument, add_mission_argument, load_mission
+from gliderplan.cli.common import add_cycles_argument, add_mission_argument, load_mission, seed
 from gliderplan.contract.errors import UsageError
 
 ORDER = 30
@@ -47,7 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--risk", type=float, default=1e-3, metavar="B",
                         help="with --confidence: the chance that the scenarios drawn were "
                              "unrepresentative (default 0.001)")
-    parser.add_argument("--seed", type=int, default=0, help="with --confidence: seed")
+    parser.add_argument("--seed", type=seed, default=0, help="with --confidence: seed")
     parser.add_argument("--scenario-file", metavar="FILE",
                         help="with --confidence: the distributions to draw from")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",

@@ -16,7 +16,7 @@ import os
 import re
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.cli.common import add_mission_argument, load_mission, seed
 from gliderplan.contract import TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
@@ -64,7 +64,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="thermocline detection (default robust; naive: the paper's first)")
     parser.add_argument("--current", metavar="N,E", default="0,0",
                         help="depth-averaged current toward north and east [m/s]")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     parser.add_argument("--tick", type=float, default=TICK_S, metavar="S",
                         help=f"sensor-array period [s] (default {TICK_S:g})")
     parser.add_argument("--duration", metavar="T",
@@ -79,14 +79,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _current(text: str):
-    from gliderplan.sim.vehicle import Current
+    from gliderplan.sim.vehicle import MAX_CURRENT_MPS, Current
 
     try:
         north, east = (float(x) for x in text.split(","))
     except ValueError:
         raise UsageError(f"--current {text!r}: expected two numbers N,E [m/s]") from None
-    if not (math.isfinite(north) and math.isfinite(east)):
-        raise UsageError(f"--current {text!r}: must be finite")
+    if not math.hypot(north, east) <= MAX_CURRENT_MPS:  # nan fails too
+        raise UsageError(f"--current {text!r}: the speed must be finite and at most "
+                         f"{MAX_CURRENT_MPS:g} m/s")
     return Current(north, east)
 
 

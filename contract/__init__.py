@@ -68,6 +68,13 @@ class FlightLimits:
 PLAN_KEY_BYTES = 32  # [bytes] of the HMAC-SHA256 key provisioned on the vehicle
 MAX_PLAN_SEQUENCE = 4_294_967_295  # a signed plan's `seq` (a u32); 1 is the first
 
+# ---- files gliderplan reads ----------------------------------------------------------
+# Every file a user names (missions, plans, board, battery, vehicle, sensor, scenario and
+# ocean files, run results) is read through `contract.files.read_input`, which refuses a
+# larger file and anything but a regular file (a device such as /dev/zero, a named pipe)
+# before reading a byte of it.
+MAX_INPUT_BYTES = 16 * 1024 * 1024  # [bytes] far beyond any real input; guards the readers
+
 # ---- the sensor array ----------------------------------------------------------------
 
 
@@ -256,3 +263,4 @@ class ExitCode(IntEnum):
     OVER_BUDGET = 3  # a simulated run broke its plan's energy budget
     INTERNAL = 70  # a bug in gliderplan (EX_SOFTWARE of sysexits.h)
     INTERRUPTED = 130  # stopped by Ctrl-C (128 + SIGINT)
+    BROKEN_PIPE = 141  # the reader of stdout went away (`| head`): stopped quietly (128 + SIGPIPE)

@@ -1,35 +1,140 @@
-"""How every part writes a result file: atomically. A crash, a full disk or Ctrl-C leaves
-either the old file or the new one, never half of one (the promise README.md makes)."""
+"""How every part reads the files a user names and writes its results.
+
+Reading: one function, `read_input`, so that every input (mission, plan, model, scenario,
+ocean and run files) is refused alike when it is missing, a directory, a device or a named
+pipe, or larger than `MAX_INPUT_BYTES`, with one line naming the file.
+
+Writing: atomically. A crash, a full disk or Ctrl-C leaves either the old file or the new
+one, never half of one (the promise README.md makes).
+"""
 
 from __future__ import annotations
 
+import codecs
+import errno
 import os
+import stat
 import tempfile
 from pathlib import Path
+
+from gliderplan.contract import MAX_INPUT_BYTES
+from gliderplan.contract.errors import GliderplanError, UsageError
+
+
+class InputFileError(GliderplanError):
+    """A file that cannot be read as the input it should be; `usage` when the path names
+    no file that could be one (missing, a directory, a device or pipe, unreadable)."""
+
+
+class OutputFileError(UsageError):
+    """A result file that cannot be written where the user asked (`-o`)."""
+
+
+def read_input(path: str | Path, what: str) -> bytes:
+    """The bytes of the input file `path` (`what` it should be: "mission file", ...).
+
+    Opened without blocking (a named pipe with no writer would hang) and checked to be a
+    regular file of at most MAX_INPUT_BYTES before it is read: a device such as /dev/zero
+    never ends."""
+    shown = str(path)
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
+    except OSError as err:
+        raise InputFileError(f"{shown}: {_open_problem(err, what)}", usage=True) from None
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise InputFileError(f"{shown}: is a directory, not a {what}", usage=True)
+        if not stat.S_ISREG(info.st_mode):
+            raise InputFileError(f"{shown}: is not a regular file (a device, pipe or "
+                                 f"socket), not a {what}", usage=True)
+        data = b""
+        if info.st_size <= MAX_INPUT_BYTES:
+            chunk = b"-"
+            while chunk and len(data) <= MAX_INPUT_BYTES:  # it may grow while it is read
+                chunk = os.read(fd, MAX_INPUT_BYTES + 1 - len(data))
+                data += chunk
+    except OSError as err:
+        raise InputFileError(f"{shown}: cannot read: {err.strerror}", usage=True) from None
+    finally:
+        os.close(fd)
+    if max(info.st_size, len(data)) > MAX_INPUT_BYTES:
+        raise InputFileError(f"{shown}: more than {MAX_INPUT_BYTES} bytes is too large for a "
+                             f"{what} (the limit of every file gliderplan reads)")
+    return data
+
+
+def read_input_text(path: str | Path, what: str) -> str:
+    """The text (UTF-8, a leading byte-order mark dropped) of the input file `path`."""
+    data = read_input(path, what)
+    if b"\0" in data:
+        raise InputFileError(f"{path}: binary file (contains NUL bytes), not a {what}")
+    if data.startswith(codecs.BOM_UTF8):  # a spreadsheet or an editor on Windows adds one
+        data = data[len(codecs.BOM_UTF8):]
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = data[: err.start].count(b"\n") + 1
+        raise InputFileError(f"{path}:{line}: not UTF-8 text (byte 0x{data[err.start]:02x}), "
+                             f"not a {what}") from None
+
+
+def _open_problem(err: OSError, what: str) -> str:
+    if err.errno in (errno.ENOENT, errno.ENOTDIR):
+        return "no such file"
+    if err.errno == errno.ENAMETOOLONG:
+        return f"file name too long for a {what}"
+    return f"cannot open: {err.strerror}"
+
+
+def output_directory(path: str | Path) -> Path:
+    """`path`, made a directory for results (with its parents), or OutputFileError."""
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputFileError(f"{path}: cannot write: {err.strerror}") from None
+    return path
 
 
 def write_atomically(path: str | Path, data: str | bytes, *, private: bool = False,
                      replace: bool = True) -> None:
-    """Write a result file so that a crash leaves either the old file or the new one.
+    """Write a result file so that a crash leaves either the old file or the new one;
+    OutputFileError, naming the file, if it cannot be written there.
 
+    A symbolic link stays a link: the file it points to is replaced. A file that exists
+    keeps its permissions; a new one gets the umask's (mkstemp alone would make it 0600).
     `private`: readable by its owner only (mode 0600: a key). `replace=False`: an existing
     file is left alone and FileExistsError raised (the new file appears whole or not at
     all; a hard link is how an atomic no-clobber create is done on POSIX)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    shown = Path(path)
+    path = Path(os.path.realpath(path))
+    output_directory(path.parent)
+    try:
+        try:
+            permissions = stat.S_IMODE(path.stat().st_mode)
+        except FileNotFoundError:
+            permissions = 0o666 & ~_umask()
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:32]}.", dir=path.parent)
+    except OSError as err:
+        raise OutputFileError(f"{shown}: cannot write: {err.strerror}") from None
     mode = "wb" if isinstance(data, bytes) else "w"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         with os.fdopen(fd, mode) as handle:
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
-        if not private:
-            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; results are for sharing
+        os.chmod(tmp, 0o600 if private else permissions)
         if replace:
             os.replace(tmp, path)
         else:
             os.link(tmp, path)
+    except FileExistsError:  # replace=False and the file is there: the caller's to say
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    except OSError as err:
+        Path(tmp).unlink(missing_ok=True)
+        raise OutputFileError(f"{shown}: cannot write: {err.strerror}") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

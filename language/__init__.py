@@ -47,7 +47,7 @@ class CheckResult:
 
 
 def check_file(path: str, stack_depth: int | None = None) -> CheckResult:
-    """Read and check a mission file (`gliderplan check`). Raises SourceError for a file
+    """Read and check a mission file (`gliderplan check`). Raises InputFileError for a file
     that cannot be read as mission text, UsageError for a stack depth the runtime cannot
     hold; a bad mission is not an error here but a result with diagnostics."""
     if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:

@@ -51,12 +51,18 @@ class _Checker:
             self.error(f"{quantity.text} is too large for a number", quantity.span)
             return None
         try:
-            return normalise(quantity.value, quantity.unit.text if quantity.unit else None,
-                         dimensions)
+            value, dimension = normalise(quantity.value,
+                                         quantity.unit.text if quantity.unit else None,
+                                         dimensions)
         except UnitProblem as problem:
             span = quantity.unit.span if quantity.unit else quantity.span
             self.error(problem.message, span, problem.hint)
             return None
+        if not math.isfinite(value):  # 1e305 kJ is a number, but not once converted
+            written = f"{quantity.text} {quantity.unit.text}" if quantity.unit else quantity.text
+            self.error(f"{written} is too large for a number", quantity.span)
+            return None
+        return value, dimension
 
     # ---- the whole mission
     def run(self) -> ir.CheckedMission | None:

@@ -61,7 +61,7 @@ class _Statement:
 
 
 def format_file(path: str | Path) -> tuple[str, str]:
-    """(text, canonical text) of a mission file. Raises SourceError when it cannot be read,
+    """(text, canonical text) of a mission file. Raises InputFileError when it cannot be read,
     MissionError (with the diagnostics) when it does not parse, FormatError when the
     formatter could not keep its meaning or comments."""
     text = read_mission(path)

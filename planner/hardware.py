@@ -4,6 +4,7 @@ from overrides given on the command line."""
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -63,8 +64,8 @@ def parse_battery(spec: str) -> tuple[float, float | None]:
         energy = energy_to_j(float(match["value"]), match["unit"], volts)
     except ValueError as err:
         raise HardwareError(f"--battery {spec!r}: {err}") from None
-    if energy <= 0.0:
-        raise HardwareError(f"--battery {spec!r}: the energy must be positive")
+    if not 0.0 < energy < math.inf:
+        raise HardwareError(f"--battery {spec!r}: the energy must be positive and finite")
     return energy, None
 
 

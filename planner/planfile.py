@@ -39,6 +39,7 @@ from gliderplan.contract import (
     FlightLimits,
 )
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import read_input
 from gliderplan.language import ir
 from gliderplan.language.ir import CheckedMission
 from gliderplan.language.registry import SENSOR_BY_NAME
@@ -453,18 +454,13 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
 
 
 def read_plan_data(path: str | Path) -> bytes:
-    """The bytes of a plan file; PlanFileError (`usage` when missing) if it cannot be read."""
-    try:
-        return Path(path).read_bytes()
-    except FileNotFoundError:
-        raise PlanFileError(0, "no such file", str(path), usage=True) from None
-    except OSError as err:
-        raise PlanFileError(0, f"cannot read the plan: {err.strerror}", str(path)) from None
+    """The bytes of a plan file; InputFileError (`usage` when missing) if it cannot be read."""
+    return read_input(path, "plan file")
 
 
 def load_plan(path: str | Path, mission: CheckedMission,
               limits: FlightLimits | None = None) -> Plan:
-    """The plan in `path` for `mission`, to fly: PlanFileError if there is no such file,
+    """The plan in `path` for `mission`, to fly: InputFileError if there is no such file,
     PlanRejected (naming the file and line) if it is not a plan for `mission` or breaks
     `limits` (default: those of the mission's vehicle on the board the plan names, if
     that is a preset, else on the mission's computer)."""

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from gliderplan.contract.files import read_input_text
 from gliderplan.contract.units import UNITS, accepted_units, to_model_unit
 from gliderplan.power_models.errors import ModelFileError
 
@@ -179,12 +180,7 @@ def read_model_file(path: Path, kind: str) -> Table:
     """Parse a model file and check that it describes a `kind` ("board", "vehicle", ...)."""
     shown = str(path)
     try:
-        with open(path, "rb") as handle:
-            data = tomllib.load(handle)
-    except FileNotFoundError:
-        raise ModelFileError(shown, None, "no such file", usage=True) from None
-    except OSError as err:
-        raise ModelFileError(shown, None, f"cannot read: {err.strerror}", usage=True) from None
+        data = tomllib.loads(read_input_text(path, f"{kind} file"))
     except tomllib.TOMLDecodeError as err:
         raise ModelFileError(shown, None, f"not valid TOML: {err}") from None
     top = Table(shown, "", data)
@@ -202,8 +198,7 @@ def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
     For display (`gliderplan power show`); call after the file has loaded, so its shape is
     known to be valid.
     """
-    with open(path, "rb") as handle:
-        data = tomllib.load(handle)
+    data = tomllib.loads(read_input_text(path, "model file"))
     rows: list[tuple[str, float, str, str]] = []
 
     def walk(prefix: str, table: dict[str, Any]) -> None:

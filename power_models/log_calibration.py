@@ -17,8 +17,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from gliderplan.contract.errors import GliderplanError, UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.errors import UsageError
+from gliderplan.contract.files import read_input_text, write_atomically
 from gliderplan.power_models import calibration
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.catalog import resolve
@@ -158,8 +158,7 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
                    log: FlightLog) -> Path:
     """Write the base vehicle's file with every fitted figure replaced (value, sd, what it
     was fitted from), the fit's correlation and the devices the hotel load holds."""
-    with open(resolve("vehicle", base), "rb") as handle:
-        data = tomllib.load(handle)
+    data = tomllib.loads(read_input_text(resolve("vehicle", base), "vehicle file"))
     name = name or re.sub(r"[^A-Za-z0-9_]", "_", output.stem)
     if not _NAME.fullmatch(name):
         raise UsageError(f"vehicle name {name!r} must match [A-Za-z_][A-Za-z0-9_]{{0,31}}")
@@ -196,10 +195,7 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
     )
     text = to_toml(data, header)
     _check_loads(text, output)
-    try:
-        write_atomically(output, text)
-    except OSError as err:
-        raise GliderplanError(f"{output}: cannot write: {err.strerror}") from None
+    write_atomically(output, text)
     return output
 
 
@@ -207,7 +203,7 @@ def _check_loads(text: str, output: Path) -> None:
     """Refuse, before `output` is touched, a calibrated vehicle that would not load (a
     figure the logs drove out of its range): the user keeps the file they had."""
     with tempfile.TemporaryDirectory() as scratch:
-        candidate = Path(scratch) / output.name
+        candidate = Path(scratch) / "calibrated.toml"  # output.name may be too long here
         candidate.write_text(text)
         try:
             read_vehicle_file(candidate)

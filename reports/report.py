@@ -18,7 +18,7 @@ import pandas as pd
 
 from gliderplan.contract import TICK_S
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import InputFileError, read_input_text, write_atomically
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
@@ -44,10 +44,10 @@ def _wh(joules: float) -> float:
 
 def _json(path: Path, what: str) -> dict:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise UsageError(f"{path}: no such file ({what})") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        data = json.loads(read_input_text(path, "JSON file"))
+    except InputFileError as err:  # say what the file should have been
+        raise UsageError(f"{err} ({what})") from None
+    except json.JSONDecodeError as err:
         raise UsageError(f"{path}: cannot read {what}: {err}") from None
     if not isinstance(data, dict):
         raise UsageError(f"{path}: {what}: expected a JSON object")

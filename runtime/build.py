@@ -25,7 +25,7 @@ from pathlib import Path
 
 from gliderplan.contract import FlightLimits
 from gliderplan.contract.errors import GliderplanError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import OutputFileError, output_directory, write_atomically
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.ir import CheckedMission
 
@@ -117,8 +117,7 @@ def build_mission(c_source_path: str | Path, out_dir: str | Path, target: str = 
     `compile_mission` for the cached path from a checked mission.
     """
     c_source = Path(c_source_path)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_directory(out_dir)
     board = find_target(target)
     command = compiler_command(board)
     with runtime_sources() as (include, sources):
@@ -202,10 +201,10 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = 
         plan = read_plan_data(plan_path)
         runtime_accepts(mission, plan_path, limits)
     source = generate_c(mission, limits)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_directory(out_dir)
     c_path = out / f"{mission.name}.c"
-    _write_if_changed(c_path, source)
+    if not (c_path.is_file() and c_path.read_text() == source):  # keep make's timestamps
+        write_atomically(c_path, source)
     with runtime_sources() as (include, sources):
         key = build_key(source, include, sources, board, compiler_command(board))
     cached = cache_dir() / key[:2] / key / mission.name
@@ -228,24 +227,17 @@ def _prune_cache(root: Path, keep: int) -> None:
         shutil.rmtree(stale, ignore_errors=True)  # another process may be removing it too
 
 
-def _write_if_changed(path: Path, text: str) -> None:
-    if path.is_file() and path.read_text() == text:
-        return
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    with os.fdopen(fd, "w") as handle:
-        handle.write(text)
-    os.chmod(tmp, 0o644)
-    os.replace(tmp, path)
-
-
 def _copy_atomically(source: Path, destination: Path) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{destination.name}.", dir=destination.parent)
-    os.close(fd)
     try:
-        shutil.copy2(source, tmp)
-        os.replace(tmp, destination)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{destination.name[:32]}.", dir=destination.parent)
+        os.close(fd)
+        try:
+            shutil.copy2(source, tmp)
+            os.replace(tmp, destination)
+        finally:
+            Path(tmp).unlink(missing_ok=True)
+    except OSError as err:
+        raise OutputFileError(f"{destination}: cannot write: {err.strerror}") from None
 
 
 # ---- checking a plan with the runtime's own reader ----------------------------------

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import read_input_text
 from gliderplan.sim import libm
 
 Number = float | np.ndarray
@@ -244,10 +245,7 @@ def read_profile_csv(path: str | Path) -> MeasuredProfile:
     """A profile file: header `depth_m,temperature_c[,salinity_psu][,time_s]`, one sample
     a row; rows of one cast share `time_s`. Errors name the file and line."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet may add a BOM
-    except (OSError, UnicodeDecodeError) as err:
-        raise OceanFileError(f"{path}: cannot read ocean file: {err}") from None
+    text = read_input_text(path, "depth profile")
     rows = list(csv.reader(text.splitlines()))
     if not rows:
         raise OceanFileError(f"{path}:1: empty ocean file; expected the header "

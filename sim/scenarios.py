@@ -31,6 +31,7 @@ from statistics import NormalDist
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import read_input_text
 from gliderplan.power_models.vehicle import FIGURES, Vehicle, figure_value, with_figures
 from gliderplan.sim.ocean import InternalWave, Thermocline
 from gliderplan.sim.science import SensorNoise
@@ -114,11 +115,7 @@ def read_spec(path: str | Path | None = None) -> ScenarioSpec:
         where = DEFAULT_FILE
     else:
         where = str(path)
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as err:
-            raise ScenarioFileError(f"{where}: cannot read scenario file: {err}",
-                                    usage=not Path(path).exists()) from None
+        text = read_input_text(path, "scenario file")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:

@@ -34,6 +34,7 @@ _RAD = math.pi / 180.0
 SURFACE_DEPTH_M = 0.3  # shallower than this the antenna is out of the water
 HOVER_RATE_M_S = 0.05  # assumption: small buoyancy corrections move a hovering glider slowly
 PITCH_RATE_RAD_S = 0.1  # assumption: the battery moves ~26 deg in under 5 s
+MAX_CURRENT_MPS = 10.0  # [m s-1] beyond any ocean current (the Gulf Stream's core: ~2.5)
 
 
 @dataclass(frozen=True)

@@ -3,18 +3,24 @@ the library raises it with its code (`contract.errors`), `cli/main.py` alone pri
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from gliderplan.cli.main import main
-from gliderplan.contract import ExitCode
+from gliderplan.contract import MAX_INPUT_BYTES, ExitCode
 
 FIG2 = str(Path(__file__).resolve().parents[1] / "examples" / "fig2.mission")
+ANNOTATED = str(Path(__file__).resolve().parents[1] / "examples" / "fig2_annotated.mission")
+LONG = "a" * 300  # longer than any file name may be (255 bytes)
 
 # (what is wrong, the commands that meet it, the exit code, what the message says)
 # Paths are relative to the test's temporary directory; "{bad}" is a mission that does
-# not parse, "{broken}" a plan file that breaks the format.
+# not parse, "{broken}" a plan file that breaks the format, "{file}" a regular file.
 CASES = [
     ("missing mission file", [
         ["check", "none.mission"], ["fmt", "none.mission"], ["plan", "none.mission"],
@@ -59,7 +65,58 @@ CASES = [
     ("missing data file", [
         ["calibrate", "none.dbd"], ["sim", FIG2, "--ocean", "none.dbd", "-o", "out"],
     ], ExitCode.USAGE, "none.dbd: no such"),
+    ("missing scenario file", [
+        ["montecarlo", FIG2, "--scenario-file", "none.toml", "--scenarios", "2", "-o", "out"],
+        ["plan", ANNOTATED, "--confidence", "0.9", "--scenario-file", "none.toml"],
+    ], ExitCode.USAGE, "none.toml: no such file"),
+    ("a device for a file", [  # read, it would never end
+        ["check", "/dev/zero"], ["fmt", "/dev/zero"], ["plan", "/dev/zero"],
+        ["compile", FIG2, "--plan", "/dev/zero", "-o", "out"],
+        ["sim", FIG2, "--plan", "/dev/urandom", "-o", "out"],
+        ["sim", FIG2, "--ocean", "/dev/zero", "-o", "out"],
+        ["montecarlo", FIG2, "--scenario-file", "/dev/zero", "--scenarios", "2", "-o", "out"],
+        ["plan", FIG2, "--computer", "/dev/zero"], ["plan", FIG2, "--battery", "/dev/zero"],
+        ["power", "show", "vehicle", "/dev/urandom"],
+        ["compare-sbc", FIG2, "--computer", "/dev/zero"],
+        ["calibrate", ".", "--base", "/dev/zero"],
+    ], ExitCode.USAGE, "/dev/"),
+    ("a file larger than any input", [
+        ["check", "{huge}"], ["plan", FIG2, "--computer", "{huge}"],
+        ["sim", FIG2, "--plan", "{huge}", "-o", "out"],
+    ], ExitCode.BAD_INPUT, f"huge.toml: more than {MAX_INPUT_BYTES} bytes is too large"),
+    ("a file name longer than the system allows", [
+        ["check", LONG], ["fmt", LONG], ["plan", LONG], ["sim", LONG, "-o", "out"],
+        ["sim", FIG2, "--plan", LONG, "-o", "out"],
+        ["plan", FIG2, "--computer", f"{LONG}.toml"],
+        ["power", "show", "board", f"{LONG}.toml"],
+    ], ExitCode.USAGE, "file name too long"),
+    ("a result that cannot be written there", [
+        ["plan", FIG2, "-o", "{file}/fig2.plan"], ["plan", FIG2, "-o", f"{LONG}.plan"],
+        ["plan", ANNOTATED, "--sweep", "3", "-o", "{file}/sweep"],
+        ["compile", FIG2, "-o", "{file}/build"],
+        ["sim", FIG2, "--duration", "60s", "-o", "{file}/run"],
+        ["montecarlo", FIG2, "--scenarios", "2", "--duration", "60s", "-o", "{file}/mc"],
+        ["compare-sbc", FIG2, "-o", "{file}/sbc"],
+        ["report", ANNOTATED, "-o", "{file}/report"],
+    ], ExitCode.USAGE, "cannot write"),
+    ("a battery no number can hold", [
+        ["plan", FIG2, "--battery", "1e400Wh"], ["plan", FIG2, "--battery", "1e305kWh"],
+        ["compare-sbc", FIG2, "--battery", "1e400Wh"],
+    ], ExitCode.USAGE, "must be positive and finite"),
+    ("a negative seed", [
+        ["sim", FIG2, "--seed", "-1", "-o", "out"],
+        ["montecarlo", FIG2, "--scenarios", "2", "--seed", "-1", "-o", "out"],
+        ["plan", ANNOTATED, "--confidence", "0.9", "--seed", "-1"],
+    ], ExitCode.USAGE, "--seed: expected an integer >= 0, got '-1'"),
 ]
+
+
+def exit_code(argv: list[str]) -> int:
+    """What `gliderplan ARGV` exits with (argparse's own errors exit through SystemExit)."""
+    try:
+        return main(argv)
+    except SystemExit as stop:
+        return int(stop.code)
 
 
 @pytest.mark.parametrize("argvs, code, message", [case[1:] for case in CASES],
@@ -69,10 +126,48 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
     monkeypatch.chdir(tmp_path)
     (tmp_path / "bad.mission").write_text("mission m\nstate s begin\n")
     (tmp_path / "broken.plan").write_text("GPPLAN 1\nmission sampleMission\n")
+    (tmp_path / "file").write_text("a file, not a directory\n")
+    with open(tmp_path / "huge.toml", "wb") as huge:  # sparse: no disk space taken
+        huge.truncate(MAX_INPUT_BYTES + 1)
     for argv in argvs:
-        argv = [a.format(bad="bad.mission", broken="broken.plan") for a in argv]
-        assert main(argv) == code, argv
+        argv = [a.format(bad="bad.mission", broken="broken.plan", file="file",
+                         huge="huge.toml") for a in argv]
+        assert exit_code(argv) == code, argv
         err = capsys.readouterr().err
         assert message in err and "Traceback" not in err, (argv, err)
         assert err.count(f"gliderplan {argv[0]}: error: ") <= 1, err  # said once
         assert not (tmp_path / "out").exists()  # nothing written
+
+
+def gliderplan(*args: str, **popen) -> subprocess.Popen:
+    """`gliderplan ARGS` as a user runs it: its own process, this interpreter's package."""
+    return subprocess.Popen([sys.executable, "-m", "gliderplan.cli", *args],
+                            stderr=subprocess.PIPE, text=True, **popen)
+
+
+@pytest.mark.parametrize("argv", [["check", "--json", ANNOTATED], ["fmt", ANNOTATED],
+                                  ["power", "list"]], ids=lambda argv: argv[0])
+def test_a_reader_that_went_away_stops_the_command_quietly(argv):
+    """`gliderplan check --json M | head -0`: no message, the exit status of a process that
+    SIGPIPE ended, as `cat` gives."""
+    process = gliderplan(*argv, stdout=subprocess.PIPE)
+    process.stdout.close()  # before the command writes a byte
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == ExitCode.BROKEN_PIPE == 128 + signal.SIGPIPE
+    assert err == ""
+
+
+def test_a_named_pipe_in_a_mission_is_refused_at_once(tmp_path):
+    """A pipe with no writer would block a reader for good: refused before it is read."""
+    os.mkfifo(tmp_path / "pipe.toml")
+    mission = tmp_path / "m.mission"
+    mission.write_text(Path(ANNOTATED).read_text().replace(
+        "vehicle slocum_g2_shallow", 'vehicle "pipe.toml"'))
+    for argv in (["plan", str(mission)], ["power", "show", "board", "pipe.toml"],
+                 ["check", "pipe.toml"], ["sim", FIG2, "--ocean", "pipe.toml", "-o", "out"]):
+        process = gliderplan(*argv, cwd=tmp_path, stdout=subprocess.DEVNULL)
+        _, err = process.communicate(timeout=120)
+        assert process.returncode == ExitCode.USAGE, (argv, err)
+        assert err.startswith(f"gliderplan {argv[0]}: error: pipe.toml: is not a regular "
+                              "file (a device, pipe or socket)"), err
+        assert len(err.strip().splitlines()) == 1, err

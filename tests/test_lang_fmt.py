@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from pathlib import Path
 
 import pytest
@@ -177,6 +179,21 @@ def test_fmt_write_rewrites_in_place(tmp_path, capsys):
     assert capsys.readouterr().out == ""
 
 
+@pytest.mark.parametrize("mode", [0o600, 0o640, 0o755])
+def test_fmt_write_keeps_a_link_a_link_and_the_file_its_permissions(tmp_path, mode):
+    target = tmp_path / "missions" / "m.mission"
+    target.parent.mkdir()
+    target.write_text("mission m\nstate s begin flightprofile surface end\n")
+    target.chmod(mode)
+    link = tmp_path / "current.mission"
+    link.symlink_to(Path("missions") / "m.mission")
+    assert main(["fmt", "--write", str(link)]) == 0
+    assert link.is_symlink() and os.readlink(link) == str(Path("missions") / "m.mission")
+    assert target.read_text() == "mission m\n\nstate s\nbegin\n  flightprofile surface\nend\n"
+    assert stat.S_IMODE(target.stat().st_mode) == mode
+    assert sorted(p.name for p in target.parent.iterdir()) == ["m.mission"]  # no leftovers
+
+
 def test_fmt_leaves_a_file_with_syntax_errors_alone(tmp_path, capsys):
     path = tmp_path / "bad.mission"
     source = "mission m\nstate s begin flightprofile surface\n"
@@ -188,9 +205,9 @@ def test_fmt_leaves_a_file_with_syntax_errors_alone(tmp_path, capsys):
 
 def test_format_file_is_the_fmt_command_as_one_call(tmp_path):
     from gliderplan.contract import ExitCode
+    from gliderplan.contract.files import InputFileError
     from gliderplan.language.diagnostics import MissionError
     from gliderplan.language.formatter import format_file
-    from gliderplan.language.source import SourceError
 
     path = tmp_path / "m.mission"
     path.write_text("mission m # keep me\nstate s begin flightprofile surface end\n")
@@ -199,7 +216,7 @@ def test_format_file_is_the_fmt_command_as_one_call(tmp_path):
     with pytest.raises(MissionError, match="does not parse") as bad:
         format_file(path)
     assert f"{path}:2:7: error: state 's' has no 'end'" in bad.value.details
-    with pytest.raises(SourceError) as missing:
+    with pytest.raises(InputFileError) as missing:
         format_file(tmp_path / "none.mission")
     assert missing.value.exit_code == ExitCode.USAGE
 

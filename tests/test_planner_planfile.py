@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from gliderplan.contract import VEHICLE_COMPONENTS, Component, ExitCode
+from gliderplan.contract.files import InputFileError
 from gliderplan.language import check_source
 from gliderplan.language.source import read_mission
 from gliderplan.planner.plan import plan_mission
@@ -168,7 +169,7 @@ def test_read_plan_file_checks_the_mission(tmp_path, annotated):
     with pytest.raises(PlanFileError, match="hash") as info:
         read_plan_file(path, other)
     assert str(info.value).startswith(f"{path}:3:")
-    with pytest.raises(PlanFileError, match="missing.plan: no such file") as info:
+    with pytest.raises(InputFileError, match="missing.plan: no such file") as info:
         read_plan_file(tmp_path / "missing.plan")
     assert info.value.exit_code == ExitCode.USAGE
 

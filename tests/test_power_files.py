@@ -8,6 +8,8 @@ import tomllib
 
 import pytest
 
+from gliderplan.contract import ExitCode
+from gliderplan.contract.files import InputFileError
 from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
 from gliderplan.power_models.catalog import DATA_DIR, preset_path
 from gliderplan.power_models.errors import ModelFileError
@@ -157,8 +159,9 @@ def test_broken_or_missing_files(tmp_path):
     bad.write_text("kind = \n")
     with pytest.raises(ModelFileError, match=r"bad\.toml: not valid TOML"):
         load_vehicle(str(bad))
-    with pytest.raises(ModelFileError, match=r"nowhere\.toml: no such file"):
+    with pytest.raises(InputFileError, match=r"nowhere\.toml: no such file") as missing:
         load_board(str(tmp_path / "nowhere.toml"))
+    assert missing.value.exit_code == ExitCode.USAGE
     with pytest.raises(ModelFileError, match="unknown vehicle preset"):
         load_vehicle("slocum_g9")
 
