@@ -33,6 +33,9 @@ from gliderplan.language.ir import CheckedMission
 C_FLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror")
 LINK_FLAGS = ("-lm",)
 CACHED_BUILDS = 64  # at most ~40 MB: a static board binary is 0.6-0.7 MB, a host one 70 kB
+# Written into every cache entry this module builds: the clean-up removes only entries
+# that hold it, never what others keep in a cache directory they share with us.
+CACHE_MARKER = ".gliderplan-build"
 
 
 class BuildError(GliderplanError):
@@ -212,6 +215,7 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = 
         os.utime(cached.parent)  # recently used: kept longest
     else:
         build_mission(c_path, cached.parent, target)
+        write_atomically(cached.parent / CACHE_MARKER, f"gliderplan build {key}\n")
         _prune_cache(cache_dir(), CACHED_BUILDS)
     binary = out / mission.name
     _copy_atomically(cached, binary)
@@ -221,9 +225,16 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = 
 
 
 def _prune_cache(root: Path, keep: int) -> None:
-    """Remove all but the `keep` most recently used builds under `root`."""
-    entries = sorted(root.glob("??/*"), key=lambda d: d.stat().st_mtime, reverse=True)
-    for stale in entries[keep:]:
+    """Remove all but the `keep` most recently used builds under `root`: only entries
+    this module made (they hold CACHE_MARKER), never a link or another's directory."""
+    used: list[tuple[float, Path]] = []
+    for entry in root.glob("??/*"):
+        try:
+            if not entry.is_symlink() and (entry / CACHE_MARKER).is_file():
+                used.append((entry.stat().st_mtime, entry))
+        except OSError:  # another process removed it meanwhile
+            continue
+    for _, stale in sorted(used, reverse=True)[keep:]:
         shutil.rmtree(stale, ignore_errors=True)  # another process may be removing it too
 
 

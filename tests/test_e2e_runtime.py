@@ -195,6 +195,17 @@ def test_a_second_compile_comes_from_the_cache(binary, cache, tmp_path):
 def test_the_cache_keeps_the_most_recently_used_builds(monkeypatch, tmp_path):
     monkeypatch.setenv("GLIDERPLAN_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(build, "CACHED_BUILDS", 2)
+    # A cache directory shared with others: their old directories are none of ours,
+    # even one named like a build, and neither is a link to a build elsewhere.
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / build.CACHE_MARKER).parent.mkdir()
+    (elsewhere / build.CACHE_MARKER).write_text("not in the cache\n")
+    foreign = [tmp_path / "cache" / "ab" / "notes", tmp_path / "cache" / "cd" / ("cd" * 32)]
+    for directory in foreign:
+        directory.mkdir(parents=True)
+        (directory / "keep.txt").write_text("someone else's\n")
+        os.utime(directory, (0, 0))  # older than every build
+    (tmp_path / "cache" / "ab" / "link").symlink_to(elsewhere)
     text = FIG2.read_text()
     for horizon in (2500, 2600, 2500, 2700):  # the third is a cache hit that refreshes 2500
         source = tmp_path / "m.mission"
@@ -206,6 +217,8 @@ def test_the_cache_keeps_the_most_recently_used_builds(monkeypatch, tmp_path):
     assert (tmp_path / "2500" / "sampleMission").read_bytes() in built
     assert (tmp_path / "2700" / "sampleMission").read_bytes() in built
     assert (tmp_path / "2600" / "sampleMission").read_bytes() not in built
+    assert all((directory / "keep.txt").is_file() for directory in foreign)
+    assert (elsewhere / build.CACHE_MARKER).is_file()
 
 
 def test_the_cache_key_changes_with_every_input_of_the_build(tmp_path):
