@@ -46,7 +46,8 @@ def read_key(path: str | Path) -> bytes:
     """The key in `path`, refused as the runtime refuses it: missing, not a regular file,
     readable by group or others, or not 64 lowercase hex digits and a LF."""
     try:
-        with open(path, "rb") as handle:
+        # Opened without blocking: a named pipe with no writer would hang (contract.files).
+        with os.fdopen(os.open(path, os.O_RDONLY | os.O_NONBLOCK), "rb") as handle:
             mode = os.fstat(handle.fileno()).st_mode
             if not stat.S_ISREG(mode):
                 raise KeyFileError(f"{path}: the key file is not a regular file", usage=True)
