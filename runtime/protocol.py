@@ -35,6 +35,7 @@ from gliderplan.contract import (
     SENSORS_RESYNC,
     CommandField,
     MessageType,
+    ReleaseReason,
 )
 
 HEADER = struct.Struct("<BBBBH")  # version, type, seq, ack, length
@@ -695,7 +696,9 @@ class Link:
                 if isinstance(message, answered) and match(message):
                     return message
                 if isinstance(message, Release):
-                    raise LinkReleasedError(message.reason)
+                    if message.reason != ReleaseReason.MISSION_EXITED:
+                        raise LinkReleasedError(message.reason)
+                    break  # the exit's COMMAND went first and was lost: ask again
                 if isinstance(message, Nak):
                     break
                 if isinstance(message, Unresolved) and resync is not None and match(message):

@@ -381,15 +381,35 @@ def test_bad_arguments_are_a_one_line_error(binary, glider):
     assert "--link-timeout-s 'soon'" in err and len(err.strip().splitlines()) == 1
 
 
-def test_link_silence_releases_control_and_exits_3(binary, glider, tmp_path):
-    process = glider.start(binary, "--link-timeout-s", "2", "--state-dir", str(tmp_path))
+def test_link_silence_releases_control_and_the_returning_link_takes_it_back(binary, glider,
+                                                                           tmp_path):
+    """Silent past the watchdog, the runtime hands the glider to layered control (RELEASE,
+    reason 1) and listens; the link's return hands it back, from the state the mission
+    was in, at the mission time the science computer says. Stopped while the link is
+    down, it exits 3."""
+    process = glider.start(binary, "--link-timeout-s", "1", "--state-dir", str(tmp_path))
     link = glider.link()
     link.wait_hello()
-    fly(link, 0, 60)  # into s2; then the science computer falls silent
+    commands = fly(link, 0, 60)  # into s2; then the science computer falls silent
     assert link.wait_release(timeout_s=10) == ReleaseReason.LINK_SILENT
+    link.release = None
+    # 40 ticks (400 s) under layered control; s2 returns at 1500 s, whenever that is seen
+    commands += fly(link, 101, 400)
+    assert transitions(commands) == FIG2_TRACE
+    assert commands[61].tick == 101 and commands[61].state == 1  # still in s2
+    assert process.wait(10) == 0
+    said = process.stderr.read()
+    assert "link silent past its timeout; releasing control" in said
+    assert "link back; taking control again" in said
+    assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE
+
+    process = glider.start(binary, "--link-timeout-s", "1")
+    link = glider.link()
+    link.wait_hello()
+    fly(link, 0, 5)
+    assert link.wait_release(timeout_s=10) == ReleaseReason.LINK_SILENT
+    process.send_signal(signal.SIGTERM)
     assert process.wait(10) == 3
-    assert "link silent" in process.stderr.read()
-    assert (tmp_path / "events.log").read_text().splitlines() == FIG2_TRACE[:2]
 
 
 @pytest.mark.parametrize("signal_number", [signal.SIGTERM, signal.SIGSEGV],
@@ -611,16 +631,17 @@ def test_a_kill_before_the_first_checkpoint_logs_start_once(binary, glider, tmp_
     assert (tmp_path / "events.log").read_text().splitlines() == restarted_trace
 
 
-@pytest.mark.parametrize("ending", ["watchdog", "SIGTERM"])
-def test_a_peer_that_stops_reading_never_blocks_the_runtime(binary, glider, ending):
+@pytest.mark.parametrize("link_timeout_s", [2, 600], ids=["released", "flying"])
+def test_a_peer_that_stops_reading_never_blocks_the_runtime(binary, glider, link_timeout_s):
     """The science computer stops reading while the runtime keeps writing (HELLO every
     millisecond here) until the line is full. The runtime blocked for good in its write
-    once, deaf to its watchdog and to SIGTERM; now a full line costs frames, and the
-    watchdog releases (exit 3) or SIGTERM stops it (exit 4) within seconds."""
-    timeout_s = 3 if ending == "watchdog" else 600
-    process = glider.start(binary, "--retransmit-ms", "1", "--link-timeout-s", str(timeout_s))
+    once, deaf to its watchdog and to SIGTERM; now a full line costs frames: its watchdog
+    still releases control, and SIGTERM stops it at once (exit 3 once released, 4
+    before)."""
+    process = glider.start(binary, "--retransmit-ms", "1", "--link-timeout-s",
+                           str(link_timeout_s))
     time.sleep(4.0)  # the runtime fills the line (in about a second); nobody reads it
-    assert process.poll() is None or ending == "watchdog"
-    if ending == "SIGTERM":
-        process.send_signal(signal.SIGTERM)
-    assert process.wait(10) == (3 if ending == "watchdog" else 4)
+    assert process.poll() is None
+    process.send_signal(signal.SIGTERM)
+    assert process.wait(5) == (3 if link_timeout_s == 2 else 4)
+    assert ("link silent past its timeout" in process.stderr.read()) == (link_timeout_s == 2)

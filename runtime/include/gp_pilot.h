@@ -45,7 +45,7 @@ typedef struct {
     uint8_t naive;               /**< thermotrackyo: the paper's first, naive tracker */
 } gp_profile_input;
 
-/** What changed in the pilot's memory this tick (the runtime checkpoints on it). */
+/** What the pilot did this tick: turned the yo, detected the thermocline. */
 enum { GP_PILOT_TURNED = 1, GP_PILOT_DETECTED = 2 };
 
 /** @brief Enter a profile: band = [min, max], window empty, leg from the depth. */

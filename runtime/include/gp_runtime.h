@@ -32,13 +32,12 @@ typedef struct {
     gp_route_state route;           /**< last: its waypoints are not checkpointed */
 } gp_runtime;
 
-/** What happened in one tick, for the event log and the checkpoint. */
+/** What happened in one tick, for the event log. */
 typedef struct {
     gp_transition transitions[2];   /**< start and an event can share tick 0 */
     uint8_t n_transitions;
     uint8_t fault;                  /**< gp_step_result of a refused event, 0: none */
     gp_transition refused;          /**< the refused transition when `fault` */
-    uint8_t changed;                /**< machine, profile or pilot memory changed */
 } gp_tick_report;
 
 /** Options of a run. */

@@ -19,11 +19,16 @@ int gp_serial_open(const char *path);
  */
 int gp_serial_open_pty(char *peer_path, size_t cap);
 
+/** What arrives while lingering: `len` bytes for the caller (`ctx` is its own), which
+ *  may decode them in place. */
+typedef void (*gp_serial_bytes_fn)(void *ctx, uint8_t *bytes, size_t len);
+
 /**
  * @brief Before closing a pty master: wait (at most `max_s`) for the peer to close its
- *        end, since closing the master discards whatever the peer has not yet read.
+ *        end, since closing the master discards whatever the peer has not yet read;
+ *        what the peer sends meanwhile goes to `on_bytes` (NULL: dropped).
  */
-void gp_serial_linger(int fd, double max_s);
+void gp_serial_linger(int fd, double max_s, gp_serial_bytes_fn on_bytes, void *ctx);
 
 /**
  * @brief Write all bytes, waiting for room on a full line at most 1 s in all.

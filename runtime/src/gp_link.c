@@ -22,6 +22,7 @@
 
 #define READ_CHUNK 256
 #define ERROR_LEN 512
+#define RELEASED_WAIT_S 1.0  /* [s] the longest poll while the link is down */
 
 typedef struct {
     const gp_mission *mission;
@@ -51,6 +52,7 @@ typedef struct {
     uint16_t plan_total, plan_received;
     uint32_t dropped;                /* frames dropped (bad CRC, COBS, ...) */
     uint32_t stale;                  /* SENSORS of a tick older than the last answered */
+    int released;                    /* the watchdog gave control to layered control */
 } link_state;
 
 static gp_runtime runtime;
@@ -113,18 +115,51 @@ static void send_nak(link_state *s)
     gp_serial_write(s->fd, wire, n);
 }
 
-/* Give control back to the glider's own layered control and end with `status`. */
+/* Give control back to the glider's own layered control: RELEASE on the line. */
+static void hand_over(link_state *s, gp_release_reason reason)
+{
+    *outgoing(s) = (uint8_t)reason;
+    send_frame(s, GP_MSG_RELEASE, 1);
+    gp_serial_drain(s->fd, 1.0);  /* the RELEASE must reach the line before we go on */
+}
+
+static int send_command(link_state *s, const gp_command *command, int whole);
+
+/* While lingering after the mission's exit: a SENSORS of the last tick again means its
+ * COMMAND was lost on the line, so it goes again; a damaged frame gets its NAK. */
+static void answer_late(void *ctx, uint8_t *bytes, size_t len)
+{
+    link_state *s = ctx;
+    for (size_t i = 0, used; i < len; i += used) {
+        gp_frame frame;
+        uint32_t tick;
+        uint8_t flags;
+        int result = gp_frame_reader_feed(&s->reader, bytes + i, len - i, &used, &frame);
+        if (result > 0) {
+            send_nak(s);
+        } else if (result == GP_FRAME_OK && frame.type == GP_MSG_SENSORS
+                   && gp_sensors_unpack(&frame, s->mission->read_mask, &tick, &flags,
+                                        runtime.sensors) == GP_FRAME_OK
+                   && runtime.has_command && tick == runtime.last_command.tick) {
+            s->ack = frame.seq;
+            send_command(s, &runtime.last_command, 1);
+        }
+    }
+}
+
+/* Give control back for good and end with `status`. */
 static int release(link_state *s, gp_release_reason reason, int status)
 {
     if (s->dropped || s->stale) {
         fprintf(stderr, "%s: link: %lu damaged frames dropped, %lu stale SENSORS ignored\n",
                 s->prog, (unsigned long)s->dropped, (unsigned long)s->stale);
     }
-    *outgoing(s) = (uint8_t)reason;
-    send_frame(s, GP_MSG_RELEASE, 1);
-    gp_serial_drain(s->fd, 1.0);  /* the RELEASE must reach the line before we close it */
+    if (!s->released || reason != GP_RELEASE_LINK_SILENT) {
+        hand_over(s, reason);
+    }
     if (s->own_pty) {
-        gp_serial_linger(s->fd, s->args->link_timeout_s);
+        gp_serial_linger(s->fd, s->args->link_timeout_s,
+                         reason == GP_RELEASE_MISSION_EXITED ? answer_late : NULL, s);
     }
     crash_fd = -1;
     close(s->fd);
@@ -252,7 +287,11 @@ static int load_state(link_state *s, char *message)
 
 /* ---- one tick ---------------------------------------------------------------- */
 
-/* Log the tick's transitions and write the checkpoint: before the COMMAND goes out. */
+/* Log the tick's transitions and write the checkpoint: before the COMMAND goes out.
+ * Every tick, not only those that changed the state or the pilot's leg: the checkpoint
+ * also holds the sensor values a SENSORS frame may leave out (a powered-off CTD's last
+ * reading) and the tracker's window, which a runtime resumed from an older record could
+ * not rebuild from the next frame; it would fly on from a different memory. */
 static int persist(link_state *s, const gp_tick_report *report)
 {
     double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
@@ -269,7 +308,7 @@ static int persist(link_state *s, const gp_tick_report *report)
             gp_events_append(s->events_fd, s->mission, time_s, "fault", t->from, t->to, t->depth);
         }
     }
-    if (s->args->state_dir && report->changed) {
+    if (s->args->state_dir) {
         off_t size = lseek(s->events_fd, 0, SEEK_END);
         runtime.events_log_bytes = size < 0 ? 0 : (uint32_t)size;
         return gp_checkpoint_store(&checkpoint, s->mission, &runtime);
@@ -457,6 +496,13 @@ static int on_frame(link_state *s, const gp_frame *frame)
 {
     s->ack = frame->seq;
     s->heard = 1;  /* the loop stamps it with the clock it reads next */
+    if (s->released && frame->type == GP_MSG_SENSORS) {
+        /* the link is back: take control again, from the state the mission was in; the
+         * science computer may hold none of our COMMANDs, so the next goes whole */
+        say(s, "link back; taking control again");
+        s->released = 0;
+        s->has_acked = 0;
+    }
     switch (frame->type) {
     case GP_MSG_SENSORS:
         return on_sensors(s, frame);
@@ -534,17 +580,21 @@ static int run_link(link_state *s)
         }
         if (stop_signal) {
             say(s, "stopped by a signal; releasing control");
-            return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
+            return s->released ? release(s, GP_RELEASE_LINK_SILENT, GP_EXIT_LINK_LOST)
+                               : release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
         }
-        if (now - s->last_valid_s >= s->args->link_timeout_s) {
+        if (!s->released && now - s->last_valid_s >= s->args->link_timeout_s) {
+            /* layered control flies the glider; we listen for the link to come back */
             say(s, "link silent past its timeout; releasing control");
-            return release(s, GP_RELEASE_LINK_SILENT, GP_EXIT_LINK_LOST);
+            hand_over(s, GP_RELEASE_LINK_SILENT);
+            s->released = 1;
         }
         if (!s->answered && now >= s->hello_due_s) {
             send_frame(s, GP_MSG_HELLO, gp_hello_pack(s->mission, outgoing(s)));
             s->hello_due_s = now + retransmit_s;
         }
-        double wait_s = s->last_valid_s + s->args->link_timeout_s - now;
+        double wait_s = s->released ? RELEASED_WAIT_S
+                                    : s->last_valid_s + s->args->link_timeout_s - now;
         if (!s->answered && s->hello_due_s - now < wait_s) {
             wait_s = s->hello_due_s - now;
         }
@@ -597,7 +647,10 @@ int gp_main(int argc, char **argv)
         return GP_EXIT_BAD_INPUT;
     }
     if (runtime.started && runtime.machine.state == GP_EXITED) {
+        /* restarted after the exit's checkpoint: say who we are, hand over, and answer
+         * the exit's tick again if its COMMAND never reached the science computer */
         say(&s, "the checkpoint says the mission already exited");
+        send_frame(&s, GP_MSG_HELLO, gp_hello_pack(s.mission, outgoing(&s)));
         return release(&s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
     }
     return run_link(&s);

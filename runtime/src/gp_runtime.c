@@ -26,12 +26,11 @@ static void enter_state(gp_runtime *rt, const gp_mission *mission)
 static void record(gp_tick_report *report, gp_transition transition)
 {
     report->transitions[report->n_transitions++] = transition;
-    report->changed = 1;
 }
 
 /* Vertical and horizontal commands of the current state. */
 static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
-                gp_command *cmd, gp_tick_report *report)
+                gp_command *cmd)
 {
     const gp_state *state = &mission->states[rt->machine.state];
     const gp_plan_state *ps = options->plan ? &options->plan->states[rt->machine.state] : NULL;
@@ -50,13 +49,10 @@ static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options 
     if (now.profile != rt->profile) {  /* entering the state or switching alternative */
         gp_pilot_enter(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH]);
         rt->profile = now.profile;
-        report->changed = 1;
     }
     gp_pilot_command vertical;
-    if (gp_pilot_step(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH], rt->sensors[GP_SENSOR_TEMP],
-                      &vertical)) {
-        report->changed = 1;
-    }
+    gp_pilot_step(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH], rt->sensors[GP_SENSOR_TEMP],
+                  &vertical);
     double heading;
     int heading_valid = gp_route_step(&rt->route, &state->route, rt->sensors[GP_SENSOR_LAT],
                                       rt->sensors[GP_SENSOR_LON], &heading);
@@ -89,9 +85,7 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
             if (rt->machine.state != GP_EXITED) {
                 enter_state(rt, mission);
             }
-        } else if (result == GP_STEP_ASSIGNED) {
-            report->changed = 1;
-        } else if (result != GP_STEP_IDLE) {
+        } else if (result != GP_STEP_IDLE && result != GP_STEP_ASSIGNED) {
             report->fault = (uint8_t)result;
             report->refused = transition;
         }
@@ -110,7 +104,7 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
     if (rt->machine.state == GP_EXITED) {
         cmd->flags = GP_FLAG_DONE;
     } else {
-        fly(rt, mission, options, cmd, report);
+        fly(rt, mission, options, cmd);
     }
     rt->last_command = *cmd;
     rt->has_command = 1;

@@ -79,17 +79,21 @@ int gp_serial_open_pty(char *peer_path, size_t cap)
     return fd;
 }
 
-void gp_serial_linger(int fd, double max_s)
+void gp_serial_linger(int fd, double max_s, gp_serial_bytes_fn on_bytes, void *ctx)
 {
-    uint8_t sink[64];
+    uint8_t got[64];
     for (double until = gp_now_s() + max_s; gp_now_s() < until;) {
         struct pollfd pfd = {.fd = fd, .events = POLLIN};
         int ready = poll(&pfd, 1, 50);
         if (ready > 0 && (pfd.revents & POLLHUP)) {
             return;
         }
-        if (ready > 0 && read(fd, sink, sizeof sink) < 0 && errno != EINTR && errno != EAGAIN) {
+        ssize_t n = ready > 0 ? read(fd, got, sizeof got) : 0;
+        if (n < 0 && errno != EINTR && errno != EAGAIN) {
             return;
+        }
+        if (n > 0 && on_bytes) {
+            on_bytes(ctx, got, (size_t)n);
         }
     }
 }

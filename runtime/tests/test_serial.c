@@ -57,11 +57,11 @@ void test_linger_should_end_when_the_peer_hangs_up_and_else_at_its_bound(void)
     int peer = gp_serial_open(path);
     CHECK(master >= 0 && peer >= 0);
     double start = gp_now_s();
-    gp_serial_linger(master, 0.3);  /* peer still open: waits out its bound */
+    gp_serial_linger(master, 0.3, NULL, NULL);  /* peer still open: waits out its bound */
     CHECK(gp_now_s() - start >= 0.3);
     close(peer);
     start = gp_now_s();
-    gp_serial_linger(master, 60.0);  /* peer gone: returns at once, not after 60 s */
+    gp_serial_linger(master, 60.0, NULL, NULL);  /* peer gone: returns at once, not after 60 s */
     CHECK(gp_now_s() - start < 30.0);
     close(master);
 }
