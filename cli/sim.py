@@ -1,8 +1,10 @@
 """`gliderplan sim`: fly a mission (and its plan) on the simulated glider and check its energy.
 
 Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.png;
-with --runtime c and --state-dir DIR the runtime's own checkpoint and events.log in DIR.
-Without --plan every sensor a state logs is always on. Exit status 3: the run spent
+with --runtime c and --state-dir DIR the runtime's own checkpoint and events.log in DIR
+(and with --faults its events.log in RUNDIR too). Without --plan every sensor a state
+logs is always on. --faults SPEC injects faults into the C runtime's line and board
+(docs/reliability.md). Exit status 3: the run spent
 more than the plan's budget (a plan violation; summary.json names the cause). A run
 within its budget in which a state spent more than 5 % over its prediction says "plan
 check: over prediction" and names the state and the component (exit 0).
@@ -74,6 +76,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the key provisioned on the simulated vehicle (gliderplan "
                              "keygen): the plan must be signed with it (plan --sign); with "
                              "--runtime c it is uploaded over the link and the runtime checks it")
+    parser.add_argument("--faults", metavar="SPEC",
+                        help="with --runtime c: faults to inject on the line and into the "
+                             "runtime's board, e.g. drop=0.01,flip=1e-4,dup=0.01,burst=5@0.001,"
+                             "disconnect=600s@3600s,kill=10 (docs/reliability.md)")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
                         help="directory for the run's files")
 
@@ -107,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
             ocean_logs=args.ocean_logs, noise=args.noise, tracker=args.tracker,
             current=_current(args.current), seed=args.seed, tick_s=args.tick,
             duration_s=duration_s, progress=progress, key_path=args.key,
-            state_dir=args.state_dir)
+            state_dir=args.state_dir, faults=args.faults)
     finally:
         if progress is not None:
             progress.finish()

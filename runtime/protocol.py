@@ -576,6 +576,9 @@ class Link:
         self.ack = 0
         self.dropped = 0  # frames received that failed to parse
         self.resyncs = 0  # COMMAND updates whose base was missing
+        self.naks = 0  # NAKs received: frames of ours the runtime dropped
+        self.resends = 0  # frames sent again after a retransmission timeout without answer
+        self.recovered = 0  # exchanges answered after at least one re-send
         self.hello: Hello | None = None
         self.release: Release | None = None
         self.plan_status: PlanStatus | None = None
@@ -686,20 +689,25 @@ class Link:
         """
         wait_s = self.retransmit_s + len(wire) * 10 / BAUD  # time to put it on the line
         give_up = time.monotonic() + (self.max_retries + 1) * wait_s
+        sent = 0
         while True:
             self.port.write(wire)
+            sent += 1
             deadline = min(time.monotonic() + wait_s, give_up)
             while (remaining := deadline - time.monotonic()) > 0:
                 message = self.receive(remaining)
                 if message is None:
+                    self.resends += 1
                     break
                 if isinstance(message, answered) and match(message):
+                    self.recovered += sent > 1
                     return message
                 if isinstance(message, Release):
                     if message.reason != ReleaseReason.MISSION_EXITED:
                         raise LinkReleasedError(message.reason)
                     break  # the exit's COMMAND went first and was lost: ask again
                 if isinstance(message, Nak):
+                    self.naks += 1
                     break
                 if isinstance(message, Unresolved) and resync is not None and match(message):
                     wire = resync()

@@ -14,6 +14,7 @@ from gliderplan.sim.ocean import Ocean
 
 if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
+    from gliderplan.sim.faults import FaultSpec
 
 RUNTIMES = ("python", "c")
 
@@ -23,7 +24,8 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         robust_tracker: bool = True,
         progress: Callable[[float, float], None] | None = None,
         tick_by_tick: bool = False, key_path: str | None = None,
-        state_dir: str | Path | None = None) -> RunRecord:
+        state_dir: str | Path | None = None,
+        faults: FaultSpec | None = None) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends.
 
     The Python executor flies runs of ticks at once where nothing can happen between them
@@ -32,7 +34,8 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
     uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
     given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
-    when it refuses the plan.
+    when it refuses the plan. `faults` (C runtime only) are injected on the line and into
+    the runtime's board; the record says what they did.
     """
     science = make_science(mission, ocean, config, vehicle)
     if runtime == "python":
@@ -56,9 +59,18 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
     limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
                           board.clocks_mhz)  # the vehicle flown: a scenario's may differ
+    schedule = None
+    if faults is not None:
+        from gliderplan.sim.faults import FaultSchedule
+
+        schedule = FaultSchedule(faults, config.seed, int(config.duration_s / config.tick_s),
+                                 config.tick_s)
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
-                                key_path=key_path, state_dir=state_dir)
+                                key_path=key_path, state_dir=state_dir, faults=schedule)
     try:
-        return simulate(mission, c_runtime, science, config, progress)
+        record = simulate(mission, c_runtime, science, config, progress)
     finally:
         c_runtime.close()
+    if schedule is not None:
+        record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
+    return record

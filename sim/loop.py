@@ -53,6 +53,8 @@ class RunRecord:
     tick_s: float
     ended: str  # "exit", "duration", "interrupted" or "fault: ..."
     surfacings: int
+    faults: dict | None = None  # with injected faults: what they did (CRuntime.report)
+    events_log: str | None = None  # with faults: the C runtime's own event log
 
 
 def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float, float]:

@@ -104,4 +104,6 @@ def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan
         "plan_assumptions": [{"subject": a.subject, "text": a.text}
                              for a in (plan.assumptions if plan is not None else ())],
     }
+    if record.faults is not None:
+        data["faults"] = record.faults
     return json.dumps(data, indent=2, sort_keys=False, allow_nan=False) + "\n"

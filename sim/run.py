@@ -21,7 +21,8 @@ if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
     from gliderplan.sim.loop import RunRecord
     from gliderplan.sim.vehicle import Current
 
-RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png")
+RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png",
+             "events.log")  # events.log: the C runtime's own, with --faults
 DEFAULT_DURATION_S = 30 * 86400.0  # a run of a mission without a horizon ends here
 TRACKERS = ("robust", "naive")
 
@@ -66,7 +67,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 seed: int = 0, tick_s: float = TICK_S, duration_s: float | None = None,
                 progress: Callable[[float, float], None] | None = None,
                 plots: bool = True, key_path: str | Path | None = None,
-                state_dir: str | Path | None = None) -> RunResult:
+                state_dir: str | Path | None = None, faults: str | None = None) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
@@ -82,6 +83,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `state_dir`: the C runtime keeps its checkpoints and event log there, as on the glider
     (its fdatasyncs included); a directory that holds an earlier flight's files is refused,
     since the runtime would resume that flight against a glider that starts afresh.
+    `faults`: a fault SPEC (sim/faults.py) injected into the C runtime's line and board;
+    the run then also writes the runtime's own events.log, and summary.json says what the
+    faults did.
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -110,6 +114,14 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_DURATION_S
     config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
                        noise=NOISE_PRESETS[noise], current=current or Current())
+    fault_spec = None
+    if faults is not None:
+        from gliderplan.sim.faults import parse_faults
+
+        if runtime != "c":
+            raise UsageError("--faults: faults are injected into the C runtime's line and "
+                             "board: add --runtime c")
+        fault_spec = parse_faults(faults)
     vehicle = load_vehicle(mission.vehicle)
     water = load_ocean(ocean, Path(ocean_logs) if ocean_logs else None)
     plan = None if plan_path is None else load_plan(plan_path, mission)
@@ -125,7 +137,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     record = fly(mission, water, config, vehicle, plan, None if plan_path is None
                  else str(plan_path), runtime, robust_tracker=tracker == "robust",
                  progress=progress, key_path=None if key_path is None else str(key_path),
-                 state_dir=state_dir)
+                 state_dir=state_dir, faults=fault_spec)
     if not len(record.columns["time_s"]):
         raise KeyboardInterrupt  # nothing flown, nothing to write
     used = accounting.account(record, mission, vehicle, plan)
@@ -139,6 +151,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
             outputs.timeseries_table(record, used, mission.battery.energy_j)),
         "summary.json": outputs.summary(record, used, check, plan, meta),
     }
+    if record.events_log is not None:
+        contents["events.log"] = record.events_log
     if plots:
         contents["depth.png"] = drawing.depth_png(record)
         contents["energy.png"] = drawing.energy_png(record, used, plan)

@@ -1,0 +1,172 @@
+"""Faults in the closed loop (`gliderplan sim --runtime c --faults SPEC`): a damaged,
+duplicated, reordered, truncated or late frame is recovered by retransmission and the
+flight is the fault-free one; a cut line hands the glider to layered control and back;
+the runtime killed (SIGKILL) at random moments resumes from its checkpoint and flies
+the same flight; its event log loses and repeats nothing; a killed `gliderplan sim`
+leaves each of its files whole (the old one or the new one) or absent."""
+
+from __future__ import annotations
+
+import json
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from gliderplan.cli.main import main
+from gliderplan.contract.errors import UsageError
+from gliderplan.sim.faults import FaultSpec, parse_faults
+
+ROOT = Path(__file__).resolve().parents[1]
+FIG2 = ROOT / "examples" / "fig2.mission"
+LINE_FAULTS = "drop=0.002,flip=1e-4,dup=0.01,reorder=0.01,truncate=0.005,burst=5@0.005"
+
+
+def fly(tmp_path: Path, name: str, *options: str) -> Path:
+    run = tmp_path / name
+    assert main(["sim", str(FIG2), "--runtime", "c", "--seed", "1", "-o", str(run),
+                 *options]) == 0
+    return run
+
+
+@pytest.fixture(scope="module")
+def fault_free(tmp_path_factory) -> Path:
+    return fly(tmp_path_factory.mktemp("faults"), "fault-free")
+
+
+def trace_rows(run: Path) -> list[str]:
+    return (run / "trace.csv").read_text().splitlines()[1:]
+
+
+def log_as_trace(run: Path) -> list[str]:
+    """The runtime's events.log in trace.csv's form (`-` is an empty state there)."""
+    rows = []
+    for line in (run / "events.log").read_text().splitlines():
+        time_s, kind, from_state, to_state, depth = line.split()
+        rows.append(",".join((time_s, kind, from_state.strip("-"), to_state.strip("-"), depth)))
+    return rows
+
+
+def faults(run: Path) -> dict:
+    return json.loads((run / "summary.json").read_text())["faults"]
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ("drop=0.01,flip=1e-4", FaultSpec("drop=0.01,flip=1e-4", drop=0.01, flip=1e-4)),
+    ("burst=5@0.001,delay=0.3s@0.01", FaultSpec("burst=5@0.001,delay=0.3s@0.01", burst=0.001,
+                                                burst_bytes=5, delay=0.01, delay_s=0.3)),
+    ("disconnect=10min@1h,disconnect=60s@0s",
+     FaultSpec("disconnect=10min@1h,disconnect=60s@0s",
+               disconnects=((0.0, 60.0), (3600.0, 600.0)))),
+    ("kill=100@2500s", FaultSpec("kill=100@2500s", kills=100, kills_within_s=2500.0)),
+])
+def test_a_fault_spec_reads_as_written(text, expected):
+    assert parse_faults(text) == expected
+
+
+@pytest.mark.parametrize(("text", "said"), [
+    ("drop=2", "--faults 'drop=2': '2' is not a probability in [0, 1]"),
+    ("flip=nan", "--faults 'flip=nan': 'nan' is not a probability"),
+    ("burst=5", "--faults 'burst=5': expected N@P"),
+    ("burst=0@0.1", "--faults 'burst=0@0.1': N must be a whole number of bytes, 1..64"),
+    ("delay=0.3@0.1", "--faults 'delay=0.3@0.1': '0.3' is not a time with a unit"),
+    ("disconnect=0s@10s", "--faults 'disconnect=0s@10s': '0s' must be a positive time"),
+    ("kill=-1", "--faults 'kill=-1': kill=N[@T] takes a whole number N"),
+    ("lightning=1", "--faults 'lightning=1': unknown fault"),
+])
+def test_a_bad_fault_spec_is_one_clear_error(text, said):
+    with pytest.raises(UsageError, match=None) as error:
+        parse_faults(text)
+    assert said in str(error.value)
+
+
+def test_sim_refuses_faults_without_the_c_runtime_and_a_bad_spec(tmp_path, capsys):
+    assert main(["sim", str(FIG2), "--faults", "drop=0.1", "-o", str(tmp_path / "a")]) == 2
+    assert main(["sim", str(FIG2), "--runtime", "c", "--faults", "drop=x",
+                 "-o", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and "add --runtime c" in err[0] and "drop=x" in err[1]
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_recoverable_line_faults_leave_the_flight_and_the_log_as_without_them(
+        tmp_path, fault_free):
+    run = fly(tmp_path, "faulted", "--faults", LINE_FAULTS)
+    # the same flight, tick for tick: every COMMAND arrived as it would have
+    assert (run / "timeseries.parquet").read_bytes() == (
+        fault_free / "timeseries.parquet").read_bytes()
+    assert trace_rows(run) == trace_rows(fault_free)
+    assert log_as_trace(run) == trace_rows(run)  # nothing lost, nothing twice
+    report = faults(run)
+    assert set(report["injected"]) == {"drop", "flip", "dup", "reorder", "truncate", "burst"}
+    assert all(n > 0 for n in report["injected"].values())
+    detected = report["detected"]
+    assert detected["damaged_at_science_computer"] > 0 and detected["damaged_at_runtime"] > 0
+    assert report["recovered"] > 0
+    assert report["lost_ticks"] == report["releases"] == 0
+    assert report["layered_control_s"] == 0
+
+
+def test_a_cut_line_hands_the_glider_to_layered_control_and_back(tmp_path, fault_free):
+    """Cut from 452 s to 552 s (ticks every 4 s): the runtime's watchdog releases control,
+    layered control flies 100 s, and the runtime takes the glider back when the line
+    returns; the call due at 500 s is made on the first tick it hears, at 552 s."""
+    run = fly(tmp_path, "cut", "--faults", "disconnect=100s@452s")
+    expected = trace_rows(fault_free)
+    assert expected[1] == "500,call,s1,s2,1"
+    expected[1] = "552,call,s1,s2,1"
+    assert trace_rows(run) == expected
+    assert log_as_trace(run) == expected
+    report = faults(run)
+    assert (report["disconnects"], report["releases"]) == (1, 1)
+    assert report["layered_control_s"] == 100.0
+
+
+def test_a_runtime_killed_at_random_moments_flies_the_same_flight(tmp_path, fault_free):
+    """Forty SIGKILLs over the mission, some while the runtime works on a tick's SENSORS:
+    each restart resumes from the checkpoint, and the flight, the trace and the event
+    log are the fault-free run's."""
+    run = fly(tmp_path, "killed", "--faults", "kill=40@2500s")
+    assert faults(run)["kills"] == 40
+    assert (run / "timeseries.parquet").read_bytes() == (
+        fault_free / "timeseries.parquet").read_bytes()
+    assert trace_rows(run) == trace_rows(fault_free)
+    assert log_as_trace(run) == trace_rows(run)
+
+
+def snapshot(directory: Path) -> set[tuple[str, int, int]]:
+    if not directory.exists():
+        return set()
+    return {(p.name, p.stat().st_mtime_ns, p.stat().st_size) for p in directory.iterdir()}
+
+
+def test_a_killed_sim_leaves_each_file_whole_or_absent(tmp_path):
+    """`gliderplan sim` killed (SIGKILL) while it writes its files (a few milliseconds
+    after the first one is touched): each file is the previous run's, the new run's, or
+    (the first time) absent, never a part of one."""
+    command = [sys.executable, "-m", "gliderplan.cli", "sim", str(FIG2), "-o"]
+    old, new, out = tmp_path / "old", tmp_path / "new", tmp_path / "out"
+    subprocess.run([*command, str(old)], check=True, capture_output=True)
+    subprocess.run([*command, str(new), "--seed", "1"], check=True, capture_output=True)
+    names = sorted(p.name for p in old.iterdir())
+    allowed = {name: {(old / name).read_bytes(), (new / name).read_bytes()} for name in names}
+    rng = random.Random(7)
+    killed_while_writing = 0
+    for attempt in range(12):
+        seed = ["--seed", "1"] if attempt % 2 else []
+        before = snapshot(out)
+        process = subprocess.Popen([*command, str(out), *seed], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL)
+        while process.poll() is None and snapshot(out) == before:
+            time.sleep(0.0005)  # until it starts writing
+        time.sleep(rng.uniform(0.0, 0.03))
+        process.send_signal(signal.SIGKILL)
+        killed_while_writing += process.wait() == -signal.SIGKILL
+        for name in names:
+            if (out / name).exists():
+                assert (out / name).read_bytes() in allowed[name], (attempt, name)
+    assert killed_while_writing >= 6
