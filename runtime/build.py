@@ -5,8 +5,8 @@ The runtime sources ship inside the package (`gliderplan.runtime`: `include/*.h`
 TS-7800's ARMv5TE (ARM9) and the TS-5500's i486-class AMD Elan SC520, both static so
 the binary runs on the boards' old C libraries; the TS-5500's links musl built for the
 i486 (`musl-i486.sh`). Builds are cached by everything that
-determines the binary: the generated source, the runtime sources, the target and the
-compiler's version.
+determines the binary: the generated source, the runtime sources, the target, the
+compiler's version and the C library it links.
 """
 
 from __future__ import annotations
@@ -113,6 +113,30 @@ def compiler_version(command: list[str]) -> str:
     return done.stdout
 
 
+def linked_libraries_digest(command: list[str], board: Target) -> str:
+    """SHA-256 of every library and start-up file the compiler links for `board`, found by
+    linking an empty program with the linker's trace on: musl rebuilt for the i486, or a
+    distribution's C library updated, changes the binary while the compiler's version
+    stays the same. A compiler that cannot link counts as none (the build itself then
+    fails with the compiler's own message)."""
+    digest = hashlib.sha256()
+    with tempfile.TemporaryDirectory(prefix="gliderplan-libs-") as scratch:
+        program = Path(scratch) / "empty.c"
+        program.write_text("int main(void) { return 0; }\n")
+        try:
+            traced = subprocess.run([*command, *board.flags, str(program), *LINK_FLAGS,
+                                     "-o", str(Path(scratch) / "empty"), "-Wl,-t"],
+                                    capture_output=True, text=True, timeout=120).stdout
+        except (OSError, subprocess.SubprocessError):
+            traced = ""
+        for line in sorted(set(traced.split())):
+            linked = Path(line.strip("()"))
+            if linked.is_absolute() and linked.is_file() and scratch not in line:
+                digest.update(f"{linked}:".encode())
+                digest.update(hashlib.sha256(linked.read_bytes()).digest())
+    return digest.hexdigest()
+
+
 def build_mission(c_source_path: str | Path, out_dir: str | Path, target: str = "host") -> Path:
     """Compile the runtime with one mission's C file into `out_dir`; the binary's path.
 
@@ -176,6 +200,7 @@ def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
     part("flags", " ".join(C_FLAGS + LINK_FLAGS).encode())
     part("compiler", " ".join(command).encode())
     part("version", compiler_version(command).encode())
+    part("libraries", linked_libraries_digest(command, board).encode())
     return digest.hexdigest()
 
 

@@ -240,6 +240,27 @@ def test_the_cache_key_changes_with_every_input_of_the_build(tmp_path):
     assert key() != first
 
 
+def test_the_cache_key_changes_when_the_c_library_is_rebuilt(tmp_path):
+    # musl rebuilt for the i486 keeps the compiler's --version: the key must still move.
+    (tmp_path / "include").mkdir()
+    source = tmp_path / "gp_a.c"
+    source.write_text("int a;\n")
+    libc = tmp_path / "libc.a"
+    libc.write_bytes(b"!<arch>\nold")
+    compiler = tmp_path / "cc"  # links nothing, traces what a real link would read
+    compiler.write_text(f'#!/bin/sh\n[ "$1" = --version ] && echo cc 1.0 || echo {libc}\n')
+    compiler.chmod(0o755)
+
+    def key():
+        return build.build_key("m", tmp_path / "include", [source], build.TARGETS["host"],
+                               [str(compiler)])
+
+    first = key()
+    assert key() == first
+    libc.write_bytes(b"!<arch>\nnew")
+    assert key() != first
+
+
 def test_a_missing_cross_compiler_names_the_debian_package(monkeypatch, tmp_path, capsys):
     monkeypatch.setenv("PATH", str(tmp_path))  # no compiler of any kind
     assert compile_fig2(tmp_path / "out", "--target", "ts7800") == 1
