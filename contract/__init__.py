@@ -26,6 +26,10 @@ MAX_PROFILE_ALTERNATIVES = 8  # `flightprofile a | b | ...` alternatives of one 
 MAX_PROFILE_ARGS = 6  # arguments of one flight profile
 MAX_ROUTE_POINTS = 64  # (lat, lon) points of one state's route
 MAX_SWEEP_WAYPOINTS = 256  # waypoints a `sweep` route expands to
+# Operators and calls nested in one expression (a sum of n terms is n - 1 deep). Every
+# stage that reads a mission walks its expressions (the mission's hash, the C code, the
+# simulator's compiled conditions): a bound keeps them all within Python's stack.
+MAX_EXPRESSION_DEPTH = 100
 MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a plan file
 MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
 MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]

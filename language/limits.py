@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 from gliderplan.contract import (
     MAX_EVENTS_PER_STATE,
+    MAX_EXPRESSION_DEPTH,
     MAX_NAME_LENGTH,
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
@@ -36,7 +37,17 @@ def check_sizes(mission: ast.Mission) -> list[Diagnostic]:
                                f"than the {MAX_NAME_LENGTH} a plan file holds", name.span,
                                "choose a shorter name"))
 
+    def shallow(expr: ast.Expr | ast.Point) -> None:
+        depth = _depth(expr)
+        if depth > MAX_EXPRESSION_DEPTH:
+            found.append(error(f"expression nested {depth} operators deep, more than the "
+                               f"{MAX_EXPRESSION_DEPTH} a mission may hold", expr.span,
+                               "split the expression with a variable ('set v = ...')"))
+
     name_fits(mission.name, "mission name")
+    for declaration in mission.declarations:
+        if isinstance(declaration, ast.VarDecl):
+            shallow(declaration.initial)
     at_most([s.name for s in mission.states], MAX_STATES, "the mission", "states",
             "split the mission, or merge states that fly alike")
     at_most([d.name for d in mission.declarations if isinstance(d, ast.VarDecl)],
@@ -47,11 +58,40 @@ def check_sizes(mission: ast.Mission) -> list[Diagnostic]:
         owner = f"state '{state.name.text}'"
         for item in state.items:
             match item:
+                case ast.RouteItem(route):
+                    for arg in route.args:
+                        shallow(arg)
                 case ast.ProfileItem(alternatives):
                     at_most(alternatives, MAX_PROFILE_ALTERNATIVES, owner,
                             "flight-profile alternatives",
                             "fly the others in a state of their own")
+                    for arg in (a for profile in alternatives for a in profile.args):
+                        shallow(arg)
                 case ast.EventsItem(events):
                     at_most(events, MAX_EVENTS_PER_STATE, owner, "events",
                             "split the state, or combine events that do the same")
+                    for event in events:
+                        shallow(event.condition)
+                        for assignment in event.assignments:
+                            shallow(assignment.value)
     return found
+
+
+def _depth(expr: ast.Expr | ast.Point) -> int:
+    """Operators and calls nested in `expr`, counted without recursion (it may be nested
+    beyond Python's stack)."""
+    deepest, pending = 0, [(expr, 0)]
+    while pending:
+        node, depth = pending.pop()
+        match node:
+            case ast.Unary(_, operand):
+                pending.append((operand, depth + 1))
+            case ast.Binary(_, left, right):
+                pending += [(left, depth + 1), (right, depth + 1)]
+            case ast.Call(_, args):
+                pending += [(arg, depth + 1) for arg in args]
+            case ast.Point(lat, lon):
+                pending += [(lat, depth), (lon, depth)]
+            case _:
+                deepest = max(deepest, depth)
+    return deepest

@@ -30,6 +30,7 @@ from gliderplan.planner.model import model_for
 from gliderplan.planner.occupancy import mission_occupancy
 from gliderplan.planner.plan import (
     InfeasibleBudget,
+    PlanningError,
     PlanResult,
     assemble,
     choose_plan,
@@ -216,6 +217,10 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
     model = model_for(build_inputs(mission, reference_hw, occupancy))
     reference = _plan(model, reference_hw.budget_j).plan
     flown_s = sum(s.time_s for s in reference.states)
+    if flown_s <= 0.0:
+        raise PlanningError(f"mission {mission.name} flies for 0 s (it exits on its first "
+                            "tick): boards are compared by the power they draw over a "
+                            "mission's time")
     others_w = (reference.predicted_j - reference.components_j[Component.COMPUTER]) / flown_s
     results = []
     for spec in specs:

@@ -191,11 +191,11 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     carlo = _montecarlo(Path(montecarlo_dir), mission) if montecarlo_dir else None
     hardware = load_hardware(mission)
     _, model = prepare(mission, hardware)
+    comparison = compare_boards(mission)  # before anything is written: it may refuse
     report, plan_file, written = _plan_report(
         mission, model, Path(plan_path) if plan_path else None, out)
     frontier = pareto(model, sweep_points)
     tornado = sensitivity(model)
-    comparison = compare_boards(mission)
     run_path = Path(run_dir) if run_dir else out / "run"
     run_origin = "the run given"
     if flown is None:

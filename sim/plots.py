@@ -59,8 +59,9 @@ def depth_png(record: RunRecord) -> bytes:
     flown = sorted(set(state.tolist()) - {NO_STATE})
     handles = [Patch(color=colours(i % 10), alpha=0.3, label=record.state_names[i])
                for i in flown]
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=8,
-              ncol=min(len(handles), 6), frameon=False)
+    if handles:  # none when the mission exits on its first tick
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+                  fontsize=8, ncol=min(len(handles), 6), frameon=False)
     points = ax.scatter(t, c["depth_m"], c=c["temperature_c"], s=4, cmap="coolwarm")
     fig.colorbar(points, ax=ax, label="water temperature [degC]")
     ax.invert_yaxis()

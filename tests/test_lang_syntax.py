@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from gliderplan.contract import MAX_EXPRESSION_DEPTH
 from gliderplan.language import check_source
 from gliderplan.language.diagnostics import closest
 
@@ -149,8 +150,26 @@ def test_deeply_nested_expressions_are_an_error_not_a_crash():
                                "expression with a variable ('set v = ...')"]
 
 
-def test_moderately_nested_expressions_are_fine():
-    assert check_source(HEADER + "    case " + "-" * 200 + "depth > 1 exit\nend\n").ok
+@pytest.mark.parametrize("nest", [
+    lambda n: "-" * n + "depth",
+    lambda n: " + ".join(["depth"] * (n + 1)),
+    lambda n: "abs(" * n + "depth" + ")" * n,
+    lambda n: "(" * n + " || ".join(["depth"] * (n + 1)) + ")" * n,
+    lambda n: "".join("abs(" if i % 2 else "-" for i in range(n)) + "depth" + ")" * (n // 2),
+], ids=["unary", "sum", "calls", "or", "mixed"])
+def test_an_expression_may_nest_as_deep_as_the_contract_says(nest):
+    """As deep as the limit, every stage takes it (tests/test_sim_cli.py flies one); one
+    level more is refused where it is written, however it nests."""
+    deepest = nest(MAX_EXPRESSION_DEPTH - 1)  # and `> 1` makes the limit
+    assert check_source(HEADER + f"    case {deepest} > 1 exit\nend\n").ok
+    too_deep = nest(MAX_EXPRESSION_DEPTH)
+    assert _errors(HEADER + f"    case {too_deep} > 1 exit\nend\n") == [
+        f"7:10: expression nested {MAX_EXPRESSION_DEPTH + 1} operators deep, more than the "
+        f"{MAX_EXPRESSION_DEPTH} a mission may hold | split the expression with a variable "
+        "('set v = ...')"]
+    with_variable = HEADER.replace("mission m\n", "mission m\nvar v = 0\n")
+    assert _errors(with_variable + f"    case depth > 1 set v = {too_deep} > 1 exit\nend\n")[0] \
+        .startswith(f"8:28: expression nested {MAX_EXPRESSION_DEPTH + 1} operators deep")
 
 
 def test_parentheses_do_not_nest_the_tree():

@@ -12,6 +12,7 @@ import pytest
 
 from gliderplan.cli.main import main
 from gliderplan.cli.sim import parse_duration_s
+from gliderplan.contract import MAX_EXPRESSION_DEPTH
 from gliderplan.contract.errors import UsageError
 
 REPO = Path(__file__).resolve().parents[1]
@@ -245,3 +246,88 @@ def test_run_mission_is_the_sim_command_as_one_call(tmp_path):
     assert result.plan is not None and result.check.budget_j == result.plan.budget_j
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["energy_j"] == pytest.approx(result.energy.total_j)
+
+
+# A mission that `check` takes must fly: one whose conditions nest as deep as the
+# contract allows, in four ways (a long sum, a chain of minus signs, calls in calls and a
+# long `||`), and one that exits on its first tick.
+_DEEP = MAX_EXPRESSION_DEPTH - 1  # and the comparison makes the limit
+_LIMIT_DEEP = f"""mission deep
+state s1
+begin
+  flightprofile yo(5, 20, .454, .454)
+  sensors missiontime, depth
+  events
+    case {" + ".join(["depth"] * (_DEEP + 1))} >= {5 * (_DEEP + 1)} goto s2
+end
+state s2
+begin
+  flightprofile yo(5, 20, .454, .454)
+  sensors missiontime, depth
+  events
+    case {"-" * (_DEEP - _DEEP % 2)}missiontime >= 600 goto s3
+end
+state s3
+begin
+  flightprofile yo(5, 20, .454, .454)
+  sensors missiontime, depth
+  events
+    case {"abs(" * (_DEEP - 1)}missiontime - 1200{")" * (_DEEP - 1)} < 2 goto s4
+end
+state s4
+begin
+  flightprofile yo(5, 20, .454, .454)
+  sensors missiontime, depth
+  events
+    case {" || ".join(["missiontime < 0"] * _DEEP)} || missiontime >= 1500 exit
+end
+"""
+_FIRST_TICK_EXIT = """mission brief
+state s
+begin
+  flightprofile yo(5, 20, .454, .454)
+  sensors missiontime, depth
+  events
+    case missiontime >= 0 exit
+end
+"""
+RUNTIMES = ["python", pytest.param("c", marks=pytest.mark.skipif(
+    shutil.which("cc") is None, reason="no C compiler (cc) for the runtime"))]
+
+
+@pytest.mark.parametrize("runtime", RUNTIMES)
+def test_conditions_as_deep_as_the_contract_allows_fly(tmp_path, runtime):
+    mission = tmp_path / "deep.mission"
+    mission.write_text(_LIMIT_DEEP)
+    assert main(["check", str(mission)]) == 0
+    assert main(["sim", str(mission), "--runtime", runtime, "-o", str(tmp_path / "run")]) == 0
+    trace = (tmp_path / "run" / "trace.csv").read_text().splitlines()
+    assert [row.split(",")[1:4] for row in trace[1:]] == [
+        ["start", "", "s1"], ["goto", "s1", "s2"], ["goto", "s2", "s3"], ["goto", "s3", "s4"],
+        ["exit", "s4", ""]]
+    times = [float(row.split(",")[0]) for row in trace[1:]]
+    assert 0 < times[1] < 600 and times[2:] == [600, 1200, 1500]
+
+
+@pytest.mark.parametrize("runtime", RUNTIMES)
+def test_a_mission_that_exits_on_its_first_tick_flies(tmp_path, capsys, runtime):
+    mission = tmp_path / "brief.mission"
+    mission.write_text(_FIRST_TICK_EXIT)
+    out = tmp_path / "run"
+    assert main(["sim", str(mission), "--runtime", runtime, "-o", str(out)]) == 0
+    assert {p.name for p in out.iterdir()} == FILES
+    assert (out / "trace.csv").read_text().splitlines()[1:] == ["0,start,,s,0", "0,exit,s,,0"]
+    assert "brief: exit after 0 s" in capsys.readouterr().err
+
+
+def test_boards_are_not_compared_on_a_mission_that_flies_no_time(tmp_path, capsys):
+    mission = tmp_path / "brief.mission"
+    mission.write_text(_FIRST_TICK_EXIT)
+    for argv in (["compare-sbc", str(mission)],
+                 ["report", str(mission), "-o", str(tmp_path / "report")]):
+        assert main(argv) == 1
+        err = capsys.readouterr().err
+        assert err == (f"gliderplan {argv[0]}: error: mission brief flies for 0 s (it exits "
+                       "on its first tick): boards are compared by the power they draw over "
+                       "a mission's time\n")
+    assert not (tmp_path / "report").exists()
