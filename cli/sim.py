@@ -1,10 +1,10 @@
 """`gliderplan sim`: fly a mission (and its plan) on the simulated glider and check its energy.
 
-Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.png;
-with --runtime c and --state-dir DIR the runtime's own checkpoint and events.log in DIR
-(and with --faults its events.log in RUNDIR too). Without --plan every sensor a state
-logs is always on. --faults SPEC injects faults into the C runtime's line and board
-(docs/reliability.md). Exit status 3: the run spent
+Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.png
+(and trajectory.nc with --netcdf); with --runtime c and --state-dir DIR the runtime's
+own checkpoint and events.log in DIR (and with --faults its events.log in RUNDIR too).
+Without --plan every sensor a state logs is always on. --faults SPEC injects faults
+into the C runtime's line and board (docs/reliability.md). Exit status 3: the run spent
 more than the plan's budget (a plan violation; summary.json names the cause). A run
 within its budget in which a state spent more than 5 % over its prediction says "plan
 check: over prediction" and names the state and the component (exit 0).
@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import re
 import sys
 
@@ -28,15 +27,15 @@ _DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*([A-Za-
 LONG_RUN_TICKS = 100_000  # progress on stderr for runs longer than this
 
 
-def parse_duration_s(text: str) -> float:
-    """'3600s', '90min', '6h', '30d' -> seconds; UsageError otherwise."""
+def parse_duration_s(text: str, option: str = "--duration") -> float:
+    """'3600s', '90min', '6h', '30d' -> seconds; UsageError (naming `option`) otherwise."""
     match = _DURATION.match(text)
     if match is None or match[2] not in UNITS["time"]:
-        raise UsageError(f"--duration {text!r}: expected a number with a unit: "
+        raise UsageError(f"{option} {text!r}: expected a number with a unit: "
                          f"{', '.join(UNITS['time'])} (e.g. 3600s, 90min, 6h, 30d)")
     seconds = float(match[1]) * UNITS["time"][match[2]]
     if not math.isfinite(seconds) or seconds <= 0.0:
-        raise UsageError(f"--duration {text!r}: must be a positive time")
+        raise UsageError(f"{option} {text!r}: must be a positive time")
     return seconds
 
 
@@ -52,13 +51,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --runtime c: the runtime keeps its checkpoints and event "
                              "log in DIR as on the glider (created if missing; must hold no "
                              "checkpoint)")
-    parser.add_argument("--ocean", default="bench", metavar="FILE|PRESET",
-                        help="bench (default), sea-trial, north-sea, uniform, or a CSV file "
-                             "depth_m,temperature_c[,salinity_psu][,time_s]")
-    parser.add_argument("--ocean-logs", metavar="DIR",
-                        default=os.environ.get("GLIDERPLAN_SLOCUM_LOGS"),
-                        help="Slocum logs (*.ebd) for --ocean north-sea "
-                             "(default: $GLIDERPLAN_SLOCUM_LOGS)")
+    parser.add_argument("--ocean", default="bench", metavar="PRESET|FILE",
+                        help="bench (default), sea-trial, uniform; a CSV file "
+                             "depth_m,temperature_c[,salinity_psu][,time_s]; or Slocum "
+                             "science logs to replay: FILE.ebd or a directory of them")
     parser.add_argument("--noise", choices=("none", "ctd", "nonmonotonic"), default="ctd",
                         help="sensor noise: ctd (default), none, or nonmonotonic (the "
                              "fluctuations of the paper's first sea trial)")
@@ -72,6 +68,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", metavar="T",
                         help="end the run here if the mission has not exited (3600s, 90min, "
                              "6h, 30d; default: the mission's horizon, else 30d)")
+    parser.add_argument("--start", metavar="UTC",
+                        help="UTC time the mission starts, ISO 8601 (default: the first "
+                             "sample of replayed logs, else 2000-01-01T00:00:00Z)")
+    parser.add_argument("--netcdf", action="store_true",
+                        help="also write RUNDIR/trajectory.nc (CF trajectory, IOOS Glider "
+                             "DAC names, ACDD attributes); more formats: gliderplan export")
     parser.add_argument("--key", metavar="KEYFILE",
                         help="the key provisioned on the simulated vehicle (gliderplan "
                              "keygen): the plan must be signed with it (plan --sign); with "
@@ -110,9 +112,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = run_mission(
             mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
-            ocean_logs=args.ocean_logs, noise=args.noise, tracker=args.tracker,
-            current=_current(args.current), seed=args.seed, tick_s=args.tick,
-            duration_s=duration_s, progress=progress, key_path=args.key,
+            noise=args.noise, tracker=args.tracker, current=_current(args.current),
+            seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=args.start,
+            netcdf=args.netcdf, progress=progress, key_path=args.key,
             state_dir=args.state_dir, faults=args.faults)
     finally:
         if progress is not None:

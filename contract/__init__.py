@@ -84,13 +84,16 @@ MAX_INPUT_BYTES = 16 * 1024 * 1024  # [bytes] far beyond any real input; guards 
 
 @dataclass(frozen=True)
 class SensorInfo:
-    """A value the glider measures, readable in conditions and loggable in `sensors`."""
+    """A value readable in conditions and loggable in `sensors`: one the glider measures,
+    or (source "runtime") one the runtime's own routines know, which it writes into its
+    sensor array before each tick's events and the science computer never sends."""
 
     name: str
     index: int  # position in the sensor array (protocol and runtime)
     unit: str  # SI unit of the value
     device: str | None  # power-model device that produces it; None: flight sensor, in hotel load
     description: str
+    source: str = "glider"  # "glider": sent by the science computer; "runtime": see above
 
 
 # The science computer's sensor array: SENSORS bit i of the link and the runtime's
@@ -115,10 +118,18 @@ SENSORS: tuple[SensorInfo, ...] = (
     SensorInfo("backscatter", 14, "1/m", "optics", "optical backscatter (optics)"),
     SensorInfo("current", 15, "m/s", "adcp", "water current speed (ADCP)"),
     SensorInfo("modem", 16, "B", "modem", "bytes received by the acoustic modem"),
+    SensorInfo("halfcycle", 17, "1", None, "the yo's leg flown since the profile was entered "
+               "(1: the first dive or climb); 0 outside a yo", "runtime"),
+    SensorInfo("wptdist", 18, "m", None, "distance to the waypoint the route flies to; NaN "
+               "without one or without a position", "runtime"),
+    SensorInfo("timeofday", 19, "s", None, "UTC time of day of the glider's clock, 0 at "
+               "midnight"),
 )
 N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
 # Sensors without a device of their own: always powered while logged, in the hotel load.
 FLIGHT_SENSORS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
+# The runtime's own readings (never on the link).
+RUNTIME_READINGS_MASK = sum(1 << s.index for s in SENSORS if s.source == "runtime")
 
 
 # ---- the library routines (docs/pilot.md) -------------------------------------------

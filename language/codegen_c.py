@@ -32,8 +32,9 @@ _ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
 _PROFILE_KINDS = {"yo": "GP_PROFILE_YO", "thermotrackyo": "GP_PROFILE_THERMOTRACKYO",
                   "surface": "GP_PROFILE_SURFACE", "hover": "GP_PROFILE_HOVER"}
 _ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
-                "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP"}
-_HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep"})
+                "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP",
+                "goto_list": "GP_ROUTE_GOTO_LIST"}
+_HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep", "goto_list"})
 # Sensors every compiled mission reads: the state timers and the plan's schedule run on
 # missiontime, every profile turns on depth (pitch is commanded, never read).
 _ALWAYS_READ = ("missiontime", "depth")
@@ -69,7 +70,8 @@ def read_mask(mission: ir.CheckedMission) -> int:
                 names.add("temp")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}
-    return sum(1 << SENSOR_BY_NAME[name].index for name in names)
+    # the runtime's own readings are not read from the link
+    return sum(1 << SENSOR_BY_NAME[name].index for name in names) & ~contract.RUNTIME_READINGS_MASK
 
 
 # ---- expressions -------------------------------------------------------------------
@@ -115,6 +117,8 @@ class ExpressionWriter:
                 return f"mission_{name}({self.value(left)}, {self.value(right)})"
             case ir.FuncCall("abs", (arg,)):
                 return f"fabs({self.value(arg)})"
+            case ir.FuncCall("mod", (first, second)):  # exact: the same on every target
+                return f"fmod({self.value(first)}, {self.value(second)})"
             case ir.FuncCall("min" | "max" as function, (first, second)):
                 self.helpers.add(f"f{function}")
                 return f"mission_f{function}({self.value(first)}, {self.value(second)})"
@@ -196,8 +200,9 @@ def _route_points(route: ir.Route) -> tuple[tuple[float, float], ...]:
 
 
 def _route_param(route: ir.Route) -> float:
-    """The route's scalar parameter (sweep: line spacing [m]); 0 when it has none."""
-    return route.params[0] if route.kind == "sweep" else 0.0
+    """The route's scalar parameter (sweep: line spacing [m], goto_list: radius [m]); 0
+    when it has none."""
+    return route.params[0] if route.kind in ("sweep", "goto_list") else 0.0
 
 
 # ---- the file ----------------------------------------------------------------------

@@ -97,7 +97,16 @@ _fmax = _ignoring_nan(max)
 
 
 # The generated C calls fabs, fmin and fmax; these must agree with them, NaN included.
-_FUNCTIONS = {"abs": abs, "min": _fmin, "max": _fmax}
+def _fmod(a: float, b: float) -> float:
+    """C's fmod (exact, the sign of `a`): NaN for an infinite `a` or a zero `b`, where
+    Python's math.fmod raises."""
+    try:
+        return math.fmod(a, b)
+    except ValueError:
+        return math.nan
+
+
+_FUNCTIONS = {"abs": abs, "min": _fmin, "max": _fmax, "mod": _fmod}
 
 
 def evaluate(expr: Expr, sensors: Mapping[str, float], variables: Mapping[str, float]) -> float:

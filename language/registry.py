@@ -114,8 +114,16 @@ ROUTES: dict[str, RouteInfo] = {
             32,
             "lawn-mower sweep of the convex hull of (lat, lon) corner points",
         ),
+        RouteInfo(
+            "goto_list",
+            (ParamSpec("radius", unit="m", low=0.0, low_open=True),),
+            1,
+            MAX_ROUTE_POINTS,
+            "Slocum's goto list: (lat, lon) waypoints in order, each reached within radius, "
+            "flown again and again",
+        ),
     )
 }
 
 # Functions usable in conditions and assignments: name -> argument count.
-FUNCTIONS: dict[str, int] = {"abs": 1, "min": 2, "max": 2}
+FUNCTIONS: dict[str, int] = {"abs": 1, "min": 2, "max": 2, "mod": 2}

@@ -10,10 +10,11 @@ variable's value.
 
 A state whose exit depends on other sensors is planned at the upper bound of its
 `expect` annotation (robust: the budget must hold when the water is unkind), leaving by
-its first sensor-driven event. A state that neither guard nor `expect` ends runs to the
-mission's horizon. Between guard crossings nothing changes, so the walk jumps from one
-crossing to the next instead of stepping every tick: a 35 h mission takes a few hundred
-evaluations, not 30,000 ticks.
+its first sensor-driven event that goes on with the mission (an abort above it, a
+`goto` to a state that only exits, is the exception a plan does not budget for). A
+state that neither guard nor `expect` ends runs to the mission's horizon. Between guard
+crossings nothing changes, so the walk jumps from one crossing to the next instead of
+stepping every tick: a 35 h mission takes a few hundred evaluations, not 30,000 ticks.
 """
 
 from __future__ import annotations
@@ -122,6 +123,25 @@ def _reads_other_sensors(event: ir.Event) -> bool:
     return bool(ir.sensors_read(event.condition) - {"missiontime"})
 
 
+def _ends_mission(mission: ir.CheckedMission, event: ir.Event) -> bool:
+    """An `exit`, or a `goto` to a state whose every event exits: an abort."""
+    if event.action == "exit":
+        return True
+    if event.action != "goto":
+        return False
+    events = mission.state(event.target).events
+    return bool(events) and all(e.action == "exit" for e in events)
+
+
+def _sensor_exit(mission: ir.CheckedMission, state: ir.State) -> ir.Event | None:
+    """The event a state is planned to leave by when sensors decide: its first
+    sensor-driven one that goes on with the mission (aborts above it are the exception
+    the plan does not budget for), else its first sensor-driven one."""
+    driven = [e for e in state.events if e.action is not None and _reads_other_sensors(e)]
+    going_on = [e for e in driven if not _ends_mission(mission, e)]
+    return (going_on or driven or [None])[0]
+
+
 def _assign(event: ir.Event, time_s: float, variables: dict[str, float]) -> dict[str, float]:
     """Variables after the event's assignments; a value that needs an unknown reading
     (NaN) leaves the variable as it was."""
@@ -154,8 +174,7 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
         entry, entry_vars = now, dict(variables)
         check_from = now if not trace else now + TICK_S  # the entering tick already fired
         limit = horizon
-        sensor_exit = next((e for e in here.events
-                            if e.action is not None and _reads_other_sensors(e)), None)
+        sensor_exit = _sensor_exit(mission, here)
         if here.expect_s is not None and sensor_exit is not None:
             limit = min(horizon, entry + here.expect_s[1])
         found = None

@@ -36,7 +36,8 @@ if TYPE_CHECKING:
 # COMMAND's `transition` of each kind the reference semantics reports.
 _KIND_CODES = {"start": TransitionKind.START, **TRANSITION_BY_ACTION}
 _F32 = struct.Struct(f"<{N_SENSORS}f")
-_DEPTH, _LAT, _LON, _TEMP = (SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp"))
+_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST = (
+    SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp", "halfcycle", "wptdist"))
 
 
 @functools.cache
@@ -77,6 +78,7 @@ class PythonRuntime:
         self.s = [math.nan] * N_SENSORS
         self.machine: semantics.Machine | None = None
         self.event_count = 0
+        self.route_resume: list[int] = []  # per call on the stack: the caller's waypoint
 
     def _power_table(self, i: int, state: ir.State) -> tuple[tuple[int, float, float], ...]:
         """(sensor index, period [s], on [s]) per logged sensor; period 0: always on."""
@@ -100,6 +102,21 @@ class PythonRuntime:
         route = self.state.route
         self.route = pilot.ROUTE_ROUTINES[route.kind](route.params, route.points)
 
+    def _follow(self, kind: str, state: str | None) -> None:
+        """Enter the state a transition leads to. A call keeps the caller's waypoint and
+        its return resumes it (docs/pilot.md, Routes); goto forgets them all."""
+        if kind == "call":
+            self.route_resume.append(self.route.k)
+        elif kind == "goto":
+            self.route_resume.clear()
+        if state is None:
+            return
+        self._enter(state)
+        if kind == "return":
+            k = self.route_resume.pop()
+            if k < len(getattr(self.route, "points", ())):
+                self.route.k = k
+
     def step(self, tick: int, mask: int, values: list[float]) -> Command:
         """Answer one SENSORS frame: `values` holds all sensors [registry units], of which
         those in `mask` arrive, through binary32 as on the link."""
@@ -111,6 +128,9 @@ class PythonRuntime:
         if self.machine is None:
             self.machine, transition = semantics.start(self.mission, s[0])
             self._enter(self.machine.state)
+        # the runtime's own readings, as the events of this tick see them
+        s[_HALFCYCLE] = float(self.routine.halfcycle) if self.routine is not None else 0.0
+        s[_WPTDIST] = self.route.distance_m(s[_LAT], s[_LON])
         machine = self.machine
         fired_i = -1 if machine.state is None else self.checkers[self.state_i](s, machine.variables)
         if fired_i >= 0:  # conditions checked once, above; the reference fires the event
@@ -121,8 +141,7 @@ class PythonRuntime:
             self.event_count += 1
             if fired is not None:
                 transition = fired
-                if after.state is not None:
-                    self._enter(after.state)
+                self._follow(fired.kind, after.state)
         return self._command(tick, transition)
 
     def _command(self, tick: int, transition: semantics.Transition | None) -> Command:

@@ -32,6 +32,9 @@ class Runtime(Protocol):
     def step(self, tick: int, mask: int, values: list[float]) -> Command: ...
 
 
+DEFAULT_START_EPOCH_S = 946684800.0  # a run that names no start: 2000-01-01T00:00:00Z
+
+
 @dataclass(frozen=True)
 class RunConfig:
     tick_s: float = TICK_S
@@ -41,6 +44,7 @@ class RunConfig:
     current: Current = Current()
     start_lat_deg: float | None = None  # None: 500 m south of the mission's first point
     start_lon_deg: float | None = None
+    start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
 
 
 @dataclass
@@ -224,4 +228,5 @@ def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
     """The science computer over a glider put in the water at the mission's start."""
     lat, lon = start_position(mission, config)
     glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current)
-    return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s)
+    return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s,
+                           config.start_epoch_s)

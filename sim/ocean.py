@@ -5,12 +5,11 @@ Two kinds of water column share one interface (`temperature_c(depth_m, time_s)` 
 
 - `Thermocline`: warm surface water over cold deep water with a tanh-shaped
   thermocline whose centre rides up and down on internal waves;
-- `MeasuredProfile`: a measured profile (a CSV file or a Slocum science log),
-  interpolated linearly in depth (and in time when it has several casts).
+- `MeasuredProfile`: measured casts (a CSV file, or Slocum science logs replayed by
+  `sim.slocum_ocean`), interpolated linearly in depth and in time.
 
 Presets: `bench` (the paper's Fig. 5 bench case: 24 C over 7 C, one internal wave),
-`sea-trial` (its Atlantic deployment: thermocline at 10-18 m), `north-sea` (the real
-sebastian 2014 Slocum log: 20 C over 15 C at 5-20 m) and `uniform`.
+`sea-trial` (its Atlantic deployment: thermocline at 10-18 m) and `uniform`.
 
 Notes
 -----
@@ -116,6 +115,7 @@ class MeasuredProfile:
     casts_s: tuple[float, ...]  # cast times [s], strictly increasing (one cast: static)
     temperatures_c: tuple[tuple[float, ...], ...]  # [cast][depth]
     salinities_psu: tuple[tuple[float, ...], ...]
+    start_epoch_s: float | None = None  # UTC time of cast time 0 [s since 1970], if known
 
     def temperature_c(self, depth_m: Number, time_s: Number = 0.0) -> Number:
         return self._interpolate(self.temperatures_c, depth_m, time_s)
@@ -219,28 +219,6 @@ def uniform(temperature_c: float = 15.0, salinity_psu: float = 35.0) -> Thermocl
     return Thermocline(temperature_c, temperature_c, 0.0, 1.0, (), salinity_psu, salinity_psu)
 
 
-def north_sea(logs_dir: Path, cache_dir: Path | None = None, bin_m: float = 1.0) -> MeasuredProfile:
-    """The sebastian 2014 North Sea profile from its Slocum science logs (*.ebd): CTD
-    temperature binned by depth (pressure [bar] x 10 m bar-1), 20 C over 15 C at 5-20 m."""
-    import dbdreader
-
-    files = sorted(str(p) for p in Path(logs_dir).glob("*.ebd"))
-    if not files:
-        raise OceanFileError(f"{logs_dir}: no Slocum science logs (*.ebd)")
-    cache = str(cache_dir if cache_dir is not None else Path(logs_dir) / "cac")
-    logs = dbdreader.MultiDBD(filenames=files, cacheDir=cache)
-    _, temp, pressure, conductivity = logs.get_sync(
-        "sci_water_temp", "sci_water_pressure", "sci_water_cond")
-    valid = (temp > 0.0) & (pressure > 0.0) & (conductivity > 0.0)
-    depth = pressure[valid] * 10.0
-    bins = np.floor(depth / bin_m).astype(int)
-    used = np.unique(bins)
-    temps = [float(np.mean(temp[valid][bins == b])) for b in used]
-    salinity = [35.0] * len(used)  # salinity needs a full EOS; the tracker reads temperature
-    return MeasuredProfile(tuple(float((b + 0.5) * bin_m) for b in used), (0.0,),
-                           (tuple(temps),), (tuple(salinity),))
-
-
 def read_profile_csv(path: str | Path) -> MeasuredProfile:
     """A profile file: header `depth_m,temperature_c[,salinity_psu][,time_s]`, one sample
     a row; rows of one cast share `time_s`. Errors name the file and line."""
@@ -296,12 +274,12 @@ def _floats(values: tuple) -> tuple[float, ...]:
     return tuple(float(v) for v in values)
 
 
-PRESETS = ("bench", "sea-trial", "north-sea", "uniform")
+PRESETS = ("bench", "sea-trial", "uniform")
 
 
-def load_ocean(spec: str, data_dir: Path | None = None) -> Ocean:
-    """A preset name or a CSV profile file. `north-sea` reads the Slocum logs in
-    `data_dir` (a directory holding *.ebd files)."""
+def load_ocean(spec: str) -> Ocean:
+    """A preset name, a CSV profile file, or Slocum science logs (a *.ebd file or a
+    directory of them) replayed by `sim.slocum_ocean`."""
     match spec:
         case "bench":
             return bench()
@@ -309,13 +287,13 @@ def load_ocean(spec: str, data_dir: Path | None = None) -> Ocean:
             return sea_trial()
         case "uniform":
             return uniform()
-        case "north-sea":
-            if data_dir is None:
-                raise OceanFileError("north-sea: needs the Slocum logs directory "
-                                     "(GLIDERPLAN_SLOCUM_LOGS or --ocean-logs)", usage=True)
-            return north_sea(data_dir)
     path = Path(spec)
+    if path.is_dir() or path.suffix.lower() == ".ebd":
+        from gliderplan.sim.slocum_ocean import read_logged_ocean
+
+        return read_logged_ocean(path).profile
     if not path.exists():
         raise OceanFileError(f"{spec}: no such ocean file or preset "
-                             f"(presets: {', '.join(PRESETS)})", usage=True)
+                             f"(presets: {', '.join(PRESETS)}; or Slocum logs: FILE.ebd|DIR)",
+                             usage=True)
     return read_profile_csv(path)

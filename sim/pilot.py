@@ -1,6 +1,6 @@
 """The runtime's library routines in Python, exactly as docs/pilot.md specifies them:
 flight profiles (yo, thermotrackyo, surface, hover), routes (nav, noheading,
-waypoints, sweep) and the plan's schedule (sensor power windows, profile alternation).
+waypoints, sweep, goto_list) and the plan's schedule (sensor power windows, profile alternation).
 
 Each routine is a small object with the pilot's memory (leg, tracked band, waypoint
 index) that is re-created on entry, and a per-tick method on plain floats: the
@@ -34,18 +34,21 @@ DIVE, CLIMB = 0, 1
 # surface); `pitch` replaces the profile's own pitch arguments when a plan gives one.
 
 class Yo:
-    """yo(min, max, dive_pitch, climb_pitch)."""
+    """yo(min, max, dive_pitch, climb_pitch). `halfcycle`: the leg flown, 1 the first."""
 
     def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
         self.leg = DIVE if depth_m < args[1] else CLIMB
+        self.halfcycle = 1
 
     def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
                 ballast: float) -> tuple[float, float, float, bool]:
         low, high = args[0], args[1]
         if self.leg == DIVE and d >= high:
             self.leg = CLIMB
+            self.halfcycle += 1
         elif self.leg == CLIMB and d <= low:
             self.leg = DIVE
+            self.halfcycle += 1
         return _yo_command(self.leg, low, high, args, pitch, ballast)
 
 
@@ -68,6 +71,7 @@ class ThermoTrackYo:
     def __init__(self, depth_m: float, args: tuple[float, ...], robust: bool = True) -> None:
         self.robust = robust
         self.low, self.high = args[0], args[1]
+        self.halfcycle = 1
         self._new_leg(DIVE if depth_m < args[1] else CLIMB)
 
     def _new_leg(self, leg: int) -> None:
@@ -88,6 +92,7 @@ class ThermoTrackYo:
             if not self.detected:  # the thermocline was lost: search the whole range
                 self.low, self.high = args[0], args[1]
             self._new_leg(leg)
+            self.halfcycle += 1
         if math.isfinite(d) and math.isfinite(temp):  # no reading: nothing to learn from
             self._track(d, temp, args)
         return _yo_command(self.leg, self.low, self.high, args, pitch, ballast)
@@ -142,6 +147,8 @@ class ThermoTrackYo:
 
 
 class Surface:
+    halfcycle = 0
+
     def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
         pass
 
@@ -151,6 +158,8 @@ class Surface:
 
 
 class Hover:
+    halfcycle = 0
+
     def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
         pass
 
@@ -166,27 +175,45 @@ PROFILE_ROUTINES = {"yo": Yo, "thermotrackyo": ThermoTrackYo, "surface": Surface
 # ---- routes ----------------------------------------------------------------------------
 
 class NoHeading:
+    k = 0  # no waypoint: nothing to resume
+
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         pass
 
     def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
         return 0.0, False
 
+    def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
+        return math.nan
+
 
 class Waypoints:
-    """Toward points[k]; k advances (one per tick) within 50 m; after the last, hold."""
+    """Toward points[k]; k advances (one per tick) within `radius_m`; after the last,
+    hold the heading to it (a goto list starts again from the first)."""
+
+    radius_m = WAYPOINT_RADIUS_M
+    loops = False
 
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         self.points = [(ddmm_to_degrees(a), ddmm_to_degrees(b)) for a, b in points]
         self.k = 0
+
+    def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
+        """Distance [m] to the waypoint flown to; NaN without a position or a waypoint."""
+        if not (math.isfinite(lat_ddmm) and math.isfinite(lon_ddmm)) or not self.points:
+            return math.nan
+        north, east = offset_m(ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm),
+                               *self.points[self.k])
+        return math.hypot(north, east)
 
     def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
         if not (math.isfinite(lat_ddmm) and math.isfinite(lon_ddmm)):
             return 0.0, False
         lat, lon = ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm)
         north, east = offset_m(lat, lon, *self.points[self.k])
-        if math.hypot(north, east) <= WAYPOINT_RADIUS_M and self.k + 1 < len(self.points):
-            self.k += 1
+        if math.hypot(north, east) <= self.radius_m and (
+                self.loops or self.k + 1 < len(self.points)):
+            self.k = (self.k + 1) % len(self.points)
             north, east = offset_m(lat, lon, *self.points[self.k])
         return bearing_rad(north, east), True
 
@@ -194,6 +221,17 @@ class Waypoints:
 class Nav(Waypoints):
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         super().__init__((), ((params[0], params[1]),))
+
+
+class GotoList(Waypoints):
+    """goto_list(radius, points...): Slocum's goto list, each point reached within
+    `radius` [m], the list flown again and again."""
+
+    loops = True
+
+    def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
+        super().__init__((), points)
+        self.radius_m = params[0]
 
 
 class Sweep(Waypoints):
@@ -267,7 +305,8 @@ def _clip(hull: list[tuple[float, float]], y: float) -> tuple[float, float] | No
     return (min(xs), max(xs)) if xs else None
 
 
-ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "waypoints": Waypoints, "sweep": Sweep}
+ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "waypoints": Waypoints, "sweep": Sweep,
+                  "goto_list": GotoList}
 
 
 # ---- the plan's schedule ---------------------------------------------------------------

@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
 
 RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png",
              "events.log")  # events.log: the C runtime's own, with --faults
+NETCDF_FILE = "trajectory.nc"  # with netcdf=True
 DEFAULT_DURATION_S = 30 * 86400.0  # a run of a mission without a horizon ends here
 TRACKERS = ("robust", "naive")
 
@@ -62,9 +63,10 @@ def check_state_dir(state_dir: Path, runtime: str) -> None:
 
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, runtime: str = "python",
-                ocean: str = "bench", ocean_logs: str | Path | None = None,
-                noise: str = "ctd", tracker: str = "robust", current: Current | None = None,
-                seed: int = 0, tick_s: float = TICK_S, duration_s: float | None = None,
+                ocean: str = "bench", noise: str = "ctd", tracker: str = "robust",
+                current: Current | None = None, seed: int = 0, tick_s: float = TICK_S,
+                duration_s: float | None = None, start_utc: str | None = None,
+                netcdf: bool = False,
                 progress: Callable[[float, float], None] | None = None,
                 plots: bool = True, key_path: str | Path | None = None,
                 state_dir: str | Path | None = None, faults: str | None = None) -> RunResult:
@@ -73,10 +75,13 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `plan_path`: the plan to fly and to check the flight against (without one every
     sensor a state logs is always on). `runtime`: "python" (the reference executor) or
     "c" (the compiled runtime over a pseudo-terminal). `ocean`: a preset (bench,
-    sea-trial, north-sea with `ocean_logs`, uniform) or a CSV file. `noise`: a key of
+    sea-trial, uniform), a CSV file, or Slocum science logs to replay (FILE.ebd or a
+    directory). `noise`: a key of
     `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
     `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
-    horizon, else 30 days). `progress(done_s, total_s)` is called on long runs.
+    horizon, else 30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the
+    replayed logs' first sample, else 2000-01-01T00:00:00Z). `netcdf`: also write
+    trajectory.nc (sim.export). `progress(done_s, total_s)` is called on long runs.
     `plots`: False leaves out depth.png and energy.png (a caller that draws its own).
     `key_path`: the key provisioned on the simulated vehicle; the plan must be signed with
     it (the C runtime gets it uploaded over the link and checks it itself).
@@ -93,10 +98,11 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     """
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import energy as accounting
-    from gliderplan.sim import outputs
+    from gliderplan.sim import export, outputs
     from gliderplan.sim import plots as drawing
+    from gliderplan.sim.export import parse_utc, utc_text
     from gliderplan.sim.flight import fly
-    from gliderplan.sim.loop import RunConfig
+    from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig
     from gliderplan.sim.ocean import load_ocean
     from gliderplan.sim.science import NOISE_PRESETS
     from gliderplan.sim.vehicle import Current
@@ -111,9 +117,11 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         raise UsageError(f"-o {out}: not a directory")
     if state_dir is not None:
         check_state_dir(Path(state_dir), runtime)
+    try:
+        start = parse_utc(start_utc) if start_utc else None
+    except ValueError as err:
+        raise UsageError(f"--start: {err}") from None
     duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_DURATION_S
-    config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
-                       noise=NOISE_PRESETS[noise], current=current or Current())
     fault_spec = None
     if faults is not None:
         from gliderplan.sim.faults import parse_faults
@@ -123,7 +131,12 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                              "board: add --runtime c")
         fault_spec = parse_faults(faults)
     vehicle = load_vehicle(mission.vehicle)
-    water = load_ocean(ocean, Path(ocean_logs) if ocean_logs else None)
+    water = load_ocean(ocean)
+    if start is None:
+        start = getattr(water, "start_epoch_s", None) or DEFAULT_START_EPOCH_S
+    config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
+                       noise=NOISE_PRESETS[noise], current=current or Current(),
+                       start_epoch_s=start)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     if key_path is not None:
         if plan_path is None:
@@ -144,11 +157,12 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     check = accounting.check_flight(used, plan)
     meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
             "ocean": ocean, "noise": noise, "tracker": tracker, "seed": seed,
-            "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path)}
+            "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
+            "vehicle": mission.vehicle, "start_utc": utc_text(start)}
+    table = outputs.timeseries_table(record, used, mission.battery.energy_j)
     contents = {
         "trace.csv": outputs.trace_csv(record.trace),
-        "timeseries.parquet": outputs.parquet_bytes(
-            outputs.timeseries_table(record, used, mission.battery.energy_j)),
+        "timeseries.parquet": outputs.parquet_bytes(table),
         "summary.json": outputs.summary(record, used, check, plan, meta),
     }
     if record.events_log is not None:
@@ -156,7 +170,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     if plots:
         contents["depth.png"] = drawing.depth_png(record)
         contents["energy.png"] = drawing.energy_png(record, used, plan)
-    written = [name for name in RUN_FILES if name in contents]
+    if netcdf:
+        contents[NETCDF_FILE] = export.netcdf_bytes(table.to_pandas(), meta)
+    written = [name for name in (*RUN_FILES, NETCDF_FILE) if name in contents]
     for name in written:
         write_atomically(out / name, contents[name])
     return RunResult(record, used, check, plan, tuple(out / name for name in written))

@@ -24,12 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import FLIGHT_SENSORS_MASK
+from gliderplan.contract import FLIGHT_SENSORS_MASK, RUNTIME_READINGS_MASK
 from gliderplan.language.registry import SENSORS
 from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.vehicle import GliderSim
 
+# sent every tick: the glider's own flight sensors (not the runtime's readings)
+SENT_ALWAYS_MASK = FLIGHT_SENSORS_MASK & ~RUNTIME_READINGS_MASK
 DEVICE_MASKS: dict[str, int] = {}
 for _s in SENSORS:
     if _s.device is not None:
@@ -39,6 +41,7 @@ _TEMP_BIT = 1 << next(s.index for s in SENSORS if s.name == "temp")
 BOTTOM_DEPTH_M = 200.0  # assumption: water depth for the altimeter reading
 BATTERY_V = 15.0  # assumption: alkaline pack voltage, constant over the run
 _NOISE_BLOCK = 4096  # random numbers drawn per numpy call
+SECONDS_PER_DAY = 86400.0
 
 
 @dataclass(frozen=True)
@@ -119,7 +122,7 @@ def _spike_signs(rng: np.random.Generator, probability: float) -> np.ndarray:
 def powered_mask(sensor_power: int) -> int:
     """Sensors sent in a tick: those without a device plus every sensor of a device that
     `sensor_power` (bit i: sensor i's device on) keeps powered."""
-    mask = FLIGHT_SENSORS_MASK
+    mask = SENT_ALWAYS_MASK
     for bits in DEVICE_MASKS.values():
         if sensor_power & bits:
             mask |= bits
@@ -130,8 +133,9 @@ class ScienceComputer:
     """The sensor array over a simulated glider in a simulated ocean."""
 
     def __init__(self, glider: GliderSim, ocean: Ocean, noise: SensorNoise, seed: int,
-                 tick_s: float) -> None:
+                 tick_s: float, start_epoch_s: float = 0.0) -> None:
         self.glider, self.ocean, self.noise, self.tick_s = glider, ocean, noise, tick_s
+        self.start_epoch_s = start_epoch_s  # UTC of missiontime 0 [s since 1970]
         self.rng = np.random.default_rng(seed)
         self.sensor_power = 0  # from the last COMMAND; nothing is powered before the first
         self._lag_keep = math.exp(-tick_s / noise.temperature_lag_s) \
@@ -149,7 +153,7 @@ class ScienceComputer:
         self.ctd_temperature_c = math.nan  # the CTD's reading sent this tick; NaN: CTD off
 
     def readings(self, tick: int) -> tuple[int, list[float]]:
-        """(mask, values): the sensor array at `tick` (all 17 values [registry units]) and
+        """(mask, values): the sensor array at `tick` (every sensor's value [registry units]) and
         which of them the SENSORS frame carries."""
         g, noise = self.glider, self.noise
         time_s = tick * self.tick_s
@@ -170,6 +174,8 @@ class ScienceComputer:
             degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
             measured, conductivity_s_m(measured, salinity), salinity,
             250.0, 1.0, 0.001, math.hypot(c.north_mps, c.east_mps), 0.0,
+            math.nan, math.nan,  # the runtime's readings: never sent
+            math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
         ]
         mask = powered_mask(self.sensor_power)
         self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan

@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from gliderplan.contract import FlightLimits
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import CodegenError, c_double, generate_c, read_mask
-from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.build import TARGETS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -152,7 +152,7 @@ _DRIVER = r"""
 #include <string.h>
 #include "gp_mission.h"
 
-/* stdin: lines of 17 sensor and n_vars variable values as hex bit patterns.
+/* stdin: lines of GP_N_SENSORS sensor and n_vars variable values as hex bit patterns.
  * stdout: per line, per event: the condition (0/1) and the assigned value's bits. */
 static double from_bits(uint64_t bits) { double d; memcpy(&d, &bits, sizeof d); return d; }
 static uint64_t to_bits(double d) { uint64_t bits; memcpy(&bits, &d, sizeof bits); return bits; }
@@ -201,8 +201,8 @@ def _extend(children: st.SearchStrategy[ir.Expr]) -> st.SearchStrategy[ir.Expr]:
         st.builds(ir.UnaryOp, st.sampled_from(("-", "!")), children),
         st.builds(ir.BinaryOp, st.sampled_from(binary), children, children),
         st.builds(lambda a: ir.FuncCall("abs", (a,)), children),
-        st.builds(lambda f, a, b: ir.FuncCall(f, (a, b)), st.sampled_from(("min", "max")),
-                  children, children),
+        st.builds(lambda f, a, b: ir.FuncCall(f, (a, b)),
+                  st.sampled_from(("min", "max", "mod")), children, children),
     )
 
 
@@ -262,7 +262,7 @@ def test_compiled_expressions_agree_bit_for_bit_with_the_reference(board, exprs,
 
     lines = []
     for row in rows:
-        sensors = [math.nan] * 17
+        sensors = [math.nan] * len(SENSORS)
         for name, value in zip(SENSORS_USED, row, strict=False):
             sensors[SENSOR_BY_NAME[name].index] = value
         variables = [*row[len(SENSORS_USED):], 0.0]

@@ -71,6 +71,41 @@ end
     assert any("expect upper bound" in note for note in occupancy.notes)
 
 
+def test_an_abort_above_the_planned_exit_is_not_taken_for_it():
+    m = source_mission("""mission m
+horizon 5000 s
+state survey
+begin
+  flightroute noheading
+  flightprofile yo(3, 30, .454, .454)
+  sensors missiontime, depth, halfcycle
+  expect 10 min .. 20 min
+  events
+    case depth > 60 goto abort
+    case halfcycle >= 4 call surfacing
+end
+state surfacing
+begin
+  flightroute noheading
+  flightprofile surface
+  sensors missiontime, depth
+  events
+    case missiontime >= 0 return
+end
+state abort
+begin
+  flightroute noheading
+  flightprofile surface
+  sensors missiontime, depth
+  events
+    case depth <= 0.3 exit
+end
+""")
+    occupancy = mission_occupancy(m)
+    assert [v.state for v in occupancy.trace[:3]] == ["survey", "surfacing", "survey"]
+    assert occupancy.time_s["abort"] == 0 and occupancy.visits["surfacing"] >= 4
+
+
 def test_open_ended_state_runs_to_the_horizon():
     m = source_mission("""mission m
 horizon 2 h

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from gliderplan.contract import NO_STATE, ReleaseReason, TransitionKind
+from gliderplan.contract import N_SENSORS, NO_STATE, ReleaseReason, TransitionKind
 from gliderplan.planner.signing import sign_plan
 from gliderplan.runtime import protocol as p
 
@@ -139,7 +139,7 @@ def test_fig2_over_the_serial_link_gives_the_papers_trace(binary, glider, tmp_pa
     link = glider.link()
     hello = link.wait_hello()
     assert (hello.name, hello.mission_hash.hex(), hello.n_sensors) == (
-        "sampleMission", FIG2_HASH, 17)
+        "sampleMission", FIG2_HASH, N_SENSORS)
     commands = fly(link, 0, 400)
     assert transitions(commands) == FIG2_TRACE
     assert commands[-1].done and commands[-1].state == NO_STATE

@@ -9,10 +9,12 @@ import zlib
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from gliderplan.cli.main import main
 from gliderplan.contract import FLIGHT_SENSORS_MASK, NO_STATE
 from gliderplan.language import check_file, check_source, ir
 from gliderplan.language.registry import SENSORS
@@ -258,3 +260,63 @@ def test_waypoints_advance_within_50_m_and_heading_points_at_the_next():
     heading, _ = route.heading(3912.0, -7350.0)  # past the last: turn back south
     assert heading == pytest.approx(math.pi)
 
+
+
+def test_a_goto_list_loops_and_counts_waypoints_reached_within_its_radius():
+    route = pilot.GotoList((200.0,), ((3910.0, -7350.0), (3911.0, -7350.0)))
+    assert route.distance_m(3909.0, -7350.0) == pytest.approx(1853.2, abs=1.0)
+    route.heading(3910.1, -7350.0)  # 185 m from the first: within 200 m
+    assert route.k == 1
+    route.heading(3911.0, -7350.0)
+    assert route.k == 0  # the list starts again
+    assert math.isnan(route.distance_m(math.nan, -7350.0))
+    assert math.isnan(pilot.NoHeading((), ()).distance_m(3910.0, -7350.0))
+
+
+def test_a_yo_counts_its_half_cycles():
+    yo = pilot.Yo(0.0, (3.0, 20.0, 0.4, 0.4))
+    legs = []
+    for depth in (0, 10, 20, 10, 3, 10, 20, 5, 3):
+        yo.command(depth, math.nan, (3.0, 20.0, 0.4, 0.4), None, 200.0)
+        legs.append(yo.halfcycle)
+    assert legs == [1, 1, 2, 2, 3, 3, 4, 4, 5]
+
+
+GOTO_LIST = REPO / "tests" / "missions" / "sim_goto_list.mission"
+
+
+def test_a_surfacing_call_resumes_the_waypoint_and_the_yo_count_restarts(tmp_path):
+    assert main(["sim", str(GOTO_LIST), "-o", str(tmp_path)]) == 0
+    table = pd.read_parquet(tmp_path / "timeseries.parquet")
+    points = [(3910.5, -7349.8), (3911.0, -7349.0), (3910.0, -7349.3)]
+    reached = []  # (time, waypoint) of each arrival within the list's 100 m
+    for k, (lat, lon) in enumerate(points):
+        near = [math.hypot(*offset_m(a, b, ddmm_to_degrees(lat), ddmm_to_degrees(lon))) <= 100
+                for a, b in zip(table["lat_deg"], table["lon_deg"], strict=True)]
+        starts = [t for t, now, before in zip(table["time_s"][1:], near[1:], near[:-1],
+                                                strict=True) if now and not before]
+        reached += [(t, k) for t in starts]
+    order = [k for _, k in sorted(reached)]
+    assert order[:4] == [0, 1, 2, 0]  # in order, looping, across 40-odd surfacings
+    # between two surfacings, four half cycles: two dives to 20 m
+    surfacing = (table["state"] == "surface").to_numpy()
+    starts = [i for i in range(1, len(table)) if surfacing[i] and not surfacing[i - 1]]
+    assert len(starts) > 30
+    for a, b in zip(starts[1:], starts[2:], strict=False):
+        depth = table["depth_m"].to_numpy()[a:b]
+        bottoms = sum(1 for i in range(1, len(depth) - 1)
+                      if depth[i] >= 19.5 and depth[i] >= depth[i - 1] and depth[i] > depth[i + 1])
+        assert bottoms == 2
+
+
+def test_the_clock_reads_utc_time_of_day_from_the_runs_start(tmp_path):
+    mission = REPO / "tests" / "missions" / "sim_clock.mission"
+    assert main(["sim", str(mission), "--start", "2024-06-01T06:10:00Z", "-o",
+                 str(tmp_path)]) == 0
+    calls = [line for line in (tmp_path / "trace.csv").read_text().splitlines()
+             if ",call," in line or ",return," in line]
+    # half past every hour (06:30 is 1200 s after 06:10), back under at 35 past
+    assert calls[:4] == ["1200,call,dive,up,1", "1500,return,up,dive,0",
+                         "4800,call,dive,up,1", "5100,return,up,dive,0"]
+    assert ir._fmod(-7.0, 3.0) == -1.0 and math.isnan(ir._fmod(1.0, 0.0))
+    assert math.isnan(ir._fmod(math.inf, 2.0)) and ir._fmod(5.0, math.inf) == 5.0

@@ -90,14 +90,15 @@ def test_a_current_carries_the_glider_away_from_its_dead_reckoning_until_a_fix()
 
 
 def test_the_ctd_lags_the_water_and_a_powered_off_ctd_is_not_sent():
-    from gliderplan.contract import FLIGHT_SENSORS_MASK
+    from gliderplan.contract import FLIGHT_SENSORS_MASK, RUNTIME_READINGS_MASK
     from gliderplan.sim import ocean
     from gliderplan.sim.science import ScienceComputer, SensorNoise
 
     g = glider(tick_s=4.0)
     science = ScienceComputer(g, ocean.bench(), SensorNoise(temperature_lag_s=8.0), 0, 4.0)
     mask, values = science.readings(0)
-    assert mask == FLIGHT_SENSORS_MASK  # nothing powered before the first COMMAND
+    # nothing powered before the first COMMAND; the runtime's own readings never sent
+    assert mask == FLIGHT_SENSORS_MASK & ~RUNTIME_READINGS_MASK
     assert values[9] == pytest.approx(24.0, abs=0.01)
     g.depth_m = 40.0  # into 7 C water: the reading follows with an 8 s time constant
     science.apply(40.0, -PITCH, -BALLAST, 0.0, 0, 1 << 9)

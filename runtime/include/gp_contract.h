@@ -64,9 +64,9 @@
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
 
-#define GP_N_SENSORS 17  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
+#define GP_N_SENSORS 20  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
 /** Sensors without a device of their own: always powered while logged, in the hotel load. */
-#define GP_FLIGHT_SENSORS_MASK 0x1FFu
+#define GP_FLIGHT_SENSORS_MASK 0xE01FFu
 
 enum {
     GP_SENSOR_MISSIONTIME = 0,  /**< time since the mission started [s] */
@@ -86,6 +86,11 @@ enum {
     GP_SENSOR_BACKSCATTER = 14,  /**< optical backscatter (optics) [1/m] */
     GP_SENSOR_CURRENT = 15,  /**< water current speed (ADCP) [m/s] */
     GP_SENSOR_MODEM = 16,  /**< bytes received by the acoustic modem [B] */
+    /** the yo's leg flown since the profile was entered (1: the first dive or climb); 0 outside a yo [1] */
+    GP_SENSOR_HALFCYCLE = 17,
+    /** distance to the waypoint the route flies to; NaN without one or without a position [m] */
+    GP_SENSOR_WPTDIST = 18,
+    GP_SENSOR_TIMEOFDAY = 19,  /**< UTC time of day of the glider's clock, 0 at midnight [s] */
 };
 
 /* ---- COMMAND's flags */

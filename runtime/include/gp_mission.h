@@ -43,6 +43,7 @@ typedef enum {
     GP_ROUTE_NOHEADING = 1,
     GP_ROUTE_WAYPOINTS = 2,
     GP_ROUTE_SWEEP = 3,
+    GP_ROUTE_GOTO_LIST = 4,
 } gp_route_kind;
 
 /**
@@ -75,7 +76,7 @@ typedef struct {
 typedef struct {
     uint8_t kind;          /**< gp_route_kind */
     uint8_t n_points;
-    double param;          /**< nav: unused; sweep: line spacing [m] */
+    double param;          /**< sweep: line spacing [m]; goto_list: radius [m]; else unused */
     const double (*points)[2];  /**< (lat, lon) DDMM.MMMM; nav has one point */
 } gp_route;
 

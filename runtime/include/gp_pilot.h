@@ -24,6 +24,7 @@ typedef struct {
     uint8_t detected;            /**< thermocline detected on this leg */
     uint8_t n_window;
     uint8_t n_recent;            /**< raw temperatures of the leg for the median (<= 3) */
+    uint32_t halfcycle;          /**< yo: the leg flown, 1 the first; 0 for other profiles */
     double lo_m, hi_m;           /**< tracked band (thermotrackyo), else min/max */
     double recent_c[3];          /**< last raw temperatures of the leg, oldest first */
     double previous_c;           /**< naive: previous raw temperature of the leg */

@@ -1,7 +1,7 @@
 /**
  * @file gp_route.h
- * @brief Flight routes (docs/pilot.md): nav, noheading, waypoints, and the area sweep
- *        of a convex hull turned into lawn-mower waypoints.
+ * @brief Flight routes (docs/pilot.md): nav, noheading, waypoints, Slocum's looping
+ *        goto list, and the area sweep of a convex hull turned into lawn-mower waypoints.
  */
 #ifndef GP_ROUTE_H
 #define GP_ROUTE_H
@@ -27,6 +27,13 @@ double gp_ddmm_to_deg(double ddmm);
  * @param from, to (lat, lon) [deg]
  */
 void gp_offset_m(const double from[2], const double to[2], double *north_m, double *east_m);
+
+/**
+ * @brief Distance [m] from the current position (DDMM.MMMM readings) to the waypoint
+ *        flown to; NaN without one (noheading) or without a position fix.
+ */
+double gp_route_distance_m(const gp_route_state *rs, const gp_route *route, double lat_ddmm,
+                           double lon_ddmm);
 
 /** @brief Enter a route: the first waypoint, waypoints from its points (sweep: the lawn-mower). */
 void gp_route_enter(gp_route_state *rs, const gp_route *route);

@@ -29,6 +29,7 @@ typedef struct {
     uint32_t events_log_bytes;      /**< size of the event log once this state was reached */
     gp_pilot pilot;
     gp_command last_command;        /**< the last tick answered (resent for the same tick) */
+    uint16_t route_resume[GP_MAX_STACK_DEPTH];  /**< per call on the stack: the caller's waypoint */
     gp_route_state route;           /**< last: its waypoints are not checkpointed */
 } gp_runtime;
 

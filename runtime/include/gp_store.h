@@ -24,7 +24,7 @@
 #include "gp_runtime.h"
 
 #define GP_PATH_MAX 1024
-#define GP_CHECKPOINT_MAGIC "GPCKPT02"
+#define GP_CHECKPOINT_MAGIC "GPCKPT03"
 /** Header to first slot, slot to slot: a flash page, so a torn write stays in its slot. */
 #define GP_CHECKPOINT_SLOT_BYTES 4096
 /** magic, mission hash (hex), slot size, CRC-32 */
@@ -32,9 +32,10 @@
 /** The largest record: every count at its bound. */
 #define GP_CHECKPOINT_MAX_RECORD                                                         \
     (4 + 2                                     /* sequence number, length */             \
-     + 6 + GP_MAX_STACK_DEPTH + 4 + 4 + 8      /* flags and counts, stack, events, log, entry */ \
+     + 6 + 3 * GP_MAX_STACK_DEPTH + 4 + 4 + 8  /* flags and counts, stack and its    */ \
+                                               /* waypoints, events, log, entry        */ \
      + 8 * GP_MAX_VARIABLES + 8 * GP_N_SENSORS                                           \
-     + 4 + 8 * 3 + 8 * 3 + 16 * GP_TRACK_WINDOW  /* pilot */                             \
+     + 4 + 4 + 8 * 3 + 8 * 3 + 16 * GP_TRACK_WINDOW  /* pilot */                         \
      + 2                                       /* route */                               \
      + 1 + GP_COMMAND_MAX_SIZE                 /* last COMMAND */                        \
      + 4)                                      /* CRC-32 */

@@ -21,6 +21,7 @@ void gp_pilot_enter(gp_pilot *pilot, const gp_profile_input *in, double depth_m)
     memset(pilot, 0, sizeof *pilot);
     pilot->lo_m = in->args[0];
     pilot->hi_m = in->args[1];
+    pilot->halfcycle = in->kind == GP_PROFILE_YO || in->kind == GP_PROFILE_THERMOTRACKYO;
     start_leg(pilot, depth_m < in->args[1] ? GP_LEG_DIVE : GP_LEG_CLIMB);
 }
 
@@ -146,6 +147,9 @@ static int fly_yo(gp_pilot *pilot, const gp_profile_input *in, double depth_m, d
             pilot->hi_m = in->args[1];
         }
         start_leg(pilot, leg);
+        if (pilot->halfcycle < UINT32_MAX) {
+            pilot->halfcycle++;
+        }
         changed |= GP_PILOT_TURNED;
     }
     if (tracking) {

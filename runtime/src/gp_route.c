@@ -180,6 +180,19 @@ void gp_route_fill(gp_route_state *rs, const gp_route *route)
     }
 }
 
+double gp_route_distance_m(const gp_route_state *rs, const gp_route *route, double lat_ddmm,
+                           double lon_ddmm)
+{
+    if (route->kind == GP_ROUTE_NOHEADING || rs->n_waypoints == 0
+        || !isfinite(lat_ddmm) || !isfinite(lon_ddmm)) {
+        return NAN;
+    }
+    double here[2] = {gp_ddmm_to_deg(lat_ddmm), gp_ddmm_to_deg(lon_ddmm)};
+    double north, east;
+    gp_offset_m(here, rs->waypoints[rs->next], &north, &east);
+    return hypot(north, east);
+}
+
 int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, double lon_ddmm,
                   double *heading_rad)
 {
@@ -192,9 +205,12 @@ int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, do
     int arrives = route->kind != GP_ROUTE_NAV;
     double distance_m = 0;
     double heading = heading_to(here, rs->waypoints[rs->next], arrives ? &distance_m : NULL);
-    /* One waypoint per tick at most; after the last, hold the heading to it. */
-    if (arrives && distance_m <= GP_WAYPOINT_RADIUS_M && rs->next + 1 < rs->n_waypoints) {
-        rs->next++;
+    /* One waypoint per tick at most; after the last, hold the heading to it (a goto
+     * list starts again from the first). */
+    int loops = route->kind == GP_ROUTE_GOTO_LIST;
+    double radius_m = loops ? route->param : GP_WAYPOINT_RADIUS_M;
+    if (arrives && distance_m <= radius_m && (loops || rs->next + 1 < rs->n_waypoints)) {
+        rs->next = (uint16_t)((rs->next + 1) % rs->n_waypoints);
         heading = heading_to(here, rs->waypoints[rs->next], &distance_m);
     }
     *heading_rad = heading;

@@ -78,12 +78,26 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
         record(report, start);
     }
     if (rt->machine.state != GP_EXITED) {
+        /* the runtime's own readings, as this tick's events see them */
+        rt->sensors[GP_SENSOR_HALFCYCLE] =
+            rt->profile == GP_NO_PROFILE ? 0.0 : (double)rt->pilot.halfcycle;
+        rt->sensors[GP_SENSOR_WPTDIST] = gp_route_distance_m(
+            &rt->route, &mission->states[rt->machine.state].route, rt->sensors[GP_SENSOR_LAT],
+            rt->sensors[GP_SENSOR_LON]);
+        uint16_t waypoint = rt->route.next;
         gp_transition transition;
         gp_step_result result = gp_machine_step(&rt->machine, mission, rt->sensors, &transition);
         if (result == GP_STEP_TRANSITION) {
             record(report, transition);
+            if (transition.kind == GP_TR_CALL) {  /* the caller's waypoint, for its return */
+                rt->route_resume[rt->machine.depth - 1] = waypoint;
+            }
             if (rt->machine.state != GP_EXITED) {
                 enter_state(rt, mission);
+            }
+            if (transition.kind == GP_TR_RETURN
+                && rt->route_resume[rt->machine.depth] < rt->route.n_waypoints) {
+                rt->route.next = rt->route_resume[rt->machine.depth];
             }
         } else if (result != GP_STEP_IDLE && result != GP_STEP_ASSIGNED) {
             report->fault = (uint8_t)result;

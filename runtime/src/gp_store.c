@@ -57,6 +57,7 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
                              rt->has_command};
     put(&w, head, sizeof head);
     put(&w, m->stack, depth);
+    put(&w, rt->route_resume, 2u * depth);
     put(&w, &m->event_count, 4);
     put(&w, &rt->events_log_bytes, 4);
     put(&w, &rt->entry_time_s, 8);
@@ -68,6 +69,7 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
     }
     const uint8_t pilot_head[4] = {pilot->leg, pilot->detected, n_window, n_recent};
     put(&w, pilot_head, sizeof pilot_head);
+    put(&w, &pilot->halfcycle, 4);
     put(&w, &pilot->lo_m, 8);
     put(&w, &pilot->hi_m, 8);
     put(&w, &pilot->previous_c, 8);
@@ -119,6 +121,7 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
         return "counts outside their bounds";
     }
     get(&r, m->stack, m->depth);
+    get(&r, loaded.route_resume, 2u * m->depth);
     get(&r, &m->event_count, 4);
     get(&r, &loaded.events_log_bytes, 4);
     get(&r, &loaded.entry_time_s, 8);
@@ -130,6 +133,7 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     }
     uint8_t pilot_head[4];
     get(&r, pilot_head, sizeof pilot_head);
+    get(&r, &pilot->halfcycle, 4);
     pilot->leg = pilot_head[0];
     pilot->detected = pilot_head[1];
     pilot->n_window = pilot_head[2];

@@ -12,7 +12,7 @@
 static const char *const sensor_names[GP_N_SENSORS] = {
     "missiontime", "depth", "pitch", "roll", "heading", "altitude", "lat", "lon", "battery",
     "temp", "conductivity", "salinity", "oxygen", "chlorophyll", "backscatter", "current",
-    "modem",
+    "modem", "halfcycle", "wptdist", "timeofday",
 };
 
 static int after_10(const double *s, const double *v) { (void)v; return s[MISSIONTIME] >= 10; }

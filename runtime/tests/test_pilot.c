@@ -31,17 +31,23 @@ void test_yo_should_turn_at_its_depths(void)
         {5.0, 10, -0.4, -230, 0},
         {4.0, 10, -0.4, -230, 0},               /* diving leg ignores min */
     };
+    static const unsigned halfcycle[] = {1, 1, 2, 2, 2, 3, 3};  /* the leg flown */
     gp_profile_input in = yo_input(5, 10);
     gp_pilot pilot;
     gp_pilot_command out;
     gp_pilot_enter(&pilot, &in, rows[0].depth);
+    CHECK_INT(pilot.halfcycle, 1);
     for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
         gp_pilot_step(&pilot, &in, rows[i].depth, NAN, &out);
         CHECK_NEAR(out.depth_target_m, rows[i].target, 0);
         CHECK_NEAR(out.pitch_rad, rows[i].pitch, 1e-12);
         CHECK_NEAR(out.ballast_cc, rows[i].ballast, 0);
         CHECK_INT(out.flags, rows[i].flags);
+        CHECK_INT(pilot.halfcycle, halfcycle[i]);
     }
+    gp_profile_input surface = {.kind = GP_PROFILE_SURFACE, .plan_pitch_rad = NAN};
+    gp_pilot_enter(&pilot, &surface, 4.0);
+    CHECK_INT(pilot.halfcycle, 0);  /* not a yo */
 }
 
 void test_yo_should_start_climbing_below_max_and_use_planned_pitch(void)

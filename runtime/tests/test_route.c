@@ -114,6 +114,34 @@ void test_waypoints_should_advance_within_50_m_and_hold_the_last(void)
     }
 }
 
+void test_goto_list_should_loop_with_its_radius_and_report_the_distance(void)
+{
+    double points[2][2];
+    local_point(44.0, -63.0, 0, 1000, points[0]);
+    local_point(44.0, -63.0, 1000, 1000, points[1]);
+    gp_route route = {GP_ROUTE_GOTO_LIST, 2, 200, (const double(*)[2])points};
+    gp_route_state rs;
+    double heading, here[2];
+    gp_route_enter(&rs, &route);
+    static const struct { double north, east, distance; int next; } rows[] = {
+        {0, 0, 1000, 0},          /* toward p1, 1 km away */
+        {0, 790, 210, 0},         /* outside the 200 m radius */
+        {0, 810, 190, 1},         /* inside: toward p2 */
+        {850, 1000, 150, 0},      /* p2 reached: the list starts again at p1 */
+        {500, 1000, 500, 0},
+    };
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        local_point(44.0, -63.0, rows[i].north, rows[i].east, here);
+        CHECK_NEAR(gp_route_distance_m(&rs, &route, here[0], here[1]), rows[i].distance, 0.5);
+        CHECK_INT(gp_route_step(&rs, &route, here[0], here[1], &heading), 1);
+        CHECK_INT(rs.next, rows[i].next);
+    }
+    CHECK(isnan(gp_route_distance_m(&rs, &route, NAN, here[1])));
+    gp_route none = {GP_ROUTE_NOHEADING, 0, 0, NULL};
+    gp_route_enter(&rs, &none);
+    CHECK(isnan(gp_route_distance_m(&rs, &none, here[0], here[1])));
+}
+
 static void to_local(const double origin[2], const double wp[2], double *north, double *east)
 {
     gp_offset_m(origin, wp, north, east);

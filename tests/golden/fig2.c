@@ -8,7 +8,7 @@
 
 #include "gp_mission.h"
 
-_Static_assert(GP_N_SENSORS == 17, "the runtime and the compiler disagree on the sensor array");
+_Static_assert(GP_N_SENSORS == 20, "the runtime and the compiler disagree on the sensor array");
 
 /* ---- state 0: s1 ---------------------------------------- */
 
@@ -131,6 +131,9 @@ static const char *const sensor_names[GP_N_SENSORS] = {
     "backscatter",
     "current",
     "modem",
+    "halfcycle",
+    "wptdist",
+    "timeofday",
 };
 
 static const gp_state states[3] = {

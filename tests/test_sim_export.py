@@ -1,0 +1,170 @@
+"""A simulated run exported for glider data pipelines: NetCDF read back (CF trajectory,
+IOOS Glider DAC names, ACDD attributes, checked by the IOOS compliance checker), and
+the track opened by standard GeoJSON and KML readers."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import geojson
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from fastkml import KML
+
+from gliderplan.cli.main import main
+from gliderplan.sim.export import profile_ids
+
+REPO = Path(__file__).resolve().parents[1]
+FIG2 = REPO / "examples" / "fig2.mission"
+START = "2024-06-01T06:00:00Z"
+DAC_VARIABLES = {  # name -> (standard_name, units) of the IOOS Glider DAC template
+    "time": ("time", "seconds since 1970-01-01T00:00:00Z"),
+    "lat": ("latitude", "degrees_north"),
+    "lon": ("longitude", "degrees_east"),
+    "depth": ("depth", "m"),
+    "pressure": ("sea_water_pressure", "dbar"),
+    "temperature": ("sea_water_temperature", "degree_Celsius"),
+    "profile_time": ("time", "seconds since 1970-01-01T00:00:00Z"),
+    "profile_lat": ("latitude", "degrees_north"),
+    "profile_lon": ("longitude", "degrees_east"),
+}
+ACDD_GLOBALS = ("title", "summary", "keywords", "Conventions", "id", "naming_authority",
+                "history", "source", "processing_level", "license", "date_created",
+                "creator_name", "institution", "standard_name_vocabulary",
+                "geospatial_lat_min", "geospatial_lat_max", "geospatial_lon_min",
+                "geospatial_lon_max", "geospatial_vertical_min", "geospatial_vertical_max",
+                "time_coverage_start", "time_coverage_end", "featureType", "cdm_data_type")
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("export") / "run"
+    assert main(["sim", str(FIG2), "--netcdf", "--start", START, "-o", str(out)]) == 0
+    return out
+
+
+def test_the_netcdf_reads_back_with_the_dac_variables_and_acdd_attributes(run):
+    raw = xr.open_dataset(run / "trajectory.nc", decode_times=False, mask_and_scale=False)
+    for name, (standard_name, units) in DAC_VARIABLES.items():
+        assert raw[name].attrs["standard_name"] == standard_name, name
+        assert raw[name].attrs["units"] == units, name
+    for name in ("trajectory", "platform", "instrument_ctd", "profile_id"):
+        assert name in raw.variables, name
+    assert raw["trajectory"].attrs["cf_role"] == "trajectory_id"
+    assert raw["instrument_ctd"].attrs["platform"] == "platform"
+    assert raw["temperature"].attrs["instrument"] == "instrument_ctd"
+    assert raw["profile_id"].dtype == np.int32
+    for attr in ACDD_GLOBALS:
+        assert str(raw.attrs[attr]).strip(), attr
+    assert raw.attrs["featureType"] == "trajectory"
+    assert "CF-1.6" in raw.attrs["Conventions"] and "ACDD-1.3" in raw.attrs["Conventions"]
+    assert raw.attrs["time_coverage_start"] == START
+
+    table = pd.read_parquet(run / "timeseries.parquet")
+    ds = xr.open_dataset(run / "trajectory.nc")
+    assert len(ds.time) == len(table)
+    seconds = (ds.time.values - np.datetime64("2024-06-01T06:00:00")) / np.timedelta64(1, "s")
+    assert np.allclose(seconds, table["time_s"])
+    assert np.allclose(ds.depth, table["depth_m"]) and np.allclose(ds.lat, table["lat_deg"])
+    # the CTD's readings, and fill (read back as NaN) while it is off
+    assert np.array_equal(np.isnan(ds.temperature), np.isnan(table["temp_reading_c"]))
+    # pressure from depth: about 1.01 dbar per metre
+    deep = ds.depth > 5
+    assert np.allclose(ds.pressure[deep] / ds.depth[deep], 1.01, atol=0.01)
+    # one profile per dive or climb of fig2's yo, each with its centre time and place
+    ids = raw["profile_id"].values
+    numbers = np.unique(ids[ids > 0])
+    assert list(numbers) == list(range(1, len(numbers) + 1)) and len(numbers) >= 10
+    assert len(ds.profile) == len(numbers)
+    for k, t in zip(numbers, raw["profile_time"].values, strict=True):
+        inside = raw["time"].values[ids == k]
+        assert inside.min() <= t <= inside.max()
+
+
+def _failures(results) -> list[tuple[int, str, list[str]]]:
+    return [(r.weight, r.name, r.msgs) for r in results if r.value[0] != r.value[1]]
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # the checker's own, on loading
+def test_the_netcdf_passes_the_compliance_checkers_cf_and_acdd_checks(run):
+    from compliance_checker.runner import CheckSuite
+
+    suite = CheckSuite()
+    suite.load_all_available_checkers()
+    dataset = suite.load_dataset(str(run / "trajectory.nc"))
+    results = suite.run_all(dataset, ["cf:1.6", "acdd:1.3"], skip_checks=[])
+    cf, cf_errors = results["cf:1.6"]
+    acdd, acdd_errors = results["acdd:1.3"]
+    assert not cf_errors and not acdd_errors
+    assert _failures(cf) == []  # every CF 1.6 check, of every priority
+    # ACDD's highly recommended attributes are all there, but a standard name for the
+    # profile number, which the CF table does not have
+    high = [f for f in _failures(acdd) if f[0] == 3]
+    assert [f[1] for f in high] == ['variable "profile_id" missing the following attributes:']
+
+
+def test_export_writes_the_track_as_geojson_and_kml_for_standard_readers(run, tmp_path):
+    assert main(["export", str(run), "--geojson", "--kml", "-o", str(tmp_path)]) == 0
+    table = pd.read_parquet(run / "timeseries.parquet")
+    first = [table["lon_deg"].iloc[0], table["lat_deg"].iloc[0]]
+    last = [table["lon_deg"].iloc[-1], table["lat_deg"].iloc[-1]]
+    steps = np.diff(np.round(table[["lon_deg", "lat_deg"]].to_numpy(), 7), axis=0)
+    moves = 1 + int(np.any(steps != 0, axis=1).sum())  # a glider at the surface waits
+
+    collection = geojson.loads((tmp_path / "track.geojson").read_text())
+    assert collection.is_valid
+    line = collection["features"][0]["geometry"]
+    assert line["type"] == "LineString" and len(line["coordinates"]) == moves
+    assert np.allclose(line["coordinates"][0], first) and np.allclose(line["coordinates"][-1],
+                                                                      last)
+
+    document = KML.parse(tmp_path / "track.kml").features[0]
+    track, start, end = document.features
+    coords = np.array(track.geometry.coords)
+    assert len(coords) == moves and np.allclose(coords[-1][:2], last)
+    assert np.allclose(start.geometry.coords[0][:2], first)
+    assert track.times.begin.dt.isoformat() == "2024-06-01T06:00:00+00:00"
+    assert end.name.endswith("end")
+
+
+def test_a_long_track_is_thinned_but_keeps_its_ends(run, tmp_path):
+    from gliderplan.sim.export import _track
+
+    table = pd.read_parquet(run / "timeseries.parquet")
+    thinned = _track(table, max_points=100)
+    assert len(thinned) <= 101
+    assert np.allclose(thinned[0], table[["lon_deg", "lat_deg"]].iloc[0])
+    assert np.allclose(thinned[-1], table[["lon_deg", "lat_deg"]].iloc[-1])
+
+
+def test_profiles_are_dives_and_climbs_not_the_surface():
+    depth = np.concatenate([np.zeros(10), np.linspace(0, 20, 40), np.linspace(20, 2, 30),
+                            np.linspace(2, 2.5, 10)])
+    ids = profile_ids(depth)
+    assert set(ids[11:48]) == {1} and set(ids[51:78]) == {2}
+    assert (ids[:10] == -999).all()  # waiting at the surface
+
+
+@pytest.mark.parametrize("argv, code, message", [
+    (["export", "{run}"], 2, "--netcdf, --geojson and/or --kml"),
+    (["export", "{missing}", "--kml"], 2, "no such run directory"),
+    (["export", "{empty}", "--kml"], 1, "timeseries.parquet: missing"),
+])
+def test_export_refuses_bad_input_in_one_line(run, tmp_path, capsys, argv, code, message):
+    (tmp_path / "empty").mkdir()
+    names = {"run": run, "missing": tmp_path / "nope", "empty": tmp_path / "empty"}
+    assert main([a.format(**names) for a in argv]) == code
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_sim_refuses_a_start_that_is_not_a_time(tmp_path, capsys):
+    assert main(["sim", str(FIG2), "--start", "yesterday", "-o", str(tmp_path)]) == 2
+    assert "--start: 'yesterday' is not an ISO 8601 time" in capsys.readouterr().err
+
+
+def test_the_summary_records_the_start(run):
+    assert json.loads((run / "summary.json").read_text())["start_utc"] == START

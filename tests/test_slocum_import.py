@@ -1,0 +1,282 @@
+"""Slocum missions imported as a pilot would: the real helgo and nsb3 missions import,
+check, plan and fly, and the simulated glider keeps the yo band, the waypoints in
+their order and the surfacing schedule their .ma files give (read here on their own,
+not through the importer); bad files stop with one line naming file and line."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gliderplan.cli.main import main
+from gliderplan.sim.geo import ddmm_to_degrees
+
+REPO = Path(__file__).resolve().parents[1]
+MISSIONS = REPO.parent / "shared" / "data" / "slocum-missions"
+TICK_S = 4.0
+METRES_PER_DEGREE = 6371000.0 * np.pi / 180.0
+
+
+def _needs_missions() -> None:
+    if not MISSIONS.is_dir():
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"the Slocum missions are missing: {MISSIONS}")
+        pytest.skip("the Slocum missions are not present")
+
+
+def ma_args(path: Path) -> dict[str, float]:
+    """The b_args of a .ma file, read with nothing but a regular expression."""
+    found = re.findall(r"^\s*b_arg:\s*(\w+)\([^)]*\)\s+(\S+)", path.read_text(), re.M)
+    return {name: float(value) for name, value in found}
+
+
+def ma_waypoints(path: Path) -> list[tuple[float, float]]:
+    """(lat, lon) DDMM.MMMM of a goto list, from its (lon, lat) lines."""
+    block = path.read_text().split("<start:waypoints>")[1].split("<end:waypoints>")[0]
+    points = []
+    for line in block.splitlines():
+        fields = line.split("#")[0].split()
+        if len(fields) == 2:
+            points.append((float(fields[1]), float(fields[0])))
+    return points
+
+
+@pytest.fixture(scope="module")
+def flown(tmp_path_factory) -> dict[str, Path]:
+    """Each real mission imported, checked, planned and flown for its 7-day horizon."""
+    _needs_missions()
+    runs = {}
+    for name, extra in (("helgo", ["--allow-missing-mafiles"]), ("nsb3", [])):
+        out = tmp_path_factory.mktemp(name)
+        mission = out / f"{name}.mission"
+        assert main(["import-slocum", str(MISSIONS / name / f"{name}.mi"), *extra,
+                     "-o", str(mission)]) == 0
+        assert main(["check", "--strict", str(mission)]) == 0
+        assert main(["plan", str(mission), "-o", str(out / f"{name}.plan")]) == 0
+        assert main(["sim", str(mission), "--plan", str(out / f"{name}.plan"),
+                     "-o", str(out / "run")]) == 0
+        runs[name] = out
+    return runs
+
+
+def _series(run: Path) -> pd.DataFrame:
+    return pd.read_parquet(run / "run" / "timeseries.parquet")
+
+
+def _turns(depth: np.ndarray) -> tuple[list[float], list[float]]:
+    """Depths of the yo's bottoms and tops (local extremes) in a depth series."""
+    bottoms, tops = [], []
+    for i in range(1, len(depth) - 1):
+        if depth[i] >= depth[i - 1] and depth[i] > depth[i + 1]:
+            bottoms.append(float(depth[i]))
+        elif depth[i] <= depth[i - 1] and depth[i] < depth[i + 1] and depth[i] > 0.3:
+            tops.append(float(depth[i]))
+    return bottoms, tops
+
+
+@pytest.mark.parametrize("name, yo", [("helgo", "yo50.ma"), ("nsb3", "yo10.ma")])
+def test_the_glider_flies_the_yo_band_of_the_ma_file(flown, name, yo):
+    args = ma_args(MISSIONS / name / "mafiles" / yo)
+    table = _series(flown[name])
+    survey = table[table["state"] == "survey"]
+    bottoms, tops = _turns(survey["depth_m"].to_numpy())
+    assert len(bottoms) > 50
+    # turns on the tick the depth passes the target: within one tick's glide (< 1 m)
+    assert min(bottoms) >= args["d_target_depth"]
+    assert max(bottoms) < args["d_target_depth"] + 1.0
+    assert all(args["c_target_depth"] - 1.0 < t <= args["c_target_depth"] for t in tops)
+
+
+@pytest.mark.parametrize("name, goto", [("helgo", "goto_l50.ma"), ("nsb3", "goto_l10.ma")])
+def test_the_glider_reaches_the_waypoints_in_the_ma_files_order(flown, name, goto):
+    path = MISSIONS / name / "mafiles" / goto
+    radius = ma_args(path)["list_when_wpt_dist"]
+    points = ma_waypoints(path)
+    table = _series(flown[name])
+    lat, lon = table["lat_deg"].to_numpy(), table["lon_deg"].to_numpy()
+    arrivals = []
+    for k, (plat, plon) in enumerate(points):
+        north = (ddmm_to_degrees(plat) - lat) * METRES_PER_DEGREE
+        east = (ddmm_to_degrees(plon) - lon) * METRES_PER_DEGREE * np.cos(np.radians(lat))
+        inside = np.hypot(north, east) <= radius + 2.0  # a tick's glide past the radius
+        before = np.concatenate([[False], inside[:-1]])  # inside at the start: reached
+        arrivals += [(int(i), k) for i in np.flatnonzero(inside & ~before)]
+    order = [k for _, k in sorted(arrivals)]
+    assert len(order) >= len(points)  # the whole list (nsb3: four times round in 7 days)
+    assert order == [i % len(points) for i in range(len(order))]
+
+
+def _surfacing_calls(run: Path) -> pd.DataFrame:
+    trace = pd.read_csv(run / "run" / "trace.csv")
+    return trace[(trace["kind"] == "call") & trace["to_state"].str.startswith("surface")]
+
+
+def test_helgo_surfaces_after_the_yos_half_cycles(flown):
+    half_cycles = ma_args(MISSIONS / "helgo" / "mafiles" / "yo50.ma")["num_half_cycles_to_do"]
+    no_comm_s = ma_args(MISSIONS / "helgo" / "mafiles" / "surfac51.ma")["when_secs"]
+    table = _series(flown["helgo"])
+    calls = _surfacing_calls(flown["helgo"])
+    assert len(calls) > 100
+    assert set(calls["to_state"]) == {"surface_1"}  # never the no-comm one: calls every hour
+    depth, state = table["depth_m"].to_numpy(), table["state"].to_numpy()
+    ticks = (calls["time_s"] / TICK_S).astype(int).to_numpy()
+    for a, b in zip(ticks, ticks[1:], strict=False):
+        dives = depth[a:b][state[a:b] == "survey"]
+        bottoms, tops = _turns(dives)
+        assert len(bottoms) + len(tops) + 1 == half_cycles  # the last climb ends the yo
+        assert depth[b] <= 3.1  # the surfacing starts where the last climb ended
+    gaps = np.diff(calls["time_s"])
+    assert gaps.max() < no_comm_s
+
+
+def test_nsb3_surfaces_every_when_secs_after_reaching_the_surface(flown):
+    every_s = ma_args(MISSIONS / "nsb3" / "mafiles" / "surfac10.ma")["when_secs"]
+    table = _series(flown["nsb3"])
+    calls = _surfacing_calls(flown["nsb3"])
+    assert set(calls["to_state"]) == {"surface_3"}  # every 3 h, before the 12 h no-comm one
+    assert len(calls) >= 7 * 86400 / (every_s + 1200) - 1
+    surfaced = (table["state"].str.startswith("surface") & (table["depth_m"] <= 0.3)).to_numpy()
+    arrivals = table["time_s"].to_numpy()[np.flatnonzero(surfaced[1:] & ~surfaced[:-1]) + 1]
+    for call in calls["time_s"].iloc[1:]:
+        last = arrivals[arrivals < call].max()
+        assert call - last == pytest.approx(every_s, abs=2 * TICK_S)
+
+
+def test_the_translation_says_what_it_left_out(flown, capsys):
+    text = (flown["helgo"] / "helgo.mission").read_text()
+    assert "left out: sample (helgo.mi:58), its .ma file sample50.ma is missing" in text
+    assert "not translated: d_target_altitude 5" in text
+    assert "flightroute goto_list(50, (5441, 647), (5413.5, 621.6), (5416, 723))" in text
+
+
+def test_import_reports_warnings_with_file_and_line(tmp_path, capsys):
+    _needs_missions()
+    assert main(["import-slocum", str(MISSIONS / "nsb3" / "nsb3.mi"),
+                 "-o", str(tmp_path / "n.mission")]) == 0
+    err = capsys.readouterr().err
+    assert re.search(r"nsb3/mafiles/yo10\.ma:8: warning: yo: not translated: d_use_pitch 1", err)
+    assert re.search(r"nsb3\.mi:10: warning: sensor u_use_current_correction", err)
+
+
+def test_a_missing_ma_file_stops_the_import_with_its_line(tmp_path, capsys):
+    _needs_missions()
+    out = tmp_path / "h.mission"
+    assert main(["import-slocum", str(MISSIONS / "helgo" / "helgo.mi"), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "helgo.mi:59: args_from_file 50: no file" in err and "sample50.ma" in err
+    assert "Traceback" not in err and not out.exists()
+
+
+def _mission(tmp_path: Path, mi: str, **mafiles: str) -> Path:
+    (tmp_path / "mafiles").mkdir(exist_ok=True)
+    for name, text in mafiles.items():
+        (tmp_path / "mafiles" / name.replace("_ma", ".ma")).write_text(text)
+    path = tmp_path / "m.mi"
+    path.write_text(mi)
+    return path
+
+
+YO_MA = ("behavior_name=yo\n<start:b_arg>\n b_arg: d_target_depth(m) 20\n"
+         " b_arg: c_target_depth(m) 3\n b_arg: d_use_pitch(enum) 3\n"
+         " b_arg: d_pitch_value(X) -0.45\n b_arg: c_use_pitch(enum) 3\n"
+         " b_arg: c_pitch_value(X) 0.45\n b_arg: num_half_cycles_to_do(nodim) -1\n<end:b_arg>\n")
+
+
+@pytest.mark.parametrize("mi, mafiles, message", [
+    ("behavior: yo\n  b_arg: args_from_file(enum) 10\nbehavior: loiter_about\n",
+     {"yo10_ma": YO_MA}, "m.mi:3: unknown behavior 'loiter_about'"),
+    ("behavior: yo\n  b_arg: args_from_file(enum) 10\n  b_arg: start_when(enum)\n",
+     {"yo10_ma": YO_MA}, "m.mi:3: malformed line 'b_arg: start_when(enum)'"),
+    ("  b_arg: start_when(enum) 0\n", {}, "m.mi:1: b_arg before any 'behavior:' line"),
+    ("behavior: yo\n  b_arg: d_target_depth(m) deep\n", {}, "m.mi:2: d_target_depth: 'deep' "
+     "is not a number"),
+    ("behavior: yo\n  b_arg: args_from_file(enum) 11\n", {"yo10_ma": YO_MA},
+     "m.mi:2: args_from_file 11: no file"),
+    ("behavior: goto_list\n  b_arg: args_from_file(enum) 10\n",
+     {"goto_l10_ma": "behavior_name=goto_list\n<start:b_arg>\n<end:b_arg>\n"
+                     "<start:waypoints>\n713.0 5475.0\n<end:waypoints>\n"},
+     "goto_l10.ma:5: latitude 5475.0 is not DDMM.MMMM"),
+    ("behavior: yo\n  b_arg: args_from_file(enum) 10\n",
+     {"yo10_ma": "behavior_name=yo\n b_arg: d_target_depth(m) 20\n"},
+     "yo10.ma:2: unexpected line 'b_arg: d_target_depth(m) 20' before <start:b_arg>"),
+    ("behavior: yo\n  b_arg: args_from_file(enum) 10\n",
+     {"yo10_ma": "behavior_name=surface\n<start:b_arg>\n<end:b_arg>\n"},
+     "yo10.ma:1: this file is for behavior 'surface'"),
+])
+def test_bad_slocum_files_stop_with_one_line_naming_file_and_line(tmp_path, capsys, mi,
+                                                                  mafiles, message):
+    path = _mission(tmp_path, mi, **mafiles)
+    out = tmp_path / "out.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert message in err, err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_bad_usage_exits_2(tmp_path, capsys):
+    assert main(["import-slocum", str(tmp_path / "nope.mi"), "-o", str(tmp_path / "x")]) == 2
+    path = _mission(tmp_path, "behavior: yo\n", )
+    assert main(["import-slocum", str(path), "--mafiles", str(tmp_path / "none"),
+                 "-o", str(tmp_path / "x")]) == 2
+    assert main(["import-slocum", str(path), "--horizon", "soon", "-o",
+                 str(tmp_path / "x")]) == 2
+    assert "--horizon 'soon'" in capsys.readouterr().err
+
+
+def test_a_synthetic_mission_translates_every_surfacing_mode(tmp_path):
+    surfac = ("behavior_name=surface\n<start:b_arg>\n b_arg: end_action(enum) 2\n"
+              " b_arg: gps_wait_time(s) 120\n<end:b_arg>\n")
+    mi = ("behavior: abend\n b_arg: overtime(s) 36000\n b_arg: overdepth(m) 60\n"
+          "behavior: surface\n b_arg: start_when(enum) 0\n b_arg: args_from_file(enum) 10\n"
+          "behavior: surface\n b_arg: start_when(enum) 7\n b_arg: when_wpt_dist(m) 300\n"
+          "behavior: surface\n b_arg: start_when(enum) 1\n b_arg: end_action(enum) 0\n"
+          "behavior: surface\n b_arg: start_when(enum) 13\n b_arg: when_utc_hour(hr) 6\n"
+          " b_arg: when_utc_min(min) 30\n"
+          "behavior: surface\n b_arg: start_when(enum) 13\n b_arg: when_utc_min(min) 15\n"
+          "behavior: surface\n b_arg: start_when(enum) 13\n b_arg: when_utc_day(day) 3\n"
+          "behavior: goto_wpt\n b_arg: wpt_units(enum) 2\n b_arg: wpt_x(lon) -7349.0\n"
+          " b_arg: wpt_y(lat) 3910.5\n"
+          "behavior: yo\n b_arg: args_from_file(enum) 10\n"
+          " b_arg: num_half_cycles_to_do(nodim) 3\n"
+          "behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: state_to_sample(enum) 1\n")
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA, surfac10_ma=surfac)
+    out = tmp_path / "s.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    text = out.read_text()
+    assert "horizon 36000 s" in text  # abend overtime bounds the mission
+    assert "case missiontime >= 36000 goto abort" in text
+    assert "case depth > 60 goto abort" in text
+    assert "case surface_1_done == 0 set surface_1_done = 1" in text
+    assert "case wptdist <= 300 && near_wpt_2 == 0" in text
+    assert "case halfcycle > 3 || halfcycle == 3 && depth >= 20" in text  # odd: at the bottom
+    assert "case timeofday >= 23400 && timeofday < 23460" in text  # 06:30 UTC
+    assert "case mod(timeofday, 3600) >= 900 && mod(timeofday, 3600) < 960" in text
+    assert "start_when 13: at a date, not translated" in text
+    assert "flightroute nav(3910.5, -7349)" in text
+    assert "temp duty 0.5" in text  # sampled on dives only
+    assert main(["sim", str(out), "--duration", "4h", "--start", "2024-06-01T06:10Z",
+                 "-o", str(tmp_path / "run")]) == 0
+    trace = (tmp_path / "run" / "trace.csv").read_text()
+    assert "300,call,survey,surface_5" in trace  # 06:15 by the glider's clock
+    assert "call,survey,surface_1" in trace  # at once
+    assert ",exit,surface_3,," in trace  # the yo's end: surfacing, then end_action 0 quits
+
+
+@pytest.mark.skipif(shutil.which("cc") is None and os.environ.get("CI") != "true",
+                    reason="no C compiler (cc)")
+def test_the_c_runtime_flies_an_imported_mission_as_the_reference_does(flown, tmp_path):
+    mission = flown["helgo"] / "helgo.mission"
+    traces = []
+    for runtime in ("python", "c"):
+        out = tmp_path / runtime
+        assert main(["sim", str(mission), "--runtime", runtime, "--duration", "8h",
+                     "-o", str(out)]) == 0
+        traces.append((out / "trace.csv").read_text())
+    assert traces[0] == traces[1] and traces[0].count("call,survey,surface_1") >= 15
