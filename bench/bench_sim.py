@@ -2,9 +2,11 @@
 closed loop over a pseudo-terminal.
 
     .venv/bin/python bench/bench_sim.py [--days 30] [--c-days 1] [--tick 4] [--runs 3] [--no-c]
+                                        [--mission FILE] [--tick-by-tick]
 
-Mission: tests/missions/sim_month.mission (yo 3-38 m along three waypoints, a surfacing
-with an Iridium call every 6 h, CTD on; exits after 30 days), bench ocean, seed 0.
+Mission (default; --mission for another): tests/missions/sim_month.mission (yo 3-38 m
+along three waypoints, a surfacing with an Iridium call every 6 h, CTD on; exits after 30
+days), bench ocean, seed 0.
 
 1. Python executor, --days of mission at --tick: wall time and simulated seconds per
    wall second (target: 30 days at 4 s in <= 10 s). Baseline in the same run: the
@@ -23,6 +25,9 @@ with an Iridium call every 6 h, CTD on; exits after 30 days), bench ocean, seed 
      pty with frames of the same sizes (bench/pty_roundtrip.c), as many round trips;
    - the Python executor on the same ticks, in process; the two traces must agree.
    For comparison, MOOS-IvP's uSimMarine is reported to run 50-300x real time.
+3. With --tick-by-tick: the Python executor's reference loop on the same days (every
+   tick through the executor, `fly(..., tick_by_tick=True)`), the baseline of part 1's
+   runs of ticks; the two traces must agree.
 """
 
 from __future__ import annotations
@@ -55,14 +60,15 @@ USIMMARINE_REAL_TIME = (50, 300)  # MOOS-IvP uSimMarine, reported time warp
 SENSORS_WIRE_BYTES, COMMAND_WIRE_BYTES = 35, 21
 
 
-def timed_run(mission, days: float, tick_s: float,
-              runtime: str) -> tuple[RunRecord, float, float, float]:
+def timed_run(mission, days: float, tick_s: float, runtime: str,
+              tick_by_tick: bool = False) -> tuple[RunRecord, float, float, float]:
     """(record, wall [s], CPU of this process [s], CPU of processes it waited for [s])."""
     config = RunConfig(tick_s=tick_s, duration_s=days * 86400.0, seed=0)
     vehicle = load_vehicle(mission.vehicle)
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu, start = time.process_time(), time.perf_counter()
-    record = fly(mission, ocean.bench(), config, vehicle, runtime=runtime)
+    record = fly(mission, ocean.bench(), config, vehicle, runtime=runtime,
+                 tick_by_tick=tick_by_tick)
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     runtime_cpu = (after.ru_utime - children.ru_utime) + (after.ru_stime - children.ru_stime)
@@ -129,8 +135,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tick", type=float, default=4.0)
     parser.add_argument("--runs", type=int, default=3, help="runs of the C loop (median)")
     parser.add_argument("--no-c", action="store_true", help="skip the C closed loop")
+    parser.add_argument("--mission", default=str(MISSION), help="the mission to fly")
+    parser.add_argument("--tick-by-tick", action="store_true",
+                        help="also fly the days tick by tick (the baseline of the fast runs)")
     args = parser.parse_args(argv)
-    mission = check_file(str(MISSION)).mission
+    mission = check_file(args.mission).mission
 
     record, wall_s, _, _ = timed_run(mission, args.days, args.tick, "python")
     simulated_s = float(record.columns["time_s"][-1])
@@ -141,6 +150,14 @@ def main(argv: list[str] | None = None) -> int:
     reference_s, compiled_s = event_checks(mission, record)
     print(f"  event checks on those ticks: reference semantics {reference_s:.2f} s, "
           f"compiled {compiled_s:.2f} s ({reference_s / compiled_s:.0f}x)")
+    if args.tick_by_tick:
+        one_by_one, one_by_one_s, _, _ = timed_run(mission, args.days, args.tick, "python",
+                                                   tick_by_tick=True)
+        same = one_by_one.trace == record.trace
+        print(f"  baseline, tick by tick: {one_by_one_s:.2f} s wall (runs of ticks: "
+              f"{one_by_one_s / wall_s:.1f}x faster; {'same' if same else 'DIFFERENT'} trace)")
+        if not same:
+            return 1
 
     if args.no_c:
         return 0
@@ -157,7 +174,7 @@ def c_loop(mission, args: argparse.Namespace) -> int:
         floor_binary = Path(tmp) / "pty_roundtrip"
         subprocess.run(["cc", "-O2", "-std=c11", str(BENCH / "pty_roundtrip.c"), "-o",
                         str(floor_binary)], check=True)
-        command = gliderplan("sim", str(MISSION), "--runtime", "c", "--tick", f"{args.tick:g}")
+        command = gliderplan("sim", args.mission, "--runtime", "c", "--tick", f"{args.tick:g}")
         where = state_dirs(Path(tmp))
         commands, fresh = {}, {}  # fresh: each command's state directory, emptied each run
         for setting, state in where.items():

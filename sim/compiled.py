@@ -85,9 +85,16 @@ def _divide_arrays(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.true_divide(a, b)
 
 
+def _fmod_arrays(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """ir's mod (C's fmod) element by element: NaN for an infinite `a` or a zero `b`."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.fmod(a, b)
+
+
 _ARRAY_GLOBALS = {"_divide": _divide_arrays, "_truth": lambda b: np.asarray(b, np.float64),
                   "np": np,
-                  "__builtins__": {"abs": np.abs, "min": _fmin, "max": _fmax, "float": float}}
+                  "__builtins__": {"abs": np.abs, "min": _fmin, "max": _fmax,
+                                   "mod": _fmod_arrays, "float": float}}
 
 
 def sensors_read(exprs: Sequence[ir.Expr]) -> frozenset[int]:

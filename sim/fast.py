@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import FLIGHT_SENSORS_MASK, SURFACE_PITCH_RAD, WAYPOINT_RADIUS_M
+from gliderplan.contract import SURFACE_PITCH_RAD
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.sim import compiled, pilot
@@ -56,6 +56,8 @@ from gliderplan.sim.science import (
     BATTERY_V,
     BOTTOM_DEPTH_M,
     DEVICE_MASKS,
+    SECONDS_PER_DAY,
+    SENT_ALWAYS_MASK,
     ScienceComputer,
     powered_mask,
 )
@@ -63,16 +65,20 @@ from gliderplan.sim.vehicle import SURFACE_DEPTH_M, Glide
 
 MIN_RUN_TICKS = 64
 MAX_RUN_TICKS = 16384
-MAX_BACKOFF_TICKS = 16
+MAX_BACKOFF_TICKS = 1024
+SHORT_RUN_TICKS = 32  # a run costs about what the loop pays for this many ticks
 NAV_ITERATIONS = 10  # iterations of the route before the rest is flown one tick at a time
 MIN_NAV_WINDOW, MAX_NAV_WINDOW = 64, 4096  # ticks of the route iterated at once
-NEAR_WAYPOINT_M = 3.0 * WAYPOINT_RADIUS_M  # closer, the route is flown tick by tick
+NEAR_WAYPOINT_RADII = 3.0  # closer (in waypoint radii), the route is flown tick by tick
 
 _COMMAND_F32 = struct.Struct("<4f")
 _ONE_F32 = struct.Struct("<f")
 _DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY = (
     SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "heading", "temp",
                                       "conductivity", "salinity"))
+_HALFCYCLE, _WPTDIST, _TIMEOFDAY = (SENSOR_BY_NAME[n].index
+                                    for n in ("halfcycle", "wptdist", "timeofday"))
+_RUNTIME_READINGS = (_HALFCYCLE, _WPTDIST)  # the executor's own, set before every tick's events
 _NAV_SENSORS = frozenset({_LAT, _LON, _HEADING})
 _TEMP_BIT = 1 << _TEMP
 _DIVE, _CLIMB = pilot.DIVE, pilot.CLIMB
@@ -126,6 +132,21 @@ def _after(glide: Glide, ticks: int) -> tuple:
     return glide.actuators[min(ticks, glide.settled)]
 
 
+def halfcycles(routine, flight: _Flight) -> np.ndarray:
+    """The routine's `halfcycle` before each tick of the run and after its last (count + 1
+    values): a yo's count goes up on the tick whose command turns it, the first leg's
+    when the run begins with a turn (`routine.leg` is the leg before the run)."""
+    counts = np.full(flight.count + 1, float(routine.halfcycle))
+    if isinstance(routine, pilot.Yo) and flight.legs:
+        turns = [first for first, _, _, _ in flight.legs[1:]]
+        if flight.legs[0][3] != routine.leg:
+            turns.insert(0, 0)
+        begun = np.zeros(flight.count + 1)
+        np.add.at(begun, [t + 1 for t in turns if t < flight.count], 1.0)
+        counts += np.cumsum(begun)
+    return counts
+
+
 class FastForward:
     """Runs of ticks for `sim.loop.simulate`, flown as `runtime` would fly them."""
 
@@ -135,7 +156,7 @@ class FastForward:
         self.tick_s = science.tick_s
         self.run_ticks = MIN_RUN_TICKS
         self.nav_window = 256
-        self._backoff = 0  # ticks left to the loop after a run that flew none
+        self._backoff = 0  # ticks left to the loop after a short run
         self._resume = 0
         self._glides: dict[tuple, Glide | None] = {}
         self._changes: dict[int, np.ndarray] = {}  # per glide: its depth changes, long
@@ -166,10 +187,12 @@ class FastForward:
             return 0
         flown = self._run(tick, min(self.run_ticks, last_tick - tick + 1), columns)
         self.run_ticks = min(MAX_RUN_TICKS, max(MIN_RUN_TICKS, 2 * flown))
-        # a run that could not fly a tick is not tried again for a while: where events
-        # fire tick after tick (an assignment on every tick near the surface, say) the
-        # loop's own ticks are cheaper
-        self._backoff = 0 if flown else min(MAX_BACKOFF_TICKS, 2 * self._backoff + 1)
+        # after runs that flew less than they cost, the next is tried later and later:
+        # where events fire every few ticks (an assignment on every tick near the
+        # surface, a bookkeeping event every metre of depth) the loop's own ticks are
+        # cheaper
+        self._backoff = 0 if flown >= SHORT_RUN_TICKS else \
+            min(MAX_BACKOFF_TICKS, 2 * self._backoff + 1)
         self._resume = tick + flown + self._backoff
         return flown
 
@@ -188,7 +211,7 @@ class FastForward:
                  if ex.constant_power[i] is not None
                  else pilot.sensor_power_masks(ex.power_tables[i], t_in[:count]))
         sent = _powered(np.concatenate([[sci.sensor_power], power[:-1]]))
-        values = _Readings(self, missiontime, sent)
+        values = _Readings(self, time_s, missiontime, sent)
         events = self._events[i]
         count = self._until_event(events[_SCHEDULE], values, count)
         if count == 0:
@@ -234,6 +257,8 @@ class FastForward:
                 last = count - 1 if every >> index & 1 else \
                     _last(sent[:count] >> index & 1 != 0)
                 ex.s[index] = values.sensor_at(index, last)
+        for index in _RUNTIME_READINGS:  # as the executor set them for the last tick
+            ex.s[index] = values.sensor_at(index, count - 1)
         self._commit_glider(flight, nav, count)
         return count
 
@@ -264,6 +289,7 @@ class FastForward:
         else:
             g.surface_time_s = -1.0
         if isinstance(ex.routine, pilot.Yo):
+            ex.routine.halfcycle = int(halfcycles(ex.routine, flight)[count])
             ex.routine.leg = next(leg for first, _, _, leg in reversed(flight.legs)
                                   if first < count)
 
@@ -559,7 +585,8 @@ class FastForward:
             positions = g.drift_along(distance, np.full(count, g.heading_rad), fix)
             return _Route(count, None, *positions)
         target = route.points[route.k]
-        can_advance = route.k + 1 < len(route.points)
+        can_advance = route.loops or route.k + 1 < len(route.points)
+        radius, near = route.radius_m, NEAR_WAYPOINT_RADII * route.radius_m
         dr_lat, dr_lon, lat, lon = (np.empty(count + 1) for _ in range(4))
         dr_lat[0], dr_lon[0], lat[0], lon[0] = g.positions
         positions = (dr_lat, dr_lon, lat, lon)
@@ -570,7 +597,7 @@ class FastForward:
         while settled < count:
             here = _steer(*_readings(dr_lat[settled:settled + 1], dr_lon[settled:settled + 1]),
                           target)
-            if math.hypot(float(here[1][0]), float(here[2][0])) < NEAR_WAYPOINT_M:
+            if math.hypot(float(here[1][0]), float(here[2][0])) < near:
                 end = min(count, settled + MIN_NAV_WINDOW)
                 iterations = None
             else:
@@ -586,9 +613,9 @@ class FastForward:
             else:
                 if can_advance:  # screened with numpy, decided as the route decides
                     close = np.flatnonzero(np.hypot(north[settled:end], east[settled:end])
-                                           <= WAYPOINT_RADIUS_M * (1.0 + 1e-9))
+                                           <= radius * (1.0 + 1e-9))
                     for j in (settled + close).tolist():
-                        if math.hypot(float(north[j]), float(east[j])) <= WAYPOINT_RADIUS_M:
+                        if math.hypot(float(north[j]), float(east[j])) <= radius:
                             return _Route(j, heading, *positions)
                 grow = iterations <= NAV_ITERATIONS // 2
                 self.nav_window = min(MAX_NAV_WINDOW, 2 * self.nav_window) if grow else \
@@ -628,7 +655,8 @@ class FastForward:
                     lat_r[changed], lon_r[changed], target)
             if iteration == 1:  # stop short of the waypoint's neighbourhood
                 end = first + _first(np.hypot(north[first:end], east[first:end])
-                                     < NEAR_WAYPOINT_M, end - first)
+                                     < NEAR_WAYPOINT_RADII * self.ex.route.radius_m,
+                                     end - first)
                 if end == first:
                     return None, first + 1
             differ = settled + _first(steer[settled:end] != heading[settled:end], end - settled)
@@ -686,8 +714,9 @@ class _Readings:
     sends it (through binary32), and as the executor holds it (a sensor not sent keeps
     its last value). Filled in as the run is computed: flight, CTD, route."""
 
-    def __init__(self, fast: FastForward, missiontime: np.ndarray, sent: np.ndarray) -> None:
-        self.fast, self.missiontime, self.sent = fast, missiontime, sent
+    def __init__(self, fast: FastForward, time_s: np.ndarray, missiontime: np.ndarray,
+                 sent: np.ndarray) -> None:
+        self.fast, self.time_s, self.missiontime, self.sent = fast, time_s, missiontime, sent
         self.flight: _Flight | None = None
         self.depth_reading: np.ndarray | None = None
         self.ctd = None
@@ -727,6 +756,16 @@ class _Readings:
                 return _f32(ctd.salinity_psu[first:stop])
             case 15:
                 return np.full(n, _f32_scalar(self.fast._current_reading))
+            case 17:  # the runtime's own: the legs its yo has begun, as before each tick
+                return halfcycles(self.fast.ex.routine, f)[first:stop]
+            case 18:  # the runtime's own, from this tick's position readings
+                route = self.fast.ex.route
+                return np.array([route.distance_m(a, b) for a, b in zip(
+                    self.sensor(_LAT, first, stop).tolist(),
+                    self.sensor(_LON, first, stop).tolist(), strict=True)])
+            case 19:
+                return _f32(np.fmod(self.fast.science.start_epoch_s + self.time_s[first:stop],
+                                    SECONDS_PER_DAY))
         return np.full(n, _f32_scalar(_CONSTANT_READINGS[index]))
 
     def sensor_at(self, index: int, tick: int) -> float:
@@ -755,7 +794,7 @@ class _Readings:
         """Sensor `index` as the executor holds it over the first `count` ticks."""
         values = self.sensor(index, 0, count)
         sent = self.sent[:count] >> index & 1 != 0
-        if sent.all():
+        if index in _RUNTIME_READINGS or sent.all():
             return values
         before = self.fast.ex.s[index]
         last = np.maximum.accumulate(np.where(sent, np.arange(count), -1))
@@ -765,8 +804,8 @@ class _Readings:
 # The stages of a run after which readings are known: the schedule (missiontime), the
 # flight (depth, pitch, altitude, the fixed readings), the CTD, the route (position, heading).
 _SCHEDULE, _FLIGHT, _CTD, _NAV = range(4)
-_STAGE_OF = {0: _SCHEDULE, _TEMP: _CTD, _CONDUCTIVITY: _CTD, _SALINITY: _CTD, _LAT: _NAV,
-             _LON: _NAV, _HEADING: _NAV}
+_STAGE_OF = {0: _SCHEDULE, _TIMEOFDAY: _SCHEDULE, _TEMP: _CTD, _CONDUCTIVITY: _CTD,
+             _SALINITY: _CTD, _LAT: _NAV, _LON: _NAV, _HEADING: _NAV, _WPTDIST: _NAV}
 
 
 def _staged(events: tuple[ir.Event, ...]) -> list[tuple | None]:
@@ -824,7 +863,7 @@ def _powered(sensor_power: np.ndarray) -> np.ndarray:
     """`powered_mask` of each COMMAND's sensor power."""
     if (sensor_power == sensor_power[0]).all():
         return np.full(len(sensor_power), powered_mask(int(sensor_power[0])), np.int64)
-    mask = np.full(len(sensor_power), FLIGHT_SENSORS_MASK, np.int64)
+    mask = np.full(len(sensor_power), SENT_ALWAYS_MASK, np.int64)
     for bits in DEVICE_MASKS.values():
         mask |= np.where(sensor_power & bits != 0, bits, 0)
     return mask

@@ -192,7 +192,8 @@ def test_the_fast_executor_flies_a_hand_written_schedule_as_the_reference(tmp_pa
 
 # Random missions: three states (a start state that calls one and goes to the other),
 # every profile and route the simulator flies, conditions on time, depth, temperature,
-# position and variables, assignments; flown in random water with random noise.
+# position, the runtime's readings, the clock and variables, assignments; flown in
+# random water with random noise.
 _PROFILES = st.one_of(
     st.builds(lambda lo, band, p, q: f"yo({lo}, {lo + band}, {p}, {q})",
               st.integers(0, 8), st.integers(2, 50), st.sampled_from([".3", ".454", ".6"]),
@@ -207,12 +208,15 @@ _ROUTES = st.sampled_from([
     "noheading", "nav(3910.5, -7349.8058)", "nav(3910.2, -7349.9)",
     "waypoints((3910.5, -7349.8), (3910.1, -7349.2), (3909.8, -7350.0))",
     "sweep(150, (3910.0, -7350.0), (3910.0, -7349.6), (3910.3, -7349.6))",
+    "goto_list(120, (3910.5, -7349.8), (3910.1, -7349.6))",
 ])
 _CONDITIONS = st.sampled_from([
     "missiontime >= {t}", "depth > {d}", "depth < {d} && missiontime > 300",
     "temp < {c}", "temp > {c} || depth > 30", "missiontime >= a", "depth > b",
     "lat < 3910.3", "lon > -7349.7", "!(depth < {d}) && temp < {c}",
     "abs(depth - b) < 1", "max(temp, 0) > {c} && missiontime >= {t}",
+    "halfcycle >= {h}", "halfcycle == {h} && depth >= {d}", "wptdist < {w}",
+    "mod(timeofday, 3600) >= {t} && mod(timeofday, 3600) < {t} + 60",
 ])
 _ASSIGNMENTS = st.sampled_from([
     "", "set a = missiontime + {t} ", "set b = depth + 3 ", "set top = max(depth - 5, 1), "
@@ -225,7 +229,9 @@ def random_missions(draw) -> str:
     def condition() -> str:
         return draw(_CONDITIONS).format(t=draw(st.integers(60, 9000)),
                                         d=draw(st.integers(1, 40)),
-                                        c=draw(st.integers(8, 23)))
+                                        c=draw(st.integers(8, 23)),
+                                        h=draw(st.integers(1, 12)),
+                                        w=draw(st.integers(100, 900)))
 
     def assignment() -> str:
         return draw(_ASSIGNMENTS).format(t=draw(st.integers(60, 3600)))
@@ -254,11 +260,14 @@ def random_missions(draw) -> str:
 @given(source=random_missions(), ocean=st.sampled_from(["bench", "sea-trial", "uniform"]),
        noise=st.sampled_from(["none", "ctd", "nonmonotonic"]),
        current=st.tuples(st.sampled_from([0.0, 0.05, -0.12]), st.sampled_from([0.0, 0.07])),
-       seed=st.integers(0, 2**31), tick_s=st.sampled_from([4.0, 2.0, 3.7]))
+       seed=st.integers(0, 2**31), tick_s=st.sampled_from([4.0, 2.0, 3.7]),
+       start_s=st.floats(9e8, 2e9))
 def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean, noise,
-                                                                  current, seed, tick_s):
+                                                                  current, seed, tick_s,
+                                                                  start_s):
     result = check_source(source, "random.mission")
     assert result.mission is not None, result.render()
     config = RunConfig(tick_s=tick_s, duration_s=12000.0, seed=seed,
-                       noise=NOISE_PRESETS[noise], current=Current(*current))
+                       noise=NOISE_PRESETS[noise], current=Current(*current),
+                       start_epoch_s=start_s)
     flown_alike(result.mission, config, ocean)

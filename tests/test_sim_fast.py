@@ -169,6 +169,7 @@ def test_every_kind_of_condition_is_checked_over_a_run_as_the_reference_checks_i
                                                   ir.BinaryOp(">", depth, temp)),
                                 ir.Const(1.0))),
         ir.UnaryOp("!", ir.BinaryOp("==", ir.VarRef("top"), ir.Const(5.0))),
+        ir.BinaryOp(">=", ir.FuncCall("mod", (depth, temp)), ir.FuncCall("mod", (temp, depth))),
     ]
     values = [0.0, -0.0, 1.0, 5.0, -3.0, math.nan, math.inf]
     rows = [(d, t) for d in values for t in values]
