@@ -45,6 +45,8 @@ static void sample_runtime(gp_runtime *rt)
     rt->pilot.window[1] = (gp_reading){14.0, 11.5};
     rt->pilot.n_recent = 1;
     rt->pilot.recent_c[0] = 11.25;
+    rt->pilot.halfcycle = 5;
+    rt->route_resume[0] = 2;  /* the caller's waypoint, for its return */
     rt->profile = 0;
     rt->last_command.tick = 81;
     rt->last_command.pitch_rad = 0.454f;
