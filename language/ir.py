@@ -192,7 +192,7 @@ def variables_read(expr: Expr) -> frozenset[str]:
 class Route:
     """`kind` from the route registry; params SI/DDMM.MMMM as the registry says."""
 
-    kind: str  # nav | noheading | waypoints | sweep
+    kind: str  # nav | noheading | waypoints | sweep | goto_list
     params: tuple[float, ...] = ()
     points: tuple[tuple[float, float], ...] = ()  # (lat, lon) DDMM.MMMM
 

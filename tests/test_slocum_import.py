@@ -16,11 +16,14 @@ import pytest
 
 from gliderplan.cli.main import main
 from gliderplan.sim.geo import ddmm_to_degrees
+from gliderplan.sim.science import NOISE_PRESETS
 
 REPO = Path(__file__).resolve().parents[1]
 MISSIONS = REPO.parent / "shared" / "data" / "slocum-missions"
 TICK_S = 4.0
 METRES_PER_DEGREE = 6371000.0 * np.pi / 180.0
+# the yo turns on the depth reading: the true depth may lie this far short of the target
+READING_ERROR_M = 5 * NOISE_PRESETS["ctd"].depth_sigma_m
 
 
 def _needs_missions() -> None:
@@ -87,10 +90,11 @@ def test_the_glider_flies_the_yo_band_of_the_ma_file(flown, name, yo):
     survey = table[table["state"] == "survey"]
     bottoms, tops = _turns(survey["depth_m"].to_numpy())
     assert len(bottoms) > 50
-    # turns on the tick the depth passes the target: within one tick's glide (< 1 m)
-    assert min(bottoms) >= args["d_target_depth"]
+    # turns on the tick the depth reading passes the target: within one tick's glide (< 1 m)
+    assert min(bottoms) >= args["d_target_depth"] - READING_ERROR_M
     assert max(bottoms) < args["d_target_depth"] + 1.0
-    assert all(args["c_target_depth"] - 1.0 < t <= args["c_target_depth"] for t in tops)
+    assert all(args["c_target_depth"] - 1.0 < t <= args["c_target_depth"] + READING_ERROR_M
+               for t in tops)
 
 
 @pytest.mark.parametrize("name, goto", [("helgo", "goto_l50.ma"), ("nsb3", "goto_l10.ma")])
