@@ -39,7 +39,7 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import PLAN_FORMAT_VERSION, TICK_S
 from gliderplan.language import check_source
 from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.limits import flight_limits
@@ -90,7 +90,8 @@ def fig2_plan(mission: CheckedMission, target: str) -> bytes:
     clock: a CTD duty of 1/4 in s2; one profile per state."""
     board = mission.computer.board if target == "host" else target
     mhz = f"{flight_limits(mission, board).clocks_mhz[-1]:g}"
-    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer {board} {mhz}\n"
+    body = (f"GPPLAN {PLAN_FORMAT_VERSION}\nmission {mission.name}\nhash {mission.hash}\n"
+            f"computer {board} {mhz}\n"
             "budget_j 6630000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\nstates 3\n"
             f"state s1 {mhz} 600 0 1\npredict 1000 2 20\nenergy 3950\n"
             "profile 0 1 0.3 150 0.31\nend\n"

@@ -36,7 +36,7 @@ MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]
 MAX_PLAN_LINE_BYTES = 255  # length of a plan-file line, its LF included [bytes]
 MAX_PLAN_COMPONENTS = 16  # energy components a plan predicts (its `components` line)
 MAX_PLAN_ASSUMPTIONS = 255  # `assume` lines of a plan file (a uint8_t count)
-PLAN_FORMAT_VERSION = 2  # the plan file's `GPPLAN` line (docs/plan-format.md)
+PLAN_FORMAT_VERSION = 3  # the plan file's `GPPLAN` line (docs/plan-format.md)
 
 # ---- what a plan may ask for ---------------------------------------------------------
 # A plan's numbers are bounded so that no finite but absurd value (a ballast of 1e300 cc,

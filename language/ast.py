@@ -255,6 +255,15 @@ class RequireItem(Node):
     span: Span = NO_SPAN
 
 
+class ComputerItem(Node):
+    """`computer clock 133 MHz | auto`, `computer sleep between ticks` or `computer
+    workload N cycles per tick`: one power-management setting of the state's board."""
+
+    setting: str  # clock | sleep | workload
+    value: Quantity | Ident | Number | None  # the clock, `auto`, the cycles; None for sleep
+    span: Span = NO_SPAN
+
+
 class Assignment(Node):
     target: Ident
     value: Expr
@@ -279,7 +288,8 @@ class EventsItem(Node):
     span: Span = NO_SPAN
 
 
-StateItem = RouteItem | ProfileItem | SensorsItem | ExpectItem | RequireItem | EventsItem
+StateItem = (RouteItem | ProfileItem | SensorsItem | ExpectItem | RequireItem | EventsItem
+             | ComputerItem)
 
 
 class State(Node):

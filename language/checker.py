@@ -10,7 +10,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import TypeVar
 
-from gliderplan.contract import MAX_STACK_DEPTH
+from gliderplan.contract import MAX_STACK_DEPTH, RUNTIME_CYCLES_PER_TICK, TICK_S
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
 from gliderplan.language.flow import check_flow
@@ -35,6 +35,8 @@ class _Checker:
         self.diagnostics: list[Diagnostic] = []
         self.variables: dict[str, ast.VarDecl] = {}
         self.state_names = {s.name.text for s in mission.states}
+        self.computer = ir.DEFAULT_COMPUTER  # the mission's board, for its states' settings
+        self._board: object | None = None  # the board, loaded once when a state needs it
 
     # ---- reporting helpers
     def error(self, message: str, span: ast.Span, hint: str | None = None) -> None:
@@ -105,7 +107,7 @@ class _Checker:
                         clock_mhz = mhz[0]
                         if clock_mhz <= 0:
                             self.error("clock must be positive", decl.clock.span)
-                    fields["computer"] = ir.Computer(decl.board.text, clock_mhz)
+                    fields["computer"] = self.computer = ir.Computer(decl.board.text, clock_mhz)
                 case ast.BatteryDecl():
                     if (battery := self.battery(decl)) is not None:
                         fields["battery"] = battery
@@ -280,9 +282,13 @@ class _Checker:
         errors_before = self.error_count()
         items: dict[type, ast.StateItem] = {}
         requirements = []
+        computer_items = []
         for item in state.items:
             if isinstance(item, ast.RequireItem):
                 requirements.append(item)
+                continue
+            if isinstance(item, ast.ComputerItem):
+                computer_items.append(item)
                 continue
             if type(item) in items:
                 self.error(f"state '{state.name.text}' has two '{_keyword(item)}' sections",
@@ -304,6 +310,7 @@ class _Checker:
         expect = self.expect(expect_item) if expect_item else None
         logged = {s.name for s in sensors if s is not None}
         reqs = [self.requirement(r, logged) for r in requirements]
+        computer = self.computer_use(state.name.text, computer_items)
         if self.error_count() > errors_before:
             return None
         return ir.State(
@@ -314,6 +321,7 @@ class _Checker:
             events=tuple(events),
             expect_s=expect,
             requirements=tuple(reqs),
+            computer=computer,
         )
 
     def registered(self, ident: ast.Ident, table: Mapping[str, T], kind: str,
@@ -414,6 +422,87 @@ class _Checker:
                        item.span)
             return None
         return low[0], high[0]
+
+    # ---- power management
+    def board(self, span: ast.Span) -> object | None:
+        """The mission's board (power_models.board.Board), loaded once; None, with an
+        error at `span`, when its file cannot be read."""
+        if self._board is None:
+            from gliderplan.contract.files import InputFileError
+            from gliderplan.power_models.board import load_board
+            from gliderplan.power_models.errors import ModelFileError
+
+            try:
+                self._board = load_board(self.computer.board)
+            except (ModelFileError, InputFileError) as err:
+                self.error(f"computer settings need the board's figures: {err}", span)
+                self._board = False
+        return self._board or None
+
+    def computer_use(self, state: str, items: list[ast.ComputerItem]) -> ir.ComputerUse:
+        """A state's `computer clock | sleep | workload` settings, checked against the
+        board's data file: a clock it has, a sleep it wakes from on the serial line, a
+        workload one of its clocks runs within the runtime's tick."""
+        seen: dict[str, ast.ComputerItem] = {}
+        for item in items:
+            if item.setting in seen:
+                self.error(f"state '{state}' sets 'computer {item.setting}' twice", item.span,
+                           f"the first is on line {seen[item.setting].span.line}")
+            seen.setdefault(item.setting, item)
+        if not seen or (board := self.board(items[0].span)) is None:
+            return ir.NO_COMPUTER_USE
+        clocks = [m.clock_mhz for m in board.clock_modes]
+        listed = ", ".join(f"{c:g}" for c in clocks)
+        use = ir.ComputerUse()
+        if (item := seen.get("clock")) is not None:
+            if isinstance(item.value, ast.Ident):
+                use = ir.ComputerUse(clock_auto=True)
+            elif (clock := self.quantity(item.value, "clock")) is not None:
+                mhz = clock[0]
+                if not any(abs(mhz - c) < 1e-6 for c in clocks):
+                    self.error(f"board {board.name} has no {mhz:g} MHz clock", item.value.span,
+                               f"its clocks: {listed} MHz; or 'computer clock auto'")
+                use = ir.ComputerUse(clock_mhz=mhz)
+        allowed = [use.clock_mhz] if use.clock_mhz else clocks if use.clock_auto else \
+            [self.computer.clock_mhz] if self.computer.clock_mhz else clocks
+        fastest_hz = max(allowed) * 1e6 * board.cycles_per_clock
+        cycles = None
+        if (item := seen.get("workload")) is not None:
+            cycles = item.value.value
+            capacity = fastest_hz * TICK_S
+            if not (math.isfinite(cycles) and cycles > 0):
+                self.error("a workload is a positive number of cycles", item.value.span)
+                cycles = None
+            elif cycles > capacity:
+                self.error(f"board {board.name} runs at most {capacity:,.0f} cycles in a "
+                           f"{TICK_S:g} s tick (at {max(allowed):g} MHz)", item.value.span,
+                           "the runtime must finish a tick's work before the next frame")
+                cycles = None
+        sleep = False
+        if (item := seen.get("sleep")) is not None:
+            sleep = self.sleep_allowed(board, item, (cycles or RUNTIME_CYCLES_PER_TICK)
+                                       / fastest_hz)
+        return ir.ComputerUse(use.clock_mhz, use.clock_auto, sleep, cycles)
+
+    def sleep_allowed(self, board, item: ast.ComputerItem, busy_s: float) -> bool:
+        """Whether the board can sleep between ticks: it has a sleep mode, the next frame
+        on the serial line wakes it, and the work and the wake-up fit in the tick."""
+        mode = board.sleep
+        if mode is None:
+            self.error(f"board {board.name} cannot sleep between ticks", item.span,
+                       "its data file has no [sleep] table (no wake-up on the serial line "
+                       "or a timer); remove the line or choose another board")
+            return False
+        if "serial" not in mode.wakes_on:
+            self.error(f"board {board.name} wakes only on {', '.join(mode.wakes_on)}, not on "
+                       "the serial line", item.span,
+                       "the next SENSORS frame must wake the runtime")
+            return False
+        if busy_s + mode.wake_latency_s > TICK_S:
+            self.warning(f"no time to sleep: the work ({busy_s:.3g} s) and the wake-up "
+                         f"({mode.wake_latency_s:g} s) fill the {TICK_S:g} s tick", item.span,
+                         "the board idles between ticks instead")
+        return True
 
     def requirement(self, item: ast.RequireItem, logged: set[str]) -> ir.Requirement | None:
         if not self.sensor_known(item.sensor):

@@ -357,6 +357,7 @@ class _MissionWriter:
             f"        .n_sensors = {len(state.sensors)},",
             f"        .events = {f'{prefix}_events' if state.events else 'NULL'},",
             f"        .n_events = {len(state.events)},",
+            *_power_fields(state.computer),
             "    },",
         ]
 
@@ -369,6 +370,17 @@ class _MissionWriter:
         if reads_vars and not any(ir.variables_read(e) for e in exprs):
             lines.append("    (void)v;")
         return lines
+
+
+def _power_fields(use: ir.ComputerUse) -> list[str]:
+    """A state's power management the runtime acts on without a plan: its fixed clock and
+    sleep between ticks (fields left out are 0: the plan's clock, awake)."""
+    lines = []
+    if use.clock_mhz is not None:
+        lines.append(f"        .clock_mhz = {c_double(use.clock_mhz)},")
+    if use.sleep:
+        lines.append("        .sleep = 1,")
+    return lines
 
 
 def _c_string(text: str) -> str:

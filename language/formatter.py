@@ -215,6 +215,14 @@ def _item(item: ast.StateItem) -> list[str]:
             return [f"expect {_quantity(low)} .. {_quantity(high)}"]
         case ast.RequireItem(sensor, bounds):
             return [" ".join([f"require {sensor.text}", *map(_bound, bounds)])]
+        case ast.ComputerItem("clock", ast.Ident(text)):
+            return [f"computer clock {text}"]
+        case ast.ComputerItem("clock", quantity):
+            return [f"computer clock {_quantity(quantity)}"]
+        case ast.ComputerItem("sleep"):
+            return ["computer sleep between ticks"]
+        case ast.ComputerItem("workload", cycles):
+            return [f"computer workload {cycles.text} cycles per tick"]
     raise TypeError(f"not a state item: {item!r}")
 
 

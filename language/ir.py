@@ -244,6 +244,25 @@ class Event:
 
 
 @dataclass(frozen=True)
+class ComputerUse:
+    """A state's power management of the board: `computer clock`, `sleep between ticks`,
+    `workload`. The defaults are the mission's: its clock, awake between ticks, the
+    runtime's own work."""
+
+    clock_mhz: float | None = None  # a clock the state runs at; None: the mission's
+    clock_auto: bool = False  # the planner picks the clock of this state
+    sleep: bool = False  # the board sleeps between ticks
+    cycles_per_tick: float | None = None  # work every tick [cycles]; None: the runtime's
+
+    @property
+    def is_default(self) -> bool:
+        return self == NO_COMPUTER_USE
+
+
+NO_COMPUTER_USE = ComputerUse()
+
+
+@dataclass(frozen=True)
 class State:
     name: str
     route: Route
@@ -252,6 +271,9 @@ class State:
     events: tuple[Event, ...]
     expect_s: tuple[float, float] | None = None  # bounds on time spent per visit [s]
     requirements: tuple[Requirement, ...] = ()
+    # Left out of the canonical JSON when a state says nothing (missions written before
+    # power management keep their hash, and with it their plans and builds).
+    computer: ComputerUse = field(default=NO_COMPUTER_USE, metadata={"omit_default": True})
 
 
 @dataclass(frozen=True)
@@ -344,7 +366,8 @@ _EXPRESSIONS = (Const, SensorRef, VarRef, UnaryOp, BinaryOp, FuncCall)
 
 def _encode(value: object) -> object:
     if is_dataclass(value):
-        data = {f.name: _encode(getattr(value, f.name)) for f in fields(value)}
+        data = {f.name: _encode(getattr(value, f.name)) for f in fields(value)
+                if not (f.metadata.get("omit_default") and getattr(value, f.name) == f.default)}
         if isinstance(value, _EXPRESSIONS):
             data = {"expr": type(value).__name__, **data}
         return data

@@ -151,6 +151,18 @@ class _Build:
     def expect_item(self, where, children):
         return ast.ExpectItem(children[0], children[1], ast.Span(*where))
 
+    def computer_clock(self, where, children):
+        value = children[0]
+        if isinstance(value, tuple):  # the `auto` token
+            value = _ident(value)
+        return ast.ComputerItem("clock", value, ast.Span(*where))
+
+    def computer_sleep(self, where, children):
+        return ast.ComputerItem("sleep", None, ast.Span(*where))
+
+    def computer_workload(self, where, children):
+        return ast.ComputerItem("workload", children[0], ast.Span(*where))
+
     def require_item(self, where, children):
         sensor, *bounds = children
         return ast.RequireItem(_ident(sensor), tuple(bounds), ast.Span(*where))

@@ -121,27 +121,36 @@ def board_label(hardware: Hardware) -> str:
 
 
 def plan_energy(hardware: Hardware, plan: Plan) -> BoardEnergy:
-    """The board's energy over `plan`, split by what it does each tick (its workload per
-    tick at the clock the plan sets in each state) and one boot."""
+    """The board's energy over `plan`, split by what it does each tick (each state's work
+    per tick at the clock the plan sets, asleep between ticks where the plan says) and one
+    boot."""
     parts = np.zeros(4)
     for state in plan.states:
         board = hardware.board.at_clock(state.clock_mhz)
-        tick = board.tick_energy(hardware.cycles_per_tick, TICK_S)
+        tick = board.tick_energy(state.cycles_per_tick, TICK_S, state.sleep)
         parts += state.time_s / TICK_S * np.array(
             [float(tick.active_j), float(tick.idle_j), float(tick.sleep_j), float(tick.wake_j)])
     return BoardEnergy(*(float(p) for p in parts), hardware.board.boot_j)
 
 
-def energy_curve_j(hardware: Hardware, plan: Plan, workload: np.ndarray) -> np.ndarray:
-    """(n,) the board's energy [J] on the mission at each workload [cycles per tick], the
-    states' times those of `plan`, each state at its cheapest clock; NaN where no clock
-    keeps up."""
-    time_s = sum(s.time_s for s in plan.states)
-    per_tick = np.array([m.tick_energy(workload, TICK_S).total_j for m in hardware.modes])
-    with np.errstate(all="ignore"):
-        cheapest = np.where(np.isnan(per_tick).all(axis=0), np.nan,
-                            np.nanmin(np.where(np.isnan(per_tick), np.inf, per_tick), axis=0))
-    return hardware.board.boot_j + time_s / TICK_S * cheapest
+def energy_curve_j(hardware: Hardware, mission: ir.CheckedMission, plan: Plan,
+                   workload: np.ndarray) -> np.ndarray:
+    """(n,) the board's energy [J] on the mission at each workload [cycles per tick] of
+    the states without a `computer workload` of their own, the states' times those of
+    `plan`, each state at its cheapest clock and asleep between ticks where it sleeps;
+    NaN where no clock keeps up."""
+    total = np.full(len(workload), hardware.board.boot_j)
+    for state, planned in zip(mission.states, plan.states, strict=True):
+        cycles = workload if state.computer.cycles_per_tick is None \
+            else np.full(len(workload), state.computer.cycles_per_tick)
+        per_tick = np.array([m.tick_energy(cycles, TICK_S, hardware.sleeps(state)).total_j
+                             for m in hardware.clocks(state)])
+        with np.errstate(all="ignore"):
+            cheapest = np.where(np.isnan(per_tick).all(axis=0), np.nan,
+                                np.nanmin(np.where(np.isnan(per_tick), np.inf, per_tick),
+                                          axis=0))
+        total = total + planned.time_s / TICK_S * cheapest
+    return total
 
 
 def _ranking(energies: dict[str, float]) -> tuple[str, ...]:
@@ -190,19 +199,19 @@ def _reason(before: tuple[str, ...], after: tuple[str, ...]) -> str:
     return f"{' and '.join(swapped)} cost the same here; beyond it their order reverses"
 
 
-def assumed_figures(spec: str, hardware: Hardware) -> dict[str, str]:
+def assumed_figures(spec: str, hardware: Hardware, sleeping: bool) -> dict[str, str]:
     """The figures of a board's data file that this comparison uses and whose source says
     they are assumptions: data-file key -> "value unit: source". Clock modes the board is
-    not held at are left out, and so are the sleep figures (no state sleeps yet)."""
+    not held at are left out, and the sleep figures unless a state sleeps on it."""
     path, _ = board_spec(spec)
     entries = file_entries(path)
-    clocks = {m.clock_mhz for m in hardware.modes}
+    clocks = {m.clock_mhz for m in (hardware.modes if hardware.held else hardware.board_modes)}
     unused = {key.split(".")[0] for key, value, unit, _ in entries
               if key.startswith("mode[") and key.endswith(".clock")
               and to_model_unit(value, unit, "clock") not in clocks}
     return {key: f"{value:g} {unit}: {source}" for key, value, unit, source in entries
             if source.lower().startswith("assumption") and key.split(".")[0] not in unused
-            and not key.startswith("sleep.") and not key.endswith(".wake_energy")}
+            and (sleeping or not (key.startswith("sleep.") or key.endswith(".wake_energy")))}
 
 
 def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS, *,
@@ -235,12 +244,14 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
         if any(r.name == name for r in results):
             raise HardwareError(f"--computer {spec}: {name} is compared already")
         results.append(BoardResult(name, hardware, planned, energy, endurance,
-                                   assumed_figures(spec, hardware)))
-    capacity = max(m.cycles_per_s * TICK_S for r in results for m in r.hardware.modes)
+                                   assumed_figures(spec, hardware, any(
+                                       hardware.sleeps(st) for st in mission.states))))
+    capacity = max(m.cycles_per_s * TICK_S for r in results for m in r.hardware.board_modes)
     workload = np.geomspace(min(1e4, cycles_per_tick), 1.1 * capacity, _GRID_POINTS)
 
     def curve(w: np.ndarray) -> dict[str, np.ndarray]:
-        return {r.name: energy_curve_j(r.hardware, r.planned.plan, w) for r in results}
+        return {r.name: energy_curve_j(r.hardware, mission, r.planned.plan, w)
+                for r in results}
 
     names = [r.name for r in results]
     return Comparison(mission.name, cycles_per_tick, reference_hw.battery_j,

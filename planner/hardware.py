@@ -40,12 +40,32 @@ class Hardware:
     reserve_fraction: float  # [1] kept unused
     devices: dict[str, Sensor]  # device name -> power model, for every device the mission logs
     overridden: frozenset[str] = frozenset()  # annotations replaced by the caller
-    cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK  # runtime work per tick [cycles]
+    cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK  # work per tick of states that say none
+    board_modes: tuple[Board, ...] = ()  # every clock of the board, slowest first
+    held: bool = False  # every state at `modes`, whatever its `computer clock` says
 
     @property
     def budget_j(self) -> float:
         """Usable energy [J] = (1 - reserve) x battery."""
         return (1.0 - self.reserve_fraction) * self.battery_j
+
+    def clocks(self, state: ir.State) -> tuple[Board, ...]:
+        """The board at each clock a state may run at: its `computer clock` (one, or all
+        of the board's for `auto`), else the mission's."""
+        use = state.computer
+        if self.held or (use.clock_mhz is None and not use.clock_auto):
+            return self.modes
+        if use.clock_auto:
+            return self.board_modes
+        return tuple(m for m in self.board_modes if abs(m.clock_mhz - use.clock_mhz) < 1e-6)
+
+    def sleeps(self, state: ir.State) -> bool:
+        """Whether the board sleeps between ticks in `state`: the state asks, the board can."""
+        return state.computer.sleep and self.board.sleep is not None
+
+    def cycles(self, state: ir.State) -> float:
+        """The board's work every tick in `state` [cycles]: its own, else the mission's."""
+        return state.computer.cycles_per_tick or self.cycles_per_tick
 
 
 def parse_battery(spec: str) -> tuple[float, float | None]:
@@ -80,15 +100,27 @@ def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
                   cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> Hardware:
     """The mission's hardware with optional overrides (`battery` as for `parse_battery`,
     `computer` as "ts7800", "ts7800@500" or a board file). A computer given without a
-    clock lets the planner choose among the board's clocks; with one, the clock is fixed.
-    `cycles_per_tick` is the computation the mission asks of the board every tick."""
+    clock lets the planner choose among the board's clocks (and the states' own `computer
+    clock` settings apply); with one, every state runs at it. `cycles_per_tick` is the
+    board's work every tick in states that do not say (`computer workload`)."""
     vehicle = load_vehicle(mission.vehicle)
     if computer is None:
         spec, clock = mission.computer.board, mission.computer.clock_mhz
     else:
         spec, clock = computer, board_spec(computer)[1]
     board = load_board(spec, clock)
-    modes = (board,) if clock is not None else tuple(board.modes())
+    board_modes = tuple(board.modes())
+    modes = (board,) if clock is not None else board_modes
+    # A clock given on the command line holds every state at it (a board compared at
+    # one clock); so does a board that has one.
+    held = (computer is not None and clock is not None) or len(board_modes) == 1
+    for state in mission.states:
+        wanted = state.computer.clock_mhz
+        if not held and wanted is not None and \
+                not any(abs(m.clock_mhz - wanted) < 1e-6 for m in board_modes):
+            raise HardwareError(f"state {state.name}: computer clock {wanted:g} MHz: board "
+                                f"{board.name} has no such clock; --computer NAME@MHZ holds "
+                                "every state at one clock")
     if battery is None:
         energy, reserve = mission.battery.energy_j, mission.battery.reserve_fraction
     else:
@@ -97,4 +129,4 @@ def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
     devices = {d: load_sensor(d) for d in mission_devices(mission)}
     overridden = frozenset(k for k, v in (("battery", battery), ("computer", computer)) if v)
     return Hardware(vehicle, board, modes, energy, reserve, devices, overridden,
-                    cycles_per_tick)
+                    cycles_per_tick, board_modes, held)

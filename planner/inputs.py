@@ -22,7 +22,13 @@ from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy
-from gliderplan.planner.rates import ProfileRates, mode_powers, state_profiles
+from gliderplan.planner.rates import (
+    ProfileRates,
+    clock_columns,
+    state_mode_powers,
+    state_profiles,
+)
+from gliderplan.power_models.board import Board
 
 SENSOR_PERIOD_S = 300.0  # on/off period of a duty-cycled sensor (long against its warm-up)
 PROFILE_CYCLE_S = 1800.0  # period over which alternative profiles alternate (a few yos)
@@ -65,7 +71,6 @@ class Transit:
 def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occupancy,
                   notes: list[str]) -> Transit:
     rows = []
-    computer_w = float(np.nanmin(mode_powers(hardware)))
     vehicle = hardware.vehicle
     for name, length in occupancy.legs_m.items():
         state = mission.state(name)
@@ -79,7 +84,7 @@ def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occ
         if state.profiles[0].kind == "thermotrackyo":
             high = min(high, low + args[5])
         pitch = rates.pitch_rad
-        load = vehicle.hotel_w + computer_w
+        load = vehicle.hotel_w + float(np.nanmin(state_mode_powers(hardware, state)))
         c0 = float(vehicle.transit_coefficient(low, high, pitch, 0.0))
         k = float(vehicle.transit_coefficient(low, high, pitch, 1.0)) - c0
         e = float(vehicle.pitch_j_per_m(low, high, pitch))
@@ -122,7 +127,8 @@ class PlanInputs:
     prof_state: np.ndarray  # (n_r,)
     profiles: tuple[ProfileRates, ...]
     # computer clocks
-    mode_state: np.ndarray  # (n_m,) state of each pair; clocks in hardware.modes order
+    clocks: tuple[Board, ...]  # the board at each clock of the clock shares, slowest first
+    mode_state: np.ndarray  # (n_m,) state of each pair; clocks in `clocks` order
     mode_power_w: np.ndarray  # (n_m,) [W]; NaN: cannot keep up
     sensor_quality_min: dict[str, float]  # mission-wide time-weighted quality floors
     notes: tuple[str, ...]
@@ -177,10 +183,21 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
     dev_auto: list[bool] = []
     profiles: list[ProfileRates] = []
     prof_state: list[int] = []
-    powers = mode_powers(hardware)
-    if not np.isfinite(powers).any():
-        raise PlanInputError(f"computer {hardware.board.name}: no clock keeps up with the "
-                             "runtime's work per tick")
+    clocks = clock_columns(hardware, mission)
+    powers = [state_mode_powers(hardware, state, clocks) for state in mission.states]
+    for state, power in zip(mission.states, powers, strict=True):
+        if not np.isfinite(power).any():
+            raise PlanInputError(f"computer {hardware.board.name}: no clock keeps up with "
+                                 f"the work per tick of state {state.name} "
+                                 f"({hardware.cycles(state):,.0f} cycles)")
+        if state.computer.sleep and not hardware.sleeps(state):
+            notes.append(f"{state.name}: board {hardware.board.name} cannot sleep between "
+                         "ticks; planned awake")
+        wanted = state.computer.clock_mhz
+        if hardware.held and wanted is not None and \
+                all(abs(m.clock_mhz - wanted) > 1e-6 for m in hardware.modes):
+            notes.append(f"{state.name}: computer clock {wanted:g} MHz, but the board is "
+                         f"held at {hardware.board.clock_mhz:g} MHz for every state")
     for s, state in enumerate(mission.states):
         for use in state.sensors:
             device = SENSOR_BY_NAME[use.name].device
@@ -232,8 +249,9 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
         dev_warmup_j=np.array([hardware.devices[k[1]].warmup_j if auto and k[1] not in held
                                else 0.0 for k, auto in zip(devs, dev_auto, strict=True)], float),
         prof_state=np.array(prof_state, int), profiles=tuple(profiles),
-        mode_state=np.repeat(np.arange(n_s), len(powers)),
-        mode_power_w=np.tile(powers, n_s),
+        clocks=clocks,
+        mode_state=np.repeat(np.arange(n_s), len(clocks)),
+        mode_power_w=np.concatenate(powers),
         sensor_quality_min=quality_min, notes=tuple(dict.fromkeys(notes)), transit=transit,
     )
 

@@ -248,12 +248,13 @@ def _device_energy_j(inputs: PlanInputs, sol: Solution) -> np.ndarray:
 
 
 def _chosen_modes(inputs: PlanInputs, sol: Solution) -> np.ndarray:
-    """Index into hardware.modes of the clock each state runs at (the largest share; a
-    transit leg runs at the cheapest clock, which its energy per metre assumes)."""
-    n_modes = len(inputs.hardware.modes)
+    """Index into inputs.clocks of the clock each state runs at (the largest share; a
+    transit leg runs at its cheapest clock, which its energy per metre assumes)."""
+    n_modes = len(inputs.clocks)
     chosen = np.argmax(sol.mode.reshape(len(inputs.states), n_modes), axis=1)
-    powers = inputs.mode_power_w[:n_modes]
-    chosen[inputs.transit.state] = int(np.nanargmin(powers))
+    powers = inputs.mode_power_w.reshape(len(inputs.states), n_modes)
+    for s in inputs.transit.state:
+        chosen[s] = int(np.nanargmin(powers[s]))
     return chosen
 
 
@@ -269,7 +270,7 @@ def state_energy_j(inputs: PlanInputs, sol: Solution) -> list[dict[str, float]]:
         result[s][Component.HOTEL] = vehicle.hotel_w * float(times[s])
         result[s][Component.PUMP] = float(tr.length_m[i] * tr.pump_j[i] / sol.pace[i] ** 2)
         result[s][Component.PITCH] = float(tr.length_m[i] * tr.pitch_j_per_m[i])
-    n_modes = len(inputs.hardware.modes)
+    n_modes = len(inputs.clocks)
     for s, m in enumerate(_chosen_modes(inputs, sol)):
         result[s][Component.COMPUTER] = float(inputs.mode_power_w[s * n_modes + m] * times[s])
     result[0][Component.COMPUTER] += inputs.hardware.board.boot_j  # booted for the start state
@@ -339,11 +340,12 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
             profiles, inflections = _transit_profile(inputs, sol, legs[s], profiles[0])
         energy = {c: as_written(energies[s].get(c, 0.0)) for c in components}
         states.append(StatePlan(
-            state.name, as_written(hardware.modes[modes[s]].clock_mhz), as_written(cycle),
-            as_written(t), visits, as_written(inflections), energy, sensors,
+            state.name, as_written(inputs.clocks[modes[s]].clock_mhz),
+            as_written(cycle), as_written(t), visits, as_written(inflections), energy, sensors,
             tuple(ProfilePlan(p.index, as_written(p.share), as_written(p.pitch_rad),
                               as_written(p.ballast_cc), as_written(p.speed_mps))
-                  for p in profiles)))
+                  for p in profiles),
+            sleep=hardware.sleeps(state), cycles_per_tick=as_written(hardware.cycles(state))))
     notes = dict.fromkeys([*_describe_defaults(inputs), *inputs.notes])
     plan = Plan(inputs.mission.name, inputs.mission.hash, hardware.board.name,
                 as_written(hardware.board.clock_mhz), as_written(choice.budget_j),

@@ -36,6 +36,7 @@ from gliderplan.contract import (
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
     PLAN_FORMAT_VERSION,
+    RUNTIME_CYCLES_PER_TICK,
     FlightLimits,
 )
 from gliderplan.contract.errors import GliderplanError
@@ -138,6 +139,8 @@ class StatePlan:
     energy_by_component_j: dict[str, float]  # predicted energy [J] per component
     sensors: tuple[SensorPlan, ...]
     profiles: tuple[ProfilePlan, ...]
+    sleep: bool = False  # the board sleeps between ticks (`computer sleep between ticks`)
+    cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK  # the board's work every tick [cycles]
     line: int = field(default=0, compare=False)  # where the block starts in its file
 
     @property
@@ -205,6 +208,8 @@ def write_plan_bytes(plan: Plan) -> bytes:
     for s in plan.states:
         lines.append(f"state {s.name} {number(s.clock_mhz)} {number(s.cycle_s)} "
                      f"{len(s.sensors)} {len(s.profiles)}")
+        if s.sleep or s.cycles_per_tick != RUNTIME_CYCLES_PER_TICK:
+            lines.append(f"power {int(s.sleep)} {number(s.cycles_per_tick)}")
         lines.append(f"predict {number(s.time_s)} {s.visits} {number(s.inflections)}")
         lines.append("energy " + " ".join(number(s.energy_by_component_j.get(c, 0.0))
                                           for c in components))
@@ -249,6 +254,10 @@ class _Cursor:
             raise PlanFileError(self.at, f"'{keyword}' takes {n_fields} fields, "
                                 f"found {len(fields) - 1}")
         return fields[1:]
+
+    def coming(self, keyword: str) -> bool:
+        """Whether the next line is a `keyword` line (for an optional line)."""
+        return self.at < len(self.lines) and self.lines[self.at].split(" ", 1)[0] == keyword
 
     def name(self, text: str) -> str:
         if not _NAME.match(text):
@@ -407,6 +416,15 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
     if state is not None:
         cur.check(n_profiles == len(state.profiles), f"state {name}: {n_profiles} profiles, "
                   f"the mission's state has {len(state.profiles)}")
+    sleep, cycles = False, RUNTIME_CYCLES_PER_TICK
+    if cur.coming("power"):
+        asleep, work = cur.next("power", 2)
+        sleep = cur.count(asleep, "SLEEP", 0, 1) == 1
+        cycles = cur.number(work, "CYCLES_PER_TICK")
+        cur.check(cycles > 0, "CYCLES_PER_TICK must be > 0")
+    if state is not None:  # a board that cannot sleep idles where the mission sleeps
+        cur.check(not sleep or state.computer.sleep,
+                  f"state {name}: SLEEP 1 where the mission does not sleep between ticks")
     time_s, visits, inflections = cur.next("predict", 3)
     prediction = (cur.number(time_s, "predicted time", 0.0, MAX_PLAN_TIME_S),
                   cur.count(visits, "predicted visits", 0, 999_999_999),
@@ -450,7 +468,7 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
               f"state {name}: profile shares sum to {sum(p.share for p in profiles):.9g}, not 1")
     cur.next("end", 0)
     return StatePlan(name, clock_mhz, cycle_s, *prediction, energy, tuple(sensors),
-                     tuple(profiles), start)
+                     tuple(profiles), sleep=sleep, cycles_per_tick=cycles, line=start)
 
 
 def read_plan_data(path: str | Path) -> bytes:

@@ -39,10 +39,11 @@ class ProfileRates:
         return float(sum(self.power_w.values()))
 
 
-def computer_power_w(board: Board, cycles_per_tick: float,
-                     tick_s: float = TICK_S) -> float | None:
-    """Mean power [W] of the board idling between ticks; None if it cannot keep up."""
-    power = float(board.mean_power_w(cycles_per_tick, tick_s))
+def computer_power_w(board: Board, cycles_per_tick: float, tick_s: float = TICK_S,
+                     sleep: bool = False) -> float | None:
+    """Mean power [W] of the board idling (or sleeping) between ticks; None if it cannot
+    keep up."""
+    power = float(board.mean_power_w(cycles_per_tick, tick_s, sleep))
     return None if np.isnan(power) else power
 
 
@@ -103,7 +104,7 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
 def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
                    notes: list[str]) -> list[ProfileRates]:
     """Rates of every alternative of a state."""
-    powers = mode_powers(hardware)
+    powers = state_mode_powers(hardware, state)
     load = hardware.vehicle.hotel_w + (float(np.nanmin(powers)) if np.isfinite(powers).any()
                                        else 0.0)
     visits = max(occupancy.visits[state.name], 1)
@@ -114,12 +115,24 @@ def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
             for j, p in enumerate(state.profiles)]
 
 
-def mode_powers(hardware: Hardware) -> np.ndarray:
-    """Mean power [W] of each clock the planner may choose; NaN for a clock that cannot
-    keep up with the runtime's workload; 0 for the others when the vehicle's hotel load
-    already holds the computer."""
-    powers = np.array([np.nan if (p := computer_power_w(m, hardware.cycles_per_tick)) is None
-                       else p
-                       for m in hardware.modes])
+def clock_columns(hardware: Hardware, mission: ir.CheckedMission) -> tuple[Board, ...]:
+    """The clocks the model's clock shares range over: the mission's (`hardware.modes`)
+    unless a state's `computer clock` asks for another, then all of the board's."""
+    if all(hardware.clocks(s) == hardware.modes for s in mission.states):
+        return hardware.modes
+    return hardware.board_modes
+
+
+def state_mode_powers(hardware: Hardware, state: ir.State,
+                      columns: tuple[Board, ...] | None = None) -> np.ndarray:
+    """Mean power [W] of the board at each clock of `columns` (default: every clock the
+    state may run at) in `state`, at the state's workload and sleeping between ticks where
+    it does; NaN for a clock the state may not run at or that cannot keep up; 0 for the
+    others when the vehicle's hotel load already holds the computer."""
+    allowed = {m.clock_mhz for m in hardware.clocks(state)}
+    cycles, sleep = hardware.cycles(state), hardware.sleeps(state)
+    powers = np.array([np.nan if m.clock_mhz not in allowed
+                       or (p := computer_power_w(m, cycles, sleep=sleep)) is None else p
+                       for m in (columns or hardware.clocks(state))])
     held = Component.COMPUTER in hardware.vehicle.hotel_includes
     return np.where(np.isnan(powers), np.nan, 0.0) if held else powers

@@ -18,6 +18,8 @@ def _state_json(result: PlanResult, s: int) -> dict:
         "time_s": state.time_s,
         "visits": state.visits,
         "clock_mhz": state.clock_mhz,
+        "sleep": state.sleep,
+        "cycles_per_tick": state.cycles_per_tick,
         "cycle_s": state.cycle_s,
         "energy_j": state.energy_j,
         "energy_by_component_j": dict(state.energy_by_component_j),
@@ -104,8 +106,9 @@ def report_text(result: PlanResult) -> str:
                         f"holds in all {c.scenarios} simulated scenarios; {c.method}, risk "
                         f"{c.risk:g}, {c.dimension} decisions, {c.support} scenarios active; "
                         "the shadow price is at this confidence")
-    lines += _table(["state", "time h", "clock", "plan"],
-                    [[s.name, f"{s.time_s / 3600:.2f}", f"{s.clock_mhz:g}",
+    lines += _table(["state", "time h", "clock MHz", "plan"],
+                    [[s.name, f"{s.time_s / 3600:.2f}",
+                      f"{s.clock_mhz:g}" + (", asleep between ticks" if s.sleep else ""),
                       _does(s, m.profiles)]
                      for s, m in zip(plan.states, result.mission.states, strict=True)])
     components = list(plan.components_j)

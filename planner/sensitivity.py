@@ -66,8 +66,10 @@ def _vehicle(key: str) -> Change:
 def _board(attr: str) -> Change:
     def change(hw: Hardware, v: float) -> Hardware:
         scale = v / getattr(hw.board, attr) if getattr(hw.board, attr) else 1.0
-        modes = tuple(replace(m, **{attr: getattr(m, attr) * scale}) for m in hw.modes)
-        return replace(hw, board=replace(hw.board, **{attr: v}), modes=modes)
+        def scaled(boards: tuple) -> tuple:
+            return tuple(replace(m, **{attr: getattr(m, attr) * scale}) for m in boards)
+        return replace(hw, board=replace(hw.board, **{attr: v}), modes=scaled(hw.modes),
+                       board_modes=scaled(hw.board_modes))
     return change
 
 

@@ -14,12 +14,14 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from gliderplan.power_models.catalog import is_path_spec, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
 from gliderplan.power_models.errors import ModelFileError
+
+if TYPE_CHECKING:  # the methods that compute import numpy: `check` reads boards without it
+    import numpy as np
 
 
 @dataclass(frozen=True)
@@ -105,6 +107,8 @@ class Board:
         self, cycles_per_tick: np.ndarray | float, ticks_per_s: np.ndarray | float
     ) -> np.ndarray:
         """Fraction of time [1] the workload keeps the CPU busy; above 1 it cannot keep up."""
+        import numpy as np
+
         return (
             np.asarray(cycles_per_tick, float) * np.asarray(ticks_per_s, float) / self.cycles_per_s
         )
@@ -112,12 +116,16 @@ class Board:
     def power_w(self, busy_fraction: np.ndarray | float) -> np.ndarray:
         """Mean electrical power [W] at a busy fraction in [0, 1] (clipped), idling when
         not busy."""
+        import numpy as np
+
         busy = np.clip(np.asarray(busy_fraction, float), 0.0, 1.0)
         return self.idle_w + (self.active_w - self.idle_w) * busy
 
     def can_sleep(self, cycles_per_tick: np.ndarray | float, tick_s: float) -> np.ndarray:
         """Whether the board can sleep between ticks of this work: it has a sleep mode and
         the work and the wake-up fit in the tick."""
+        import numpy as np
+
         if self.sleep is None:
             return np.zeros(np.shape(cycles_per_tick), bool)
         busy_s = np.asarray(cycles_per_tick, float) / self.cycles_per_s
@@ -127,6 +135,8 @@ class Board:
                     sleep: bool = False) -> TickEnergy:
         """Energy [J] of one tick of `tick_s` [s] with `cycles_per_tick` [cycles] of work,
         idling between ticks, or sleeping where `sleep` is asked and `can_sleep`."""
+        import numpy as np
+
         busy_s = np.asarray(cycles_per_tick, float) / self.cycles_per_s
         fits = busy_s <= tick_s
         asleep = self.can_sleep(cycles_per_tick, tick_s) & sleep

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -210,7 +211,8 @@ def assumptions_by_figure(comparison: Comparison) -> dict[str, list[str]]:
     found: dict[str, list[str]] = {}
     for r in comparison.boards:
         for key, text in r.assumptions.items():
-            found.setdefault(f"{r.board.name} {key.split('.')[-1]} {text}", []).append(r.name)
+            figure = re.sub(r"^mode\[\d+\]\.", "", key)  # the clock is in the value
+            found.setdefault(f"{r.board.name} {figure} {text}", []).append(r.name)
     return found
 
 

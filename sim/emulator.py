@@ -67,12 +67,18 @@ class CRuntime:
         self._counts: Counter[str] = Counter()
         self._downtime_s = 0.0  # [s] wall time from each kill to the restarted runtime's HELLO
         self.events_log: str | None = None  # the runtime's event log, once closed
+        self.suspends = 0  # counted when the runtime has ended (close)
+        # The platform's suspend interface, simulated: a file the runtime appends "mem" to
+        # each time it would suspend the board between ticks (a restarted runtime too).
+        self._suspend_file = work_dir / "power-state"
+        self._suspend_file.touch()
         # the runtime makes the pty and names its other end; a state directory only when
         # asked for or under faults: a simulated run needs no checkpoint to resume from
         if state_dir is None and faults is not None:
             state_dir = work_dir / "state"
         self._state_dir = None if state_dir is None else Path(state_dir).resolve()
-        self._command = [str(binary), "--device", "pty"]
+        self._command = [str(binary), "--device", "pty", "--suspend-file",
+                         str(self._suspend_file)]
         if key_path is not None:  # the key provisioned on the vehicle: the plan is uploaded
             self._command += ["--key", str(Path(key_path).resolve())]
         elif plan_path is not None:
@@ -304,6 +310,7 @@ class CRuntime:
             log = None if self._state_dir is None else self._state_dir / "events.log"
             if self.faults is not None and log.exists():
                 self.events_log = log.read_text()
+            self.suspends = self._suspend_file.read_text().count("mem\n")
             shutil.rmtree(self._work, ignore_errors=True)
 
 

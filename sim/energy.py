@@ -94,18 +94,27 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
 
 def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
                 plan: Plan | None) -> np.ndarray:
-    """The board's energy per tick at the clock each state runs at: the plan's board
-    (when it names a preset), else the mission's."""
+    """The board's energy per tick in each state: the plan's board (when it names a
+    preset), else the mission's, at the clock, the work per tick and asleep or awake
+    between ticks as the plan says (without a plan: as the mission's `computer` settings
+    say, the runtime's own work elsewhere). A board that cannot keep up is billed busy."""
     board = load_board(mission.computer.board, mission.computer.clock_mhz)
     if plan is not None and plan.computer in preset_names("board") \
             and plan.computer != board.name:
         board = load_board(plan.computer, plan.clock_mhz)
 
-    def power_w(at) -> float:
-        return float(at.power_w(at.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / dt)))
+    def tick_j(state: int) -> float:
+        if plan is not None:
+            p = plan.states[state]
+            at, cycles, sleep = board.at_clock(p.clock_mhz), p.cycles_per_tick, p.sleep
+        else:
+            use = mission.states[state].computer
+            at = board.at_clock(use.clock_mhz) if use.clock_mhz else board
+            cycles, sleep = use.cycles_per_tick or RUNTIME_CYCLES_PER_TICK, use.sleep
+        energy = float(at.tick_energy(cycles, dt, sleep).total_j)
+        return at.active_w * dt if np.isnan(energy) else energy
 
-    per_state = np.array([power_w(board.at_clock(plan.states[i].clock_mhz) if plan else board)
-                          for i in range(len(mission.states))])
+    per_state = np.array([tick_j(i) / dt for i in range(len(mission.states))])
     per_tick = per_state[np.minimum(state, len(per_state) - 1)] * dt
     per_tick[:1] += board.boot_j  # booted at its default clock for the first tick
     return per_tick

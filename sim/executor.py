@@ -79,6 +79,11 @@ class PythonRuntime:
         self.machine: semantics.Machine | None = None
         self.event_count = 0
         self.route_resume: list[int] = []  # per call on the stack: the caller's waypoint
+        # where the runtime suspends the board after answering a tick: the plan's SLEEP,
+        # without a plan the mission's `computer sleep between ticks`
+        self.sleeps = [plan.states[i].sleep if plan is not None else s.computer.sleep
+                       for i, s in enumerate(mission.states)]
+        self.suspends = 0  # ticks after which the board was put to sleep
 
     def _power_table(self, i: int, state: ir.State) -> tuple[tuple[int, float, float], ...]:
         """(sensor index, period [s], on [s]) per logged sensor; period 0: always on."""
@@ -179,5 +184,6 @@ class PythonRuntime:
         power = self.constant_power[i]
         if power is None:
             power = pilot.sensor_power_mask(self.power_tables[i], t_in)
+        self.suspends += self.sleeps[i]
         return Command(tick, i, len(machine.stack), kind, src, dst, k, flags, target, pitch_cmd,
                        ballast_cmd, heading, power, self.event_count)

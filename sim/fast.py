@@ -250,6 +250,7 @@ class FastForward:
         })
         sci.commit_ctd(ctd, count, float(temp_reading[-1]))
         sci.sensor_power = int(power[count - 1])
+        ex.suspends += count * ex.sleeps[i]  # the board sleeps after each tick, as there
         every = int(np.bitwise_and.reduce(sent[:count]))
         some = int(np.bitwise_or.reduce(sent[:count]))
         for index in self._executor_reads:

@@ -71,6 +71,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         record = simulate(mission, c_runtime, science, config, progress)
     finally:
         c_runtime.close()
+    record.suspends = c_runtime.suspends  # counted once the runtime has ended
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
     return record

@@ -59,6 +59,7 @@ class RunRecord:
     surfacings: int
     faults: dict | None = None  # with injected faults: what they did (CRuntime.report)
     events_log: str | None = None  # with faults: the C runtime's own event log
+    suspends: int = 0  # ticks after which the runtime put the board to sleep
 
 
 def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float, float]:
@@ -212,7 +213,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     n = len(arrays["state"])
     trace = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
     return RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
-                     tick_s, ended, glider.surfacings)
+                     tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0))
 
 
 def _close_row(cols: dict[str, list], state: int) -> None:

@@ -97,6 +97,7 @@ def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan
         else 0.0,
         "transitions": len(record.trace),
         "surfacings": record.surfacings,
+        "computer_suspends": record.suspends,
         "energy_j": energy.total_j,
         "energy_by_component_j": energy.by_component_j(),
         "states": states,

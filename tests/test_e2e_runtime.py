@@ -29,7 +29,13 @@ import pytest
 import serial
 
 from gliderplan.cli.main import main
-from gliderplan.contract import NO_STATE, PROTOCOL_VERSION, ReleaseReason, RuntimeExit
+from gliderplan.contract import (
+    NO_STATE,
+    PLAN_FORMAT_VERSION,
+    PROTOCOL_VERSION,
+    ReleaseReason,
+    RuntimeExit,
+)
 from gliderplan.language import check_source, semantics
 from gliderplan.language.codegen_c import read_mask
 from gliderplan.language.registry import SENSORS
@@ -372,8 +378,9 @@ def test_a_killed_runtime_resumes_with_the_same_trace(binary, line, tmp_path):
 # ---- plans ---------------------------------------------------------------------------
 
 
-def make_plan(mission_hash: str, version: int = 2, temp_period_s: float = 60,
-              temp_on_s: float = 15, s2_clock_mhz: int = 300, s3_ballast: str = "230") -> bytes:
+def make_plan(mission_hash: str, version: int = PLAN_FORMAT_VERSION,
+              temp_period_s: float = 60, temp_on_s: float = 15, s2_clock_mhz: int = 300,
+              s3_ballast: str = "230") -> bytes:
     """A plan for Fig. 2 written by hand from docs/plan-format.md."""
     body = (f"GPPLAN {version}\nmission sampleMission\nhash {mission_hash}\n"
             "computer ts7800 300\nbudget_j 6630000\npredicted_j 9876.5\ncomponents hotel\n"
@@ -471,23 +478,51 @@ def test_a_hand_written_plan_switches_sensors_on_their_windows(binary, fig2_hash
     assert {abs(c.ballast_cc) for c in in_s1} == {150.0}
 
 
+def clocks_by_state(link: p.Link, speed: Path) -> dict[int, set[str]]:
+    """Fly to the end: state -> what the clock file held after each of its ticks."""
+    link.wait_hello(30)
+    clocks: dict[int, set[str]] = {}
+    for tick in range(1000):
+        command = link.step(tick, readings(tick))
+        clocks.setdefault(command.state, set()).add(speed.read_text())
+        if command.done:
+            return clocks
+    return clocks
+
+
 def test_the_runtime_sets_each_states_planned_clock(binary, fig2_hash, line, tmp_path):
     (tmp_path / "fig2.plan").write_bytes(make_plan(fig2_hash, s2_clock_mhz=500))
     speed = tmp_path / "scaling_setspeed"  # what cpufreq's userspace governor reads, in kHz
     speed.write_text("")
     process = line.start([str(binary), "--plan", str(tmp_path / "fig2.plan"),
                           "--clock-file", str(speed)])
-    link = line.link()
-    link.wait_hello(30)
-    clocks: dict[int, set[str]] = {}  # state -> the clock file after each of its ticks
-    for tick in range(1000):
-        command = link.step(tick, readings(tick))
-        clocks.setdefault(command.state, set()).add(speed.read_text())
-        if command.done:
-            break
+    clocks = clocks_by_state(line.link(), speed)
     assert process.wait(30) == 0, process.stderr.read()
     assert clocks[0] == {"300000\n"} and clocks[2] == {"300000\n"}
     assert clocks[1] == {"500000\n"}
+
+
+def test_without_a_plan_the_runtime_follows_the_missions_own_power_settings(
+        cache, line, tmp_path):
+    # Fig. 2 with s2 at 500 MHz, asleep between ticks: the tables the compiler writes
+    # carry both, and the runtime acts on them through its clock and suspend files.
+    source = FIG2.read_text().replace(
+        "  sensors missiontime, depth, pitch, temp\n",
+        "  sensors missiontime, depth, pitch, temp\n  computer clock 500 MHz\n"
+        "  computer sleep between ticks\n")
+    (tmp_path / "power.mission").write_text(source)
+    assert main(["compile", str(tmp_path / "power.mission"), "-o", str(tmp_path)]) == 0
+    speed, suspend = tmp_path / "scaling_setspeed", tmp_path / "power_state"
+    speed.write_text("")
+    suspend.write_text("")
+    process = line.start([str(tmp_path / "sampleMission"), "--clock-file", str(speed),
+                          "--suspend-file", str(suspend)])
+    clocks = clocks_by_state(line.link(), speed)
+    assert process.wait(30) == 0, process.stderr.read()
+    assert clocks[1] == {"500000\n"}
+    assert clocks[0] <= {"", "500000\n"}  # s1 has no clock of its own: left as it was
+    in_s2 = 1000 / TICK_S  # ticks from 500 s to 1500 s, each followed by a sleep
+    assert suspend.read_text().count("mem\n") == in_s2
 
 
 def test_a_clock_that_cannot_be_set_is_said_once_and_the_mission_flies_on(

@@ -48,7 +48,7 @@ def test_bytes_follow_the_format(path):
     lines = data.decode("ascii").split("\n")[:-1]
     assert all(0 < len(line) + 1 <= 255 and "  " not in line and line == line.strip()
                for line in lines)
-    assert lines[:2] == ["GPPLAN 2", f"mission {m.name}"]
+    assert lines[:2] == ["GPPLAN 3", f"mission {m.name}"]
     assert lines[2] == f"hash {m.hash}"
     assert f"states {len(m.states)}" in lines
     assert [line.split()[1] for line in lines if line.startswith("state ")] == \
@@ -114,7 +114,7 @@ def _mutate(data: bytes, old: bytes, new: bytes, fix_crc: bool = True) -> bytes:
 
 
 @pytest.mark.parametrize("old,new,line,message", [
-    (b"GPPLAN 2", b"GPPLAN 1", 1, "version"),
+    (b"GPPLAN 3", b"GPPLAN 2", 1, "version"),
     (b"mission sampleMission", b"mission 9bad", 2, "NAME"),
     (b"budget_j ", b"budget_j  ", 5, "one space"),
     (b"components hotel pump", b"components hotel hotel", 7, "named twice"),

@@ -107,7 +107,7 @@ def transitions(commands: list[p.Command]) -> list[str]:
 
 
 def make_plan(s2_temp_on_s: float = 15, hash_: str = FIG2_HASH, s1_pitch: float = 0.3) -> bytes:
-    body = (f"GPPLAN 2\nmission sampleMission\nhash {hash_}\ncomputer ts7800 300\n"
+    body = (f"GPPLAN 3\nmission sampleMission\nhash {hash_}\ncomputer ts7800 300\n"
             "budget_j 180000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\nstates 3\n"
             "state s1 300 600 0 1\npredict 1000 2 20\nenergy 3950\n"
             f"profile 0 1 {s1_pitch:g} 150 0.31\nend\n"
@@ -359,7 +359,7 @@ def test_plans_over_the_link_are_checked_and_a_bad_one_keeps_the_last(binary, gl
     [
         (make_plan(hash_="1" * 64), "fig2.plan line 3: hash does not match the compiled mission"),
         (make_plan()[:-1], "fig2.plan line 26: no final LF (truncated file)"),
-        (make_plan().replace(b"GPPLAN 2", b"GPPLAN 1"), "line 26: checksum mismatch"),
+        (make_plan().replace(b"GPPLAN 3", b"GPPLAN 2"), "line 26: checksum mismatch"),
         (None, "fig2.plan: cannot read the plan file (no such file)"),
     ],
     ids=["wrong-hash", "truncated", "edited", "missing"],

@@ -110,7 +110,7 @@ def test_a_bad_ocean_file_names_file_and_line(tmp_path, capsys):
 
 def test_a_bad_plan_file_names_the_line(tmp_path, capsys):
     plan = tmp_path / "fig2.plan"
-    plan.write_text("GPPLAN 2\nmission sampleMission\n")
+    plan.write_text("GPPLAN 3\nmission sampleMission\n")
     assert main(["sim", str(FIG2), "--plan", str(plan), "-o", str(tmp_path / "r")]) == 1
     assert f"plan rejected: {plan}:3: expected a 'hash' line" in capsys.readouterr().err
 

@@ -81,7 +81,7 @@ def write_plan(path: Path, mission_path: Path) -> Path:
     from gliderplan.language import check_file
 
     mission = check_file(str(mission_path)).mission
-    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+    body = (f"GPPLAN 3\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
             "budget_j 1000000\npredicted_j 100000\ncomponents hotel\nassumptions 0\nstates 2\n"
             "state survey 300 1200 2 2\npredict 30000 1 200\nenergy 90000\n"
             "sensor temp 60 20\nsensor oxygen 300 100\n"

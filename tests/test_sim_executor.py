@@ -161,7 +161,7 @@ end
 
 
 def plan_text(mission: ir.CheckedMission, body: str, *, crc: str | None = None) -> bytes:
-    head = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
+    head = (f"GPPLAN 3\nmission {mission.name}\nhash {mission.hash}\ncomputer ts7800 300\n"
             "budget_j 180000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\n"
             f"states 1\n{body}")
     data = head.encode()

@@ -51,7 +51,7 @@ def write_plan(tmp_path: Path, budget_j: float, planned_s: float,
     predicted = sum(components.values())
     u = float(vehicle.glide(PITCH_RAD, BALLAST_CC)[0])
     name, clock = board
-    body = (f"GPPLAN 2\nmission {mission.name}\nhash {mission.hash}\ncomputer {name} {clock:g}\n"
+    body = (f"GPPLAN 3\nmission {mission.name}\nhash {mission.hash}\ncomputer {name} {clock:g}\n"
             f"budget_j {budget_j:.9g}\npredicted_j {predicted:.9g}\n"
             f"components {' '.join(components)}\nassumptions 1\nassume survey {ASSUMED}\n"
             f"states 1\nstate survey {clock:g} 600 1 1\n"

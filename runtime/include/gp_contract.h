@@ -24,7 +24,7 @@
 #define GP_MAX_PLAN_LINE_BYTES 255  /**< length of a plan-file line, its LF included [bytes] */
 #define GP_MAX_PLAN_COMPONENTS 16  /**< energy components a plan predicts (its `components` line) */
 #define GP_MAX_PLAN_ASSUMPTIONS 255  /**< `assume` lines of a plan file (a uint8_t count) */
-#define GP_PLAN_FORMAT_VERSION 2  /**< the plan file's `GPPLAN` line (docs/plan-format.md) */
+#define GP_PLAN_FORMAT_VERSION 3  /**< the plan file's `GPPLAN` line (docs/plan-format.md) */
 
 /* ---- what a plan may ask for */
 

@@ -20,6 +20,7 @@ typedef struct {
     const char *state_dir;       /**< NULL: no checkpoint, no event log */
     const char *clock_path;      /**< NULL: the clock is left alone; else gets kHz */
     const char *key_path;        /**< NULL: no key, plans over the link are refused */
+    const char *suspend_path;    /**< NULL: never sleeps; else gets "mem" between ticks */
     double link_timeout_s;       /**< default 10 */
     int retransmit_ms;           /**< default 200 */
     int naive_tracker;

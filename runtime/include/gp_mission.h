@@ -89,6 +89,8 @@ typedef struct {
     uint8_t n_sensors;
     const gp_event *events;      /**< checked in order each tick; the first true fires */
     uint8_t n_events;
+    double clock_mhz;            /**< `computer clock`: the state's clock [MHz]; 0: none */
+    uint8_t sleep;               /**< `computer sleep between ticks`: 1, else 0 */
 } gp_state;
 
 typedef struct {

@@ -26,6 +26,8 @@ typedef struct {
 
 typedef struct {
     double clock_mhz, cycle_s;
+    uint8_t sleep;                   /**< 1: the board sleeps between ticks */
+    double cycles_per_tick;          /**< the work the plan assumed [cycles]; 0: the runtime's */
     uint8_t n_sensors, n_profiles;
     gp_plan_sensor sensors[GP_MAX_PLAN_SENSORS];
     gp_plan_profile profiles[GP_MAX_PROFILE_ALTERNATIVES];

@@ -7,7 +7,7 @@
 #include "gp_link.h"
 
 #define USAGE "usage: PROG --device PATH|pty [--plan FILE] [--state-dir DIR] " \
-              "[--clock-file PATH] [--key FILE] " \
+              "[--clock-file PATH] [--suspend-file PATH] [--key FILE] " \
               "[--link-timeout-s S] [--retransmit-ms MS] [--naive-tracker]"
 
 static int number(const char *text, double low, double high, double *out)
@@ -49,7 +49,7 @@ int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
         int takes_value = strcmp(option, "--device") == 0 || strcmp(option, "--plan") == 0
             || strcmp(option, "--state-dir") == 0 || strcmp(option, "--link-timeout-s") == 0
             || strcmp(option, "--retransmit-ms") == 0 || strcmp(option, "--clock-file") == 0
-            || strcmp(option, "--key") == 0;
+            || strcmp(option, "--suspend-file") == 0 || strcmp(option, "--key") == 0;
         if (!takes_value) {
             snprintf(error, cap, "unknown argument '%s'; " USAGE,
                      shown(option, quoted, sizeof quoted));
@@ -70,6 +70,8 @@ int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
             out->clock_path = value;
         } else if (strcmp(option, "--key") == 0) {
             out->key_path = value;
+        } else if (strcmp(option, "--suspend-file") == 0) {
+            out->suspend_path = value;
         } else if (strcmp(option, "--link-timeout-s") == 0) {
             if (number(value, 0.001, 86400.0, &number_value) < 0) {
                 snprintf(error, cap, "--link-timeout-s '%s' is not a number of seconds in "

@@ -32,6 +32,7 @@ typedef struct {
     int own_pty;                     /* fd is the master of a pty we created */
     double clock_mhz;                /* last clock written to --clock-file, 0: none */
     int clock_failed;                /* --clock-file could not be written: said once */
+    int suspend_failed;              /* --suspend-file could not be written: said once */
     int events_fd;                   /* events.log, -1 without a state directory */
     gp_frame_reader reader;
     uint8_t seq;                     /* our last frame's seq */
@@ -329,36 +330,68 @@ static int send_command(link_state *s, const gp_command *command, int whole)
     return result;
 }
 
-/* The planned clock of the current state, written in kHz to --clock-file (a cpufreq
- * scaling_setspeed under the userspace governor) when it changes. A clock that cannot
- * be set costs energy, not safety: say so once and fly on. */
+/* Write `text` to a control file of the platform (a sysfs file; in simulation a plain
+ * one), opened with `flags` besides O_WRONLY. @return 0, or the errno of what failed. */
+static int write_control(const char *path, int flags, const char *text, size_t len)
+{
+    int fd = open(path, O_WRONLY | O_CLOEXEC | flags);
+    int written = fd >= 0 && write(fd, text, len) == (ssize_t)len;
+    int error = written ? 0 : errno ? errno : EIO;
+    if (fd >= 0) {
+        close(fd);
+    }
+    return error;
+}
+
+/* The clock of the current state, written in kHz to --clock-file (a cpufreq
+ * scaling_setspeed under the userspace governor) when it changes: the plan's, or without
+ * a plan the mission's `computer clock` (none: left alone). A clock that cannot be set
+ * costs energy, not safety: say so once and fly on. */
 static void follow_clock(link_state *s)
 {
-    if (!s->args->clock_path || !s->has_plan || s->clock_failed
-        || runtime.machine.state == GP_EXITED) {
+    if (!s->args->clock_path || s->clock_failed || runtime.machine.state == GP_EXITED) {
         return;
     }
-    double mhz = plan.states[runtime.machine.state].clock_mhz;
-    if (mhz == s->clock_mhz) {
+    double mhz = s->has_plan ? plan.states[runtime.machine.state].clock_mhz
+                             : s->mission->states[runtime.machine.state].clock_mhz;
+    if (mhz == 0 || mhz == s->clock_mhz) {
         return;
     }
     char text[32];
     int len = snprintf(text, sizeof text, "%ld\n", lround(mhz * 1000.0));
-    int fd = open(s->args->clock_path, O_WRONLY | O_TRUNC | O_CLOEXEC);
-    int written = fd >= 0 && write(fd, text, (size_t)len) == len;
-    int saved = errno;
-    if (fd >= 0) {
-        close(fd);
-    }
-    if (!written) {
+    int error = write_control(s->args->clock_path, O_TRUNC, text, (size_t)len);
+    if (error) {
         char message[ERROR_LEN];
         snprintf(message, sizeof message, "%.200s: cannot set the clock to %g MHz: %s; "
-                 "flying on at the present clock", s->args->clock_path, mhz, strerror(saved));
+                 "flying on at the present clock", s->args->clock_path, mhz, strerror(error));
         say(s, message);
         s->clock_failed = 1;
         return;
     }
     s->clock_mhz = mhz;
+}
+
+/* After answering a tick in a state that sleeps between ticks (the plan's SLEEP, or
+ * without a plan the mission's `computer sleep between ticks`): "mem" to --suspend-file,
+ * the platform's suspend interface (/sys/power/state). On a board the write returns when
+ * the next SENSORS frame on the serial line (or the RTC) wakes it; a frame whose first
+ * bytes the wake-up loses is re-sent like any damaged frame (docs/protocol.md). A board
+ * that cannot sleep costs energy, not safety: say so once and stay awake. */
+static void sleep_until_next_tick(link_state *s)
+{
+    int state = runtime.machine.state;
+    if (!s->args->suspend_path || s->suspend_failed || state == GP_EXITED
+        || !(s->has_plan ? plan.states[state].sleep : s->mission->states[state].sleep)) {
+        return;
+    }
+    int error = write_control(s->args->suspend_path, O_APPEND, "mem\n", 4);
+    if (error) {
+        char message[ERROR_LEN];
+        snprintf(message, sizeof message, "%.200s: cannot sleep between ticks: %s; staying "
+                 "awake", s->args->suspend_path, strerror(error));
+        say(s, message);
+        s->suspend_failed = 1;
+    }
 }
 
 /* @return -1 to go on, else the exit status */
@@ -420,6 +453,7 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     if (runtime.machine.state == GP_EXITED) {
         return release(s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
     }
+    sleep_until_next_tick(s);
     return -1;
 }
 

@@ -613,6 +613,38 @@ static int read_prediction(reader *r, int n_components)
     return 0;
 }
 
+/* Whether the next line is a `keyword` line (for an optional line). */
+static int coming(const reader *r, const char *keyword)
+{
+    size_t n = strlen(keyword);
+    return r->pos + n < r->len && memcmp(r->text + r->pos, keyword, n) == 0
+        && r->text[r->pos + n] == ' ';
+}
+
+/* `power SLEEP CYCLES_PER_TICK`, optional (absent: awake between ticks, the runtime's own
+ * work): SLEEP 1 only where the mission's state sleeps between ticks. */
+static int read_power(reader *r, const gp_state *state, gp_plan_state *out)
+{
+    int sleep = 0;
+    out->sleep = 0;
+    out->cycles_per_tick = 0;
+    if (!coming(r, "power")) {
+        return 0;
+    }
+    if (expect(r, "power", 3) < 0 || count_field(r, 1, "SLEEP", 0, 1, &sleep) < 0
+        || number_field(r, 2, "CYCLES_PER_TICK", &out->cycles_per_tick) < 0) {
+        return -1;
+    }
+    if (!(out->cycles_per_tick > 0)) {
+        return fail(r, "CYCLES_PER_TICK must be > 0");
+    }
+    if (sleep && !state->sleep) {
+        return fail(r, "SLEEP 1 where state '%.32s' does not sleep between ticks", state->name);
+    }
+    out->sleep = (uint8_t)sleep;
+    return 0;
+}
+
 static int read_state(reader *r, const gp_mission *mission, int n_components, int s,
                       gp_plan_state *out)
 {
@@ -638,7 +670,7 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
         return fail(r, "%d profiles, state '%.32s' has %d", n_profiles, state->name,
                     state->n_profiles);
     }
-    if (read_prediction(r, n_components) < 0) {
+    if (read_power(r, state, out) < 0 || read_prediction(r, n_components) < 0) {
         return -1;
     }
     out->n_sensors = (uint8_t)n_sensors;

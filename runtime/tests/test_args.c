@@ -11,12 +11,14 @@ void test_args_should_parse_every_option(void)
 {
     const char *argv[] = {"prog", "--device", "/dev/ttyS1", "--plan", "p.plan", "--state-dir",
                           "st", "--link-timeout-s", "2.5", "--retransmit-ms", "50",
-                          "--naive-tracker", "--clock-file", "speed", "--key", "k.key"};
+                          "--naive-tracker", "--clock-file", "speed", "--suspend-file",
+                          "state", "--key", "k.key"};
     gp_args args;
     char error[256];
-    CHECK_INT(parse(16, argv, &args, error), 0);
+    CHECK_INT(parse(18, argv, &args, error), 0);
     CHECK(strcmp(args.clock_path, "speed") == 0);
     CHECK(strcmp(args.key_path, "k.key") == 0);
+    CHECK(strcmp(args.suspend_path, "state") == 0);
     CHECK(strcmp(args.device, "/dev/ttyS1") == 0);
     CHECK(strcmp(args.plan_path, "p.plan") == 0);
     CHECK(strcmp(args.state_dir, "st") == 0);
@@ -25,7 +27,7 @@ void test_args_should_parse_every_option(void)
     CHECK_INT(args.naive_tracker, 1);
     CHECK_INT(parse(3, argv, &args, error), 0);
     CHECK(args.plan_path == NULL && args.state_dir == NULL && args.clock_path == NULL
-          && args.key_path == NULL);
+          && args.suspend_path == NULL && args.key_path == NULL);
     CHECK_NEAR(args.link_timeout_s, 10, 0);
     CHECK_INT(args.retransmit_ms, 200);
     CHECK_INT(args.naive_tracker, 0);

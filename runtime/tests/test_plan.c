@@ -9,7 +9,7 @@
 #include "gp_test.h"
 
 #define GOOD_BODY                                                                   \
-    "GPPLAN 2\n"                                                                    \
+    "GPPLAN 3\n"                                                                    \
     "mission sampleMission\n"                                                       \
     "hash 5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9\n"       \
     "computer ts7800 300\n"                                                         \
@@ -93,9 +93,9 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
     static const struct {
         const char *from, *to, *message;
     } rows[] = {
-        {"GPPLAN 2", "GPPLAN 1",
-         "line 1: plan format version '1', this runtime reads version 2"},
-        {"GPPLAN 2", "GPPLAN", "line 1: expected 'GPPLAN 2'"},
+        {"GPPLAN 3", "GPPLAN 2",
+         "line 1: plan format version '2', this runtime reads version 3"},
+        {"GPPLAN 3", "GPPLAN", "line 1: expected 'GPPLAN 3'"},
         {"mission sampleMission", "mission other", "line 2: plan is for mission 'other'"},
         {"mission sampleMission", "mission 9lives", "line 2: mission name is not a NAME"},
         {"hash 5db9", "hash 6db9", "line 3: hash does not match"},
@@ -130,6 +130,14 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"state s1 300 600 0 1", "state s1 1000 600 0 1", "line 12: clock 1000 MHz: the board"},
         {"predict 1000 2 19.8", "predict 1e99 2 19.8", "line 13: TIME_S 1e+99 exceeds"},
         {"state s1 300 600 0 1", "state s1 300 600 0", "line 12: 'state' takes 5 fields, found 4"},
+        {"state s1 300 600 0 1\n", "state s1 300 600 0 1\npower 1 2e5\n",
+         "line 13: SLEEP 1 where state 's1' does not sleep between ticks"},
+        {"state s1 300 600 0 1\n", "state s1 300 600 0 1\npower 0 0\n",
+         "line 13: CYCLES_PER_TICK must be > 0"},
+        {"state s1 300 600 0 1\n", "state s1 300 600 0 1\npower 2 2e5\n",
+         "line 13: SLEEP 2 outside 0..1"},
+        {"state s1 300 600 0 1\n", "state s1 300 600 0 1\npower 0\n",
+         "line 13: 'power' takes 2 fields, found 1"},
         {"predict 1000 2 19.8", "predict -1 2 19.8", "line 13: TIME_S must be >= 0"},
         {"predict 1000 2 19.8", "predict 1000 2.5 19.8", "line 13: VISITS '2.5' is not a COUNT"},
         {"predict 1000 2 19.8", "predict 1000 2", "line 13: 'predict' takes 3 fields, found 2"},
@@ -177,6 +185,26 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         CHECK_INT(read_text(len, error), -1);
         CHECK_CONTAINS(error, rows[i].message);
     }
+}
+
+void test_plan_should_read_a_states_power_line_where_its_mission_sleeps(void)
+{
+    /* Fig. 2 with s2 asleep between ticks (`computer sleep between ticks`). */
+    static gp_state states[3];
+    memcpy(states, gp_mission_table.states, sizeof states);
+    states[1].sleep = 1;
+    gp_mission sleepy = gp_mission_table;
+    sleepy.states = states;
+    static char body[GP_MAX_PLAN_BYTES];
+    const char *at = strstr(GOOD_BODY, "predict 1000 1 12.4");
+    snprintf(body, sizeof body, "%.*spower 1 7.3e6\n%s", (int)(at - GOOD_BODY), GOOD_BODY, at);
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    CHECK_INT(gp_plan_read(text, with_crc(body), &sleepy, NULL, &plan, error), 0);
+    CHECK_INT(plan.states[1].sleep, 1);
+    CHECK_NEAR(plan.states[1].cycles_per_tick, 7.3e6, 0);
+    CHECK_INT(plan.states[0].sleep, 0);  /* no power line: awake, the runtime's own work */
+    CHECK_NEAR(plan.states[0].cycles_per_tick, 0, 0);
 }
 
 void test_plan_should_reject_a_file_of_only_its_checksum_line(void)
@@ -300,11 +328,11 @@ void test_signed_plan_should_carry_the_tag_gliderplan_plan_sign_writes(void)
     test_key(&auth);
     size_t len = with_crc(GOOD_BODY);
     len += (size_t)sprintf(text + len, "seq 7\nhmac %s\n",
-                           "13f422b03cb8e1e681bf215f69ab405116f12966f3af0e4aeb7f5e94162d7286");
+                           "dce9e85f51f7f12a86519c60f3ed90a81f0698963456ccb396f785e9b036ec04");
     CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), 0);
     CHECK_INT(plan.is_signed, 1);
     CHECK_INT(plan.seq, 7);
-    CHECK_INT(plan.tag[0], 0x13);
+    CHECK_INT(plan.tag[0], 0xdc);
     CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), 0);  /* no key */
     auth.key[31] ^= 1;  /* another vehicle's key */
     CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), -1);
@@ -387,7 +415,7 @@ void test_signed_plan_should_have_a_well_formed_tail(void)
 static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL}, {GP_PROFILE_HOVER, 0, NULL}};
 static const uint8_t logged[] = {0, 1, 9, 12};  /* missiontime, depth, temp, oxygen */
 static const gp_state scheduled = {
-    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0,
+    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0, 0, 0,
 };
 
 void test_schedule_without_a_plan_should_power_every_logged_sensor(void)

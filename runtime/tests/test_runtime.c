@@ -105,7 +105,7 @@ void test_runtime_should_fly_fig2_and_report_each_transition(void)
 void test_runtime_should_follow_the_plan_schedule(void)
 {
     static const char body[] =
-        "GPPLAN 2\nmission sampleMission\n"
+        "GPPLAN 3\nmission sampleMission\n"
         "hash 5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9\n"
         "computer ts7800 300\nbudget_j 180000\npredicted_j 9876.5\ncomponents hotel\n"
         "assumptions 0\nstates 3\n"
@@ -162,8 +162,8 @@ static const gp_event call_b[] = {{always, NULL, GP_ACT_CALL, 1}};
 static const gp_event call_a[] = {{always, NULL, GP_ACT_CALL, 0}};
 static const gp_profile hover[] = {{GP_PROFILE_HOVER, 0, NULL}};
 static const gp_state stacker_states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_b, 1},
-    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_a, 1},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_b, 1, 0, 0},
+    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_a, 1, 0, 0},
 };
 static const gp_mission stacker = {.name = "stacker", .hash = "", .states = stacker_states,
                                    .n_states = 2, .stack_depth = 1};
