@@ -52,6 +52,13 @@ MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
 CLOCK_TOLERANCE_MHZ = 1e-6  # [MHz] a plan's clock is the board's within this
 
 
+def same_clock(clock_mhz: float, board_clock_mhz: float) -> bool:
+    """Whether a clock [MHz] is the board's clock `board_clock_mhz`: the one test `check`,
+    the planner, the simulator and both plan readers apply (the C reader with
+    GP_CLOCK_TOLERANCE_MHZ)."""
+    return abs(clock_mhz - board_clock_mhz) <= CLOCK_TOLERANCE_MHZ
+
+
 @dataclass(frozen=True)
 class FlightLimits:
     """The figures of one vehicle and board that bound a plan: the code generator writes
@@ -66,6 +73,10 @@ class FlightLimits:
         if not 1 <= len(self.clocks_mhz) <= MAX_BOARD_CLOCKS:
             raise ValueError(f"a board has 1..{MAX_BOARD_CLOCKS} clocks, not "
                              f"{len(self.clocks_mhz)}")
+
+    def has_clock(self, clock_mhz: float) -> bool:
+        """Whether the board has the clock `clock_mhz` [MHz] (`same_clock`)."""
+        return any(same_clock(clock_mhz, c) for c in self.clocks_mhz)
 
 
 # ---- signed plans (docs/plan-format.md) ---------------------------------------------

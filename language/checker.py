@@ -101,13 +101,17 @@ class _Checker:
                     self.preset_known("vehicle", decl.preset, decl.is_file)
                     fields["vehicle"] = decl.preset.text
                 case ast.ComputerDecl():
-                    self.preset_known("board", decl.board, decl.is_file)
+                    known = self.preset_known("board", decl.board, decl.is_file)
                     clock_mhz = None
                     if decl.clock is not None and (mhz := self.quantity(decl.clock, "clock")):
                         clock_mhz = mhz[0]
                         if clock_mhz <= 0:
                             self.error("clock must be positive", decl.clock.span)
                     fields["computer"] = self.computer = ir.Computer(decl.board.text, clock_mhz)
+                    if known and clock_mhz is not None and clock_mhz > 0 and \
+                            (board := self.board(decl.clock.span)) is not None:
+                        self.clock_known(board, clock_mhz, decl.clock.span,
+                                         "or leave the clock out: the planner picks one")
                 case ast.BatteryDecl():
                     if (battery := self.battery(decl)) is not None:
                         fields["battery"] = battery
@@ -144,9 +148,11 @@ class _Checker:
         )
         return fields
 
-    def preset_known(self, kind: str, name: ast.Ident, is_file: bool) -> None:
+    def preset_known(self, kind: str, name: ast.Ident, is_file: bool) -> bool:
+        """False, with an error, for a preset name that is not shipped; a user's file is
+        loaded and validated by the power models when its figures are needed."""
         if is_file:
-            return  # a user file: loaded and validated by the power models
+            return True
         from gliderplan.power_models.catalog import preset_names
 
         names = preset_names(kind)
@@ -154,6 +160,8 @@ class _Checker:
             hint = did_you_mean(name.text, names) or f"presets: {', '.join(names)}"
             self.error(f"unknown {kind} preset '{name.text}'", name.span,
                        f"{hint}; or give a file as \"path/to/{kind}.toml\"")
+            return False
+        return True
 
     def battery(self, decl: ast.BatteryDecl) -> ir.Battery | None:
         capacity = self.quantity(decl.capacity, "energy", "charge")
@@ -439,6 +447,15 @@ class _Checker:
                 self._board = False
         return self._board or None
 
+    def clock_known(self, board, clock_mhz: float, span: ast.Span, hint: str) -> bool:
+        """Whether the board's data file has this clock (`Board.has_clock`: the test the
+        plan readers, Python and C, apply to a plan's clocks); an error at `span` if not."""
+        if board.has_clock(clock_mhz):
+            return True
+        self.error(f"board {board.name} has no {clock_mhz:g} MHz clock", span,
+                   f"its clocks: {board.clocks_text()} MHz; {hint}")
+        return False
+
     def computer_use(self, state: str, items: list[ast.ComputerItem]) -> ir.ComputerUse:
         """A state's `computer clock | sleep | workload` settings, checked against the
         board's data file: a clock it has, a sleep it wakes from on the serial line, a
@@ -452,16 +469,13 @@ class _Checker:
         if not seen or (board := self.board(items[0].span)) is None:
             return ir.NO_COMPUTER_USE
         clocks = [m.clock_mhz for m in board.clock_modes]
-        listed = ", ".join(f"{c:g}" for c in clocks)
         use = ir.ComputerUse()
         if (item := seen.get("clock")) is not None:
             if isinstance(item.value, ast.Ident):
                 use = ir.ComputerUse(clock_auto=True)
             elif (clock := self.quantity(item.value, "clock")) is not None:
                 mhz = clock[0]
-                if not any(abs(mhz - c) < 1e-6 for c in clocks):
-                    self.error(f"board {board.name} has no {mhz:g} MHz clock", item.value.span,
-                               f"its clocks: {listed} MHz; or 'computer clock auto'")
+                self.clock_known(board, mhz, item.value.span, "or 'computer clock auto'")
                 use = ir.ComputerUse(clock_mhz=mhz)
         allowed = [use.clock_mhz] if use.clock_mhz else clocks if use.clock_auto else \
             [self.computer.clock_mhz] if self.computer.clock_mhz else clocks

@@ -8,7 +8,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, ExitCode
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, ExitCode, same_clock
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
@@ -57,7 +57,7 @@ class Hardware:
             return self.modes
         if use.clock_auto:
             return self.board_modes
-        return tuple(m for m in self.board_modes if abs(m.clock_mhz - use.clock_mhz) < 1e-6)
+        return tuple(m for m in self.board_modes if same_clock(use.clock_mhz, m.clock_mhz))
 
     def sleeps(self, state: ir.State) -> bool:
         """Whether the board sleeps between ticks in `state`: the state asks, the board can."""
@@ -116,8 +116,7 @@ def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
     held = (computer is not None and clock is not None) or len(board_modes) == 1
     for state in mission.states:
         wanted = state.computer.clock_mhz
-        if not held and wanted is not None and \
-                not any(abs(m.clock_mhz - wanted) < 1e-6 for m in board_modes):
+        if not held and wanted is not None and not board.has_clock(wanted):
             raise HardwareError(f"state {state.name}: computer clock {wanted:g} MHz: board "
                                 f"{board.name} has no such clock; --computer NAME@MHZ holds "
                                 "every state at one clock")

@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gliderplan.contract import (
-    CLOCK_TOLERANCE_MHZ,
     MAX_NAME_LENGTH,
     MAX_PLAN_ASSUMPTIONS,
     MAX_PLAN_BYTES,
@@ -279,7 +278,7 @@ class _Cursor:
         value = self.number(text, "clock")
         self.check(value > 0, "the clock must be > 0 MHz")
         if limits is not None:
-            self.check(any(abs(value - c) <= CLOCK_TOLERANCE_MHZ for c in limits.clocks_mhz),
+            self.check(limits.has_clock(value),
                        f"clock {value:g} MHz: the board has "
                        f"{', '.join(f'{c:g}' for c in limits.clocks_mhz)} MHz")
         return value

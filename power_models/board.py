@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import same_clock
 from gliderplan.power_models.catalog import is_path_spec, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
 from gliderplan.power_models.errors import ModelFileError
@@ -84,23 +85,33 @@ class Board:
         """This board at each of its available clocks, slowest first."""
         return [self.at_clock(m.clock_mhz) for m in self.clock_modes]
 
+    def clocks_text(self) -> str:
+        """The board's clocks as people read them: "300, 500"."""
+        return ", ".join(f"{m.clock_mhz:g}" for m in self.clock_modes)
+
+    def has_clock(self, clock_mhz: float) -> bool:
+        """Whether the board's data file has a mode at `clock_mhz` [MHz] (`same_clock`, as
+        the plan readers test a plan's clocks against the same file's)."""
+        return self._mode(clock_mhz) is not None
+
+    def _mode(self, clock_mhz: float) -> ClockMode | None:
+        return next((m for m in self.clock_modes if same_clock(clock_mhz, m.clock_mhz)), None)
+
     def at_clock(self, clock_mhz: float) -> Board:
         """This board at another of its clocks [MHz]; ValueError if it has no such clock."""
-        for mode in self.clock_modes:
-            if abs(mode.clock_mhz - clock_mhz) < 1e-6:
-                sleep = replace(self.sleep, wake_j=mode.wake_j) if self.sleep else None
-                return replace(
-                    self,
-                    clock_mhz=mode.clock_mhz,
-                    active_w=mode.active_w,
-                    idle_w=mode.idle_w,
-                    sleep=sleep,
-                    boot_j=self.boot_j if self.boot_j_given else self.boot_s * mode.active_w,
-                    cycles_per_s=mode.clock_mhz * 1e6 * self.cycles_per_clock,
-                )
-        clocks = ", ".join(f"{m.clock_mhz:g}" for m in self.clock_modes)
-        raise ValueError(
-            f"board {self.name!r} has no {clock_mhz:g} MHz clock (available: {clocks})"
+        mode = self._mode(clock_mhz)
+        if mode is None:
+            raise ValueError(f"board {self.name!r} has no {clock_mhz:g} MHz clock "
+                             f"(available: {self.clocks_text()})")
+        sleep = replace(self.sleep, wake_j=mode.wake_j) if self.sleep else None
+        return replace(
+            self,
+            clock_mhz=mode.clock_mhz,
+            active_w=mode.active_w,
+            idle_w=mode.idle_w,
+            sleep=sleep,
+            boot_j=self.boot_j if self.boot_j_given else self.boot_s * mode.active_w,
+            cycles_per_s=mode.clock_mhz * 1e6 * self.cycles_per_clock,
         )
 
     def busy_fraction(

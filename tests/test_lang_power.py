@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 
+from gliderplan.contract import FlightLimits
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.formatter import format_source
@@ -71,6 +72,11 @@ def test_format_gives_the_canonical_spelling_and_keeps_the_meaning():
      "error: board ts7800 has no 400 MHz clock | its clocks: 300, 500 MHz; or 'computer "
      "clock auto'"),
     ("computer clock 300 V", "computer ts7800", "error: "),
+    ("", "computer ts7800 @ 400 MHz",
+     "error: board ts7800 has no 400 MHz clock | its clocks: 300, 500 MHz; or leave the "
+     "clock out"),
+    ("", "computer ts5500 @ 300 MHz", "error: board ts5500 has no 300 MHz clock | its "
+     "clocks: 133 MHz"),
     ("computer sleep between ticks", "computer ts5500",
      "error: board ts5500 cannot sleep between ticks | its data file has no [sleep] table"),
     ("computer workload 3e9 cycles per tick", "computer ts7800",
@@ -88,6 +94,40 @@ def test_format_gives_the_canonical_spelling_and_keeps_the_meaning():
 def test_the_checker_holds_settings_to_the_board(settings, computer, expected):
     assert any(d.startswith(expected) for d in diagnostics(settings, computer)), \
         diagnostics(settings, computer)
+
+
+@pytest.mark.parametrize("spec", ["ts5500", "ts7800"])
+@pytest.mark.parametrize("clock", [133, 300, 400, 500, 0.5])
+def test_check_accepts_a_mission_clock_exactly_when_a_plan_reader_would(spec, clock):
+    # the plan readers' test (the board's clocks the compiled mission carries) and the
+    # planner's (a board loaded at that clock) agree with check's
+    from gliderplan.planner.limits import flight_limits
+    from gliderplan.power_models import load_board
+    from gliderplan.power_models.errors import ModelFileError
+
+    result = check_source(source("", f"computer {spec} @ {clock} MHz"), "pm.mission")
+    reader = flight_limits(checked("", f"computer {spec}")).has_clock(clock)
+    try:
+        load_board(spec, clock)
+        loads = True
+    except ModelFileError:
+        loads = False
+    assert (result.mission is not None) == reader == loads, result.render()
+    assert reader == ((spec, clock) in {("ts5500", 133), ("ts7800", 300), ("ts7800", 500)})
+
+
+def test_a_mission_clock_on_a_board_file_is_held_to_that_file(tmp_path):
+    from gliderplan.power_models.catalog import preset_path
+
+    board = tmp_path / "fast.toml"
+    board.write_text(preset_path("board", "ts7800").read_text().replace(
+        "value = 500, unit", "value = 400, unit"))
+    assert checked("", f'computer "{board}" @ 400 MHz').computer.clock_mhz == 400.0
+    found = diagnostics("", f'computer "{board}" @ 500 MHz')
+    assert any(d.startswith("error: board ts7800 has no 500 MHz clock | its clocks: 300, 400")
+               for d in found), found
+    found = diagnostics("", f'computer "{tmp_path}/none.toml" @ 300 MHz')
+    assert any("no such file" in d for d in found), found
 
 
 def test_a_board_that_wakes_only_on_its_timer_cannot_sleep_between_ticks(tmp_path):
@@ -113,9 +153,10 @@ def test_syntax_errors_name_what_was_expected():
 
 
 def test_the_c_tables_carry_the_fixed_clock_and_the_sleep():
-    code = generate_c(checked("computer clock 500 MHz\ncomputer sleep between ticks"), 230.0)
+    limits = FlightLimits(230.0, 233.0, (300.0, 500.0))
+    code = generate_c(checked("computer clock 500 MHz\ncomputer sleep between ticks"), limits)
     assert ".clock_mhz = 500.0," in code and ".sleep = 1," in code
-    plain = generate_c(checked(""), 230.0)
+    plain = generate_c(checked(""), limits)
     assert ".clock_mhz" not in plain and ".sleep" not in plain
 
 
