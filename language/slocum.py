@@ -670,14 +670,19 @@ def import_mission(mi: str | Path, output: str | Path, mafiles: str | Path | Non
                    horizon_s: float = 7 * 86400.0,
                    allow_missing_mafiles: bool = False) -> Imported:
     """Translate the Slocum mission `mi` (its .ma files in `mafiles`), check the result and
-    write it to `output` atomically. Raises a GliderplanError naming file and line."""
+    write it to `output` atomically (`gliderplan import-slocum`). `horizon_s` [s]: how long
+    the mission is planned and flown; `allow_missing_mafiles`: leave out a behavior whose
+    .ma file is missing (a warning) instead of stopping.
+
+    Raises SlocumFileError (exit 1), its message `FILE:LINE: problem`, for a malformed
+    line, an unknown behavior or a .ma file that is not there; exit 2 (usage) for a
+    mission file that does not exist or is a directory, a --mafiles that is no directory
+    and an output that cannot be written."""
     from gliderplan.contract.errors import GliderplanError, UsageError
     from gliderplan.contract.files import write_atomically
     from gliderplan.language import check_source
     from gliderplan.language.slocum_files import read_mission
 
-    if not Path(mi).is_file():
-        raise UsageError(f"{mi}: no such file")
     if mafiles is not None and not Path(mafiles).is_dir():
         raise UsageError(f"--mafiles {mafiles}: no such directory")
     translation = translate(read_mission(mi, mafiles, allow_missing_mafiles), horizon_s)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import read_input
 
 
 class SlocumFileError(GliderplanError):
@@ -99,10 +100,7 @@ def mafile_name(behavior: str, number: int) -> str:
 
 def read_mafile(path: Path, behavior: Behavior) -> None:
     """Add a .ma file's b_args (and waypoints) to the behavior, in file order."""
-    try:
-        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError as err:
-        raise SlocumFileError(f"{path}:1: cannot read: {err.strerror}") from None
+    lines = _lines(path, "Slocum behavior argument (.ma) file")
     section = None  # None before <start:b_arg>, then "b_arg", "between", "waypoints", "end"
     header_seen = False
     for number, raw in enumerate(lines, start=1):
@@ -162,10 +160,7 @@ def read_mission(path: str | Path, mafiles: str | Path | None = None,
     """Read a .mi file and the .ma files it names (in `mafiles`, by default the
     `mafiles` directory beside the .mi or beside its `missions` directory)."""
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError as err:
-        raise SlocumFileError(f"{path}:1: cannot read: {err.strerror}") from None
+    lines = _lines(path, "Slocum mission (.mi) file")
     ma_dir = Path(mafiles) if mafiles is not None else _default_mafiles(path)
     sensors: list[Arg] = []
     behaviors: list[Behavior] = []
@@ -191,6 +186,13 @@ def read_mission(path: str | Path, mafiles: str | Path | None = None,
                                   "'behavior: NAME', 'b_arg: name(unit) value' or "
                                   "'sensor: name(unit) value'")
     return SlocumMission(path, tuple(sensors), tuple(behaviors))
+
+
+def _lines(path: Path, what: str) -> list[str]:
+    """The lines of a Slocum file; a byte that is not UTF-8 (a comment written on an old
+    card) becomes U+FFFD rather than an error. InputFileError (`usage` for a path that
+    names no such file) as for every file gliderplan reads."""
+    return read_input(path, what).decode("utf-8", errors="replace").splitlines()
 
 
 def _default_mafiles(mission: Path) -> Path:

@@ -23,8 +23,9 @@ from xml.sax.saxutils import escape
 import numpy as np
 import pandas as pd
 
+from gliderplan.contract import ExitCode
 from gliderplan.contract.errors import GliderplanError, UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import InputFileError, read_input_text, write_atomically
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
 from gliderplan.sim.slocum_ocean import leg_starts
 from gliderplan.sim.vehicle import SURFACE_DEPTH_M
@@ -340,11 +341,17 @@ FORMATS = {"netcdf": ("trajectory.nc", netcdf_bytes), "geojson": ("track.geojson
 def export_run(run_dir: str | Path, formats: list[str],
                output_dir: str | Path | None = None) -> list[Path]:
     """Write the run in `run_dir` in each of `formats` (keys of FORMATS) into
-    `output_dir` (default `run_dir`), atomically; the files written."""
+    `output_dir` (default `run_dir`), atomically; the files written (`gliderplan export`).
+
+    Raises UsageError (exit 2) for no format, a run directory that does not exist or
+    lacks the run's files, an output that cannot be written; ExportError (exit 1) for a
+    run's file that cannot be read as one."""
     if not formats:
         raise UsageError("say what to write: --netcdf, --geojson and/or --kml")
+    if not Path(run_dir).exists():
+        raise UsageError(f"{run_dir}: no such directory (a run of gliderplan sim)")
     if not Path(run_dir).is_dir():
-        raise UsageError(f"{run_dir}: no such run directory")
+        raise UsageError(f"{run_dir}: not a directory (a run of gliderplan sim)")
     out = Path(output_dir if output_dir is not None else run_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
@@ -361,17 +368,20 @@ def read_run(run_dir: str | Path) -> tuple[pd.DataFrame, dict]:
     """The time series and summary of a run directory written by `gliderplan sim`."""
     run_dir = Path(run_dir)
     series, summary = run_dir / "timeseries.parquet", run_dir / "summary.json"
-    for path in (series, summary):
-        if not path.is_file():
-            raise ExportError(f"{path}: missing; is {run_dir} the output of gliderplan sim?")
+    try:
+        meta = json.loads(read_input_text(summary, "run summary"))
+    except InputFileError as err:
+        raise ExportError(f"{err}; is {run_dir} a run of gliderplan sim?",
+                          usage=err.exit_code == ExitCode.USAGE) from None
+    except ValueError as err:
+        raise ExportError(f"{summary}: cannot read: {err}") from None
+    if not series.is_file():  # read whole by pyarrow: a month's run is larger than one input
+        raise ExportError(f"{series}: no such file; is {run_dir} a run of gliderplan sim?",
+                          usage=True)
     try:
         table = pd.read_parquet(series)
     except (OSError, ValueError) as err:
         raise ExportError(f"{series}: cannot read: {err}") from None
-    try:
-        meta = json.loads(summary.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as err:
-        raise ExportError(f"{summary}: cannot read: {err}") from None
     missing = {"time_s", "depth_m", "lat_deg", "lon_deg", "temp_reading_c"} - set(table.columns)
     if missing:
         raise ExportError(f"{series}: no column {', '.join(sorted(missing))}")

@@ -17,21 +17,40 @@ from gliderplan.contract import MAX_INPUT_BYTES, ExitCode
 FIG2 = str(Path(__file__).resolve().parents[1] / "examples" / "fig2.mission")
 ANNOTATED = str(Path(__file__).resolve().parents[1] / "examples" / "fig2_annotated.mission")
 LONG = "a" * 300  # longer than any file name may be (255 bytes)
+SLOCUM_MISSIONS = {
+    "good.mi": "behavior: surface\n  b_arg: start_when(enum) 9\n  b_arg: when_secs(sec) 600\n",
+    "bad.mi": "behavior: yo\n  b_arg: start_when(enum)\n",
+    "noma.mi": "behavior: yo\n  b_arg: args_from_file(enum) 10\n",
+    "unknown.mi": "behavior: loiter_about\n",
+}
 
 # (what is wrong, the commands that meet it, the exit code, what the message says)
 # Paths are relative to the test's temporary directory; "{bad}" is a mission that does
-# not parse, "{broken}" a plan file that breaks the format, "{file}" a regular file.
+# not parse, "{broken}" a plan file that breaks the format, "{file}" a regular file,
+# "{slocum}" a directory of Slocum missions (SLOCUM_MISSIONS: good.mi and broken ones).
 CASES = [
     ("missing mission file", [
         ["check", "none.mission"], ["fmt", "none.mission"], ["plan", "none.mission"],
         ["compile", "none.mission", "-o", "out"], ["sim", "none.mission", "-o", "out"],
         ["montecarlo", "none.mission", "--scenarios", "2", "-o", "out"],
-        ["compare-sbc", "none.mission"],
+        ["compare-sbc", "none.mission"], ["import-slocum", "none.mission", "-o", "out"],
     ], ExitCode.USAGE, "none.mission: no such file"),
     ("a directory for a mission", [
         ["check", "."], ["fmt", "."], ["plan", "."], ["compile", ".", "-o", "out"],
-        ["sim", ".", "-o", "out"],
+        ["sim", ".", "-o", "out"], ["import-slocum", ".", "-o", "out"],
     ], ExitCode.USAGE, "is a directory"),
+    ("a malformed line of a Slocum mission", [
+        ["import-slocum", "{slocum}/bad.mi", "-o", "out"],
+    ], ExitCode.BAD_INPUT, "bad.mi:2: malformed line 'b_arg: start_when(enum)'"),
+    ("a .ma file that is not there", [
+        ["import-slocum", "{slocum}/noma.mi", "-o", "out"],
+    ], ExitCode.BAD_INPUT, "noma.mi:2: args_from_file 10: no file"),
+    ("an unknown Slocum behavior", [
+        ["import-slocum", "{slocum}/unknown.mi", "-o", "out"],
+    ], ExitCode.BAD_INPUT, "unknown.mi:1: unknown behavior 'loiter_about'"),
+    ("missing run directory", [
+        ["export", "none", "--kml"], ["report", ANNOTATED, "--run", "none", "-o", "out"],
+    ], ExitCode.USAGE, "none: no such directory"),
     ("a mission that does not parse", [
         ["check", "{bad}"], ["fmt", "{bad}"], ["plan", "{bad}"],
         ["compile", "{bad}", "-o", "out"], ["sim", "{bad}", "-o", "out"],
@@ -78,6 +97,7 @@ CASES = [
         ["plan", FIG2, "--computer", "/dev/zero"], ["plan", FIG2, "--battery", "/dev/zero"],
         ["power", "show", "vehicle", "/dev/urandom"],
         ["compare-sbc", FIG2, "--computer", "/dev/zero"],
+        ["import-slocum", "/dev/zero", "-o", "out"],
         ["calibrate", ".", "--base", "/dev/zero"], ["plan", FIG2, "--sign", "/dev/zero"],
     ], ExitCode.USAGE, "/dev/"),
     ("a file larger than any input", [
@@ -98,6 +118,7 @@ CASES = [
         ["montecarlo", FIG2, "--scenarios", "2", "--duration", "60s", "-o", "{file}/mc"],
         ["compare-sbc", FIG2, "-o", "{file}/sbc"],
         ["report", ANNOTATED, "-o", "{file}/report"],
+        ["import-slocum", "{slocum}/good.mi", "-o", "{file}/good.mission"],
     ], ExitCode.USAGE, "cannot write"),
     ("a battery no number can hold", [
         ["plan", FIG2, "--battery", "1e400Wh"], ["plan", FIG2, "--battery", "1e305kWh"],
@@ -129,9 +150,12 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
     (tmp_path / "file").write_text("a file, not a directory\n")
     with open(tmp_path / "huge.toml", "wb") as huge:  # sparse: no disk space taken
         huge.truncate(MAX_INPUT_BYTES + 1)
+    (tmp_path / "slocum" / "mafiles").mkdir(parents=True)
+    for name, text in SLOCUM_MISSIONS.items():
+        (tmp_path / "slocum" / name).write_text(text)
     for argv in argvs:
         argv = [a.format(bad="bad.mission", broken="broken.plan", file="file",
-                         huge="huge.toml") for a in argv]
+                         huge="huge.toml", slocum="slocum") for a in argv]
         assert exit_code(argv) == code, argv
         err = capsys.readouterr().err
         assert message in err and "Traceback" not in err, (argv, err)
@@ -165,7 +189,7 @@ def test_a_named_pipe_in_a_mission_is_refused_at_once(tmp_path):
         "vehicle slocum_g2_shallow", 'vehicle "pipe.toml"'))
     for argv in (["plan", str(mission)], ["power", "show", "board", "pipe.toml"],
                  ["check", "pipe.toml"], ["sim", FIG2, "--ocean", "pipe.toml", "-o", "out"],
-                 ["plan", FIG2, "--sign", "pipe.toml"]):
+                 ["plan", FIG2, "--sign", "pipe.toml"], ["import-slocum", "pipe.toml", "-o", "o"]):
         process = gliderplan(*argv, cwd=tmp_path, stdout=subprocess.DEVNULL)
         _, err = process.communicate(timeout=120)
         assert process.returncode == ExitCode.USAGE, (argv, err)

@@ -15,7 +15,9 @@ import xarray as xr
 from fastkml import KML
 
 from gliderplan.cli.main import main
-from gliderplan.sim.export import profile_ids
+from gliderplan.contract import ExitCode
+from gliderplan.contract.errors import UsageError
+from gliderplan.sim.export import ExportError, export_run, profile_ids
 
 REPO = Path(__file__).resolve().parents[1]
 FIG2 = REPO / "examples" / "fig2.mission"
@@ -150,15 +152,38 @@ def test_profiles_are_dives_and_climbs_not_the_surface():
 
 @pytest.mark.parametrize("argv, code, message", [
     (["export", "{run}"], 2, "--netcdf, --geojson and/or --kml"),
-    (["export", "{missing}", "--kml"], 2, "no such run directory"),
-    (["export", "{empty}", "--kml"], 1, "timeseries.parquet: missing"),
+    (["export", "{missing}", "--kml"], 2, "nope: no such directory"),
+    (["export", "{empty}", "--kml"], 2, "summary.json: no such file; is"),
+    (["export", "{broken}", "--kml"], 1, "summary.json: cannot read"),
 ])
 def test_export_refuses_bad_input_in_one_line(run, tmp_path, capsys, argv, code, message):
     (tmp_path / "empty").mkdir()
-    names = {"run": run, "missing": tmp_path / "nope", "empty": tmp_path / "empty"}
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "summary.json").write_text("{not json")
+    names = {"run": run, "missing": tmp_path / "nope", "empty": tmp_path / "empty",
+             "broken": tmp_path / "broken"}
     assert main([a.format(**names) for a in argv]) == code
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err
+
+
+def test_export_run_is_the_call_behind_export(run, tmp_path):
+    written = export_run(run, ["kml", "netcdf", "geojson"], tmp_path / "out")
+    assert [p.name for p in written] == ["track.kml", "trajectory.nc", "track.geojson"]
+    assert all(p.stat().st_size > 0 for p in written)
+    with pytest.raises(UsageError) as refused:
+        export_run(tmp_path / "nope", ["kml"])
+    assert refused.value.exit_code == ExitCode.USAGE
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "summary.json").write_text("[]")
+    (tmp_path / "bad" / "timeseries.parquet").write_bytes((run / "timeseries.parquet")
+                                                           .read_bytes())
+    with pytest.raises(ExportError) as refused:
+        export_run(tmp_path / "bad", ["kml"])
+    assert refused.value.exit_code == ExitCode.BAD_INPUT
+    assert str(refused.value) == f"{tmp_path / 'bad' / 'summary.json'}: not a run summary"
+    assert not (tmp_path / "bad" / "track.kml").exists()
 
 
 def test_sim_refuses_a_start_that_is_not_a_time(tmp_path, capsys):

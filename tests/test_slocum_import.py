@@ -15,6 +15,11 @@ import pandas as pd
 import pytest
 
 from gliderplan.cli.main import main
+from gliderplan.contract import ExitCode
+from gliderplan.contract.errors import GliderplanError
+from gliderplan.language import check_file
+from gliderplan.language.slocum import import_mission
+from gliderplan.language.slocum_files import SlocumFileError
 from gliderplan.sim.geo import ddmm_to_degrees
 from gliderplan.sim.science import NOISE_PRESETS
 
@@ -222,6 +227,29 @@ def test_bad_slocum_files_stop_with_one_line_naming_file_and_line(tmp_path, caps
     assert message in err, err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not out.exists()
+
+
+def test_import_mission_is_the_call_behind_import_slocum(tmp_path):
+    path = _mission(tmp_path, "behavior: yo\n  b_arg: args_from_file(enum) 10\n"
+                    "behavior: surface\n  b_arg: start_when(enum) 9\n"
+                    "  b_arg: when_secs(sec) 3600\n", yo10_ma=YO_MA)
+    imported = import_mission(path, tmp_path / "m.mission", horizon_s=86400.0)
+    assert imported.path == tmp_path / "m.mission" and imported.states == 2
+    assert check_file(str(imported.path)).ok and imported.warnings == ()
+    text = imported.path.read_text()
+    assert "horizon 86400 s" in text  # the horizon given, not the default 7 days
+    assert "case missiontime - surfaced_s >= 3600 set surfaced_s = missiontime call" in text
+    unknown = _mission(tmp_path, "behavior: yo\n  b_arg: args_from_file(enum) 10\n"
+                       "behavior: loiter_about\n", yo10_ma=YO_MA)
+    with pytest.raises(SlocumFileError) as refused:
+        import_mission(unknown, tmp_path / "u.mission")
+    assert refused.value.exit_code == ExitCode.BAD_INPUT
+    assert str(refused.value).startswith(f"{unknown}:3: unknown behavior 'loiter_about'")
+    for missing in (tmp_path / "none.mi", tmp_path):  # no such file; a directory
+        with pytest.raises(GliderplanError) as refused:
+            import_mission(missing, tmp_path / "n.mission")
+        assert refused.value.exit_code == ExitCode.USAGE
+    assert not (tmp_path / "u.mission").exists() and not (tmp_path / "n.mission").exists()
 
 
 def test_bad_usage_exits_2(tmp_path, capsys):
