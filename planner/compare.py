@@ -39,7 +39,7 @@ from gliderplan.planner.plan import (
 from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.board import Board, board_spec
 from gliderplan.power_models.computation import equivalents
-from gliderplan.power_models.datafile import file_entries
+from gliderplan.power_models.datafile import file_entries, is_assumption
 
 COMPUTERS = ("ts5500", "ts7800@300", "ts7800@500")
 SECONDS_PER_DAY = 86400.0
@@ -210,7 +210,7 @@ def assumed_figures(spec: str, hardware: Hardware, sleeping: bool) -> dict[str, 
               if key.startswith("mode[") and key.endswith(".clock")
               and to_model_unit(value, unit, "clock") not in clocks}
     return {key: f"{value:g} {unit}: {source}" for key, value, unit, source in entries
-            if source.lower().startswith("assumption") and key.split(".")[0] not in unused
+            if is_assumption(source) and key.split(".")[0] not in unused
             and (sleeping or not (key.startswith("sleep.") or key.endswith(".wake_energy")))}
 
 

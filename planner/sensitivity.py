@@ -1,12 +1,15 @@
 """Which assumption matters most: the plan's energy and quality when each model figure moves.
 
 Each figure the plan rests on (the vehicle's energy and drag figures, the board's active
-and idle power, each sensor device's on-power, the runtime's workload per tick) is moved
+and idle power, its sleep power and wake-up energy where a state sleeps between ticks,
+each sensor device's on-power, the runtime's workload per tick) is moved
 down and up by one standard deviation where its data file gives one (`sd`, from
 calibration), else by 20 %, and the mission is planned again at the same budget with
 `choose_plan` (the plan `gliderplan plan` would make with that figure). The model is
 built once; a figure only changes parameter values (`model_for` re-uses it while the
-structure holds), so a tornado of ~30 plans costs about as much as a short sweep.
+structure holds), so a tornado of ~30 plans costs about as much as a short sweep. Each
+swing carries its figure's source from the data file, so the report can say which
+figures are assumptions.
 """
 
 from __future__ import annotations
@@ -14,17 +17,22 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
 
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.inputs import PlanInputError, build_inputs
 from gliderplan.planner.model import PlanModel, model_for
 from gliderplan.planner.occupancy import Occupancy
 from gliderplan.planner.plan import InfeasibleBudget, choose_plan, realised_energy_j
+from gliderplan.power_models.board import Board
+from gliderplan.power_models.datafile import figure_sources, is_assumption
 from gliderplan.power_models.vehicle import figure_value, with_figures
 
 DEFAULT_SPREAD = 0.20  # relative move of a figure without a stated uncertainty
 SOLVER_TOLERANCE = 1e-6  # relative change below which a figure moved nothing
+SOURCES_JOINT = "; "  # between the sources of a figure given once per clock
 # Vehicle figures that move energy (the depths and pitch a mission sets are not figures
 # of the model): data-file key -> unit shown.
 VEHICLE_FIGURES = {
@@ -44,8 +52,15 @@ class Swing:
     unit: str
     step: float  # how far it moves either way [its unit]
     basis: str  # "1 sd (calibration)" or "20 % (no stated uncertainty)"
+    source: str  # what the figure rests on, as its data file says ("; " between several)
     energy_j: tuple[float, float]  # mission energy [J] with the figure down, up
     quality: tuple[float, float]  # plan quality with the figure down, up (NaN: over budget)
+
+    @property
+    def assumed(self) -> bool:
+        """Whether the figure (or, for a board's figure, one clock's) rests on an
+        assumption."""
+        return is_assumption(self.source)
 
 
 @dataclass(frozen=True)
@@ -59,18 +74,44 @@ class Sensitivity:
 Change = Callable[[Hardware, float], Hardware]  # hardware with the figure at a value
 
 
+@dataclass(frozen=True)
+class Figure:
+    """A model figure the tornado moves, and how."""
+
+    name: str
+    value: float
+    unit: str
+    step: float
+    basis: str
+    source: str
+    change: Change
+
+
 def _vehicle(key: str) -> Change:
     return lambda hw, v: replace(hw, vehicle=with_figures(hw.vehicle, {key: v}))
 
 
-def _board(attr: str) -> Change:
+def _board_figure(read: Callable[[Board], float],
+                  write: Callable[[Board, float], Board]) -> Change:
+    """A figure of the board moved at every clock by the same factor."""
     def change(hw: Hardware, v: float) -> Hardware:
-        scale = v / getattr(hw.board, attr) if getattr(hw.board, attr) else 1.0
-        def scaled(boards: tuple) -> tuple:
-            return tuple(replace(m, **{attr: getattr(m, attr) * scale}) for m in boards)
-        return replace(hw, board=replace(hw.board, **{attr: v}), modes=scaled(hw.modes),
-                       board_modes=scaled(hw.board_modes))
+        base = read(hw.board)
+        scale = v / base if base else 1.0
+
+        def moved(board: Board) -> Board:
+            return write(board, read(board) * scale)
+        return replace(hw, board=moved(hw.board), modes=tuple(map(moved, hw.modes)),
+                       board_modes=tuple(map(moved, hw.board_modes)))
     return change
+
+
+def _board(attr: str) -> Change:
+    return _board_figure(lambda b: getattr(b, attr), lambda b, v: replace(b, **{attr: v}))
+
+
+def _sleep(attr: str) -> Change:
+    return _board_figure(lambda b: getattr(b.sleep, attr),
+                         lambda b, v: replace(b, sleep=replace(b.sleep, **{attr: v})))
 
 
 def _device(name: str) -> Change:
@@ -82,31 +123,48 @@ def _workload(hw: Hardware, v: float) -> Hardware:
     return replace(hw, cycles_per_tick=v)
 
 
-def figures(hardware: Hardware) -> list[tuple[str, float, str, float, str, Change]]:
-    """(figure, value, unit, step, basis, change) of every figure the tornado moves."""
-    vehicle = hardware.vehicle
+def _sources(path: Path | None, key: str) -> str:
+    """The data file's sources of a figure, or "" for a model built without a file."""
+    return SOURCES_JOINT.join(figure_sources(path, key)) if path is not None else ""
+
+
+def figures(hardware: Hardware, mission: ir.CheckedMission) -> list[Figure]:
+    """Every figure the tornado moves for `mission`: the vehicle's, the board's active and
+    idle power (and its sleep power and wake-up energy where a state sleeps), each
+    device's on-power and the runtime's workload, each with its data file's source."""
+    vehicle, board = hardware.vehicle, hardware.board
     spread = {} if vehicle.uncertainty is None else dict(
         zip(vehicle.uncertainty.keys, vehicle.uncertainty.sd, strict=True))
     rows = []
 
-    def add(name: str, value: float, unit: str, change: Change, sd: float | None = None):
+    def add(name: str, value: float, unit: str, change: Change, source: str,
+            sd: float | None = None) -> None:
         if sd:
-            rows.append((name, value, unit, float(sd), "1 sd (calibration)", change))
+            rows.append(Figure(name, value, unit, float(sd), "1 sd (calibration)", source,
+                               change))
         elif value:
-            rows.append((name, value, unit, DEFAULT_SPREAD * abs(value),
-                         f"{100 * DEFAULT_SPREAD:g} % (no stated uncertainty)", change))
+            rows.append(Figure(name, value, unit, DEFAULT_SPREAD * abs(value),
+                               f"{100 * DEFAULT_SPREAD:g} % (no stated uncertainty)", source,
+                               change))
 
-    for key, unit in VEHICLE_FIGURES.items():
-        add(f"vehicle {key}", figure_value(vehicle, key), unit, _vehicle(key), spread.get(key))
-    for key in spread.keys() - VEHICLE_FIGURES.keys():
-        add(f"vehicle {key}", figure_value(vehicle, key), "", _vehicle(key), spread[key])
-    add(f"board {hardware.board.name} active_power", hardware.board.active_w, "W",
-        _board("active_w"))
-    add(f"board {hardware.board.name} idle_power", hardware.board.idle_w, "W",
-        _board("idle_w"))
+    for key in [*VEHICLE_FIGURES, *sorted(spread.keys() - VEHICLE_FIGURES.keys())]:
+        add(f"vehicle {key}", figure_value(vehicle, key), VEHICLE_FIGURES.get(key, ""),
+            _vehicle(key), _sources(vehicle.path, key), spread.get(key))
+    for key, attr in (("active_power", "active_w"), ("idle_power", "idle_w")):
+        add(f"board {board.name} {key}", getattr(board, attr), "W", _board(attr),
+            _sources(board.path, key))
+    if any(hardware.sleeps(state) for state in mission.states):
+        add(f"board {board.name} sleep_power", board.sleep.power_w, "W", _sleep("power_w"),
+            _sources(board.path, "sleep.power"))
+        add(f"board {board.name} wake_energy", board.sleep.wake_j, "J", _sleep("wake_j"),
+            _sources(board.path, "wake_energy"))
     for name, sensor in hardware.devices.items():
-        add(f"sensor {name} on_power", sensor.on_power_w, "W", _device(name))
-    add("runtime workload per tick", hardware.cycles_per_tick, "cycles", _workload)
+        add(f"sensor {name} on_power", sensor.on_power_w, "W", _device(name),
+            _sources(sensor.path, "on_power"))
+    workload = "assumption: the runtime's own work every tick " \
+        "(contract.RUNTIME_CYCLES_PER_TICK)" \
+        if hardware.cycles_per_tick == RUNTIME_CYCLES_PER_TICK else "given (--cycles-per-tick)"
+    add("runtime workload per tick", hardware.cycles_per_tick, "cycles", _workload, workload)
     return rows
 
 
@@ -133,16 +191,16 @@ def sensitivity(model: PlanModel) -> Sensitivity:
     budget = hardware.budget_j
     energy, quality, model = _outcome(mission, hardware, occupancy, model, budget)
     swings = []
-    for name, value, unit, step, basis, change in figures(hardware):
+    for f in figures(hardware, mission):
         results = []
-        for moved in (value - step, value + step):
+        for moved in (f.value - f.step, f.value + f.step):
             try:
-                results.append(_outcome(mission, change(hardware, max(moved, 0.0)),
+                results.append(_outcome(mission, f.change(hardware, max(moved, 0.0)),
                                         occupancy, model, budget))
             except PlanInputError:  # e.g. a workload no clock keeps up with
                 results.append((math.nan, math.nan, model))
             model = results[-1][2]
-        swings.append(Swing(name, value, unit, step, basis,
+        swings.append(Swing(f.name, f.value, f.unit, f.step, f.basis, f.source,
                             tuple(_settled(r[0], energy) for r in results),
                             tuple(_settled(r[1], quality) for r in results)))
     model_for(inputs, model)  # the caller's model as it was

@@ -12,7 +12,7 @@ files.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -80,6 +80,7 @@ class Board:
     cycles_per_clock: float
     clock_modes: tuple[ClockMode, ...]
     boot_j_given: bool  # True: boot energy from the file; False: boot_s x active_w
+    path: Path | None = field(default=None, compare=False)  # its data file: the sources
 
     def modes(self) -> list[Board]:
         """This board at each of its available clocks, slowest first."""
@@ -238,6 +239,7 @@ def read_board_file(path: Path) -> Board:
         cycles_per_clock=top.quantity("cycles_per_clock", "cycles_per_clock", 1.0, positive=True),
         clock_modes=tuple(modes),
         boot_j_given=boot_given,
+        path=path,
     )
     top.finish()
     try:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -215,3 +216,19 @@ def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
 
     walk("", data)
     return rows
+
+
+def figure_sources(path: Path, key: str) -> tuple[str, ...]:
+    """The sources a model file gives for the figure `key`, each once: the entry of that
+    dotted key ("hotel_power", "flight.drag_cd0", "sleep.power"), or of that key in every
+    `[[mode]]` table ("idle_power": one per clock)."""
+    mode = re.compile(rf"mode\[\d+\]\.{re.escape(key)}")
+    return tuple(dict.fromkeys(source for dotted, _, _, source in file_entries(path)
+                               if dotted == key or mode.fullmatch(dotted)))
+
+
+def is_assumption(source: str) -> bool:
+    """Whether a figure's source says it rests on an assumption (no measurement or
+    publication behind it, or behind a part of it): data files write "assumption: why",
+    or name the assumed part ("43 mA; x 10 V (assumption: the bus voltage)")."""
+    return "assumption" in source.lower()

@@ -9,7 +9,7 @@ cvxpy as `cp.log(1 + a * d) / np.log1p(a)`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +30,7 @@ class Sensor:
     sample_hz: float
     quality_alpha: float  # [1] curvature of the quality utility
     energy_per_byte_j: float | None = None  # communication devices only
+    path: Path | None = field(default=None, compare=False)  # its data file: the sources
 
     def utility(self, duty: np.ndarray | float) -> np.ndarray:
         """Quality [1] of data taken at duty cycle `duty` [1], concave, u(0)=0, u(1)=1."""
@@ -73,6 +74,7 @@ def read_sensor_file(path: Path) -> Sensor:
             if top.has("energy_per_byte")
             else None
         ),
+        path=path,
     )
     top.finish()
     return sensor

@@ -76,6 +76,7 @@ class Vehicle:
     climb_pitch_error_rad: float = 0.0  # the same for a climb
     hotel_includes: tuple[str, ...] = ()  # devices ("ctd", "computer", ...) in the hotel load
     uncertainty: Uncertainty | None = field(default=None, compare=False)
+    path: Path | None = field(default=None, compare=False)  # its data file: the sources
 
     def neutral(self) -> Vehicle:
         """The same glider trimmed neutral in uniform water of its reference density, its
@@ -380,6 +381,7 @@ def read_vehicle_file(path: Path) -> Vehicle:
         flight=params,
         hotel_includes=_hotel_includes(top),
         uncertainty=_uncertainty(top, spreads),
+        path=path,
         **{a: v for a, v in values.items() if a not in flight_attrs},
     )
     top.finish()

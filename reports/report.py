@@ -377,29 +377,41 @@ def _sbc_section(comparison, tables: dict[str, pd.DataFrame]) -> Section:
                    tuple(sbc.assumption_lines(comparison)))
 
 
+ASSUMED_MARK = " *"  # after the name of a figure that is an assumption
+
+
 def _sensitivity_frame(tornado) -> pd.DataFrame:
     return pd.DataFrame([{
         "figure": s.figure, "value": s.value, "unit": s.unit, "step": s.step, "basis": s.basis,
         "energy_down_wh": _wh(s.energy_j[0]), "energy_up_wh": _wh(s.energy_j[1]),
-        "quality_down": s.quality[0], "quality_up": s.quality[1]} for s in tornado.swings])
+        "quality_down": s.quality[0], "quality_up": s.quality[1], "assumed": s.assumed,
+        "source": s.source} for s in tornado.swings])
 
 
 def _sensitivity_section(tornado, frame: pd.DataFrame) -> Section:
     top = frame.iloc[0]["figure"] if len(frame) else "-"
+    assumed = frame[frame["assumed"]]["figure"].tolist() if len(frame) else []
     text = (f"<p>The plan made again with each model figure moved down and up by its "
             f"uncertainty (one standard deviation where calibration gives one, else 20 %), "
             f"at the same budget. Largest effect first: {esc(top)}. Quality shown as a gap "
-            "(no bar) means the budget could not buy the mission with that figure.</p>")
+            "(no bar) means the budget could not buy the mission with that figure.</p>",
+            f"<p>Marked{esc(ASSUMED_MARK)}: figures that rest on an assumption, as their data "
+            f"files say, rather than on measurements or published figures alone "
+            f"({esc(', '.join(assumed)) or 'none'}); the table gives every figure's "
+            "source.</p>")
+    shown = frame.assign(figure=[f + (ASSUMED_MARK if a else "")
+                                 for f, a in zip(frame["figure"], frame["assumed"],
+                                                 strict=True)])
     headers = {"energy_down_wh": "energy, figure down [Wh]",
                "energy_up_wh": "energy, figure up [Wh]", "quality_down": "quality, down",
                "quality_up": "quality, up", "step": "moved by"}
-    return Section("sensitivity", "Sensitivity: which assumption matters most", (text,),
-                   charts.tornado(frame, _wh(tornado.energy_j), tornado.quality),
+    return Section("sensitivity", "Sensitivity: which assumption matters most", text,
+                   charts.tornado(shown, _wh(tornado.energy_j), tornado.quality),
                    f"Mission energy and quality with each figure moved; the line is the plan "
                    f"({_wh(tornado.energy_j):,.4g} Wh, quality {tornado.quality:.4f}).",
                    ("sensitivity.csv",),
-                   (Table(frame, headers, {**dict.fromkeys(headers, ",.4g"),
-                                           "value": ",.4g"}),))
+                   (Table(shown.drop(columns="assumed"), headers,
+                          {**dict.fromkeys(headers, ",.4g"), "value": ",.4g"}),))
 
 
 def _montecarlo_section(frame: pd.DataFrame, summary: dict, directory: Path) -> Section:

@@ -74,3 +74,45 @@ def test_a_figure_the_budget_cannot_buy_shows_as_no_quality(tmp_path):
     assert math.isnan(hotel.quality[1])  # 0.8 W more hotel load: over the budget
     assert hotel.energy_j[1] > tight.battery.energy_j
     assert not math.isnan(hotel.quality[0])
+
+
+def test_each_figure_says_what_it_rests_on_and_sleep_figures_move_where_a_state_sleeps(
+        tmp_path):
+    awake = mission_with(tmp_path, 1000.0)
+    asleep = check_source(MISSION.format(vehicle=tmp_path / "glider.toml", battery=1000.0)
+                          .replace("  sensors", "  computer sleep between ticks\n  sensors"),
+                          "tornado.mission").checked()
+    tornadoes = {}
+    for name, mission in (("awake", awake), ("asleep", asleep)):
+        _, model = prepare(mission, load_hardware(mission))
+        tornadoes[name] = {s.figure: s for s in sensitivity(model).swings}
+    awake, asleep = tornadoes["awake"], tornadoes["asleep"]
+    # the sources are the data files' own words
+    hotel = awake["vehicle hotel_power"]
+    assert hotel.source.startswith("gliderplan calibrate on the sebastian 2014 log")
+    assert not hotel.assumed
+    idle = awake["board ts7800 idle_power"]
+    assert idle.assumed and "75 % of active" in idle.source
+    assert not awake["board ts7800 active_power"].assumed  # Table I of the paper
+    assert awake["board ts7800 active_power"].source == "Woithe & Kremer, Table I"
+    assert awake["runtime workload per tick"].assumed
+    # a board that idles between ticks has no sleep figure to move; one that sleeps has
+    assert not any("sleep_power" in f or "wake_energy" in f for f in awake)
+    sleep = asleep["board ts7800 sleep_power"]
+    assert sleep.assumed and sleep.value == pytest.approx(0.8)
+    assert sleep.energy_j[0] < sleep.energy_j[1]  # a hungrier sleep costs more
+    # the swing is the plan of a board whose data file says 0.96 W asleep
+    board = tmp_path / "hungry.toml"
+    board.write_text(preset_path("board", "ts7800").read_text().replace(
+        "power = { value = 0.8,", "power = { value = 0.96,"))
+    hungry = check_source(MISSION.format(vehicle=tmp_path / "glider.toml", battery=1000.0)
+                          .replace("computer ts7800", f'computer "{board}"')
+                          .replace("  sensors", "  computer sleep between ticks\n  sensors"),
+                          "tornado.mission").checked()
+    assert sleep.energy_j[1] == pytest.approx(plan_mission(hungry).plan.predicted_j, rel=1e-6)
+    wake = asleep["board ts7800 wake_energy"]
+    assert wake.assumed and wake.energy_j[0] < wake.energy_j[1]
+    # asleep, the idle power moves nothing the board draws between ticks
+    assert asleep["board ts7800 idle_power"].energy_j[1] - \
+        asleep["board ts7800 idle_power"].energy_j[0] < \
+        awake["board ts7800 idle_power"].energy_j[1] - awake["board ts7800 idle_power"].energy_j[0]

@@ -112,6 +112,13 @@ def test_sensitivity_is_the_plan_made_again_with_the_figure_moved(report_dir):
     names = list(table.index)
     assert any(n.startswith("board ts7800 idle_power") for n in names)
     assert any(n.startswith("sensor ctd on_power") for n in names)
+    # where a figure is an assumption, the table and the page say so, from its data file
+    assert not row["assumed"] and row["source"].startswith("gliderplan calibrate")
+    idle = table.loc["board ts7800 idle_power"]
+    assert idle["assumed"] and idle["source"].startswith("assumption: ARM926")
+    assert not table.loc["board ts7800 active_power"]["assumed"]
+    page = (report_dir / "report.html").read_text()
+    assert "board ts7800 idle_power *" in page and "board ts7800 active_power *" not in page
 
 
 @pytest.fixture(scope="module")
