@@ -30,13 +30,15 @@ class OutputFileError(UsageError):
     """A result file that cannot be written where the user asked (`-o`)."""
 
 
-def read_input(path: str | Path, what: str) -> bytes:
+def read_input(path: str | Path, what: str, *, head: int | None = None) -> bytes:
     """The bytes of the input file `path` (`what` it should be: "mission file", ...).
 
     Opened without blocking (a named pipe with no writer would hang) and checked to be a
     regular file of at most MAX_INPUT_BYTES before it is read: a device such as /dev/zero
-    never ends."""
+    never ends. `head`: only the first `head` bytes, whatever the file's size (of a file
+    that another library reads, such as a Slocum log, looked at before it is handed on)."""
     shown = str(path)
+    wanted = MAX_INPUT_BYTES + 1 if head is None else head
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
     except OSError as err:
@@ -49,16 +51,16 @@ def read_input(path: str | Path, what: str) -> bytes:
             raise InputFileError(f"{shown}: is not a regular file (a device, pipe or "
                                  f"socket), not a {what}", usage=True)
         data = b""
-        if info.st_size <= MAX_INPUT_BYTES:
+        if head is not None or info.st_size <= MAX_INPUT_BYTES:
             chunk = b"-"
-            while chunk and len(data) <= MAX_INPUT_BYTES:  # it may grow while it is read
-                chunk = os.read(fd, MAX_INPUT_BYTES + 1 - len(data))
+            while chunk and len(data) < wanted:  # it may grow while it is read
+                chunk = os.read(fd, wanted - len(data))
                 data += chunk
     except OSError as err:
         raise InputFileError(f"{shown}: cannot read: {err.strerror}", usage=True) from None
     finally:
         os.close(fd)
-    if max(info.st_size, len(data)) > MAX_INPUT_BYTES:
+    if head is None and max(info.st_size, len(data)) > MAX_INPUT_BYTES:
         raise InputFileError(f"{shown}: more than {MAX_INPUT_BYTES} bytes is too large for a "
                              f"{what} (the limit of every file gliderplan reads)")
     return data

@@ -123,14 +123,12 @@ class Table:
             )
         converted = to_model_unit(float(value), unit, dimension)
         if converted < minimum or (positive and converted <= 0.0):
-            bound = (
-                "> 0" if positive and minimum <= 0.0 else f">= {value_in(minimum, unit, dimension)}"
-            )
+            least = value_in(minimum, unit, dimension)
+            bound = "> 0" if positive and minimum <= 0.0 else f">= {least:g}"
             raise self.error(name, f"must be {bound} {unit}, got {value} {unit}")
         if converted > maximum:
-            raise self.error(
-                name, f"must be <= {value_in(maximum, unit, dimension)} {unit}, got {value} {unit}"
-            )
+            most = value_in(maximum, unit, dimension)
+            raise self.error(name, f"must be <= {most:g} {unit}, got {value} {unit}")
         return converted
 
     def sd(self, name: str, dimension: str) -> float | None:

@@ -9,12 +9,15 @@ computer's CTD (TEOS-10; NaN where the CTD had no reading).
 
 from __future__ import annotations
 
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import read_input
 
 # dbd variable -> field; the first is the time base every other series is synced onto.
 _SERIES = (
@@ -49,6 +52,33 @@ _TAGGED_SUFFIXES = {".dbd", ".ebd"}
 
 class LogError(GliderplanError):
     """Logs that cannot be read or lack a variable the calibration needs."""
+
+
+# The ASCII header of an uncompressed Slocum log: `dbd_label: ...` first, and among the
+# lines that follow, `num_ascii_tags: N`, the header's length in lines. (A compressed
+# log, *.?cd, is LZ4 blocks: dbdreader checks those itself.)
+_COMPRESSED = re.compile(r"\.[a-z]cd\Z", re.IGNORECASE)
+_HEADER_BYTES = 4096  # a header is some 15 lines of 20-40 bytes
+_TAG_COUNT = re.compile(rb"num_ascii_tags:\s*([0-9]{1,3})\s*\Z")
+
+
+def check_log_headers(files: Sequence[str | Path]) -> None:
+    """Refuse, naming the file, what is no Slocum log before dbdreader reads it: of
+    garbage it says only "could not be loaded", and on a header cut short it reads on for
+    ever. A path that is no regular file is refused as every input is."""
+    for name in files:
+        if _COMPRESSED.search(str(name)):
+            continue
+        lines = read_input(name, "Slocum log", head=_HEADER_BYTES).split(b"\n")[:-1]
+        if not lines or not lines[0].startswith(b"dbd_label:"):
+            raise LogError(f"{name}: not a Slocum log (no dbd_label line first)")
+        counts = [int(m[1]) for line in lines if (m := _TAG_COUNT.match(line.strip()))]
+        if not counts:
+            raise LogError(f"{name}: not a Slocum log (its header ends after {len(lines)} "
+                           "lines, with no num_ascii_tags line)")
+        if len(lines) < counts[0]:
+            raise LogError(f"{name}: not a Slocum log (its header ends after {len(lines)} "
+                           f"of its {counts[0]} lines)")
 
 
 @dataclass(frozen=True)
@@ -119,6 +149,7 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
     import dbdreader  # heavy, and only needed here
 
     files = expand_log_paths(paths)
+    check_log_headers(files)
     cache = cache_dir if cache_dir is not None else default_cache_dir(files)
     if cache is not None and not Path(cache).is_dir():
         raise LogError(f"{cache}: cache directory not found", usage=True)

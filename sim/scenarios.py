@@ -35,7 +35,7 @@ from gliderplan.contract.files import read_input_text
 from gliderplan.power_models.vehicle import FIGURES, Vehicle, figure_value, with_figures
 from gliderplan.sim.ocean import InternalWave, Thermocline
 from gliderplan.sim.science import SensorNoise
-from gliderplan.sim.vehicle import Current
+from gliderplan.sim.vehicle import MAX_CURRENT_MPS, Current
 
 DEFAULT_FILE = "scenarios_default.toml"
 
@@ -47,6 +47,18 @@ OCEAN_KEYS = ("thermocline_depth_m", "thermocline_thickness_m", "surface_tempera
 SENSOR_KEYS = ("temperature_sigma_c", "temperature_lag_s", "depth_sigma_m",
                "spike_probability_1", "spike_c")
 BATTERY_KEYS = ("usable_fraction_1",)
+# Where each quantity may lie, in its key's unit (a key not named: anywhere). A fixed
+# value, a uniform distribution's bounds and a normal's mean and bounds are refused
+# outside it; a normal's tails may still leave it (where the simulator needs a positive
+# value, a draw is clipped).
+RANGES = {
+    "thermocline_depth_m": (0.0, 11_000.0), "thermocline_thickness_m": (0.0, 11_000.0),
+    "surface_temperature_c": (-5.0, 50.0), "wave_amplitude_m": (0.0, 11_000.0),
+    "wave_period_s": (0.0, math.inf), "current_speed_mps": (0.0, MAX_CURRENT_MPS),
+    "temperature_sigma_c": (0.0, math.inf), "temperature_lag_s": (0.0, math.inf),
+    "depth_sigma_m": (0.0, math.inf), "spike_probability_1": (0.0, 1.0),
+    "usable_fraction_1": (0.0, 1.5),
+}
 _SALINITY_PSU = (31.0, 32.5)
 _STANDARD_NORMAL = NormalDist()  # surface and deep: salinity does not steer any routine
 
@@ -144,8 +156,20 @@ def _section(where: str, data: dict, name: str, keys: tuple[str, ...]) -> dict[s
     for key in keys:
         if key not in table:
             raise ScenarioFileError(f"{where}: {name}.{key}: missing")
-        result[key] = _distribution(f"{where}: {name}.{key}", table[key])
+        result[key] = _within(f"{where}: {name}.{key}", _distribution(
+            f"{where}: {name}.{key}", table[key]), *RANGES.get(key, (-math.inf, math.inf)))
     return result
+
+
+def _within(where: str, dist: Distribution, low: float, high: float) -> Distribution:
+    """`dist`, if the values it is written with lie in [low, high]."""
+    written = {"fixed": {"value": dist.a}, "uniform": {"low": dist.a, "high": dist.b},
+               "normal": {"mean": dist.a, "low": dist.low, "high": dist.high}}[dist.kind]
+    for field, value in written.items():
+        if math.isfinite(value) and not low <= value <= high:
+            raise ScenarioFileError(f"{where}: {field} {value:g} is outside [{low:g}, "
+                                    f"{high:g}]")
+    return dist
 
 
 def _distribution(where: str, entry: object) -> Distribution:

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gliderplan.contract.errors import GliderplanError
+from gliderplan.power_models.slocum_log import check_log_headers
 from gliderplan.sim.ocean import MeasuredProfile, OceanFileError
 
 BIN_M = 1.0  # depth bin of a cast [m]
@@ -65,9 +67,10 @@ def _latitude_deg(files: list[Path], cache: str | None) -> float:
     if not flight:
         return DEFAULT_LATITUDE_DEG
     try:
+        check_log_headers(flight)
         logs = dbdreader.MultiDBD(filenames=[str(f) for f in flight], cacheDir=cache)
         _, lat = logs.get("m_gps_lat")
-    except (dbdreader.DbdError, OSError, ValueError):
+    except (GliderplanError, dbdreader.DbdError, OSError, ValueError):
         return DEFAULT_LATITUDE_DEG
     lat = lat[np.isfinite(lat) & (np.abs(lat) <= 90.0)]
     return float(np.median(lat)) if lat.size else DEFAULT_LATITUDE_DEG
@@ -99,6 +102,7 @@ def read_logged_ocean(path: str | Path) -> LoggedOcean:
     import gsw
 
     files = science_logs(path)
+    check_log_headers(files)
     cache = _cache_dir(files)
     try:
         logs = dbdreader.MultiDBD(filenames=[str(f) for f in files], cacheDir=cache)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from gliderplan.cli.main import main
-from gliderplan.contract import MAX_INPUT_BYTES, ExitCode
+from gliderplan.contract import MAX_INPUT_BYTES, MAX_STATES, ExitCode
 
 FIG2 = str(Path(__file__).resolve().parents[1] / "examples" / "fig2.mission")
 ANNOTATED = str(Path(__file__).resolve().parents[1] / "examples" / "fig2_annotated.mission")
@@ -55,6 +55,11 @@ CASES = [
         ["check", "{bad}"], ["fmt", "{bad}"], ["plan", "{bad}"],
         ["compile", "{bad}", "-o", "out"], ["sim", "{bad}", "-o", "out"],
     ], ExitCode.BAD_INPUT, "bad.mission:2:"),
+    ("a mission larger than the runtime holds", [  # refused before a model is built
+        ["check", "{big}"], ["plan", "{big}"], ["compile", "{big}", "-o", "out"],
+        ["sim", "{big}", "-o", "out"], ["montecarlo", "{big}", "--scenarios", "2", "-o", "out"],
+        ["compare-sbc", "{big}"], ["report", "{big}", "-o", "out"],
+    ], ExitCode.BAD_INPUT, f"more than the {MAX_STATES} the runtime holds"),
     ("a stack deeper than the runtime's", [
         ["check", FIG2, "--max-stack", "40"], ["plan", FIG2, "--max-stack", "40"],
         ["compile", FIG2, "--max-stack", "40", "-o", "out"],
@@ -148,6 +153,10 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
     (tmp_path / "bad.mission").write_text("mission m\nstate s begin\n")
     (tmp_path / "broken.plan").write_text("GPPLAN 1\nmission sampleMission\n")
     (tmp_path / "file").write_text("a file, not a directory\n")
+    (tmp_path / "big.mission").write_text("mission big\n" + "".join(
+        f"state s{i}\nbegin\n  flightprofile yo(5, 20, .454, .454)\n  sensors missiontime\n"
+        f"  events\n    case missiontime >= {10 * i + 10} {'exit' if i == 1999 else 'goto '}"
+        f"{'' if i == 1999 else f's{i + 1}'}\nend\n" for i in range(2000)))
     with open(tmp_path / "huge.toml", "wb") as huge:  # sparse: no disk space taken
         huge.truncate(MAX_INPUT_BYTES + 1)
     (tmp_path / "slocum" / "mafiles").mkdir(parents=True)
@@ -155,7 +164,8 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
         (tmp_path / "slocum" / name).write_text(text)
     for argv in argvs:
         argv = [a.format(bad="bad.mission", broken="broken.plan", file="file",
-                         huge="huge.toml", slocum="slocum") for a in argv]
+                         huge="huge.toml", slocum="slocum", big="big.mission")
+                for a in argv]
         assert exit_code(argv) == code, argv
         err = capsys.readouterr().err
         assert message in err and "Traceback" not in err, (argv, err)

@@ -160,7 +160,7 @@ def test_calibrate_rejects_a_file_that_is_not_a_log(capsys, tmp_path):
     bogus = tmp_path / "x.dbd"
     bogus.write_bytes(b"not a log")
     assert main(["calibrate", str(bogus)]) == 1
-    assert "cannot read the logs" in capsys.readouterr().err
+    assert f"{bogus}: not a Slocum log (no dbd_label line first)" in capsys.readouterr().err
 
 
 def _copy_logs(tmp_path: Path) -> Path:

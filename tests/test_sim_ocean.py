@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from gliderplan.power_models.slocum_log import LogError
 from gliderplan.sim import ocean
 from gliderplan.sim.ocean import OceanFileError
 from gliderplan.sim.slocum_ocean import leg_starts, read_logged_ocean
@@ -124,7 +125,7 @@ def test_logs_that_are_not_there_say_what_is_needed(tmp_path):
     with pytest.raises(OceanFileError, match="no such file"):
         ocean.load_ocean(str(tmp_path / "x.ebd"))
     (tmp_path / "bad.ebd").write_bytes(b"not a log")
-    with pytest.raises(OceanFileError, match="bad.ebd: cannot read the science logs"):
+    with pytest.raises(LogError, match=r"bad.ebd: not a Slocum log \(no dbd_label line"):
         ocean.load_ocean(str(tmp_path / "bad.ebd"))
 
 
