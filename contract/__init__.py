@@ -135,6 +135,9 @@ SENSORS: tuple[SensorInfo, ...] = (
                "without one or without a position", "runtime"),
     SensorInfo("timeofday", 19, "s", None, "UTC time of day of the glider's clock, 0 at "
                "midnight"),
+    SensorInfo("energy_left", 20, "J", None,
+               "energy left in the battery: its capacity less what the coulomb counter "
+               "counted (the energy guard reads it)"),
 )
 N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
 # Sensors without a device of their own: always powered while logged, in the hotel load.
@@ -217,12 +220,17 @@ class TransitionKind(IntEnum):
     CALL = 3
     RETURN = 4
     EXIT = 5
+    RESERVE = 6  # the energy guard ended the mission: the battery reached its reserve
 
 
 # The language's action words and the kinds they make.
 TRANSITION_BY_ACTION: dict[str, TransitionKind] = {
     "goto": TransitionKind.GOTO, "call": TransitionKind.CALL,
     "return": TransitionKind.RETURN, "exit": TransitionKind.EXIT}
+# Every kind's name in a trace and in the runtime's event log.
+TRANSITION_NAMES: dict[TransitionKind, str] = {
+    TransitionKind.START: "start", **{k: a for a, k in TRANSITION_BY_ACTION.items()},
+    TransitionKind.RESERVE: "reserve"}
 
 NO_STATE = 0xFF  # COMMAND's `state` once exited; `from`/`to` of no state
 
@@ -266,6 +274,7 @@ class ReleaseReason(IntEnum):
     LINK_SILENT = 1  # no valid frame for the link timeout (the watchdog)
     INTERNAL_ERROR = 2  # a mission fault, I/O that failed, a crash or a stop signal
     MISSION_EXITED = 3
+    ENERGY_RESERVE = 4  # the energy guard ended the mission: surface and hold
 
 
 class RuntimeExit(IntEnum):
@@ -275,6 +284,7 @@ class RuntimeExit(IntEnum):
     BAD_INPUT = 1  # bad arguments, plan or checkpoint
     LINK_LOST = 3  # the watchdog: the link went silent
     INTERNAL = 4  # a mission fault, I/O that failed, a crash or a stop signal
+    RESERVE = 5  # the energy guard ended the mission: the battery reached its reserve
 
 
 # ---- the command line ---------------------------------------------------------------

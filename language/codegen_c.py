@@ -37,7 +37,7 @@ _ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
 _HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep", "goto_list"})
 # Sensors every compiled mission reads: the state timers and the plan's schedule run on
 # missiontime, every profile turns on depth (pitch is commanded, never read).
-_ALWAYS_READ = ("missiontime", "depth")
+_ALWAYS_READ = ("missiontime", "depth", "energy_left")  # energy_left: the energy guard
 
 
 class CodegenError(GliderplanError):
@@ -334,6 +334,7 @@ class _MissionWriter:
             f"    .read_mask = 0x{read_mask(mission):08x}u,",
             f"    .default_ballast_cc = {c_double(self.limits.default_ballast_cc)},",
             f"    .max_ballast_cc = {c_double(self.limits.max_ballast_cc)},",
+            f"    .reserve_j = {c_double(mission.battery.reserve_j)},",
             "    .clocks_mhz = board_clocks_mhz,",
             f"    .n_clocks = {len(self.limits.clocks_mhz)},",
             "    .sensor_names = sensor_names,",

@@ -304,6 +304,11 @@ class Battery:
     energy_j: float
     reserve_fraction: float = 0.0
 
+    @property
+    def reserve_j(self) -> float:
+        """[J] the energy left at which the energy guard ends the mission."""
+        return self.energy_j * self.reserve_fraction
+
 
 @dataclass(frozen=True)
 class Objective:

@@ -20,7 +20,7 @@ class Transition:
     """One row of a transition trace (the format of trace.csv and the runtime's event log)."""
 
     time_s: float
-    kind: str  # start | goto | call | return | exit
+    kind: str  # start | goto | call | return | exit | reserve (the energy guard)
     from_state: str  # "" on start
     to_state: str  # "" on exit
     stack_depth: int  # after the transition

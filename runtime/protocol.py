@@ -703,9 +703,10 @@ class Link:
                     self.recovered += sent > 1
                     return message
                 if isinstance(message, Release):
-                    if message.reason != ReleaseReason.MISSION_EXITED:
+                    if message.reason not in (ReleaseReason.MISSION_EXITED,
+                                              ReleaseReason.ENERGY_RESERVE):
                         raise LinkReleasedError(message.reason)
-                    break  # the exit's COMMAND went first and was lost: ask again
+                    break  # the mission's last COMMAND went first and was lost: ask again
                 if isinstance(message, Nak):
                     self.naks += 1
                     break

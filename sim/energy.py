@@ -18,6 +18,7 @@ plan's prediction was wrong.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +33,7 @@ from gliderplan.power_models.timeline import Timeline, energy_by_component_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunRecord
 
+GAUGE_TICKS = 64  # the coulomb counter is read out every 64 ticks (256 s at the 4 s tick)
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
 DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
 DEVICE_BITS = {d: sum(1 << s.index for s in SENSORS if s.device == d) for d in DEVICES}
@@ -58,26 +60,9 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
             plan: Plan | None) -> RunEnergy:
     """Energy of every component in every tick of the run."""
     c = record.columns
-    dt = record.tick_s
+    parts = Billing(mission, vehicle, plan, record.tick_s).per_tick_j(c)
     state = c["state"].astype(int)
-    timeline = Timeline(dt_s=dt, phase=c["phase"].astype(np.int8), depth_m=c["depth_m"],
-                        pumped_out_cc=c["pumped_out_cc"], pumped_in_cc=c["pumped_in_cc"],
-                        inflection=c["inflection"].astype(bool))
-    parts = energy_by_component_j(timeline, vehicle)
-    held = vehicle.hotel_includes  # devices whose power the hotel load already holds
-    parts[Component.COMPUTER] = _computer_j(state, dt, mission, plan) * (
-        Component.COMPUTER not in held)
-    power = c["sensor_power"].astype(np.int64)
-    for device in DEVICES:
-        on = (power & DEVICE_BITS[device]) != 0
-        if on.any() and device not in held:
-            device_timeline = Timeline(dt, timeline.phase, timeline.depth_m, np.zeros(len(on)),
-                                       np.zeros(len(on)), np.zeros(len(on), bool),
-                                       sensor_on=on[None, :])
-            parts[device] = energy_by_component_j(device_timeline, vehicle,
-                                                  sensors=[load_sensor(device)])[Component.SENSORS]
-    flying = state < len(mission.states)  # the row of the exit is the run's end: no energy
-    parts = {k: np.where(flying, v, 0.0) for k, v in parts.items()}
+    dt = record.tick_s
     names = record.state_names
     by_state: dict[str, dict[str, float]] = {}
     inflections: dict[str, int] = {}
@@ -92,32 +77,107 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
     return RunEnergy(parts, by_state, inflections, times)
 
 
-def _computer_j(state: np.ndarray, dt: float, mission: ir.CheckedMission,
-                plan: Plan | None) -> np.ndarray:
-    """The board's energy per tick in each state: the plan's board (when it names a
-    preset), else the mission's, at the clock, the work per tick and asleep or awake
-    between ticks as the plan says (without a plan: as the mission's `computer` settings
-    say, the runtime's own work elsewhere). A board that cannot keep up is billed busy."""
-    board = load_board(mission.computer.board, mission.computer.clock_mhz)
-    if plan is not None and plan.computer in preset_names("board") \
-            and plan.computer != board.name:
-        board = load_board(plan.computer, plan.clock_mhz)
+class Billing:
+    """How a tick is billed: the vehicle's loads, the computer at the clock of each state
+    (the plan's board when it names a preset, else the mission's), each sensor device.
+    The model files are read once, here."""
 
-    def tick_j(state: int) -> float:
-        if plan is not None:
-            p = plan.states[state]
-            at, cycles, sleep = board.at_clock(p.clock_mhz), p.cycles_per_tick, p.sleep
-        else:
-            use = mission.states[state].computer
-            at = board.at_clock(use.clock_mhz) if use.clock_mhz else board
-            cycles, sleep = use.cycles_per_tick or RUNTIME_CYCLES_PER_TICK, use.sleep
-        energy = float(at.tick_energy(cycles, dt, sleep).total_j)
-        return at.active_w * dt if np.isnan(energy) else energy
+    def __init__(self, mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None,
+                 dt: float) -> None:
+        self.vehicle, self.dt, self.n_states = vehicle, dt, len(mission.states)
+        self.held = vehicle.hotel_includes  # devices whose power the hotel load already holds
+        board = load_board(mission.computer.board, mission.computer.clock_mhz)
+        if plan is not None and plan.computer in preset_names("board") \
+                and plan.computer != board.name:
+            board = load_board(plan.computer, plan.clock_mhz)
 
-    per_state = np.array([tick_j(i) / dt for i in range(len(mission.states))])
-    per_tick = per_state[np.minimum(state, len(per_state) - 1)] * dt
-    per_tick[:1] += board.boot_j  # booted at its default clock for the first tick
-    return per_tick
+        def tick_j(state: int) -> float:
+            """The board's energy in a tick of `state`: at the clock, the work per tick and
+            asleep or awake between ticks as the plan says (without a plan: as the
+            mission's `computer` settings say, the runtime's own work elsewhere). A board
+            that cannot keep up is billed busy."""
+            if plan is not None:
+                p = plan.states[state]
+                at, cycles, sleep = board.at_clock(p.clock_mhz), p.cycles_per_tick, p.sleep
+            else:
+                use = mission.states[state].computer
+                at = board.at_clock(use.clock_mhz) if use.clock_mhz else board
+                cycles, sleep = use.cycles_per_tick or RUNTIME_CYCLES_PER_TICK, use.sleep
+            energy = float(at.tick_energy(cycles, dt, sleep).total_j)
+            return at.active_w * dt if np.isnan(energy) else energy
+
+        self.computer_w = np.array([tick_j(i) / dt for i in range(self.n_states)])  # [W]
+        self.boot_j = board.boot_j  # booted at its default clock in the first tick
+        self.sensors = {d: load_sensor(d) for d in DEVICES if d not in self.held}
+
+    def per_tick_j(self, c: Mapping[str, np.ndarray], boot: bool = True
+                   ) -> dict[str, np.ndarray]:
+        """Energy [J] of every component in each tick of the columns `c` (a run's, or some
+        of its ticks in order); `boot`: the first is the run's first tick, in which the
+        board boots. A sensor on in the first tick is counted as switched on there."""
+        dt, vehicle = self.dt, self.vehicle
+        state = c["state"].astype(int)
+        timeline = Timeline(dt_s=dt, phase=c["phase"].astype(np.int8), depth_m=c["depth_m"],
+                            pumped_out_cc=c["pumped_out_cc"], pumped_in_cc=c["pumped_in_cc"],
+                            inflection=c["inflection"].astype(bool))
+        parts = energy_by_component_j(timeline, vehicle)
+        computer = self.computer_w[np.minimum(state, self.n_states - 1)] * dt
+        if boot:
+            computer[:1] += self.boot_j
+        parts[Component.COMPUTER] = computer * (Component.COMPUTER not in self.held)
+        power = c["sensor_power"].astype(np.int64)
+        for device, sensor in self.sensors.items():
+            on = (power & DEVICE_BITS[device]) != 0
+            if on.any():
+                n = len(on)
+                device_timeline = Timeline(dt, timeline.phase, timeline.depth_m, np.zeros(n),
+                                           np.zeros(n), np.zeros(n, bool), sensor_on=on[None, :])
+                parts[device] = energy_by_component_j(device_timeline, vehicle,
+                                                      sensors=[sensor])[Component.SENSORS]
+        flying = state < self.n_states  # the row of the exit is the run's end: no energy
+        return {k: np.where(flying, v, 0.0) for k, v in parts.items()}
+
+
+class BatteryGauge:
+    """The simulated glider's coulomb counter as the science computer reads it out
+    (sensor `energy_left` [J]): the battery's energy less what the ticks flown drew,
+    billed as `Billing` bills them, brought up to date every GAUGE_TICKS ticks (in
+    between it reads as at the last update, as a real counter read out now and then).
+    The energy guard of the runtimes ends the mission when it reads the reserve."""
+
+    def __init__(self, mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None,
+                 tick_s: float) -> None:
+        self.billing = Billing(mission, vehicle, plan, tick_s)
+        self.left_j = mission.battery.energy_j
+        self.reserve_j = mission.battery.reserve_j
+        self.counted = 0  # ticks billed
+        self.most_per_tick_j = 0.0  # [J] the most a tick billed has drawn
+
+    def reading(self, tick: int, columns) -> float:
+        """The reading at `tick` [J]; every tick before it is flown and in `columns`
+        (sim.loop.Columns)."""
+        update = tick - tick % GAUGE_TICKS
+        if update > self.counted:
+            arrays = columns.arrays()
+            start = max(self.counted - 1, 0)  # a tick before: who switched on in the first
+            part = {k: v[start:update] for k, v in arrays.items()}
+            drawn = sum(self.billing.per_tick_j(part, boot=self.counted == 0).values()
+                        )[self.counted - start:]
+            self.left_j -= float(drawn.sum())
+            self.most_per_tick_j = max(self.most_per_tick_j, float(drawn.max()))
+            self.counted = update
+        return self.left_j
+
+    def safe_ticks(self, tick: int) -> int:
+        """How many ticks from `tick` (the reading at it taken) can be flown in one run
+        without passing an update that could read the reserve: four times the most a tick
+        has drawn so far is taken as the bound on what a tick draws."""
+        next_update = tick - tick % GAUGE_TICKS + GAUGE_TICKS
+        if self.most_per_tick_j <= 0.0:
+            return next_update - tick
+        ticks = int((self.left_j - self.reserve_j) / (4.0 * self.most_per_tick_j))
+        last_safe = self.counted + ticks - ticks % GAUGE_TICKS  # an update that reads above
+        return max(next_update, last_safe + GAUGE_TICKS) - tick
 
 
 # ---- the flight against its plan -------------------------------------------------------

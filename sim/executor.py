@@ -22,7 +22,8 @@ from gliderplan.contract import (
     FLAG_SURFACE,
     N_SENSORS,
     NO_STATE,
-    TRANSITION_BY_ACTION,
+    SURFACE_PITCH_RAD,
+    TRANSITION_NAMES,
     TransitionKind,
 )
 from gliderplan.language import ir, semantics
@@ -34,10 +35,12 @@ if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
 
 # COMMAND's `transition` of each kind the reference semantics reports.
-_KIND_CODES = {"start": TransitionKind.START, **TRANSITION_BY_ACTION}
+_KIND_CODES = {name: kind for kind, name in TRANSITION_NAMES.items()}
 _F32 = struct.Struct(f"<{N_SENSORS}f")
-_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST = (
-    SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp", "halfcycle", "wptdist"))
+_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _ENERGY = (
+    SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp", "halfcycle", "wptdist",
+                                      "energy_left"))
+_SURFACE_PITCH_F32 = struct.unpack("<f", struct.pack("<f", SURFACE_PITCH_RAD))[0]
 
 
 @functools.cache
@@ -61,9 +64,13 @@ class PythonRuntime:
     """A mission (and optional plan) executing tick by tick, like the compiled runtime."""
 
     def __init__(self, mission: ir.CheckedMission, plan: Plan | None, default_ballast_cc: float,
-                 robust_tracker: bool = True) -> None:
+                 robust_tracker: bool = True, max_ballast_cc: float | None = None) -> None:
+        """`default_ballast_cc` [cc] is flown where no plan sets one; `max_ballast_cc` [cc],
+        the pump's volume, is the surfacing of the energy guard (default: the former)."""
         self.mission, self.plan = mission, plan
         self.default_ballast_cc = default_ballast_cc
+        self.max_ballast_cc = default_ballast_cc if max_ballast_cc is None else max_ballast_cc
+        self.reserve_j = mission.battery.reserve_j
         self.robust = robust_tracker
         self.index = mission.state_index
         self.checkers = [compiled.event_checker(s) for s in mission.states]
@@ -137,6 +144,11 @@ class PythonRuntime:
         s[_HALFCYCLE] = float(self.routine.halfcycle) if self.routine is not None else 0.0
         s[_WPTDIST] = self.route.distance_m(s[_LAT], s[_LON])
         machine = self.machine
+        if machine.state is not None and s[_ENERGY] <= self.reserve_j:
+            # the energy guard: whatever the state and the stack, the mission ends here
+            self.machine = semantics.Machine(None, (), machine.variables)
+            return self._command(tick, semantics.Transition(s[0], "reserve", machine.state,
+                                                            "", 0))
         fired_i = -1 if machine.state is None else self.checkers[self.state_i](s, machine.variables)
         if fired_i >= 0:  # conditions checked once, above; the reference fires the event
             named = {info.name: s[info.index] for info in SENSORS}
@@ -156,6 +168,10 @@ class PythonRuntime:
             src = self.index[transition.from_state] if transition.from_state else NO_STATE
             dst = self.index[transition.to_state] if transition.to_state else NO_STATE
         machine = self.machine
+        if kind == TransitionKind.RESERVE:  # surface and hold
+            return Command(tick, NO_STATE, 0, kind, src, dst, 0,
+                           FLAG_DONE | FLAG_SURFACE | FLAG_CLIMBING, 0.0, _SURFACE_PITCH_F32,
+                           float(self.max_ballast_cc), 0.0, 0, self.event_count)
         if machine.state is None:
             return Command(tick, NO_STATE, 0, kind, src, dst, 0, FLAG_DONE, 0.0, 0.0, 0.0, 0.0,
                            0, self.event_count)

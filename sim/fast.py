@@ -73,9 +73,9 @@ NEAR_WAYPOINT_RADII = 3.0  # closer (in waypoint radii), the route is flown tick
 
 _COMMAND_F32 = struct.Struct("<4f")
 _ONE_F32 = struct.Struct("<f")
-_DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY = (
+_DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY, _ENERGY = (
     SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "heading", "temp",
-                                      "conductivity", "salinity"))
+                                      "conductivity", "salinity", "energy_left"))
 _HALFCYCLE, _WPTDIST, _TIMEOFDAY = (SENSOR_BY_NAME[n].index
                                     for n in ("halfcycle", "wptdist", "timeofday"))
 _RUNTIME_READINGS = (_HALFCYCLE, _WPTDIST)  # the executor's own, set before every tick's events
@@ -172,6 +172,9 @@ class FastForward:
         self._executor_reads = sorted(compiled.sensors_read(expressions)
                                       | {0, _DEPTH, _LAT, _LON, _TEMP})
         self._covered = [[_covered(p) for p in s.profiles] for s in mission.states]
+        # the battery reading changes within a run (the loop's gauge): a mission that reads
+        # it is flown tick by tick
+        self._reads_energy = _ENERGY in self._executor_reads
         self._depth_free = not self.glider.speed_depends_on_depth
         self._ocean = hasattr(science.ocean, "water_along")
         c = self.glider.current
@@ -180,7 +183,7 @@ class FastForward:
     def __call__(self, tick: int, last_tick: int, columns: Columns) -> int:
         ex = self.ex
         machine = ex.machine
-        if tick < self._resume or machine is None or machine.state is None \
+        if tick < self._resume or machine is None or machine.state is None or self._reads_energy \
                 or ex.profile_k < 0 or not (self._depth_free and self._ocean) \
                 or not self._covered[ex.state_i][ex.profile_k] \
                 or not isinstance(ex.route, _ROUTES):

@@ -37,18 +37,22 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     when it refuses the plan. `faults` (C runtime only) are injected on the line and into
     the runtime's board; the record says what they did.
     """
+    from gliderplan.sim.energy import BatteryGauge
+
     science = make_science(mission, ocean, config, vehicle)
+    gauge = BatteryGauge(mission, vehicle, plan, config.tick_s)
     if runtime == "python":
         from gliderplan.sim.executor import PythonRuntime
 
         # without a plan: the same buoyancy volume the compiler gives the C runtime
-        executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker)
+        executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
+                                 vehicle.max_ballast_cc)
         if tick_by_tick:
-            return simulate(mission, executor, science, config, progress)
+            return simulate(mission, executor, science, config, progress, gauge=gauge)
         from gliderplan.sim.fast import FastForward
 
         return simulate(mission, executor, science, config, progress,
-                        FastForward(mission, executor, science))
+                        FastForward(mission, executor, science), gauge)
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
     from gliderplan.contract import FlightLimits
@@ -68,7 +72,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)
     try:
-        record = simulate(mission, c_runtime, science, config, progress)
+        record = simulate(mission, c_runtime, science, config, progress, gauge=gauge)
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended

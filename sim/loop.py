@@ -13,7 +13,7 @@ from typing import Protocol
 
 import numpy as np
 
-from gliderplan.contract import NO_STATE, TICK_S, TRANSITION_BY_ACTION, TransitionKind
+from gliderplan.contract import NO_STATE, TICK_S, TRANSITION_NAMES, TransitionKind
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, Transition, start
 from gliderplan.power_models.vehicle import Vehicle
@@ -23,7 +23,6 @@ from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.science import ScienceComputer, SensorNoise
 from gliderplan.sim.vehicle import Current, GliderSim
 
-ACTION_OF_KIND = {kind: action for action, kind in TRANSITION_BY_ACTION.items()}
 _COMMAND_F32 = struct.Struct("<4f")
 PROGRESS_TICKS = 50_000  # report progress this often on long runs
 
@@ -55,7 +54,7 @@ class RunRecord:
     columns: dict[str, np.ndarray]
     state_names: tuple[str, ...]
     tick_s: float
-    ended: str  # "exit", "duration", "interrupted" or "fault: ..."
+    ended: str  # "exit", "reserve", "duration", "interrupted" or "fault: ..."
     surfacings: int
     faults: dict | None = None  # with injected faults: what they did (CRuntime.report)
     events_log: str | None = None  # with faults: the C runtime's own event log
@@ -123,6 +122,16 @@ class Columns:
         return {k: v[:self._filled] for k, v in self._arrays.items()}
 
 
+class Gauge(Protocol):
+    """The battery's coulomb counter (sim.energy.BatteryGauge)."""
+
+    reserve_j: float
+
+    def reading(self, tick: int, columns: Columns) -> float: ...
+
+    def safe_ticks(self, tick: int) -> int: ...
+
+
 class FastForward(Protocol):
     def __call__(self, tick: int, last_tick: int, columns: Columns) -> int:
         """Fly ticks `tick`.. ahead in one go, as the tick-by-tick loop would, appending
@@ -132,10 +141,11 @@ class FastForward(Protocol):
 
 def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceComputer,
              config: RunConfig, progress: Callable[[float, float], None] | None = None,
-             fast_forward: FastForward | None = None) -> RunRecord:
-    """Run the loop until the mission exits, the runtime faults or the duration ends.
-    With `fast_forward`, the ticks on which nothing can happen are flown in runs by it,
-    the others one by one here."""
+             fast_forward: FastForward | None = None, gauge: Gauge | None = None) -> RunRecord:
+    """Run the loop until the mission exits (or its energy guard ends it), the runtime
+    faults or the duration ends. With `fast_forward`, the ticks on which nothing can
+    happen are flown in runs by it, the others one by one here. `gauge` gives the
+    science computer its `energy_left` reading (NaN without one)."""
     names = tuple(s.name for s in mission.states)
     glider = science.glider
     tick_s = config.tick_s
@@ -156,8 +166,13 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     last_state = NO_STATE
     try:
         while tick <= last_tick:
-            if fast_forward is not None and tick:
-                flown = fast_forward(tick, last_tick, columns)
+            energy_left = math.nan if gauge is None else gauge.reading(tick, columns)
+            if fast_forward is not None and tick and (
+                    gauge is None or energy_left > gauge.reserve_j):
+                # a run never passes a read-out of the gauge at which the guard could fire
+                end = last_tick if gauge is None else min(
+                    last_tick, tick + gauge.safe_ticks(tick) - 1)
+                flown = fast_forward(tick, end, columns)
                 if flown:
                     if progress is not None and (tick + flown) // PROGRESS_TICKS \
                             > tick // PROGRESS_TICKS:
@@ -165,6 +180,9 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                     tick += flown
                     if tick > last_tick:
                         break
+                    if gauge is not None:
+                        energy_left = gauge.reading(tick, columns)
+            science.energy_left_j = energy_left
             mask, values = readings(tick)
             depth_c.append(glider.depth_m)
             pitch_c.append(glider.pitch_rad)
@@ -183,7 +201,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 trace.append(start(mission, time_s)[1])
             if cmd.transition > TransitionKind.START:
                 trace.append(Transition(
-                    time_s, ACTION_OF_KIND[cmd.transition], names[cmd.from_state],
+                    time_s, TRANSITION_NAMES[cmd.transition], names[cmd.from_state],
                     "" if cmd.to_state == NO_STATE else names[cmd.to_state], cmd.stack_depth))
             last_state = cmd.state
             state_c.append(cmd.state)
@@ -191,7 +209,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
             profile_c.append(cmd.profile)
             power_c.append(cmd.sensor_power)
             if cmd.state == NO_STATE:
-                ended = "exit"
+                ended = "reserve" if cmd.transition == TransitionKind.RESERVE else "exit"
                 phase_c.append(glider.phase)
                 out_c.append(0.0)
                 in_c.append(0.0)

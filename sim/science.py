@@ -151,6 +151,7 @@ class ScienceComputer:
             self.spikes = Draws(lambda: _spike_signs(spike_rng, noise.spike_probability))
         self.water_temperature_c = math.nan  # at the glider, this tick (for the record)
         self.ctd_temperature_c = math.nan  # the CTD's reading sent this tick; NaN: CTD off
+        self.energy_left_j = math.nan  # the coulomb counter's reading (sim.energy.BatteryGauge)
 
     def readings(self, tick: int) -> tuple[int, list[float]]:
         """(mask, values): the sensor array at `tick` (every sensor's value [registry units]) and
@@ -176,6 +177,7 @@ class ScienceComputer:
             250.0, 1.0, 0.001, math.hypot(c.north_mps, c.east_mps), 0.0,
             math.nan, math.nan,  # the runtime's readings: never sent
             math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
+            self.energy_left_j,
         ]
         mask = powered_mask(self.sensor_power)
         self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan

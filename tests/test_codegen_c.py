@@ -70,8 +70,9 @@ def test_fig2_reads_the_sensors_its_conditions_profiles_and_routes_need():
     mask = read_mask(checked(ROOT / "examples" / "fig2.mission"))
     read = {name for name, info in SENSOR_BY_NAME.items() if mask >> info.index & 1}
     # missiontime (conditions), depth (every profile), temp (thermotrackyo in s2), lat and
-    # lon (nav routes in s1 and s3); nothing else: pitch is commanded, not read.
-    assert read == {"missiontime", "depth", "temp", "lat", "lon"}
+    # lon (nav routes in s1 and s3), energy_left (the energy guard, in every mission);
+    # nothing else: pitch is commanded, not read.
+    assert read == {"missiontime", "depth", "temp", "lat", "lon", "energy_left"}
 
 
 def test_fig2_tables_name_the_transitions_of_the_paper():

@@ -38,12 +38,13 @@ from gliderplan.contract import (
 )
 from gliderplan.language import check_source, semantics
 from gliderplan.language.codegen_c import read_mask
-from gliderplan.language.registry import SENSORS
+from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime import build
 from gliderplan.runtime import protocol as p
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG2 = ROOT / "examples" / "fig2.mission"
+ENERGY_LEFT = SENSOR_BY_NAME["energy_left"].index
 TICK_S = 10.0
 STATES = {0: "s1", 1: "s2", 2: "s3", NO_STATE: "-"}
 KINDS = {1: "start", 2: "goto", 3: "call", 4: "return", 5: "exit"}
@@ -570,6 +571,7 @@ def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, 
     for tick in range(100_000):
         values = {s.index: f32(rng.uniform(-5.0, 90.0)) for s in SENSORS if mask >> s.index & 1}
         values[0] = tick * 60.0
+        values[ENERGY_LEFT] = mission.battery.energy_j  # a full battery: the guard sleeps
         command = link.step(tick, values)
         if command.transition:
             actual.append(semantics.Transition(

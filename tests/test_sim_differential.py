@@ -135,8 +135,9 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
 
 # ---- the fast executor against the tick-by-tick reference ------------------------------
 
-def flown_alike(mission, config: RunConfig, ocean: str = "bench", plan=None) -> None:
-    """Fly `mission` tick by tick and in runs; the two flights must be the same. The
+def flown_alike(mission, config: RunConfig, ocean: str = "bench", plan=None):
+    """Fly `mission` tick by tick and in runs; the two flights must be the same (the
+    flight is returned). The
     mission's vehicle flies with an incompressible hull: the fast executor leaves a glider
     whose speed changes with depth to the tick-by-tick loop, and would fly nothing here."""
     vehicle = load_vehicle(mission.vehicle)
@@ -150,6 +151,7 @@ def flown_alike(mission, config: RunConfig, ocean: str = "bench", plan=None) -> 
         ours = fast.columns[name]
         assert ours.dtype == column.dtype and ours.shape == column.shape, name
         assert np.array_equal(ours.view(np.uint8), column.view(np.uint8)), name
+    return fast
 
 
 # (ocean, noise, current north/east [m/s], duration [s]) each mission is flown in

@@ -64,9 +64,9 @@
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
 
-#define GP_N_SENSORS 20  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
+#define GP_N_SENSORS 21  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
 /** Sensors without a device of their own: always powered while logged, in the hotel load. */
-#define GP_FLIGHT_SENSORS_MASK 0xE01FFu
+#define GP_FLIGHT_SENSORS_MASK 0x1E01FFu
 
 enum {
     GP_SENSOR_MISSIONTIME = 0,  /**< time since the mission started [s] */
@@ -91,6 +91,8 @@ enum {
     /** distance to the waypoint the route flies to; NaN without one or without a position [m] */
     GP_SENSOR_WPTDIST = 18,
     GP_SENSOR_TIMEOFDAY = 19,  /**< UTC time of day of the glider's clock, 0 at midnight [s] */
+    /** energy left in the battery: its capacity less what the coulomb counter counted (the energy guard reads it) [J] */
+    GP_SENSOR_ENERGY_LEFT = 20,
 };
 
 /* ---- COMMAND's flags */
@@ -124,6 +126,7 @@ typedef enum {
 typedef enum {
     GP_TR_NONE = 0, GP_TR_START = 1, GP_TR_GOTO = 2, GP_TR_CALL = 3, GP_TR_RETURN = 4,
     GP_TR_EXIT = 5,
+    GP_TR_RESERVE = 6,  /**< the energy guard ended the mission: the battery reached its reserve */
 } gp_transition_kind;
 
 /** A COMMAND's fields in wire order: bit i of its `fields` says that field i follows. */
@@ -149,6 +152,7 @@ typedef enum {
     /** a mission fault, I/O that failed, a crash or a stop signal */
     GP_RELEASE_INTERNAL_ERROR = 2,
     GP_RELEASE_MISSION_EXITED = 3,
+    GP_RELEASE_ENERGY_RESERVE = 4,  /**< the energy guard ended the mission: surface and hold */
 } gp_release_reason;
 
 /** Exit status of a mission binary (runtime/README.md). */
@@ -157,6 +161,8 @@ typedef enum {
     GP_EXIT_BAD_INPUT = 1,  /**< bad arguments, plan or checkpoint */
     GP_EXIT_LINK_LOST = 3,  /**< the watchdog: the link went silent */
     GP_EXIT_INTERNAL = 4,  /**< a mission fault, I/O that failed, a crash or a stop signal */
+    /** the energy guard ended the mission: the battery reached its reserve */
+    GP_EXIT_RESERVE = 5,
 } gp_exit_status;
 
 #endif /* GP_CONTRACT_H */

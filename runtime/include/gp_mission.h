@@ -104,6 +104,7 @@ typedef struct {
     uint32_t read_mask;           /**< sensors the mission reads (bit i: sensor i) */
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
     double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc] */
+    double reserve_j;             /**< energy left at which the guard ends the mission [J] */
     const double *clocks_mhz;     /**< the clocks of the board it flies on [MHz] */
     uint8_t n_clocks;             /**< 1..GP_MAX_BOARD_CLOCKS */
     const char *const *sensor_names;  /**< GP_N_SENSORS names, registry order */

@@ -160,7 +160,8 @@ static int release(link_state *s, gp_release_reason reason, int status)
     }
     if (s->own_pty) {
         gp_serial_linger(s->fd, s->args->link_timeout_s,
-                         reason == GP_RELEASE_MISSION_EXITED ? answer_late : NULL, s);
+                         reason == GP_RELEASE_MISSION_EXITED
+                             || reason == GP_RELEASE_ENERGY_RESERVE ? answer_late : NULL, s);
     }
     crash_fd = -1;
     close(s->fd);
@@ -169,6 +170,17 @@ static int release(link_state *s, gp_release_reason reason, int status)
     }
     gp_checkpoint_close(&checkpoint);
     return status;
+}
+
+/* The mission is over, by its exit or by the energy guard: hand over for good. */
+static int end_mission(link_state *s)
+{
+    if (runtime.last_command.transition == GP_TR_RESERVE) {
+        say(s, "the battery reached its reserve: the mission ends, surfacing; releasing "
+               "control");
+        return release(s, GP_RELEASE_ENERGY_RESERVE, GP_EXIT_RESERVE);
+    }
+    return release(s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
 }
 
 /* ---- start-up ---------------------------------------------------------------- */
@@ -451,7 +463,7 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     s->answered_seq = frame->seq;
     send_command(s, &command, resync);
     if (runtime.machine.state == GP_EXITED) {
-        return release(s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
+        return end_mission(s);
     }
     sleep_until_next_tick(s);
     return -1;
@@ -683,9 +695,9 @@ int gp_main(int argc, char **argv)
     if (runtime.started && runtime.machine.state == GP_EXITED) {
         /* restarted after the exit's checkpoint: say who we are, hand over, and answer
          * the exit's tick again if its COMMAND never reached the science computer */
-        say(&s, "the checkpoint says the mission already exited");
+        say(&s, "the checkpoint says the mission already ended");
         send_frame(&s, GP_MSG_HELLO, gp_hello_pack(s.mission, outgoing(&s)));
-        return release(&s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
+        return end_mission(&s);
     }
     return run_link(&s);
 }

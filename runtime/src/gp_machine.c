@@ -101,9 +101,9 @@ const char *gp_mission_check(const gp_mission *mission)
     if (mission->stack_depth < 1 || mission->stack_depth > GP_MAX_STACK_DEPTH) {
         return "stack depth outside 1..GP_MAX_STACK_DEPTH";
     }
-    if (!(mission->max_ballast_cc > 0) || mission->n_clocks < 1
+    if (!(mission->reserve_j >= 0) || !(mission->max_ballast_cc > 0) || mission->n_clocks < 1
         || mission->n_clocks > GP_MAX_BOARD_CLOCKS || !mission->clocks_mhz) {
-        return "no pump volume, or a clock count outside 1..GP_MAX_BOARD_CLOCKS";
+        return "no pump volume or energy reserve, or a clock count outside 1..GP_MAX_BOARD_CLOCKS";
     }
     for (int s = 0; s < mission->n_states; s++) {
         const gp_state *state = &mission->states[s];

@@ -77,7 +77,14 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
         enter_state(rt, mission);
         record(report, start);
     }
-    if (rt->machine.state != GP_EXITED) {
+    if (rt->machine.state != GP_EXITED
+        && rt->sensors[GP_SENSOR_ENERGY_LEFT] <= mission->reserve_j) {
+        /* the energy guard: the battery reached its reserve. Whatever the state and the
+         * stack, the mission ends here; the glider surfaces and holds there */
+        record(report, (gp_transition){GP_TR_RESERVE, rt->machine.state, GP_EXITED, 0});
+        rt->machine.state = GP_EXITED;
+        rt->machine.depth = 0;
+    } else if (rt->machine.state != GP_EXITED) {
         /* the runtime's own readings, as this tick's events see them */
         rt->sensors[GP_SENSOR_HALFCYCLE] =
             rt->profile == GP_NO_PROFILE ? 0.0 : (double)rt->pilot.halfcycle;
@@ -115,7 +122,11 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
         cmd->from = last->from;
         cmd->to = last->to;
     }
-    if (rt->machine.state == GP_EXITED) {
+    if (cmd->transition == GP_TR_RESERVE) {
+        cmd->flags = GP_FLAG_DONE | GP_FLAG_SURFACE | GP_FLAG_CLIMBING;
+        cmd->pitch_rad = (float)GP_SURFACE_PITCH_RAD;
+        cmd->ballast_cc = (float)mission->max_ballast_cc;
+    } else if (rt->machine.state == GP_EXITED) {
         cmd->flags = GP_FLAG_DONE;
     } else {
         fly(rt, mission, options, cmd);

@@ -71,7 +71,8 @@
     X(test_signed_plan_should_carry_the_tag_gliderplan_plan_sign_writes)    \
     X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \
     X(test_signed_plan_should_have_a_well_formed_tail)                      \
-    X(test_key_file_should_be_64_hex_digits_readable_by_its_owner_only)
+    X(test_key_file_should_be_64_hex_digits_readable_by_its_owner_only)    \
+    X(test_energy_guard_should_end_the_mission_in_any_state_and_stack_depth)
 
 #define DECLARE(name) void name(void);
 TESTS(DECLARE)

@@ -189,3 +189,43 @@ void test_runtime_should_report_start_and_event_on_tick_0_and_refuse_overflow(vo
     CHECK_INT(cmd.state, 1);
     CHECK_INT(cmd.stack_depth, 1);
 }
+
+void test_energy_guard_should_end_the_mission_in_any_state_and_stack_depth(void)
+{
+    /* In s2, called from s1 (stack depth 1), the battery reaches its reserve: the mission
+     * ends on that tick whatever the events say, the stack emptied, and the COMMAND says
+     * surface and hold; later ticks change nothing. */
+    gp_runtime rt;
+    row rows[8];
+    gp_command commands[80], cmd;
+    gp_tick_report report;
+    gp_run_options options = {NULL, 0};
+    gp_runtime_init(&rt);
+    rt.sensors[GP_SENSOR_ENERGY_LEFT] = 5e6;
+    int n = run(&rt, &options, 0, 60, rows, 0, commands);
+    CHECK_INT(n, 2);  /* start, call into s2 */
+    CHECK_INT(rt.machine.depth, 1);
+    rt.sensors[GP_SENSOR_ENERGY_LEFT] = 1.17e6;  /* at the reserve: the guard fires */
+    n = run(&rt, &options, 61, 61, rows, n, commands);
+    CHECK_INT(n, 3);
+    CHECK_INT(rows[2].kind, GP_TR_RESERVE);
+    CHECK_INT(rows[2].from, 1);
+    CHECK_INT(rows[2].to, GP_EXITED);
+    CHECK_INT(rows[2].depth, 0);
+    cmd = commands[61];
+    CHECK_INT(cmd.state, GP_EXITED);
+    CHECK_INT(cmd.transition, GP_TR_RESERVE);
+    CHECK_INT(cmd.flags, GP_FLAG_DONE | GP_FLAG_SURFACE | GP_FLAG_CLIMBING);
+    CHECK_NEAR(cmd.pitch_rad, GP_SURFACE_PITCH_RAD, 1e-6);
+    CHECK_NEAR(cmd.ballast_cc, 233.0, 0);
+    CHECK_INT(cmd.sensor_power, 0);
+    CHECK_INT(rt.machine.depth, 0);
+    rt.sensors[GP_SENSOR_ENERGY_LEFT] = 5e6;  /* a reading that rose again changes nothing */
+    gp_runtime_tick(&rt, &gp_mission_table, &options, 62, &cmd, &report);
+    CHECK_INT(report.n_transitions, 0);
+    CHECK_INT(cmd.state, GP_EXITED);
+
+    /* no reading (NaN: a science computer that does not send it): no guard */
+    gp_runtime_init(&rt);
+    CHECK_INT(run(&rt, &options, 0, 400, rows, 0, NULL), 5);
+}

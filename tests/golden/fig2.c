@@ -8,7 +8,7 @@
 
 #include "gp_mission.h"
 
-_Static_assert(GP_N_SENSORS == 20, "the runtime and the compiler disagree on the sensor array");
+_Static_assert(GP_N_SENSORS == 21, "the runtime and the compiler disagree on the sensor array");
 
 /* ---- state 0: s1 ---------------------------------------- */
 
@@ -134,6 +134,7 @@ static const char *const sensor_names[GP_N_SENSORS] = {
     "halfcycle",
     "wptdist",
     "timeofday",
+    "energy_left",
 };
 
 static const gp_state states[3] = {
@@ -177,9 +178,10 @@ const gp_mission gp_mission_table = {
     .var_initial = NULL,
     .n_vars = 0,
     .stack_depth = 8,
-    .read_mask = 0x000002c3u,
+    .read_mask = 0x001002c3u,
     .default_ballast_cc = 233.0,
     .max_ballast_cc = 233.0,
+    .reserve_j = 1170000.0,
     .clocks_mhz = board_clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,
