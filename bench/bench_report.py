@@ -4,7 +4,7 @@
 
 What a user pays: `gliderplan report examples/thermocline_survey.mission -o DIR` from
 process start to exit (plan, 20-point Pareto sweep, a 35 h flight on the simulated
-glider, three boards compared, ~30 re-plans for the sensitivity, eight figures, the
+glider, three boards compared, ~45 re-plans for the sensitivity, six figures, the
 page and its CSV files). Baseline, measured in turn in the same run: `gliderplan plan
 --sweep 20` of the same mission (imports, plan, the same sweep, its PNG). Medians of
 wall and CPU time (bench/whole_process.py), the ratio and the page's size. Targets:

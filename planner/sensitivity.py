@@ -7,7 +7,7 @@ down and up by one standard deviation where its data file gives one (`sd`, from
 calibration), else by 20 %, and the mission is planned again at the same budget with
 `choose_plan` (the plan `gliderplan plan` would make with that figure). The model is
 built once; a figure only changes parameter values (`model_for` re-uses it while the
-structure holds), so a tornado of ~30 plans costs about as much as a short sweep. Each
+structure holds): the thermocline survey's 44 plans take 0.46 s of CPU (bench/README.md). Each
 swing carries its figure's source from the data file, so the report can say which
 figures are assumptions.
 """
