@@ -139,9 +139,16 @@ def test_a_runtime_killed_at_random_moments_flies_the_same_flight(tmp_path, faul
 
 
 def snapshot(directory: Path) -> set[tuple[str, int, int]]:
-    if not directory.exists():
-        return set()
-    return {(p.name, p.stat().st_mtime_ns, p.stat().st_size) for p in directory.iterdir()}
+    """Name, mtime and size of each file; a temporary file renamed away between the
+    listing and its stat (the writer at work) is simply not in it."""
+    files = set()
+    for path in directory.iterdir() if directory.exists() else ():
+        try:
+            status = path.stat()
+        except FileNotFoundError:
+            continue
+        files.add((path.name, status.st_mtime_ns, status.st_size))
+    return files
 
 
 def test_a_killed_sim_leaves_each_file_whole_or_absent(tmp_path):
