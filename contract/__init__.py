@@ -195,6 +195,9 @@ MAX_PAYLOAD = 240  # [bytes] of one frame's payload
 MAX_WIRE = 250  # [bytes] of COBS before the delimiter that a receiver accepts
 PLAN_PIECE = 200  # [bytes] of plan file per PLAN frame
 MAX_LINK_PLAN = 65535  # [bytes] of a plan sent over the link (PLAN's `total` is a u16)
+# [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at
+# the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes)
+SBD_MT_MESSAGE_BYTES = 1890
 COMMAND_MAX_SIZE = 38  # [bytes] of a COMMAND payload that carries every field
 BAUD = 115200  # 8N1: 10 bits per byte on the line
 

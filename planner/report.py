@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from gliderplan.contract import SBD_MT_MESSAGE_BYTES
 from gliderplan.language import ir
 from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, PlanResult
 from gliderplan.planner.planfile import StatePlan
@@ -33,6 +34,11 @@ def _state_json(result: PlanResult, s: int) -> dict:
     }
 
 
+def sbd_messages(size_bytes: int) -> int:
+    """Iridium SBD mobile-terminated messages a plan of `size_bytes` takes to send."""
+    return -(-size_bytes // SBD_MT_MESSAGE_BYTES)
+
+
 def report_json(result: PlanResult) -> dict:
     """The JSON report (planner/README.md documents every field)."""
     plan = result.plan
@@ -57,7 +63,7 @@ def report_json(result: PlanResult) -> dict:
         "states": [_state_json(result, s) for s in range(len(plan.states))],
         "confidence": result.confidence.to_json() if result.confidence is not None else None,
         "upload": {"bytes": result.upload_bytes, "signed": result.plan.seq > 0,
-                   "seq": result.plan.seq},
+                   "seq": result.plan.seq, "sbd_messages": sbd_messages(result.upload_bytes)},
     }
 
 
@@ -125,6 +131,9 @@ def report_text(result: PlanResult) -> str:
     lines.append(f"\nsolver: {result.solver_status}, {result.solver_iterations} iterations, "
                  f"{1000 * result.solve_s:.1f} ms")
     if result.upload_bytes:
+        messages = sbd_messages(result.upload_bytes)
         lines.append(f"upload: {result.upload_bytes} bytes, "
-                     + (f"signed (seq {plan.seq})" if plan.seq else "unsigned"))
+                     + (f"signed (seq {plan.seq})" if plan.seq else "unsigned")
+                     + f"; {messages} Iridium SBD message{'s' if messages > 1 else ''} "
+                     f"({SBD_MT_MESSAGE_BYTES} bytes each)")
     return "\n".join(lines) + "\n"

@@ -64,7 +64,8 @@ def test_plan_sign_reports_the_upload_size_and_signs_what_the_reader_reads(signe
     assert read_plan_bytes(data).seq == 5
     assert check_signature(data, read_key(key)) == 5
     report = json.loads(Path(f"{plan}.json").read_text())
-    assert report["upload"] == {"bytes": len(data), "signed": True, "seq": 5}
+    assert report["upload"] == {"bytes": len(data), "signed": True, "seq": 5,
+                                "sbd_messages": 1}  # Fig. 2's plan: under 1,890 bytes
     # the signature costs two lines: "seq 5" and "hmac" with 64 hex digits
     assert len(data) - len(unsigned_part(data)) == len("seq 5\n") + 5 + 64 + 1
 
@@ -72,7 +73,8 @@ def test_plan_sign_reports_the_upload_size_and_signs_what_the_reader_reads(signe
 def test_plan_without_sign_reports_its_upload_size(tmp_path, capsys):
     assert main(["plan", str(FIG2), "-o", str(tmp_path / "p.plan")]) == 0
     size = len((tmp_path / "p.plan").read_bytes())
-    assert f"upload: {size} bytes, unsigned" in capsys.readouterr().out
+    assert f"upload: {size} bytes, unsigned; 1 Iridium SBD message (1890 bytes each)" in (
+        capsys.readouterr().out)
     assert main(["plan", str(FIG2), "--seq", "3"]) == 2
 
 
@@ -123,3 +125,17 @@ def test_a_bad_key_file_is_one_clear_error(tmp_path, capsys, content, mode, said
         key.chmod(mode)
     with pytest.raises(KeyFileError, match=re.escape(said)):
         read_key(key)
+
+
+def test_a_plan_too_big_for_one_satellite_message_says_how_many_it_takes(tmp_path, capsys):
+    """The month-long survey's signed plan is over 1,890 bytes: two Iridium SBD messages."""
+    key = tmp_path / "k.key"
+    assert main(["keygen", "-o", str(key)]) == 0
+    plan = tmp_path / "month.plan"
+    assert main(["plan", str(ROOT / "examples" / "survey_month.mission"), "-o", str(plan),
+                 "--sign", str(key), "--seq", "1"]) == 0
+    size = len(plan.read_bytes())
+    assert 1890 < size <= 2 * 1890
+    assert f"upload: {size} bytes, signed (seq 1); 2 Iridium SBD messages" in (
+        capsys.readouterr().out)
+    assert json.loads(Path(f"{plan}.json").read_text())["upload"]["sbd_messages"] == 2
