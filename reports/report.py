@@ -18,7 +18,12 @@ import pandas as pd
 
 from gliderplan.contract import TICK_S
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import InputFileError, read_input_text, write_atomically
+from gliderplan.contract.files import (
+    InputFileError,
+    read_input,
+    read_input_text,
+    write_atomically,
+)
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
@@ -52,6 +57,15 @@ def _json(path: Path, what: str) -> dict:
     if not isinstance(data, dict):
         raise UsageError(f"{path}: {what}: expected a JSON object")
     return data
+
+
+def _regular(path: Path, what: str) -> None:
+    """Refuse what is no regular file before pyarrow reads it whole (a named pipe would
+    block it); the input limit does not apply to a month's run (contract.files)."""
+    try:
+        read_input(path, what, head=0)
+    except InputFileError as err:
+        raise UsageError(str(err)) from None
 
 
 # ---- the plan ------------------------------------------------------------------------
@@ -98,6 +112,7 @@ def _read_run(mission: CheckedMission, run_dir: Path) -> tuple[dict, pd.DataFram
     if summary.get("mission_hash") != mission.hash:
         raise UsageError(f"{run_dir}: a run of another mission (or of another version of it)")
     try:
+        _regular(run_dir / "timeseries.parquet", "run's time series")
         series = pq.read_table(run_dir / "timeseries.parquet",
                                columns=["time_s", "depth_m", "temperature_c", "state"]
                                ).to_pandas()
@@ -144,6 +159,7 @@ def _montecarlo(directory: Path, mission: CheckedMission) -> tuple[pd.DataFrame,
         raise UsageError(f"{directory}: Monte Carlo of another mission (or of another "
                          "version of it)")
     try:
+        _regular(directory / "scenarios.parquet", "Monte Carlo table")
         table = pd.read_parquet(directory / "scenarios.parquet",
                                 columns=["scenario", "energy_j", "budget_j", "held",
                                          "duration_s", "exhausted_s", "quality", "ended"])

@@ -206,3 +206,18 @@ def test_a_named_pipe_in_a_mission_is_refused_at_once(tmp_path):
         assert err.startswith(f"gliderplan {argv[0]}: error: pipe.toml: "), err
         assert "not a regular file" in err, err
         assert len(err.strip().splitlines()) == 1, err
+
+
+def test_a_named_pipe_in_a_run_directory_is_refused_at_once(tmp_path):
+    """The run's tables are read whole by pyarrow, past the input limit, but never from a
+    pipe."""
+    run = tmp_path / "run"
+    assert main(["sim", ANNOTATED, "--duration", "60s", "-o", str(run)]) == 0
+    (run / "timeseries.parquet").unlink()
+    os.mkfifo(run / "timeseries.parquet")
+    process = gliderplan("report", ANNOTATED, "--run", str(run), "-o", str(tmp_path / "out"),
+                         stdout=subprocess.DEVNULL)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == ExitCode.USAGE, err
+    assert err == (f"gliderplan report: error: {run}/timeseries.parquet: is not a regular file "
+                   "(a device, pipe or socket), not a run's time series\n")
