@@ -135,15 +135,17 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
 
 # ---- the fast executor against the tick-by-tick reference ------------------------------
 
-def flown_alike(mission, config: RunConfig, ocean: str = "bench", plan=None):
-    """Fly `mission` tick by tick and in runs; the two flights must be the same (the
-    flight is returned). The
-    mission's vehicle flies with an incompressible hull: the fast executor leaves a glider
-    whose speed changes with depth to the tick-by-tick loop, and would fly nothing here."""
-    vehicle = load_vehicle(mission.vehicle)
+def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=None):
+    """Fly `mission` tick by tick and in runs (in `ocean`, a preset name or an Ocean;
+    `vehicle`: default the mission's); the two flights must be the same (the flight is
+    returned). The vehicle flies with an incompressible hull: the fast executor leaves a
+    glider whose speed changes with depth to the tick-by-tick loop, and would fly
+    nothing here."""
+    vehicle = vehicle or load_vehicle(mission.vehicle)
     vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
-    reference = fly(mission, load_ocean(ocean), config, vehicle, plan, tick_by_tick=True)
-    fast = fly(mission, load_ocean(ocean), config, vehicle, plan)
+    water = load_ocean(ocean) if isinstance(ocean, str) else ocean
+    reference = fly(mission, water, config, vehicle, plan, tick_by_tick=True)
+    fast = fly(mission, water, config, vehicle, plan)
     assert fast.trace == reference.trace
     assert (fast.ended, fast.surfacings) == (reference.ended, reference.surfacings)
     assert fast.columns.keys() == reference.columns.keys()
@@ -273,3 +275,23 @@ def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean,
                        noise=NOISE_PRESETS[noise], current=Current(*current),
                        start_epoch_s=start_s)
     flown_alike(result.mission, config, ocean)
+
+
+# (mission, scenario, days): the survey's whole flight; 10 days of the month's scenario 1
+# end a run of ticks on the last of a block of random numbers (the spikes' stream)
+MONTE_CARLO_CASES = [("thermocline_survey.mission", 0, 1.5), ("thermocline_survey.mission", 1, 1.5),
+                     ("survey_month.mission", 1, 10.0)]
+
+
+@pytest.mark.parametrize(("name", "index", "days"), MONTE_CARLO_CASES)
+def test_the_fast_executor_flies_monte_carlo_scenarios_as_the_reference(name, index, days):
+    # the scenarios' own water (an internal wave), noise (spikes), current and vehicle
+    from gliderplan.sim.montecarlo import Job, scenario_seed
+    from gliderplan.sim.scenarios import draw_scenario, read_spec
+
+    mission = check_file(str(REPO / "examples" / name)).mission
+    job = Job(mission, None, load_vehicle(mission.vehicle), read_spec(), 1.0, 0, days * 86400.0)
+    scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
+    config = RunConfig(duration_s=job.duration_s, seed=scenario.seed, noise=scenario.noise,
+                       current=scenario.current)
+    flown_alike(mission, config, scenario.ocean, vehicle=scenario.vehicle)
