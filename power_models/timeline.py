@@ -55,12 +55,19 @@ def energy_by_component_j(
         busy = np.zeros(phase.shape) if timeline.board_busy is None else timeline.board_busy
         parts[Component.COMPUTER] = board.power_w(busy) * dt
     if sensors:
-        on = timeline.sensor_on
-        on_w = np.array([s.on_power_w for s in sensors])[:, None]
-        warmup_j = np.array([s.warmup_j for s in sensors])[:, None]
-        before = np.concatenate([np.zeros((on.shape[0], 1), bool), on[:, :-1]], axis=1)
-        parts[Component.SENSORS] = (on * on_w * dt + (on & ~before) * warmup_j).sum(axis=0)
+        parts[Component.SENSORS] = sum(sensor_energy_j(on, sensor, dt)
+                                       for on, sensor in zip(timeline.sensor_on, sensors,
+                                                             strict=True))
     return parts
+
+
+def sensor_energy_j(on: np.ndarray, sensor: Sensor, dt_s: np.ndarray | float) -> np.ndarray:
+    """Energy [J] per step of one sensor powered where `on` (n,) bool: its on power over
+    the step, plus its warm-up in each step that switches it on (the first step counts
+    as one when on)."""
+    switched_on = on.copy()
+    switched_on[1:] &= ~on[:-1]
+    return on * (sensor.on_power_w * dt_s) + switched_on * sensor.warmup_j
 
 
 def energy_per_step_j(

@@ -29,7 +29,7 @@ from gliderplan.language.registry import SENSORS
 from gliderplan.planner.planfile import Plan
 from gliderplan.power_models import load_board, load_sensor
 from gliderplan.power_models.catalog import preset_names
-from gliderplan.power_models.timeline import Timeline, energy_by_component_j
+from gliderplan.power_models.timeline import Timeline, energy_by_component_j, sensor_energy_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunRecord
 
@@ -61,19 +61,22 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
     """Energy of every component in every tick of the run."""
     c = record.columns
     parts = Billing(mission, vehicle, plan, record.tick_s).per_tick_j(c)
-    state = c["state"].astype(int)
     dt = record.tick_s
+    state = c["state"].astype(np.intp)
+    states = len(mission.states)
+    flown = np.bincount(np.minimum(state, states), minlength=states + 1)[:states]
+    inflected = np.bincount(state[c["inflection"].astype(bool)], minlength=states + 1)
+    by_component = {k: np.bincount(state, weights=v, minlength=states + 1)
+                    for k, v in parts.items()}
     names = record.state_names
     by_state: dict[str, dict[str, float]] = {}
     inflections: dict[str, int] = {}
     times: dict[str, float] = {}
-    for i, name in enumerate(names):
-        mine = state == i
-        if not mine.any():
-            continue
-        by_state[name] = {k: float(v[mine].sum()) for k, v in parts.items()}
-        inflections[name] = int(c["inflection"][mine].sum())
-        times[name] = float(mine.sum() * dt)
+    for i in np.flatnonzero(flown).tolist():
+        name = names[i]
+        by_state[name] = {k: float(v[i]) for k, v in by_component.items()}
+        inflections[name] = int(inflected[i])
+        times[name] = float(flown[i] * dt)
     return RunEnergy(parts, by_state, inflections, times)
 
 
@@ -129,13 +132,11 @@ class Billing:
         for device, sensor in self.sensors.items():
             on = (power & DEVICE_BITS[device]) != 0
             if on.any():
-                n = len(on)
-                device_timeline = Timeline(dt, timeline.phase, timeline.depth_m, np.zeros(n),
-                                           np.zeros(n), np.zeros(n, bool), sensor_on=on[None, :])
-                parts[device] = energy_by_component_j(device_timeline, vehicle,
-                                                      sensors=[sensor])[Component.SENSORS]
-        flying = state < self.n_states  # the row of the exit is the run's end: no energy
-        return {k: np.where(flying, v, 0.0) for k, v in parts.items()}
+                parts[device] = sensor_energy_j(on, sensor, dt)
+        idle = np.flatnonzero(state >= self.n_states)  # the exit's row ends the run: no energy
+        for joules in parts.values():
+            joules[idle] = 0.0
+        return parts
 
 
 class BatteryGauge:

@@ -23,8 +23,11 @@ A run of ticks, in order:
    changes: that fixed point is the sequential solution itself, and every iteration
    settles at least the ticks up to its first change. Near the last waypoint, where the
    glider circles and the iteration would crawl, the route is flown one tick at a time.
-The run's length adapts: twice what the last run flew, so that work computed past an
-event is bounded by the work kept.
+The run's length adapts, per state: twice what the last run flew when a tick it had
+computed was thrown away (an event on a reading, a waypoint), so that work computed past
+an event is bounded by the work kept; twice the last length when nothing computed was
+lost (the run was flown whole, or cut at once by an event on the time, whose tick is
+known before anything is computed).
 """
 
 from __future__ import annotations
@@ -154,7 +157,8 @@ class FastForward:
                  science: ScienceComputer) -> None:
         self.ex, self.science, self.glider = runtime, science, science.glider
         self.tick_s = science.tick_s
-        self.run_ticks = MIN_RUN_TICKS
+        self.run_ticks = [MIN_RUN_TICKS] * len(mission.states)  # per state
+        self._computed = 0  # ticks the last run computed past its schedule
         self.nav_window = 256
         self._backoff = 0  # ticks left to the loop after a short run
         self._resume = 0
@@ -188,8 +192,11 @@ class FastForward:
                 or not self._covered[ex.state_i][ex.profile_k] \
                 or not isinstance(ex.route, _ROUTES):
             return 0
-        flown = self._run(tick, min(self.run_ticks, last_tick - tick + 1), columns)
-        self.run_ticks = min(MAX_RUN_TICKS, max(MIN_RUN_TICKS, 2 * flown))
+        i = ex.state_i
+        self._computed = 0
+        flown = self._run(tick, min(self.run_ticks[i], last_tick - tick + 1), columns)
+        grown = 2 * (flown if flown < self._computed else self.run_ticks[i])
+        self.run_ticks[i] = min(MAX_RUN_TICKS, max(MIN_RUN_TICKS, grown))
         # after runs that flew less than they cost, the next is tried later and later:
         # where events fire every few ticks (an assignment on every tick near the
         # surface, a bookkeeping event every metre of depth) the loop's own ticks are
@@ -219,6 +226,7 @@ class FastForward:
         count = self._until_event(events[_SCHEDULE], values, count)
         if count == 0:
             return 0
+        self._computed = count
         flight = self._flight(i, k, state_plan, count)
         if flight is None or flight.count == 0:
             return 0

@@ -16,6 +16,7 @@ from gliderplan.sim.energy import FlightCheck, RunEnergy
 from gliderplan.sim.loop import RunRecord
 
 TRACE_HEADER = "time_s,kind,from_state,to_state,stack_depth"
+TIMESERIES_DICTIONARY = ("state", "stack_depth", "profile")  # few distinct values each
 
 
 def trace_csv(trace: list[Transition]) -> str:
@@ -32,15 +33,15 @@ def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
     import pyarrow as pa
 
     c = record.columns
-    names = np.array(list(record.state_names) + [""], dtype=object)
-    state = c["state"].astype(int)
+    state = c["state"].astype(np.intp)
+    names = list(record.state_names)
     columns = {
         "time_s": c["time_s"],
         "depth_m": c["depth_m"],
         "pitch_rad": c["pitch_rad"],
         "temperature_c": c["temperature_c"],
         "temp_reading_c": c["temp_reading_c"],
-        "state": names[np.where(state == NO_STATE, len(record.state_names), state)],
+        "state": _strings(names + [""], np.where(state == NO_STATE, len(names), state)),
         "stack_depth": c["stack_depth"].astype(np.int16),
         "profile": c["profile"].astype(np.int16),
         "lat_deg": c["lat_deg"],
@@ -56,14 +57,48 @@ def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
         total = total + joules
     columns["power_total_w"] = total / record.tick_s
     columns["battery_remaining_j"] = battery_j - np.cumsum(total)
-    return pa.table(columns)
+    return pa.Table.from_arrays([v if isinstance(v, pa.Array) else _arrow(v)
+                                 for v in columns.values()], names=list(columns))
 
 
-def parquet_bytes(table) -> bytes:
+# Arrow arrays are built on the numpy arrays' memory: pyarrow's own conversion would
+# import pandas to look for pandas types (a quarter of a second of every run).
+
+def _arrow(values: np.ndarray):
+    """A numpy array of numbers or booleans as an Arrow array."""
+    import pyarrow as pa
+
+    if values.dtype == np.bool_:
+        return pa.Array.from_buffers(pa.bool_(), len(values), [
+            None, pa.py_buffer(np.packbits(values, bitorder="little"))])
+    values = np.ascontiguousarray(values)
+    return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), len(values),
+                                 [None, pa.py_buffer(values)])
+
+
+def _strings(names: list[str], index: np.ndarray):
+    """An Arrow string array of names[index[i]] for every i."""
+    import pyarrow as pa
+
+    encoded = [name.encode() for name in names]
+    lengths = np.array([len(e) for e in encoded], np.int64)[index]
+    offsets = np.zeros(len(index) + 1, np.int32)
+    np.cumsum(lengths, out=offsets[1:])
+    text = np.frombuffer(b"".join(encoded), np.uint8)
+    starts = np.cumsum([0] + [len(e) for e in encoded])[index]
+    # each row's bytes: its name's start in `text` plus 0, 1, ... along the row
+    gather = np.repeat(starts - offsets[:-1], lengths) + np.arange(offsets[-1])
+    return pa.Array.from_buffers(pa.string(), len(index),
+                                 [None, pa.py_buffer(offsets), pa.py_buffer(text[gather])])
+
+
+def parquet_bytes(table, dictionary: tuple[str, ...] = ()) -> bytes:
+    """The table as Parquet; `dictionary`: the columns worth dictionary-encoding (few
+    distinct values; trying it on every column costs more time than it saves space)."""
     import pyarrow.parquet as pq
 
     sink = io.BytesIO()
-    pq.write_table(table, sink)
+    pq.write_table(table, sink, use_dictionary=list(dictionary) or True)
     return sink.getvalue()
 
 

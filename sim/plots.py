@@ -13,6 +13,7 @@ from gliderplan.sim.energy import RunEnergy
 from gliderplan.sim.loop import RunRecord
 
 BUDGET_LINE_SPAN = 3.0  # draw the budget line only if it lies within 3x the energy spent
+PLOTTED_TICKS = 6000  # a longer run is drawn from about this many of its ticks (decimated)
 
 
 def _figure():
@@ -42,7 +43,27 @@ def _state_runs(state: np.ndarray) -> list[tuple[int, int, int]]:
     return [(int(state[a]), int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
 
 
+def decimated(values: np.ndarray, most: int = PLOTTED_TICKS) -> np.ndarray:
+    """Indices of at most about `most` ticks that draw `values` as all of them would at a
+    figure's resolution: in each of most/3 equal stretches of ticks, its first tick and
+    those of its smallest and largest value (a yo's turns stay where they were, and so
+    does the band it flew), in order. All ticks when there are no more than `most`."""
+    n = len(values)
+    if n <= most:
+        return np.arange(n)
+    width = -(-3 * n // most)  # ticks per stretch, rounded up
+    stretches = -(-n // width)
+    padded = np.concatenate([values, np.full(stretches * width - n, values[-1])])
+    rows = padded.reshape(stretches, width)
+    first = np.arange(stretches) * width
+    picked = np.concatenate([first, first + rows.argmin(axis=1), first + rows.argmax(axis=1),
+                             [n - 1]])
+    return np.unique(np.minimum(picked, n - 1))
+
+
 def depth_png(record: RunRecord) -> bytes:
+    """Depth against time coloured by the water's temperature, on bands of the states
+    flown; a long run drawn decimated (`decimated`), the bands from every tick."""
     plt = _figure()
     from matplotlib.patches import Patch
 
@@ -51,23 +72,35 @@ def depth_png(record: RunRecord) -> bytes:
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
     colours = plt.get_cmap("tab10")
     state = c["state"].astype(int)
+    spans: dict[int, list[float]] = {}
     for index, a, b in _state_runs(state):
-        if index == NO_STATE:
-            continue
-        end = t[b] if b < len(t) else t[-1]
-        ax.axvspan(t[a], end, color=colours(index % 10), alpha=0.15, lw=0)
-    flown = sorted(set(state.tolist()) - {NO_STATE})
+        if index != NO_STATE:  # each stretch, then a gap (NaN) before the next
+            spans.setdefault(index, []).extend((t[a], t[b] if b < len(t) else t[-1], np.nan))
+    for index, xs in spans.items():  # one shape per state: fast for thousands of stretches
+        ax.fill_between(xs, 0, 1, color=colours(index % 10), alpha=0.15, lw=0,
+                        transform=ax.get_xaxis_transform())
     handles = [Patch(color=colours(i % 10), alpha=0.3, label=record.state_names[i])
-               for i in flown]
+               for i in sorted(spans)]
     if handles:  # none when the mission exits on its first tick
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13),
                   fontsize=8, ncol=min(len(handles), 6), frameon=False)
-    points = ax.scatter(t, c["depth_m"], c=c["temperature_c"], s=4, cmap="coolwarm")
-    fig.colorbar(points, ax=ax, label="water temperature [degC]")
+    from matplotlib.collections import LineCollection
+
+    # the dive as a line from tick to tick, each piece coloured by the water where it
+    # starts: decimated, the line runs up and down the band the glider flew
+    shown = decimated(c["depth_m"])
+    points = np.column_stack([t[shown], c["depth_m"][shown]])
+    path = LineCollection(np.stack([points[:-1], points[1:]], axis=1), cmap="coolwarm",
+                          array=c["temperature_c"][shown][:-1], linewidths=1.0)
+    ax.add_collection(path)
+    ax.autoscale_view()
+    fig.colorbar(path, ax=ax, label="water temperature [degC]")
     ax.invert_yaxis()
     ax.set_xlabel(f"mission time [{unit}]")
     ax.set_ylabel("depth [m]")
-    ax.set_title("depth profile coloured by water temperature; bands: mission states")
+    ax.set_title("depth profile coloured by water temperature; bands: mission states"
+                 + (f" ({len(shown):,} of {len(t):,} ticks drawn)" if len(shown) < len(t)
+                    else ""))
     return _png(fig, plt)
 
 
@@ -80,7 +113,9 @@ def energy_png(record: RunRecord, energy: RunEnergy, plan: Plan | None) -> bytes
     t, unit = _time_axis(c["time_s"])
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
     parts = sorted(energy.per_tick_j.items(), key=lambda kv: -kv[1].sum())
-    ax.stackplot(t, *[np.cumsum(v) / 1e3 for _, v in parts], labels=[k for k, _ in parts],
+    spent = [np.cumsum(v) for _, v in parts]  # every tick counts; a long run is drawn
+    shown = decimated(sum(spent, np.zeros(len(t))))  # decimated (cumulative: smooth)
+    ax.stackplot(t[shown], *[s[shown] / 1e3 for s in spent], labels=[k for k, _ in parts],
                  alpha=0.8)
     budget_j = plan.budget_j if plan is not None else None
     if plan is not None:
@@ -93,7 +128,8 @@ def energy_png(record: RunRecord, energy: RunEnergy, plan: Plan | None) -> bytes
                 continue
             time_in_state = np.cumsum(state == i) * record.tick_s
             planned += p.energy_j / p.time_s * np.minimum(time_in_state, p.time_s)
-        ax.plot(t, planned / 1e3, "k--", lw=1.5, label="plan (each state's prediction)")
+        ax.plot(t[shown], planned[shown] / 1e3, "k--", lw=1.5,
+                label="plan (each state's prediction)")
     title = "energy over time"
     top_kj = ax.get_ylim()[1]
     if budget_j is not None and budget_j / 1e3 <= BUDGET_LINE_SPAN * top_kj:

@@ -162,7 +162,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     table = outputs.timeseries_table(record, used, mission.battery.energy_j)
     contents = {
         "trace.csv": outputs.trace_csv(record.trace),
-        "timeseries.parquet": outputs.parquet_bytes(table),
+        "timeseries.parquet": outputs.parquet_bytes(
+            table, dictionary=outputs.TIMESERIES_DICTIONARY),
         "summary.json": outputs.summary(record, used, check, plan, meta),
     }
     if record.events_log is not None:

@@ -8,6 +8,7 @@ import os
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -332,3 +333,22 @@ def test_boards_are_not_compared_on_a_mission_that_flies_no_time(tmp_path, capsy
                        "on its first tick): boards are compared by the power they draw over "
                        "a mission's time\n")
     assert not (tmp_path / "report").exists()
+
+
+def test_a_long_run_is_plotted_from_a_decimated_series_that_keeps_its_extremes():
+    from gliderplan.sim.plots import PLOTTED_TICKS, decimated
+
+    t = np.arange(648_001) * 4.0
+    depth = 20.0 + 15.0 * np.sin(2 * np.pi * t / 410.0)  # a yo about every 100 ticks
+    depth[123_457] = 61.0  # one deep excursion between the stretches' first ticks
+    shown = decimated(depth)
+    assert len(shown) <= PLOTTED_TICKS + 1
+    assert (np.diff(shown) > 0).all() and shown[0] == 0 and shown[-1] == len(t) - 1
+    assert 123_457 in shown and depth[shown].min() == depth.min()
+    # every stretch of ticks keeps its band: the deepest and shallowest of each
+    width = -(-3 * len(t) // PLOTTED_TICKS)
+    for start in range(0, len(t) - width, 50 * width):
+        mine = shown[(shown >= start) & (shown < start + width)]
+        stretch = depth[start:start + width]
+        assert depth[mine].max() == stretch.max() and depth[mine].min() == stretch.min()
+    assert decimated(depth[:500]).tolist() == list(range(500))  # short runs: every tick
