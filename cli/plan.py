@@ -2,6 +2,8 @@
 
   plan MISSION [--battery 1.2kWh] [--computer ts7800@300] [-o PLANFILE] [--json]
        [--sign KEYFILE [--seq N]]
+  plan MISSION --confidence 0.95 [--scenarios N]   the budget holds in that share of scenarios
+  plan MISSION --occupancy-from-sim [--scenarios N]   each state's time as simulated
   plan MISSION --sweep N -o DIR     pareto.csv, computers.csv, batteries.csv, pareto.png
 
 With -o the plan file (docs/plan-format.md) is written to PLANFILE and its report to
@@ -41,17 +43,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--confidence", type=float, metavar="C",
                         help="plan so that the budget holds with this probability (e.g. "
                              "0.95): the scenario approach over simulated scenarios")
+    parser.add_argument("--occupancy-from-sim", action="store_true",
+                        help="plan each state's time (visits, the variables its profiles "
+                             "read) as the simulator flies the plan, re-planned until it "
+                             "settles: one flight, or the mean of --scenarios scenarios")
     parser.add_argument("--scenarios", type=int, metavar="N",
                         help="with --confidence: scenarios to fly (default: as many as the "
-                             "confidence needs at --risk)")
+                             "confidence needs at --risk); with --occupancy-from-sim: fly "
+                             "N drawn scenarios each round instead of one flight")
     parser.add_argument("--risk", type=float, default=1e-3, metavar="B",
                         help="with --confidence: the chance that the scenarios drawn were "
                              "unrepresentative (default 0.001)")
-    parser.add_argument("--seed", type=seed, default=0, help="with --confidence: seed")
+    parser.add_argument("--seed", type=seed, default=0,
+                        help="with --confidence or --occupancy-from-sim: seed")
     parser.add_argument("--scenario-file", metavar="FILE",
-                        help="with --confidence: the distributions to draw from")
+                        help="with --confidence or --scenarios: the distributions to draw "
+                             "from")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
-                        help="with --confidence: worker processes (default: one per core)")
+                        help="with --confidence or --scenarios: worker processes (default: "
+                             "one per core)")
     parser.add_argument("--sign", metavar="KEYFILE",
                         help="sign the plan with the vehicle's key (gliderplan keygen)")
     parser.add_argument("--seq", type=int, metavar="N",
@@ -79,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
                            output=args.output, confidence=args.confidence,
                            scenarios=args.scenarios, seed=args.seed, risk=args.risk,
                            scenario_file=args.scenario_file, workers=args.workers,
-                           progress=progress, sign=args.sign, seq=args.seq)
+                           occupancy_from_sim=args.occupancy_from_sim, progress=progress,
+                           sign=args.sign, seq=args.seq)
     except InfeasibleBudget as short:  # the report says so too; the error is for main
         if args.json:
             print(json.dumps(infeasible_json(short), indent=2))

@@ -275,6 +275,12 @@ class State:
     # power management keep their hash, and with it their plans and builds).
     computer: ComputerUse = field(default=NO_COMPUTER_USE, metadata={"omit_default": True})
 
+    @property
+    def profile_variables(self) -> tuple[str, ...]:
+        """The variables its profiles' arguments read, sorted."""
+        return tuple(sorted(set().union(*(variables_read(a) for p in self.profiles
+                                          for a in p.args))))
+
 
 @dataclass(frozen=True)
 class Variable:

@@ -30,6 +30,7 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
               output: str | Path | None = None,
               confidence: float | None = None, scenarios: int | None = None, seed: int = 0,
               risk: float = 1e-3, scenario_file: str | Path | None = None, workers: int = 1,
+              occupancy_from_sim: bool = False,
               progress: Callable[[float, float], None] | None = None,
               sign: str | Path | None = None, seq: int | None = None) -> PlanResult:
     """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
@@ -38,7 +39,11 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     `confidence`, the budget holds with that probability: the scenario approach over
     `scenarios` simulated scenarios (default: as many as the confidence needs at `risk`)
     drawn from `scenario_file` (default: the shipped one) from `seed`, flown by `workers`
-    processes (planner/confidence.py). With `output`, write the plan file there and its
+    processes (planner/confidence.py). With `occupancy_from_sim`, the time in each state
+    (its visits, the variables its profiles read) comes from flying the plan, planned
+    again until it settles (planner/simulated.py): one flight in the simulator's default
+    water from `seed`, or the mean of `scenarios` scenarios drawn as for `confidence`.
+    With `output`, write the plan file there and its
     JSON report beside it (`output`.json), atomically; with `sign` (a key file) the plan
     file is signed as plan number `seq` (default: `signing.default_sequence()`). The
     result holds the plan
@@ -50,9 +55,17 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     from gliderplan.planner.planfile import write_plan_bytes
     from gliderplan.planner.report import report_json
 
+    if confidence is not None and occupancy_from_sim:
+        raise UsageError("--confidence and --occupancy-from-sim: choose one (a plan at a "
+                         "confidence plans each scenario on the times it flew)")
+    if scenarios is not None and scenarios < 1:
+        raise UsageError(f"--scenarios {scenarios}: must be at least 1")
     hardware = load_hardware(mission, battery=battery, computer=computer,
                              cycles_per_tick=cycles_per_tick)
-    if confidence is None:
+    if occupancy_from_sim:
+        result = _plan_on_simulation(mission, hardware, scenarios, seed, scenario_file,
+                                     workers, progress)
+    elif confidence is None:
         result = plan_mission(mission, hardware)
     else:
         from gliderplan.planner.confidence import plan_mission_at_confidence
@@ -62,8 +75,6 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
         for name, value in (("--confidence", confidence), ("--risk", risk)):
             if not 0.0 < value < 1.0:
                 raise UsageError(f"{name} {value:g}: must lie strictly between 0 and 1")
-        if scenarios is not None and scenarios < 1:
-            raise UsageError(f"--scenarios {scenarios}: must be at least 1")
         spec = read_spec(scenario_file)
         with scenario_executor(workers) as executor:
             result = plan_mission_at_confidence(
@@ -81,6 +92,27 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
         write_atomically(output, data)
         write_atomically(f"{output}.json", json.dumps(report_json(result), indent=2) + "\n")
     return result
+
+
+def _plan_on_simulation(mission: CheckedMission, hardware, scenarios: int | None,  # noqa: ANN001
+                        seed: int, scenario_file: str | Path | None, workers: int,
+                        progress: Callable[[float, float], None] | None) -> PlanResult:
+    from gliderplan.planner.simulated import flown_in_scenarios, flown_once, plan_on_simulation
+
+    if scenarios is None:
+        return plan_on_simulation(mission, hardware, flown_once(mission, hardware, seed),
+                                  f"one flight in the bench ocean with the CTD's noise, "
+                                  f"seed {seed}")
+    from gliderplan.sim.backends import scenario_executor
+    from gliderplan.sim.scenarios import read_spec
+
+    spec = read_spec(scenario_file)
+    with scenario_executor(workers) as executor:
+        fly_plan = flown_in_scenarios(mission, hardware, scenarios, seed, spec, executor,
+                                      workers, progress)
+        return plan_on_simulation(mission, hardware, fly_plan,
+                                  f"the mean of {scenarios} scenarios drawn from "
+                                  f"{spec.source}, seed {seed}")
 
 
 @dataclass(frozen=True)

@@ -238,8 +238,7 @@ def _variable_arguments(mission: ir.CheckedMission, trace: list[Visit]) -> list[
         first.setdefault(visit.state, visit.variables)
     initial = {v.name: v.initial for v in mission.variables}
     for state in mission.states:
-        read = sorted(set().union(*(ir.variables_read(a) for p in state.profiles
-                                    for a in p.args)) & assigned)
+        read = sorted(set(state.profile_variables) & assigned)
         if read:
             values = first.get(state.name, initial)
             notes.append(f"{state.name}: profile arguments {', '.join(read)} planned at "
@@ -265,8 +264,14 @@ def _summarise(mission: ir.CheckedMission, trace: list[Visit], notes: list[str],
                      tuple(dict.fromkeys(notes)), legs)
 
 
-def measured_occupancy(mission: ir.CheckedMission, occupancy_s: dict[str, float]) -> Occupancy:
-    """Occupancy measured in simulation (state name -> seconds); unknown names are errors."""
+def measured_occupancy(mission: ir.CheckedMission, occupancy_s: dict[str, float],
+                       visits: dict[str, int] | None = None,
+                       variables: dict[str, dict[str, float]] | None = None,
+                       note: str = "time in each state: measured in simulation") -> Occupancy:
+    """Occupancy measured in simulation (state name -> seconds; unknown names are errors),
+    with the visits and the variables on entry measured too where given (else one visit
+    to each state flown, and the variables' initial values). `note` says where the
+    figures come from, for the plan's assumptions."""
     unknown = sorted(set(occupancy_s) - set(mission.state_index))
     if unknown:
         raise ValueError(f"occupancy names states the mission does not have: {', '.join(unknown)}")
@@ -274,7 +279,9 @@ def measured_occupancy(mission: ir.CheckedMission, occupancy_s: dict[str, float]
     if bad:
         raise ValueError(f"occupancy of {', '.join(bad)} must be a finite number of seconds >= 0")
     time_s = {s.name: float(occupancy_s.get(s.name, 0.0)) for s in mission.states}
-    visits = {k: int(v > 0.0) for k, v in time_s.items()}
+    stays = {k: int(v > 0.0) for k, v in time_s.items()}
+    stays.update({k: max(int(n), stays[k]) for k, n in (visits or {}).items()})
     initial = {v.name: v.initial for v in mission.variables}
-    return Occupancy(time_s, visits, {s.name: initial for s in mission.states}, (),
-                     "simulation", ("time in each state: measured in simulation",))
+    on_entry = {s.name: {**initial, **(variables or {}).get(s.name, {})}
+                for s in mission.states}
+    return Occupancy(time_s, stays, on_entry, (), "simulation", (note,))

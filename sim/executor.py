@@ -91,6 +91,7 @@ class PythonRuntime:
         self.sleeps = [plan.states[i].sleep if plan is not None else s.computer.sleep
                        for i, s in enumerate(mission.states)]
         self.suspends = 0  # ticks after which the board was put to sleep
+        self.entry_variables: dict[str, dict[str, float]] = {}  # state -> on first entry
 
     def _power_table(self, i: int, state: ir.State) -> tuple[tuple[int, float, float], ...]:
         """(sensor index, period [s], on [s]) per logged sensor; period 0: always on."""
@@ -105,6 +106,7 @@ class PythonRuntime:
         return tuple(table)
 
     def _enter(self, state: str) -> None:
+        self.entry_variables.setdefault(state, dict(self.machine.variables))
         i = self.index[state]
         self.state_i = i
         self.state = self.mission.states[i]

@@ -48,11 +48,14 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
                                  vehicle.max_ballast_cc)
         if tick_by_tick:
-            return simulate(mission, executor, science, config, progress, gauge=gauge)
-        from gliderplan.sim.fast import FastForward
+            record = simulate(mission, executor, science, config, progress, gauge=gauge)
+        else:
+            from gliderplan.sim.fast import FastForward
 
-        return simulate(mission, executor, science, config, progress,
-                        FastForward(mission, executor, science), gauge)
+            record = simulate(mission, executor, science, config, progress,
+                              FastForward(mission, executor, science), gauge)
+        record.entry_variables = executor.entry_variables
+        return record
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
     from gliderplan.contract import FlightLimits

@@ -59,6 +59,18 @@ class RunRecord:
     faults: dict | None = None  # with injected faults: what they did (CRuntime.report)
     events_log: str | None = None  # with faults: the C runtime's own event log
     suspends: int = 0  # ticks after which the runtime put the board to sleep
+    # state -> the variables as it was first entered (the Python executor's; None for
+    # the C runtime, whose variables the link does not carry)
+    entry_variables: dict[str, dict[str, float]] | None = None
+
+    def visits(self) -> dict[str, int]:
+        """Stays in each state flown: every transition into it (the start, a goto, a call,
+        a return to the caller)."""
+        stays = dict.fromkeys(self.state_names, 0)
+        for transition in self.trace:
+            if transition.to_state:
+                stays[transition.to_state] += 1
+        return stays
 
 
 def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float, float]:

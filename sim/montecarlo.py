@@ -85,9 +85,19 @@ def fly_scenario(job: Job, index: int) -> dict:
         "overran_component": component,
         "overran_j": excess,
         **{f"time_{name}_s": energy.time_by_state_s.get(name, 0.0) for name in names},
+        **{f"visits_{name}": n for name, n in record.visits().items()},
+        **entry_arguments(job.mission, record),
         **{f"energy_{k}_j": v for k, v in energy.by_component_j().items()},
         **{f"drawn_{k}": v for k, v in scenario.drawn.items()},
     }
+
+
+def entry_arguments(mission: ir.CheckedMission, record: RunRecord) -> dict[str, float]:
+    """`entered_STATE_VARIABLE`: each variable a state's profiles read, as the state was
+    first entered (NaN if it never was): what the planner evaluates the profiles with."""
+    entered = record.entry_variables or {}
+    return {f"entered_{state.name}_{name}": entered.get(state.name, {}).get(name, math.nan)
+            for state in mission.states for name in state.profile_variables}
 
 
 def _end_state(record: RunRecord) -> str:

@@ -65,27 +65,26 @@ def depth_png(record: RunRecord) -> bytes:
     """Depth against time coloured by the water's temperature, on bands of the states
     flown; a long run drawn decimated (`decimated`), the bands from every tick."""
     plt = _figure()
+    from matplotlib.collections import LineCollection, PolyCollection
     from matplotlib.patches import Patch
 
     c = record.columns
     t, unit = _time_axis(c["time_s"])
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
     colours = plt.get_cmap("tab10")
-    state = c["state"].astype(int)
-    spans: dict[int, list[float]] = {}
-    for index, a, b in _state_runs(state):
-        if index != NO_STATE:  # each stretch, then a gap (NaN) before the next
-            spans.setdefault(index, []).extend((t[a], t[b] if b < len(t) else t[-1], np.nan))
-    for index, xs in spans.items():  # one shape per state: fast for thousands of stretches
-        ax.fill_between(xs, 0, 1, color=colours(index % 10), alpha=0.15, lw=0,
-                        transform=ax.get_xaxis_transform())
+    stretches = [(index, t[a], t[b] if b < len(t) else t[-1])
+                 for index, a, b in _state_runs(c["state"].astype(int)) if index != NO_STATE]
+    # every stretch a band across the axes' height: one collection for all of them
+    ax.add_collection(PolyCollection(
+        [[(a, 0.0), (b, 0.0), (b, 1.0), (a, 1.0)] for _, a, b in stretches],
+        facecolors=[colours(index % 10) for index, _, _ in stretches], alpha=0.15, lw=0,
+        transform=ax.get_xaxis_transform()), autolim=False)
+    flown = sorted({index for index, _, _ in stretches})
     handles = [Patch(color=colours(i % 10), alpha=0.3, label=record.state_names[i])
-               for i in sorted(spans)]
+               for i in flown]
     if handles:  # none when the mission exits on its first tick
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13),
                   fontsize=8, ncol=min(len(handles), 6), frameon=False)
-    from matplotlib.collections import LineCollection
-
     # the dive as a line from tick to tick, each piece coloured by the water where it
     # starts: decimated, the line runs up and down the band the glider flew
     shown = decimated(c["depth_m"])
