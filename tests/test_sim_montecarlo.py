@@ -1,9 +1,14 @@
 """Monte Carlo as a user runs it: seeded scenarios, results that do not depend on the
-workers, the files of a run, bad scenario files, Ctrl-C."""
+workers, the files of a run, bad scenario files, Ctrl-C, progress."""
 
 from __future__ import annotations
 
+import io
 import json
+import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -136,6 +141,49 @@ def test_ctrl_c_keeps_the_scenarios_that_finished(tmp_path, monkeypatch, capsys)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] and summary["scenarios"] == 2
     assert "2 of 5 scenarios finished" in capsys.readouterr().err
+
+
+def test_ctrl_c_on_a_pool_keeps_what_finished_and_the_log_has_a_line_per_update(tmp_path):
+    out = tmp_path / "mc"
+    run = subprocess.Popen(
+        [sys.executable, "-m", "gliderplan.cli", "montecarlo", str(SURVEY), "--scenarios",
+         "200", "--workers", "2", "-o", str(out)],
+        stderr=subprocess.PIPE, text=True, start_new_session=True)
+    logged = []
+    for line in run.stderr:  # a log, not a terminal: one line per update
+        logged.append(line)
+        if line.endswith(" 3 of 200 scenarios\n"):
+            break
+    os.killpg(run.pid, signal.SIGINT)  # Ctrl-C at a terminal reaches the workers too
+    said = run.stderr.read()
+    assert run.wait(timeout=120) == 130
+    summary = json.loads((out / "summary.json").read_text())
+    finished = summary["scenarios"]
+    assert summary["interrupted"] and 3 <= finished < 200
+    table = pd.read_parquet(out / "scenarios.parquet")
+    assert len(table) == finished and table["scenario"].is_unique
+    assert f"{finished} of 200 scenarios finished" in said and "Traceback" not in said
+    counts = [int(line.split("] ")[1].split(" of ")[0]) for line in logged]
+    assert counts == list(range(1, 4)) and "\r" not in "".join(logged)
+
+
+def test_progress_is_one_bar_redrawn_in_place_on_a_terminal(monkeypatch):
+    from gliderplan.cli.progress import ProgressBar
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    terminal = Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    bar = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios")
+    for done in (1, 2, 3):
+        bar(done, 3)
+    bar.finish()
+    shown = terminal.getvalue()
+    assert shown.count("\r") == 3 and shown.count("\n") == 1
+    assert shown.startswith("\r[##########....................] 1 of 3 scenarios")
+    assert shown.endswith("\r[##############################] 3 of 3 scenarios\n")
 
 
 @pytest.mark.parametrize(("text", "message"), [
