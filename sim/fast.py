@@ -166,6 +166,7 @@ class FastForward:
         self._changes: dict[int, np.ndarray] = {}  # per glide: its depth changes, long
         self._change_lists: dict[int, list[float]] = {}
         self._sums: dict[int, list[float]] = {}
+        self._rows: dict[int, list[tuple[float, float, float, float]]] = {}
         # each state's events by the stage of a run at which their readings are known
         self._events = [_staged(s.events) for s in mission.states]
         # the sensors whose last value the executor reads: the mission's conditions,
@@ -179,7 +180,7 @@ class FastForward:
         # the battery reading changes within a run (the loop's gauge): a mission that reads
         # it is flown tick by tick
         self._reads_energy = _ENERGY in self._executor_reads
-        self._depth_free = not self.glider.speed_depends_on_depth
+        self._rigid = not self.glider.speed_depends_on_depth
         self._ocean = hasattr(science.ocean, "water_along")
         c = self.glider.current
         self._current_reading = math.hypot(c.north_mps, c.east_mps)
@@ -188,7 +189,7 @@ class FastForward:
         ex = self.ex
         machine = ex.machine
         if tick < self._resume or machine is None or machine.state is None or self._reads_energy \
-                or ex.profile_k < 0 or not (self._depth_free and self._ocean) \
+                or ex.profile_k < 0 or not self._ocean \
                 or not self._covered[ex.state_i][ex.profile_k] \
                 or not isinstance(ex.route, _ROUTES):
             return 0
@@ -351,16 +352,19 @@ class FastForward:
         elif leg == _CLIMB and reading <= low:
             leg = _DIVE
         legs: list[tuple[int, int, Glide, int]] = []
-        j, depth, actuators, exact = 0, g.depth_m, g.actuators, False
+        j, depth, actuators, exact = 0, g.depth_m, g.actuators, not self._rigid
+        depths = [depth]  # a compressible hull's: every leg flown exactly, in order
         while True:
             while j < count:
                 glide = self._glide(actuators, commands[leg])
                 if glide is None:
                     break
                 if exact:  # the leg the certificate refuted: tick by tick in binary32
-                    ticks, leg_depths, stop = self._leg(glide, depth, noise, j, spread,
-                                                        edges[leg], leg == _DIVE, count - j)
-                    exact = False
+                    leg_of = self._leg if self._rigid else self._leg_squeezed
+                    ticks, leg_depths, stop = leg_of(glide, depth, noise, j, spread,
+                                                     edges[leg], leg == _DIVE, count - j)
+                    depths += leg_depths[1:ticks + 1]
+                    exact = not self._rigid
                     if stop:  # clamped at the surface: the run ends before that tick
                         if ticks:
                             legs.append((j, ticks, glide, leg))
@@ -378,6 +382,8 @@ class FastForward:
                 leg = _CLIMB if leg == _DIVE else _DIVE
             if not legs:
                 return None
+            if not self._rigid:  # each leg exact as flown: nothing to certify
+                return self._assemble(j, legs, np.array(depths), surface=None)
             flight = self._assemble(j, legs, None, surface=None)
             refuted = self._refuted(flight, noise_array, edges)
             if refuted is None:
@@ -496,12 +502,17 @@ class FastForward:
         phase = column("phase")
         out, inn = column("pumped_out_cc"), column("pumped_in_cc")
         inflection = column("inflection").astype(bool)
-        distance = column("distance_m")
         if depth_m is None:
             depth_m = np.empty(ticks + 1)
             depth_m[0] = self.glider.depth_m
             depth_m[1:] = column("dz_m")
             np.add.accumulate(depth_m, out=depth_m)
+        if self._rigid or not legs:
+            distance = column("distance_m")
+        else:  # at the depth each tick starts at
+            u_per_root = np.repeat([gl.speeds_per_root[0] for _, _, gl, _ in legs], lengths)
+            distance = self.glider.glide_distances(u_per_root, column("ballast_cc"),
+                                                   column("glide_s"), depth_m[:ticks])
         surface_time = np.empty(0)
         count = ticks
         if surface is not None and surface[0]:
@@ -574,9 +585,44 @@ class FastForward:
                 return limit, depths, False
             guess = 2 * n
 
+    def _leg_squeezed(self, glide: Glide, depth: float, noise: list[float], first: int,
+                      spread: float, edge: float, diving: bool, limit: int
+                      ) -> tuple[int, list[float], bool]:
+        """`_leg` for a compressible hull, whose glide speed changes with the depth each
+        tick starts at: the depths one tick after another (`_SqueezedLeg`), the turn
+        decided on each tick's reading as `_leg` decides it."""
+        flight = self.glider.vehicle.flight
+        rows = self._rows.get(id(glide))
+        if rows is None:  # per row: sign of the buoyancy, volume plus trim, signed speed, time
+            w_per_root = glide.speeds_per_root[1]
+            rows = self._rows[id(glide)] = [
+                (math.copysign(1.0, b), b + flight.trim_cc,
+                 -w_per_root if b > 0.0 else w_per_root, s)
+                for b, s in zip(glide.ballast_cc.tolist(), glide.glide_s.tolist(),
+                                strict=True)]
+        margin = spread + 1e-6 * max(1.0, abs(edge))  # beyond which no reading can reach it
+        near = edge - margin if diving else edge + margin
+        leg = _SqueezedLeg(flight, rows, noise, first, near, edge, diving, limit)
+        settled = min(glide.settled, limit)
+        end = leg.ticks(depth, 1, settled)  # settling: each tick its own row
+        if end is not None:
+            return end
+        if settled == limit:
+            return limit, leg.depths, False
+        speed = rows[-1][2]
+        if diving and speed >= 0.0:
+            return leg.down(settled + 1)
+        if not diving and speed < 0.0:
+            return leg.up(settled + 1)
+        # away from its edge (not a yo's leg): tick by tick
+        return leg.ticks(leg.depths[-1], settled + 1, limit) or (limit, leg.depths, False)
+
     def _depths(self, glide: Glide, depth: float, ticks: int) -> np.ndarray:
         """Depths before each of `ticks` ticks of a glide from `depth`, and after the last:
-        the running sum of the depth changes, added in order as the glider adds them."""
+        the running sum of the depth changes, added in order as the glider adds them. A
+        compressible hull's climb stops after the first depth at the surface."""
+        if not glide.rigid:
+            return self._climb_squeezed(glide, depth, ticks)
         changes = self._changes.get(id(glide))
         if changes is None or len(changes) <= ticks:
             n = max(2 * ticks + 2, 512)
@@ -586,6 +632,21 @@ class FastForward:
         depths = changes[:ticks + 1].copy()
         depths[0] = depth
         return np.add.accumulate(depths, out=depths)
+
+    def _climb_squeezed(self, glide: Glide, depth: float, ticks: int) -> np.ndarray:
+        """A compressible hull's climb to the surface, tick by tick (`GliderSim.glide_rates`):
+        the depths before each tick and after the last, which is the first at the surface
+        (at most `ticks` ticks). Unclamped, as `_depths`: the caller clamps the last."""
+        depths = [depth]
+        rate, per_root, settled = self.glider.glide_rates, glide.speeds_per_root, glide.settled
+        ballast, glide_s = glide.ballast_cc.tolist(), glide.glide_s.tolist()
+        for t in range(ticks):
+            row = min(t, settled)
+            depth = depth + rate(per_root, ballast[row], glide_s[row], depth)[0]
+            depths.append(depth)
+            if depth <= SURFACE_DEPTH_M:
+                break
+        return np.array(depths)
 
     # ---- the route ---------------------------------------------------------------------
 
@@ -719,6 +780,85 @@ class _Route:
     def positions_at(self, tick: int) -> tuple[float, float, float, float]:
         return (float(self.dr_lat[tick]), float(self.dr_lon[tick]), float(self.lat[tick]),
                 float(self.lon[tick]))
+
+
+class _SqueezedLeg:
+    """The ticks of one yo leg of a compressible hull (`FastForward._leg_squeezed`): each
+    depth the last plus `GliderSim.glide_rates`' change at it, inlined with the same
+    operations in the same order (these loops run once for every tick such a glider
+    flies); the leg ends on the first tick whose reading reaches its edge (as `_leg`
+    decides it), or before a depth the glider would clamp at the surface. The methods
+    return (ticks, depths before each tick and after the last, whether the run stops)."""
+
+    def __init__(self, flight, rows: list[tuple[float, float, float, float]],  # noqa: ANN001
+                 noise: list[float], first: int, near: float, edge: float, diving: bool,
+                 limit: int) -> None:
+        self.weight = flight.rho_kg_m3 * flight.g_m_s2  # net_buoyancy_cc's (rho g) depth
+        self.squeeze = flight.hull_volume_cc * flight.compressibility_per_pa
+        self.rows, self.noise, self.first = rows, noise, first
+        self.near, self.edge, self.diving, self.limit = near, edge, diving, limit
+        self.depths: list[float] = []
+
+    def _turns(self, t: int, d: float) -> bool:
+        """Whether tick t's reading, at depth d, ends the leg (the last tick is left to
+        the run after it)."""
+        return t < self.limit and _reaches(d + self.noise[self.first + t], self.edge,
+                                           self.diving)
+
+    def ticks(self, d: float, start: int, stop: int) -> tuple[int, list[float], bool] | None:
+        """Ticks start..stop from depth d (the depth before `start`), each on its own row
+        (the last row from there on); None if the leg goes on after `stop`."""
+        if start == 1:
+            self.depths = [d]
+        depths, rows, near = self.depths, self.rows, self.near
+        weight, squeeze = self.weight, self.squeeze
+        last = len(rows) - 1
+        for t in range(start, stop + 1):
+            sign, base, speed, glide_s = rows[min(t - 1, last)]
+            x = sign * (base - squeeze * (weight * d))
+            d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s  # sqrt(max(x, 0.0))
+            if d < 0.0:  # the glider would clamp it at the surface: the loop flies it
+                return t - 1, depths, True
+            depths.append(d)
+            if ((d >= near) if self.diving else (d <= near)) and self._turns(t, d):
+                return t, depths, False
+        return None
+
+    def down(self, start: int) -> tuple[int, list[float], bool]:
+        """A settled dive from tick `start`: it cannot clamp, only the deep edge ends it."""
+        weight, squeeze, near, sqrt = self.weight, self.squeeze, self.near, math.sqrt
+        sign, base, speed, glide_s = self.rows[-1]
+        depths = self.depths
+        append = depths.append
+        d = depths[-1]
+        for t in range(start, self.limit + 1):
+            x = sign * (base - squeeze * (weight * d))
+            d = d + speed * sqrt(0.0 if x < 0.0 else x) * glide_s
+            append(d)
+            if d >= near and self._turns(t, d):
+                return t, depths, False
+        return self.limit, depths, False
+
+    def up(self, start: int) -> tuple[int, list[float], bool]:
+        """A settled climb from tick `start`: deeper than the edge's neighbourhood and the
+        surface, nothing can end it."""
+        weight, squeeze, near, sqrt = self.weight, self.squeeze, self.near, math.sqrt
+        sign, base, speed, glide_s = self.rows[-1]
+        shallow = max(near, 0.0)
+        depths = self.depths
+        append = depths.append
+        d = depths[-1]
+        for t in range(start, self.limit + 1):
+            x = sign * (base - squeeze * (weight * d))
+            d = d + speed * sqrt(0.0 if x < 0.0 else x) * glide_s
+            if d <= shallow:
+                if d < 0.0:
+                    return t - 1, depths, True
+                if d <= near and self._turns(t, d):
+                    append(d)
+                    return t, depths, False
+            append(d)
+        return self.limit, depths, False
 
 
 class _Readings:

@@ -53,9 +53,11 @@ MAX_SETTLE_TICKS = 64  # a command whose actuators have not settled by then is f
 class Glide:
     """The ticks of a glider under one command below the surface (`GliderSim.glide_from`):
     row i < settled is the i-th tick, row `settled` every tick after (the actuators have
-    settled and the speed does not change with depth). Per row: depth change [m],
-    distance through the water [m], the step's outputs, the pitch [rad] and the
-    actuators at the start of the tick."""
+    settled). Per row: the step's outputs, the pitch [rad] and the actuators at the start
+    of the tick, the pumped volume the glide flies with [cc] and the time it glides [s];
+    and, for a hull whose speed does not change with depth (`rigid`), the depth change
+    [m] and the distance through the water [m]. With a compressible hull those depend on
+    the depth each tick starts at: `GliderSim.glide_rates`."""
 
     dz_m: np.ndarray
     distance_m: np.ndarray
@@ -64,8 +66,12 @@ class Glide:
     pumped_in_cc: np.ndarray
     inflection: np.ndarray
     pitch_rad: np.ndarray
+    ballast_cc: np.ndarray
+    glide_s: np.ndarray
     actuators: list[tuple[float, float, float, float]]
     settled: int
+    speeds_per_root: tuple[float, float]  # (u, w) [m s-1] per square root of a cc: `_per_root`
+    rigid: bool
 
 
 def _moves(start: tuple[float, float], north_m: np.ndarray, east_m: np.ndarray,
@@ -118,9 +124,9 @@ class GliderSim:
         self._turn_left_s = 0.0  # time the current inflection still turns after pumping
         self._geometry: dict[float, tuple[float, float]] = {}
 
-    def _speeds(self, pitch_rad: float, ballast_cc: float) -> tuple[float, float]:
-        """(u, w) [m s-1] magnitudes at the current depth with `ballast_cc` pumped (signed);
-        commands repeat, so the angle-of-attack bisection runs once per pitch."""
+    def _per_root(self, pitch_rad: float) -> tuple[float, float]:
+        """(u, w) [m s-1] per square root of the net buoyancy [cc] at a pitch [rad]
+        magnitude; commands repeat, so the angle-of-attack solve runs once per pitch."""
         if pitch_rad <= 0.0 or pitch_rad >= math.pi / 2:
             return 0.0, 0.0
         per_root = self._geometry.get(pitch_rad)
@@ -128,9 +134,7 @@ class GliderSim:
             gamma, speed = glide_geometry(self.vehicle.flight, pitch_rad)
             per_root = (float(speed * math.cos(gamma)), float(speed * math.sin(gamma)))
             self._geometry[pitch_rad] = per_root
-        net = net_buoyancy_cc(self.vehicle.flight, ballast_cc, self.depth_m)
-        root = math.sqrt(max(math.copysign(1.0, ballast_cc) * net, 0.0))
-        return per_root[0] * root, per_root[1] * root
+        return per_root
 
     def step(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
              heading_rad: float, heading_valid: bool, surface: bool) -> None:
@@ -159,6 +163,19 @@ class GliderSim:
         (outputs and internal state updated), then the glider glides (or hovers, on zero
         buoyancy). Returns (depth change [m], distance through the water [m], hovering);
         a glide's depth is clamped at the surface by the caller, a hover's is not."""
+        glide_s, pitch_rad = self._actuate(pitch_rad, ballast_cc)
+        if ballast_cc == 0.0 and self.ballast_cc == 0.0:
+            # hovering: small buoyancy corrections toward the target depth
+            step_m = min(abs(depth_target_m - self.depth_m), HOVER_RATE_M_S * self.tick_s)
+            return math.copysign(step_m, depth_target_m - self.depth_m), 0.0, True
+        dz, distance = self.glide_rates(self._per_root(abs(pitch_rad)), self.ballast_cc,
+                                        glide_s, self.depth_m)
+        return dz, distance, False
+
+    def _actuate(self, pitch_rad: float, ballast_cc: float) -> tuple[float, float]:
+        """The battery, the pump and the turn move toward a command for one tick (outputs
+        and internal state updated). Returns (the time left to glide [s], the pitch the
+        servo settles at for the command [rad])."""
         dt = self.tick_s
         v = self.vehicle
         # battery: toward the pitch the servo settles at for the command, at the motor's rate
@@ -193,13 +210,7 @@ class GliderSim:
             turning = min(self._turn_left_s, glide_s)
             self._turn_left_s -= turning
             glide_s -= turning
-
-        if ballast_cc == 0.0 and self.ballast_cc == 0.0:
-            # hovering: small buoyancy corrections toward the target depth
-            step_m = min(abs(depth_target_m - self.depth_m), HOVER_RATE_M_S * dt)
-            return math.copysign(step_m, depth_target_m - self.depth_m), 0.0, True
-        u, w = self._speeds(abs(pitch_rad), self.ballast_cc)
-        return (-w if self.ballast_cc > 0.0 else w) * glide_s, u * glide_s, False
+        return glide_s, pitch_rad
 
     @property
     def actuators(self) -> tuple[float, float, float, float]:
@@ -216,25 +227,50 @@ class GliderSim:
     def glide_from(self, actuators: tuple[float, float, float, float], pitch_rad: float,
                    ballast_cc: float) -> Glide | None:
         """The ticks under water under one gliding command from `actuators`: `step` on a
-        scratch copy until the battery, the pump and the turn have settled (the speed must
-        not depend on depth). None if the glider would hover or does not settle."""
+        scratch copy until the battery, the pump and the turn have settled. None if the
+        glider would hover or does not settle."""
         scratch = copy.copy(self)
         scratch.actuators = actuators
         rows, starts = [], []
+        per_root = (0.0, 0.0)
         for _ in range(MAX_SETTLE_TICKS):
             before = scratch.actuators
             scratch.pumped_out_cc = scratch.pumped_in_cc = 0.0
             scratch.inflection = False
-            dz, distance, hovering = scratch.below_surface(0.0, pitch_rad, ballast_cc)
-            if hovering:
-                return None
+            glide_s, servo_pitch = scratch._actuate(pitch_rad, ballast_cc)
+            if ballast_cc == 0.0 and scratch.ballast_cc == 0.0:
+                return None  # hovering
+            per_root = scratch._per_root(abs(servo_pitch))
+            dz, distance = scratch.glide_rates(per_root, scratch.ballast_cc, glide_s,
+                                               scratch.depth_m)
             rows.append((dz, distance, scratch.phase, scratch.pumped_out_cc,
-                         scratch.pumped_in_cc, scratch.inflection, before[0]))
+                         scratch.pumped_in_cc, scratch.inflection, before[0],
+                         scratch.ballast_cc, glide_s))
             starts.append(before)
             if scratch.actuators == before:
                 return Glide(*(np.array(c) for c in zip(*rows, strict=True)), actuators=starts,
-                             settled=len(rows) - 1)
+                             settled=len(rows) - 1, speeds_per_root=per_root,
+                             rigid=not self.speed_depends_on_depth)
         return None
+
+    def glide_rates(self, per_root: tuple[float, float], ballast_cc: float, glide_s: float,
+                    depth_m: float) -> tuple[float, float]:
+        """(depth change [m], distance through the water [m]) of a tick that glides
+        `glide_s` [s] from `depth_m` [m] with `ballast_cc` pumped, at a pitch whose speeds
+        per square root of the net buoyancy are `per_root`: `below_surface`'s glide."""
+        net = net_buoyancy_cc(self.vehicle.flight, ballast_cc, depth_m)
+        root = math.sqrt(max(math.copysign(1.0, ballast_cc) * net, 0.0))
+        u, w = per_root[0] * root, per_root[1] * root
+        return (-w if ballast_cc > 0.0 else w) * glide_s, u * glide_s
+
+    def glide_distances(self, u_per_root: np.ndarray, ballast_cc: np.ndarray,
+                        glide_s: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+        """`glide_rates`' distance [m] over arrays of ticks, element by element bit for bit
+        (the fast executor's): `u_per_root` [m s-1 cc^-1/2], `ballast_cc` [cc], `glide_s`
+        [s] and the depth each tick starts at [m]."""
+        net = net_buoyancy_cc(self.vehicle.flight, ballast_cc, depth_m)
+        root = np.sqrt(np.maximum(np.copysign(1.0, ballast_cc) * net, 0.0))
+        return u_per_root * root * glide_s
 
     def surface_along(self, count: int, surface_time_s: float
                       ) -> tuple[np.ndarray, np.ndarray, int]:

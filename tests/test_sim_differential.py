@@ -135,14 +135,16 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
 
 # ---- the fast executor against the tick-by-tick reference ------------------------------
 
-def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=None):
+def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=None,
+                rigid: bool = False):
     """Fly `mission` tick by tick and in runs (in `ocean`, a preset name or an Ocean;
-    `vehicle`: default the mission's); the two flights must be the same (the flight is
-    returned). The vehicle flies with an incompressible hull: the fast executor leaves a
-    glider whose speed changes with depth to the tick-by-tick loop, and would fly
-    nothing here."""
+    `vehicle`: default the mission's, whose calibrated hull is compressible: its speed
+    changes with depth; `rigid`: with the hull made incompressible, whose legs the fast
+    executor predicts and certifies instead); the two flights must be the same (the
+    flight is returned)."""
     vehicle = vehicle or load_vehicle(mission.vehicle)
-    vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
+    if rigid:
+        vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
     water = load_ocean(ocean) if isinstance(ocean, str) else ocean
     reference = fly(mission, water, config, vehicle, plan, tick_by_tick=True)
     fast = fly(mission, water, config, vehicle, plan)
@@ -156,24 +158,26 @@ def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=No
     return fast
 
 
-# (ocean, noise, current north/east [m/s], duration [s]) each mission is flown in
-FAST_CASES = [("bench", "ctd", (0.0, 0.0), 2 * 86400.0),
-              ("sea-trial", "nonmonotonic", (0.08, -0.05), 6 * 3600.0)]
+# (ocean, noise, current north/east [m/s], duration [s], rigid hull) each mission is
+# flown in: the calibrated (compressible) hull and a rigid one
+FAST_CASES = [("bench", "ctd", (0.0, 0.0), 2 * 86400.0, False),
+              ("sea-trial", "nonmonotonic", (0.08, -0.05), 6 * 3600.0, True)]
 
 
-@pytest.mark.parametrize("case", FAST_CASES, ids=["bench", "sea-trial-current"])
+@pytest.mark.parametrize("case", FAST_CASES, ids=["bench", "sea-trial-current-rigid"])
 @pytest.mark.parametrize("path", MISSIONS, ids=lambda p: p.name)
 def test_the_fast_executor_flies_every_mission_as_the_reference(path, case):
-    ocean, noise, (north, east), duration_s = case
+    ocean, noise, (north, east), duration_s, rigid = case
     mission = check_file(str(path)).mission
     config = RunConfig(duration_s=min(duration_s, mission.horizon_s or duration_s), seed=11,
                        noise=NOISE_PRESETS[noise], current=Current(north, east))
-    flown_alike(mission, config, ocean)
+    flown_alike(mission, config, ocean, rigid=rigid)
 
 
+@pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
 @pytest.mark.parametrize("name", ["fig2_annotated.mission", "thermocline_survey.mission",
                                   "survey_month.mission"])
-def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, tmp_path):
+def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, rigid, tmp_path):
     from gliderplan.planner.planfile import load_plan
 
     path = REPO / "examples" / name
@@ -182,7 +186,7 @@ def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, tmp_
     mission = check_file(str(path)).mission
     config = RunConfig(duration_s=min(86400.0, mission.horizon_s), seed=3,
                        noise=NOISE_PRESETS["ctd"], current=Current(0.03, 0.1))
-    flown_alike(mission, config, "sea-trial", load_plan(plan_path, mission))
+    flown_alike(mission, config, "sea-trial", load_plan(plan_path, mission), rigid=rigid)
 
 
 def test_the_fast_executor_flies_a_hand_written_schedule_as_the_reference(tmp_path):
@@ -265,16 +269,16 @@ def random_missions(draw) -> str:
        noise=st.sampled_from(["none", "ctd", "nonmonotonic"]),
        current=st.tuples(st.sampled_from([0.0, 0.05, -0.12]), st.sampled_from([0.0, 0.07])),
        seed=st.integers(0, 2**31), tick_s=st.sampled_from([4.0, 2.0, 3.7]),
-       start_s=st.floats(9e8, 2e9))
+       start_s=st.floats(9e8, 2e9), rigid=st.booleans())
 def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean, noise,
                                                                   current, seed, tick_s,
-                                                                  start_s):
+                                                                  start_s, rigid):
     result = check_source(source, "random.mission")
     assert result.mission is not None, result.render()
     config = RunConfig(tick_s=tick_s, duration_s=12000.0, seed=seed,
                        noise=NOISE_PRESETS[noise], current=Current(*current),
                        start_epoch_s=start_s)
-    flown_alike(result.mission, config, ocean)
+    flown_alike(result.mission, config, ocean, rigid=rigid)
 
 
 # (mission, scenario, days): the survey's whole flight; 10 days of the month's scenario 1
