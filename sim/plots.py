@@ -1,9 +1,12 @@
 """Plots of a simulated run: the depth profile coloured by water temperature with the
-states as bands (the paper's Fig. 5), and energy over time against the plan."""
+states as bands (the paper's Fig. 5), and energy over time against the plan. Each is
+drawn from a series (`depth_series`, `energy_series`) that is small whatever the run's
+length, so that another process can draw it (sim/plotter.py)."""
 
 from __future__ import annotations
 
 import io
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -16,7 +19,8 @@ BUDGET_LINE_SPAN = 3.0  # draw the budget line only if it lies within 3x the ene
 PLOTTED_TICKS = 6000  # a longer run is drawn from about this many of its ticks (decimated)
 
 
-def _figure():
+def pyplot():
+    """matplotlib.pyplot on the Agg backend (imported on the first call)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -61,81 +65,120 @@ def decimated(values: np.ndarray, most: int = PLOTTED_TICKS) -> np.ndarray:
     return np.unique(np.minimum(picked, n - 1))
 
 
-def depth_png(record: RunRecord) -> bytes:
+@dataclass(frozen=True)
+class DepthSeries:
+    """What depth.png draws of a run (`depth_series`): small whatever the run's length."""
+
+    time: np.ndarray  # the ticks drawn, in `unit`
+    unit: str  # of the time axis: s, min, h or d
+    depth_m: np.ndarray
+    temperature_c: np.ndarray  # the water's at those ticks
+    stretches: list[tuple[int, float, float]]  # (state, start, end [unit]) of every stretch
+    state_names: tuple[str, ...]
+    ticks: int  # in the run
+
+
+def depth_series(record: RunRecord) -> DepthSeries:
+    """The depth profile decimated (`decimated`), the states' stretches from every tick."""
+    c = record.columns
+    t, unit = _time_axis(c["time_s"])
+    stretches = [(index, float(t[a]), float(t[b] if b < len(t) else t[-1]))
+                 for index, a, b in _state_runs(c["state"].astype(int)) if index != NO_STATE]
+    shown = decimated(c["depth_m"])
+    return DepthSeries(t[shown], unit, c["depth_m"][shown], c["temperature_c"][shown],
+                       stretches, record.state_names, len(t))
+
+
+def depth_png(series: DepthSeries) -> bytes:
     """Depth against time coloured by the water's temperature, on bands of the states
-    flown; a long run drawn decimated (`decimated`), the bands from every tick."""
-    plt = _figure()
+    flown (the paper's Fig. 5)."""
+    plt = pyplot()
     from matplotlib.collections import LineCollection, PolyCollection
     from matplotlib.patches import Patch
 
-    c = record.columns
-    t, unit = _time_axis(c["time_s"])
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
     colours = plt.get_cmap("tab10")
-    stretches = [(index, t[a], t[b] if b < len(t) else t[-1])
-                 for index, a, b in _state_runs(c["state"].astype(int)) if index != NO_STATE]
     # every stretch a band across the axes' height: one collection for all of them
     ax.add_collection(PolyCollection(
-        [[(a, 0.0), (b, 0.0), (b, 1.0), (a, 1.0)] for _, a, b in stretches],
-        facecolors=[colours(index % 10) for index, _, _ in stretches], alpha=0.15, lw=0,
-        transform=ax.get_xaxis_transform()), autolim=False)
-    flown = sorted({index for index, _, _ in stretches})
-    handles = [Patch(color=colours(i % 10), alpha=0.3, label=record.state_names[i])
+        [[(a, 0.0), (b, 0.0), (b, 1.0), (a, 1.0)] for _, a, b in series.stretches],
+        facecolors=[colours(index % 10) for index, _, _ in series.stretches], alpha=0.15,
+        lw=0, transform=ax.get_xaxis_transform()), autolim=False)
+    flown = sorted({index for index, _, _ in series.stretches})
+    handles = [Patch(color=colours(i % 10), alpha=0.3, label=series.state_names[i])
                for i in flown]
     if handles:  # none when the mission exits on its first tick
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13),
                   fontsize=8, ncol=min(len(handles), 6), frameon=False)
     # the dive as a line from tick to tick, each piece coloured by the water where it
     # starts: decimated, the line runs up and down the band the glider flew
-    shown = decimated(c["depth_m"])
-    points = np.column_stack([t[shown], c["depth_m"][shown]])
+    points = np.column_stack([series.time, series.depth_m])
     path = LineCollection(np.stack([points[:-1], points[1:]], axis=1), cmap="coolwarm",
-                          array=c["temperature_c"][shown][:-1], linewidths=1.0)
+                          array=series.temperature_c[:-1], linewidths=1.0)
     ax.add_collection(path)
     ax.autoscale_view()
     fig.colorbar(path, ax=ax, label="water temperature [degC]")
     ax.invert_yaxis()
-    ax.set_xlabel(f"mission time [{unit}]")
+    ax.set_xlabel(f"mission time [{series.unit}]")
     ax.set_ylabel("depth [m]")
+    drawn = len(series.time)
     ax.set_title("depth profile coloured by water temperature; bands: mission states"
-                 + (f" ({len(shown):,} of {len(t):,} ticks drawn)" if len(shown) < len(t)
+                 + (f" ({drawn:,} of {series.ticks:,} ticks drawn)" if drawn < series.ticks
                     else ""))
     return _png(fig, plt)
 
 
-def energy_png(record: RunRecord, energy: RunEnergy, plan: Plan | None) -> bytes:
-    """Cumulative energy by component against the plan: each state's predicted energy
-    spent at its predicted rate along the simulated states, up to its predicted time, and
-    the plan's budget."""
-    plt = _figure()
+@dataclass(frozen=True)
+class EnergySeries:
+    """What energy.png draws of a run (`energy_series`): small whatever the run's length."""
+
+    time: np.ndarray  # the ticks drawn, in `unit`
+    unit: str
+    spent_kj: dict[str, np.ndarray]  # component -> energy spent by then, most first
+    planned_kj: np.ndarray | None  # the plan's prediction by then (None: no plan)
+    budget_j: float | None
+
+
+def energy_series(record: RunRecord, energy: RunEnergy, plan: Plan | None) -> EnergySeries:
+    """Cumulative energy by component, and each state's predicted energy spent at its
+    predicted rate along the simulated states, up to its predicted time; decimated (the
+    curves are cumulative: smooth), every tick counted."""
     c = record.columns
     t, unit = _time_axis(c["time_s"])
-    fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
     parts = sorted(energy.per_tick_j.items(), key=lambda kv: -kv[1].sum())
-    spent = [np.cumsum(v) for _, v in parts]  # every tick counts; a long run is drawn
-    shown = decimated(sum(spent, np.zeros(len(t))))  # decimated (cumulative: smooth)
-    ax.stackplot(t[shown], *[s[shown] / 1e3 for s in spent], labels=[k for k, _ in parts],
-                 alpha=0.8)
-    budget_j = plan.budget_j if plan is not None else None
+    spent = {k: np.cumsum(v) for k, v in parts}
+    shown = decimated(sum(spent.values(), np.zeros(len(t))))
+    planned = None
     if plan is not None:
         # each state spends its predicted energy at its predicted rate, for no longer
         # than the time the plan gave it
         state = c["state"].astype(int)
         planned = np.zeros(len(state))
         for i, p in enumerate(plan.states):
-            if not p.time_s:
-                continue
-            time_in_state = np.cumsum(state == i) * record.tick_s
-            planned += p.energy_j / p.time_s * np.minimum(time_in_state, p.time_s)
-        ax.plot(t[shown], planned[shown] / 1e3, "k--", lw=1.5,
+            if p.time_s:
+                time_in_state = np.cumsum(state == i) * record.tick_s
+                planned += p.energy_j / p.time_s * np.minimum(time_in_state, p.time_s)
+        planned = planned[shown] / 1e3
+    return EnergySeries(t[shown], unit, {k: v[shown] / 1e3 for k, v in spent.items()},
+                        planned, plan.budget_j if plan is not None else None)
+
+
+def energy_png(series: EnergySeries) -> bytes:
+    """Cumulative energy by component against the plan's prediction and budget."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
+    ax.stackplot(series.time, *series.spent_kj.values(), labels=list(series.spent_kj),
+                 alpha=0.8)
+    if series.planned_kj is not None:
+        ax.plot(series.time, series.planned_kj, "k--", lw=1.5,
                 label="plan (each state's prediction)")
     title = "energy over time"
     top_kj = ax.get_ylim()[1]
+    budget_j = series.budget_j
     if budget_j is not None and budget_j / 1e3 <= BUDGET_LINE_SPAN * top_kj:
         ax.axhline(budget_j / 1e3, color="red", lw=1, label="plan budget")
     elif budget_j is not None:  # a line far above the data would flatten the curves
         title += f" (plan budget {budget_j / 1e3:,.0f} kJ, off the scale)"
-    ax.set_xlabel(f"mission time [{unit}]")
+    ax.set_xlabel(f"mission time [{series.unit}]")
     ax.set_ylabel("energy [kJ]")
     ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title)
@@ -156,7 +199,7 @@ def energy_histogram_png(energy_j: np.ndarray, budget_j: np.ndarray, nominal_bud
                          held_share: float) -> bytes:
     """Energy spent in each scenario against the budget: the plan's budget as a line, the
     range of the scenarios' own budgets (their batteries differ) as a band."""
-    plt = _figure()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     ax.hist(energy_j / 1e3, bins=min(50, max(10, len(energy_j) // 10)), color="tab:blue",
             alpha=0.8, label="scenarios")
@@ -175,7 +218,7 @@ def energy_histogram_png(energy_j: np.ndarray, budget_j: np.ndarray, nominal_bud
 def exhaustion_png(exhausted_s: np.ndarray, duration_s: np.ndarray) -> bytes:
     """Share of scenarios whose budget still holds against mission time (a scenario whose
     budget ran out at t drops out at t; one that never ran out stays to its end)."""
-    plt = _figure()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     n = len(exhausted_s)
     end = float(np.nanmax(duration_s)) if n else 1.0

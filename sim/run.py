@@ -81,7 +81,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
     horizon, else 30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the
     replayed logs' first sample, else 2000-01-01T00:00:00Z). `netcdf`: also write
-    trajectory.nc (sim.export). `progress(done_s, total_s)` is called on long runs.
+    trajectory.nc (sim.export). `progress(done_s, total_s)` is called on long runs, whose
+    plots a second process draws (sim/plotter.py).
     `plots`: False leaves out depth.png and energy.png (a caller that draws its own).
     `key_path`: the key provisioned on the simulated vehicle; the plan must be signed with
     it (the C runtime gets it uploaded over the link and checks it itself).
@@ -104,6 +105,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim.flight import fly
     from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig
     from gliderplan.sim.ocean import load_ocean
+    from gliderplan.sim.plotter import PlotProcess
     from gliderplan.sim.science import NOISE_PRESETS
     from gliderplan.sim.vehicle import Current
 
@@ -147,32 +149,52 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         key = read_key(key_path)
         if runtime == "python":  # the C runtime checks for itself
             check_signature(read_plan_data(plan_path), key, str(plan_path))
-    record = fly(mission, water, config, vehicle, plan, None if plan_path is None
-                 else str(plan_path), runtime, robust_tracker=tracker == "robust",
-                 progress=progress, key_path=None if key_path is None else str(key_path),
-                 state_dir=state_dir, faults=fault_spec)
-    if not len(record.columns["time_s"]):
-        raise KeyboardInterrupt  # nothing flown, nothing to write
-    used = accounting.account(record, mission, vehicle, plan)
-    check = accounting.check_flight(used, plan)
-    meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
-            "ocean": ocean, "noise": noise, "tracker": tracker, "seed": seed,
-            "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
-            "vehicle": mission.vehicle, "start_utc": utc_text(start)}
-    table = outputs.timeseries_table(record, used, mission.battery.energy_j)
-    contents = {
-        "trace.csv": outputs.trace_csv(record.trace),
-        "timeseries.parquet": outputs.parquet_bytes(
-            table, dictionary=outputs.TIMESERIES_DICTIONARY),
-        "summary.json": outputs.summary(record, used, check, plan, meta),
-    }
-    if record.events_log is not None:
-        contents["events.log"] = record.events_log
-    if plots:
-        contents["depth.png"] = drawing.depth_png(record)
-        contents["energy.png"] = drawing.energy_png(record, used, plan)
-    if netcdf:
-        contents[NETCDF_FILE] = export.netcdf_bytes(table.to_pandas(), meta)
+    plotter: PlotProcess | None = None
+
+    def progressed(done_s: float, total_s: float) -> None:
+        """A run long enough to report its progress draws its plots in a second process,
+        which imports matplotlib while the rest is flown."""
+        nonlocal plotter
+        if plots and plotter is None:
+            plotter = PlotProcess()
+        if progress is not None:
+            progress(done_s, total_s)
+
+    try:
+        record = fly(mission, water, config, vehicle, plan, None if plan_path is None
+                     else str(plan_path), runtime, robust_tracker=tracker == "robust",
+                     progress=progressed, key_path=None if key_path is None else str(key_path),
+                     state_dir=state_dir, faults=fault_spec)
+        if not len(record.columns["time_s"]):
+            raise KeyboardInterrupt  # nothing flown, nothing to write
+        used = accounting.account(record, mission, vehicle, plan)
+        check = accounting.check_flight(used, plan)
+        contents = {}
+        if plots:
+            series = drawing.depth_series(record), drawing.energy_series(record, used, plan)
+            if plotter is not None:
+                plotter.draw(*series)  # drawn there while the other files are written here
+            else:
+                contents["depth.png"] = drawing.depth_png(series[0])
+                contents["energy.png"] = drawing.energy_png(series[1])
+        meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
+                "ocean": ocean, "noise": noise, "tracker": tracker, "seed": seed,
+                "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
+                "vehicle": mission.vehicle, "start_utc": utc_text(start)}
+        table = outputs.timeseries_table(record, used, mission.battery.energy_j)
+        contents["trace.csv"] = outputs.trace_csv(record.trace)
+        contents["timeseries.parquet"] = outputs.parquet_bytes(
+            table, dictionary=outputs.TIMESERIES_DICTIONARY)
+        contents["summary.json"] = outputs.summary(record, used, check, plan, meta)
+        if record.events_log is not None:
+            contents["events.log"] = record.events_log
+        if netcdf:
+            contents[NETCDF_FILE] = export.netcdf_bytes(table.to_pandas(), meta)
+        if plotter is not None:
+            contents["depth.png"], contents["energy.png"] = plotter.pngs()
+    finally:
+        if plotter is not None:
+            plotter.close()
     written = [name for name in (*RUN_FILES, NETCDF_FILE) if name in contents]
     for name in written:
         write_atomically(out / name, contents[name])

@@ -6,6 +6,7 @@ import json
 import math
 import os
 import shutil
+import signal
 from pathlib import Path
 
 import numpy as np
@@ -223,6 +224,28 @@ def test_ctrl_c_keeps_the_part_flown(tmp_path, capsys, monkeypatch):
     assert json.loads((tmp_path / "summary.json").read_text())["ended"] == "interrupted"
     trace = pd.read_csv(tmp_path / "trace.csv")
     assert list(trace["kind"]) == ["start", "call"]  # s1 -call-> s2 at 500 s, then Ctrl-C
+    assert "interrupted" in capsys.readouterr().err
+
+
+def test_ctrl_c_in_a_long_run_keeps_the_part_flown_and_its_plots(tmp_path, capsys,
+                                                                 monkeypatch):
+    # a run this long draws its plots in a second process while it writes the rest
+    from gliderplan.cli.progress import ProgressBar
+    from gliderplan.sim import plotter
+
+    started = []
+    real_start = plotter.PlotProcess.__init__
+    monkeypatch.setattr(plotter.PlotProcess, "__init__",
+                        lambda self: started.append(1) or real_start(self))
+    monkeypatch.setattr(ProgressBar, "__call__",  # Ctrl-C at the first progress report
+                        lambda self, done, total: os.kill(os.getpid(), signal.SIGINT))
+    mission = REPO / "tests" / "missions" / "sim_month.mission"
+    assert main(["sim", str(mission), "--duration", "10d", "-o", str(tmp_path)]) == 130
+    assert started and {p.name for p in tmp_path.iterdir()} == FILES
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["ended"] == "interrupted" and 0 < summary["simulated_s"] < 10 * 86400
+    for png in ("depth.png", "energy.png"):
+        assert (tmp_path / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "interrupted" in capsys.readouterr().err
 
 
