@@ -812,9 +812,10 @@ class _SqueezedLeg:
             self.depths = [d]
         depths, rows, near = self.depths, self.rows, self.near
         weight, squeeze = self.weight, self.squeeze
-        last = len(rows) - 1
-        for t in range(start, stop + 1):
-            sign, base, speed, glide_s = rows[min(t - 1, last)]
+        own = rows[start - 1:stop]
+        steady = itertools.repeat(rows[-1], stop - start + 1 - len(own))
+        for t, (sign, base, speed, glide_s) in zip(range(start, stop + 1),
+                                                   itertools.chain(own, steady), strict=True):
             x = sign * (base - squeeze * (weight * d))
             d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s  # sqrt(max(x, 0.0))
             if d < 0.0:  # the glider would clamp it at the surface: the loop flies it
