@@ -604,7 +604,7 @@ class FastForward:
         near = edge - margin if diving else edge + margin
         leg = _SqueezedLeg(flight, rows, noise, first, near, edge, diving, limit)
         settled = min(glide.settled, limit)
-        end = leg.ticks(depth, 1, settled)  # settling: each tick its own row
+        end = leg.settling(depth, settled)
         if end is not None:
             return end
         if settled == limit:
@@ -614,8 +614,7 @@ class FastForward:
             return leg.down(settled + 1)
         if not diving and speed < 0.0:
             return leg.up(settled + 1)
-        # away from its edge (not a yo's leg): tick by tick
-        return leg.ticks(leg.depths[-1], settled + 1, limit) or (limit, leg.depths, False)
+        return leg.away(settled + 1)
 
     def _depths(self, glide: Glide, depth: float, ticks: int) -> np.ndarray:
         """Depths before each of `ticks` ticks of a glide from `depth`, and after the last:
@@ -805,25 +804,38 @@ class _SqueezedLeg:
         return t < self.limit and _reaches(d + self.noise[self.first + t], self.edge,
                                            self.diving)
 
-    def ticks(self, d: float, start: int, stop: int) -> tuple[int, list[float], bool] | None:
-        """Ticks start..stop from depth d (the depth before `start`), each on its own row
-        (the last row from there on); None if the leg goes on after `stop`."""
-        if start == 1:
-            self.depths = [d]
-        depths, rows, near = self.depths, self.rows, self.near
+    def settling(self, d: float, settled: int) -> tuple[int, list[float], bool] | None:
+        """The first `settled` ticks from depth d, each on its own row; None if the leg
+        goes on after them."""
+        depths, near, diving = [d], self.near, self.diving
+        self.depths = depths
         weight, squeeze = self.weight, self.squeeze
-        own = rows[start - 1:stop]
-        steady = itertools.repeat(rows[-1], stop - start + 1 - len(own))
-        for t, (sign, base, speed, glide_s) in zip(range(start, stop + 1),
-                                                   itertools.chain(own, steady), strict=True):
-            x = sign * (base - squeeze * (weight * d))
-            d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s  # sqrt(max(x, 0.0))
-            if d < 0.0:  # the glider would clamp it at the surface: the loop flies it
-                return t - 1, depths, True
+        for t, (sign, base, speed, glide_s) in enumerate(self.rows[:settled], 1):
+            if glide_s:  # else pumping or turning all tick: the depth stays
+                x = sign * (base - squeeze * (weight * d))
+                d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s  # sqrt(max(x, 0))
+                if d < 0.0:  # the glider would clamp it at the surface: the loop flies it
+                    return t - 1, depths, True
             depths.append(d)
-            if ((d >= near) if self.diving else (d <= near)) and self._turns(t, d):
+            if ((d >= near) if diving else (d <= near)) and self._turns(t, d):
                 return t, depths, False
         return None
+
+    def away(self, start: int) -> tuple[int, list[float], bool]:
+        """A settled glide away from the leg's edge (not a yo's) from tick `start`."""
+        weight, squeeze, near, diving = self.weight, self.squeeze, self.near, self.diving
+        sign, base, speed, glide_s = self.rows[-1]
+        depths = self.depths
+        d = depths[-1]
+        for t in range(start, self.limit + 1):
+            x = sign * (base - squeeze * (weight * d))
+            d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s
+            if d < 0.0:
+                return t - 1, depths, True
+            depths.append(d)
+            if ((d >= near) if diving else (d <= near)) and self._turns(t, d):
+                return t, depths, False
+        return self.limit, depths, False
 
     def down(self, start: int) -> tuple[int, list[float], bool]:
         """A settled dive from tick `start`: it cannot clamp, only the deep edge ends it."""

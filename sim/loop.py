@@ -89,10 +89,11 @@ def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float
 
 # One row per tick: the glider before the tick's step, the COMMAND that answered it, the
 # step's outputs. Python numbers in the tick-by-tick loop, these types in the record.
+# The narrowest type that holds each: a month of ticks is 650,000 rows.
 COLUMN_TYPES: dict[str, type] = {
     "depth_m": np.float64, "pitch_rad": np.float64, "temperature_c": np.float64,
-    "temp_reading_c": np.float64, "state": np.int64, "stack_depth": np.int64,
-    "profile": np.int64, "sensor_power": np.int64, "phase": np.int64,
+    "temp_reading_c": np.float64, "state": np.int16, "stack_depth": np.int8,
+    "profile": np.int8, "sensor_power": np.int32, "phase": np.int8,
     "pumped_out_cc": np.float64, "pumped_in_cc": np.float64, "inflection": np.bool_,
     "lat_deg": np.float64, "lon_deg": np.float64,
 }
