@@ -359,14 +359,19 @@ def profile_indices(state_plan: StatePlan | None, t_in_s: np.ndarray) -> np.ndar
 
 def sensor_power_masks(logged: tuple[tuple[int, float, float], ...],
                        t_in_s: np.ndarray) -> np.ndarray:
-    """`sensor_power_mask` at each time of an array (the fast executor's)."""
-    mask = np.zeros(len(t_in_s), np.int64)
-    phases: dict[float, np.ndarray] = {}  # sensors of a plan mostly share one period
+    """`sensor_power_mask` at each time of an array (the fast executor's). Sensors that
+    share a schedule (the CTD's temperature and conductivity, say) are decided at once."""
+    always = 0
+    schedules: dict[tuple[float, float], int] = {}  # (period, on) -> their sensors' bits
     for index, period_s, on_s in logged:
         if period_s == 0.0:
-            mask |= 1 << index
+            always |= 1 << index
         else:
-            if period_s not in phases:
-                phases[period_s] = np.fmod(t_in_s, period_s)
-            mask |= (phases[period_s] < on_s).astype(np.int64) << index
+            schedules[period_s, on_s] = schedules.get((period_s, on_s), 0) | 1 << index
+    mask = np.full(len(t_in_s), always, np.int64)
+    phases: dict[float, np.ndarray] = {}  # sensors of a plan mostly share one period
+    for (period_s, on_s), bits in schedules.items():
+        if period_s not in phases:
+            phases[period_s] = np.fmod(t_in_s, period_s)
+        mask |= np.where(phases[period_s] < on_s, bits, 0)
     return mask
