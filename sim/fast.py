@@ -821,12 +821,15 @@ class _SqueezedLeg:
                 return t, depths, False
         return None
 
+    def _steady(self) -> tuple:
+        """What a settled glide's loop works with: the pressure's factors, the near edge,
+        the settled row, the depths so far."""
+        return self.weight, self.squeeze, self.near, self.rows[-1], self.depths
+
     def away(self, start: int) -> tuple[int, list[float], bool]:
         """A settled glide away from the leg's edge (not a yo's) from tick `start`."""
-        weight, squeeze, near, diving = self.weight, self.squeeze, self.near, self.diving
-        sign, base, speed, glide_s = self.rows[-1]
-        depths = self.depths
-        d = depths[-1]
+        weight, squeeze, near, (sign, base, speed, glide_s), depths = self._steady()
+        diving, d = self.diving, depths[-1]
         for t in range(start, self.limit + 1):
             x = sign * (base - squeeze * (weight * d))
             d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s
@@ -839,11 +842,8 @@ class _SqueezedLeg:
 
     def down(self, start: int) -> tuple[int, list[float], bool]:
         """A settled dive from tick `start`: it cannot clamp, only the deep edge ends it."""
-        weight, squeeze, near, sqrt = self.weight, self.squeeze, self.near, math.sqrt
-        sign, base, speed, glide_s = self.rows[-1]
-        depths = self.depths
-        append = depths.append
-        d = depths[-1]
+        weight, squeeze, near, (sign, base, speed, glide_s), depths = self._steady()
+        append, sqrt, d = depths.append, math.sqrt, depths[-1]
         for t in range(start, self.limit + 1):
             x = sign * (base - squeeze * (weight * d))
             d = d + speed * sqrt(0.0 if x < 0.0 else x) * glide_s
@@ -855,12 +855,9 @@ class _SqueezedLeg:
     def up(self, start: int) -> tuple[int, list[float], bool]:
         """A settled climb from tick `start`: deeper than the edge's neighbourhood and the
         surface, nothing can end it."""
-        weight, squeeze, near, sqrt = self.weight, self.squeeze, self.near, math.sqrt
-        sign, base, speed, glide_s = self.rows[-1]
+        weight, squeeze, near, (sign, base, speed, glide_s), depths = self._steady()
+        append, sqrt, d = depths.append, math.sqrt, depths[-1]
         shallow = max(near, 0.0)
-        depths = self.depths
-        append = depths.append
-        d = depths[-1]
         for t in range(start, self.limit + 1):
             x = sign * (base - squeeze * (weight * d))
             d = d + speed * sqrt(0.0 if x < 0.0 else x) * glide_s
