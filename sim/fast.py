@@ -709,11 +709,18 @@ class FastForward:
             *_readings(positions[0][:1], positions[1][:1]), target)[0][0]
         heading[first:end] = guess
         settled = first
+        # the headings follow the dead reckoning alone: with a current but no GPS fix in
+        # the window, the true track is drifted once, along the headings found
+        drifting = self._current_reading != 0.0 and not first <= fix < end
         for iteration in range(1, NAV_ITERATIONS + 1):
             start = tuple(float(p[settled]) for p in positions)
-            tail = g.drift_along(distance[settled:end], heading[settled:end],
-                                 fix - settled if settled <= fix < end else -1, start)
-            for p, t in zip(positions, tail, strict=True):
+            if drifting:
+                tail = g.dead_reckoning_along(distance[settled:end], heading[settled:end],
+                                              start[:2])
+            else:
+                tail = g.drift_along(distance[settled:end], heading[settled:end],
+                                     fix - settled if settled <= fix < end else -1, start)
+            for p, t in zip(positions, tail, strict=False):
                 p[settled:end + 1] = t
             lat_new, lon_new = _readings(positions[0][settled:end], positions[1][settled:end])
             if iteration == 1:
@@ -733,6 +740,10 @@ class FastForward:
                     return None, first + 1
             differ = settled + _first(steer[settled:end] != heading[settled:end], end - settled)
             if differ == end:
+                if drifting:
+                    start = tuple(float(p[first]) for p in positions)
+                    track = g.drift_along(distance[first:end], heading[first:end], -1, start)
+                    positions[2][first:end + 1], positions[3][first:end + 1] = track[2:]
                 return iteration, end
             heading[differ:end] = steer[differ:end]
             settled = differ

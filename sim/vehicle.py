@@ -95,6 +95,14 @@ def _moves(start: tuple[float, float], north_m: np.ndarray, east_m: np.ndarray,
     return lat, lon
 
 
+def _through_water(distance_m: np.ndarray, heading_rad: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(north, east) [m] moved through the water each tick, and whether it moved."""
+    north = distance_m * libm.cos(heading_rad)
+    east = distance_m * libm.sin(heading_rad)
+    return north, east, (north != 0.0) | (east != 0.0)
+
+
 class GliderSim:
     """The glider's motion, stepped once per tick of `tick_s` [s].
 
@@ -303,9 +311,7 @@ class GliderSim:
         `_at_surface` (dead reckoning set to the true position) on tick `fix_at` (-1:
         none)."""
         dr_lat0, dr_lon0, lat0, lon0 = self.positions if start is None else start
-        north = distance_m * libm.cos(heading_rad)
-        east = distance_m * libm.sin(heading_rad)
-        moved = (north != 0.0) | (east != 0.0)
+        north, east, moved = _through_water(distance_m, heading_rad)
         c = self.current
         if c.north_mps == 0.0 and c.east_mps == 0.0:  # true = dead reckoning: a fix moves none
             dr_lat, dr_lon = _moves((dr_lat0, dr_lon0), north, east, moved)
@@ -320,6 +326,12 @@ class GliderSim:
                       moved[fix_at:])
         return (np.concatenate([head[0], tail[0][1:]]), np.concatenate([head[1], tail[1][1:]]),
                 lat, lon)
+
+    def dead_reckoning_along(self, distance_m: np.ndarray, heading_rad: np.ndarray,
+                             start: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """`drift_along`'s dead-reckoned lat and lon [deg] alone, from `start` [deg], for
+        ticks without a GPS fix: what the glider reports, which the current does not move."""
+        return _moves(start, *_through_water(distance_m, heading_rad))
 
     def _at_surface(self, dt: float) -> None:
         """GPS fix, then the Iridium call, then wait (antenna up)."""
