@@ -18,10 +18,9 @@ import json
 import math
 from datetime import UTC, datetime
 from pathlib import Path
-from xml.sax.saxutils import escape
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from gliderplan.contract import ExitCode
 from gliderplan.contract.errors import GliderplanError, UsageError
@@ -29,6 +28,9 @@ from gliderplan.contract.files import InputFileError, read_input_text, write_ato
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
 from gliderplan.sim.slocum_ocean import leg_starts
 from gliderplan.sim.vehicle import SURFACE_DEPTH_M
+
+if TYPE_CHECKING:  # pandas: imported by the functions that read a run (`gliderplan sim`
+    import pandas as pd  # only writes one, and importing it costs half a second)
 
 MIN_PROFILE_M = 3.0  # a dive or climb spanning less depth is no profile [m]
 TRACK_POINTS = 5000  # at most this many points on a map track
@@ -299,6 +301,8 @@ def track_geojson(table: pd.DataFrame, meta: dict) -> str:
 
 def track_kml(table: pd.DataFrame, meta: dict) -> str:
     """The track as KML 2.2: a line, and placemarks at its start and end."""
+    from xml.sax.saxutils import escape
+
     track = _track(table)
     name = escape(str(meta.get("mission", "mission")))
     start = start_epoch_s(meta)
@@ -379,6 +383,8 @@ def read_run(run_dir: str | Path) -> tuple[pd.DataFrame, dict]:
         raise ExportError(f"{series}: no such file; is {run_dir} a run of gliderplan sim?",
                           usage=True)
     try:
+        import pandas as pd
+
         table = pd.read_parquet(series)
     except (OSError, ValueError) as err:
         raise ExportError(f"{series}: cannot read: {err}") from None

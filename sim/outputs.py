@@ -81,15 +81,16 @@ def _strings(names: list[str], index: np.ndarray):
     import pyarrow as pa
 
     encoded = [name.encode() for name in names]
-    lengths = np.array([len(e) for e in encoded], np.int64)[index]
+    width = max(map(len, encoded), default=0)
+    padded = np.frombuffer(b"".join(e.ljust(width, b"\0") for e in encoded),
+                           np.uint8).reshape(len(names), width)
+    lengths = np.array([len(e) for e in encoded], np.int32)[index]
     offsets = np.zeros(len(index) + 1, np.int32)
     np.cumsum(lengths, out=offsets[1:])
-    text = np.frombuffer(b"".join(encoded), np.uint8)
-    starts = np.cumsum([0] + [len(e) for e in encoded])[index]
-    # each row's bytes: its name's start in `text` plus 0, 1, ... along the row
-    gather = np.repeat(starts - offsets[:-1], lengths) + np.arange(offsets[-1])
+    # each row's name padded to the longest, less the padding
+    text = padded[index][np.arange(width) < lengths[:, None]]
     return pa.Array.from_buffers(pa.string(), len(index),
-                                 [None, pa.py_buffer(offsets), pa.py_buffer(text[gather])])
+                                 [None, pa.py_buffer(offsets), pa.py_buffer(text)])
 
 
 def parquet_bytes(table, dictionary: tuple[str, ...] = ()) -> bytes:

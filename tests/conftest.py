@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import os
 import shutil
+import subprocess
+import sys
 from collections.abc import Callable
 
 import pytest
@@ -17,6 +19,20 @@ import pytest
 
 def running_in_ci() -> bool:
     return os.environ.get("CI", "").lower() in ("true", "1")
+
+
+def modules_loaded_by(argv: list[str]) -> tuple[int, set[str]]:
+    """`gliderplan ARGV` in a fresh interpreter: its exit code and the modules it loaded
+    (top-level packages, and for gliderplan's own, e.g. `gliderplan.sim`)."""
+    probe = ("import sys\n"
+             "from gliderplan.cli.main import main\n"
+             f"code = main({argv!r})\n"
+             "print(code, *sorted(m.split('.')[0] if not m.startswith('gliderplan.') else\n"
+             "                    '.'.join(m.split('.')[:2]) for m in set(sys.modules)))\n")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout, proc.stdout + proc.stderr
+    code, *loaded = proc.stdout.splitlines()[-1].split()
+    return int(code), set(loaded)
 
 
 @pytest.hookimpl(hookwrapper=True)

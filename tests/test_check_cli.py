@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import modules_loaded_by
 
 from gliderplan.cli.main import main
 
@@ -146,17 +147,11 @@ def test_check_without_json_does_not_serialise_the_mission(monkeypatch, capsys):
 def test_check_imports_nothing_of_the_later_stages():
     """`check` runs the front end only: no runtime, planner, simulator or power models,
     and none of the libraries they need."""
-    probe = ("import sys\n"
-             "from gliderplan.cli.main import main\n"
-             f"code = main(['check', {str(EXAMPLES / 'fig2.mission')!r}])\n"
-             "heavy = {'numpy', 'pandas', 'cvxpy', 'scipy', 'matplotlib', 'clarabel'}\n"
-             "stages = {'gliderplan.runtime', 'gliderplan.planner', 'gliderplan.sim',\n"
-             "          'gliderplan.power_models'}\n"
-             "loaded = {m.split('.')[0] for m in sys.modules} & heavy\n"
-             "loaded |= {'.'.join(m.split('.')[:2]) for m in sys.modules} & stages\n"
-             "print(code, sorted(loaded))\n")
-    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
-    assert proc.stdout.split("\n")[0] == "0 []", proc.stdout + proc.stderr
+    code, loaded = modules_loaded_by(["check", str(EXAMPLES / "fig2.mission")])
+    heavy = {"numpy", "pandas", "cvxpy", "scipy", "matplotlib", "clarabel"}
+    stages = {"gliderplan.runtime", "gliderplan.planner", "gliderplan.sim",
+              "gliderplan.power_models"}
+    assert (code, loaded & (heavy | stages)) == (0, set())
 
 
 def test_help_lists_every_subcommand(capsys):

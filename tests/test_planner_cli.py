@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import modules_loaded_by
 
 from gliderplan.planner.planfile import read_plan_bytes
 
@@ -45,13 +46,8 @@ def test_fig2_without_annotations_says_which_defaults_it_used():
 def test_a_plan_imports_neither_the_tables_nor_the_plotting_of_sweeps(tmp_path):
     """pandas and matplotlib take a third of a second each to import: only --sweep,
     which writes CSV tables and pareto.png, pays for them."""
-    probe = ("import sys\n"
-             "from gliderplan.cli.main import main\n"
-             f"code = main(['plan', {SURVEY!r}, '-o', {str(tmp_path / 'p.plan')!r}])\n"
-             "loaded = {m.split('.')[0] for m in sys.modules}\n"
-             "print(code, sorted(loaded & {'pandas', 'matplotlib'}), 'cvxpy' in loaded)\n")
-    run = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
-    assert run.stdout.splitlines()[-1] == "0 [] True", run.stdout + run.stderr
+    code, loaded = modules_loaded_by(["plan", SURVEY, "-o", str(tmp_path / "p.plan")])
+    assert (code, loaded & {"pandas", "matplotlib"}, "cvxpy" in loaded) == (0, set(), True)
 
 
 def test_output_writes_plan_and_report(tmp_path):

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import modules_loaded_by
 
 from gliderplan.cli.main import main
 from gliderplan.cli.sim import parse_duration_s
@@ -34,6 +35,14 @@ def test_a_run_writes_every_file(tmp_path, capsys):
     for png in ("depth.png", "energy.png"):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "sampleMission: exit after 2500 s" in capsys.readouterr().err
+
+
+def test_a_run_loads_no_library_it_does_not_use(tmp_path):
+    """`sim` writes its files without pandas, scipy or the planner's solvers (pandas alone
+    costs a run half a second of start-up)."""
+    code, loaded = modules_loaded_by(["sim", str(FIG2), "-o", str(tmp_path / "run")])
+    assert (code, loaded & {"pandas", "scipy", "cvxpy", "clarabel", "xarray"}) == (0, set())
+    assert {p.name for p in (tmp_path / "run").iterdir()} == FILES
 
 
 def test_timeseries_columns_and_summary(tmp_path):
