@@ -12,7 +12,7 @@ set -u
 
 PACKAGES="gcc make gcc-arm-linux-gnueabi libc6-dev-armel-cross gcc-i686-linux-gnu libc6-dev-i386-cross
           qemu-user valgrind clang libclang-rt-dev chromium"
-MUSL_PREFIX=/usr/local/lib/musl-i486
+MUSL_PREFIX=${MUSL_PREFIX:-/usr/local/lib/musl-i486}  # where musl for the i486 lives
 LOCK_WAIT_S=${LOCK_WAIT_S:-900}
 root=$(cd "$(dirname "$0")/.." && pwd)
 
