@@ -105,6 +105,13 @@ CASES = [
         ["import-slocum", "/dev/zero", "-o", "out"],
         ["calibrate", ".", "--base", "/dev/zero"], ["plan", FIG2, "--sign", "/dev/zero"],
     ], ExitCode.USAGE, "/dev/"),
+    ("a device named in a mission", [  # `vehicle "/dev/zero"` once grew a process to 10 GB
+        ["plan", "{device_vehicle}"], ["sim", "{device_vehicle}", "-o", "out"],
+        ["compile", "{device_vehicle}", "-o", "out"], ["compare-sbc", "{device_vehicle}"],
+        ["montecarlo", "{device_vehicle}", "--scenarios", "2", "-o", "out"],
+        ["report", "{device_vehicle}", "-o", "out"],
+        ["plan", "{device_computer}"], ["compare-sbc", "{device_computer}"],
+    ], ExitCode.USAGE, "/dev/zero: is not a regular file (a device, pipe or socket)"),
     ("a file larger than any input", [
         ["check", "{huge}"], ["plan", FIG2, "--computer", "{huge}"],
         ["sim", FIG2, "--plan", "{huge}", "-o", "out"],
@@ -157,6 +164,11 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
         f"state s{i}\nbegin\n  flightprofile yo(5, 20, .454, .454)\n  sensors missiontime\n"
         f"  events\n    case missiontime >= {10 * i + 10} {'exit' if i == 1999 else 'goto '}"
         f"{'' if i == 1999 else f's{i + 1}'}\nend\n" for i in range(2000)))
+    annotated = Path(ANNOTATED).read_text()
+    (tmp_path / "device_vehicle.mission").write_text(
+        annotated.replace("vehicle slocum_g2_shallow", 'vehicle "/dev/zero"'))
+    (tmp_path / "device_computer.mission").write_text(
+        annotated.replace("computer ts7800 @ 300 MHz", 'computer "/dev/zero"'))
     with open(tmp_path / "huge.toml", "wb") as huge:  # sparse: no disk space taken
         huge.truncate(MAX_INPUT_BYTES + 1)
     (tmp_path / "slocum" / "mafiles").mkdir(parents=True)
@@ -164,7 +176,9 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
         (tmp_path / "slocum" / name).write_text(text)
     for argv in argvs:
         argv = [a.format(bad="bad.mission", broken="broken.plan", file="file",
-                         huge="huge.toml", slocum="slocum", big="big.mission")
+                         huge="huge.toml", slocum="slocum", big="big.mission",
+                         device_vehicle="device_vehicle.mission",
+                         device_computer="device_computer.mission")
                 for a in argv]
         assert exit_code(argv) == code, argv
         err = capsys.readouterr().err
