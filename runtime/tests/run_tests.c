@@ -62,6 +62,7 @@
     X(test_pty_should_carry_raw_bytes_to_the_path_it_names)                 \
     X(test_pty_should_refuse_a_path_buffer_too_small)                       \
     X(test_linger_should_end_when_the_peer_hangs_up_and_else_at_its_bound)  \
+    X(test_read_should_nap_briefly_on_a_line_whose_peer_hung_up)            \
     X(test_now_should_count_clock_ticks_on_a_kernel_without_a_monotonic_clock) \
     X(test_args_should_parse_every_option)                                  \
     X(test_args_should_refuse_bad_command_lines)                            \
