@@ -52,7 +52,7 @@ GOALS = {"instructions_per_tick": 2000, "text_bytes": 64 * 1024, "link_bytes_per
 PARTS = {"step": ("gp_runtime_tick",),
          "link in": ("gp_serial_read", "gp_frame_reader_feed", "gp_sensors_unpack"),
          "link out": ("gp_command_pack", "gp_frame_seal", "gp_serial_write"),
-         "checkpoint": ("gp_checkpoint_store",),
+         "checkpoint": ("gp_checkpoint_store", "gp_journal_append"),
          "event log": ("gp_events_append",)}
 TS5500_HZ = 133e6  # AMD Elan SC520 clock
 # Cycles per instruction assumed for the SC520 (a 486 core: ~1-2 for integer work, the

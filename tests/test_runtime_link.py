@@ -210,6 +210,47 @@ def test_a_checkpoint_torn_by_a_crash_gives_way_to_the_one_before(binary, glider
     assert (tmp_path / "events.log").read_text().splitlines() == [FIG2_TRACE[0], *late_call]
 
 
+def thermocline_readings(tick: int) -> dict[int, float]:
+    """A 5-24 m yo through a thermocline at 12 m with +-0.3 C of flicker; every third
+    SENSORS leaves the temperature out (the runtime flies on its last reading)."""
+    values = readings(tick)
+    del values[9]
+    if tick % 3:
+        values[9] = (22.0 if values[1] < 12.0 else 9.0) + (0.3 if tick % 2 else -0.3)
+    return values
+
+
+def test_a_runtime_killed_between_records_resumes_with_the_same_memory(binary, glider,
+                                                                        tmp_path):
+    """Killed on ticks in s2 that wrote no record, only a journal entry (twice in a row,
+    once right after a restart): each restart steps the journal again, and every COMMAND
+    is the one of a run never killed, with the thermocline tracker's band and window and
+    the temperature the frames left out as they were."""
+    def flight(state_dir: Path, kill_after: set[int]) -> list[p.Command]:
+        glider.start(binary, "--state-dir", str(state_dir))
+        link = glider.link()
+        link.wait_hello()
+        commands = []
+        for tick in range(401):
+            commands.append(link.step(tick, thermocline_readings(tick)))
+            if commands[-1].done:
+                break
+            if tick in kill_after:
+                glider.process.send_signal(signal.SIGKILL)
+                glider.process.wait(5)
+                glider.start(binary, "--state-dir", str(state_dir))
+                link.wait_hello()
+        assert link.wait_release() == ReleaseReason.MISSION_EXITED  # read: not left on the line
+        assert glider.process.wait(10) == 0
+        return commands
+
+    never_killed = flight(tmp_path / "never-killed", set())
+    killed = flight(tmp_path / "killed", {67, 68, 69, 112, 140})
+    assert killed == never_killed
+    assert len({(c.depth_target_m, c.flags) for c in never_killed[50:150]}) > 4  # it tracked
+    assert (tmp_path / "killed" / "events.log").read_text().splitlines() == FIG2_TRACE
+
+
 def test_corrupted_frames_are_naked_and_the_trace_survives(binary, glider):
     process = glider.start(binary)
     link = glider.link()

@@ -1,17 +1,25 @@
 /**
  * @file gp_store.h
  * @brief What survives a crash, in the state directory: `checkpoint` (a record of what
- *        a resumed runtime needs, written in place to alternate slots) and
- *        `events.log` (append-only, fsync'd).
+ *        a resumed runtime needs, written in place to alternate slots, and a journal of
+ *        the readings stepped since) and `events.log` (append-only, fsync'd).
  *
- * The checkpoint file: a header (magic, mission hash, slot size, CRC-32) in its first
- * GP_CHECKPOINT_SLOT_BYTES, then two slots of that size. A record holds only what is in
+ * The checkpoint file: a header (magic, mission hash, slot size, journal size, CRC-32) in
+ * its first GP_CHECKPOINT_SLOT_BYTES, two slots of that size, then the journal
+ * (GP_JOURNAL_BYTES, reserved when the file is created). A record holds only what is in
  * use (the stack to its depth, the mission's variables, the sensors it reads, the
  * tracker's window to its length): ~170 bytes for Fig. 2 against 1.9 KiB for the whole
  * runtime state. Record n goes to slot n mod 2, so the newest intact record is never
  * overwritten: a write torn by a crash or a power loss leaves the record before it,
  * which the CRC-32 tells apart. The file is created whole (temporary file, rename)
  * holding the state before the first tick, so there is always an intact record.
+ *
+ * A tick that needs no record appends an entry to the journal instead: the payload of
+ * the SENSORS frame it stepped, which is all a resumed runtime needs to step that tick
+ * again (the runtime is a function of its state and the readings). An entry names the
+ * record it follows (its sequence number) and ends in two Fletcher sums over its 32-bit
+ * words; the first entry that is torn, damaged, or of another record ends the journal.
+ * A new record empties the journal: it holds all the entries said.
  */
 #ifndef GP_STORE_H
 #define GP_STORE_H
@@ -24,11 +32,15 @@
 #include "gp_runtime.h"
 
 #define GP_PATH_MAX 1024
-#define GP_CHECKPOINT_MAGIC "GPCKPT03"
+#define GP_CHECKPOINT_MAGIC "GPCKPT04"
 /** Header to first slot, slot to slot: a flash page, so a torn write stays in its slot. */
 #define GP_CHECKPOINT_SLOT_BYTES 4096
-/** magic, mission hash (hex), slot size, CRC-32 */
-#define GP_CHECKPOINT_HEADER_BYTES (8 + 64 + 4 + 4)
+/** The journal after the slots: four flash pages, 341 Fig. 2 ticks between records. */
+#define GP_JOURNAL_BYTES (4 * GP_CHECKPOINT_SLOT_BYTES)
+/** magic, mission hash (hex), slot size, journal size, CRC-32 */
+#define GP_CHECKPOINT_HEADER_BYTES (8 + 64 + 4 + 4 + 4)
+/** The largest journal entry: record number, length, payload (to whole words), sums. */
+#define GP_JOURNAL_MAX_ENTRY (4 + 4 + (GP_MAX_PAYLOAD + 3) / 4 * 4 + 8)
 /** The largest record: every count at its bound. */
 #define GP_CHECKPOINT_MAX_RECORD                                                         \
     (4 + 2                                     /* sequence number, length */             \
@@ -42,8 +54,9 @@
 
 /** The checkpoint file of a run, open from start-up to exit. */
 typedef struct {
-    int fd;        /**< -1: none */
-    uint32_t seq;  /**< sequence number of the newest record */
+    int fd;              /**< -1: none */
+    uint32_t seq;        /**< sequence number of the newest record */
+    uint32_t journal_at; /**< [bytes] of the journal in use: where the next entry goes */
 } gp_checkpoint;
 
 /**
@@ -57,8 +70,24 @@ int gp_checkpoint_open(gp_checkpoint *cp, const char *dir, const gp_mission *mis
                        gp_runtime *rt, int *resumed, const char **problem);
 
 /**
+ * @brief After gp_checkpoint_open: the next payload the journal holds after the record
+ *        loaded, into `payload` (GP_MAX_PAYLOAD bytes). Read them all before the first
+ *        append: an append goes where reading stopped, over a torn entry if any.
+ * @return the payload's length, or -1 after the last intact entry
+ */
+long gp_journal_next(gp_checkpoint *cp, uint8_t *payload);
+
+/**
+ * @brief Append `payload` (at most GP_MAX_PAYLOAD bytes) to the journal and wait for the
+ *        disk (fdatasync).
+ * @return 0, 1 if the journal has no room for it (write a record instead), or -1 with
+ *         errno set
+ */
+int gp_journal_append(gp_checkpoint *cp, const uint8_t *payload, size_t len);
+
+/**
  * @brief Write `rt` as the next record, over the older slot, and wait for the disk
- *        (fdatasync).
+ *        (fdatasync); the journal starts afresh after it.
  * @return 0, or -1 with errno set
  */
 int gp_checkpoint_store(gp_checkpoint *cp, const gp_mission *mission, const gp_runtime *rt);

@@ -63,7 +63,7 @@ static uint8_t crash_release[GP_MAX_FRAME];  /* RELEASE (internal error), framed
 static size_t crash_release_len;
 static gp_plan plan;
 static char plan_text[GP_MAX_PLAN_BYTES + 1];
-static gp_checkpoint checkpoint = {-1, 0};
+static gp_checkpoint checkpoint = {-1, 0, 0};
 static gp_plan_auth auth;                  /* with --key: what the next plan must show */
 static const gp_plan_auth *plan_auth;      /* &auth with --key, else NULL */
 
@@ -183,6 +183,65 @@ static int end_mission(link_state *s)
     return release(s, GP_RELEASE_MISSION_EXITED, GP_EXIT_DONE);
 }
 
+/* ---- what a tick leaves in the state directory ------------------------------- */
+
+/* The tick's transitions (and a refused one) in the event log. */
+static int log_transitions(link_state *s, const gp_tick_report *report)
+{
+    if (s->events_fd < 0) {
+        return 0;
+    }
+    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
+    for (int i = 0; i < report->n_transitions; i++) {
+        const gp_transition *t = &report->transitions[i];
+        if (gp_events_append(s->events_fd, s->mission, time_s, gp_transition_name(t->kind),
+                             t->from, t->to, t->depth) < 0) {
+            return -1;
+        }
+    }
+    if (report->fault) {
+        const gp_transition *t = &report->refused;
+        gp_events_append(s->events_fd, s->mission, time_s, "fault", t->from, t->to, t->depth);
+    }
+    return 0;
+}
+
+/* The whole runtime state as a new checkpoint record, with the event log's size: lines
+ * past it belong to ticks after it. */
+static int store_record(link_state *s)
+{
+    off_t size = lseek(s->events_fd, 0, SEEK_END);
+    runtime.events_log_bytes = size < 0 ? 0 : (uint32_t)size;
+    return gp_checkpoint_store(&checkpoint, s->mission, &runtime);
+}
+
+/* Log the tick's transitions, and keep what a resumed runtime needs of the tick: before
+ * its COMMAND goes out. A tick with a transition or a fault gets a record (it holds the
+ * log's size); any other tick, only the SENSORS payload it stepped, in the checkpoint's
+ * journal, from which a resumed runtime steps the tick again, to the same state: the
+ * readings a later SENSORS frame may leave out (a powered-off CTD's last one) and the
+ * tracker's window come back as they were. A full journal gives way to a record. */
+static int persist(link_state *s, const gp_frame *frame, const gp_tick_report *report)
+{
+    if (log_transitions(s, report) < 0) {
+        return -1;
+    }
+    if (!s->args->state_dir) {
+        return 0;
+    }
+    int journaled = report->n_transitions == 0 && !report->fault
+                        ? gp_journal_append(&checkpoint, frame->payload, frame->length)
+                        : 1;
+    return journaled == 1 ? store_record(s) : journaled;
+}
+
+/* One tick of the mission on the readings in runtime.sensors. */
+static void step(link_state *s, uint32_t tick, gp_command *command, gp_tick_report *report)
+{
+    gp_run_options options = {s->has_plan ? &plan : NULL, (uint8_t)s->args->naive_tracker};
+    gp_runtime_tick(&runtime, s->mission, &options, tick, command, report);
+}
+
 /* ---- start-up ---------------------------------------------------------------- */
 
 /* The key provisioned on the vehicle: from now on every plan must be signed with it. */
@@ -253,6 +312,30 @@ static void resume_plan(link_state *s, const char *path)
     }
 }
 
+/* The ticks journaled after the checkpoint's record, stepped again as they were stepped
+ * before the restart (their transitions are logged: none, unless the plan in force
+ * changed). A new record then holds them, and the journal starts afresh. */
+static int replay_journal(link_state *s)
+{
+    static uint8_t payload[GP_MAX_PAYLOAD];
+    for (long len; (len = gp_journal_next(&checkpoint, payload)) >= 0;) {
+        gp_frame frame = {GP_MSG_SENSORS, 0, 0, (uint16_t)len, payload};
+        uint32_t tick;
+        uint8_t flags;
+        gp_command command;
+        gp_tick_report report;
+        if (gp_sensors_unpack(&frame, s->mission->read_mask, &tick, &flags, runtime.sensors)
+            != GP_FRAME_OK) {
+            break;
+        }
+        step(s, tick, &command, &report);
+        if (log_transitions(s, &report) < 0) {
+            return -1;
+        }
+    }
+    return checkpoint.journal_at > 0 ? store_record(s) : 0;
+}
+
 /* The state directory: the event log, then the checkpoint. Resume from the checkpoint
  * (and its plan) if there is one; else the checkpoint comes into being holding the state
  * before the first tick, and the place in the log where this mission's lines begin. */
@@ -295,39 +378,15 @@ static int load_state(link_state *s, char *message)
     if (resumed && gp_path_join(dir, "plan", path) == 0) {
         resume_plan(s, path);
     }
+    if (replay_journal(s) < 0) {
+        snprintf(message, ERROR_LEN, "%.180s: cannot step the checkpoint's journal again: %s",
+                 dir, strerror(errno));
+        return -1;
+    }
     return 0;
 }
 
 /* ---- one tick ---------------------------------------------------------------- */
-
-/* Log the tick's transitions and write the checkpoint: before the COMMAND goes out.
- * Every tick, not only those that changed the state or the pilot's leg: the checkpoint
- * also holds the sensor values a SENSORS frame may leave out (a powered-off CTD's last
- * reading) and the tracker's window, which a runtime resumed from an older record could
- * not rebuild from the next frame; it would fly on from a different memory. */
-static int persist(link_state *s, const gp_tick_report *report)
-{
-    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
-    if (s->events_fd >= 0) {
-        for (int i = 0; i < report->n_transitions; i++) {
-            const gp_transition *t = &report->transitions[i];
-            if (gp_events_append(s->events_fd, s->mission, time_s,
-                                 gp_transition_name(t->kind), t->from, t->to, t->depth) < 0) {
-                return -1;
-            }
-        }
-        if (report->fault) {
-            const gp_transition *t = &report->refused;
-            gp_events_append(s->events_fd, s->mission, time_s, "fault", t->from, t->to, t->depth);
-        }
-    }
-    if (s->args->state_dir) {
-        off_t size = lseek(s->events_fd, 0, SEEK_END);
-        runtime.events_log_bytes = size < 0 ? 0 : (uint32_t)size;
-        return gp_checkpoint_store(&checkpoint, s->mission, &runtime);
-    }
-    return 0;
-}
 
 /* A COMMAND as its changes against the last one the science computer acknowledged,
  * or whole (`whole`, or none acknowledged since the start). */
@@ -439,11 +498,10 @@ static int on_sensors(link_state *s, const gp_frame *frame)
         send_command(s, &runtime.last_command, resync);
         return -1;
     }
-    gp_run_options options = {s->has_plan ? &plan : NULL, (uint8_t)s->args->naive_tracker};
     gp_command command;
     gp_tick_report report;
-    gp_runtime_tick(&runtime, s->mission, &options, tick, &command, &report);
-    if (persist(s, &report) < 0) {
+    step(s, tick, &command, &report);
+    if (persist(s, frame, &report) < 0) {
         say(s, "cannot write the checkpoint or event log; releasing control");
         return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
     }
@@ -527,8 +585,11 @@ static void on_plan(link_state *s, const gp_frame *frame)
     } else if (gp_plan_read(plan_text, total, s->mission, plan_auth, &plan, error) == 0) {
         accepted = 1;
         adopt_plan(s);
+        /* a record first: the ticks journaled so far were stepped under the plan before,
+         * and a resumed runtime steps the journal under the stored plan */
         if (s->args->state_dir
-            && gp_write_atomically(s->args->state_dir, "plan", plan_text, total) < 0) {
+            && (store_record(s) < 0
+                || gp_write_atomically(s->args->state_dir, "plan", plan_text, total) < 0)) {
             say(s, "warning: cannot store the new plan in the state directory");
         }
     }

@@ -1,6 +1,8 @@
 /* Crash safety: the checkpoint's records alternate between two slots, so a write torn
  * by a crash never touches the newest intact record, and each record's CRC-32 tells a
- * torn one apart; the file itself comes into being whole (rename is atomic). */
+ * torn one apart; the file itself comes into being whole (rename is atomic). Between
+ * records, each tick appends a journal entry of a few words, which a word-wise checksum
+ * guards: the CRC-32 of a whole record every tick cost more than the tick's step. */
 #define _POSIX_C_SOURCE 200809L
 #include "gp_store.h"
 
@@ -182,15 +184,15 @@ static uint8_t record_buf[GP_CHECKPOINT_MAX_RECORD];
 
 static void encode_header(const gp_mission *mission, uint8_t *header)
 {
-    uint32_t slot = GP_CHECKPOINT_SLOT_BYTES;
+    const uint32_t sizes[2] = {GP_CHECKPOINT_SLOT_BYTES, GP_JOURNAL_BYTES};
     memcpy(header, GP_CHECKPOINT_MAGIC, 8);
     memset(header + 8, 0, 64);
     if (mission->hash) {
         memcpy(header + 8, mission->hash, strnlen(mission->hash, 64));
     }
-    memcpy(header + 72, &slot, 4);
-    uint32_t crc = gp_crc32(0, header, 76);
-    memcpy(header + 76, &crc, 4);
+    memcpy(header + 72, sizes, 8);
+    uint32_t crc = gp_crc32(0, header, 80);
+    memcpy(header + 80, &crc, 4);
 }
 
 static const char *check_header(const gp_mission *mission, const uint8_t *header, long len)
@@ -200,12 +202,12 @@ static const char *check_header(const gp_mission *mission, const uint8_t *header
         return "not a checkpoint of this runtime version";
     }
     encode_header(mission, expected);
-    if (len < GP_CHECKPOINT_HEADER_BYTES || memcmp(header + 72, expected + 72, 4) != 0) {
+    if (len < GP_CHECKPOINT_HEADER_BYTES || memcmp(header + 72, expected + 72, 8) != 0) {
         return "truncated, or written by another build of the runtime";
     }
     uint32_t crc;
-    memcpy(&crc, header + 76, 4);
-    if (gp_crc32(0, header, 76) != crc) {
+    memcpy(&crc, header + 80, 4);
+    if (gp_crc32(0, header, 80) != crc) {
         return "checksum mismatch in its header (damaged file)";
     }
     if (memcmp(header + 8, expected + 8, 64) != 0) {
@@ -218,6 +220,9 @@ static off_t slot_offset(uint32_t seq)
 {
     return (off_t)GP_CHECKPOINT_SLOT_BYTES * (1 + (seq & 1u));
 }
+
+#define JOURNAL_OFFSET ((off_t)GP_CHECKPOINT_SLOT_BYTES * 3)  /* after the header and slots */
+#define CHECKPOINT_FILE_BYTES (JOURNAL_OFFSET + GP_JOURNAL_BYTES)
 
 static ssize_t read_at(int fd, void *buf, size_t len, off_t offset)
 {
@@ -255,7 +260,10 @@ typedef struct {
     size_t len;
 } piece;
 
-static int replace_file(const char *dir, const char *name, const piece *pieces, int n_pieces)
+/* @param size the file's size, its blocks reserved now so that no later write in it finds
+ *        the disk full (a file system without fallocate: the size only); 0: the pieces' */
+static int replace_file(const char *dir, const char *name, const piece *pieces, int n_pieces,
+                        off_t size)
 {
     char path[GP_PATH_MAX], tmp[GP_PATH_MAX + 8];
     if (gp_path_join(dir, name, path) < 0) {
@@ -270,6 +278,14 @@ static int replace_file(const char *dir, const char *name, const piece *pieces, 
     int failed = 0;
     for (int i = 0; i < n_pieces && !failed; i++) {
         failed = write_at(fd, pieces[i].data, pieces[i].len, pieces[i].offset) < 0;
+    }
+    int error = failed || size == 0 ? 0 : posix_fallocate(fd, 0, size);
+    if (error == EOPNOTSUPP || error == EINVAL) {
+        error = ftruncate(fd, size) < 0 ? errno : 0;
+    }
+    if (error) {
+        errno = error;
+        failed = 1;
     }
     if (failed || fsync(fd) < 0) {
         int saved = errno;
@@ -292,18 +308,18 @@ static int replace_file(const char *dir, const char *name, const piece *pieces, 
 int gp_write_atomically(const char *dir, const char *name, const void *data, size_t len)
 {
     const piece whole = {0, data, len};
-    return replace_file(dir, name, &whole, 1);
+    return replace_file(dir, name, &whole, 1, 0);
 }
 
 /* The file as it comes into being: the header, and `rt` as record 1 in slot 1; slot 0
- * holds no record yet (zeros fail the CRC). */
+ * holds no record yet (zeros fail the CRC), the journal no entry (zeros name no record). */
 static int create_checkpoint(const char *dir, const gp_mission *mission, const gp_runtime *rt)
 {
     uint8_t header[GP_CHECKPOINT_HEADER_BYTES];
     encode_header(mission, header);
     size_t len = gp_checkpoint_encode(mission, rt, 1, record_buf);
     const piece pieces[] = {{0, header, sizeof header}, {slot_offset(1), record_buf, len}};
-    return replace_file(dir, "checkpoint", pieces, 2);
+    return replace_file(dir, "checkpoint", pieces, 2, CHECKPOINT_FILE_BYTES);
 }
 
 /* The newest intact record of an open file into `rt`; NULL, or what is wrong. */
@@ -341,6 +357,7 @@ int gp_checkpoint_open(gp_checkpoint *cp, const char *dir, const gp_mission *mis
     char path[GP_PATH_MAX];
     cp->fd = -1;
     cp->seq = 1;
+    cp->journal_at = 0;
     *resumed = 0;
     *problem = "state directory path too long";
     if (gp_path_join(dir, "checkpoint", path) < 0) {
@@ -377,7 +394,77 @@ int gp_checkpoint_store(gp_checkpoint *cp, const gp_mission *mission, const gp_r
         return -1;
     }
     cp->seq = seq;
+    cp->journal_at = 0;  /* the entries before name the record before: no longer read */
     return 0;
+}
+
+/* ---- the journal ---------------------------------------------------------------------- */
+
+/* An entry in 32-bit words, in the board's byte order: the number of the record it
+ * follows, the payload's length in bytes, the payload (zeros to a whole word), and two
+ * Fletcher sums over the words before them (modulo 2^32): the first changes with any
+ * one damaged word, the second with two words swapped; other damage goes unnoticed once
+ * in 2^32 or so, and must also keep the record number and a length that fits. */
+static uint32_t entry_buf[GP_JOURNAL_MAX_ENTRY / 4];
+
+static void fletcher_sums(const uint32_t *words, size_t n, uint32_t *sums)
+{
+    uint32_t a = 0, b = 0;
+    for (size_t i = 0; i < n; i++) {
+        a += words[i];
+        b += a;
+    }
+    sums[0] = a;
+    sums[1] = b;
+}
+
+/* Words of an entry with a payload of `len` bytes, its sums included. */
+static size_t entry_words(size_t len)
+{
+    return 2 + (len + 3) / 4 + 2;
+}
+
+int gp_journal_append(gp_checkpoint *cp, const uint8_t *payload, size_t len)
+{
+    if (len > GP_MAX_PAYLOAD) {
+        errno = EINVAL;
+        return -1;
+    }
+    size_t words = entry_words(len);
+    if (cp->journal_at + 4 * words > GP_JOURNAL_BYTES) {
+        return 1;
+    }
+    entry_buf[0] = cp->seq;
+    entry_buf[1] = (uint32_t)len;
+    entry_buf[2 + len / 4] = 0;  /* the last payload word's padding (none: a sum's place) */
+    memcpy(entry_buf + 2, payload, len);
+    fletcher_sums(entry_buf, words - 2, entry_buf + words - 2);
+    if (write_at(cp->fd, entry_buf, 4 * words, JOURNAL_OFFSET + cp->journal_at) < 0
+        || fdatasync(cp->fd) < 0) {
+        return -1;
+    }
+    cp->journal_at += (uint32_t)(4 * words);
+    return 0;
+}
+
+long gp_journal_next(gp_checkpoint *cp, uint8_t *payload)
+{
+    size_t room = GP_JOURNAL_BYTES - cp->journal_at;
+    ssize_t n = read_at(cp->fd, entry_buf, room < sizeof entry_buf ? room : sizeof entry_buf,
+                        JOURNAL_OFFSET + cp->journal_at);
+    if (n < 16 || entry_buf[0] != cp->seq || entry_buf[1] > GP_MAX_PAYLOAD
+        || 4 * entry_words(entry_buf[1]) > (size_t)n) {
+        return -1;
+    }
+    size_t len = entry_buf[1], words = entry_words(len);
+    uint32_t sums[2];
+    fletcher_sums(entry_buf, words - 2, sums);
+    if (sums[0] != entry_buf[words - 2] || sums[1] != entry_buf[words - 1]) {
+        return -1;
+    }
+    memcpy(payload, entry_buf + 2, len);
+    cp->journal_at += (uint32_t)(4 * words);
+    return (long)len;
 }
 
 void gp_checkpoint_close(gp_checkpoint *cp)

@@ -53,6 +53,11 @@
     X(test_checkpoint_should_refuse_damaged_and_foreign_records)            \
     X(test_checkpoint_file_should_resume_from_the_newest_intact_record)     \
     X(test_checkpoint_should_survive_kill_9_at_any_point)                   \
+    X(test_journal_should_give_back_its_entries_until_the_next_record)      \
+    X(test_journal_should_end_at_a_torn_or_damaged_entry)                   \
+    X(test_journal_should_ask_for_a_record_when_full)                       \
+    X(test_checkpoint_should_refuse_an_older_format_and_another_journal_size) \
+    X(test_journal_should_survive_kill_9_at_any_point)                      \
     X(test_atomic_write_should_replace_the_file_whole)                      \
     X(test_event_log_should_append_one_line_per_transition)                 \
     X(test_runtime_should_fly_fig2_and_report_each_transition)              \
