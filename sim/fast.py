@@ -160,8 +160,10 @@ class FastForward:
         self.run_ticks = [MIN_RUN_TICKS] * len(mission.states)  # per state
         self._computed = 0  # ticks the last run computed past its schedule
         self.nav_window = 256
-        self._backoff = 0  # ticks left to the loop after a short run
-        self._resume = 0
+        # per state: ticks left to the loop after a short run, and the tick to try again
+        # (a state whose events fire every few ticks holds back no other state's runs)
+        self._backoff = [0] * len(mission.states)
+        self._resume = [0] * len(mission.states)
         self._glides: dict[tuple, Glide | None] = {}
         self._changes: dict[int, np.ndarray] = {}  # per glide: its depth changes, long
         self._change_lists: dict[int, list[float]] = {}
@@ -188,7 +190,8 @@ class FastForward:
     def __call__(self, tick: int, last_tick: int, columns: Columns) -> int:
         ex = self.ex
         machine = ex.machine
-        if tick < self._resume or machine is None or machine.state is None or self._reads_energy \
+        if machine is None or machine.state is None or tick < self._resume[ex.state_i] \
+                or self._reads_energy \
                 or ex.profile_k < 0 or not self._ocean \
                 or not self._covered[ex.state_i][ex.profile_k] \
                 or not isinstance(ex.route, _ROUTES):
@@ -202,9 +205,9 @@ class FastForward:
         # where events fire every few ticks (an assignment on every tick near the
         # surface, a bookkeeping event every metre of depth) the loop's own ticks are
         # cheaper
-        self._backoff = 0 if flown >= SHORT_RUN_TICKS else \
-            min(MAX_BACKOFF_TICKS, 2 * self._backoff + 1)
-        self._resume = tick + flown + self._backoff
+        self._backoff[i] = 0 if flown >= SHORT_RUN_TICKS else \
+            min(MAX_BACKOFF_TICKS, 2 * self._backoff[i] + 1)
+        self._resume[i] = tick + flown + self._backoff[i]
         return flown
 
     # ---- one run ----------------------------------------------------------------------

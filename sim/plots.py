@@ -7,13 +7,16 @@ from __future__ import annotations
 
 import io
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gliderplan.contract import NO_STATE
-from gliderplan.planner.planfile import Plan
-from gliderplan.sim.energy import RunEnergy
-from gliderplan.sim.loop import RunRecord
+
+if TYPE_CHECKING:  # the plotting process (sim/plotter.py) draws without the simulator
+    from gliderplan.planner.planfile import Plan
+    from gliderplan.sim.energy import RunEnergy
+    from gliderplan.sim.loop import RunRecord
 
 BUDGET_LINE_SPAN = 3.0  # draw the budget line only if it lies within 3x the energy spent
 PLOTTED_TICKS = 6000  # a longer run is drawn from about this many of its ticks (decimated)
