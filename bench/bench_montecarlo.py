@@ -3,12 +3,15 @@ scenarios per second with 1 and 2 local workers and a Dask LocalCluster of 2 wor
 parallel efficiency, and the whole `gliderplan montecarlo` command of 1,000 scenarios.
 
     .venv/bin/python bench/bench_montecarlo.py [--scenarios 40] [--whole 1000] [--no-dask]
+                                               [--reference 2]
 
 Each backend flies the same --scenarios scenarios (seed 0) of
 examples/survey_month.mission with its plan; the tables must be identical. The baseline
 is 1 worker (this process) in the same run: efficiency at K workers = rate(K) / (K x
-rate(1)). Then the command a user runs, `gliderplan montecarlo ... --scenarios 1000
---workers 2` (target: at most 10 minutes on a 2-core machine), timed as a whole process.
+rate(1)). The first --reference scenarios are also flown tick by tick (the reference
+executor): the fast executor's speed-up, rows identical. Then the command a user runs,
+`gliderplan montecarlo ... --scenarios 1000 --workers 2` (target: at most 10 minutes on
+a 2-core machine), timed as a whole process.
 """
 
 from __future__ import annotations
@@ -35,6 +38,25 @@ SURVEY = REPO / "examples" / "survey_month.mission"
 TARGET_MIN = 10.0  # 1,000 scenarios on 2 cores
 
 
+def reference_speedup(job: montecarlo.Job, scenarios: int) -> bool:
+    """The first `scenarios` scenarios flown in runs of ticks and tick by tick (the
+    reference), in this process: the fast executor's speed-up; False if a row differs."""
+    import pandas as pd
+
+    times = {False: 0.0, True: 0.0}
+    rows = {False: [], True: []}
+    for index in range(scenarios):
+        for tick_by_tick in (False, True):
+            start = time.perf_counter()
+            rows[tick_by_tick].append(montecarlo.fly_scenario(job, index, tick_by_tick))
+            times[tick_by_tick] += time.perf_counter() - start
+    same = pd.DataFrame(rows[False]).equals(pd.DataFrame(rows[True]))
+    print(f"{scenarios} scenarios in runs of ticks {times[False]:.1f} s, tick by tick "
+          f"{times[True]:.1f} s: {times[True] / times[False]:.1f}x; identical rows: {same} "
+          f"({load_average()})")
+    return same
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenarios", type=int, default=40,
@@ -42,6 +64,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--whole", type=int, default=1000,
                         help="scenarios of the whole command (0: skip it)")
     parser.add_argument("--no-dask", action="store_true")
+    parser.add_argument("--reference", type=int, default=2,
+                        help="scenarios also flown tick by tick, for the fast executor's "
+                             "speed-up (0: skip)")
     args = parser.parse_args(argv)
     print(load_average())
     mission = check_file(str(SURVEY)).mission
@@ -66,6 +91,8 @@ def main(argv: list[str] | None = None) -> int:
               f"({load_average()})")
     same = all(t.equals(tables[0]) for t in tables[1:])
     print(f"identical tables across backends: {same}")
+    if args.reference:
+        same = reference_speedup(job, args.reference) and same
     if args.whole:
         with tempfile.TemporaryDirectory() as tmp:
             plan_path = Path(tmp) / "survey.plan"
