@@ -12,8 +12,9 @@ load; the median of --runs runs is printed (they differ by the few instructions 
 read that found half a frame). callgrind's inclusive counts split the tick into the
 mission's step (`gp_runtime_tick`), the link in (`gp_serial_read`,
 `gp_frame_reader_feed`, `gp_sensors_unpack`), the link out (`gp_command_pack`,
-`gp_frame_seal`, `gp_serial_write`), the checkpoint (`gp_checkpoint_store`) and the
-event log (`gp_events_append`); the rest is the loop and the clock.
+`gp_frame_seal`, `gp_serial_write`), the checkpoint (`gp_journal_append`,
+`gp_checkpoint_store`) and the event log (`gp_events_append`); the rest is the loop and
+the clock.
 
 Missions: the paper's Fig. 2 (without and with a plan) and a generated mission whose
 state checks 200 events every tick. Readings: a 5-25 m yo (400 s period), a noisy

@@ -55,8 +55,8 @@ def generate_c(mission: ir.CheckedMission, limits: FlightLimits) -> str:
     return _MissionWriter(mission, limits).write()
 
 
-def read_mask(mission: ir.CheckedMission) -> int:
-    """Bit i set when the runtime reads sensor i (conditions, assignments, profiles, routes)."""
+def _sensors_read(mission: ir.CheckedMission) -> int:
+    """Bit i set when the mission reads sensor i (conditions, assignments, profiles, routes)."""
     names = set(_ALWAYS_READ)
     for state in mission.states:
         for event in state.events:
@@ -70,8 +70,19 @@ def read_mask(mission: ir.CheckedMission) -> int:
                 names.add("temp")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}
-    # the runtime's own readings are not read from the link
-    return sum(1 << SENSOR_BY_NAME[name].index for name in names) & ~contract.RUNTIME_READINGS_MASK
+    return sum(1 << SENSOR_BY_NAME[name].index for name in names)
+
+
+def read_mask(mission: ir.CheckedMission) -> int:
+    """Bit i set when the runtime reads sensor i from the link (HELLO's mask)."""
+    return _sensors_read(mission) & ~contract.RUNTIME_READINGS_MASK
+
+
+def own_read_mask(mission: ir.CheckedMission) -> int:
+    """Bit i set for each of the runtime's own readings (halfcycle, wptdist) the mission
+    reads: the runtime works out the distance to the waypoint only for a mission that
+    reads it."""
+    return _sensors_read(mission) & contract.RUNTIME_READINGS_MASK
 
 
 # ---- expressions -------------------------------------------------------------------
@@ -332,6 +343,7 @@ class _MissionWriter:
             f"    .n_vars = {len(mission.variables)},",
             f"    .stack_depth = {mission.stack_depth},",
             f"    .read_mask = 0x{read_mask(mission):08x}u,",
+            f"    .own_read_mask = 0x{own_read_mask(mission):08x}u,",
             f"    .default_ballast_cc = {c_double(self.limits.default_ballast_cc)},",
             f"    .max_ballast_cc = {c_double(self.limits.max_ballast_cc)},",
             f"    .reserve_j = {c_double(mission.battery.reserve_j)},",
@@ -346,6 +358,7 @@ class _MissionWriter:
         prefix = f"state{index}"
         route = state.route
         points = _route_points(route)
+        sensor_mask = sum(1 << SENSOR_BY_NAME[u.name].index for u in state.sensors)
         return [
             "    {",
             f"        .name = {_c_string(state.name)},",
@@ -356,6 +369,7 @@ class _MissionWriter:
             f"        .n_profiles = {len(state.profiles)},",
             f"        .sensors = {f'{prefix}_sensors' if state.sensors else 'NULL'},",
             f"        .n_sensors = {len(state.sensors)},",
+            f"        .sensor_mask = 0x{sensor_mask:08x}u,",
             f"        .events = {f'{prefix}_events' if state.events else 'NULL'},",
             f"        .n_events = {len(state.events)},",
             *_power_fields(state.computer),

@@ -20,7 +20,13 @@ from hypothesis import strategies as st
 
 from gliderplan.contract import FlightLimits
 from gliderplan.language import check_source, ir
-from gliderplan.language.codegen_c import CodegenError, c_double, generate_c, read_mask
+from gliderplan.language.codegen_c import (
+    CodegenError,
+    c_double,
+    generate_c,
+    own_read_mask,
+    read_mask,
+)
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.build import TARGETS
 
@@ -73,6 +79,17 @@ def test_fig2_reads_the_sensors_its_conditions_profiles_and_routes_need():
     # lon (nav routes in s1 and s3), energy_left (the energy guard, in every mission);
     # nothing else: pitch is commanded, not read.
     assert read == {"missiontime", "depth", "temp", "lat", "lon", "energy_left"}
+
+
+def test_the_runtime_works_out_its_own_readings_for_the_missions_that_read_them():
+    # Fig. 2 reads neither halfcycle nor wptdist: the runtime spares the distance to the
+    # waypoint (a cosine and a hypot a tick); a goto list whose events read both gets both.
+    assert own_read_mask(checked(ROOT / "examples" / "fig2.mission")) == 0
+    goto_list = checked(ROOT / "tests" / "missions" / "sim_goto_list.mission")
+    mask = own_read_mask(goto_list)
+    own = {name for name, info in SENSOR_BY_NAME.items() if mask >> info.index & 1}
+    assert own == {"halfcycle", "wptdist"}
+    assert not read_mask(goto_list) & mask  # neither comes over the link
 
 
 def test_fig2_tables_name_the_transitions_of_the_paper():

@@ -91,6 +91,8 @@ typedef struct {
     uint8_t n_events;
     double clock_mhz;            /**< `computer clock`: the state's clock [MHz]; 0: none */
     uint8_t sleep;               /**< `computer sleep between ticks`: 1, else 0 */
+    uint32_t sensor_mask;        /**< `sensors` as a mask (bit i: sensor i), which the
+                                      schedule powers each tick */
 } gp_state;
 
 typedef struct {
@@ -102,6 +104,8 @@ typedef struct {
     uint8_t n_vars;
     uint8_t stack_depth;          /**< 1..GP_MAX_STACK_DEPTH */
     uint32_t read_mask;           /**< sensors the mission reads (bit i: sensor i) */
+    uint32_t own_read_mask;       /**< the runtime's own readings it reads (halfcycle,
+                                       wptdist): the runtime computes wptdist only then */
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
     double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc] */
     double reserve_j;             /**< energy left at which the guard ends the mission [J] */

@@ -29,6 +29,12 @@ typedef struct {
     double recent_c[3];          /**< last raw temperatures of the leg, oldest first */
     double previous_c;           /**< naive: previous raw temperature of the leg */
     gp_reading window[GP_TRACK_WINDOW];  /**< oldest first */
+    /* What the robust tracker knows of the window without walking it: its shallowest
+     * and deepest reading, its warmest and coldest (the first of equals). Derived, never
+     * checkpointed: 0 in `summarized` (a resumed runtime) walks the window again. */
+    uint8_t summarized;
+    uint8_t warmest, coldest;
+    double shallowest_m, deepest_m;
 } gp_pilot;
 
 /** The vertical part of a COMMAND. */

@@ -49,6 +49,11 @@ uint16_t gp_crc16(const uint8_t *data, size_t len)
                          ^ crc16_table[5][p[2]] ^ crc16_table[4][p[3]] ^ crc16_table[3][p[4]]
                          ^ crc16_table[2][p[5]] ^ crc16_table[1][p[6]] ^ crc16_table[0][p[7]]);
     }
+    if (end - p >= 4) {  /* four of the last seven bytes at once, as above */
+        crc = (uint16_t)(crc16_table[3][(crc >> 8) ^ p[0]] ^ crc16_table[2][(crc & 0xFFu) ^ p[1]]
+                         ^ crc16_table[1][p[2]] ^ crc16_table[0][p[3]]);
+        p += 4;
+    }
     for (; p < end; p++) {
         crc = (uint16_t)((crc << 8) ^ crc16_table[0][(crc >> 8) ^ *p]);
     }

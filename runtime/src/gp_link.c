@@ -223,16 +223,16 @@ static int store_record(link_state *s)
  * tracker's window come back as they were. A full journal gives way to a record. */
 static int persist(link_state *s, const gp_frame *frame, const gp_tick_report *report)
 {
+    if (report->n_transitions == 0 && !report->fault) {  /* most ticks */
+        int journaled = s->args->state_dir
+                            ? gp_journal_append(&checkpoint, frame->payload, frame->length)
+                            : 0;
+        return journaled == 1 ? store_record(s) : journaled;
+    }
     if (log_transitions(s, report) < 0) {
         return -1;
     }
-    if (!s->args->state_dir) {
-        return 0;
-    }
-    int journaled = report->n_transitions == 0 && !report->fault
-                        ? gp_journal_append(&checkpoint, frame->payload, frame->length)
-                        : 1;
-    return journaled == 1 ? store_record(s) : journaled;
+    return s->args->state_dir ? store_record(s) : 0;
 }
 
 /* One tick of the mission on the readings in runtime.sensors. */

@@ -121,10 +121,15 @@ const char *gp_mission_check(const gp_mission *mission)
             || (state->route.n_points > 0 && !state->route.points)) {
             return "more route points than GP_MAX_ROUTE_POINTS, or none given";
         }
+        uint32_t sensor_mask = 0;
         for (int i = 0; i < state->n_sensors; i++) {
             if (!state->sensors || state->sensors[i] >= GP_N_SENSORS) {
                 return "sensor index outside the sensor array";
             }
+            sensor_mask |= 1u << state->sensors[i];
+        }
+        if (sensor_mask != state->sensor_mask) {
+            return "sensor mask disagrees with the sensor list";
         }
         for (int i = 0; i < state->n_events; i++) {
             const gp_event *event = state->events ? &state->events[i] : NULL;

@@ -43,11 +43,55 @@ static void window_append(gp_pilot *pilot, double depth_m, double temp_c)
     if (pilot->n_window == GP_TRACK_WINDOW) {
         memmove(pilot->window, pilot->window + 1, (GP_TRACK_WINDOW - 1) * sizeof pilot->window[0]);
         pilot->n_window--;
+        pilot->summarized = 0;  /* the oldest may have been an extreme, and indices moved */
     }
-    pilot->window[pilot->n_window++] = (gp_reading){depth_m, temp_c};
+    uint8_t at = pilot->n_window++;
+    pilot->window[at] = (gp_reading){depth_m, temp_c};
+    if (at == 0) {  /* a window of one reading */
+        pilot->summarized = 1;
+        pilot->warmest = pilot->coldest = 0;
+        pilot->shallowest_m = pilot->deepest_m = depth_m;
+    } else if (pilot->summarized) {
+        pilot->warmest = temp_c > pilot->window[pilot->warmest].temp_c ? at : pilot->warmest;
+        pilot->coldest = temp_c < pilot->window[pilot->coldest].temp_c ? at : pilot->coldest;
+        pilot->shallowest_m = depth_m < pilot->shallowest_m ? depth_m : pilot->shallowest_m;
+        pilot->deepest_m = depth_m > pilot->deepest_m ? depth_m : pilot->deepest_m;
+    }
+}
+
+/* Keep the readings within `depth_threshold` of `depth_m` and summarize what is kept. */
+static void filter_window(gp_pilot *pilot, double depth_m, double depth_threshold)
+{
+    gp_reading *window = pilot->window;
+    int n = pilot->n_window, kept = 0;
+    pilot->summarized = 0;
+    for (int i = 0; i < n; i++) {
+        gp_reading reading = window[i];
+        if (!(fabs(reading.depth_m - depth_m) <= depth_threshold)) {
+            continue;
+        }
+        if (kept == 0 || reading.temp_c > window[pilot->warmest].temp_c) {
+            pilot->warmest = (uint8_t)kept;
+        }
+        if (kept == 0 || reading.temp_c < window[pilot->coldest].temp_c) {
+            pilot->coldest = (uint8_t)kept;
+        }
+        if (kept == 0 || reading.depth_m < pilot->shallowest_m) {
+            pilot->shallowest_m = reading.depth_m;
+        }
+        if (kept == 0 || reading.depth_m > pilot->deepest_m) {
+            pilot->deepest_m = reading.depth_m;
+        }
+        window[kept++] = reading;
+    }
+    pilot->n_window = (uint8_t)kept;
+    pilot->summarized = kept > 0;
 }
 
 /* Robust: median-filtered temperature; window keeps readings near the current depth.
+ * Every reading is kept when the shallowest and the deepest are (a difference rounds
+ * monotonically): then the summary holds as it is, and the window is not walked; most
+ * ticks of a leg are such ticks.
  * @return index of the reading `a` that detects the thermocline, or -1 */
 static int robust_detect(gp_pilot *pilot, double depth_m, double *temp_c,
                          double temp_threshold, double depth_threshold)
@@ -59,28 +103,16 @@ static int robust_detect(gp_pilot *pilot, double depth_m, double *temp_c,
     }
     pilot->recent_c[pilot->n_recent++] = *temp_c;
     *temp_c = median_of_recent(pilot);
-    uint8_t kept = 0;
-    for (uint8_t i = 0; i < pilot->n_window; i++) {
-        if (fabs(pilot->window[i].depth_m - depth_m) <= depth_threshold) {
-            pilot->window[kept++] = pilot->window[i];
-        }
+    if (!(pilot->summarized && fabs(pilot->shallowest_m - depth_m) <= depth_threshold
+          && fabs(pilot->deepest_m - depth_m) <= depth_threshold)) {
+        filter_window(pilot, depth_m, depth_threshold);
     }
-    pilot->n_window = kept;
-    int warmest = -1, coldest = -1;
-    for (int i = 0; i < kept; i++) {
-        if (warmest < 0 || pilot->window[i].temp_c > pilot->window[warmest].temp_c) {
-            warmest = i;
-        }
-        if (coldest < 0 || pilot->window[i].temp_c < pilot->window[coldest].temp_c) {
-            coldest = i;
-        }
-    }
-    if (warmest < 0) {
+    if (pilot->n_window == 0) {
         return -1;
     }
-    double warm_diff = fabs(pilot->window[warmest].temp_c - *temp_c);
-    double cold_diff = fabs(pilot->window[coldest].temp_c - *temp_c);
-    int a = cold_diff > warm_diff ? coldest : warmest;
+    double warm_diff = fabs(pilot->window[pilot->warmest].temp_c - *temp_c);
+    double cold_diff = fabs(pilot->window[pilot->coldest].temp_c - *temp_c);
+    int a = cold_diff > warm_diff ? pilot->coldest : pilot->warmest;
     return fmax(warm_diff, cold_diff) >= temp_threshold ? a : -1;
 }
 

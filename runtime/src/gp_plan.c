@@ -728,20 +728,14 @@ int gp_plan_read(const char *text, size_t len, const gp_mission *mission,
 
 /* ---- schedule ---------------------------------------------------------------- */
 
-static uint32_t logged_mask(const gp_state *state)
-{
-    uint32_t mask = 0;
-    for (int i = 0; i < state->n_sensors; i++) {
-        mask |= 1u << state->sensors[i];
-    }
-    return mask;
-}
-
 /* Shares of the cycle in index order; the last alternative with a share takes any
  * rounding remainder. Where one alternative has the whole cycle (most states) that is
  * the answer at any time, and the fmod (~55 instructions a tick) is not needed. */
 static int alternative_at(const gp_plan_state *ps, double t_in_s)
 {
+    if (ps->n_profiles == 1) {  /* its share is 1: no loop */
+        return 0;
+    }
     int n_flown = 0, last_nonzero = 0;
     for (int i = 0; i < ps->n_profiles; i++) {
         if (ps->profiles[i].share > 0) {
@@ -766,7 +760,7 @@ static int alternative_at(const gp_plan_state *ps, double t_in_s)
 void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
                  double default_ballast_cc, gp_schedule_now *out)
 {
-    out->sensor_power = logged_mask(state);
+    out->sensor_power = state->sensor_mask;
     out->profile = 0;
     out->pitch_rad = NAN;
     out->ballast_cc = default_ballast_cc;

@@ -85,12 +85,15 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
         rt->machine.state = GP_EXITED;
         rt->machine.depth = 0;
     } else if (rt->machine.state != GP_EXITED) {
-        /* the runtime's own readings, as this tick's events see them */
+        /* the runtime's own readings, as this tick's events see them, if they read them
+         * (the distance to the waypoint costs a cosine and a hypot) */
         rt->sensors[GP_SENSOR_HALFCYCLE] =
             rt->profile == GP_NO_PROFILE ? 0.0 : (double)rt->pilot.halfcycle;
-        rt->sensors[GP_SENSOR_WPTDIST] = gp_route_distance_m(
-            &rt->route, &mission->states[rt->machine.state].route, rt->sensors[GP_SENSOR_LAT],
-            rt->sensors[GP_SENSOR_LON]);
+        if (mission->own_read_mask & (1u << GP_SENSOR_WPTDIST)) {
+            rt->sensors[GP_SENSOR_WPTDIST] = gp_route_distance_m(
+                &rt->route, &mission->states[rt->machine.state].route,
+                rt->sensors[GP_SENSOR_LAT], rt->sensors[GP_SENSOR_LON]);
+        }
         uint16_t waypoint = rt->route.next;
         gp_transition transition;
         gp_step_result result = gp_machine_step(&rt->machine, mission, rt->sensors, &transition);

@@ -60,9 +60,12 @@ static const gp_event s2_events[] = {{s2_return, NULL, GP_ACT_RETURN, 0}};
 static const gp_event s3_events[] = {{s3_exit, NULL, GP_ACT_EXIT, 0}};
 
 static const gp_state states[] = {
-    {"s1", {GP_ROUTE_NAV, 1, 0.0, s1_point}, s1_profiles, 1, s1_sensors, 3, s1_events, 2, 0, 0},
-    {"s2", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, s2_profiles, 1, s2_sensors, 4, s2_events, 1, 0, 0},
-    {"s3", {GP_ROUTE_NAV, 1, 0.0, s3_point}, s3_profiles, 1, s3_sensors, 3, s3_events, 1, 0, 0},
+    {"s1", {GP_ROUTE_NAV, 1, 0.0, s1_point}, s1_profiles, 1, s1_sensors, 3, s1_events, 2, 0, 0,
+     0x7},
+    {"s2", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, s2_profiles, 1, s2_sensors, 4, s2_events, 1, 0, 0,
+     0x207},
+    {"s3", {GP_ROUTE_NAV, 1, 0.0, s3_point}, s3_profiles, 1, s3_sensors, 3, s3_events, 1, 0, 0,
+     0x7},
 };
 
 /* the TS-7800 and the Slocum G2 shallow glider's pump (+-233 cc) */

@@ -17,6 +17,7 @@
     X(test_robust_tracker_should_detect_clean_and_noisy_casts)              \
     X(test_tracker_should_turn_at_the_band_and_reset_a_lost_band)           \
     X(test_tracker_should_ignore_missing_readings)                          \
+    X(test_robust_tracker_should_skip_its_walk_only_where_it_changes_nothing) \
     X(test_ddmm_should_convert_to_degrees)                                  \
     X(test_ddmm_should_equal_the_fmod_definition)                           \
     X(test_nav_should_head_to_its_point)                                    \

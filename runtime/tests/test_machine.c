@@ -78,7 +78,7 @@ static const gp_event vars_events[] = {
 };
 static const gp_profile hover_profile[] = {{GP_PROFILE_HOVER, 0, NULL}};
 static const gp_state vars_states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, vars_events, 2, 0, 0},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, vars_events, 2, 0, 0, 0},
 };
 static const double vars_initial[] = {5, 20};
 static const gp_mission vars_mission = {
@@ -122,8 +122,8 @@ static const gp_event just_return[] = {{always, NULL, GP_ACT_RETURN, 0}};
 static const gp_event goto_nowhere[] = {{always, NULL, GP_ACT_GOTO, 9}};
 static const double zero[] = {0};
 static const gp_state stacker_states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_b, 1, 0, 0},
-    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_a, 1, 0, 0},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_b, 1, 0, 0, 0},
+    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_a, 1, 0, 0, 0},
 };
 static const gp_mission stacker = {
     .name = "stacker", .hash = "", .states = stacker_states, .n_states = 2,
@@ -158,7 +158,7 @@ void test_machine_should_refuse_a_call_past_the_stack_depth(void)
 void test_machine_should_refuse_return_with_an_empty_stack(void)
 {
     static const gp_state states[] = {
-        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, just_return, 1, 0, 0},
+        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, just_return, 1, 0, 0, 0},
     };
     static const gp_mission mission = {.name = "r", .hash = "", .states = states,
                                        .n_states = 1, .stack_depth = 1};
@@ -174,7 +174,8 @@ void test_machine_should_refuse_return_with_an_empty_stack(void)
 void test_machine_should_refuse_a_target_outside_the_table(void)
 {
     static const gp_state states[] = {
-        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, goto_nowhere, 1, 0, 0},
+        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, goto_nowhere, 1, 0, 0,
+         0},
     };
     static const gp_mission mission = {.name = "g", .hash = "", .states = states,
                                        .n_states = 1, .stack_depth = 1};
@@ -212,7 +213,8 @@ void test_mission_check_should_accept_fig2_and_reject_bad_tables(void)
     bad.n_states = 0;
     CHECK(gp_mission_check(&bad) != NULL);
     static const gp_state nowhere[] = {
-        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, goto_nowhere, 1, 0, 0},
+        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, goto_nowhere, 1, 0, 0,
+         0},
     };
     bad = stacker;
     bad.states = nowhere;
@@ -227,4 +229,10 @@ void test_mission_check_should_accept_fig2_and_reject_bad_tables(void)
     bad = gp_mission_table;
     bad.max_ballast_cc = 0;  /* no pump */
     CHECK(gp_mission_check(&bad) != NULL);
+    static gp_state unpowered[3];  /* a sensor logged but missing from the state's mask */
+    memcpy(unpowered, gp_mission_table.states, sizeof unpowered);
+    unpowered[1].sensor_mask &= ~(1u << GP_SENSOR_TEMP);
+    bad = gp_mission_table;
+    bad.states = unpowered;
+    CHECK_CONTAINS(gp_mission_check(&bad), "sensor mask");
 }

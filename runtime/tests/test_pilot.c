@@ -191,3 +191,46 @@ void test_tracker_should_ignore_missing_readings(void)
     }
     CHECK_INT(pilot.n_window, 0);
 }
+
+/* The robust tracker skips its walk of the window on a tick that keeps every reading
+ * (its summary: shallowest, deepest, warmest, coldest). Against the same tracker made
+ * to walk the window every tick, on random casts that wander up and down (readings
+ * dropped from the middle of the window), repeat temperatures (ties: the first of
+ * equals) and fill the window (its oldest reading dropped): the same commands, band,
+ * detections and window, tick for tick. */
+void test_robust_tracker_should_skip_its_walk_only_where_it_changes_nothing(void)
+{
+    unsigned seed = 99;
+    int skipped = 0, walked = 0;
+    for (int cast = 0; cast < 60; cast++) {
+        double depth_threshold = 1 + gp_test_random(&seed) % 12;
+        double temp_threshold = cast % 3 == 0 ? 1.5 : 50;  /* some detect, some fill up */
+        gp_profile_input in = {.kind = GP_PROFILE_THERMOTRACKYO,
+                               .args = {0, 200, 0.4, 0.4, temp_threshold, depth_threshold},
+                               .plan_pitch_rad = NAN, .ballast_cc = 230};
+        gp_pilot summarized, walking;
+        gp_pilot_command out_s, out_w;
+        double depth = 50;
+        gp_pilot_enter(&summarized, &in, depth);
+        gp_pilot_enter(&walking, &in, depth);
+        for (int tick = 0; tick < 300; tick++) {
+            depth += ((double)(gp_test_random(&seed) % 41) - 15) / 10.0;  /* -1.5..+2.5 m */
+            double temp = 0.5 * (double)(gp_test_random(&seed) % 9) + (depth < 60 ? 10 : 0);
+            int before = summarized.n_window;
+            walking.summarized = 0;  /* forget the summary: walk the window */
+            int r_s = gp_pilot_step(&summarized, &in, depth, temp, &out_s);
+            int r_w = gp_pilot_step(&walking, &in, depth, temp, &out_w);
+            /* a reading dropped (walked), or all kept and one more (skipped) */
+            walked += r_s == 0 && summarized.n_window > 0 && summarized.n_window <= before;
+            skipped += r_s == 0 && summarized.n_window == before + 1;
+            CHECK_INT(r_s, r_w);
+            CHECK(out_s.depth_target_m == out_w.depth_target_m);
+            CHECK(summarized.lo_m == walking.lo_m && summarized.hi_m == walking.hi_m);
+            CHECK_INT(summarized.n_window, walking.n_window);
+            CHECK(memcmp(summarized.window, walking.window,
+                         summarized.n_window * sizeof summarized.window[0]) == 0);
+        }
+    }
+
+    CHECK(skipped > 1000 && walked > 1000);  /* both paths taken, many times */
+}
