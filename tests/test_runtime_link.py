@@ -438,6 +438,7 @@ def test_link_silence_releases_control_and_the_returning_link_takes_it_back(bina
     commands += fly(link, 101, 400)
     assert transitions(commands) == FIG2_TRACE
     assert commands[61].tick == 101 and commands[61].state == 1  # still in s2
+    assert link.wait_release() == ReleaseReason.MISSION_EXITED  # read: not left on the line
     assert process.wait(10) == 0
     said = process.stderr.read()
     assert "link silent past its timeout; releasing control" in said
