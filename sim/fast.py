@@ -6,23 +6,23 @@ glider and science computer tick by tick would: the same transition trace and ev
 per-tick record bit for bit. It leaves to the loop the ticks on which something happens
 that a run does not compute: an event fires, the plan switches to another profile
 alternative, a waypoint is reached, a state's or profile's first tick; and every tick
-of a profile the runs do not cover (thermotrackyo, hover, arguments that read sensors)
-or of a glider whose speed changes with depth (hull compressibility).
+of a profile the runs do not cover (thermotrackyo, hover, arguments that read sensors).
 
 A run of ticks, in order:
-1. the schedule: profile alternative and sensor power from the time in the state;
+1. the schedule: the profile alternative from the time in the state, the events on the
+   clock, then the sensors' power;
 2. the flight: a yo leg after leg, each leg's depths the running sum (cumsum, the same
    additions in the same order) of the depth changes of `GliderSim.glide_from` (the
    actuators settling, then steady), the depth readings with their noise giving the tick
-   the leg turns; a surfacing: the climb, then the ticks at the surface;
-3. the CTD along those depths (its lag is a recursion, one number at a time);
+   the leg turns; a compressible hull's depths, each the last plus the glide's change at
+   it, tick after tick in C (sim/native.c); a surfacing: the climb, then the ticks at
+   the surface;
+3. the CTD along those depths (its lag is a recursion, one number at a time, in C);
 4. the events: every condition over the run's readings at once; the run ends before
    the first tick on which one holds;
 5. the route: a heading comes from this tick's position and sets the next one, through
-   the readings' binary32 rounding. Iterated from a first guess until no heading
-   changes: that fixed point is the sequential solution itself, and every iteration
-   settles at least the ticks up to its first change. Near the last waypoint, where the
-   glider circles and the iteration would crawl, the route is flown one tick at a time.
+   the readings' binary32 rounding: steered tick after tick in C, up to the tick that
+   may reach a waypoint.
 The run's length adapts, per state: twice what the last run flew when a tick it had
 computed was thrown away (an event on a reading, a waypoint), so that work computed past
 an event is bounded by the work kept; twice the last length when nothing computed was
@@ -33,7 +33,6 @@ known before anything is computed).
 from __future__ import annotations
 
 import bisect
-import copy
 import itertools
 import math
 import operator
@@ -45,15 +44,9 @@ import numpy as np
 from gliderplan.contract import SURFACE_PITCH_RAD
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
-from gliderplan.sim import compiled, pilot
+from gliderplan.sim import compiled, native, pilot
 from gliderplan.sim.executor import PythonRuntime
-from gliderplan.sim.geo import (
-    bearing_binary32_array,
-    ddmm_to_degrees_array,
-    degrees_to_ddmm,
-    degrees_to_ddmm_array,
-    offset_m_array,
-)
+from gliderplan.sim.geo import degrees_to_ddmm, degrees_to_ddmm_array
 from gliderplan.sim.loop import Columns
 from gliderplan.sim.science import (
     BATTERY_V,
@@ -70,9 +63,6 @@ MIN_RUN_TICKS = 64
 MAX_RUN_TICKS = 16384
 MAX_BACKOFF_TICKS = 1024
 SHORT_RUN_TICKS = 32  # a run costs about what the loop pays for this many ticks
-NAV_ITERATIONS = 10  # iterations of the route before the rest is flown one tick at a time
-MIN_NAV_WINDOW, MAX_NAV_WINDOW = 64, 4096  # ticks of the route iterated at once
-NEAR_WAYPOINT_RADII = 3.0  # closer (in waypoint radii), the route is flown tick by tick
 
 _COMMAND_F32 = struct.Struct("<4f")
 _ONE_F32 = struct.Struct("<f")
@@ -82,7 +72,6 @@ _DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY, _ENERGY = (
 _HALFCYCLE, _WPTDIST, _TIMEOFDAY = (SENSOR_BY_NAME[n].index
                                     for n in ("halfcycle", "wptdist", "timeofday"))
 _RUNTIME_READINGS = (_HALFCYCLE, _WPTDIST)  # the executor's own, set before every tick's events
-_NAV_SENSORS = frozenset({_LAT, _LON, _HEADING})
 _TEMP_BIT = 1 << _TEMP
 _DIVE, _CLIMB = pilot.DIVE, pilot.CLIMB
 
@@ -135,6 +124,16 @@ def _after(glide: Glide, ticks: int) -> tuple:
     return glide.actuators[min(ticks, glide.settled)]
 
 
+def squeezed_rows(glide: Glide, trim_cc: float) -> np.ndarray:
+    """A compressible hull's glide as native.c's `gpn_squeezed_yo` reads it: per row, the
+    sign of the buoyancy, the volume plus trim [cc], the signed vertical speed per square
+    root of a cc [m s-1], the time gliding [s]."""
+    w_per_root = glide.speeds_per_root[1]
+    return np.array([(math.copysign(1.0, b), b + trim_cc, -w_per_root if b > 0.0 else w_per_root,
+                      s) for b, s in zip(glide.ballast_cc.tolist(), glide.glide_s.tolist(),
+                                         strict=True)])
+
+
 def halfcycles(routine, flight: _Flight) -> np.ndarray:
     """The routine's `halfcycle` before each tick of the run and after its last (count + 1
     values): a yo's count goes up on the tick whose command turns it, the first leg's
@@ -159,7 +158,6 @@ class FastForward:
         self.tick_s = science.tick_s
         self.run_ticks = [MIN_RUN_TICKS] * len(mission.states)  # per state
         self._computed = 0  # ticks the last run computed past its schedule
-        self.nav_window = 256
         # per state: ticks left to the loop after a short run, and the tick to try again
         # (a state whose events fire every few ticks holds back no other state's runs)
         self._backoff = [0] * len(mission.states)
@@ -168,7 +166,7 @@ class FastForward:
         self._changes: dict[int, np.ndarray] = {}  # per glide: its depth changes, long
         self._change_lists: dict[int, list[float]] = {}
         self._sums: dict[int, list[float]] = {}
-        self._rows: dict[int, list[tuple[float, float, float, float]]] = {}
+        self._rows: dict[int, np.ndarray] = {}  # per glide: `_leg_squeezed`'s rows
         # each state's events by the stage of a run at which their readings are known
         self._events = [_staged(s.events) for s in mission.states]
         # the sensors whose last value the executor reads: the mission's conditions,
@@ -221,16 +219,18 @@ class FastForward:
         t_in = missiontime - ex.entry_time_s
         if state_plan is not None and sum(p.share > 0.0 for p in state_plan.profiles) > 1:
             count = _first(pilot.profile_indices(state_plan, t_in) != k, count)
-        power = (np.full(count, ex.constant_power[i], np.int64)
-                 if ex.constant_power[i] is not None
-                 else pilot.sensor_power_masks(ex.power_tables[i], t_in[:count]))
-        sent = _powered(np.concatenate([[sci.sensor_power], power[:-1]]))
-        values = _Readings(self, time_s, missiontime, sent)
+        # the events on the clock cut the run before the sensors' schedule is worked out:
+        # they read only sensors sent on every tick
+        values = _Readings(self, time_s, missiontime)
         events = self._events[i]
         count = self._until_event(events[_SCHEDULE], values, count)
         if count == 0:
             return 0
         self._computed = count
+        power = (np.full(count, ex.constant_power[i], np.int64)
+                 if ex.constant_power[i] is not None
+                 else pilot.sensor_power_masks(ex.power_tables[i], t_in[:count]))
+        sent = values.sent = _powered(np.concatenate([[sci.sensor_power], power[:-1]]))
         flight = self._flight(i, k, state_plan, count)
         if flight is None or flight.count == 0:
             return 0
@@ -344,30 +344,29 @@ class FastForward:
         sci, g = self.science, self.glider
         # the depth sensor's error each tick, as `readings` adds it to the depth
         noise_array = sci.noise.depth_sigma_m * sci.normal.peek(count + 1)[:, 1]
-        noise = noise_array.tolist()
         spread = float(np.abs(noise_array).max())
         edges = {_DIVE: high, _CLIMB: low}
-        x = g.depth_m + noise[0]
+        x = g.depth_m + float(noise_array[0])
         reading = _f32_scalar(x if x > 0.0 else 0.0)
         leg = self.ex.routine.leg
         if leg == _DIVE and reading >= high:
             leg = _CLIMB
         elif leg == _CLIMB and reading <= low:
             leg = _DIVE
+        if not self._rigid:
+            return self._yo_squeezed(commands, noise_array, spread, edges, leg, count)
+        noise = noise_array.tolist()
         legs: list[tuple[int, int, Glide, int]] = []
-        j, depth, actuators, exact = 0, g.depth_m, g.actuators, not self._rigid
-        depths = [depth]  # a compressible hull's: every leg flown exactly, in order
+        j, depth, actuators, exact = 0, g.depth_m, g.actuators, False
         while True:
             while j < count:
                 glide = self._glide(actuators, commands[leg])
                 if glide is None:
                     break
                 if exact:  # the leg the certificate refuted: tick by tick in binary32
-                    leg_of = self._leg if self._rigid else self._leg_squeezed
-                    ticks, leg_depths, stop = leg_of(glide, depth, noise, j, spread,
-                                                     edges[leg], leg == _DIVE, count - j)
-                    depths += leg_depths[1:ticks + 1]
-                    exact = not self._rigid
+                    ticks, leg_depths, stop = self._leg(glide, depth, noise, j, spread,
+                                                        edges[leg], leg == _DIVE, count - j)
+                    exact = False
                     if stop:  # clamped at the surface: the run ends before that tick
                         if ticks:
                             legs.append((j, ticks, glide, leg))
@@ -385,8 +384,6 @@ class FastForward:
                 leg = _CLIMB if leg == _DIVE else _DIVE
             if not legs:
                 return None
-            if not self._rigid:  # each leg exact as flown: nothing to certify
-                return self._assemble(j, legs, np.array(depths), surface=None)
             flight = self._assemble(j, legs, None, surface=None)
             refuted = self._refuted(flight, noise_array, edges)
             if refuted is None:
@@ -588,36 +585,59 @@ class FastForward:
                 return limit, depths, False
             guess = 2 * n
 
-    def _leg_squeezed(self, glide: Glide, depth: float, noise: list[float], first: int,
-                      spread: float, edge: float, diving: bool, limit: int
-                      ) -> tuple[int, list[float], bool]:
-        """`_leg` for a compressible hull, whose glide speed changes with the depth each
-        tick starts at: the depths one tick after another (`_SqueezedLeg`), the turn
-        decided on each tick's reading as `_leg` decides it."""
+    def _yo_squeezed(self, commands: dict[int, tuple[float, float]], noise: np.ndarray,
+                     spread: float, edges: dict[int, float], leg: int, count: int
+                     ) -> _Flight | None:
+        """`_yo` for a compressible hull, whose glide speed changes with the depth each
+        tick starts at: every leg flown exactly, each depth the last plus
+        `GliderSim.glide_rates`' change at it (native.c's `gpn_squeezed_yo`, the same
+        operations in the same order), each turn decided on the tick's reading as `_leg`
+        decides it. The legs after the first alternate between two glides while each
+        settles before its turn; from a leg that does not, the next is found here."""
         flight = self.glider.vehicle.flight
+        weight = flight.rho_kg_m3 * flight.g_m_s2  # net_buoyancy_cc's (rho g) depth
+        squeeze = flight.hull_volume_cc * flight.compressibility_per_pa
+        # beyond `near` of an edge no reading can reach it
+        near = tuple(edges[d] + (1.0 if d == _CLIMB else -1.0) * (
+            spread + 1e-6 * max(1.0, abs(edges[d]))) for d in (_CLIMB, _DIVE))
+        edge = (edges[_CLIMB], edges[_DIVE])
+        legs: list[tuple[int, int, Glide, int]] = []
+        depths = [np.array([self.glider.depth_m])]
+        j, actuators = 0, self.glider.actuators
+        while j < count:
+            first = self._glide(actuators, commands[leg])
+            if first is None:
+                break
+            glides = [first]
+            settled = first.actuators[first.settled]
+            second = self._glide(settled, commands[1 - leg])
+            third = None if second is None else \
+                self._glide(second.actuators[second.settled], commands[leg])
+            if third is not None and third.actuators[third.settled] == settled:
+                glides += [second, third]  # the next legs' glides, again and again
+            flown, leg_depths, stop = native.squeezed_yo(
+                [(self._rows_of(glide), glide.settled) for glide in glides], weight, squeeze,
+                noise[j:], near, edge, leg == _DIVE, count - j, float(depths[-1][-1]))
+            for n, (start, ticks) in enumerate(flown.tolist()):
+                legs.append((j + start, ticks, glides[0 if n == 0 else 2 - n % 2],
+                             leg if n % 2 == 0 else 1 - leg))
+            depths.append(leg_depths[1:])
+            if stop or not len(flown):
+                break
+            j = legs[-1][0] + legs[-1][1]
+            actuators = _after(legs[-1][2], legs[-1][1])
+            leg = 1 - legs[-1][3]
+        if not legs:
+            return None
+        return self._assemble(legs[-1][0] + legs[-1][1], legs, np.concatenate(depths),
+                              surface=None)
+
+    def _rows_of(self, glide: Glide) -> np.ndarray:
         rows = self._rows.get(id(glide))
-        if rows is None:  # per row: sign of the buoyancy, volume plus trim, signed speed, time
-            w_per_root = glide.speeds_per_root[1]
-            rows = self._rows[id(glide)] = [
-                (math.copysign(1.0, b), b + flight.trim_cc,
-                 -w_per_root if b > 0.0 else w_per_root, s)
-                for b, s in zip(glide.ballast_cc.tolist(), glide.glide_s.tolist(),
-                                strict=True)]
-        margin = spread + 1e-6 * max(1.0, abs(edge))  # beyond which no reading can reach it
-        near = edge - margin if diving else edge + margin
-        leg = _SqueezedLeg(flight, rows, noise, first, near, edge, diving, limit)
-        settled = min(glide.settled, limit)
-        end = leg.settling(depth, settled)
-        if end is not None:
-            return end
-        if settled == limit:
-            return limit, leg.depths, False
-        speed = rows[-1][2]
-        if diving and speed >= 0.0:
-            return leg.down(settled + 1)
-        if not diving and speed < 0.0:
-            return leg.up(settled + 1)
-        return leg.away(settled + 1)
+        if rows is None:
+            rows = self._rows[id(glide)] = squeezed_rows(glide,
+                                                         self.glider.vehicle.flight.trim_cc)
+        return rows
 
     def _depths(self, glide: Glide, depth: float, ticks: int) -> np.ndarray:
         """Depths before each of `ticks` ticks of a glide from `depth`, and after the last:
@@ -659,121 +679,11 @@ class FastForward:
         if isinstance(route, pilot.NoHeading):
             positions = g.drift_along(distance, np.full(count, g.heading_rad), fix)
             return _Route(count, None, *positions)
-        target = route.points[route.k]
-        can_advance = route.loops or route.k + 1 < len(route.points)
-        radius, near = route.radius_m, NEAR_WAYPOINT_RADII * route.radius_m
-        dr_lat, dr_lon, lat, lon = (np.empty(count + 1) for _ in range(4))
-        dr_lat[0], dr_lon[0], lat[0], lon[0] = g.positions
-        positions = (dr_lat, dr_lon, lat, lon)
-        heading, steer = np.empty(count), np.empty(count)
-        north, east = np.empty(count), np.empty(count)
-        lat_r, lon_r = np.empty(count), np.empty(count)
-        settled = 0  # ticks whose heading and the position after them are final
-        while settled < count:
-            here = _steer(*_readings(dr_lat[settled:settled + 1], dr_lon[settled:settled + 1]),
-                          target)
-            if math.hypot(float(here[1][0]), float(here[2][0])) < near:
-                end = min(count, settled + MIN_NAV_WINDOW)
-                iterations = None
-            else:
-                end = min(count, settled + self.nav_window)
-                iterations, end = self._settle_window(settled, end, distance, fix, target,
-                                                      positions, heading, steer, north,
-                                                      east, lat_r, lon_r)
-            if iterations is None:  # near the waypoint, or it did not settle: tick by tick
-                reached = self._route_ticks(flight, settled, end, positions, heading)
-                if reached < end:
-                    return _Route(reached, heading, *positions)
-                self.nav_window = max(MIN_NAV_WINDOW, self.nav_window // 2)
-            else:
-                if can_advance:  # screened with numpy, decided as the route decides
-                    close = np.flatnonzero(np.hypot(north[settled:end], east[settled:end])
-                                           <= radius * (1.0 + 1e-9))
-                    for j in (settled + close).tolist():
-                        if math.hypot(float(north[j]), float(east[j])) <= radius:
-                            return _Route(j, heading, *positions)
-                grow = iterations <= NAV_ITERATIONS // 2
-                self.nav_window = min(MAX_NAV_WINDOW, 2 * self.nav_window) if grow else \
-                    max(MIN_NAV_WINDOW, self.nav_window // 2)
-            settled = end
-        return _Route(count, heading, *positions)
-
-    def _settle_window(self, first: int, end: int, distance: np.ndarray, fix: int,
-                       target: tuple[float, float], positions: tuple, heading: np.ndarray,
-                       steer: np.ndarray, north: np.ndarray, east: np.ndarray,
-                       lat_r: np.ndarray, lon_r: np.ndarray) -> tuple[int | None, int]:
-        """Headings and positions of ticks first..end-1, the position before `first`
-        final: iterated to the fixed point. Returns the number of iterations (None if it
-        did not settle, leaving the position before `first` as it was) and the end of
-        the window, which stops short where the glider comes near the waypoint. A heading
-        is recomputed only where its reading changed."""
-        g = self.glider
-        guess = heading[first - 1] if first else _steer(
-            *_readings(positions[0][:1], positions[1][:1]), target)[0][0]
-        heading[first:end] = guess
-        settled = first
-        # the headings follow the dead reckoning alone: with a current but no GPS fix in
-        # the window, the true track is drifted once, along the headings found
-        drifting = self._current_reading != 0.0 and not first <= fix < end
-        for iteration in range(1, NAV_ITERATIONS + 1):
-            start = tuple(float(p[settled]) for p in positions)
-            if drifting:
-                tail = g.dead_reckoning_along(distance[settled:end], heading[settled:end],
-                                              start[:2])
-            else:
-                tail = g.drift_along(distance[settled:end], heading[settled:end],
-                                     fix - settled if settled <= fix < end else -1, start)
-            for p, t in zip(positions, tail, strict=False):
-                p[settled:end + 1] = t
-            lat_new, lon_new = _readings(positions[0][settled:end], positions[1][settled:end])
-            if iteration == 1:
-                changed = settled + np.arange(end - settled)
-            else:
-                changed = settled + np.flatnonzero((lat_new != lat_r[settled:end])
-                                                   | (lon_new != lon_r[settled:end]))
-            lat_r[settled:end], lon_r[settled:end] = lat_new, lon_new
-            if len(changed):
-                steer[changed], north[changed], east[changed] = _steer(
-                    lat_r[changed], lon_r[changed], target)
-            if iteration == 1:  # stop short of the waypoint's neighbourhood
-                end = first + _first(np.hypot(north[first:end], east[first:end])
-                                     < NEAR_WAYPOINT_RADII * self.ex.route.radius_m,
-                                     end - first)
-                if end == first:
-                    return None, first + 1
-            differ = settled + _first(steer[settled:end] != heading[settled:end], end - settled)
-            if differ == end:
-                if drifting:
-                    start = tuple(float(p[first]) for p in positions)
-                    track = g.drift_along(distance[first:end], heading[first:end], -1, start)
-                    positions[2][first:end + 1], positions[3][first:end + 1] = track[2:]
-                return iteration, end
-            heading[differ:end] = steer[differ:end]
-            settled = differ
-        return None, end
-
-    def _route_ticks(self, flight: _Flight, first: int, end: int, positions: tuple,
-                     heading: np.ndarray) -> int:
-        """Ticks first..end-1 of the route one at a time, from the final position before
-        `first`: the route's own heading (on a copy), the glider's own drift (on a
-        scratch copy). Returns the tick that reaches a waypoint, else `end`."""
-        scratch = copy.copy(self.glider)
-        scratch.positions = tuple(float(p[first]) for p in positions)
-        route = copy.copy(self.ex.route)
-        k = route.k
-        distance = flight.distance_m[first:end].tolist()
-        for j in range(first, end):
-            h = _f32_scalar(route.heading(_f32_scalar(degrees_to_ddmm(scratch.dr_lat_deg)),
-                                          _f32_scalar(degrees_to_ddmm(scratch.dr_lon_deg)))[0])
-            if route.k != k:
-                return j
-            heading[j] = scratch.heading_rad = h
-            if j == flight.fix_at:
-                scratch.dr_lat_deg, scratch.dr_lon_deg = scratch.lat_deg, scratch.lon_deg
-            scratch._drift(distance[j - first], self.tick_s)
-            for p, value in zip(positions, scratch.positions, strict=True):
-                p[j + 1] = value
-        return end
+        c = g.current
+        flown, heading, positions = native.route(
+            route.points[route.k], route.radius_m, route.loops or route.k + 1 < len(route.points),
+            distance, fix, self.tick_s, (c.north_mps, c.east_mps), g.positions)
+        return _Route(flown, heading, *positions)
 
 
 _ROUTES = (pilot.NoHeading, pilot.Waypoints)
@@ -795,104 +705,15 @@ class _Route:
                 float(self.lon[tick]))
 
 
-class _SqueezedLeg:
-    """The ticks of one yo leg of a compressible hull (`FastForward._leg_squeezed`): each
-    depth the last plus `GliderSim.glide_rates`' change at it, inlined with the same
-    operations in the same order (these loops run once for every tick such a glider
-    flies); the leg ends on the first tick whose reading reaches its edge (as `_leg`
-    decides it), or before a depth the glider would clamp at the surface. The methods
-    return (ticks, depths before each tick and after the last, whether the run stops)."""
-
-    def __init__(self, flight, rows: list[tuple[float, float, float, float]],  # noqa: ANN001
-                 noise: list[float], first: int, near: float, edge: float, diving: bool,
-                 limit: int) -> None:
-        self.weight = flight.rho_kg_m3 * flight.g_m_s2  # net_buoyancy_cc's (rho g) depth
-        self.squeeze = flight.hull_volume_cc * flight.compressibility_per_pa
-        self.rows, self.noise, self.first = rows, noise, first
-        self.near, self.edge, self.diving, self.limit = near, edge, diving, limit
-        self.depths: list[float] = []
-
-    def _turns(self, t: int, d: float) -> bool:
-        """Whether tick t's reading, at depth d, ends the leg (the last tick is left to
-        the run after it)."""
-        return t < self.limit and _reaches(d + self.noise[self.first + t], self.edge,
-                                           self.diving)
-
-    def settling(self, d: float, settled: int) -> tuple[int, list[float], bool] | None:
-        """The first `settled` ticks from depth d, each on its own row; None if the leg
-        goes on after them."""
-        depths, near, diving = [d], self.near, self.diving
-        self.depths = depths
-        weight, squeeze = self.weight, self.squeeze
-        for t, (sign, base, speed, glide_s) in enumerate(self.rows[:settled], 1):
-            if glide_s:  # else pumping or turning all tick: the depth stays
-                x = sign * (base - squeeze * (weight * d))
-                d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s  # sqrt(max(x, 0))
-                if d < 0.0:  # the glider would clamp it at the surface: the loop flies it
-                    return t - 1, depths, True
-            depths.append(d)
-            if ((d >= near) if diving else (d <= near)) and self._turns(t, d):
-                return t, depths, False
-        return None
-
-    def _steady(self) -> tuple:
-        """What a settled glide's loop works with: the pressure's factors, the near edge,
-        the settled row, the depths so far."""
-        return self.weight, self.squeeze, self.near, self.rows[-1], self.depths
-
-    def away(self, start: int) -> tuple[int, list[float], bool]:
-        """A settled glide away from the leg's edge (not a yo's) from tick `start`."""
-        weight, squeeze, near, (sign, base, speed, glide_s), depths = self._steady()
-        diving, d = self.diving, depths[-1]
-        for t in range(start, self.limit + 1):
-            x = sign * (base - squeeze * (weight * d))
-            d = d + speed * math.sqrt(0.0 if x < 0.0 else x) * glide_s
-            if d < 0.0:
-                return t - 1, depths, True
-            depths.append(d)
-            if ((d >= near) if diving else (d <= near)) and self._turns(t, d):
-                return t, depths, False
-        return self.limit, depths, False
-
-    def down(self, start: int) -> tuple[int, list[float], bool]:
-        """A settled dive from tick `start`: it cannot clamp, only the deep edge ends it."""
-        weight, squeeze, near, (sign, base, speed, glide_s), depths = self._steady()
-        append, sqrt, d = depths.append, math.sqrt, depths[-1]
-        for t in range(start, self.limit + 1):
-            x = sign * (base - squeeze * (weight * d))
-            d = d + speed * sqrt(0.0 if x < 0.0 else x) * glide_s
-            append(d)
-            if d >= near and self._turns(t, d):
-                return t, depths, False
-        return self.limit, depths, False
-
-    def up(self, start: int) -> tuple[int, list[float], bool]:
-        """A settled climb from tick `start`: deeper than the edge's neighbourhood and the
-        surface, nothing can end it."""
-        weight, squeeze, near, (sign, base, speed, glide_s), depths = self._steady()
-        append, sqrt, d = depths.append, math.sqrt, depths[-1]
-        shallow = max(near, 0.0)
-        for t in range(start, self.limit + 1):
-            x = sign * (base - squeeze * (weight * d))
-            d = d + speed * sqrt(0.0 if x < 0.0 else x) * glide_s
-            if d <= shallow:
-                if d < 0.0:
-                    return t - 1, depths, True
-                if d <= near and self._turns(t, d):
-                    append(d)
-                    return t, depths, False
-            append(d)
-        return self.limit, depths, False
-
-
 class _Readings:
     """The sensor array over a run: each sensor's value per tick as the science computer
     sends it (through binary32), and as the executor holds it (a sensor not sent keeps
-    its last value). Filled in as the run is computed: flight, CTD, route."""
+    its last value). Filled in as the run is computed: the sensors sent, flight, CTD,
+    route."""
 
-    def __init__(self, fast: FastForward, time_s: np.ndarray, missiontime: np.ndarray,
-                 sent: np.ndarray) -> None:
-        self.fast, self.time_s, self.missiontime, self.sent = fast, time_s, missiontime, sent
+    def __init__(self, fast: FastForward, time_s: np.ndarray, missiontime: np.ndarray) -> None:
+        self.fast, self.time_s, self.missiontime = fast, time_s, missiontime
+        self.sent: np.ndarray | None = None  # each tick's mask of the sensors sent
         self.flight: _Flight | None = None
         self.depth_reading: np.ndarray | None = None
         self.ctd = None
@@ -969,8 +790,10 @@ class _Readings:
     def held(self, index: int, count: int) -> np.ndarray:
         """Sensor `index` as the executor holds it over the first `count` ticks."""
         values = self.sensor(index, 0, count)
+        if index in _RUNTIME_READINGS or SENT_ALWAYS_MASK >> index & 1:
+            return values
         sent = self.sent[:count] >> index & 1 != 0
-        if index in _RUNTIME_READINGS or sent.all():
+        if sent.all():
             return values
         before = self.fast.ex.s[index]
         last = np.maximum.accumulate(np.where(sent, np.arange(count), -1))
@@ -1004,20 +827,6 @@ _F32_BATTERY = _f32_scalar(BATTERY_V)
 def _covered(profile: ir.Profile) -> bool:
     """Whether runs of ticks compute this profile (else it is flown tick by tick)."""
     return profile.kind in ("yo", "surface") and not compiled.sensors_read(profile.args)
-
-
-def _readings(dr_lat: np.ndarray, dr_lon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The lat and lon readings [DDMM.MMMM, binary32] of dead-reckoned positions [deg]."""
-    return _f32(degrees_to_ddmm_array(dr_lat)), _f32(degrees_to_ddmm_array(dr_lon))
-
-
-def _steer(lat_r: np.ndarray, lon_r: np.ndarray, target: tuple[float, float]
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The route's heading [rad, binary32 as the COMMAND carries it] toward `target` [deg]
-    from lat and lon readings, and the (north, east) offsets [m] it is taken from."""
-    north, east = offset_m_array(ddmm_to_degrees_array(lat_r), ddmm_to_degrees_array(lon_r),
-                                 *target)
-    return bearing_binary32_array(north, east), north, east
 
 
 def _reaches(depth_m: float, edge: float, diving: bool) -> bool:

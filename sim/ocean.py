@@ -30,7 +30,7 @@ import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import read_input_text
-from gliderplan.sim import libm
+from gliderplan.sim import native
 
 Number = float | np.ndarray
 
@@ -93,7 +93,7 @@ class Thermocline:
     def water_along(self, depth_m: np.ndarray, time_s: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray]:
         """`water_at` at each (depth, time) of two arrays, bit for bit."""
-        return self._water(depth_m, time_s, libm.sin, libm.tanh)
+        return self._water(depth_m, time_s, native.sin, native.tanh)
 
     def _water(self, depth_m, time_s, sin, tanh):
         """The model in the simulator's order of operations, on floats or arrays."""

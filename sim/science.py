@@ -26,6 +26,7 @@ import numpy as np
 
 from gliderplan.contract import FLIGHT_SENSORS_MASK, RUNTIME_READINGS_MASK
 from gliderplan.language.registry import SENSORS
+from gliderplan.sim import native
 from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean
 from gliderplan.sim.vehicle import GliderSim
@@ -189,7 +190,7 @@ class ScienceComputer:
         noise = self.noise
         count = len(depth_m)
         water, salinity = self.ocean.water_along(depth_m, time_s)
-        lagged = first_order_lag(water, self._ctd_temp, self._lag_keep)
+        lagged = native.first_order_lag(water, self._ctd_temp, self._lag_keep)
         odd = np.arange(count) % 2 == 1
         flicker = np.where(odd, self._flicker_c, -self._flicker_c)
         z_temp = self.normal.peek(count)[:, 0]
@@ -225,42 +226,6 @@ class CtdRun:
     measured_c: np.ndarray  # the reading the CTD makes, sent or not [degC]
     lagged_c: np.ndarray  # the sensor's lagged temperature before noise [degC]
     flicker_c: np.ndarray
-
-
-LAG_ITERATIONS = 12  # sweeps of the lag's fixed point before the rest is summed in a loop
-
-
-def first_order_lag(water_c: np.ndarray, before_c: float, keep: float) -> np.ndarray:
-    """The CTD's lagged temperature each tick, `readings`' recursion
-    c[i] = w[i] + (c[i-1] - w[i]) * keep (c = w where the one before is NaN), bit for bit.
-
-    Solved as a fixed point: every sweep recomputes all values from the previous sweep's,
-    and a sweep that changes nothing has found the recursion's own values (the first
-    value is exact after one sweep, the first two after two, ...). With keep << 1 (a
-    CTD much faster than the tick) an error shrinks by `keep` per sweep and a handful of
-    sweeps settle every bit; a slow sensor falls back to the loop where the sweeps stop."""
-    n = len(water_c)
-    if n == 0:
-        return np.empty(0)
-    lagged = water_c.copy()
-    settled = 0  # lagged[:settled] hold their final values
-    previous = np.empty(n)
-    for _ in range(LAG_ITERATIONS):
-        previous[0] = before_c
-        previous[1:] = lagged[:-1]
-        swept = np.where(previous != previous, water_c, water_c + (previous - water_c) * keep)
-        changed = np.flatnonzero(swept[settled:] != lagged[settled:])
-        lagged[settled:] = swept[settled:]
-        if not len(changed):
-            return lagged
-        settled += int(changed[0])
-    c = float(lagged[settled - 1]) if settled else before_c
-    rest = []
-    for w in water_c[settled:].tolist():
-        c = w if c != c else w + (c - w) * keep
-        rest.append(c)
-    lagged[settled:] = rest
-    return lagged
 
 
 def conductivity_s_m(temperature_c: float, salinity_psu: float) -> float:

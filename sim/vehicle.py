@@ -26,7 +26,7 @@ from gliderplan.contract import EARTH_RADIUS_M
 from gliderplan.power_models.flight import glide_geometry, net_buoyancy_cc
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
-from gliderplan.sim import libm
+from gliderplan.sim import native
 from gliderplan.sim.geo import move_degrees
 
 _RAD = math.pi / 180.0
@@ -85,7 +85,7 @@ def _moves(start: tuple[float, float], north_m: np.ndarray, east_m: np.ndarray,
     np.copyto(lat[1:], north_m / (EARTH_RADIUS_M * _RAD))
     np.copyto(lat[1:], -0.0, where=~moved)
     np.add.accumulate(lat, out=lat)
-    cos_lat = libm.cos(lat[:-1] * _RAD)
+    cos_lat = native.cos(lat[:-1] * _RAD)
     lon = np.empty(len(north_m) + 1)
     lon[0] = start[1]
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -98,8 +98,8 @@ def _moves(start: tuple[float, float], north_m: np.ndarray, east_m: np.ndarray,
 def _through_water(distance_m: np.ndarray, heading_rad: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(north, east) [m] moved through the water each tick, and whether it moved."""
-    north = distance_m * libm.cos(heading_rad)
-    east = distance_m * libm.sin(heading_rad)
+    north = distance_m * native.cos(heading_rad)
+    east = distance_m * native.sin(heading_rad)
     return north, east, (north != 0.0) | (east != 0.0)
 
 

@@ -14,10 +14,11 @@ from hypothesis import strategies as st
 
 from gliderplan.language import check_file, ir
 from gliderplan.power_models import load_vehicle
-from gliderplan.sim import compiled, geo, libm, ocean, pilot
+from gliderplan.sim import compiled, geo, native, ocean, pilot
 from gliderplan.sim.flight import fly
 from gliderplan.sim.loop import RunConfig
-from gliderplan.sim.science import Draws, first_order_lag
+from gliderplan.sim.science import Draws
+from gliderplan.sim.vehicle import Current, GliderSim
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((REPO / "examples").glob("*.mission")) + sorted(
@@ -36,30 +37,110 @@ def test_the_c_library_s_functions_over_arrays_are_math_s(xs, ys):
     x = np.array(xs)
     y = np.resize(np.array(ys), len(x))
     for name in ("sin", "cos", "tanh"):
-        assert same_bits(getattr(libm, name)(x), [getattr(math, name)(v) for v in xs]), name
-    assert same_bits(libm.atan2(y, x), [math.atan2(a, b) for a, b in zip(y, x, strict=True)])
+        assert same_bits(getattr(native, name)(x), [getattr(math, name)(v) for v in xs]), name
+    assert same_bits(native.atan2(y, x), [math.atan2(a, b) for a, b in zip(y, x, strict=True)])
 
 
-@settings(max_examples=50, deadline=None)
-@given(st.lists(st.tuples(finite, finite), min_size=1, max_size=60))
-def test_headings_in_binary32_are_the_route_s(offsets):
-    north, east = (np.array(v) for v in zip(*offsets, strict=True))
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-60, 60), st.floats(-170, 170), st.floats(-0.05, 0.05), st.floats(-0.05, 0.05),
+       st.lists(st.floats(0.0, 400.0), min_size=1, max_size=120), st.integers(-1, 130),
+       st.sampled_from([(0.0, 0.0), (0.3, -0.2), (0.0, 1.5)]), st.booleans(),
+       st.sampled_from([10.0, 50.0, 2000.0]))
+@example(39.17, -73.82, 0.0004, 0.0, [1.2] * 80, -1, (0.0, 0.0), True, 50.0).via(
+    "a waypoint 44 m north: reached on the first tick")
+def test_the_route_over_a_run_is_the_route_steered_tick_by_tick(
+        lat, lon, dlat, dlon, distance, fix_at, current, advance, radius):
+    """native.route against the runtime's route and the glider's drift, a tick at a time:
+    the same headings and positions bit for bit, and the same tick reaching the waypoint."""
     pack = struct.Struct("<f")
-    want = [pack.unpack(pack.pack(geo.bearing_rad(n, e)))[0] for n, e in offsets]
-    assert same_bits(geo.bearing_binary32_array(north, east), want)
+
+    def f32(x: float) -> float:
+        return pack.unpack(pack.pack(x))[0]
+
+    target = (lat + dlat, lon + dlon)
+    route = pilot.Waypoints((), ((geo.degrees_to_ddmm(target[0]),
+                                  geo.degrees_to_ddmm(target[1])),) * (2 if advance else 1))
+    route.radius_m = radius
+    glider = GliderSim(load_vehicle("slocum_g2_shallow"), 4.0, lat, lon, Current(*current))
+    glider.lat_deg, glider.lon_deg = lat + 0.001, lon - 0.002  # drifted from dead reckoning
+    start = glider.positions
+    headings, positions, reached = [], [start], len(distance)
+    for j, metres in enumerate(distance):
+        heading = f32(route.heading(f32(geo.degrees_to_ddmm(glider.dr_lat_deg)),
+                                    f32(geo.degrees_to_ddmm(glider.dr_lon_deg)))[0])
+        if route.k != 0:
+            reached = j
+            break
+        headings.append(heading)
+        glider.heading_rad = heading
+        if j == fix_at:
+            glider.dr_lat_deg, glider.dr_lon_deg = glider.lat_deg, glider.lon_deg
+        glider._drift(metres, 4.0)
+        positions.append(glider.positions)
+    flown, heading, track = native.route(route.points[0], radius, advance, np.array(distance),
+                                         fix_at, 4.0, current, start)
+    # a tick within a billionth of the radius of it is left to the route itself
+    assert flown == reached or (flown < reached and abs(math.hypot(*geo.offset_m(
+        geo.ddmm_to_degrees(f32(geo.degrees_to_ddmm(positions[flown][0]))),
+        geo.ddmm_to_degrees(f32(geo.degrees_to_ddmm(positions[flown][1]))),
+        *target)) - radius) <= 1e-9 * radius)
+    assert same_bits(heading[:flown], headings[:flown])
+    assert same_bits(track[:, :flown + 1].T, positions[:flown + 1])
 
 
 @settings(max_examples=50, deadline=None)
-@given(st.lists(st.floats(-90, 90), min_size=1, max_size=30),
-       st.lists(st.floats(-180, 180), min_size=1, max_size=30))
-def test_positions_and_readings_over_arrays_are_geo_s(lats, lons):
-    lat, lon = np.array(lats), np.resize(np.array(lons), len(lats))
-    assert same_bits(geo.degrees_to_ddmm_array(lat), [geo.degrees_to_ddmm(v) for v in lat])
-    ddmm = geo.degrees_to_ddmm_array(lon)
-    assert same_bits(geo.ddmm_to_degrees_array(ddmm), [geo.ddmm_to_degrees(v) for v in ddmm])
-    north, east = geo.offset_m_array(lat, lon, 39.17, -73.82)
-    pairs = [geo.offset_m(a, b, 39.17, -73.82) for a, b in zip(lat, lon, strict=True)]
-    assert same_bits(north, [p[0] for p in pairs]) and same_bits(east, [p[1] for p in pairs])
+@given(st.lists(st.floats(-180, 180), min_size=1, max_size=30))
+def test_position_readings_over_arrays_are_geo_s(degrees):
+    assert same_bits(geo.degrees_to_ddmm_array(np.array(degrees)),
+                     [geo.degrees_to_ddmm(v) for v in degrees])
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([(5.0, 20.0), (3.0, 60.0), (8.0, 30.5)]),
+       st.floats(0.0, 0.3))
+def test_a_compressible_hull_s_yo_is_the_glider_stepped_under_the_yo_routine(seed, band, sigma):
+    """native.squeezed_yo against the glider stepped a tick at a time under the runtime's
+    yo, deciding each turn on the depth reading as the link carries it (binary32): the
+    same depths bit for bit and the same turns, among them turns only that rounding
+    decides (a reading 1e-7 m short of the edge, which binary32 rounds onto it)."""
+    from gliderplan.sim.fast import _command_f32, squeezed_rows
+
+    vehicle = load_vehicle("slocum_g2_shallow")
+    flight = vehicle.flight
+    assert flight.compressibility_per_pa > 0.0  # the calibrated hull is squeezed
+    low, high = band
+    args, ticks = (low, high, 0.454, 0.454), 600
+    pack = struct.Struct("<f")
+    rng = np.random.default_rng(seed)
+    noise = sigma * rng.standard_normal(ticks + 1)
+    glider = GliderSim(vehicle, 4.0, 39.0, -73.0, depth_m=low + 1.0)
+    start, actuators = glider.depth_m, glider.actuators
+    yo = pilot.Yo(glider.depth_m, args)
+    depths, legs, near_edge = [start], [], 0
+    for t in range(ticks):
+        if abs(glider.depth_m - high) < 1.0 and rng.random() < 0.3:  # 1e-7 m short of it
+            noise[t] = (high - 1e-7) - glider.depth_m
+            near_edge += 1
+        reading = pack.unpack(pack.pack(max(0.0, glider.depth_m + noise[t])))[0]
+        target, pitch, ballast, _ = yo.command(reading, math.nan, args, None, 200.0)
+        glider.step(target, *_command_f32(pitch, ballast), 0.0, False, False)
+        depths.append(glider.depth_m)
+        legs.append(yo.leg)
+    commands = {leg: _command_f32(*pilot._yo_command(leg, low, high, args, None, 200.0)[1:3])
+                for leg in (pilot.DIVE, pilot.CLIMB)}
+    first = glider.glide_from(actuators, *commands[legs[0]])
+    second = glider.glide_from(first.actuators[first.settled], *commands[1 - legs[0]])
+    third = glider.glide_from(second.actuators[second.settled], *commands[legs[0]])
+    assert third.actuators[third.settled] == first.actuators[first.settled]
+    reach = float(np.abs(noise).max()) + 1.0  # no reading reaches an edge from beyond this
+    flown, native_depths, stop = native.squeezed_yo(
+        [(squeezed_rows(g, flight.trim_cc), g.settled) for g in (first, second, third)],
+        flight.rho_kg_m3 * flight.g_m_s2, flight.hull_volume_cc * flight.compressibility_per_pa,
+        noise, (low + reach, high - reach), (low, high), legs[0] == pilot.DIVE, ticks, start)
+    turns = [t for t in range(1, ticks) if legs[t] != legs[t - 1]]
+    assert not stop and flown[:, 0].tolist() == [0, *turns]
+    assert same_bits(native_depths, depths)
+    assert near_edge == 0 or len(turns) > 0
 
 
 @settings(max_examples=40, deadline=None)
@@ -97,7 +178,7 @@ def test_the_ctd_lag_over_a_run_is_the_recursion(water, before, keep):
     for w in water:
         c = w if c != c else w + (c - w) * keep
         want.append(c)
-    assert same_bits(first_order_lag(np.array(water), before, keep), want)
+    assert same_bits(native.first_order_lag(np.array(water), before, keep), want)
 
 
 @settings(max_examples=40, deadline=None)
