@@ -143,10 +143,19 @@ long gpn_squeezed_yo(const double *const *rows, const long *settled, long glides
 
 /* ---- the route to a waypoint (fast.FastForward._route) --------------------------- */
 
+/* floor(|x| / 100) + fmod(|x|, 100) / 60 with the sign of x (geo.ddmm_to_degrees), the
+ * minutes fmod's exactly without fmod (as the runtime's gp_ddmm_to_deg): with
+ * q = floor(|x| / 100), |x| - 100 q is exact (Sterbenz), and q is at most once too high,
+ * when the difference is negative and 100 more is the remainder. */
 static double ddmm_to_degrees(double x)
 {
     double a = fabs(x);
-    return copysign(floor(a / 100.0) + fmod(a, 100.0) / 60.0, x);
+    double hundreds = floor(a / 100.0);
+    double minutes = a - 100.0 * hundreds;
+    if (minutes < 0.0) {
+        minutes += 100.0;
+    }
+    return copysign(hundreds + minutes / 60.0, x);
 }
 
 static double degrees_to_ddmm(double x)
