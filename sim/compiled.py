@@ -145,6 +145,16 @@ def firing_ticks(events: Sequence[ir.Event]
     return namespace["fires"]
 
 
+def value_ticks(expr: ir.Expr) -> Callable[[Mapping[int, np.ndarray], Variables, int],
+                                         np.ndarray]:
+    """f(s, v, n) -> the expression's value on each of n ticks, element by element what
+    `ir.evaluate` gives: `s` maps each sensor it reads to its n readings."""
+    source = f"np.broadcast_to(np.asarray({python_source(expr, True)}, np.float64), (n,))"
+    namespace: dict = {}
+    exec(f"def value(s, v, n): return {source}", dict(_ARRAY_GLOBALS), namespace)  # noqa: S102
+    return namespace["value"]
+
+
 def arguments(profile: ir.Profile) -> Callable[[SensorArray, Variables], tuple[float, ...]]:
     """f(s, v) -> the profile's argument values as floats."""
     items = "".join(f"float({python_source(a)}), " for a in profile.args)

@@ -37,7 +37,8 @@ import itertools
 import math
 import operator
 import struct
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -168,7 +169,7 @@ class FastForward:
         self._sums: dict[int, list[float]] = {}
         self._rows: dict[int, np.ndarray] = {}  # per glide: `_leg_squeezed`'s rows
         # each state's events by the stage of a run at which their readings are known
-        self._events = [_staged(s.events) for s in mission.states]
+        self._events = [_staged(s) for s in mission.states]
         # the sensors whose last value the executor reads: the mission's conditions,
         # assignments and profile arguments, the time of entry, the routines and routes
         expressions = [x for s in mission.states for e in s.events
@@ -222,8 +223,7 @@ class FastForward:
         # the events on the clock cut the run before the sensors' schedule is worked out:
         # they read only sensors sent on every tick
         values = _Readings(self, time_s, missiontime)
-        events = self._events[i]
-        count = self._until_event(events[_SCHEDULE], values, count)
+        count = self._until_event(_SCHEDULE, values, count)
         if count == 0:
             return 0
         self._computed = count
@@ -239,15 +239,15 @@ class FastForward:
         noise = sci.normal.peek(count)
         depth = flight.depth_m[:count]
         values.depth_reading = _f32(_positive(depth + sci.noise.depth_sigma_m * noise[:, 1]))
-        count = self._until_event(events[_FLIGHT], values, count)
+        count = self._until_event(_FLIGHT, values, count)
         if count == 0:
             return 0
         ctd = values.ctd = sci.ctd_along(depth[:count], time_s[:count])
-        count = self._until_event(events[_CTD], values, count)
+        count = self._until_event(_CTD, values, count)
         if count == 0:
             return 0
         nav = values.nav = self._route(flight, count)
-        count = self._until_event(events[_NAV], values, nav.count)
+        count = self._until_event(_NAV, values, nav.count)
         if count == 0:
             return 0
 
@@ -276,16 +276,21 @@ class FastForward:
         for index in _RUNTIME_READINGS:  # as the executor set them for the last tick
             ex.s[index] = values.sensor_at(index, count - 1)
         self._commit_glider(flight, nav, count)
+        values.commit_held(count)
         return count
 
-    def _until_event(self, events: tuple | None, values: _Readings, count: int) -> int:
-        """The run's ticks before the first on which one of `events` (a checker and the
-        sensors it reads) fires."""
-        if events is None:
+    def _until_event(self, stage: int, values: _Readings, count: int) -> int:
+        """The run's ticks before the first on which one of the events checked at `stage`
+        (a checker and the sensors it reads) fires; the held event's variables over the
+        run worked out first where its readings become known."""
+        events = self._events[self.ex.state_i]
+        if events.held is not None and events.held.stage == stage:
+            values.hold(events.held, count)
+        if events.stages[stage] is None:
             return count
-        fires, wanted = events
+        fires, wanted = events.stages[stage]
         s = {index: values.held(index, count) for index in wanted}
-        return _first(fires(s, self.ex.machine.variables, count), count)
+        return _first(fires(s, values.variables(count), count), count)
 
     def _commit_glider(self, flight: _Flight, nav: _Route, count: int) -> None:
         g, ex = self.glider, self.ex
@@ -714,6 +719,11 @@ class _Readings:
     def __init__(self, fast: FastForward, time_s: np.ndarray, missiontime: np.ndarray) -> None:
         self.fast, self.time_s, self.missiontime = fast, time_s, missiontime
         self.sent: np.ndarray | None = None  # each tick's mask of the sensors sent
+        # the held event over the run: whether it fires each tick, the values it assigns,
+        # and the variables as each tick's events see them
+        self.held_fires: np.ndarray | None = None
+        self.assigned: dict[str, np.ndarray] = {}
+        self.seen: dict[str, np.ndarray] = {}
         self.flight: _Flight | None = None
         self.depth_reading: np.ndarray | None = None
         self.ctd = None
@@ -787,6 +797,39 @@ class _Readings:
                 return _F32_BATTERY
         return float(self.sensor(index, tick, tick + 1)[0])
 
+    def hold(self, held: _Held, count: int) -> None:
+        """The held event over the first `count` ticks: it fires on every tick its
+        condition holds (the run ends before any other event fires), and each tick's
+        events see the variables as the last firing before that tick left them."""
+        s = {index: self.held(index, count) for index in held.reads}
+        before = self.fast.ex.machine.variables
+        self.held_fires = held.fires(s, before, count)
+        fired = np.where(self.held_fires, np.arange(count), -1)
+        last = np.concatenate([[-1], np.maximum.accumulate(fired)[:-1]])  # before each tick
+        for name, value in held.values:
+            self.assigned[name] = value(s, before, count)
+            self.seen[name] = np.where(last >= 0, self.assigned[name][np.maximum(last, 0)],
+                                       before[name])
+
+    def variables(self, count: int) -> Mapping[str, float | np.ndarray]:
+        """The variables as the events of the first `count` ticks see them."""
+        before = self.fast.ex.machine.variables
+        if not self.seen:
+            return before
+        return {**before, **{name: v[:count] for name, v in self.seen.items()}}
+
+    def commit_held(self, count: int) -> None:
+        """The executor after the held event's firings in the first `count` ticks."""
+        if self.held_fires is None:
+            return
+        fired = np.flatnonzero(self.held_fires[:count])
+        if len(fired):
+            ex = self.fast.ex
+            ex.event_count += len(fired)
+            ex.machine = replace(ex.machine, variables={
+                **ex.machine.variables,
+                **{name: float(v[fired[-1]]) for name, v in self.assigned.items()}})
+
     def held(self, index: int, count: int) -> np.ndarray:
         """Sensor `index` as the executor holds it over the first `count` ticks."""
         values = self.sensor(index, 0, count)
@@ -807,15 +850,60 @@ _STAGE_OF = {0: _SCHEDULE, _TIMEOFDAY: _SCHEDULE, _TEMP: _CTD, _CONDUCTIVITY: _C
              _SALINITY: _CTD, _LAT: _NAV, _LON: _NAV, _HEADING: _NAV, _WPTDIST: _NAV}
 
 
-def _staged(events: tuple[ir.Event, ...]) -> list[tuple | None]:
-    """The events in groups by the stage at which all they read is known: for each stage,
-    a checker of the group and the sensors it reads (None: no event)."""
+@dataclass(frozen=True)
+class _Held:
+    """An event that only assigns variables from readings and variables it does not
+    assign (a sample held: `case depth < 8 set surface_temp = temp`): runs go on through
+    the ticks on which it fires, each later tick seeing the variables as it left them."""
+
+    stage: int  # at which its readings are known
+    fires: Callable  # (s, v, n) -> whether its condition holds on each of n ticks
+    values: tuple[tuple[str, Callable], ...]  # (variable, (s, v, n) -> its values)
+    reads: frozenset[int]  # the sensors it reads
+
+
+@dataclass(frozen=True)
+class _Events:
+    """A state's events for runs of ticks: in groups by the stage of a run at which all
+    they read is known (per stage a checker of the group and the sensors it reads, or
+    None), and the one event a run may fly through, if any."""
+
+    stages: tuple[tuple | None, ...]
+    held: _Held | None
+
+
+def _stage(sensors: frozenset[int]) -> int:
+    return max((_STAGE_OF.get(s, _FLIGHT) for s in sensors), default=_SCHEDULE)
+
+
+def _staged(state: ir.State) -> _Events:
+    """The state's events for runs: every event but the held one (the first that assigns
+    and does nothing else, whose assignments neither it nor the state's profiles read)
+    ends a run before the first tick on which it holds; an event that reads what the held
+    one assigns is checked from the held one's stage on."""
+    held, assigned = None, frozenset()
+    for event in state.events:
+        names = frozenset(a.variable for a in event.assignments)
+        read = frozenset().union(*(ir.variables_read(x) for x in (
+            event.condition, *(a.value for a in event.assignments))))
+        if event.action is None and names and not names & (read | set(state.profile_variables)):
+            sensors = compiled.sensors_read([event.condition,
+                                             *(a.value for a in event.assignments)])
+            held = _Held(_stage(sensors), compiled.firing_ticks([event]),
+                         tuple((a.variable, compiled.value_ticks(a.value))
+                               for a in event.assignments), sensors)
+            held_event, assigned = event, names
+            break
     groups: list[list[ir.Event]] = [[] for _ in range(4)]
-    for event in events:
-        read = compiled.sensors_read([event.condition])
-        groups[max((_STAGE_OF.get(s, _FLIGHT) for s in read), default=_SCHEDULE)].append(event)
-    return [(compiled.firing_ticks(g), compiled.sensors_read([e.condition for e in g]))
-            if g else None for g in groups]
+    for event in state.events:
+        if held is not None and event is held_event:
+            continue
+        stage = _stage(compiled.sensors_read([event.condition]))
+        if ir.variables_read(event.condition) & assigned:
+            stage = max(stage, held.stage)
+        groups[stage].append(event)
+    return _Events(tuple((compiled.firing_ticks(g), compiled.sensors_read(
+        [e.condition for e in g])) if g else None for g in groups), held)
 
 
 # the science computer's fixed readings (sim/science.py, `readings`)

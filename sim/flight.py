@@ -55,6 +55,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
             record = simulate(mission, executor, science, config, progress,
                               FastForward(mission, executor, science), gauge)
         record.entry_variables = executor.entry_variables
+        record.events_fired = executor.event_count
         return record
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")

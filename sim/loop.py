@@ -62,6 +62,8 @@ class RunRecord:
     # state -> the variables as it was first entered (the Python executor's; None for
     # the C runtime, whose variables the link does not carry)
     entry_variables: dict[str, dict[str, float]] | None = None
+    # events the Python executor fired, as its COMMANDs count them (None for the C runtime)
+    events_fired: int | None = None
 
     def visits(self) -> dict[str, int]:
         """Stays in each state flown: every transition into it (the start, a goto, a call,

@@ -149,7 +149,8 @@ def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=No
     reference = fly(mission, water, config, vehicle, plan, tick_by_tick=True)
     fast = fly(mission, water, config, vehicle, plan)
     assert fast.trace == reference.trace
-    assert (fast.ended, fast.surfacings) == (reference.ended, reference.surfacings)
+    assert (fast.ended, fast.surfacings, fast.events_fired) == \
+        (reference.ended, reference.surfacings, reference.events_fired)
     assert fast.columns.keys() == reference.columns.keys()
     for name, column in reference.columns.items():
         ours = fast.columns[name]
