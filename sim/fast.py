@@ -52,6 +52,7 @@ from gliderplan.sim.loop import Columns
 from gliderplan.sim.science import (
     BATTERY_V,
     BOTTOM_DEPTH_M,
+    CONSTANT_READINGS,
     DEVICE_MASKS,
     SECONDS_PER_DAY,
     SENT_ALWAYS_MASK,
@@ -72,6 +73,19 @@ _DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY, _ENERGY = (
                                       "conductivity", "salinity", "energy_left"))
 _HALFCYCLE, _WPTDIST, _TIMEOFDAY = (SENSOR_BY_NAME[n].index
                                     for n in ("halfcycle", "wptdist", "timeofday"))
+
+
+class _S:
+    """Sensor indices by name, for `match` (its value patterns are dotted names)."""
+
+    MISSIONTIME, DEPTH, PITCH, HEADING, ALTITUDE, LAT, LON, BATTERY = (
+        SENSOR_BY_NAME[n].index for n in ("missiontime", "depth", "pitch", "heading",
+                                          "altitude", "lat", "lon", "battery"))
+    TEMP, CONDUCTIVITY, SALINITY, CURRENT, HALFCYCLE, WPTDIST, TIMEOFDAY = (
+        SENSOR_BY_NAME[n].index for n in ("temp", "conductivity", "salinity", "current",
+                                          "halfcycle", "wptdist", "timeofday"))
+
+
 _RUNTIME_READINGS = (_HALFCYCLE, _WPTDIST)  # the executor's own, set before every tick's events
 _TEMP_BIT = 1 << _TEMP
 _DIVE, _CLIMB = pilot.DIVE, pilot.CLIMB
@@ -176,7 +190,7 @@ class FastForward:
                        for x in (e.condition, *(a.value for a in e.assignments))]
         expressions += [a for s in mission.states for p in s.profiles for a in p.args]
         self._executor_reads = sorted(compiled.sensors_read(expressions)
-                                      | {0, _DEPTH, _LAT, _LON, _TEMP})
+                                      | {_S.MISSIONTIME, _DEPTH, _LAT, _LON, _TEMP})
         self._covered = [[_covered(p) for p in s.profiles] for s in mission.states]
         # the battery reading changes within a run (the loop's gauge): a mission that reads
         # it is flown tick by tick
@@ -731,46 +745,46 @@ class _Readings:
 
     def sensor(self, index: int, first: int, stop: int) -> np.ndarray:
         """Sensor `index`'s value sent at ticks first..stop-1 (binary32)."""
-        if index == 0:
+        if index == _S.MISSIONTIME:
             return self.missiontime[first:stop]
         f, ctd, g = self.flight, self.ctd, self.fast.glider
         n = stop - first
         match index:
-            case 1:
+            case _S.DEPTH:
                 return self.depth_reading[first:stop]
-            case 2:
+            case _S.PITCH:
                 return _f32(f.pitch_rad[first:stop])
-            case 4:  # the glider's heading at the tick's start: the last one steered
+            case _S.HEADING:  # the glider's heading at the tick's start: the last one steered
                 steered = None if self.nav is None else self.nav.heading
                 if steered is None:
                     return np.full(n, _f32_scalar(g.heading_rad))
                 return _f32(np.concatenate([[g.heading_rad], steered])[first:stop])
-            case 5:
+            case _S.ALTITUDE:
                 return _f32(BOTTOM_DEPTH_M - f.depth_m[first:stop])
-            case 6 | 7:
+            case _S.LAT | _S.LON:
                 degrees = (self.nav.dr_lat if index == _LAT else self.nav.dr_lon)[first:stop]
                 return _f32(degrees_to_ddmm_array(degrees))
-            case 8:
+            case _S.BATTERY:
                 return np.full(n, _f32_scalar(BATTERY_V))
-            case 9:
+            case _S.TEMP:
                 return _f32(ctd.measured_c[first:stop])
-            case 10:
+            case _S.CONDUCTIVITY:
                 from gliderplan.sim.science import conductivity_s_m
 
                 return _f32(conductivity_s_m(ctd.measured_c[first:stop],
                                              ctd.salinity_psu[first:stop]))
-            case 11:
+            case _S.SALINITY:
                 return _f32(ctd.salinity_psu[first:stop])
-            case 15:
+            case _S.CURRENT:
                 return np.full(n, _f32_scalar(self.fast._current_reading))
-            case 17:  # the runtime's own: the legs its yo has begun, as before each tick
+            case _S.HALFCYCLE:  # the runtime's own: the legs its yo has begun, as before a tick
                 return halfcycles(self.fast.ex.routine, f)[first:stop]
-            case 18:  # the runtime's own, from this tick's position readings
+            case _S.WPTDIST:  # the runtime's own, from this tick's position readings
                 route = self.fast.ex.route
                 return np.array([route.distance_m(a, b) for a, b in zip(
                     self.sensor(_LAT, first, stop).tolist(),
                     self.sensor(_LON, first, stop).tolist(), strict=True)])
-            case 19:
+            case _S.TIMEOFDAY:
                 return _f32(np.fmod(self.fast.science.start_epoch_s + self.time_s[first:stop],
                                     SECONDS_PER_DAY))
         return np.full(n, _f32_scalar(_CONSTANT_READINGS[index]))
@@ -781,19 +795,19 @@ class _Readings:
             return _F32_CONSTANTS[index]
         f = self.flight
         match index:
-            case 0:
+            case _S.MISSIONTIME:
                 return float(self.missiontime[tick])
-            case 1:
+            case _S.DEPTH:
                 return float(self.depth_reading[tick])
-            case 2:
+            case _S.PITCH:
                 return _f32_scalar(float(f.pitch_rad[tick]))
-            case 5:
+            case _S.ALTITUDE:
                 return _f32_scalar(BOTTOM_DEPTH_M - float(f.depth_m[tick]))
-            case 6 | 7:
+            case _S.LAT | _S.LON:
                 nav = self.nav
                 return _f32_scalar(degrees_to_ddmm(float(
                     (nav.dr_lat if index == _LAT else nav.dr_lon)[tick])))
-            case 8:
+            case _S.BATTERY:
                 return _F32_BATTERY
         return float(self.sensor(index, tick, tick + 1)[0])
 
@@ -846,7 +860,7 @@ class _Readings:
 # The stages of a run after which readings are known: the schedule (missiontime), the
 # flight (depth, pitch, altitude, the fixed readings), the CTD, the route (position, heading).
 _SCHEDULE, _FLIGHT, _CTD, _NAV = range(4)
-_STAGE_OF = {0: _SCHEDULE, _TIMEOFDAY: _SCHEDULE, _TEMP: _CTD, _CONDUCTIVITY: _CTD,
+_STAGE_OF = {_S.MISSIONTIME: _SCHEDULE, _TIMEOFDAY: _SCHEDULE, _TEMP: _CTD, _CONDUCTIVITY: _CTD,
              _SALINITY: _CTD, _LAT: _NAV, _LON: _NAV, _HEADING: _NAV, _WPTDIST: _NAV}
 
 
@@ -907,7 +921,7 @@ def _staged(state: ir.State) -> _Events:
 
 
 # the science computer's fixed readings (sim/science.py, `readings`)
-_CONSTANT_READINGS = {3: 0.0, 12: 250.0, 13: 1.0, 14: 0.001, 16: 0.0}
+_CONSTANT_READINGS = CONSTANT_READINGS
 _F32_CONSTANTS = {k: _f32_scalar(v) for k, v in _CONSTANT_READINGS.items()}
 _F32_BATTERY = _f32_scalar(BATTERY_V)
 

@@ -24,8 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import FLIGHT_SENSORS_MASK, RUNTIME_READINGS_MASK
-from gliderplan.language.registry import SENSORS
+from gliderplan.contract import (
+    FLAG_HEADING,
+    FLAG_SURFACE,
+    FLIGHT_SENSORS_MASK,
+    N_SENSORS,
+    RUNTIME_READINGS_MASK,
+)
+from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.sim import native
 from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean
@@ -41,6 +47,16 @@ for _s in SENSORS:
 _TEMP_BIT = 1 << next(s.index for s in SENSORS if s.name == "temp")
 BOTTOM_DEPTH_M = 200.0  # assumption: water depth for the altimeter reading
 BATTERY_V = 15.0  # assumption: alkaline pack voltage, constant over the run
+# Readings the simulated glider holds constant, by sensor index: no roll, and the optode,
+# optics and modem of a quiet shelf sea (assumption). The fast executor sends the same.
+CONSTANT_READINGS: dict[int, float] = {SENSOR_BY_NAME[name].index: value for name, value in (
+    ("roll", 0.0), ("oxygen", 250.0), ("chlorophyll", 1.0), ("backscatter", 0.001),
+    ("modem", 0.0))}
+_BLANK_READINGS = tuple(CONSTANT_READINGS.get(i, math.nan) for i in range(N_SENSORS))
+# the readings `ScienceComputer.readings` measures each tick, in the order it lists them
+_MEASURED = tuple(SENSOR_BY_NAME[name].index for name in (
+    "missiontime", "depth", "pitch", "heading", "altitude", "lat", "lon", "battery", "temp",
+    "conductivity", "salinity", "current", "timeofday", "energy_left"))
 _NOISE_BLOCK = 4096  # random numbers drawn per numpy call
 SECONDS_PER_DAY = 86400.0
 
@@ -171,15 +187,15 @@ class ScienceComputer:
             measured += self.noise.spike_c * self.spikes.next()
         depth = max(0.0, g.depth_m + noise.depth_sigma_m * z_depth)
         c = self.glider.current
-        values = [
-            time_s, depth, g.pitch_rad, 0.0, g.heading_rad, BOTTOM_DEPTH_M - g.depth_m,
-            degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
-            measured, conductivity_s_m(measured, salinity), salinity,
-            250.0, 1.0, 0.001, math.hypot(c.north_mps, c.east_mps), 0.0,
-            math.nan, math.nan,  # the runtime's readings: never sent
-            math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
-            self.energy_left_j,
-        ]
+        values = list(_BLANK_READINGS)  # the constants; the runtime's readings stay NaN
+        for index, value in zip(_MEASURED, (
+                time_s, depth, g.pitch_rad, g.heading_rad, BOTTOM_DEPTH_M - g.depth_m,
+                degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
+                measured, conductivity_s_m(measured, salinity), salinity,
+                math.hypot(c.north_mps, c.east_mps),
+                math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
+                self.energy_left_j), strict=True):
+            values[index] = value
         mask = powered_mask(self.sensor_power)
         self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan
         return mask, values
@@ -214,7 +230,7 @@ class ScienceComputer:
         """Fly one tick under a COMMAND and switch the sensors it powers."""
         self.sensor_power = sensor_power
         self.glider.step(depth_target_m, pitch_rad, ballast_cc, heading_rad,
-                         bool(flags & 8), bool(flags & 1))
+                         bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE))
 
 
 @dataclass(frozen=True)

@@ -65,6 +65,28 @@ def test_no_module_redefines_a_fact_of_the_contract(path):
             "import it from gliderplan.contract")
 
 
+def _numbers(nodes) -> bool:
+    return any(isinstance(n, ast.Constant) and type(n.value) is int for n in nodes)
+
+
+@pytest.mark.parametrize("path", _python_sources(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_module_reads_a_flag_or_a_sensor_by_its_number(path):
+    """A COMMAND's flags are tested by their names (`flags & FLAG_HEADING`, not `flags & 8`)
+    and a sensor is picked by its name's index, not by its place in the array (`case 9:`
+    over a sensor index): the contract may grow, and the layout is its alone."""
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.BitAnd):
+            flags = any(isinstance(n, ast.Name) and n.id.endswith("flags")
+                        for n in (node.left, node.right))
+            assert not (flags and _numbers((node.left, node.right))), (
+                f"{path.name}:{node.lineno} tests a flag by its number")
+        if isinstance(node, ast.Match) and isinstance(node.subject, ast.Name) \
+                and node.subject.id.endswith("index"):
+            values = [p.value for c in node.cases for p in ast.walk(c.pattern)
+                      if isinstance(p, ast.MatchValue)]
+            assert not _numbers(values), f"{path.name}:{node.lineno} picks a sensor by number"
+
+
 def _c_sources() -> list[Path]:
     runtime = ROOT / "runtime"
     return [p for p in sorted([*runtime.glob("include/*.h"), *runtime.glob("src/*.c")])
