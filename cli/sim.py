@@ -18,7 +18,7 @@ import re
 import sys
 
 from gliderplan.cli.common import add_mission_argument, load_mission, seed
-from gliderplan.contract import TICK_S, ExitCode
+from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
 
@@ -100,11 +100,11 @@ def _current(text: str):
 
 
 def run(args: argparse.Namespace) -> int:
-    from gliderplan.sim.run import DEFAULT_DURATION_S, run_mission
+    from gliderplan.sim.run import run_mission
 
     mission = load_mission(args)
     duration_s = parse_duration_s(args.duration) if args.duration else None
-    ticks = (duration_s or mission.horizon_s or DEFAULT_DURATION_S) / max(args.tick, 1e-9)
+    ticks = (duration_s or mission.horizon_s or DEFAULT_HORIZON_S) / max(args.tick, 1e-9)
     from gliderplan.cli.progress import ProgressBar
 
     progress = ProgressBar(lambda done, total: f"{done / 86400:.2f} of {total / 86400:.2f} d "

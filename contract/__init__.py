@@ -166,6 +166,9 @@ TICK_S = 4.0  # [s]
 # interpreter, plus Linux serial I/O): under 0.1 % busy at 300 MHz and a 4 s tick. The
 # planner prices the computer with it and the simulator bills it.
 RUNTIME_CYCLES_PER_TICK = 200_000.0  # [cycles]
+# A mission without `horizon` is planned over this time, and a run of it (sim, montecarlo)
+# ends here if it has not exited: the plan's budget and the flight cover the same time.
+DEFAULT_HORIZON_S = 30 * 86400.0  # [s] 30 days
 
 
 # ---- energy components --------------------------------------------------------------

@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 import cvxpy as cp
 import numpy as np
 
+from gliderplan.contract import DEFAULT_HORIZON_S
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.inputs import ENERGY_UNIT_J, Coefficients, PlanInputs, build_inputs
@@ -247,7 +248,7 @@ def plan_mission_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
     count = scenarios or scenarios_needed(confidence, dimension, risk)
     spec = spec or read_spec()
     job = montecarlo.Job(mission, nominal, hardware.vehicle, spec, hardware.budget_j, seed,
-                         mission.horizon_s or 30 * 86400.0)
+                         mission.horizon_s or DEFAULT_HORIZON_S)
     result = montecarlo.run_montecarlo(job, count, executor, workers, progress)
     if result.interrupted:
         raise KeyboardInterrupt

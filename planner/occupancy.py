@@ -22,13 +22,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
 from gliderplan.language import ir
 from gliderplan.language.semantics import Machine, act, fired_event, start
 from gliderplan.planner.legs import Position, leg_length_m, route_targets
 
 NOMINAL_SPEED_MPS = 0.35  # Slocum horizontal speed (paper; BCO-DMO): transit times in the walk
-DEFAULT_HORIZON_S = 30 * 86400.0  # planning horizon of an open-ended mission without `horizon`
 _MAX_VISITS = 100_000  # bounds the walk of a mission that bounces between states forever
 
 

@@ -20,12 +20,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.inputs import build_inputs
 from gliderplan.planner.model import model_for
-from gliderplan.planner.occupancy import DEFAULT_HORIZON_S, measured_occupancy
+from gliderplan.planner.occupancy import measured_occupancy
 from gliderplan.planner.plan import PlanResult, plan_mission, solve_plan
 from gliderplan.planner.planfile import MISSION_SUBJECT, Assumption, Plan
 

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gliderplan.contract import ExitCode
+from gliderplan.contract import TICK_S, ExitCode
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import InputFileError, read_input_text, write_atomically
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
@@ -243,7 +243,7 @@ def _global_attributes(meta: dict, time: np.ndarray, lat: np.ndarray, lon: np.nd
         "time_coverage_start": utc_text(first),
         "time_coverage_end": utc_text(last),
         "time_coverage_duration": f"PT{max(last - first, 0.0):.0f}S",
-        "time_coverage_resolution": f"PT{meta.get('tick_s', 4.0):g}S",
+        "time_coverage_resolution": f"PT{meta.get('tick_s', TICK_S):g}S",
     }
 
 

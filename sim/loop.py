@@ -13,7 +13,13 @@ from typing import Protocol
 
 import numpy as np
 
-from gliderplan.contract import NO_STATE, TICK_S, TRANSITION_NAMES, TransitionKind
+from gliderplan.contract import (
+    DEFAULT_HORIZON_S,
+    NO_STATE,
+    TICK_S,
+    TRANSITION_NAMES,
+    TransitionKind,
+)
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, Transition, start
 from gliderplan.power_models.vehicle import Vehicle
@@ -37,7 +43,7 @@ DEFAULT_START_EPOCH_S = 946684800.0  # a run that names no start: 2000-01-01T00:
 @dataclass(frozen=True)
 class RunConfig:
     tick_s: float = TICK_S
-    duration_s: float = 30 * 86400.0  # the run ends here if the mission has not exited
+    duration_s: float = DEFAULT_HORIZON_S  # the run ends here if the mission has not exited
     seed: int = 0
     noise: SensorNoise = SensorNoise()
     current: Current = Current()

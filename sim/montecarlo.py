@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
@@ -258,7 +258,6 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
 
 MONTECARLO_FILES = ("scenarios.parquet", "summary.json", "energy.png", "exhaustion.png")
 MAX_SCENARIOS = 1_000_000
-DEFAULT_DURATION_S = 30 * 86400.0  # a run of a mission without a horizon ends here
 
 
 @dataclass(frozen=True)
@@ -302,7 +301,7 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
-    duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_DURATION_S
+    duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_HORIZON_S
     spec = read_spec(scenario_file)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     budget_j = plan.budget_j if plan is not None else \

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.files import write_atomically
 from gliderplan.language.ir import CheckedMission
@@ -24,7 +24,6 @@ if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
 RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png",
              "events.log")  # events.log: the C runtime's own, with --faults
 NETCDF_FILE = "trajectory.nc"  # with netcdf=True
-DEFAULT_DURATION_S = 30 * 86400.0  # a run of a mission without a horizon ends here
 TRACKERS = ("robust", "naive")
 
 
@@ -123,7 +122,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         start = parse_utc(start_utc) if start_utc else None
     except ValueError as err:
         raise UsageError(f"--start: {err}") from None
-    duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_DURATION_S
+    duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_HORIZON_S
     fault_spec = None
     if faults is not None:
         from gliderplan.sim.faults import parse_faults

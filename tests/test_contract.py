@@ -203,3 +203,14 @@ def test_a_unit_means_the_same_in_a_mission_a_data_file_and_an_option(tmp_path):
     clock = check_source("mission m\ncomputer ts7800 @ 0.5 GHz\nstate s begin flightprofile "
                          "surface end\n", "m.mission").mission.computer.clock_mhz
     assert clock == 500.0
+
+
+def test_a_mission_without_a_horizon_is_planned_and_flown_over_the_same_time():
+    """The plan budgets what the simulator flies: one default horizon for both."""
+    from gliderplan.planner.occupancy import mission_occupancy
+    from gliderplan.sim.loop import RunConfig
+
+    source = "mission m\nstate s begin flightprofile yo(5, 20, .454, .454) end\n"
+    occupancy = mission_occupancy(check_source(source, "m.mission").mission)
+    assert occupancy.total_s == pytest.approx(contract.DEFAULT_HORIZON_S, abs=contract.TICK_S)
+    assert RunConfig().duration_s == contract.DEFAULT_HORIZON_S
