@@ -73,8 +73,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.sweep is not None and not args.output:
         raise UsageError("--sweep needs -o DIR for its CSV files and plot")
-    if args.seq is not None and args.sign is None:
-        raise UsageError("--seq goes with --sign KEYFILE")
     mission = load_mission(args)
     if args.sweep is not None:
         return _sweep(mission, args)

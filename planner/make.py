@@ -58,8 +58,11 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     if confidence is not None and occupancy_from_sim:
         raise UsageError("--confidence and --occupancy-from-sim: choose one (a plan at a "
                          "confidence plans each scenario on the times it flew)")
-    if scenarios is not None and scenarios < 1:
-        raise UsageError(f"--scenarios {scenarios}: must be at least 1")
+    if seq is not None and sign is None:
+        raise UsageError("--seq goes with --sign KEYFILE")
+    from gliderplan.sim.backends import check_run_size
+
+    check_run_size(scenarios, workers)
     hardware = load_hardware(mission, battery=battery, computer=computer,
                              cycles_per_tick=cycles_per_tick)
     if occupancy_from_sim:

@@ -15,9 +15,21 @@ from contextlib import contextmanager
 
 from gliderplan.contract.errors import UsageError
 
+MAX_SCENARIOS = 1_000_000
+
 
 class BackendError(UsageError):
     """A scheduler that cannot be reached or used; the message says what to do."""
+
+
+def check_run_size(scenarios: int | None, workers: int) -> None:
+    """UsageError unless `scenarios` (None: as many as the caller works out) lies in
+    1..MAX_SCENARIOS and `workers` is at least 1: the one test of `gliderplan montecarlo`
+    and `gliderplan plan --confidence` / `--occupancy-from-sim`."""
+    if scenarios is not None and not 1 <= scenarios <= MAX_SCENARIOS:
+        raise UsageError(f"--scenarios {scenarios}: must be between 1 and {MAX_SCENARIOS:,}")
+    if workers < 1:
+        raise UsageError(f"--workers {workers}: must be at least 1")
 
 
 def _ignore_interrupt() -> None:
@@ -59,10 +71,12 @@ def scenario_executor(workers: int, scheduler: str | None = None
             client = Client(cluster)
         else:
             client = Client(scheduler, timeout=10)
-    except OSError as err:
+    except (OSError, ValueError) as err:  # ValueError: an address Dask cannot read
         if cluster is not None:
             cluster.close()
-        raise BackendError(f"--scheduler {scheduler}: cannot reach it: {err}") from None
+        why = "cannot reach it" if isinstance(err, OSError) else \
+            "expected local or tcp://HOST:PORT"
+        raise BackendError(f"--scheduler {scheduler}: {why}: {err}") from None
     try:
         yield client.get_executor()
     finally:

@@ -257,7 +257,6 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
 # ---- the command ------------------------------------------------------------------------
 
 MONTECARLO_FILES = ("scenarios.parquet", "summary.json", "energy.png", "exhaustion.png")
-MAX_SCENARIOS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -290,14 +289,11 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     from gliderplan.planner.planfile import load_plan
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import plots
-    from gliderplan.sim.backends import scenario_executor
+    from gliderplan.sim.backends import check_run_size, scenario_executor
     from gliderplan.sim.outputs import parquet_bytes
     from gliderplan.sim.scenarios import read_spec
 
-    if not 1 <= scenarios <= MAX_SCENARIOS:
-        raise UsageError(f"--scenarios {scenarios}: must be between 1 and {MAX_SCENARIOS:,}")
-    if workers < 1:
-        raise UsageError(f"--workers {workers}: must be at least 1")
+    check_run_size(scenarios, workers)
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")

@@ -136,6 +136,19 @@ CASES = [
         ["plan", FIG2, "--battery", "1e400Wh"], ["plan", FIG2, "--battery", "1e305kWh"],
         ["compare-sbc", FIG2, "--battery", "1e400Wh"],
     ], ExitCode.USAGE, "must be positive and finite"),
+    ("no scenario to fly", [
+        ["montecarlo", FIG2, "--scenarios", "0", "-o", "out"],
+        ["plan", ANNOTATED, "--confidence", "0.9", "--scenarios", "0"],
+        ["plan", ANNOTATED, "--occupancy-from-sim", "--scenarios", "0"],
+    ], ExitCode.USAGE, "--scenarios 0: must be between 1 and 1,000,000"),
+    ("fewer than one worker", [  # plan once flew its scenarios in this process instead
+        ["montecarlo", FIG2, "--scenarios", "2", "--workers", "0", "-o", "out"],
+        ["plan", ANNOTATED, "--confidence", "0.9", "--workers", "0"],
+        ["plan", ANNOTATED, "--occupancy-from-sim", "--scenarios", "2", "--workers", "0"],
+    ], ExitCode.USAGE, "--workers 0: must be at least 1"),
+    ("a scheduler address Dask cannot read", [  # once an internal error, exit 70
+        ["montecarlo", FIG2, "--scenarios", "2", "--scheduler", "nowhere", "-o", "out"],
+    ], ExitCode.USAGE, "--scheduler nowhere: expected local or tcp://HOST:PORT"),
     ("a negative seed", [
         ["sim", FIG2, "--seed", "-1", "-o", "out"],
         ["montecarlo", FIG2, "--scenarios", "2", "--seed", "-1", "-o", "out"],

@@ -178,3 +178,13 @@ def test_make_plan_and_sweep_mission_are_the_plan_command_as_calls(tmp_path):
     assert len(sweep.pareto) == 4 and list(sweep.computers["computer"]) == \
         ["ts5500@133", "ts7800@300", "ts7800@500"]
     assert ("pareto", 4, 4) in seen and ("batteries", 3, 3) in seen
+    # the call refuses what the command refuses, with the same error (exit 2)
+    from gliderplan.contract import ExitCode
+    from gliderplan.contract.errors import GliderplanError
+
+    for options, message in (({"seq": 5}, "--seq goes with --sign KEYFILE"),
+                             ({"confidence": 0.9, "workers": 0}, "--workers 0: must be at "),
+                             ({"confidence": 0.9, "scenarios": 0}, "--scenarios 0: must be ")):
+        with pytest.raises(GliderplanError, match=message) as refused:
+            make_plan(mission, **options)
+        assert refused.value.exit_code == ExitCode.USAGE

@@ -57,7 +57,7 @@ def test_fresh_scenarios_hold_the_budget_as_often_as_the_plan_says(tmp_path, cap
 @pytest.mark.parametrize(("extra", "message"), [
     (["--confidence", "1.5"], "--confidence 1.5: must lie strictly between 0 and 1"),
     (["--confidence", "0.9", "--risk", "0"], "--risk 0: must lie strictly between 0 and 1"),
-    (["--confidence", "0.9", "--scenarios", "0"], "--scenarios 0: must be at least 1"),
+    (["--confidence", "0.9", "--scenarios", "0"], "--scenarios 0: must be between 1 and 1,000,000"),
 ])
 def test_bad_confidence_options_exit_2(capsys, extra, message):
     assert main(["plan", str(SEPARABLE), *extra]) == 2

@@ -83,7 +83,7 @@ def test_an_occupancy_that_never_settles_is_said_so():
 
 @pytest.mark.parametrize(("extra", "message"), [
     (["--confidence", "0.9"], "--confidence and --occupancy-from-sim: choose one"),
-    (["--scenarios", "0"], "--scenarios 0: must be at least 1"),
+    (["--scenarios", "0"], "--scenarios 0: must be between 1 and 1,000,000"),
 ])
 def test_bad_occupancy_options_exit_2(capsys, extra, message):
     assert main(["plan", str(SURVEY), "--occupancy-from-sim", *extra]) == 2
