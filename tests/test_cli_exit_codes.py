@@ -248,3 +248,32 @@ def test_a_named_pipe_in_a_run_directory_is_refused_at_once(tmp_path):
     assert process.returncode == ExitCode.USAGE, err
     assert err == (f"gliderplan report: error: {run}/timeseries.parquet: is not a regular file "
                    "(a device, pipe or socket), not a run's time series\n")
+
+
+def test_every_command_is_a_documented_call_that_a_test_calls():
+    """README.md's Python block names, for every command, the call it is a shell over
+    (`from MODULE import NAME  # COMMAND`); each such call exists and a test other than
+    the command-line ones calls it directly."""
+    import importlib
+    import re
+
+    from gliderplan.cli.main import subcommands
+
+    root = Path(__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text()
+    block = readme[readme.index("```python\n"):]
+    block = block[:block.index("\n```\n")]
+    documented = {}
+    for module, names, commands in re.findall(r"^from (\S+) import ([\w, ]+?)\s*# (.+)$",
+                                              block, re.M):
+        for command in re.findall(r"[a-z][a-z-]*", commands):
+            documented.setdefault(command, []).extend(
+                (module, n.strip()) for n in names.split(","))
+    tests = [p.read_text() for p in (root / "tests").glob("test_*.py")
+             if p.name not in ("test_cli_exit_codes.py", "test_check_cli.py")]
+    for command in subcommands():
+        assert command in documented, f"README.md documents no call for `{command}`"
+        for module, name in documented[command]:
+            assert hasattr(importlib.import_module(module), name), (command, module, name)
+            assert any(re.search(rf"\b{name}\b", t) for t in tests), (
+                f"no test calls {module}.{name} (`gliderplan {command}`) directly")

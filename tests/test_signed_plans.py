@@ -58,6 +58,19 @@ def test_keygen_writes_a_private_key_once(tmp_path, capsys):
     assert (tmp_path / "other.key").read_text() != first
 
 
+def test_write_new_key_is_the_keygen_command_as_one_call(tmp_path):
+    from gliderplan.contract import ExitCode
+    from gliderplan.planner.signing import write_new_key
+
+    key = tmp_path / "k.key"
+    write_new_key(key)
+    assert stat.S_IMODE(key.stat().st_mode) == 0o600 and len(read_key(key)) == 32
+    first = key.read_text()
+    with pytest.raises(KeyFileError, match="exists") as refused:
+        write_new_key(key)  # the error the command prints, with its exit code
+    assert refused.value.exit_code == ExitCode.USAGE and key.read_text() == first
+
+
 def test_plan_sign_reports_the_upload_size_and_signs_what_the_reader_reads(signed, capsys):
     key, plan = signed
     data = plan.read_bytes()
