@@ -17,7 +17,7 @@ import synthetic_glider as sg
 from gliderplan.cli.main import main
 from gliderplan.power_models import calibration, load_vehicle
 from gliderplan.power_models.slocum_log import FlightLog
-from gliderplan.power_models.vehicle import read_vehicle_file
+from gliderplan.power_models.vehicle import figure_value, read_vehicle_file
 
 LOGS = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "slocum-logs"
 needs_logs = pytest.mark.skipif(
@@ -116,8 +116,24 @@ def test_real_log_writes_every_fitted_figure_with_its_sd_and_source(capsys, tmp_
 @needs_logs
 def test_the_preset_is_this_log_calibrated(capsys, tmp_path):
     out = tmp_path / "sebastian.toml"
-    _calibrate(capsys, "-o", str(out))
+    _, report = _calibrate(capsys, "-o", str(out))
     mine, preset = read_vehicle_file(out), load_vehicle("slocum_g2_shallow")
+    # every figure the preset's source says calibrate fitted, as the preset writes it (6
+    # digits), with its sd and the bootstrap's correlation (3 decimals)
+    fitted = [f for f in report["figures"] if f["fitted"]]
+    assert {f["key"] for f in fitted} >= {"pump_out_energy_per_volume", "pitch_energy",
+                                          "surface_power", "iridium_power"}
+    for f in fitted:
+        assert figure_value(preset, f["key"]) == pytest.approx(f["value"], rel=1e-5,
+                                                               abs=1e-5), f["key"]
+    spread = dict(zip(preset.uncertainty.keys, preset.uncertainty.sd, strict=True))
+    assert spread.keys() == {f["key"] for f in fitted if f["sd"] is not None}
+    for f in fitted:
+        if f["sd"] is not None:
+            assert spread[f["key"]] == pytest.approx(f["sd"], rel=5e-3), f["key"]
+    assert preset.uncertainty.keys == mine.uncertainty.keys
+    assert np.allclose(preset.uncertainty.correlation, mine.uncertainty.correlation,
+                       atol=2e-3)
     for attribute in ("hotel_w", "pump_in_j_per_cc", "top_turn_s", "bottom_turn_s",
                       "iridium_s", "surface_s"):
         assert getattr(mine, attribute) == pytest.approx(getattr(preset, attribute), rel=0.01,
