@@ -10,6 +10,7 @@ import pytest
 
 from gliderplan.contract import ExitCode
 from gliderplan.contract.files import InputFileError
+from gliderplan.contract.units import UNITS
 from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
 from gliderplan.power_models.catalog import DATA_DIR, preset_path
 from gliderplan.power_models.errors import ModelFileError
@@ -226,6 +227,16 @@ def _quoted(source: str, unit: str) -> list[float]:
     return found
 
 
+def _quoted_in_any_unit(source: str, unit: str) -> list[float]:
+    """Numbers the source gives in `unit` or in another unit of its dimension, converted
+    ("0.454 rad" for a figure in deg, "0.0716 m3" for one in l)."""
+    found = _quoted(source, unit)
+    for table in (t for t in UNITS.values() if unit in t):
+        found += [q * factor / table[unit] for other, factor in table.items() if other != unit
+                  for q in _quoted(source, other)]
+    return found
+
+
 def _figures(name, prefix, table):
     for key, item in table.items():
         if isinstance(item, dict) and "value" in item:
@@ -244,13 +255,14 @@ def _preset_figures():
             yield from _figures(path.name, "", tomllib.load(handle))
 
 
-QUOTING = [(f, k, e) for f, k, e in _preset_figures() if _quoted(e["source"], e["unit"])]
+QUOTING = [(f, k, e) for f, k, e in _preset_figures()
+           if _quoted_in_any_unit(e["source"], e["unit"])]
 
 
 @pytest.mark.parametrize(("file", "key", "entry"), QUOTING,
                          ids=[f"{f}:{k}" for f, k, _ in QUOTING])
 def test_a_preset_figure_is_a_number_its_source_quotes(file, key, entry):
-    quoted = _quoted(entry["source"], entry["unit"])
+    quoted = _quoted_in_any_unit(entry["source"], entry["unit"])
     assert any(math.isclose(entry["value"], q, rel_tol=1e-3) for q in quoted), (
         f"{file}: {key} = {entry['value']} {entry['unit']}, but its source quotes "
         f"{quoted}: {entry['source']}")
@@ -260,5 +272,6 @@ def test_the_source_check_reads_ranges_and_spreads():
     assert _quoted("shallow pump +-233 cc (the log: -231..+234 cc)", "cc") == [233, -231, 234]
     assert len(QUOTING) > 20  # most figures quote their number
     assert _quoted("yo 3-38 m; 2.4888 J/cc", "m") == [3, 38]
+    assert _quoted_in_any_unit("Vg ~ 0.0716 m3", "l") == pytest.approx([71.6])
     assert _quoted("oil in E = dV (-0.17935 + ...), i.e. 0.17935 J/cc and -0.005574 J/(cc m)",
                    "J/(cc m)") == [-0.005574]
