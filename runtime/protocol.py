@@ -433,7 +433,10 @@ class Release:
 
 
 @dataclass(frozen=True)
-class Plan:
+class PlanPiece:
+    """A PLAN frame: `data`, the bytes of a plan file from `offset`, of `total` in all (the
+    plan itself is `planner.planfile.Plan`)."""
+
     offset: int
     total: int
     data: bytes
@@ -446,7 +449,7 @@ class Plan:
         return struct.pack("<HH", self.offset, self.total) + self.data
 
     @classmethod
-    def unpack(cls, payload: bytes) -> Plan:
+    def unpack(cls, payload: bytes) -> PlanPiece:
         if not 4 <= len(payload) <= 4 + PLAN_PIECE:
             raise LengthError(f"PLAN payload of {len(payload)} bytes")
         offset, total = struct.unpack_from("<HH", payload)
@@ -485,8 +488,8 @@ class Nak:
         return cls()
 
 
-Message = Hello | Sensors | CommandUpdate | Release | Plan | PlanStatus | Nak
-MESSAGES: dict[int, type] = {m.TYPE: m for m in (Hello, Sensors, CommandUpdate, Release, Plan,
+Message = Hello | Sensors | CommandUpdate | Release | PlanPiece | PlanStatus | Nak
+MESSAGES: dict[int, type] = {m.TYPE: m for m in (Hello, Sensors, CommandUpdate, Release, PlanPiece,
                                                  PlanStatus, Nak)}
 
 
@@ -495,11 +498,11 @@ def unpack_message(frame: Frame) -> Message:
     return MESSAGES[frame.type].unpack(frame.payload)
 
 
-def plan_pieces(plan: bytes) -> list[Plan]:
+def plan_pieces(plan: bytes) -> list[PlanPiece]:
     """A plan file cut into PLAN messages of at most PLAN_PIECE bytes, in order."""
     if not 0 < len(plan) <= MAX_LINK_PLAN:
         raise ValueError(f"a plan file has 1..{MAX_LINK_PLAN} bytes, not {len(plan)}")
-    return [Plan(offset, len(plan), plan[offset:offset + PLAN_PIECE])
+    return [PlanPiece(offset, len(plan), plan[offset:offset + PLAN_PIECE])
             for offset in range(0, len(plan), PLAN_PIECE)]
 
 

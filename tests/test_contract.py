@@ -214,3 +214,12 @@ def test_a_mission_without_a_horizon_is_planned_and_flown_over_the_same_time():
     occupancy = mission_occupancy(check_source(source, "m.mission").mission)
     assert occupancy.total_s == pytest.approx(contract.DEFAULT_HORIZON_S, abs=contract.TICK_S)
     assert RunConfig().duration_s == contract.DEFAULT_HORIZON_S
+
+
+def test_plan_names_one_thing():
+    """One `Plan` type, the plan file's (`planner/planfile.py`): the PLAN frame that carries a
+    piece of it over the link is a `PlanPiece`."""
+    named = [str(p.relative_to(ROOT)) for p in _python_sources()
+             for node in ast.walk(ast.parse(p.read_text()))
+             if isinstance(node, ast.ClassDef) and node.name == "Plan"]
+    assert named == ["planner/planfile.py"]

@@ -71,7 +71,7 @@ MESSAGES = [
     p.Sensors(tick=42, values={0: 500.0}, resync=True),
     p.CommandUpdate.between(CALL),
     p.Release(ReleaseReason.MISSION_EXITED),
-    p.Plan(offset=200, total=450, data=b"x" * 200),
+    p.PlanPiece(offset=200, total=450, data=b"x" * 200),
     p.PlanStatus(False, "plan line 3: hash does not match the mission"),
     p.Nak(),
 ]
@@ -184,7 +184,7 @@ def test_bad_frames_raise_typed_errors(wire, error):
      (p.Sensors, struct.pack("<IBI", 0, SENSORS_MASK, 3) + b"\x00" * 4),
      (p.Sensors, struct.pack("<IB", 0, 0x80)),
      (p.Hello, b"\x01" * 10), (p.Release, b""), (p.PlanStatus, b"\x01\x05ok"),
-     (p.Nak, b"\x00"), (p.Plan, b"\x00")],
+     (p.Nak, b"\x00"), (p.PlanPiece, b"\x00")],
 )
 def test_payloads_of_the_wrong_size_are_refused(message_type, payload):
     with pytest.raises(p.LengthError):
@@ -268,7 +268,7 @@ class ScriptedRuntime(threading.Thread):
                 if isinstance(message, p.Nak):
                     self.naks += 1
                     continue
-                if isinstance(message, p.Plan):
+                if isinstance(message, p.PlanPiece):
                     if message.offset + len(message.data) == message.total:
                         self.send(p.PlanStatus(True, "ok"))
                     continue
