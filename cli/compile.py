@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from gliderplan.cli.common import add_mission_argument, load_mission
-from gliderplan.contract.errors import UsageError
 
 ORDER = 40
 
@@ -29,9 +27,6 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.runtime.build import compile_mission
 
     mission = load_mission(args)
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {out}: not a directory")
-    binary = compile_mission(mission, out, args.target, args.plan)
+    binary = compile_mission(mission, args.output, args.target, args.plan)
     print(f"{binary} ({args.target})", file=sys.stderr)
     return 0

@@ -24,7 +24,7 @@ from importlib import resources
 from pathlib import Path
 
 from gliderplan.contract import FlightLimits
-from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import OutputFileError, output_directory, write_atomically
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.ir import CheckedMission
@@ -218,6 +218,8 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = 
     plan it would refuse, ModelFileError for a vehicle or board that cannot be loaded,
     BuildError otherwise.
     """
+    if Path(out_dir).exists() and not Path(out_dir).is_dir():
+        raise UsageError(f"-o {out_dir}: not a directory")
     board = find_target(target)
     if limits is None:
         from gliderplan.planner.limits import flight_limits

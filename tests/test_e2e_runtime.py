@@ -33,9 +33,11 @@ from gliderplan.contract import (
     NO_STATE,
     PLAN_FORMAT_VERSION,
     PROTOCOL_VERSION,
+    ExitCode,
     ReleaseReason,
     RuntimeExit,
 )
+from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import check_source, semantics
 from gliderplan.language.codegen_c import read_mask
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
@@ -453,6 +455,10 @@ def test_compile_mission_checks_the_plan_with_the_runtime_and_ships_it(binary, f
     with pytest.raises(PlanRejected, match="plan rejected: .*bad.plan line"):
         compile_mission(mission, tmp_path / "out2", plan_path=tmp_path / "bad.plan")
     assert not (tmp_path / "out2").exists()
+    (tmp_path / "file").write_text("a file, not a directory\n")
+    with pytest.raises(GliderplanError, match="not a directory") as refused:
+        compile_mission(mission, tmp_path / "file")  # the command's error, exit 2
+    assert refused.value.exit_code == ExitCode.USAGE
 
 
 def test_a_hand_written_plan_switches_sensors_on_their_windows(binary, fig2_hash, line,
