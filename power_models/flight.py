@@ -31,11 +31,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract.errors import GliderplanError
+
 _BISECTION_STEPS = 12  # halves the bracket (< 1.6 rad) to < 4e-4 rad ...
 _NEWTON_STEPS = 3  # ... which Newton's method squares below double precision
 _DEPTH_CELLS = 128  # midpoint rule over a yo band: exact for uniform water, 1e-5 with a profile
 
 Array = np.ndarray
+
+
+class FlightModelError(GliderplanError, ValueError):
+    """A glide the vehicle cannot fly (a yo deeper than its trim and pumped volume can
+    climb back from): bad input, exit 1, said in one line."""
 
 
 @dataclass(frozen=True)
@@ -194,12 +201,12 @@ def glide_leg(
     `pumped_cc` [cc] (magnitude) pumped below (above) neutral, through `ocean` (default:
     uniform water of the reference density). Broadcasts over its array arguments.
 
-    Raises ValueError where the glider's trim leaves it without buoyancy to glide.
+    Raises FlightModelError where the glider's trim leaves it without buoyancy to glide.
     """
     top = np.asarray(top_m, float)
     bottom = np.asarray(bottom_m, float)
     if np.any(bottom - top <= 0.0) or np.any(top < 0.0):
-        raise ValueError("a glide needs 0 <= top < bottom")
+        raise FlightModelError("a glide needs 0 <= top < bottom")
     gamma, per_root_cc = glide_geometry(params, pitch_rad)
     sign = 1.0 if climbing else -1.0
     cells = (np.arange(_DEPTH_CELLS) + 0.5) / _DEPTH_CELLS
@@ -209,9 +216,11 @@ def glide_leg(
         params, sign * np.asarray(pumped_cc, float)[..., None], depth, rho
     )
     if np.any(volume <= 0.0):
-        raise ValueError(
-            f"the glider cannot {'climb' if climbing else 'dive'}: its trim and the water "
-            "leave it without buoyancy at this pumped volume"
+        stuck = float(np.min(np.broadcast_to(depth, volume.shape)[volume <= 0.0]))
+        raise FlightModelError(
+            f"the glider cannot {'climb' if climbing else 'dive'} below {stuck:.0f} m: its "
+            "trim and the water (the hull squeezed by sea pressure) leave it without "
+            "buoyancy at this pumped volume"
         )
     w = (per_root_cc * np.sin(gamma))[..., None] * np.sqrt(volume)
     band = bottom - top

@@ -149,6 +149,11 @@ CASES = [
     ("a scheduler address Dask cannot read", [  # once an internal error, exit 70
         ["montecarlo", FIG2, "--scenarios", "2", "--scheduler", "nowhere", "-o", "out"],
     ], ExitCode.USAGE, "--scheduler nowhere: expected local or tcp://HOST:PORT"),
+    ("a yo deeper than the vehicle can climb back from", [  # once an internal error
+        ["plan", "{deep}"], ["compare-sbc", "{deep}"], ["report", "{deep}", "-o", "out"],
+        ["power", "energy", "--max-depth", "500"],
+        ["power", "speed", "--hotel-w", "1", "--max-depth", "500"],
+    ], ExitCode.BAD_INPUT, "the glider cannot climb below "),
     ("a negative seed", [
         ["sim", FIG2, "--seed", "-1", "-o", "out"],
         ["montecarlo", FIG2, "--scenarios", "2", "--seed", "-1", "-o", "out"],
@@ -180,6 +185,8 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
     annotated = Path(ANNOTATED).read_text()
     (tmp_path / "device_vehicle.mission").write_text(
         annotated.replace("vehicle slocum_g2_shallow", 'vehicle "/dev/zero"'))
+    (tmp_path / "deep.mission").write_text(  # the 100 m shallow glider, yo to 500 m
+        annotated.replace("yo(5, 20,", "yo(5, 500,").replace("yo(5.0, 10,", "yo(5, 500,"))
     (tmp_path / "device_computer.mission").write_text(
         annotated.replace("computer ts7800 @ 300 MHz", 'computer "/dev/zero"'))
     with open(tmp_path / "huge.toml", "wb") as huge:  # sparse: no disk space taken
@@ -191,7 +198,7 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
         argv = [a.format(bad="bad.mission", broken="broken.plan", file="file",
                          huge="huge.toml", slocum="slocum", big="big.mission",
                          device_vehicle="device_vehicle.mission",
-                         device_computer="device_computer.mission")
+                         device_computer="device_computer.mission", deep="deep.mission")
                 for a in argv]
         assert exit_code(argv) == code, argv
         err = capsys.readouterr().err
