@@ -75,8 +75,12 @@ class DensityProfile:
 
 
 def _check_pitch(pitch_rad: np.ndarray) -> None:
-    if np.any(~np.isfinite(pitch_rad)) or np.any((pitch_rad <= 0.0) | (pitch_rad >= math.pi / 2)):
-        raise ValueError("pitch must lie strictly between 0 and pi/2 rad (a magnitude)")
+    bad = ~np.isfinite(pitch_rad) | (pitch_rad <= 0.0) | (pitch_rad >= math.pi / 2)
+    if np.any(bad):
+        flown = float(np.asarray(pitch_rad, float)[bad].flat[0])
+        raise FlightModelError(f"the glider would fly a pitch of {flown:.4g} rad (with a "
+                               "calibrated vehicle, the pitch commanded plus its pitch error): "
+                               "a glide's pitch must lie strictly between 0 and pi/2 rad")
 
 
 def angle_of_attack_rad(params: FlightParams, pitch_rad: np.ndarray | float) -> np.ndarray:

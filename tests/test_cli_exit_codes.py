@@ -154,6 +154,9 @@ CASES = [
         ["power", "energy", "--max-depth", "500"],
         ["power", "speed", "--hotel-w", "1", "--max-depth", "500"],
     ], ExitCode.BAD_INPUT, "the glider cannot climb below "),
+    ("a pitch the calibrated glider would fly below 0", [  # its dive error is -2.2 deg
+        ["plan", "{flat}"], ["compare-sbc", "{flat}"], ["power", "energy", "--pitch-deg", "1"],
+    ], ExitCode.BAD_INPUT, "a glide's pitch must lie strictly between 0 and pi/2 rad"),
     ("a negative seed", [
         ["sim", FIG2, "--seed", "-1", "-o", "out"],
         ["montecarlo", FIG2, "--scenarios", "2", "--seed", "-1", "-o", "out"],
@@ -187,6 +190,7 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
         annotated.replace("vehicle slocum_g2_shallow", 'vehicle "/dev/zero"'))
     (tmp_path / "deep.mission").write_text(  # the 100 m shallow glider, yo to 500 m
         annotated.replace("yo(5, 20,", "yo(5, 500,").replace("yo(5.0, 10,", "yo(5, 500,"))
+    (tmp_path / "flat.mission").write_text(annotated.replace(".454", ".02"))
     (tmp_path / "device_computer.mission").write_text(
         annotated.replace("computer ts7800 @ 300 MHz", 'computer "/dev/zero"'))
     with open(tmp_path / "huge.toml", "wb") as huge:  # sparse: no disk space taken
@@ -198,7 +202,8 @@ def test_one_error_exits_alike_in_every_command(tmp_path, monkeypatch, capsys, a
         argv = [a.format(bad="bad.mission", broken="broken.plan", file="file",
                          huge="huge.toml", slocum="slocum", big="big.mission",
                          device_vehicle="device_vehicle.mission",
-                         device_computer="device_computer.mission", deep="deep.mission")
+                         device_computer="device_computer.mission", deep="deep.mission",
+                         flat="flat.mission")
                 for a in argv]
         assert exit_code(argv) == code, argv
         err = capsys.readouterr().err
