@@ -127,13 +127,13 @@ def _most_overrun(energy: RunEnergy, plan: Plan | None) -> tuple[str, float]:
 def flown_quality(mission: ir.CheckedMission, record: RunRecord) -> float:
     """Data quality as flown: over the sensors the mission weighs, the weighted share of
     the time a state logged the sensor that its device was on (0..1; NaN without any)."""
-    state = record.columns["state"].astype(int)
-    power = record.columns["sensor_power"].astype(np.int64)
+    state = np.minimum(record.columns["state"], len(mission.states))  # the exit's row: none
+    power = record.columns["sensor_power"]
     total = weight = 0.0
     for pref in mission.sensor_preferences:
         info = SENSOR_BY_NAME[pref.sensor]
-        logging = np.isin(state, [i for i, s in enumerate(mission.states)
-                                  if any(u.name == pref.sensor for u in s.sensors)])
+        logs = [any(u.name == pref.sensor for u in s.sensors) for s in mission.states]
+        logging = np.array([*logs, False])[state]
         if not logging.any() or pref.weight <= 0.0:
             continue
         on = (power[logging] >> info.index & 1).mean()
