@@ -84,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios flown")
     try:
         result = make_plan(mission, battery=args.battery, computer=args.computer,
+                           cycles_per_tick=args.cycles_per_tick,
                            output=args.output, confidence=args.confidence,
                            scenarios=args.scenarios, seed=args.seed, risk=args.risk,
                            scenario_file=args.scenario_file, workers=args.workers,

@@ -84,6 +84,19 @@ def test_battery_and_computer_options_change_the_plan():
     assert preset["budget_j"] == pytest.approx(0.85 * 7.8e6)
 
 
+def test_cycles_per_tick_prices_the_computer_and_goes_into_the_plan(tmp_path):
+    # the runtime's own 200,000 cycles a tick, then a billion (half a 4 s tick at 500 MHz)
+    own = json.loads(gliderplan("plan", SURVEY, "--json").stdout)
+    out = tmp_path / "busy.plan"
+    run = gliderplan("plan", SURVEY, "--cycles-per-tick", "1e9", "-o", str(out), "--json")
+    assert run.returncode == 0, run.stderr
+    busy = json.loads(run.stdout)
+    assert busy["components_j"]["computer"] > 1.2 * own["components_j"]["computer"]
+    assert {s.cycles_per_tick for s in read_plan_bytes(out.read_bytes()).states} == {1e9}
+    run = gliderplan("plan", SURVEY, "--computer", "ts5500", "--cycles-per-tick", "1e9")
+    assert run.returncode == 1 and "no clock keeps up" in run.stderr
+
+
 def test_infeasible_budget_exits_1_with_the_minimum():
     run = gliderplan("plan", ANNOTATED, "--battery", "4Wh")
     assert run.returncode == 1
