@@ -28,19 +28,18 @@ from gliderplan.planner.occupancy import Occupancy
 from gliderplan.planner.plan import InfeasibleBudget, choose_plan, realised_energy_j
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.datafile import figure_sources, is_assumption
-from gliderplan.power_models.vehicle import figure_value, with_figures
+from gliderplan.power_models.vehicle import figure_unit, figure_value, with_figures
 
 DEFAULT_SPREAD = 0.20  # relative move of a figure without a stated uncertainty
 SOLVER_TOLERANCE = 1e-6  # relative change below which a figure moved nothing
 SOURCES_JOINT = "; "  # between the sources of a figure given once per clock
 # Vehicle figures that move energy (the depths and pitch a mission sets are not figures
-# of the model): data-file key -> unit shown.
-VEHICLE_FIGURES = {
-    "hotel_power": "W", "pump_out_energy_per_volume": "J/cc",
-    "pump_in_energy_per_volume": "J/cc", "pitch_energy": "J", "surface_power": "W",
-    "iridium_power": "W", "iridium_time": "s", "surfacing_energy": "J",
-    "flight.drag_cd0": "1", "pump_rate": "cc/s",
-}
+# of the model), by data-file key; each is shown in the model's unit (`figure_unit`).
+VEHICLE_FIGURES = (
+    "hotel_power", "pump_out_energy_per_volume", "pump_in_energy_per_volume", "pitch_energy",
+    "surface_power", "iridium_power", "iridium_time", "surfacing_energy", "flight.drag_cd0",
+    "pump_rate",
+)
 
 
 @dataclass(frozen=True)
@@ -147,8 +146,8 @@ def figures(hardware: Hardware, mission: ir.CheckedMission) -> list[Figure]:
                                f"{100 * DEFAULT_SPREAD:g} % (no stated uncertainty)", source,
                                change))
 
-    for key in [*VEHICLE_FIGURES, *sorted(spread.keys() - VEHICLE_FIGURES.keys())]:
-        add(f"vehicle {key}", figure_value(vehicle, key), VEHICLE_FIGURES.get(key, ""),
+    for key in [*VEHICLE_FIGURES, *sorted(spread.keys() - set(VEHICLE_FIGURES))]:
+        add(f"vehicle {key}", figure_value(vehicle, key), figure_unit(key),
             _vehicle(key), _sources(vehicle.path, key), spread.get(key))
     for key, attr in (("active_power", "active_w"), ("idle_power", "idle_w")):
         add(f"board {board.name} {key}", getattr(board, attr), "W", _board(attr),

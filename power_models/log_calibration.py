@@ -26,14 +26,13 @@ from gliderplan.power_models.errors import ModelFileError
 from gliderplan.power_models.forecast_check import ForwardCheck, check_forward, stay_from_base
 from gliderplan.power_models.model_writer import to_toml
 from gliderplan.power_models.slocum_log import FlightLog, read_flight_log
-from gliderplan.power_models.vehicle import Vehicle, load_vehicle, read_vehicle_file
-from gliderplan.power_models.vehicle_fit import (
-    CalibrationError,
-    Figure,
-    VehicleFit,
+from gliderplan.power_models.vehicle import (
+    Vehicle,
     figure_unit,
-    fit_vehicle,
+    load_vehicle,
+    read_vehicle_file,
 )
+from gliderplan.power_models.vehicle_fit import CalibrationError, Figure, VehicleFit, fit_vehicle
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,31}")
 

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from gliderplan.contract import Component
+from gliderplan.contract.units import UNITS
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
@@ -343,6 +344,12 @@ FIGURES: dict[str, tuple[str, str, dict]] = {
     "flight.trim_volume": ("trim_cc", "volume", {"default": 0.0, "minimum": -np.inf}),
     "flight.compressibility": ("compressibility_per_pa", "compressibility", {"default": 0.0}),
 }
+
+
+def figure_unit(key: str) -> str:
+    """The model's unit of a figure, as a data file writes it."""
+    dimension = FIGURES[key][1]
+    return next(u for u, factor in UNITS[dimension].items() if factor == 1.0)
 
 
 def with_figures(vehicle: Vehicle, values: dict[str, float]) -> Vehicle:

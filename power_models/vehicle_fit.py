@@ -21,7 +21,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
-from gliderplan.contract.units import UNITS
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.calibration import EnergyFit, fit_energy
 from gliderplan.power_models.dives import Dive, concatenate, split_dives
@@ -29,7 +28,7 @@ from gliderplan.power_models.flight import DensityProfile, glide_leg
 from gliderplan.power_models.flight_fit import FlightFit, FlightFitError, fit_flight, steady_glides
 from gliderplan.power_models.seawater import density_profile
 from gliderplan.power_models.slocum_log import FlightLog
-from gliderplan.power_models.vehicle import FIGURES, Uncertainty, Vehicle, with_figures
+from gliderplan.power_models.vehicle import Uncertainty, Vehicle, with_figures
 
 BOOTSTRAP_RESAMPLES = 40
 SEED = 2014
@@ -240,8 +239,3 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
     return VehicleFit(replace(vehicle, uncertainty=uncertainty), tuple(figures), energy,
                        flight, ocean, len(dives), len(draws))
 
-
-def figure_unit(key: str) -> str:
-    """The model's unit of a figure, as a data file writes it."""
-    dimension = FIGURES[key][1]
-    return next(u for u, factor in UNITS[dimension].items() if factor == 1.0)

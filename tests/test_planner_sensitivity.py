@@ -116,3 +116,18 @@ def test_each_figure_says_what_it_rests_on_and_sleep_figures_move_where_a_state_
     assert asleep["board ts7800 idle_power"].energy_j[1] - \
         asleep["board ts7800 idle_power"].energy_j[0] < \
         awake["board ts7800 idle_power"].energy_j[1] - awake["board ts7800 idle_power"].energy_j[0]
+
+
+def test_every_figure_carries_its_unit(tmp_path):
+    # the calibrated figures too (turn times, pitch errors, trim, compressibility, density),
+    # in the unit the model holds them in, as the vehicle file writes it
+    mission = mission_with(tmp_path, 1000.0)
+    _, model = prepare(mission, load_hardware(mission))
+    units = {s.figure: s.unit for s in sensitivity(model).swings}
+    assert all(units.values()), [f for f, u in units.items() if not u]
+    assert units["vehicle bottom_turn_time"] == "s"
+    assert units["vehicle dive_pitch_error"] == "rad"
+    assert units["vehicle flight.trim_volume"] == "cc"
+    assert units["vehicle flight.compressibility"] == "1/Pa"
+    assert units["vehicle flight.water_density"] == "kg/m3"
+    assert units["vehicle hotel_power"] == "W" and units["vehicle pump_rate"] == "cc/s"
