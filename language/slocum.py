@@ -609,11 +609,11 @@ class _Translator:
         vehicle = load_vehicle(DEFAULT_VEHICLE)
         top, bottom = self.band
         seconds = 0.0
-        for leg in range(self.half_cycles):
-            pitch = self.pitches[leg % 2]
+        for kind, pitch in enumerate(self.pitches):  # dives are the even legs, climbs odd
+            legs = (self.half_cycles + 1 - kind) // 2
             _, w = vehicle.glide(pitch, vehicle.max_ballast_cc)
-            seconds += (bottom - top) / float(w) + 2 * vehicle.max_ballast_cc / \
-                vehicle.pump_rate_cc_s
+            seconds += legs * ((bottom - top) / float(w) + 2 * vehicle.max_ballast_cc
+                               / vehicle.pump_rate_cc_s)
         low, high = math.floor(0.8 * seconds / 60), math.ceil(1.25 * seconds / 60)
         return (f"{low} min .. {high} min    # {self.half_cycles} half cycles at the "
                 f"{DEFAULT_VEHICLE} glide model's speeds, -20 % .. +25 %")

@@ -11,6 +11,7 @@ least two digits (`yo10.ma`, `surfac01.ma`).
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -89,7 +90,7 @@ def _setting(kind: str, text: str, comment: str, where: Where) -> Arg:
     if match is None or match[1] != kind:
         raise SlocumFileError(f"{where}: malformed line {text!r}: expected "
                               f"'{kind}: name(unit) value'")
-    if not _NUMBER.match(match[4]):
+    if not _NUMBER.match(match[4]) or not math.isfinite(float(match[4])):
         raise SlocumFileError(f"{where}: {match[2]}: {match[4]!r} is not a number")
     return Arg(match[2], match[3], float(match[4]), match[4], where, comment)
 

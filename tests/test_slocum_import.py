@@ -205,6 +205,8 @@ YO_MA = ("behavior_name=yo\n<start:b_arg>\n b_arg: d_target_depth(m) 20\n"
     ("  b_arg: start_when(enum) 0\n", {}, "m.mi:1: b_arg before any 'behavior:' line"),
     ("behavior: yo\n  b_arg: d_target_depth(m) deep\n", {}, "m.mi:2: d_target_depth: 'deep' "
      "is not a number"),
+    ("behavior: yo\n  b_arg: num_half_cycles_to_do(nodim) 1e400\n", {},
+     "m.mi:2: num_half_cycles_to_do: '1e400' is not a number"),
     ("behavior: yo\n  b_arg: args_from_file(enum) 11\n", {"yo10_ma": YO_MA},
      "m.mi:2: args_from_file 11: no file"),
     ("behavior: goto_list\n  b_arg: args_from_file(enum) 10\n",
@@ -312,3 +314,11 @@ def test_the_c_runtime_flies_an_imported_mission_as_the_reference_does(flown, tm
                      "-o", str(out)]) == 0
         traces.append((out / "trace.csv").read_text())
     assert traces[0] == traces[1] and traces[0].count("call,survey,surface_1") >= 15
+
+
+def test_a_yo_of_a_billion_half_cycles_imports_at_once(tmp_path):
+    path = _mission(tmp_path, "behavior: yo\n b_arg: args_from_file(enum) 10\n",
+                    yo10_ma=YO_MA.replace("num_half_cycles_to_do(nodim) -1",
+                                          "num_half_cycles_to_do(nodim) 1e9"))
+    imported = import_mission(path, tmp_path / "y.mission")
+    assert "1000000000 half cycles at the" in imported.path.read_text()
