@@ -29,6 +29,7 @@ from pathlib import Path
 
 from gliderplan.contract import MAX_ROUTE_POINTS as MAX_POINTS
 from gliderplan.contract import SURFACE_PITCH_RAD
+from gliderplan.language.ir import DEFAULT_BATTERY
 from gliderplan.language.slocum_files import Arg, Behavior, SlocumFileError, SlocumMission, Where
 
 # Behaviors this translation reads, and real Slocum behaviors it knows but leaves out.
@@ -373,10 +374,23 @@ class _Translator:
             self.reads.add("wptdist")
             events.append(f"case wptdist > {_number(far)} goto abort"
                           f"    # max_wpt_distance {_number(far)} m")
-        ignored = [n for n in ("stalled_for", "remaining_charge_min") if
-                   behavior.value(n, -1) > 0]
-        for note in self.leave_out(behavior, ignored, "the simulator has no live reading "
-                                   "of the charge left nor a stall"):
+        charge = behavior.value("remaining_charge_min", -1)
+        if charge > 0:
+            if charge >= 100:
+                arg = behavior.args["remaining_charge_min"]
+                raise SlocumFileError(f"{arg.where}: remaining_charge_min {arg.text} %: the "
+                                      "mission would abort at once (a charge below 100 %)")
+            # the battery's coulomb counter, as the runtime's energy guard reads it; the
+            # translated mission has no battery line: the default pack's energy
+            left = charge / 100.0 * DEFAULT_BATTERY.energy_j
+            self.reads.add("energy_left")
+            events.append(f"case energy_left < {_number(left)} goto abort    # "
+                          f"remaining_charge_min {_number(charge)} % of the mission's battery "
+                          f"({_number(DEFAULT_BATTERY.energy_j)} J: the default pack; another "
+                          "battery line changes this threshold)")
+        for note in self.leave_out(behavior, ["stalled_for"] if
+                                   behavior.value("stalled_for", -1) > 0 else [],
+                                   "the simulated glider does not stall"):
             events.append(f"# {note}")
         known = {"overtime", "overdepth", "samedepth_for", "samedepth_for_sample_time",
                  "max_wpt_distance", "stalled_for", "remaining_charge_min"}

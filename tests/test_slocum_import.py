@@ -207,6 +207,8 @@ YO_MA = ("behavior_name=yo\n<start:b_arg>\n b_arg: d_target_depth(m) 20\n"
      "is not a number"),
     ("behavior: yo\n  b_arg: num_half_cycles_to_do(nodim) 1e400\n", {},
      "m.mi:2: num_half_cycles_to_do: '1e400' is not a number"),
+    ("behavior: abend\n  b_arg: remaining_charge_min(%) 100\n", {},
+     "m.mi:2: remaining_charge_min 100 %: the mission would abort at once"),
     ("behavior: yo\n  b_arg: args_from_file(enum) 11\n", {"yo10_ma": YO_MA},
      "m.mi:2: args_from_file 11: no file"),
     ("behavior: goto_list\n  b_arg: args_from_file(enum) 10\n",
@@ -314,6 +316,22 @@ def test_the_c_runtime_flies_an_imported_mission_as_the_reference_does(flown, tm
                      "-o", str(out)]) == 0
         traces.append((out / "trace.csv").read_text())
     assert traces[0] == traces[1] and traces[0].count("call,survey,surface_1") >= 15
+
+
+def test_abend_on_minimum_charge_reads_the_batterys_coulomb_counter(tmp_path):
+    # remaining_charge_min of the default 7.8 MJ pack: 99.9 % is spent within the hour
+    path = _mission(tmp_path, "behavior: abend\n b_arg: remaining_charge_min(%) 99.9\n"
+                    "behavior: yo\n b_arg: args_from_file(enum) 10\n", yo10_ma=YO_MA)
+    out = tmp_path / "c.mission"
+    imported = import_mission(path, out)
+    assert imported.warnings == ()
+    text = out.read_text()
+    assert "case energy_left < 7792200 goto abort    # remaining_charge_min 99.9 %" in text
+    assert main(["sim", str(out), "--duration", "3h", "-o", str(tmp_path / "run")]) == 0
+    trace = pd.read_csv(tmp_path / "run" / "trace.csv")
+    aborted = trace[(trace["kind"] == "goto") & (trace["to_state"] == "abort")]
+    assert len(aborted) == 1 and aborted["time_s"].iloc[0] < 3600
+    assert trace["kind"].iloc[-1] == "exit"
 
 
 def test_a_yo_of_a_billion_half_cycles_imports_at_once(tmp_path):
