@@ -109,6 +109,7 @@ class _Translator:
         self.bookkeeping: list[str] = []  # the survey's assignments, checked last
         self.surface_states: list[_State] = []
         self.survey_sensors: dict[str, str] = {}  # sensor -> duty ("" always on)
+        self.survey_notes: list[str] = []  # what sample and sensors_in leave out
         self.surface_sensors: dict[str, str] = {}
         self.reads: set[str] = set()  # runtime readings the survey's events read
         self.abort_needed = False
@@ -540,6 +541,10 @@ class _Translator:
         return _State(name, comment, "noheading", "surface", [], events)
 
     # ---- science sensors
+    def note(self, behavior: Behavior, notes: list[str]) -> None:
+        """What a science behavior leaves out, as comments of the survey state."""
+        self.survey_notes += [f"{behavior.name} ({_source(behavior)}): {n}" for n in notes]
+
     def sensors_in(self, behavior: Behavior, science_all_on: bool) -> None:
         for arg in behavior.args.values():
             if arg.name not in SENSORS_IN or arg.value < 0:
@@ -550,44 +555,55 @@ class _Translator:
                 self.survey_sensors.setdefault(sensor, "")
                 self.surface_sensors.setdefault(sensor, "")
             if arg.value > 0:
-                self.leave_out(behavior, [arg.name], "sampled as fast as the CTD goes")
+                self.note(behavior, self.leave_out(behavior, [arg.name],
+                                                   "sampled as fast as the CTD goes"))
+        self.note(behavior, self.leave_out(
+            behavior, [n for n in behavior.args if n not in SENSORS_IN],
+            "the flight sensors' sampling intervals: the simulated glider reads them every "
+            "tick"))
 
     def sample(self, behavior: Behavior) -> None:
         kind = int(behavior.value("sensor_type", 0))
         if kind not in SENSOR_TYPES:
-            self.leave_out(behavior, ["sensor_type"], "gliderplan's power models have no "
-                                                      "such sensor")
+            self.note(behavior, self.leave_out(behavior, ["sensor_type"], "gliderplan's "
+                                               "power models have no such sensor"))
             return
         sensors, _ = SENSOR_TYPES[kind]
         interval = behavior.value("intersample_time", 0)
         if interval < 0:
             return  # sampling off: the behavior does nothing
         if interval > 0:
-            self.leave_out(behavior, ["intersample_time"], "the sensor stays on: a duty "
-                                                           "follows from the plan")
+            self.note(behavior, self.leave_out(behavior, ["intersample_time"], "the sensor "
+                                               "stays on: a duty follows from the plan"))
         states = int(behavior.value("state_to_sample", DIVING))
         yo_bits = states & (DIVING | CLIMBING)
         if yo_bits == DIVING | CLIMBING:
             duty = ""
         elif yo_bits:
             duty = "0.5"
-            self.leave_out(behavior, ["state_to_sample"], "sampling only on "
-                           + ("dives" if yo_bits == DIVING else "climbs")
-                           + " is duty 0.5 over the yo, not tied to the legs")
+            self.note(behavior, self.leave_out(
+                behavior, ["state_to_sample"], "sampling only on "
+                + ("dives" if yo_bits == DIVING else "climbs")
+                + " is duty 0.5 over the yo, not tied to the legs"))
         else:
             duty = None
+            if states & HOVERING:
+                self.note(behavior, self.leave_out(
+                    behavior, ["state_to_sample"], "the simulated glider never hovers: "
+                    "the sensor samples " + ("only at the surface" if states & ON_SURFACE
+                                             else "never")))
         for sensor in sensors:
             if duty is not None:
                 self.survey_sensors[sensor] = duty
             if states & ON_SURFACE:
                 self.surface_sensors.setdefault(sensor, "")
-        self.leave_out(behavior, [n for n in ("sample_time_after_state_change",)
-                                  if behavior.value(n, 0) > 0],
-                       "sensors switch with the state, at once")
+        self.note(behavior, self.leave_out(
+            behavior, [n for n in ("sample_time_after_state_change",)
+                       if behavior.value(n, 0) > 0], "sensors switch with the state, at once"))
         depths = (behavior.value("min_depth", -5), behavior.value("max_depth", 2000))
         if depths[0] > 0 or depths[1] < 1000:
-            self.leave_out(behavior, ["min_depth", "max_depth"], "the sensor samples at every "
-                                                                 "depth")
+            self.note(behavior, self.leave_out(behavior, ["min_depth", "max_depth"],
+                                               "the sensor samples at every depth"))
 
     # ---- states
     def prepare_to_dive(self, behavior: Behavior) -> _State:
@@ -608,8 +624,8 @@ class _Translator:
                      profile_comment: list[str], yo: Behavior | None) -> _State:
         sensors = list(FLIGHT_SENSORS) + sorted(self.reads)
         science = [f"{s} duty {d}" if d else s for s, d in self.survey_sensors.items()]
-        state = _State("survey", route_comment + profile_comment, route, profile,
-                       sensors + science)
+        state = _State("survey", route_comment + profile_comment + self.survey_notes, route,
+                       profile, sensors + science)
         state.events = self.survey_events + self.bookkeeping
         if yo is not None and "halfcycle" in self.reads:
             state.expect = self.yo_expect()

@@ -171,6 +171,11 @@ def test_import_reports_warnings_with_file_and_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert re.search(r"nsb3/mafiles/yo10\.ma:8: warning: yo: not translated: d_use_pitch 1", err)
     assert re.search(r"nsb3\.mi:10: warning: sensor u_use_current_correction", err)
+    # what the science behaviors leave out is in the mission too, not only on the terminal
+    assert re.search(r"nsb3\.mi:91: warning: sensors_in: not translated: c_att_time 0", err)
+    text = (tmp_path / "n.mission").read_text()
+    assert "# sensors_in (nsb3.mi:89): not translated: c_att_time 0, c_alt_time -1" in text
+    assert "# sample (nsb3.mi:83, sample13.ma): not translated: sensor_type 39" in text
 
 
 def test_a_missing_ma_file_stops_the_import_with_its_line(tmp_path, capsys):
@@ -332,6 +337,28 @@ def test_abend_on_minimum_charge_reads_the_batterys_coulomb_counter(tmp_path):
     aborted = trace[(trace["kind"] == "goto") & (trace["to_state"] == "abort")]
     assert len(aborted) == 1 and aborted["time_s"].iloc[0] < 3600
     assert trace["kind"].iloc[-1] == "exit"
+
+
+def test_science_behaviors_say_what_they_leave_out_in_the_mission(tmp_path, capsys):
+    # a sensor sampled only while hovering (never, in the simulator), sensors_in's flight
+    # sensors, a sample at intervals: each a warning with its line and a comment
+    mi = ("behavior: yo\n b_arg: args_from_file(enum) 10\n"
+          "behavior: sample\n b_arg: sensor_type(enum) 19\n b_arg: state_to_sample(enum) 2\n"
+          "behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: state_to_sample(enum) 5\n"
+          " b_arg: intersample_time(s) 10\n"
+          "behavior: sensors_in\n b_arg: c_att_time(sec) 0\n b_arg: u_battery_time(sec) 10\n")
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA)
+    out = tmp_path / "s.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    text = out.read_text()
+    assert "m.mi:5: warning: sample: not translated: state_to_sample 2" in err
+    assert "# sample (m.mi:3): not translated: state_to_sample 2 (the simulated glider " \
+           "never hovers: the sensor samples never)" in text
+    assert "chlorophyll" not in text.split("state survey")[1].split("end")[0]
+    assert "# sample (m.mi:6): not translated: intersample_time 10" in text
+    assert "m.mi:11: warning: sensors_in: not translated: c_att_time 0" in err
+    assert "# sensors_in (m.mi:10): not translated: c_att_time 0, u_battery_time 10" in text
 
 
 def test_a_yo_of_a_billion_half_cycles_imports_at_once(tmp_path):
