@@ -21,11 +21,11 @@ from gliderplan.reports.figures import pyplot, render
 
 FILES = ("boards.csv", "workload.csv", "crossovers.csv", "sbc.png")
 
-# What every comparison rests on besides the boards' own figures.
+# The runtime's own code, measured (bench/README.md, bench_runtime.py): instructions a
+# 4 s tick of Fig. 2 with the state directory on, in the TS-5500's i486 build.
+MEASURED_RUNTIME_INSTRUCTIONS = 2_737
+# What every comparison rests on besides the boards' own figures and its workload.
 MODEL_NOTES = (
-    f"workload per tick: {RUNTIME_CYCLES_PER_TICK:,.0f} cycles is the runtime's own work every "
-    f"{TICK_S:g} s tick, an assumption (contract.RUNTIME_CYCLES_PER_TICK); --cycles-per-tick "
-    "sets another",
     "cycles of the reference computations: i486 instructions counted by "
     "bench/bench_workloads.py x 4 cycles per instruction (an assumption), the same on "
     "every board",
@@ -34,6 +34,22 @@ MODEL_NOTES = (
     "endurance: the usable battery spent at the vehicle and sensor power of the mission's "
     "own plan (the same sampling plan for every board) plus each board's mean power",
 )
+
+
+def model_notes(comparison: Comparison) -> list[str]:
+    """The workload the comparison was made at, and where it comes from; then MODEL_NOTES."""
+    cycles = comparison.cycles_per_tick
+    if cycles == RUNTIME_CYCLES_PER_TICK:
+        workload = (
+            f"workload per tick: {cycles:,.0f} cycles is the runtime's own work every "
+            f"{TICK_S:g} s tick, an assumption (contract.RUNTIME_CYCLES_PER_TICK): its code "
+            f"was measured at {MEASURED_RUNTIME_INSTRUCTIONS:,} i486 instructions a tick of "
+            "Fig. 2 (bench/README.md), the system calls and the kernel's serial I/O around it "
+            "were not; --cycles-per-tick sets another")
+    else:
+        workload = (f"workload per tick: {cycles:,.0f} cycles, given with --cycles-per-tick "
+                    f"(the runtime's own is taken as {RUNTIME_CYCLES_PER_TICK:,.0f})")
+    return [workload, *MODEL_NOTES]
 
 
 def _wh(joules: float) -> float:
@@ -97,7 +113,7 @@ def comparison_json(comparison: Comparison) -> dict[str, Any]:
         "crossovers": [crossover_json(c) for c in comparison.crossovers],
         "computations": {c.name: {"cycles": c.cycles, "description": c.description,
                                   "source": c.source} for c in load_computations()},
-        "assumptions": list(MODEL_NOTES),
+        "assumptions": model_notes(comparison),
     }
 
 
@@ -222,7 +238,7 @@ def assumption_lines(comparison: Comparison) -> list[str]:
     for figure, boards in assumptions_by_figure(comparison).items():
         value, source = figure.split(": ", 1)
         lines.append(f"{value} (for {', '.join(boards)}): {source}")
-    return lines + list(MODEL_NOTES)
+    return lines + model_notes(comparison)
 
 
 def energy_plot(comparison: Comparison, fmt: str = "png") -> bytes:

@@ -63,6 +63,9 @@ def test_the_three_boards_with_table_i_figures_and_the_data_files_idle_powers():
     assert boards["ts5500"]["boot_energy_j"] == pytest.approx(20 * 2.7)  # boot time x active
     assert boards["ts5500"]["sleep_power_w"] is None  # it cannot sleep between ticks
     assert any("assumption" in note for note in data["assumptions"])
+    # the workload it rests on, and the measurement beside that assumption
+    assert data["assumptions"][0].startswith("workload per tick: 200,000 cycles")
+    assert "measured at 2,737 i486 instructions" in data["assumptions"][0]
 
 
 def test_board_energy_is_what_the_planner_charges_for_the_computer():
@@ -72,6 +75,8 @@ def test_board_energy_is_what_the_planner_charges_for_the_computer():
         assert board["board_energy_j"] == pytest.approx(computer_j(mission, spec, 5e7),
                                                         rel=1e-9)
     # the active share follows the workload: 5e7 cycles every 4 s at 133 MHz
+    assert data["assumptions"][0].startswith(
+        "workload per tick: 50,000,000 cycles, given with --cycles-per-tick")
     ts5500 = data["boards"]["ts5500"]
     busy_s = 5e7 / 133e6
     assert ts5500["active_j"] / (ts5500["active_j"] + ts5500["idle_j"]) == pytest.approx(
