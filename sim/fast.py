@@ -181,7 +181,7 @@ class FastForward:
         self._changes: dict[int, np.ndarray] = {}  # per glide: its depth changes, long
         self._change_lists: dict[int, list[float]] = {}
         self._sums: dict[int, list[float]] = {}
-        self._rows: dict[int, np.ndarray] = {}  # per glide: `_leg_squeezed`'s rows
+        self._rows: dict[int, np.ndarray] = {}  # per glide: `squeezed_rows`
         # each state's events by the stage of a run at which their readings are known
         self._events = [_staged(s) for s in mission.states]
         # the sensors whose last value the executor reads: the mission's conditions,
