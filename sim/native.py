@@ -14,12 +14,15 @@ import numpy as np
 from gliderplan.contract import EARTH_RADIUS_M
 
 
-def _load() -> ctypes.CDLL:
-    spec = importlib.util.find_spec("gliderplan.sim._native")
-    if spec is None or not spec.origin:
-        raise ImportError("gliderplan's C loops (sim/native.c) are not built: "
-                          "install gliderplan again (pip install -e .)")
-    library = ctypes.CDLL(spec.origin)
+def _load(path: str | None = None) -> ctypes.CDLL:
+    """The library built with the package (`path`: another build of native.c)."""
+    if path is None:
+        spec = importlib.util.find_spec("gliderplan.sim._native")
+        if spec is None or not spec.origin:
+            raise ImportError("gliderplan's C loops (sim/native.c) are not built: "
+                              "install gliderplan again (pip install -e .)")
+        path = spec.origin
+    library = ctypes.CDLL(path)
     pointer, count, real, flag = ctypes.c_void_p, ctypes.c_long, ctypes.c_double, ctypes.c_int
     signatures = {
         "gpn_sin": (None, [pointer, pointer, count]),
