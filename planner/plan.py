@@ -25,7 +25,7 @@ from gliderplan.planner.inputs import (
     build_inputs,
     utility,
 )
-from gliderplan.planner.model import PlanModel, Solution, model_for
+from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel, Solution, model_for
 from gliderplan.planner.occupancy import (
     NOMINAL_SPEED_MPS,
     measured_occupancy,
@@ -157,13 +157,26 @@ def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
             raise PlanningError(f"the solver could not plan this mission ({chosen.status})")
         shadow = chosen.budget_dual
         if shadow is not None and shadow * J_PER_WH < _NO_PRICE:
-            # Budget to spare: of the plans with this quality, fly the cheapest.
-            cheapest = model.solve_energy(chosen.quality * (1 - 1e-9))
-            if cheapest.optimal:
-                chosen = cheapest
+            chosen = _cheapest_at(model, chosen)
     price = (shadow or 0.0) * J_PER_WH
     return Choice(_snapped(inputs, chosen), budget_j, realised_energy_j(inputs, least),
                   price if price >= _NO_PRICE else 0.0)
+
+
+def _cheapest_at(model: PlanModel, best: Solution) -> Solution:
+    """Of the plans with `best`'s quality, the cheapest (budget to spare). Its floor lies
+    at the optimum, where the solver may stop short of its tolerances (status
+    optimal_inaccurate): a floor a little lower, at most SATURATION_TOLERANCE of the
+    quality, is solved cleanly; else the first found only to reduced accuracy, else
+    `best` itself."""
+    found = best
+    for slack in (1e-9, 1e-7, SATURATION_TOLERANCE):
+        cheapest = model.solve_energy(best.quality * (1 - slack))
+        if cheapest.status == "optimal":
+            return cheapest
+        if cheapest.optimal and found is best:
+            found = cheapest
+    return found
 
 
 def least_energy_plan(model: PlanModel, budget_j: float) -> PlanResult:
