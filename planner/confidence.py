@@ -42,7 +42,6 @@ from gliderplan.planner.plan import (
     PlanResult,
     _snapped,
     assemble,
-    realised_energy_j,
 )
 from gliderplan.planner.planfile import MISSION_SUBJECT, Assumption
 from gliderplan.power_models.vehicle import Vehicle
@@ -214,7 +213,7 @@ def plan_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
                             f"{count} scenarios ({chosen.status}): raise the budget or ask "
                             "for less confidence")
     least = model.solve_energy(-1.0)
-    choice = Choice(_snapped(inputs, chosen), budget, realised_energy_j(inputs, least),
+    choice = Choice(_snapped(inputs, chosen), budget, least.model_energy_j,
                     max(price * J_PER_WH, 0.0))
     dimension = decision_dimension(inputs)
     stated = Confidence(confidence, risk, count, dimension,

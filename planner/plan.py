@@ -72,7 +72,8 @@ class PlanResult:
     mission: ir.CheckedMission
     objective: str  # "maximize_quality" or "minimize_energy"
     quality: float  # [0, 1]
-    minimum_energy_j: float  # least energy the mission can be flown with [J]
+    minimum_energy_j: float  # least budget the mission can be planned on [J] (`Choice`)
+    budgeted_energy_j: float  # the plan's energy as the budget counts it [J], >= predicted
     shadow_price: float  # quality per extra Wh of budget at this plan
     time_source: str  # "timeline" (static walk) or "simulation" (measured occupancy)
     solver_status: str
@@ -123,8 +124,16 @@ class Choice:
 
     solution: Solution  # snapped: values within solver tolerance of a bound are on it
     budget_j: float  # [J]
-    minimum_j: float  # least energy the mission can be flown with [J], as flown
+    minimum_j: float  # least budget the mission can be planned on [J], as budgets count
     shadow_price: float  # quality per extra Wh of budget; 0 when the budget does not limit
+
+
+# Two energies belong to a plan. Its prediction (`Plan.predicted_j`) is what it draws:
+# warm-ups only for the devices it does cycle. Budgets count energy as the convex model
+# does, which charges warm-ups to every device that may cycle (a switch-on cost is not
+# convex): an upper bound of the prediction. The least budget, the infeasible-budget
+# message, the Pareto curve and a plan's place on it all use the budget's measure, so
+# that "needs at least" means one number whatever the objective.
 
 
 def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
@@ -159,7 +168,7 @@ def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
         if shadow is not None and shadow * J_PER_WH < _NO_PRICE:
             chosen = _cheapest_at(model, chosen)
     price = (shadow or 0.0) * J_PER_WH
-    return Choice(_snapped(inputs, chosen), budget_j, realised_energy_j(inputs, least),
+    return Choice(_snapped(inputs, chosen), budget_j, least.model_energy_j,
                   price if price >= _NO_PRICE else 0.0)
 
 
@@ -186,8 +195,8 @@ def least_energy_plan(model: PlanModel, budget_j: float) -> PlanResult:
     least = model.solve_energy(-1.0)
     if not least.optimal:
         raise PlanningError("the mission's annotations cannot all hold together")
-    minimum = realised_energy_j(model.inputs, least)
-    result = assemble(model.inputs, Choice(_snapped(model.inputs, least), budget_j, minimum, 0.0))
+    result = assemble(model.inputs, Choice(_snapped(model.inputs, least), budget_j,
+                                           least.model_energy_j, 0.0))
     short = least.model_energy_j > budget_j * (1 + 1e-9)
     return replace(result, status="infeasible") if short else result
 
@@ -368,7 +377,8 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
         plan=plan, mission=inputs.mission, objective=inputs.mission.objective.sense,
         quality=float(sol.quality), minimum_energy_j=choice.minimum_j,
         shadow_price=choice.shadow_price, time_source=inputs.occupancy.source,
-        solver_status=sol.status, solve_s=sol.solve_s, solver_iterations=sol.iterations,
+        budgeted_energy_j=sol.model_energy_j, solver_status=sol.status, solve_s=sol.solve_s,
+        solver_iterations=sol.iterations,
         state_quality=tuple(_state_quality(inputs, sol, s)
                             for s in range(len(inputs.mission.states))))
 

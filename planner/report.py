@@ -51,6 +51,7 @@ def report_json(result: PlanResult) -> dict:
         "quality": result.quality,
         "energy_j": plan.predicted_j,
         "budget_j": plan.budget_j,
+        "budgeted_energy_j": result.budgeted_energy_j,
         "minimum_energy_j": result.minimum_energy_j,
         "shadow_price": result.shadow_price,
         "shadow_price_unit": "quality per Wh",
@@ -102,7 +103,7 @@ def report_text(result: PlanResult) -> str:
              f"{plan.computer} @ {plan.clock_mhz:g} MHz",
              f"quality {result.quality:.4f}   energy {_wh(plan.predicted_j)} Wh of a "
              f"{_wh(plan.budget_j)} Wh budget ({100 * plan.predicted_j / plan.budget_j:.1f} %)"
-             f"   minimum {_wh(result.minimum_energy_j)} Wh",
+             f"   least budget {_wh(result.minimum_energy_j)} Wh",
              f"shadow price {result.shadow_price:.4g} quality per extra Wh"
              + ("  (the budget is not the limit)" if result.shadow_price < 1e-9 else ""),
              "", "what each state does:"]

@@ -22,14 +22,15 @@ def _svg(fig) -> str:
     return render(fig, "svg").decode("utf-8")
 
 
-def pareto(frame: pd.DataFrame, budget_wh: float, energy_wh: float, quality: float) -> str:
-    """Quality against budget, the shadow price on a second axis, the plan marked."""
+def pareto(frame: pd.DataFrame, budget_wh: float, plan_wh: float, quality: float) -> str:
+    """Quality against budget, the shadow price on a second axis, the plan marked at the
+    budget it takes (`plan_wh`, counted as the curve's budgets are)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=WIDE)
     ax.plot(frame["budget_wh"], frame["quality"], "o-", ms=3, color="tab:blue",
             label="best quality at the budget")
-    ax.plot([energy_wh], [quality], "*", ms=14, color="tab:orange",
-            label=f"the plan: {energy_wh:.3g} Wh, quality {quality:.3f}")
+    ax.plot([plan_wh], [quality], "*", ms=14, color="tab:orange",
+            label=f"the plan: {plan_wh:.4g} Wh of budget, quality {quality:.3f}")
     if frame["budget_wh"].min() <= budget_wh <= frame["budget_wh"].max() * 1.5:
         ax.axvline(budget_wh, color="grey", ls=":", lw=1, label=f"budget {budget_wh:.4g} Wh")
     ax.set_xlabel("energy budget [Wh]")

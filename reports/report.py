@@ -30,6 +30,7 @@ from gliderplan.reports import charts
 from gliderplan.reports.html import Section, Table, esc, facts_html, page
 
 SWEEP_POINTS = 20  # budgets on the Pareto curve
+QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
 SECTIONS = ("summary", "pareto", "energy", "plan-vs-simulation", "profile", "sbc",
@@ -84,6 +85,10 @@ def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Pa
                        "`gliderplan plan -o PLAN`")
         if report.get("hash") != mission.hash or not isinstance(report.get("states"), list):
             raise UsageError(f"{plan_path}.json: not the report of a plan for this mission")
+        if "budgeted_energy_j" not in report:
+            raise UsageError(f"{plan_path}.json: made by an older gliderplan (no "
+                             "budgeted_energy_j, the plan's place on the Pareto curve): plan "
+                             "again with `gliderplan plan -o PLAN`")
         return report, plan_path, []
     result = solve_plan(model)
     path = out / f"{mission.name}.plan"
@@ -211,6 +216,8 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     report, plan_file, written = _plan_report(
         mission, model, Path(plan_path) if plan_path else None, out)
     frontier = pareto(model, sweep_points)
+    floor = (mission.objective.quality_floor
+             if mission.objective.sense == "minimize_energy" else None)
     tornado = sensitivity(model)
     run_path = Path(run_dir) if run_dir else out / "run"
     run_origin = "the run given"
@@ -237,7 +244,7 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
         tables["montecarlo.csv"] = carlo[0]
     sections = [
         _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
-        _pareto_section(frontier, report),
+        _pareto_section(frontier, report, _star(model, frontier, report), floor, plan_file),
         _energy_section(tables["energy_by_state.csv"]),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
         _profile_section(tables["profile.csv"], len(series)),
@@ -292,8 +299,11 @@ def _summary_section(mission: CheckedMission, source: str, hardware, report: dic
         ("budget", esc(f"{_wh(budget):,.4g} Wh usable")),
         ("objective", esc(report["objective"].replace("_", " "))),
         ("predicted energy", esc(f"{_wh(report['energy_j']):,.4g} Wh "
-                                 f"({100 * report['energy_j'] / budget:.1f} % of the budget); "
-                                 f"least possible {_wh(report['minimum_energy_j']):,.4g} Wh")),
+                                 f"({100 * report['energy_j'] / budget:.1f} % of the budget): "
+                                 "what the plan draws")),
+        ("budget it takes", esc(f"{_wh(report['budgeted_energy_j']):,.4g} Wh as budgets count "
+                                f"energy ({WARMUPS}); the least any plan of this mission takes "
+                                f"is {_wh(report['minimum_energy_j']):,.4g} Wh")),
         ("predicted quality", esc(f"{report['quality']:.4f} (0 to 1)")),
         ("shadow price", esc(f"{report['shadow_price']:.4g} quality per extra Wh")),
         ("plan", esc(str(plan_file))),
@@ -306,21 +316,87 @@ def _summary_section(mission: CheckedMission, source: str, hardware, report: dic
     return Section("summary", "Summary", (facts_html(facts),), notes=tuple(notes))
 
 
-def _pareto_section(frontier: pd.DataFrame, report: dict) -> Section:
-    svg = charts.pareto(frontier, _wh(report["budget_j"]), _wh(report["energy_j"]),
-                        report["quality"])
-    text = (f"<p>The best quality each energy budget buys, from the least the mission needs "
-            f"to where more energy buys nothing. The plan sits at "
-            f"{_wh(report['energy_j']):,.4g} Wh with quality {report['quality']:.4f}; there "
-            f"one more Wh buys {report['shadow_price']:.4g} quality (the shadow price of the "
-            "budget).</p>")
+WARMUPS = "a sensor warm-up counted for every device that may duty-cycle"
+
+
+@dataclass(frozen=True)
+class Star:
+    """The plan's point on the Pareto curve and what the curve says there."""
+
+    budgeted_wh: float  # x: the budget the plan takes, as the curve's budgets count
+    quality: float  # y
+    drawn_wh: float  # the plan's predicted energy, <= budgeted_wh
+    best_quality: float  # the curve at budgeted_wh: the best any plan reaches there
+    same_model: bool  # the plan was made on the curve's inputs (hardware, times, workload)
+    free: tuple[str, ...]  # devices of `duty auto` sensors that cost no energy (hotel load)
+
+
+def _star(model, frontier: pd.DataFrame, report: dict) -> Star:
+    """Where the plan sits against the curve. A plan is on the curve's model when it
+    needs the least budget the curve starts at (a plan given by --plan may have been made
+    for another computer or workload, or on simulated times; a battery moves only the
+    budget, not the curve)."""
+    least = float(frontier["budget_j"].iloc[0])
+    budgeted = float(report["budgeted_energy_j"])
+    same = math.isclose(report["minimum_energy_j"], least, rel_tol=1e-6)
+    best = model.solve_quality(budgeted).quality if same else math.nan
+    inputs = model.inputs
+    free = tuple(dict.fromkeys(
+        name for name, power, lo, hi in zip(inputs.dev_name, inputs.dev_power_w,
+                                            inputs.dev_lo, inputs.dev_hi, strict=True)
+        if power == 0.0 and hi > lo))
+    return Star(_wh(budgeted), float(report["quality"]), _wh(report["energy_j"]), best, same,
+                free)
+
+
+def _star_text(star: Star, report: dict, frontier: pd.DataFrame, floor: float | None,
+               plan_path: Path | None) -> str:
+    """What the star is, and why it sits where it does (`floor`: the quality floor of a
+    minimize-energy mission)."""
+    text = (f"The star is the plan: quality {star.quality:.4f} at the budget it takes, "
+            f"{star.budgeted_wh:,.4g} Wh. Budgets count energy as the planner's convex model "
+            f"does, {WARMUPS}, so that a plan within its budget holds it; the plan is "
+            f"predicted to draw {star.drawn_wh:,.4g} Wh")
+    warmups = star.budgeted_wh - star.drawn_wh
+    text += (f" ({warmups:.2g} Wh of those warm-ups are for devices it keeps off or always "
+             "on)." if warmups > 5e-4 else ".")
+    text += " The curve, the least budget and the infeasible-budget message count the same way."
+    start = float(frontier["budget_wh"].iloc[0])
+    if not star.same_model:
+        return (f"{text} The plan given ({plan_path}) was made on other inputs than this "
+                "curve (the mission's own hardware and times): it needs at least "
+                f"{_wh(report['minimum_energy_j']):,.4g} Wh where the curve starts at "
+                f"{start:,.4g} Wh, so its star is placed by its own figures and is not a "
+                "point of this curve.")
+    if star.quality >= star.best_quality - QUALITY_TOLERANCE:
+        return f"{text} It lies on the curve: no plan reaches more quality on that budget."
+    where = ("the least budget, where the curve starts,"
+             if math.isclose(star.budgeted_wh, start, rel_tol=1e-6) else "that budget")
+    text += (f" It lies below the curve: at {where} the best plan reaches quality "
+             f"{star.best_quality:.4f}.")
+    if floor is not None:
+        free = (f" (sensors the vehicle's hotel load already powers: {', '.join(star.free)})"
+                if star.free else "")
+        text += (f" The mission asks for the least energy that reaches quality {floor:g}, "
+                 f"not for the most quality that energy buys; quality that costs no energy{free} "
+                 "is not sought.")
+    return text
+
+
+def _pareto_section(frontier: pd.DataFrame, report: dict, star: Star, floor: float | None,
+                    plan_path: Path | None) -> Section:
+    svg = charts.pareto(frontier, _wh(report["budget_j"]), star.budgeted_wh, star.quality)
+    text = ("<p>The best quality each energy budget buys, from the least the mission needs "
+            f"to where more energy buys nothing. At the plan one more Wh of budget buys "
+            f"{report['shadow_price']:.4g} quality (the shadow price of the budget).</p>",
+            f"<p>{esc(_star_text(star, report, frontier, floor, plan_path))}</p>")
     table = Table(frontier[["budget_wh", "quality", "shadow_price", "status"]],
                   {"budget_wh": "budget [Wh]", "quality": "quality [1]",
                    "shadow_price": "shadow price [quality per Wh]"},
                   {"quality": ".4f", "shadow_price": ".4g", "budget_wh": ",.4g"})
-    return Section("pareto", "Quality against budget (Pareto curve)", (text,), svg,
-                   "Quality against the energy budget; dashed: the shadow price; star: the plan.",
-                   ("pareto.csv",), (table,))
+    return Section("pareto", "Quality against budget (Pareto curve)", text, svg,
+                   "Quality against the energy budget; dashed: the shadow price; star: the "
+                   "plan, at the budget it takes.", ("pareto.csv",), (table,))
 
 
 def _energy_section(frame: pd.DataFrame) -> Section:

@@ -25,6 +25,7 @@ from gliderplan.reports.report import make_report
 
 ROOT = Path(__file__).resolve().parents[1]
 ANNOTATED = str(ROOT / "examples" / "fig2_annotated.mission")
+SURVEY = str(ROOT / "examples" / "thermocline_survey.mission")
 ARTIFACTS = ROOT / "out" / "test-artifacts"
 CHROMIUM = "/usr/bin/chromium"
 SECTIONS = ["summary", "pareto", "energy", "plan-vs-simulation", "profile", "sbc",
@@ -73,6 +74,34 @@ def test_the_page_is_one_offline_file_with_every_section(report_dir):
     for text in ("[Wh]", "[W]", "[h]", "quality per extra Wh", "% used", "predicted ("):
         assert text in page
     assert "(examples/" in page or ANNOTATED in page
+
+
+@pytest.fixture(scope="module")
+def survey_dir(tmp_path_factory) -> Path:
+    """The report of the thermocline survey: a minimize-energy mission whose plan draws
+    less than the budget it takes (warm-ups of an optode it keeps off)."""
+    out = tmp_path_factory.mktemp("survey")
+    run = gliderplan("report", SURVEY, "-o", str(out))
+    assert run.returncode == 0, run.stderr
+    return out
+
+
+def test_the_plans_star_is_on_or_under_the_pareto_curve(survey_dir):
+    planned = json.loads((survey_dir / "thermoclineSurvey.plan.json").read_text())
+    curve = pd.read_csv(survey_dir / "pareto.csv")
+    budgeted = planned["budgeted_energy_j"]
+    # the curve starts at the least budget, and the minimum-energy plan takes just that
+    assert curve["budget_j"].iloc[0] == pytest.approx(planned["minimum_energy_j"], rel=1e-9)
+    assert (curve["budget_j"] >= planned["minimum_energy_j"] * (1 - 1e-9)).all()
+    assert budgeted == pytest.approx(curve["budget_j"].iloc[0], rel=1e-6)
+    assert planned["quality"] <= curve["quality"].iloc[0] + 1e-6
+    # it draws less than it takes; the star is drawn at what it takes, and the page says so
+    assert planned["energy_j"] < budgeted
+    page = (survey_dir / "report.html").read_text()
+    assert f"the plan: {budgeted / 3600:.4g} Wh of budget" in page
+    assert f"the plan: {planned['energy_j'] / 3600:.4g} Wh" not in page
+    assert "The star is the plan" in page and "predicted to draw" in page
+    assert "where the curve starts" in page
 
 
 def test_every_figure_has_its_csv_and_the_plan_and_run_are_kept(report_dir):
@@ -192,6 +221,22 @@ def test_a_plan_and_a_run_given_are_used_as_they_are(tmp_path):
     page = (out / "report.html").read_text()
     assert str(plan) in page
     assert 'id="montecarlo"' not in page  # only with --montecarlo
+
+
+def test_a_plan_made_on_other_hardware_is_said_to_be_no_point_of_the_curve(tmp_path):
+    """The curve is the mission's own hardware; a plan for the 500 MHz clock needs more
+    than the curve's least budget, and the page does not pass its star off as a point
+    of the curve."""
+    plan = tmp_path / "fast.plan"
+    assert gliderplan("plan", ANNOTATED, "--computer", "ts7800@500", "-o", str(plan)
+                      ).returncode == 0
+    make_report(check_file(ANNOTATED).checked(), tmp_path / "out", plan_path=plan)
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "is not a point of this curve" in page and "It lies on the curve" not in page
+    own = tmp_path / "own.plan"
+    assert gliderplan("plan", ANNOTATED, "-o", str(own)).returncode == 0
+    make_report(check_file(ANNOTATED).checked(), tmp_path / "own", plan_path=own)
+    assert "It lies on the curve" in (tmp_path / "own" / "report.html").read_text()
 
 
 @pytest.mark.parametrize(("args", "code", "message"), [
