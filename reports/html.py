@@ -21,7 +21,7 @@ CSP = ("default-src 'none'; style-src 'unsafe-inline'; script-src 'unsafe-inline
 
 CSS = """
 body { font-family: sans-serif; margin: 2em auto; max-width: 62em; padding: 0 1em;
-       color: #1b1b1b; line-height: 1.45; }
+       color: #1b1b1b; line-height: 1.45; overflow-wrap: break-word; }
 h1 { font-size: 1.6em; margin-bottom: 0.2em; }
 h2 { font-size: 1.25em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
 p.sub { color: #555; margin-top: 0; }
@@ -29,16 +29,26 @@ nav ol { columns: 2; font-size: 0.95em; }
 figure { margin: 1em 0; break-inside: avoid; }
 figure svg { width: 100%; height: auto; }
 figcaption { font-size: 0.85em; color: #444; }
-table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.88em; }
-th, td { border: 1px solid #ccc; padding: 0.25em 0.55em; }
+div.table { max-width: 100%; overflow-x: auto; margin: 0.8em 0; }
+table { border-collapse: collapse; font-size: 0.88em; }
+th, td { border: 1px solid #ccc; padding: 0.25em 0.55em; overflow-wrap: break-word; }
 th { background: #f2f2f2; text-align: left; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
+td.num span.n { white-space: nowrap; }
 table.sortable th { cursor: pointer; }
 table.sortable th::after { content: " \\2195"; color: #999; font-size: 0.8em; }
 tr { break-inside: avoid; }
 dl.facts { display: grid; grid-template-columns: max-content auto; gap: 0.2em 1.2em; }
 dl.facts dt { font-weight: bold; }
-dl.facts dd { margin: 0; }
+dl.facts dd { margin: 0; overflow-wrap: anywhere; }
+@media (max-width: 60em) {
+  table { font-size: 0.82em; }
+  th, td { padding: 0.2em 0.35em; }
+}
+@media (max-width: 40em) {
+  dl.facts { display: block; }
+  dl.facts dd { margin: 0 0 0.4em 1em; }
+}
 .verdict-pass { color: #1a6e1a; font-weight: bold; }
 .verdict-violation { color: #b00020; font-weight: bold; }
 .verdict-over-prediction { color: #a15c00; font-weight: bold; }
@@ -46,6 +56,7 @@ ul.notes { font-size: 0.88em; color: #333; }
 @media print {
   body { margin: 0; max-width: none; font-size: 10pt; }
   nav, table.sortable th::after { display: none; }
+  div.table { overflow: visible; }
   h2 { break-after: avoid; }
   section { break-before: auto; }
   a { color: inherit; text-decoration: none; }
@@ -83,12 +94,15 @@ document.querySelectorAll("table.sortable").forEach(function (table) {
 @dataclass(frozen=True)
 class Table:
     """A table of `frame`; `headers` maps a column to its heading with its unit, `formats`
-    a column to a format spec for its numbers."""
+    a column to a format spec for its numbers, `units` a column of numbers in different
+    units to the column that names each row's unit (shown after the number, not as a
+    column of its own)."""
 
     frame: pd.DataFrame
     headers: dict[str, str] = field(default_factory=dict)
     formats: dict[str, str] = field(default_factory=dict)
     caption: str = ""
+    units: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -114,26 +128,38 @@ def inline_svg(svg: str, prefix: str) -> str:
     return re.sub(r'(\bid="|href="#|url\(#)', lambda m: m.group(1) + prefix, body)
 
 
-def _cell(value: object, fmt: str | None) -> str:
+def _cell(value: object, fmt: str | None, unit: str = "") -> str:
     if isinstance(value, bool) or value is None:
         return f"<td>{esc('-' if value is None else value)}</td>"
     if isinstance(value, int | float):
         number = float(value)
         shown = "-" if math.isnan(number) else format(number, fmt or ",.4g")
-        return f'<td class="num" data-v="{number!r}">{esc(shown)}</td>'
-    return f"<td>{esc(value)}</td>"
+        with_unit = f" {esc(unit)}" if unit not in ("", "1") and not math.isnan(number) else ""
+        # the number never wraps (2.4e-09 would break after its minus); its unit may
+        return (f'<td class="num" data-v="{number!r}"><span class="n">{esc(shown)}</span>'
+                f"{with_unit}</td>")
+    return f"<td>{breakable(esc(value))}</td>"
+
+
+def breakable(text: str) -> str:
+    """Escaped text with a line-break opportunity (<wbr>) after each _ . / inside a word:
+    an identifier (pump_out_energy_per_volume) or a path wraps there instead of widening
+    its table past the page."""
+    return re.sub(r"([_./])(?=\w)", r"\1<wbr>", text)
 
 
 def table_html(table: Table) -> str:
     frame = table.frame
-    head = "".join(f"<th>{esc(table.headers.get(c, c))}</th>" for c in frame.columns)
+    columns = [c for c in frame.columns if c not in table.units.values()]
+    head = "".join(f"<th>{esc(table.headers.get(c, c))}</th>" for c in columns)
     rows = "".join(
-        "<tr>" + "".join(_cell(v, table.formats.get(c)) for c, v in zip(
-            frame.columns, (row[c] for c in frame.columns), strict=True)) + "</tr>"
+        "<tr>" + "".join(_cell(row[c], table.formats.get(c),
+                               str(row[table.units[c]]) if c in table.units else "")
+                         for c in columns) + "</tr>"
         for row in frame.to_dict("records"))
     caption = f"<caption>{esc(table.caption)}</caption>" if table.caption else ""
-    return (f'<table class="sortable">{caption}<thead><tr>{head}</tr></thead>'
-            f"<tbody>{rows}</tbody></table>")
+    return (f'<div class="table"><table class="sortable">{caption}<thead><tr>{head}</tr>'
+            f"</thead><tbody>{rows}</tbody></table></div>")
 
 
 def facts_html(facts: Sequence[tuple[str, str]]) -> str:

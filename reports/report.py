@@ -493,17 +493,21 @@ def _sensitivity_section(tornado, frame: pd.DataFrame) -> Section:
             "source.</p>")
     shown = frame.assign(figure=[f + (ASSUMED_MARK if a else "")
                                  for f, a in zip(frame["figure"], frame["assumed"],
-                                                 strict=True)])
-    headers = {"energy_down_wh": "energy, figure down [Wh]",
-               "energy_up_wh": "energy, figure up [Wh]", "quality_down": "quality, down",
-               "quality_up": "quality, up", "step": "moved by"}
+                                                 strict=True)],
+                         basis=[b.split(" (")[0] for b in frame["basis"]])
+    # Units ride with their numbers and the basis is "1 sd" or "20 %" (the text above says
+    # which is which): the table fits the page instead of scrolling sideways.
+    headers = {"step": "moved by", "energy_down_wh": "energy down [Wh]",
+               "energy_up_wh": "energy up [Wh]", "quality_down": "quality down [1]",
+               "quality_up": "quality up [1]"}
     return Section("sensitivity", "Sensitivity: which assumption matters most", text,
                    charts.tornado(shown, _wh(tornado.energy_j), tornado.quality),
                    f"Mission energy and quality with each figure moved; the line is the plan "
                    f"({_wh(tornado.energy_j):,.4g} Wh, quality {tornado.quality:.4f}).",
                    ("sensitivity.csv",),
                    (Table(shown.drop(columns="assumed"), headers,
-                          {**dict.fromkeys(headers, ",.4g"), "value": ",.4g"}),))
+                          {**dict.fromkeys(headers, ",.4g"), "value": ",.4g"},
+                          units={"value": "unit", "step": "unit"}),))
 
 
 def _montecarlo_section(frame: pd.DataFrame, summary: dict, directory: Path) -> Section:
