@@ -48,7 +48,9 @@ def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cycles-per-tick", type=cycles_per_tick, metavar="N",
                         default=RUNTIME_CYCLES_PER_TICK,
                         help="the board's work every tick [cycles] in states that do not say "
-                             f"(default: the runtime's own, {RUNTIME_CYCLES_PER_TICK:,.0f})")
+                             f"(default: {RUNTIME_CYCLES_PER_TICK:,.0f}, the runtime's whole "
+                             "tick, an assumption: compare-sbc sets it beside each board's "
+                             "measured code)")
 
 
 def load_mission(args: argparse.Namespace) -> CheckedMission:

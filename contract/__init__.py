@@ -161,10 +161,13 @@ EARTH_RADIUS_M = 6371000.0  # [m] of the sphere positions and headings are compu
 # COMMAND and one step of the mission per tick. The planner's occupancy and the
 # simulator's clock both run on it.
 TICK_S = 4.0  # [s]
-# The runtime's work per tick: decode a frame, check events, run the library routine,
-# encode the COMMAND, append to the event log. An assumption (a C loop without an
-# interpreter, plus Linux serial I/O): under 0.1 % busy at 300 MHz and a 4 s tick. The
-# planner prices the computer with it and the simulator bills it.
+# The runtime's whole tick on a board: decode a frame, check events, run the library
+# routine, encode the COMMAND, journal the tick, and the kernel's work for all of it. An
+# assumption, kept because no board's whole tick is measured: the runtime's own code is
+# (a board file's `runtime_instructions`, a small part of this), the system calls, the
+# serial line's interrupts and the journal's fdatasync to flash are not. Under 0.1 %
+# busy at 133 MHz and a 4 s tick. The planner prices the computer with it, the
+# simulator bills it, compare-sbc sets it beside each board's measured code.
 RUNTIME_CYCLES_PER_TICK = 200_000.0  # [cycles]
 # A mission without `horizon` is planned over this time, and a run of it (sim, montecarlo)
 # ends here if it has not exited: the plan's budget and the flight cover the same time.

@@ -38,6 +38,8 @@ UNITS: dict[str, dict[str, float]] = {
     "fraction": {"1": 1.0, "%": 0.01},
     "cycles_per_clock": {"cycles/clock": 1.0},
     "cycles": {"cycles": 1.0, "Mcycles": 1e6},
+    "instructions": {"instructions": 1.0},
+    "cycles_per_instruction": {"cycles/instruction": 1.0},
 }
 
 

@@ -63,6 +63,20 @@ class BoardEnergy:
 
 
 @dataclass(frozen=True)
+class RuntimeCode:
+    """The runtime's own code on a board beside the workload the boards are compared at:
+    its instructions a tick measured on the board's build, in cycles, and what the rest
+    of the workload (the kernel's system calls and interrupts, not measured) costs."""
+
+    instructions: float  # [instructions per tick] (board file: runtime_instructions)
+    cycles_per_instruction: float  # [cycles] (board file: cycles_per_instruction)
+    sources: dict[str, str]  # data-file key -> its source
+    cycles: float  # [cycles per tick] instructions x cycles per instruction
+    share: float  # [1] of the workload compared at
+    rest_j: float  # the board's energy on the mission at the workload less at the code alone
+
+
+@dataclass(frozen=True)
 class BoardResult:
     """One board on the mission."""
 
@@ -72,6 +86,7 @@ class BoardResult:
     energy: BoardEnergy
     endurance_days: float  # usable battery at the reference plan's vehicle and sensors
     assumptions: dict[str, str]  # data-file key -> figure and source, for assumed figures
+    runtime_code: RuntimeCode | None = None  # None: not measured on this board's build
 
     @property
     def board(self) -> Board:
@@ -214,6 +229,21 @@ def assumed_figures(spec: str, hardware: Hardware, sleeping: bool) -> dict[str, 
             and (sleeping or not (key.startswith("sleep.") or key.endswith(".wake_energy")))}
 
 
+def runtime_code(hardware: Hardware, mission: ir.CheckedMission, plan: Plan,
+                 cycles_per_tick: float) -> RuntimeCode | None:
+    """The runtime's measured code on the board against `cycles_per_tick` [cycles] on
+    `plan`'s times (`energy_curve_j`); None where the board file gives no measurement."""
+    board = hardware.board
+    cycles = board.runtime_code_cycles
+    if cycles is None or board.path is None:
+        return None
+    sources = {key: source for key, _, _, source in file_entries(board.path)
+               if key in ("runtime_instructions", "cycles_per_instruction")}
+    at = energy_curve_j(hardware, mission, plan, np.array([cycles_per_tick, cycles]))
+    return RuntimeCode(float(board.runtime_instructions), float(board.cycles_per_instruction),
+                       sources, cycles, cycles / cycles_per_tick, float(at[0] - at[1]))
+
+
 def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS, *,
                    battery: str | None = None,
                    cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> Comparison:
@@ -245,7 +275,9 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
             raise HardwareError(f"--computer {spec}: {name} is compared already")
         results.append(BoardResult(name, hardware, planned, energy, endurance,
                                    assumed_figures(spec, hardware, any(
-                                       hardware.sleeps(st) for st in mission.states))))
+                                       hardware.sleeps(st) for st in mission.states)),
+                                   runtime_code(hardware, mission, planned.plan,
+                                                cycles_per_tick)))
     capacity = max(m.cycles_per_s * TICK_S for r in results for m in r.hardware.board_modes)
     workload = np.geomspace(min(1e4, cycles_per_tick), 1.1 * capacity, _GRID_POINTS)
 

@@ -160,9 +160,11 @@ def figures(hardware: Hardware, mission: ir.CheckedMission) -> list[Figure]:
     for name, sensor in hardware.devices.items():
         add(f"sensor {name} on_power", sensor.on_power_w, "W", _device(name),
             _sources(sensor.path, "on_power"))
-    workload = "assumption: the runtime's own work every tick " \
-        "(contract.RUNTIME_CYCLES_PER_TICK)" \
+    workload = "assumption: the runtime's whole tick (contract.RUNTIME_CYCLES_PER_TICK)" \
         if hardware.cycles_per_tick == RUNTIME_CYCLES_PER_TICK else "given (--cycles-per-tick)"
+    if board.runtime_code_cycles is not None:
+        workload += (f"; the runtime's own code measured on this board's build is "
+                     f"{board.runtime_code_cycles:,.0f} cycles of it (board file)")
     add("runtime workload per tick", hardware.cycles_per_tick, "cycles", _workload, workload)
     return rows
 

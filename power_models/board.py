@@ -81,6 +81,19 @@ class Board:
     clock_modes: tuple[ClockMode, ...]
     boot_j_given: bool  # True: boot energy from the file; False: boot_s x active_w
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
+    # The runtime's own code every tick, measured on this board's build [instructions],
+    # and the cycles an instruction takes on its CPU; None: not measured on this board.
+    runtime_instructions: float | None = None
+    cycles_per_instruction: float | None = None
+
+    @property
+    def runtime_code_cycles(self) -> float | None:
+        """Cycles [cycles] of the runtime's own code every tick, from its measured
+        instructions; None where they are not measured. The kernel's system calls and
+        interrupts around it are not in it."""
+        if self.runtime_instructions is None or self.cycles_per_instruction is None:
+            return None
+        return self.runtime_instructions * self.cycles_per_instruction
 
     def modes(self) -> list[Board]:
         """This board at each of its available clocks, slowest first."""
@@ -226,6 +239,7 @@ def read_board_file(path: Path) -> Board:
     default_clock = top.quantity("default_clock", "clock", modes[0].clock_mhz, positive=True)
     boot_s = top.quantity("boot_time", "time")
     boot_given = top.has("boot_energy")
+    instructions, cpi = _runtime_code(top)
     template = Board(
         name=top.text("name"),
         description=top.text("description", ""),
@@ -240,12 +254,29 @@ def read_board_file(path: Path) -> Board:
         clock_modes=tuple(modes),
         boot_j_given=boot_given,
         path=path,
+        runtime_instructions=instructions,
+        cycles_per_instruction=cpi,
     )
     top.finish()
     try:
         return template.at_clock(default_clock)
     except ValueError as err:
         raise top.error("default_clock", str(err)) from None
+
+
+def _runtime_code(top: Table) -> tuple[float | None, float | None]:
+    """(`runtime_instructions`, `cycles_per_instruction`): both or neither, the count
+    meaning nothing in cycles without what an instruction takes."""
+    given = [top.has(k) for k in ("runtime_instructions", "cycles_per_instruction")]
+    if given == [False, False]:
+        return None, None
+    if not all(given):
+        missing = "cycles_per_instruction" if given[0] else "runtime_instructions"
+        raise top.missing(missing, "runtime_instructions and cycles_per_instruction go "
+                                   "together: the measured count and what an instruction "
+                                   "costs in cycles on this board")
+    return (top.quantity("runtime_instructions", "instructions", positive=True),
+            top.quantity("cycles_per_instruction", "cycles_per_instruction", positive=True))
 
 
 def _sleep_mode(top: Table) -> SleepMode | None:

@@ -448,12 +448,15 @@ def _sbc_section(comparison, tables: dict[str, pd.DataFrame]) -> Section:
     cheapest = min(comparison.boards, key=lambda r: r.energy.total_j)
     flips = "; ".join(f"at {sbc.cycles_text(x.cycles_per_tick)} {x.reason} "
                       f"({sbc.equivalents_text(x)})" for x in comparison.crossovers)
+    code = "".join(f"<li>{esc(line)}</li>" for line in sbc.runtime_code_lines(comparison))
     text = (f"<p>The TS-5500 and the TS-7800 at 300 and 500 MHz on this mission at the same "
             f"battery and workload ({comparison.cycles_per_tick:,.0f} cycles per tick): "
             f"cheapest is {esc(cheapest.name)}. Where the ranking changes: "
             f"{esc(flips) or 'nowhere up to the fastest board'}.</p>",
-            "<p>Below the tables: every figure the comparison rests on that is an assumption "
-            "rather than a measurement.</p>")
+            f"<p>The {esc(sbc.workload_basis(comparison))}.</p>",
+            f'<ul class="notes">{code}</ul>',
+            "<p>Below the tables: every other figure the comparison rests on that is an "
+            "assumption rather than a measurement.</p>")
     crossings = tables["sbc_crossovers.csv"]
     return Section("sbc", "Single-board computers", text, sbc.energy_plot(comparison, "svg")
                    .decode("utf-8"), "Board energy on the mission against the workload per "
@@ -466,7 +469,7 @@ def _sbc_section(comparison, tables: dict[str, pd.DataFrame]) -> Section:
                                                   "ranking_before": "cheapest first, below",
                                                   "ranking_after": "above"},
                           {"cycles_per_tick": ",.0f"})),
-                   tuple(sbc.assumption_lines(comparison)))
+                   tuple(sbc.assumption_lines(comparison, workload=False)))
 
 
 ASSUMED_MARK = " *"  # after the name of a figure that is an assumption

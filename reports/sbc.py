@@ -21,9 +21,6 @@ from gliderplan.reports.figures import pyplot, render
 
 FILES = ("boards.csv", "workload.csv", "crossovers.csv", "sbc.png")
 
-# The runtime's own code, measured (bench/README.md, bench_runtime.py): instructions a
-# 4 s tick of Fig. 2 with the state directory on, in the TS-5500's i486 build.
-MEASURED_RUNTIME_INSTRUCTIONS = 2_737
 # What every comparison rests on besides the boards' own figures and its workload.
 MODEL_NOTES = (
     "cycles of the reference computations: i486 instructions counted by "
@@ -34,22 +31,54 @@ MODEL_NOTES = (
     "endurance: the usable battery spent at the vehicle and sensor power of the mission's "
     "own plan (the same sampling plan for every board) plus each board's mean power",
 )
+UNMEASURED = ("the kernel's system calls, the serial line's interrupts and the journal's "
+              "fdatasync around it")
+
+
+def workload_basis(comparison: Comparison) -> str:
+    """The workload the boards were compared at, and where it comes from."""
+    cycles = comparison.cycles_per_tick
+    if cycles == RUNTIME_CYCLES_PER_TICK:
+        return (f"workload per tick: {cycles:,.0f} cycles, the runtime's whole {TICK_S:g} s "
+                "tick on every board, an assumption (contract.RUNTIME_CYCLES_PER_TICK): the "
+                "runtime's own code is measured where a board file gives runtime_instructions, "
+                f"{UNMEASURED} are not; --cycles-per-tick sets another")
+    return (f"workload per tick: {cycles:,.0f} cycles, given with --cycles-per-tick "
+            f"(without it the runtime's whole tick is taken as {RUNTIME_CYCLES_PER_TICK:,.0f} "
+            "cycles, an assumption)")
+
+
+def runtime_code_lines(comparison: Comparison) -> list[str]:
+    """How the workload relates to the runtime's measured code, board by board: its
+    cycles, their share of the workload, and what the rest costs the board on the mission."""
+    lines, unmeasured = [], []
+    for r in comparison.boards:
+        code = r.runtime_code
+        if code is None:
+            unmeasured.append(r.name)
+            continue
+        rest = comparison.cycles_per_tick - code.cycles
+        text = (f"{r.name}: the runtime's own code is {code.cycles:,.0f} cycles a tick, "
+                f"{100 * code.share:.3g} % of the workload: {code.instructions:,.0f} "
+                f"instructions ({code.sources['runtime_instructions']}) x "
+                f"{code.cycles_per_instruction:g} cycles per instruction "
+                f"({code.sources['cycles_per_instruction']})")
+        if rest >= 0:
+            share = 100 * code.rest_j / r.energy.total_j
+            text += (f"; the other {rest:,.0f} cycles, for {UNMEASURED} (not measured), cost "
+                     f"it {_wh(code.rest_j):.2g} Wh on this mission, {share:.2g} % of its "
+                     "energy")
+        lines.append(text)
+    if unmeasured:
+        lines.append(f"{', '.join(unmeasured)}: the runtime's own code is not measured on "
+                     "this board's build (its board file gives no runtime_instructions)")
+    return lines
 
 
 def model_notes(comparison: Comparison) -> list[str]:
-    """The workload the comparison was made at, and where it comes from; then MODEL_NOTES."""
-    cycles = comparison.cycles_per_tick
-    if cycles == RUNTIME_CYCLES_PER_TICK:
-        workload = (
-            f"workload per tick: {cycles:,.0f} cycles is the runtime's own work every "
-            f"{TICK_S:g} s tick, an assumption (contract.RUNTIME_CYCLES_PER_TICK): its code "
-            f"was measured at {MEASURED_RUNTIME_INSTRUCTIONS:,} i486 instructions a tick of "
-            "Fig. 2 (bench/README.md), the system calls and the kernel's serial I/O around it "
-            "were not; --cycles-per-tick sets another")
-    else:
-        workload = (f"workload per tick: {cycles:,.0f} cycles, given with --cycles-per-tick "
-                    f"(the runtime's own is taken as {RUNTIME_CYCLES_PER_TICK:,.0f})")
-    return [workload, *MODEL_NOTES]
+    """The workload the comparison was made at, where it comes from and how it relates to
+    the runtime's measured code; then MODEL_NOTES."""
+    return [workload_basis(comparison), *runtime_code_lines(comparison), *MODEL_NOTES]
 
 
 def _wh(joules: float) -> float:
@@ -61,7 +90,7 @@ def _clock(result: BoardResult) -> float | None:
     return None if len(result.hardware.modes) > 1 else result.board.clock_mhz
 
 
-def board_json(result: BoardResult) -> dict[str, Any]:
+def board_json(result: BoardResult, comparison_cycles: float) -> dict[str, Any]:
     """One board: its data file's figures as given, and what it costs on the mission."""
     board, energy, planned = result.board, result.energy, result.planned
     sleep = board.sleep
@@ -90,7 +119,22 @@ def board_json(result: BoardResult) -> dict[str, Any]:
         "quality": planned.quality,
         "endurance_days": result.endurance_days,
         "assumptions": dict(result.assumptions),
+        "runtime_code": _code_json(result, comparison_cycles),
     }
+
+
+def _code_json(result: BoardResult, cycles_per_tick: float) -> dict[str, Any] | None:
+    """The runtime's measured code on the board beside the workload; None: not measured."""
+    code = result.runtime_code
+    if code is None:
+        return None
+    return {"instructions_per_tick": code.instructions,
+            "instructions_source": code.sources["runtime_instructions"],
+            "cycles_per_instruction": code.cycles_per_instruction,
+            "cycles_per_instruction_source": code.sources["cycles_per_instruction"],
+            "cycles_per_tick": code.cycles, "share_of_workload": code.share,
+            "rest_cycles_per_tick": cycles_per_tick - code.cycles,
+            "rest_energy_j": code.rest_j}
 
 
 def crossover_json(crossover: Crossover) -> dict[str, Any]:
@@ -109,7 +153,11 @@ def comparison_json(comparison: Comparison) -> dict[str, Any]:
         "battery_j": comparison.battery_j,
         "budget_j": comparison.budget_j,
         "reference_plan": comparison.reference,
-        "boards": {r.name: board_json(r) for r in comparison.boards},
+        "workload": {"cycles_per_tick": comparison.cycles_per_tick,
+                     "assumed": comparison.cycles_per_tick == RUNTIME_CYCLES_PER_TICK,
+                     "source": workload_basis(comparison)},
+        "boards": {r.name: board_json(r, comparison.cycles_per_tick)
+                   for r in comparison.boards},
         "crossovers": [crossover_json(c) for c in comparison.crossovers],
         "computations": {c.name: {"cycles": c.cycles, "description": c.description,
                                   "source": c.source} for c in load_computations()},
@@ -121,10 +169,13 @@ def boards_frame(comparison: Comparison) -> pd.DataFrame:
     """One row per board (boards.csv): figures, energy split, mission energy, endurance."""
     rows = []
     for r in comparison.boards:
-        data = board_json(r)
+        data = board_json(r, comparison.cycles_per_tick)
+        code = data.pop("runtime_code") or {}
         rows.append({"board": r.name, **{k: v for k, v in data.items()
                                          if k not in ("description", "clocks_mhz", "wakes_on",
                                                       "assumptions")},
+                     "workload_cycles_per_tick": comparison.cycles_per_tick,
+                     "runtime_code_cycles_per_tick": code.get("cycles_per_tick", math.nan),
                      "board_energy_wh": _wh(r.energy.total_j),
                      "mission_energy_wh": _wh(r.planned.plan.predicted_j)})
     return pd.DataFrame(rows)
@@ -182,9 +233,10 @@ def _assumed(result: BoardResult, key: str) -> str:
 def comparison_text(comparison: Comparison) -> str:
     """The table a person reads, the crossovers and every assumption behind them."""
     c = comparison
+    given = "" if c.cycles_per_tick == RUNTIME_CYCLES_PER_TICK else ", given"
     lines = [f"mission {c.mission}: {len(c.boards)} boards at {c.cycles_per_tick:,.0f} cycles "
-             f"per {TICK_S:g} s tick, battery {_wh(c.battery_j):,.4g} Wh "
-             f"({_wh(c.budget_j):,.4g} Wh usable)", ""]
+             f"per {TICK_S:g} s tick (workload{given}: below), battery "
+             f"{_wh(c.battery_j):,.4g} Wh ({_wh(c.budget_j):,.4g} Wh usable)", ""]
     header = ["board", "clock MHz", "active W", "idle W", "boot s", "board Wh", "active Wh",
               "idle Wh", "sleep+wake Wh", "boot Wh", "share", "mission Wh", "quality",
               "endurance d"]
@@ -209,6 +261,8 @@ def comparison_text(comparison: Comparison) -> str:
     over = [r.name for r in c.boards if r.planned.status != "optimal"]
     if over:
         lines.append(f"over the battery on: {', '.join(over)} (the least-energy plan shown)")
+    lines += ["", workload_basis(c)]
+    lines += [f"  {line}" for line in runtime_code_lines(c)]
     lines += ["", "crossovers (workload at which the ranking changes, cheapest first):"]
     if not c.crossovers:
         lines.append("  none up to the fastest board's capacity")
@@ -217,7 +271,7 @@ def comparison_text(comparison: Comparison) -> str:
                      f"becomes {' < '.join(x.after) or 'none'}; {x.reason}")
         lines.append(f"    ({equivalents_text(x)})")
     lines += ["", "assumptions (figures without a measurement behind them):"]
-    lines += [f"  {line}" for line in assumption_lines(c)]
+    lines += [f"  {line}" for line in assumption_lines(c, workload=False)]
     return "\n".join(lines) + "\n"
 
 
@@ -232,13 +286,14 @@ def assumptions_by_figure(comparison: Comparison) -> dict[str, list[str]]:
     return found
 
 
-def assumption_lines(comparison: Comparison) -> list[str]:
-    """One line per assumed figure (with the boards that use it), then the model's own."""
+def assumption_lines(comparison: Comparison, workload: bool = True) -> list[str]:
+    """One line per assumed figure (with the boards that use it), then the model's own,
+    the workload's first unless `workload` is False (said apart)."""
     lines = []
     for figure, boards in assumptions_by_figure(comparison).items():
         value, source = figure.split(": ", 1)
         lines.append(f"{value} (for {', '.join(boards)}): {source}")
-    return lines + model_notes(comparison)
+    return lines + (model_notes(comparison) if workload else list(MODEL_NOTES))
 
 
 def energy_plot(comparison: Comparison, fmt: str = "png") -> bytes:
@@ -254,6 +309,12 @@ def energy_plot(comparison: Comparison, fmt: str = "png") -> bytes:
     top = np.nanmax([np.nanmax(_wh(v)) for v in comparison.curves_j.values()])
     ax.annotate("mission's workload", (comparison.cycles_per_tick, top), fontsize=8,
                 rotation=90, va="top", ha="right", color="grey")
+    for r in comparison.boards:  # the part of a tick that is measured, where it is
+        code = r.runtime_code
+        if code is not None and w[0] <= code.cycles <= w[-1]:
+            ax.axvline(code.cycles, color="grey", ls="-.", lw=0.8)
+            ax.annotate(f"{r.name}: runtime's code, measured", (code.cycles, top), fontsize=7,
+                        rotation=90, va="top", ha="right", color="grey")
     for x in comparison.crossovers:
         ax.axvline(x.cycles_per_tick, color="black", ls="--", lw=0.8)
         ax.annotate(f"crossover {cycles_text(x.cycles_per_tick)}", (x.cycles_per_tick, top),
@@ -263,7 +324,7 @@ def energy_plot(comparison: Comparison, fmt: str = "png") -> bytes:
     ax.set_title(f"{comparison.mission}: board energy against workload (ends where a "
                  "board cannot keep up)", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left")
+    ax.legend(fontsize=8, loc="lower right")  # the upper left holds the workload labels
     return render(fig, fmt)
 
 

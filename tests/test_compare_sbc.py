@@ -65,7 +65,72 @@ def test_the_three_boards_with_table_i_figures_and_the_data_files_idle_powers():
     assert any("assumption" in note for note in data["assumptions"])
     # the workload it rests on, and the measurement beside that assumption
     assert data["assumptions"][0].startswith("workload per tick: 200,000 cycles")
-    assert "measured at 2,737 i486 instructions" in data["assumptions"][0]
+    assert data["assumptions"][1].startswith("ts5500: the runtime's own code is 10,948 cycles")
+
+
+def _bench_instructions(build: str, mission: str) -> int:
+    """Instructions a tick of `mission` on `build`, as bench/README.md's runtime table
+    reports them (the "now" column)."""
+    for line in (ROOT / "bench" / "README.md").read_text().splitlines():
+        cells = [c.strip().strip("*") for c in line.strip("|").split("|")]
+        if cells[:2] == [build, mission]:
+            return int(cells[3].replace(",", ""))
+    raise AssertionError(f"bench/README.md has no row for {build} {mission}")
+
+
+def test_the_workload_says_where_it_comes_from_beside_the_runtimes_measured_code():
+    """The default workload is the contract's assumed whole tick, and compare-sbc says so;
+    beside it, on the TS-5500, the runtime's own code as its board file gives it (the
+    bench's measured i486 count, at the cycles per instruction the file assumes), its
+    share, and what the rest of the assumed tick costs the board, from the figures alone.
+    The TS-7800's ARM build is not measured, and the comparison says that too."""
+    data = compare_json(SURVEY)
+    workload = data["workload"]
+    assert workload["cycles_per_tick"] == 200_000 and workload["assumed"]
+    assert "an assumption (contract.RUNTIME_CYCLES_PER_TICK)" in workload["source"]
+    assert "are not" in workload["source"]  # what the measurement leaves out is said
+    ts5500 = load_board("ts5500")
+    code = data["boards"]["ts5500"]["runtime_code"]
+    assert code["instructions_per_tick"] == ts5500.runtime_instructions == \
+        _bench_instructions("ts5500 i486", "fig2")
+    assert code["instructions_source"].startswith("bench/bench_runtime.py")
+    assert code["cycles_per_instruction_source"].startswith("assumption:")
+    assert "cycles_per_instruction" in data["boards"]["ts5500"]["assumptions"]
+    assert code["cycles_per_tick"] == 2737 * 4
+    assert code["share_of_workload"] == pytest.approx(2737 * 4 / 200_000)
+    # the rest of the tick, idle power to active power for its cycles on every tick
+    mission = check_file(SURVEY).mission
+    plan = plan_mission(mission, load_hardware(mission, computer="ts5500")).plan
+    ticks = sum(s.time_s for s in plan.states) / TICK_S
+    rest_s = (200_000 - 2737 * 4) / 133e6
+    assert code["rest_energy_j"] == pytest.approx(ticks * (2.7 - 2.2) * rest_s, rel=1e-9)
+    for name in ("ts7800@300", "ts7800@500"):
+        assert data["boards"][name]["runtime_code"] is None
+    text = gliderplan("compare-sbc", SURVEY).stdout
+    assert "(workload: below)" in text.splitlines()[0]
+    assert "workload per tick: 200,000 cycles, the runtime's whole 4 s tick" in text
+    assert "ts7800@300, ts7800@500: the runtime's own code is not measured" in text
+    given = compare_json(SURVEY, "--cycles-per-tick", "5e7", "--computer", "ts5500")
+    assert not given["workload"]["assumed"]
+    assert given["boards"]["ts5500"]["runtime_code"]["share_of_workload"] == \
+        pytest.approx(2737 * 4 / 5e7)
+
+
+def test_a_board_file_gives_its_measured_code_with_what_an_instruction_costs(tmp_path):
+    from gliderplan.power_models.errors import ModelFileError
+
+    board = tmp_path / "quick.toml"
+    text = BOARD.format(active=10.0, idle=2.0)
+    count = 'runtime_instructions = { value = 3000, unit = "instructions", source = "test" }\n'
+    board.write_text(text.replace("[[mode]]", count + "[[mode]]"))
+    with pytest.raises(ModelFileError, match="cycles_per_instruction: missing"):
+        load_board(str(board))
+    cpi = ('cycles_per_instruction = { value = 1.5, unit = "cycles/instruction", '
+           'source = "assumption: test" }\n')
+    board.write_text(text.replace("[[mode]]", count + cpi + "[[mode]]"))
+    assert load_board(str(board)).runtime_code_cycles == 4500
+    data = compare_json(ANNOTATED, "--computer", str(board))
+    assert data["boards"]["quickboard"]["runtime_code"]["cycles_per_tick"] == 4500
 
 
 def test_board_energy_is_what_the_planner_charges_for_the_computer():

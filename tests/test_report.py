@@ -122,6 +122,19 @@ def test_every_figure_has_its_csv_and_the_plan_and_run_are_kept(report_dir):
     assert energy["total_wh"].sum() == pytest.approx(planned["energy_j"] / 3600)
 
 
+def test_the_board_section_says_what_workload_it_compares_at_and_where_it_comes_from(
+        report_dir):
+    page = (report_dir / "report.html").read_text().replace("<wbr>", "")
+    section = page[page.index('<section id="sbc">'):page.index('<section id="sensitivity">')]
+    assert "200,000 cycles, the runtime&#x27;s whole 4 s tick on every board, an " \
+        "assumption (contract.RUNTIME_CYCLES_PER_TICK)" in section
+    assert "ts5500: the runtime&#x27;s own code is 10,948 cycles a tick" in section
+    boards = pd.read_csv(report_dir / "sbc_boards.csv").set_index("board")
+    assert (boards["workload_cycles_per_tick"] == 200_000).all()
+    assert boards.loc["ts5500", "runtime_code_cycles_per_tick"] == 2737 * 4
+    assert boards["runtime_code_cycles_per_tick"].isna().sum() == 2  # the TS-7800's ARM
+
+
 def test_sensitivity_is_the_plan_made_again_with_the_figure_moved(report_dir):
     table = pd.read_csv(report_dir / "sensitivity.csv").set_index("figure")
     row = table.loc["vehicle hotel_power"]
