@@ -139,7 +139,8 @@ class Choice:
 def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
     """Which plan to fly at `budget_j` [J], for the mission's objective: the best quality
     within the budget (and of the plans with that quality, the cheapest when the budget
-    is not what limits), or the least energy that reaches the quality floor. Raises
+    is not what limits), or the least energy that reaches the quality floor (and of the
+    plans with that energy, the best quality). Raises
     InfeasibleBudget when the budget is below what the mission needs (`origin` says where
     the budget came from), PlanningError when the annotations cannot all hold."""
     inputs = model.inputs
@@ -159,6 +160,8 @@ def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
         _check_budget(inputs, chosen, budget_j, origin)
         priced = model.solve_quality(chosen.model_energy_j)
         shadow = priced.budget_dual if priced.optimal else 0.0
+        if priced.status == "optimal" and priced.quality > chosen.quality:
+            chosen = priced  # quality that costs nothing more (a sensor the hotel powers)
     else:
         _check_budget(inputs, least, budget_j, origin)
         chosen = model.solve_quality(budget_j)

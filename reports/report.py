@@ -216,8 +216,6 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     report, plan_file, written = _plan_report(
         mission, model, Path(plan_path) if plan_path else None, out)
     frontier = pareto(model, sweep_points)
-    floor = (mission.objective.quality_floor
-             if mission.objective.sense == "minimize_energy" else None)
     tornado = sensitivity(model)
     run_path = Path(run_dir) if run_dir else out / "run"
     run_origin = "the run given"
@@ -244,7 +242,7 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
         tables["montecarlo.csv"] = carlo[0]
     sections = [
         _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
-        _pareto_section(frontier, report, _star(model, frontier, report), floor, plan_file),
+        _pareto_section(frontier, report, _star(model, frontier, report), plan_file),
         _energy_section(tables["energy_by_state.csv"]),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
         _profile_section(tables["profile.csv"], len(series)),
@@ -328,7 +326,6 @@ class Star:
     drawn_wh: float  # the plan's predicted energy, <= budgeted_wh
     best_quality: float  # the curve at budgeted_wh: the best any plan reaches there
     same_model: bool  # the plan was made on the curve's inputs (hardware, times, workload)
-    free: tuple[str, ...]  # devices of `duty auto` sensors that cost no energy (hotel load)
 
 
 def _star(model, frontier: pd.DataFrame, report: dict) -> Star:
@@ -340,19 +337,12 @@ def _star(model, frontier: pd.DataFrame, report: dict) -> Star:
     budgeted = float(report["budgeted_energy_j"])
     same = math.isclose(report["minimum_energy_j"], least, rel_tol=1e-6)
     best = model.solve_quality(budgeted).quality if same else math.nan
-    inputs = model.inputs
-    free = tuple(dict.fromkeys(
-        name for name, power, lo, hi in zip(inputs.dev_name, inputs.dev_power_w,
-                                            inputs.dev_lo, inputs.dev_hi, strict=True)
-        if power == 0.0 and hi > lo))
-    return Star(_wh(budgeted), float(report["quality"]), _wh(report["energy_j"]), best, same,
-                free)
+    return Star(_wh(budgeted), float(report["quality"]), _wh(report["energy_j"]), best, same)
 
 
-def _star_text(star: Star, report: dict, frontier: pd.DataFrame, floor: float | None,
-               plan_path: Path | None) -> str:
-    """What the star is, and why it sits where it does (`floor`: the quality floor of a
-    minimize-energy mission)."""
+def _star_text(star: Star, report: dict, frontier: pd.DataFrame, plan_path: Path | None
+               ) -> str:
+    """What the star is, and why it sits where it does."""
     text = (f"The star is the plan: quality {star.quality:.4f} at the budget it takes, "
             f"{star.budgeted_wh:,.4g} Wh. Budgets count energy as the planner's convex model "
             f"does, {WARMUPS}, so that a plan within its budget holds it; the plan is "
@@ -372,24 +362,17 @@ def _star_text(star: Star, report: dict, frontier: pd.DataFrame, floor: float | 
         return f"{text} It lies on the curve: no plan reaches more quality on that budget."
     where = ("the least budget, where the curve starts,"
              if math.isclose(star.budgeted_wh, start, rel_tol=1e-6) else "that budget")
-    text += (f" It lies below the curve: at {where} the best plan reaches quality "
-             f"{star.best_quality:.4f}.")
-    if floor is not None:
-        free = (f" (sensors the vehicle's hotel load already powers: {', '.join(star.free)})"
-                if star.free else "")
-        text += (f" The mission asks for the least energy that reaches quality {floor:g}, "
-                 f"not for the most quality that energy buys; quality that costs no energy{free} "
-                 "is not sought.")
-    return text
+    return (f"{text} It lies below the curve: at {where} the best plan reaches quality "
+            f"{star.best_quality:.4f} (the solver did not reach that plan to full accuracy).")
 
 
-def _pareto_section(frontier: pd.DataFrame, report: dict, star: Star, floor: float | None,
+def _pareto_section(frontier: pd.DataFrame, report: dict, star: Star,
                     plan_path: Path | None) -> Section:
     svg = charts.pareto(frontier, _wh(report["budget_j"]), star.budgeted_wh, star.quality)
     text = ("<p>The best quality each energy budget buys, from the least the mission needs "
             f"to where more energy buys nothing. At the plan one more Wh of budget buys "
             f"{report['shadow_price']:.4g} quality (the shadow price of the budget).</p>",
-            f"<p>{esc(_star_text(star, report, frontier, floor, plan_path))}</p>")
+            f"<p>{esc(_star_text(star, report, frontier, plan_path))}</p>")
     table = Table(frontier[["budget_wh", "quality", "shadow_price", "status"]],
                   {"budget_wh": "budget [Wh]", "quality": "quality [1]",
                    "shadow_price": "shadow price [quality per Wh]"},
