@@ -138,6 +138,9 @@ SENSORS: tuple[SensorInfo, ...] = (
     SensorInfo("energy_left", 20, "J", None,
                "energy left in the battery: its capacity less what the coulomb counter "
                "counted (the energy guard reads it)"),
+    SensorInfo("wptreached", 21, "1", None, "waypoints the route has reached since the state "
+               "was entered (a goto list counts on, lap after lap); 0 for nav and noheading",
+               "runtime"),
 )
 N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
 # Sensors without a device of their own: always powered while logged, in the hotel load.

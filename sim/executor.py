@@ -37,9 +37,9 @@ if TYPE_CHECKING:
 # COMMAND's `transition` of each kind the reference semantics reports.
 _KIND_CODES = {name: kind for kind, name in TRANSITION_NAMES.items()}
 _F32 = struct.Struct(f"<{N_SENSORS}f")
-_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _ENERGY = (
+_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _WPTREACHED, _ENERGY = (
     SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp", "halfcycle", "wptdist",
-                                      "energy_left"))
+                                      "wptreached", "energy_left"))
 _SURFACE_PITCH_F32 = struct.unpack("<f", struct.pack("<f", SURFACE_PITCH_RAD))[0]
 
 
@@ -85,7 +85,8 @@ class PythonRuntime:
         self.s = [math.nan] * N_SENSORS
         self.machine: semantics.Machine | None = None
         self.event_count = 0
-        self.route_resume: list[int] = []  # per call on the stack: the caller's waypoint
+        # per call on the stack: the caller's waypoint and the waypoints it had reached
+        self.route_resume: list[tuple[int, int]] = []
         # where the runtime suspends the board after answering a tick: the plan's SLEEP,
         # without a plan the mission's `computer sleep between ticks`
         self.sleeps = [plan.states[i].sleep if plan is not None else s.computer.sleep
@@ -118,18 +119,19 @@ class PythonRuntime:
 
     def _follow(self, kind: str, state: str | None) -> None:
         """Enter the state a transition leads to. A call keeps the caller's waypoint and
-        its return resumes it (docs/pilot.md, Routes); goto forgets them all."""
+        count of waypoints reached, and its return resumes them (docs/pilot.md, Routes);
+        goto forgets them all."""
         if kind == "call":
-            self.route_resume.append(self.route.k)
+            self.route_resume.append((self.route.k, self.route.reached))
         elif kind == "goto":
             self.route_resume.clear()
         if state is None:
             return
         self._enter(state)
         if kind == "return":
-            k = self.route_resume.pop()
+            k, reached = self.route_resume.pop()
             if k < len(getattr(self.route, "points", ())):
-                self.route.k = k
+                self.route.k, self.route.reached = k, reached
 
     def step(self, tick: int, mask: int, values: list[float]) -> Command:
         """Answer one SENSORS frame: `values` holds all sensors [registry units], of which
@@ -145,6 +147,7 @@ class PythonRuntime:
         # the runtime's own readings, as the events of this tick see them
         s[_HALFCYCLE] = float(self.routine.halfcycle) if self.routine is not None else 0.0
         s[_WPTDIST] = self.route.distance_m(s[_LAT], s[_LON])
+        s[_WPTREACHED] = float(self.route.reached)
         machine = self.machine
         if machine.state is not None and s[_ENERGY] <= self.reserve_j:
             # the energy guard: whatever the state and the stack, the mission ends here

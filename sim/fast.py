@@ -22,7 +22,8 @@ A run of ticks, in order:
    the first tick on which one holds;
 5. the route: a heading comes from this tick's position and sets the next one, through
    the readings' binary32 rounding: steered tick after tick in C, up to the tick that
-   may reach a waypoint.
+   may reach a waypoint (so the count of waypoints reached is the same on every tick of
+   a run).
 The run's length adapts, per state: twice what the last run flew when a tick it had
 computed was thrown away (an event on a reading, a waypoint), so that work computed past
 an event is bounded by the work kept; twice the last length when nothing computed was
@@ -71,8 +72,8 @@ _ONE_F32 = struct.Struct("<f")
 _DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY, _ENERGY = (
     SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "heading", "temp",
                                       "conductivity", "salinity", "energy_left"))
-_HALFCYCLE, _WPTDIST, _TIMEOFDAY = (SENSOR_BY_NAME[n].index
-                                    for n in ("halfcycle", "wptdist", "timeofday"))
+_HALFCYCLE, _WPTDIST, _WPTREACHED, _TIMEOFDAY = (
+    SENSOR_BY_NAME[n].index for n in ("halfcycle", "wptdist", "wptreached", "timeofday"))
 
 
 class _S:
@@ -81,12 +82,13 @@ class _S:
     MISSIONTIME, DEPTH, PITCH, HEADING, ALTITUDE, LAT, LON, BATTERY = (
         SENSOR_BY_NAME[n].index for n in ("missiontime", "depth", "pitch", "heading",
                                           "altitude", "lat", "lon", "battery"))
-    TEMP, CONDUCTIVITY, SALINITY, CURRENT, HALFCYCLE, WPTDIST, TIMEOFDAY = (
+    TEMP, CONDUCTIVITY, SALINITY, CURRENT, HALFCYCLE, WPTDIST, WPTREACHED, TIMEOFDAY = (
         SENSOR_BY_NAME[n].index for n in ("temp", "conductivity", "salinity", "current",
-                                          "halfcycle", "wptdist", "timeofday"))
+                                          "halfcycle", "wptdist", "wptreached", "timeofday"))
 
 
-_RUNTIME_READINGS = (_HALFCYCLE, _WPTDIST)  # the executor's own, set before every tick's events
+# the executor's own, set before every tick's events
+_RUNTIME_READINGS = (_HALFCYCLE, _WPTDIST, _WPTREACHED)
 _TEMP_BIT = 1 << _TEMP
 _DIVE, _CLIMB = pilot.DIVE, pilot.CLIMB
 
@@ -700,8 +702,8 @@ class FastForward:
             return _Route(count, None, *positions)
         c = g.current
         flown, heading, positions = native.route(
-            route.points[route.k], route.radius_m, route.loops or route.k + 1 < len(route.points),
-            distance, fix, self.tick_s, (c.north_mps, c.east_mps), g.positions)
+            route.points[route.k], route.radius_m, route.may_reach(), distance, fix,
+            self.tick_s, (c.north_mps, c.east_mps), g.positions)
         return _Route(flown, heading, *positions)
 
 
@@ -779,6 +781,8 @@ class _Readings:
                 return np.full(n, _f32_scalar(self.fast._current_reading))
             case _S.HALFCYCLE:  # the runtime's own: the legs its yo has begun, as before a tick
                 return halfcycles(self.fast.ex.routine, f)[first:stop]
+            case _S.WPTREACHED:  # the runtime's own: a run ends before a waypoint is reached
+                return np.full(n, float(self.fast.ex.route.reached))
             case _S.WPTDIST:  # the runtime's own, from this tick's position readings
                 route = self.fast.ex.route
                 return np.array([route.distance_m(a, b) for a, b in zip(
@@ -857,11 +861,13 @@ class _Readings:
         return np.where(last >= 0, values[np.maximum(last, 0)], before)
 
 
-# The stages of a run after which readings are known: the schedule (missiontime), the
-# flight (depth, pitch, altitude, the fixed readings), the CTD, the route (position, heading).
+# The stages of a run after which readings are known: the schedule (missiontime, the clock,
+# the waypoints reached, which no tick of a run changes), the flight (depth, pitch,
+# altitude, the fixed readings), the CTD, the route (position, heading).
 _SCHEDULE, _FLIGHT, _CTD, _NAV = range(4)
-_STAGE_OF = {_S.MISSIONTIME: _SCHEDULE, _TIMEOFDAY: _SCHEDULE, _TEMP: _CTD, _CONDUCTIVITY: _CTD,
-             _SALINITY: _CTD, _LAT: _NAV, _LON: _NAV, _HEADING: _NAV, _WPTDIST: _NAV}
+_STAGE_OF = {_S.MISSIONTIME: _SCHEDULE, _TIMEOFDAY: _SCHEDULE, _WPTREACHED: _SCHEDULE,
+             _TEMP: _CTD, _CONDUCTIVITY: _CTD, _SALINITY: _CTD, _LAT: _NAV, _LON: _NAV,
+             _HEADING: _NAV, _WPTDIST: _NAV}
 
 
 @dataclass(frozen=True)

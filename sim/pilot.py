@@ -176,6 +176,7 @@ PROFILE_ROUTINES = {"yo": Yo, "thermotrackyo": ThermoTrackYo, "surface": Surface
 
 class NoHeading:
     k = 0  # no waypoint: nothing to resume
+    reached = 0  # waypoints reached (the runtime's `wptreached`): never one
 
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         pass
@@ -189,14 +190,24 @@ class NoHeading:
 
 class Waypoints:
     """Toward points[k]; k advances (one per tick) within `radius_m`; after the last,
-    hold the heading to it (a goto list starts again from the first)."""
+    hold the heading to it (a goto list starts again from the first). `reached` counts
+    the waypoints reached: each advance, and the last of a list that does not loop once."""
 
     radius_m = WAYPOINT_RADIUS_M
     loops = False
+    arrives = True  # False: a heading only, no waypoint is ever reached (nav)
 
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         self.points = [(ddmm_to_degrees(a), ddmm_to_degrees(b)) for a, b in points]
         self.k = 0
+        self.reached = 0
+
+    def may_reach(self) -> bool:
+        """Whether reaching the waypoint flown to would count (advance, or end the list).
+        A list that does not loop reaches one waypoint per advance, so it has reached its
+        last once it has reached more than its index."""
+        return self.arrives and (self.loops or self.k + 1 < len(self.points)
+                                 or self.reached <= self.k)
 
     def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
         """Distance [m] to the waypoint flown to; NaN without a position or a waypoint."""
@@ -211,14 +222,17 @@ class Waypoints:
             return 0.0, False
         lat, lon = ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm)
         north, east = offset_m(lat, lon, *self.points[self.k])
-        if math.hypot(north, east) <= self.radius_m and (
-                self.loops or self.k + 1 < len(self.points)):
-            self.k = (self.k + 1) % len(self.points)
-            north, east = offset_m(lat, lon, *self.points[self.k])
+        if math.hypot(north, east) <= self.radius_m and self.may_reach():
+            self.reached += 1
+            if self.loops or self.k + 1 < len(self.points):
+                self.k = (self.k + 1) % len(self.points)
+                north, east = offset_m(lat, lon, *self.points[self.k])
         return bearing_rad(north, east), True
 
 
 class Nav(Waypoints):
+    arrives = False  # a heading toward the point, every tick
+
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         super().__init__((), ((params[0], params[1]),))
 
@@ -240,6 +254,7 @@ class Sweep(Waypoints):
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         self.points = sweep_waypoints(params[0], points)
         self.k = 0
+        self.reached = 0
 
 
 def _hull(points: list[tuple[float, float]]) -> list[tuple[float, float]]:

@@ -201,8 +201,9 @@ def test_the_fast_executor_flies_a_hand_written_schedule_as_the_reference(tmp_pa
 
 # Random missions: three states (a start state that calls one and goes to the other),
 # every profile and route the simulator flies, conditions on time, depth, temperature,
-# position, the runtime's readings, the clock and variables, assignments; flown in
-# random water with random noise.
+# position, the runtime's readings (the yo's leg, the distance to the waypoint, the
+# waypoints reached), the clock and variables, assignments; flown in random water with
+# random noise.
 _PROFILES = st.one_of(
     st.builds(lambda lo, band, p, q: f"yo({lo}, {lo + band}, {p}, {q})",
               st.integers(0, 8), st.integers(2, 50), st.sampled_from([".3", ".454", ".6"]),
@@ -226,10 +227,11 @@ _CONDITIONS = st.sampled_from([
     "abs(depth - b) < 1", "max(temp, 0) > {c} && missiontime >= {t}",
     "halfcycle >= {h}", "halfcycle == {h} && depth >= {d}", "wptdist < {w}",
     "mod(timeofday, 3600) >= {t} && mod(timeofday, 3600) < {t} + 60",
+    "wptreached >= {n}", "wptreached > b - 10 && depth > {d}",
 ])
 _ASSIGNMENTS = st.sampled_from([
     "", "set a = missiontime + {t} ", "set b = depth + 3 ", "set top = max(depth - 5, 1), "
-    "bottom = depth + 5 ", "set a = missiontime + 600, b = b + 1 ",
+    "bottom = depth + 5 ", "set a = missiontime + 600, b = b + 1 ", "set b = wptreached + 10 ",
 ])
 
 
@@ -240,7 +242,8 @@ def random_missions(draw) -> str:
                                         d=draw(st.integers(1, 40)),
                                         c=draw(st.integers(8, 23)),
                                         h=draw(st.integers(1, 12)),
-                                        w=draw(st.integers(100, 900)))
+                                        w=draw(st.integers(100, 900)),
+                                        n=draw(st.integers(1, 4)))
 
     def assignment() -> str:
         return draw(_ASSIGNMENTS).format(t=draw(st.integers(60, 3600)))

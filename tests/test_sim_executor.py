@@ -261,6 +261,52 @@ def test_waypoints_advance_within_50_m_and_heading_points_at_the_next():
     assert heading == pytest.approx(math.pi)
 
 
+def test_the_waypoints_reached_count_each_arrival_and_the_lists_last_once():
+    route = pilot.Waypoints((), ((3910.0, -7350.0), (3911.0, -7350.0)))
+    counts = []
+    for lat in (3909.0, 3910.0, 3910.5, 3911.0, 3911.01, 3912.0, 3911.0):
+        route.heading(lat, -7350.0)
+        counts.append((route.k, route.reached))
+    # the first reached and left behind; the last reached once, however often it is
+    # passed again (the route holds the heading to it)
+    assert counts == [(0, 0), (1, 1), (1, 1), (1, 2), (1, 2), (1, 2), (1, 2)]
+    laps = pilot.GotoList((200.0,), ((3910.0, -7350.0), (3911.0, -7350.0)))
+    for lat in (3910.0, 3911.0, 3910.0, 3911.0, 3910.0):
+        laps.heading(lat, -7350.0)
+    assert (laps.k, laps.reached) == (1, 5)  # a goto list counts on, lap after lap
+    nav = pilot.Nav((3910.0, -7350.0), ())
+    nav.heading(3910.0, -7350.0)  # on its point: a heading, never a waypoint reached
+    assert nav.reached == 0 and pilot.NoHeading((), ()).reached == 0
+
+
+def test_a_return_resumes_the_callers_waypoints_reached(tmp_path):
+    """tests/missions/sim_waypoints_reached.mission: the transect surfaces once at each of
+    its first two waypoints (a count that restarted after the surfacing's return would
+    never reach the third), leaves at its third, and the goto list after two laps."""
+    path = REPO / "tests" / "missions" / "sim_waypoints_reached.mission"
+    assert main(["sim", str(path), "-o", str(tmp_path)]) == 0
+    trace = pd.read_csv(tmp_path / "trace.csv")
+    moves = list(zip(trace["kind"], trace["from_state"].fillna(""),
+                     trace["to_state"].fillna(""), strict=True))
+    assert moves == [("start", "", "transect"), ("call", "transect", "fix"),
+                     ("return", "fix", "transect"), ("call", "transect", "fix"),
+                     ("return", "fix", "transect"), ("goto", "transect", "laps"),
+                     ("goto", "laps", "home"), ("exit", "home", "")]
+    table = pd.read_parquet(tmp_path / "timeseries.parquet").set_index("time_s")
+    mission = check_file(str(path)).mission
+    transect, laps = mission.states[0].route.points, mission.states[2].route.points
+    # each fired on the tick after the one its waypoint came within reach (50 m; 100 m for
+    # the goto list), the glider having moved on by one tick's glide
+    arrivals = [(t, p, 50.0) for t, p in zip(trace["time_s"][[1, 3, 5]], transect,
+                                            strict=True)]
+    arrivals.append((trace["time_s"][6], laps[1], 100.0))  # the fourth: two laps
+    for time_s, (lat, lon), radius in arrivals:
+        row = table.loc[time_s - 4.0]
+        north, east = offset_m(row["lat_deg"], row["lon_deg"], ddmm_to_degrees(lat),
+                               ddmm_to_degrees(lon))
+        assert math.hypot(north, east) <= radius + 5.0
+
+
 
 def test_a_goto_list_loops_and_counts_waypoints_reached_within_its_radius():
     route = pilot.GotoList((200.0,), ((3910.0, -7350.0), (3911.0, -7350.0)))

@@ -239,6 +239,46 @@ def test_a_long_survey_is_flown_in_runs_of_ticks(monkeypatch):
         assert len(record.trace) < len(one_by_one) < 0.02 * 43201
 
 
+def test_runs_of_ticks_leave_each_waypoint_reached_to_the_loop(monkeypatch):
+    """`wptreached` is one number over a run: a run ends before a tick that may reach a
+    waypoint (the last of a list too, which counts once), and the loop steps that tick
+    through the reference, which counts it on the tick a tick-by-tick flight does. The
+    rest is flown in runs."""
+    from gliderplan.sim.executor import PythonRuntime
+
+    stepped = []  # (tick, state, waypoints reached after the tick) of each tick stepped
+    step = PythonRuntime.step
+
+    def counted(self, tick, mask, values):
+        command = step(self, tick, mask, values)
+        stepped.append((tick, self.machine.state, self.route.reached))
+        return command
+
+    monkeypatch.setattr(PythonRuntime, "step", counted)
+    path = REPO / "tests" / "missions" / "sim_waypoints_reached.mission"
+    mission = check_file(str(path)).mission
+
+    def counts(tick_by_tick: bool) -> tuple[list[tuple], int]:
+        """The ticks on which the state or its count changed, and the ticks stepped."""
+        stepped.clear()
+        fly(mission, ocean.bench(), RunConfig(duration_s=86400.0, seed=1),
+            load_vehicle(mission.vehicle), tick_by_tick=tick_by_tick)
+        changes = [row for i, row in enumerate(stepped)
+                   if i == 0 or row[1:] != stepped[i - 1][1:]]
+        return changes, len(stepped)
+
+    reference, ticks = counts(tick_by_tick=True)
+    fast, few = counts(tick_by_tick=False)
+    assert fast == reference and few < 0.05 * ticks
+    # the transect's three waypoints (its last ends it; a return resumes the count), two
+    # laps of the goto list, and none on the nav route home
+    seen = {}
+    for _, state, reached in reference:
+        seen.setdefault(state, []).append(reached)
+    assert seen == {"transect": [0, 1, 1, 2, 2, 3], "fix": [0, 0], "laps": [0, 1, 2, 3, 4],
+                    "home": [0], None: [0]}
+
+
 def test_every_kind_of_condition_is_checked_over_a_run_as_the_reference_checks_it():
     depth, temp = ir.SensorRef("depth"), ir.SensorRef("temp")
     conditions = [

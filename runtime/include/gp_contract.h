@@ -64,9 +64,9 @@
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
 
-#define GP_N_SENSORS 21  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
+#define GP_N_SENSORS 22  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
 /** Sensors without a device of their own: always powered while logged, in the hotel load. */
-#define GP_FLIGHT_SENSORS_MASK 0x1E01FFu
+#define GP_FLIGHT_SENSORS_MASK 0x3E01FFu
 
 enum {
     GP_SENSOR_MISSIONTIME = 0,  /**< time since the mission started [s] */
@@ -93,6 +93,8 @@ enum {
     GP_SENSOR_TIMEOFDAY = 19,  /**< UTC time of day of the glider's clock, 0 at midnight [s] */
     /** energy left in the battery: its capacity less what the coulomb counter counted (the energy guard reads it) [J] */
     GP_SENSOR_ENERGY_LEFT = 20,
+    /** waypoints the route has reached since the state was entered (a goto list counts on, lap after lap); 0 for nav and noheading [1] */
+    GP_SENSOR_WPTREACHED = 21,
 };
 
 /* ---- COMMAND's flags */

@@ -105,7 +105,7 @@ typedef struct {
     uint8_t stack_depth;          /**< 1..GP_MAX_STACK_DEPTH */
     uint32_t read_mask;           /**< sensors the mission reads (bit i: sensor i) */
     uint32_t own_read_mask;       /**< the runtime's own readings it reads (halfcycle,
-                                       wptdist): the runtime computes wptdist only then */
+                                       wptdist, wptreached): it computes wptdist only then */
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
     double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc] */
     double reserve_j;             /**< energy left at which the guard ends the mission [J] */

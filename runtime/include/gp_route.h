@@ -11,11 +11,13 @@
 #include "gp_mission.h"
 
 
-/** Where the route is: the waypoint flown to, and the waypoints in decimal degrees.
- *  The waypoints come last: they follow from the route, so a checkpoint leaves them out. */
+/** Where the route is: the waypoint flown to, the waypoints reached, and the waypoints in
+ *  decimal degrees. The waypoints come last: they follow from the route, so a checkpoint
+ *  leaves them out. */
 typedef struct {
     uint16_t next;                          /**< index of the waypoint flown to */
     uint16_t n_waypoints;
+    uint32_t reached;                       /**< waypoints reached since entry (`wptreached`) */
     double waypoints[GP_MAX_SWEEP_WAYPOINTS][2];  /**< (lat, lon) [deg] */
 } gp_route_state;
 
@@ -42,7 +44,9 @@ void gp_route_enter(gp_route_state *rs, const gp_route *route);
 void gp_route_fill(gp_route_state *rs, const gp_route *route);
 
 /**
- * @brief Heading to fly from the current position (DDMM.MMMM readings).
+ * @brief Heading to fly from the current position (DDMM.MMMM readings). A waypoint within
+ *        the radius is reached: `reached` counts it, and the route flies on to the next
+ *        (a list that does not loop counts its last once, then holds the heading to it).
  * @param heading_rad true heading, clockwise from north, [0, 2 pi)
  * @return 1 if the heading is valid, 0 (noheading, no position fix)
  */

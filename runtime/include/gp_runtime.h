@@ -30,6 +30,7 @@ typedef struct {
     gp_pilot pilot;
     gp_command last_command;        /**< the last tick answered (resent for the same tick) */
     uint16_t route_resume[GP_MAX_STACK_DEPTH];  /**< per call on the stack: the caller's waypoint */
+    uint32_t reached_resume[GP_MAX_STACK_DEPTH];  /**< and the waypoints it had reached */
     gp_route_state route;           /**< last: its waypoints are not checkpointed */
 } gp_runtime;
 

@@ -8,7 +8,7 @@
  * its first GP_CHECKPOINT_SLOT_BYTES, two slots of that size, then the journal
  * (GP_JOURNAL_BYTES, reserved when the file is created). A record holds only what is in
  * use (the stack to its depth, the mission's variables, the sensors it reads, the
- * tracker's window to its length): ~170 bytes for Fig. 2 against 1.9 KiB for the whole
+ * tracker's window to its length): ~170 bytes for Fig. 2 against 2.0 KiB for the whole
  * runtime state. Record n goes to slot n mod 2, so the newest intact record is never
  * overwritten: a write torn by a crash or a power loss leaves the record before it,
  * which the CRC-32 tells apart. The file is created whole (temporary file, rename)
@@ -32,7 +32,7 @@
 #include "gp_runtime.h"
 
 #define GP_PATH_MAX 1024
-#define GP_CHECKPOINT_MAGIC "GPCKPT04"
+#define GP_CHECKPOINT_MAGIC "GPCKPT05"
 /** Header to first slot, slot to slot: a flash page, so a torn write stays in its slot. */
 #define GP_CHECKPOINT_SLOT_BYTES 4096
 /** The journal after the slots: four flash pages, 341 Fig. 2 ticks between records. */
@@ -44,11 +44,11 @@
 /** The largest record: every count at its bound. */
 #define GP_CHECKPOINT_MAX_RECORD                                                         \
     (4 + 2                                     /* sequence number, length */             \
-     + 6 + 3 * GP_MAX_STACK_DEPTH + 4 + 4 + 8  /* flags and counts, stack and its    */ \
-                                               /* waypoints, events, log, entry        */ \
+     + 6 + 7 * GP_MAX_STACK_DEPTH + 4 + 4 + 8  /* flags and counts, stack and its    */ \
+                                               /* routes, events, log, entry           */ \
      + 8 * GP_MAX_VARIABLES + 8 * GP_N_SENSORS                                           \
      + 4 + 4 + 8 * 3 + 8 * 3 + 16 * GP_TRACK_WINDOW  /* pilot */                         \
-     + 2                                       /* route */                               \
+     + 2 + 4                                   /* route: waypoint, waypoints reached */  \
      + 1 + GP_COMMAND_MAX_SIZE                 /* last COMMAND */                        \
      + 4)                                      /* CRC-32 */
 

@@ -159,6 +159,7 @@ uint16_t gp_sweep_waypoints(const double (*corners)[2], uint8_t n_corners, doubl
 void gp_route_enter(gp_route_state *rs, const gp_route *route)
 {
     rs->next = 0;
+    rs->reached = 0;
     gp_route_fill(rs, route);
 }
 
@@ -206,12 +207,19 @@ int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, do
     double distance_m = 0;
     double heading = heading_to(here, rs->waypoints[rs->next], arrives ? &distance_m : NULL);
     /* One waypoint per tick at most; after the last, hold the heading to it (a goto
-     * list starts again from the first). */
+     * list starts again from the first). A list that does not loop reaches one waypoint
+     * per advance, so it has reached its last once it has reached more than its index. */
     int loops = route->kind == GP_ROUTE_GOTO_LIST;
+    int advances = loops || rs->next + 1 < rs->n_waypoints;
     double radius_m = loops ? route->param : GP_WAYPOINT_RADIUS_M;
-    if (arrives && distance_m <= radius_m && (loops || rs->next + 1 < rs->n_waypoints)) {
-        rs->next = (uint16_t)((rs->next + 1) % rs->n_waypoints);
-        heading = heading_to(here, rs->waypoints[rs->next], &distance_m);
+    if (arrives && distance_m <= radius_m && (advances || rs->reached <= rs->next)) {
+        if (rs->reached < UINT32_MAX) {
+            rs->reached++;
+        }
+        if (advances) {
+            rs->next = (uint16_t)((rs->next + 1) % rs->n_waypoints);
+            heading = heading_to(here, rs->waypoints[rs->next], &distance_m);
+        }
     }
     *heading_rad = heading;
     return 1;

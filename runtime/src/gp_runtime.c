@@ -89,18 +89,21 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
          * (the distance to the waypoint costs a cosine and a hypot) */
         rt->sensors[GP_SENSOR_HALFCYCLE] =
             rt->profile == GP_NO_PROFILE ? 0.0 : (double)rt->pilot.halfcycle;
+        rt->sensors[GP_SENSOR_WPTREACHED] = (double)rt->route.reached;
         if (mission->own_read_mask & (1u << GP_SENSOR_WPTDIST)) {
             rt->sensors[GP_SENSOR_WPTDIST] = gp_route_distance_m(
                 &rt->route, &mission->states[rt->machine.state].route,
                 rt->sensors[GP_SENSOR_LAT], rt->sensors[GP_SENSOR_LON]);
         }
         uint16_t waypoint = rt->route.next;
+        uint32_t reached = rt->route.reached;
         gp_transition transition;
         gp_step_result result = gp_machine_step(&rt->machine, mission, rt->sensors, &transition);
         if (result == GP_STEP_TRANSITION) {
             record(report, transition);
-            if (transition.kind == GP_TR_CALL) {  /* the caller's waypoint, for its return */
+            if (transition.kind == GP_TR_CALL) {  /* the caller's route, for its return */
                 rt->route_resume[rt->machine.depth - 1] = waypoint;
+                rt->reached_resume[rt->machine.depth - 1] = reached;
             }
             if (rt->machine.state != GP_EXITED) {
                 enter_state(rt, mission);
@@ -108,6 +111,7 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
             if (transition.kind == GP_TR_RETURN
                 && rt->route_resume[rt->machine.depth] < rt->route.n_waypoints) {
                 rt->route.next = rt->route_resume[rt->machine.depth];
+                rt->route.reached = rt->reached_resume[rt->machine.depth];
             }
         } else if (result != GP_STEP_IDLE && result != GP_STEP_ASSIGNED) {
             report->fault = (uint8_t)result;

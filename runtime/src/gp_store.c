@@ -60,6 +60,7 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
     put(&w, head, sizeof head);
     put(&w, m->stack, depth);
     put(&w, rt->route_resume, 2u * depth);
+    put(&w, rt->reached_resume, 4u * depth);
     put(&w, &m->event_count, 4);
     put(&w, &rt->events_log_bytes, 4);
     put(&w, &rt->entry_time_s, 8);
@@ -78,6 +79,7 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
     put(&w, pilot->recent_c, 8u * n_recent);
     put(&w, pilot->window, sizeof pilot->window[0] * n_window);
     put(&w, &rt->route.next, 2);
+    put(&w, &rt->route.reached, 4);
     uint8_t *command_len = w.at++;  /* the last COMMAND as the link sends it whole */
     *command_len = (uint8_t)gp_command_pack(&rt->last_command, NULL, w.at);
     w.at += *command_len;
@@ -124,6 +126,7 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     }
     get(&r, m->stack, m->depth);
     get(&r, loaded.route_resume, 2u * m->depth);
+    get(&r, loaded.reached_resume, 4u * m->depth);
     get(&r, &m->event_count, 4);
     get(&r, &loaded.events_log_bytes, 4);
     get(&r, &loaded.entry_time_s, 8);
@@ -149,6 +152,7 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     get(&r, pilot->recent_c, 8u * pilot->n_recent);
     get(&r, pilot->window, sizeof pilot->window[0] * pilot->n_window);
     get(&r, &loaded.route.next, 2);
+    get(&r, &loaded.route.reached, 4);
     uint8_t command_len;
     get(&r, &command_len, 1);
     gp_frame command = {GP_MSG_COMMAND, 0, 0, command_len, r.at};
@@ -168,9 +172,15 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
         }
     }
     if (m->state < mission->n_states) {
-        gp_route_fill(&loaded.route, &mission->states[m->state].route);
+        const gp_route *route = &mission->states[m->state].route;
+        gp_route_fill(&loaded.route, route);
         if (loaded.route.next >= loaded.route.n_waypoints && loaded.route.next > 0) {
             return "waypoint index outside the route";
+        }
+        /* a list that does not loop has reached its waypoint index, or one more (its last) */
+        uint32_t reached = loaded.route.reached, next = loaded.route.next;
+        if (route->kind != GP_ROUTE_GOTO_LIST && (reached < next || reached > next + 1u)) {
+            return "waypoints reached outside the route";
         }
     }
     memcpy(seq, record, 4);

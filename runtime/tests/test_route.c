@@ -100,18 +100,26 @@ void test_waypoints_should_advance_within_50_m_and_hold_the_last(void)
     gp_route_state rs;
     double heading, here[2];
     gp_route_enter(&rs, &route);
-    static const struct { double north, east, heading; int next; } rows[] = {
-        {0, 0, PI / 2, 0},        /* toward p1 */
-        {0, 960, 0, 1},           /* within 50 m of p1: toward p2, due north */
-        {0, 500, 0.463648, 1},   /* never back to p1: atan2(500, 1000) */
-        {1020, 1000, PI, 1},      /* past the last: hold toward it */
+    static const struct { double north, east, heading; int next, reached; } rows[] = {
+        {0, 0, PI / 2, 0, 0},        /* toward p1 */
+        {0, 960, 0, 1, 1},           /* within 50 m of p1: toward p2, due north */
+        {0, 500, 0.463648, 1, 1},    /* never back to p1: atan2(500, 1000) */
+        {1020, 1000, PI, 1, 2},      /* within 50 m of the last: reached, held toward */
+        {1010, 1000, PI, 1, 2},      /* still within: the last counts once */
+        {1200, 1000, PI, 1, 2},      /* past the last: hold toward it */
     };
     for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
         local_point(44.0, -63.0, rows[i].north, rows[i].east, here);
         CHECK_INT(gp_route_step(&rs, &route, here[0], here[1], &heading), 1);
         CHECK_NEAR(heading, rows[i].heading, 0.05);
         CHECK_INT(rs.next, rows[i].next);
+        CHECK_INT(rs.reached, rows[i].reached);
     }
+    gp_route nav = {GP_ROUTE_NAV, 1, 0, (const double(*)[2])points};
+    gp_route_enter(&rs, &nav);
+    local_point(44.0, -63.0, 0, 1000, here);  /* on its point: a heading, never reached */
+    CHECK_INT(gp_route_step(&rs, &nav, here[0], here[1], &heading), 1);
+    CHECK_INT(rs.reached, 0);
 }
 
 void test_goto_list_should_loop_with_its_radius_and_report_the_distance(void)
@@ -123,18 +131,20 @@ void test_goto_list_should_loop_with_its_radius_and_report_the_distance(void)
     gp_route_state rs;
     double heading, here[2];
     gp_route_enter(&rs, &route);
-    static const struct { double north, east, distance; int next; } rows[] = {
-        {0, 0, 1000, 0},          /* toward p1, 1 km away */
-        {0, 790, 210, 0},         /* outside the 200 m radius */
-        {0, 810, 190, 1},         /* inside: toward p2 */
-        {850, 1000, 150, 0},      /* p2 reached: the list starts again at p1 */
-        {500, 1000, 500, 0},
+    static const struct { double north, east, distance; int next, reached; } rows[] = {
+        {0, 0, 1000, 0, 0},          /* toward p1, 1 km away */
+        {0, 790, 210, 0, 0},         /* outside the 200 m radius */
+        {0, 810, 190, 1, 1},         /* inside: toward p2 */
+        {850, 1000, 150, 0, 2},      /* p2 reached: the list starts again at p1 */
+        {500, 1000, 500, 0, 2},
+        {0, 900, 100, 1, 3},         /* p1 again: the count goes on, lap after lap */
     };
     for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
         local_point(44.0, -63.0, rows[i].north, rows[i].east, here);
         CHECK_NEAR(gp_route_distance_m(&rs, &route, here[0], here[1]), rows[i].distance, 0.5);
         CHECK_INT(gp_route_step(&rs, &route, here[0], here[1], &heading), 1);
         CHECK_INT(rs.next, rows[i].next);
+        CHECK_INT(rs.reached, rows[i].reached);
     }
     CHECK(isnan(gp_route_distance_m(&rs, &route, NAN, here[1])));
     gp_route none = {GP_ROUTE_NOHEADING, 0, 0, NULL};

@@ -49,6 +49,8 @@ static void sample_runtime(gp_runtime *rt)
     rt->pilot.recent_c[0] = 11.25;
     rt->pilot.halfcycle = 5;
     rt->route_resume[0] = 2;  /* the caller's waypoint, for its return */
+    rt->reached_resume[0] = 70000;  /* and the waypoints it had reached: past a u16 */
+    rt->route.reached = 1;  /* s2 flies no route: 0, or 1 for a list's last */
     rt->profile = 0;
     rt->last_command.tick = 81;
     rt->last_command.pitch_rad = 0.454f;
@@ -72,6 +74,8 @@ void test_checkpoint_should_round_trip_what_is_in_use(void)
     expected.sensors[5] = NAN;
     CHECK(memcmp(&expected, &back, offsetof(gp_runtime, route)) == 0);
     CHECK_INT(back.route.next, 0);
+    CHECK_INT(back.route.reached, 1);
+    CHECK_INT(back.reached_resume[0], 70000);
     CHECK_NEAR(back.pilot.window[1].temp_c, 11.5, 0);
     CHECK(back.last_command.pitch_rad == rt.last_command.pitch_rad);
     /* the slot's bytes after the record do not matter: its length field says where it ends */
@@ -94,6 +98,10 @@ void test_checkpoint_should_refuse_damaged_and_foreign_records(void)
     CHECK_INT(back.machine.event_count, 0);  /* untouched by a refused record */
     memset(record, 0, sizeof record);  /* a slot never written */
     CHECK(gp_checkpoint_decode(&gp_mission_table, record, sizeof record, &seq, &back) != NULL);
+    rt.route.reached = 2;  /* more waypoints reached than a route that does not loop has */
+    len = gp_checkpoint_encode(&gp_mission_table, &rt, 3, record);
+    CHECK_CONTAINS(or_none(gp_checkpoint_decode(&gp_mission_table, record, len, &seq, &back)),
+                   "waypoints reached outside the route");
     rt.machine.state = 9;  /* well-formed but outside the mission: refused too */
     len = gp_checkpoint_encode(&gp_mission_table, &rt, 3, record);
     CHECK_CONTAINS(or_none(gp_checkpoint_decode(&gp_mission_table, record, len, &seq, &back)),
