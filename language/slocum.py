@@ -14,7 +14,11 @@ surfacing states keep: `surfaced_s`, when the glider last reached the surface
 (`start_when` 9, every `when_secs`, counts from there), and `last_comm_s`, when it
 last left it (`start_when` 12, no communication for `when_secs`). A yo of N half
 cycles ends on the runtime's `halfcycle` reading, on the tick its N-th leg reaches
-its turning depth, so the glider climbs on to the surface without another dive.
+its turning depth, so the glider climbs on to the surface without another dive. The
+route's progress is the runtime's `wptreached` reading, the waypoints reached (a
+surfacing call's return resumes it): a goto list run N legs has been flown when it
+reaches N (`start_when` 3, and 1 when the yo never ends), and each waypoint reached
+raises it by one (`start_when` 8).
 
 Whatever has no counterpart stays visible: as a comment in the mission, next to what
 it concerns, and as a warning naming the file and line.
@@ -28,7 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gliderplan.contract import MAX_ROUTE_POINTS as MAX_POINTS
-from gliderplan.contract import SURFACE_PITCH_RAD
+from gliderplan.contract import SURFACE_PITCH_RAD, WAYPOINT_RADIUS_M
 from gliderplan.language.ir import DEFAULT_BATTERY
 from gliderplan.language.slocum_files import Arg, Behavior, SlocumFileError, SlocumMission, Where
 
@@ -115,6 +119,13 @@ class _Translator:
         self.abort_needed = False
         self.done_needed = False
         self.surfaces = 0
+        # the route's end as (condition, why), or why it never ends; whether it reaches
+        # waypoints at all (a goto list), or why not
+        self.route_end: tuple[str, str] | None = None
+        self.route_never = ("the mission flies no goto list (its heading is idle from the "
+                            "start: a Slocum glider would surface at once)")
+        self.route_reaches: str | None = "the mission flies no goto list"  # None: it does
+        self.yo_never = "the mission has no yo"
 
     # ---- reporting
     def warn(self, where: Where, message: str) -> None:
@@ -266,12 +277,14 @@ class _Translator:
         pairs = [f"({_number(p.lat)}, {_number(p.lon)})" for p in order]
         comment.append("(lat, lon) from the file's (lon, lat) lines "
                        + ", ".join(f"{p.where.line}" for p in order))
+        self.route_reaches = None
         if legs == -1:
             comment.append(f"num_legs_to_run -1: the list loops; each waypoint is reached "
                            f"within {_number(radius)} m")
             if len(pairs) > MAX_POINTS:
                 raise SlocumFileError(f"{behavior.mafile}: {len(pairs)} waypoints, more than "
                                       f"the {MAX_POINTS} a route holds")
+            self.route_never = "num_legs_to_run -1: the goto list loops for ever"
             return f"goto_list({_number(radius)}, {', '.join(pairs)})", comment
         if legs == 0 or legs < -2:
             arg = behavior.args["num_legs_to_run"]
@@ -279,10 +292,15 @@ class _Translator:
                                   "(-1 loop, -2 once through, or N > 0 legs)")
         n = len(pairs) if legs == -2 else legs
         flown = [pairs[i % len(pairs)] for i in range(min(n, MAX_POINTS))]
+        within = "" if radius == WAYPOINT_RADIUS_M else (
+            f", each reached within {_number(WAYPOINT_RADIUS_M)} m, not list_when_wpt_dist "
+            f"{_number(radius)} m")
         comment += self.leave_out(behavior, ["num_legs_to_run"],
-                                  f"the {len(flown)} waypoints are flown in order and the "
-                                  "glider then holds the last; the list's end does not end "
-                                  "the mission")
+                                  f"the {len(flown)} waypoints are flown in order{within} "
+                                  "and the glider then holds the last; the list's end does "
+                                  "not end the mission")
+        self.route_end = (f"wptreached >= {len(flown)}",
+                          f"its {len(flown)} waypoints reached, num_legs_to_run {_number(legs)}")
         return f"waypoints({', '.join(flown)})", comment
 
     def goto_wpt(self, behavior: Behavior, comment: list[str]) -> tuple[str, list[str]]:
@@ -291,8 +309,12 @@ class _Translator:
         if units != 2 or x is None or y is None:
             self.warn(behavior.where, "goto_wpt: only a waypoint in DDMM.MMMM (wpt_units 2, "
                       "wpt_x longitude, wpt_y latitude) is translated: no heading is flown")
+            self.route_never = self.route_reaches = ("goto_wpt's waypoint is not translated: "
+                                                     "no heading is flown")
             return "noheading", comment + ["not translated: the waypoint is not in DDMM.MMMM"]
         comment.append(f"wpt_y {y.text} (lat), wpt_x {x.text} (lon)")
+        self.route_never = self.route_reaches = ("goto_wpt is flown as nav, a heading that "
+                                                 "never reaches its waypoint")
         return f"nav({_number(y.value)}, {_number(x.value)})", comment
 
     # ---- yo
@@ -337,7 +359,8 @@ class _Translator:
                    f"{_number(pitches[1])})")
         half_cycles = behavior.value("num_half_cycles_to_do", -1)
         if half_cycles <= 0:
-            comment.append(f"num_half_cycles_to_do {_number(half_cycles)}: the yo never ends")
+            self.yo_never = f"num_half_cycles_to_do {_number(half_cycles)}: the yo never ends"
+            comment.append(self.yo_never)
             return profile, comment, None
         n = int(half_cycles)
         turn = f"depth >= {_number(bottom)}" if n % 2 else f"depth <= {_number(top)}"
@@ -418,16 +441,45 @@ class _Translator:
         used = {"start_when", "args_from_file", "end_action", "keystroke_wait_time",
                 "gps_wait_time", "c_use_bpump", "c_bpump_value", "c_use_pitch",
                 "c_pitch_value"}
+        # a goto list, once flown, stays so: a surfacing on its end that resumes surfaces
+        # again at once, as a Slocum glider whose heading stays idle does
+        again = "" if int(behavior.value("end_action", 1)) in (0, 5) else (
+            "; then again each time it resumes, the list staying flown")
         match when:
             case 1:
-                if yo_done is None:
-                    self.survey_events.append(f"{head}, stack idle: never (the yo and the "
-                                              "route never finish)")
-                    return  # a state nothing calls would be unreachable
-                else:
+                if yo_done is not None:
                     condition, why = yo_done
                     self.survey_events += [f"{head}, stack idle: the yo's end ({why})",
                                            f"case {condition} {call}"]
+                elif self.route_end is not None:
+                    condition, why = self.route_end
+                    self.reads.add("wptreached")
+                    self.survey_events += [
+                        f"{head}, stack idle: the goto list's end ({why}; {self.yo_never})"
+                        f"{again}", f"case {condition} {call}"]
+                else:
+                    self.never(behavior, head, "stack idle",
+                               f"{self.yo_never}, and {self.route_never}")
+                    return  # a state nothing calls would be unreachable
+            case 3:
+                if self.route_end is None:
+                    self.never(behavior, head, "at the end of the goto list", self.route_never)
+                    return
+                condition, why = self.route_end
+                self.reads.add("wptreached")
+                self.survey_events += [f"{head}, at the end of the goto list ({why}){again}",
+                                       f"case {condition} {call}"]
+            case 8:
+                if self.route_reaches is not None:
+                    self.never(behavior, head, "when a waypoint is reached", self.route_reaches)
+                    return
+                seen = f"wpt_surfaced_{number}"
+                self.reads.add("wptreached")
+                self.variables[seen] = (0.0, f"the waypoints reached when {name} last surfaced")
+                self.survey_events += [
+                    f"{head}, when a waypoint is reached (once per waypoint)",
+                    f"case wptreached > {seen} set {seen} = wptreached, surfaced_s = "
+                    f"missiontime call {name}"]
             case 9:
                 used.add("when_secs")
                 self.survey_events += [
@@ -469,12 +521,20 @@ class _Translator:
                 arg = behavior.args.get("start_when")
                 self.warn(arg.where if arg else behavior.where,
                           f"surface: start_when {when} is not translated (translated: 0 "
-                          "immediately, 1 stack idle, 7 near the waypoint, 9 every when_secs, "
-                          "12 no communication, 13 a time of day): this surfacing never "
-                          "happens")
+                          "immediately, 1 stack idle, 3 the goto list's end, 7 near the "
+                          "waypoint, 8 a waypoint reached, 9 every when_secs, 12 no "
+                          "communication, 13 a time of day): this surfacing never happens")
                 self.survey_events.append(f"{head}: not translated, never surfaces")
                 return
         self.surface_states.append(self.surface_state(behavior, name, used))
+
+    def never(self, behavior: Behavior, head: str, mode: str, why: str) -> None:
+        """A surfacing whose start never comes: a comment and a warning at its start_when."""
+        arg = behavior.args.get("start_when")
+        self.warn(arg.where if arg else behavior.where,
+                  f"surface: start_when {int(behavior.value('start_when', 0))} ({mode}) never "
+                  f"happens: {why}")
+        self.survey_events.append(f"{head}, {mode}: never ({why})")
 
     def utc_time(self, behavior: Behavior, used: set[str]) -> tuple[str, str] | None:
         """start_when 13: the condition on the glider's clock, true for the minute that

@@ -367,3 +367,110 @@ def test_a_yo_of_a_billion_half_cycles_imports_at_once(tmp_path):
                                           "num_half_cycles_to_do(nodim) 1e9"))
     imported = import_mission(path, tmp_path / "y.mission")
     assert "1000000000 half cycles at the" in imported.path.read_text()
+
+
+GOTO_MA = ("behavior_name=goto_list\n<start:b_arg>\n b_arg: list_stop_when(enum) 7\n"
+           " b_arg: list_when_wpt_dist(m) 50\n b_arg: initial_wpt(enum) 0\n"
+           " b_arg: num_legs_to_run(nodim) {legs}\n<end:b_arg>\n<start:waypoints>\n"
+           "-7349.8 3910.5\n-7349.4 3910.8\n-7349.5 3910.2\n<end:waypoints>\n")
+
+
+def _calls_at(run: Path, state: str) -> list[float]:
+    trace = pd.read_csv(run / "trace.csv")
+    return trace[(trace["kind"] == "call") & (trace["to_state"] == state)]["time_s"].tolist()
+
+
+def _distance_m(table: pd.DataFrame, time_s: float, point: tuple[float, float]) -> float:
+    """From the glider, on the tick before `time_s` (the one that reached the waypoint, its
+    surfacing called on the next), to a (lat, lon) DDMM.MMMM point [m]."""
+    row = table[table["time_s"] == time_s - TICK_S].iloc[0]
+    north = (ddmm_to_degrees(point[0]) - row["lat_deg"]) * METRES_PER_DEGREE
+    east = (ddmm_to_degrees(point[1]) - row["lon_deg"]) * METRES_PER_DEGREE * np.cos(
+        np.radians(row["lat_deg"]))
+    return float(np.hypot(north, east))
+
+
+def test_a_finite_goto_list_surfaces_at_each_waypoint_and_at_its_end(tmp_path, capsys):
+    # start_when 8 at every waypoint reached (resuming), start_when 3 at the end of the
+    # list (quitting), on the runtime's count of waypoints reached
+    mi = ("behavior: surface\n b_arg: start_when(enum) 8\n b_arg: end_action(enum) 2\n"
+          " b_arg: gps_wait_time(s) 120\n"
+          "behavior: surface\n b_arg: start_when(enum) 3\n b_arg: end_action(enum) 0\n"
+          " b_arg: gps_wait_time(s) 120\n"
+          "behavior: goto_list\n b_arg: args_from_file(enum) 10\n"
+          "behavior: yo\n b_arg: args_from_file(enum) 10\n")
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA, goto_l10_ma=GOTO_MA.format(legs=4))
+    out = tmp_path / "g.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    text = out.read_text()
+    assert "case wptreached > wpt_surfaced_1 set wpt_surfaced_1 = wptreached, surfaced_s = " \
+           "missiontime call surface_1" in text
+    assert "case wptreached >= 4 set surfaced_s = missiontime call surface_2" in text
+    assert main(["check", "--strict", str(out)]) == 0
+    assert main(["sim", str(out), "--duration", "1d", "-o", str(tmp_path / "run")]) == 0
+    ma = tmp_path / "mafiles" / "goto_l10.ma"
+    legs, points = int(ma_args(ma)["num_legs_to_run"]), ma_waypoints(ma)
+    radius = 50.0  # a list run N legs is flown as waypoints, each reached within 50 m
+    table = _series(tmp_path)
+    at_waypoints = _calls_at(tmp_path / "run", "surface_1")
+    # once at every waypoint the .ma file's list gives, in its order, legs waypoints in all
+    assert len(at_waypoints) == legs
+    for leg, time_s in enumerate(at_waypoints):
+        assert _distance_m(table, time_s, points[leg % len(points)]) <= radius + 2.0
+    # the end of the list: right after the last waypoint's surfacing resumes; then it quits
+    at_end = _calls_at(tmp_path / "run", "surface_2")
+    assert len(at_end) == 1 and at_end[0] > at_waypoints[-1]
+    trace = pd.read_csv(tmp_path / "run" / "trace.csv")
+    assert trace["kind"].iloc[-1] == "exit" and trace["from_state"].iloc[-1] == "surface_2"
+
+
+def test_stack_idle_with_a_list_run_once_surfaces_when_it_is_flown(tmp_path, capsys):
+    # the yo never ends: the stack goes idle when the list has been flown once (-2), and
+    # stays so: each time the glider resumes it surfaces again, as a Slocum glider does
+    mi = ("behavior: surface\n b_arg: start_when(enum) 1\n b_arg: end_action(enum) 1\n"
+          " b_arg: keystroke_wait_time(s) 300\n"
+          "behavior: goto_list\n b_arg: args_from_file(enum) 10\n"
+          "behavior: yo\n b_arg: args_from_file(enum) 10\n")
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA, goto_l10_ma=GOTO_MA.format(legs=-2))
+    out = tmp_path / "o.mission"
+    imported = import_mission(path, out)
+    assert [w.message.split(":")[0] for w in imported.warnings] == ["goto_list"]
+    assert "not translated: num_legs_to_run -2" in imported.warnings[0].message
+    text = out.read_text()
+    assert "stack idle: the goto list's end (its 3 waypoints reached, num_legs_to_run -2; " \
+           "num_half_cycles_to_do -1: the yo never ends); then again each time it resumes" \
+           in text
+    assert "case wptreached >= 3 set surfaced_s = missiontime call surface_1" in text
+    assert main(["sim", str(out), "--duration", "8h", "-o", str(tmp_path / "run")]) == 0
+    points = ma_waypoints(tmp_path / "mafiles" / "goto_l10.ma")
+    calls = _calls_at(tmp_path / "run", "surface_1")
+    assert _distance_m(_series(tmp_path), calls[0], points[-1]) <= 52.0
+    gaps = np.diff(calls)
+    assert len(calls) > 5 and gaps.max() < 300 + 120  # the wait, a climb and a tick
+
+
+def test_surfacings_that_can_never_start_are_a_comment_and_a_warning(tmp_path, capsys):
+    # a list that loops for ever and a yo that never ends: stack idle and the list's end
+    # never come; a goto_wpt, flown as nav, never reaches its waypoint
+    looping = ("behavior: surface\n b_arg: start_when(enum) 3\n"
+               "behavior: surface\n b_arg: start_when(enum) 1\n"
+               "behavior: surface\n b_arg: start_when(enum) 9\n b_arg: when_secs(s) 3600\n"
+               "behavior: goto_list\n b_arg: args_from_file(enum) 10\n"
+               "behavior: yo\n b_arg: args_from_file(enum) 10\n")
+    path = _mission(tmp_path, looping, yo10_ma=YO_MA, goto_l10_ma=GOTO_MA.format(legs=-1))
+    assert main(["import-slocum", str(path), "-o", str(tmp_path / "l.mission")]) == 0
+    err = capsys.readouterr().err
+    assert "m.mi:2: warning: surface: start_when 3 (at the end of the goto list) never " \
+           "happens: num_legs_to_run -1: the goto list loops for ever" in err
+    assert "m.mi:4: warning: surface: start_when 1 (stack idle) never happens: " \
+           "num_half_cycles_to_do -1: the yo never ends, and num_legs_to_run -1" in err
+    text = (tmp_path / "l.mission").read_text()
+    assert "start_when 3, at the end of the goto list: never (num_legs_to_run -1" in text
+    assert "wptreached" not in text
+    nav = ("behavior: surface\n b_arg: start_when(enum) 8\n"
+           "behavior: goto_wpt\n b_arg: wpt_units(enum) 2\n b_arg: wpt_x(lon) -7349.0\n"
+           " b_arg: wpt_y(lat) 3910.5\n")
+    path = _mission(tmp_path, nav)
+    assert main(["import-slocum", str(path), "-o", str(tmp_path / "n.mission")]) == 0
+    assert "m.mi:2: warning: surface: start_when 8 (when a waypoint is reached) never " \
+           "happens: goto_wpt is flown as nav" in capsys.readouterr().err
