@@ -62,6 +62,9 @@ SENSORS_IN: dict[str, tuple[str, ...]] = {
 }
 FLIGHT_SENSORS = ("missiontime", "depth", "pitch", "lat", "lon")
 DIVING, HOVERING, CLIMBING, ON_SURFACE = 1, 2, 4, 8  # sample's state_to_sample bits
+# surface's start_when modes translated that read when_secs: when they surface
+WHEN_SECS_MODES = {9: "when_secs after it last reached the surface",
+                   12: "when_secs after it last left the surface"}
 
 
 @dataclass(frozen=True)
@@ -441,6 +444,11 @@ class _Translator:
         used = {"start_when", "args_from_file", "end_action", "keystroke_wait_time",
                 "gps_wait_time", "c_use_bpump", "c_bpump_value", "c_use_pitch",
                 "c_pitch_value"}
+        if when in WHEN_SECS_MODES and secs <= 0:
+            arg = behavior.args["when_secs"]
+            raise SlocumFileError(f"{arg.where}: when_secs {arg.text} s is no time to wait: "
+                                  f"start_when {when} surfaces {WHEN_SECS_MODES[when]} (a "
+                                  "positive number of seconds)")
         # a goto list, once flown, stays so: a surfacing on its end that resumes surfaces
         # again at once, as a Slocum glider whose heading stays idle does
         again = "" if int(behavior.value("end_action", 1)) in (0, 5) else (
@@ -526,7 +534,12 @@ class _Translator:
                           "communication, 13 a time of day): this surfacing never happens")
                 self.survey_events.append(f"{head}: not translated, never surfaces")
                 return
-        self.surface_states.append(self.surface_state(behavior, name, used))
+        notes = []
+        if "when_secs" not in used:
+            notes = self.leave_out(behavior, ["when_secs"], f"start_when {when} does not read "
+                                   "it; Slocum reads it for start_when 6, 9 and 12")
+            used.add("when_secs")
+        self.surface_states.append(self.surface_state(behavior, name, used, notes))
 
     def never(self, behavior: Behavior, head: str, mode: str, why: str) -> None:
         """A surfacing whose start never comes: a comment and a warning at its start_when."""
@@ -560,11 +573,12 @@ class _Translator:
         return (f"timeofday >= {_number(at)} && timeofday < {_number(at + 60)}",
                 f"{int(hour):02d}:{int(minute):02d} UTC")
 
-    def surface_state(self, behavior: Behavior, name: str, used: set[str]) -> _State:
+    def surface_state(self, behavior: Behavior, name: str, used: set[str],
+                      notes: list[str]) -> _State:
         end = int(behavior.value("end_action", 1))
         keystroke = behavior.value("keystroke_wait_time", 300.0)
         gps = behavior.value("gps_wait_time", 300.0)
-        comment = [f"surface ({_source(behavior)})"]
+        comment = [f"surface ({_source(behavior)})", *notes]
         match end:
             case 0:
                 wait, action, why = gps, "exit", "end_action 0: quit once at the surface " \

@@ -226,6 +226,14 @@ YO_MA = ("behavior_name=yo\n<start:b_arg>\n b_arg: d_target_depth(m) 20\n"
     ("behavior: yo\n  b_arg: args_from_file(enum) 10\n",
      {"yo10_ma": "behavior_name=surface\n<start:b_arg>\n<end:b_arg>\n"},
      "yo10.ma:1: this file is for behavior 'surface'"),
+    ("behavior: surface\n b_arg: start_when(enum) 9\n b_arg: when_secs(sec) -60\n", {},
+     "m.mi:3: when_secs -60 s is no time to wait: start_when 9 surfaces when_secs after it "
+     "last reached the surface"),
+    ("behavior: surface\n b_arg: args_from_file(enum) 10\n b_arg: start_when(enum) 12\n",
+     {"surfac10_ma": "behavior_name=surface\n<start:b_arg>\n b_arg: when_secs(sec) 0\n"
+                     "<end:b_arg>\n"},
+     "surfac10.ma:3: when_secs 0 s is no time to wait: start_when 12 surfaces when_secs "
+     "after it last left the surface"),
 ])
 def test_bad_slocum_files_stop_with_one_line_naming_file_and_line(tmp_path, capsys, mi,
                                                                   mafiles, message):
@@ -394,7 +402,7 @@ def test_a_finite_goto_list_surfaces_at_each_waypoint_and_at_its_end(tmp_path, c
     # start_when 8 at every waypoint reached (resuming), start_when 3 at the end of the
     # list (quitting), on the runtime's count of waypoints reached
     mi = ("behavior: surface\n b_arg: start_when(enum) 8\n b_arg: end_action(enum) 2\n"
-          " b_arg: gps_wait_time(s) 120\n"
+          " b_arg: gps_wait_time(s) 120\n b_arg: when_secs(sec) -60\n"
           "behavior: surface\n b_arg: start_when(enum) 3\n b_arg: end_action(enum) 0\n"
           " b_arg: gps_wait_time(s) 120\n"
           "behavior: goto_list\n b_arg: args_from_file(enum) 10\n"
@@ -402,7 +410,11 @@ def test_a_finite_goto_list_surfaces_at_each_waypoint_and_at_its_end(tmp_path, c
     path = _mission(tmp_path, mi, yo10_ma=YO_MA, goto_l10_ma=GOTO_MA.format(legs=4))
     out = tmp_path / "g.mission"
     assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    # a when_secs that start_when 8 does not read: a warning at its line, and a comment
+    assert "m.mi:5: warning: surface: not translated: when_secs -60" in err
     text = out.read_text()
+    assert "# not translated: when_secs -60 (start_when 8 does not read it" in text
     assert "case wptreached > wpt_surfaced_1 set wpt_surfaced_1 = wptreached, surfaced_s = " \
            "missiontime call surface_1" in text
     assert "case wptreached >= 4 set surfaced_s = missiontime call surface_2" in text
