@@ -27,6 +27,14 @@ from gliderplan.power_models.vehicle import Vehicle
 
 MIN_DEPTH_SPREAD_M = 10.0
 MIN_PHASE_S = 30.0  # less time than this in a phase is too little to fit its power
+# what a phase's fitted power holds: the current sensor measures the whole glider
+PHASE_HOLDS = {
+    seg.GLIDE: "the whole glider gliding, outside pump runs and battery moves (the flight "
+               "computer and every sensor that logged then)",
+    seg.SURFACE: "the whole glider at the surface outside its Iridium calls (the air pump "
+                 "and the GPS included)",
+    seg.IRIDIUM: "the whole glider while an Iridium call is up",
+}
 
 
 @dataclass(frozen=True)
@@ -71,7 +79,8 @@ def fit_energy(log: FlightLog, base: Vehicle) -> EnergyFit:
         power, time = _phase_power(energy, dt, parts.phase == phase)
         name = seg.PHASE_NAMES[phase]
         if time >= MIN_PHASE_S:
-            coeffs.append(Coefficient(key, power, "W", True, f"{time:.0f} s of {name}"))
+            coeffs.append(Coefficient(key, power, "W", True,
+                                      f"{time:.0f} s of {name}: {PHASE_HOLDS[phase]}"))
             return power
         coeffs.append(Coefficient(key, kept, "W", False, f"only {time:.0f} s of {name}"))
         return kept

@@ -9,7 +9,7 @@ validation fits on the earlier dives and forecasts the later ones.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -49,7 +49,8 @@ def split_dives(log: FlightLog, parts: seg.Segmentation | None = None) -> list[D
 def concatenate(log: FlightLog, dives: list[Dive]) -> FlightLog:
     """One log of the given dives flown one after another (a dive may repeat: the bootstrap
     resamples dives with replacement). Times run on without gaps; the counter is rebuilt
-    from each dive's own increments."""
+    from each dive's own increments; what the log says once (targets, payload, the pump's
+    limit) stays."""
     pieces = [log.slice(d.start, d.stop + 1) for d in dives]
     times, charge = [], []
     now, counted = 0.0, 0.0
@@ -63,7 +64,4 @@ def concatenate(log: FlightLog, dives: list[Dive]) -> FlightLog:
         for name in FlightLog.SERIES
         if name not in ("t_s", "charge_ah")
     }
-    return FlightLog(
-        log.files, log.start_epoch_s, t_s=np.concatenate(times),
-        charge_ah=np.concatenate(charge), **joined,
-    )
+    return replace(log, t_s=np.concatenate(times), charge_ah=np.concatenate(charge), **joined)

@@ -27,6 +27,7 @@ from gliderplan.power_models.forecast_check import ForwardCheck, check_forward, 
 from gliderplan.power_models.model_writer import to_toml
 from gliderplan.power_models.slocum_log import FlightLog, read_flight_log
 from gliderplan.power_models.vehicle import (
+    FIGURES,
     Vehicle,
     figure_unit,
     load_vehicle,
@@ -156,7 +157,8 @@ def _log_names(log: FlightLog) -> str:
 def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
                    log: FlightLog) -> Path:
     """Write the base vehicle's file with every fitted figure replaced (value, sd, what it
-    was fitted from), the fit's correlation and the devices the hotel load holds."""
+    was fitted from), every other figure saying it is the base's and why, the fit's
+    correlation and the devices the hotel load holds."""
     data = tomllib.loads(read_input_text(resolve("vehicle", base), "vehicle file"))
     name = name or re.sub(r"[^A-Za-z0-9_]", "_", output.stem)
     if not _NAME.fullmatch(name):
@@ -164,22 +166,26 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
     logs = _log_names(log)
     data["name"] = name
     data["description"] = f"calibrated from {', '.join(Path(f).name for f in log.files)}"
-    for figure in fit.figures:
-        if not figure.fitted:
-            continue
-        entry = {"value": float(f"{figure.value:.6g}"), "unit": figure_unit(figure.key),
-                 "source": f"gliderplan calibrate on {logs}: {figure.basis}"}
-        if figure.sd is not None:
-            entry["sd"] = float(f"{figure.sd:.3g}")
-        table, key = (data["flight"], figure.key[7:]) if figure.key.startswith("flight.") \
-            else (data, figure.key)
-        table[key] = entry
-    if log.payload:
-        data["hotel_includes"] = {
-            "devices": list(log.payload),
-            "source": f"gliderplan calibrate on {logs}: science sensors logging while it "
-                      "glided, so their power is in the fitted hotel load",
-        }
+    figures = {f.key: f for f in fit.figures}
+    for key in FIGURES:
+        table, short = (data["flight"], key[7:]) if key.startswith("flight.") else (data, key)
+        figure = figures.get(key)
+        if figure is not None and figure.fitted:
+            entry = {"value": float(f"{figure.value:.6g}"), "unit": figure_unit(key),
+                     "source": f"gliderplan calibrate on {logs}: {figure.basis}"}
+            if figure.sd is not None:
+                entry["sd"] = float(f"{figure.sd:.3g}")
+            table[short] = entry
+        elif short in table:  # the base's, and the reason it stays
+            why = figure.basis if figure is not None else "not a figure the log measures"
+            table[short] = {**table[short],
+                            "source": f"base {base} ({why}): {table[short]['source']}"}
+    data["hotel_includes"] = {
+        "devices": list(log.payload),
+        "source": f"gliderplan calibrate on {logs}: the fitted hotel load is the whole "
+                  "glider gliding, with the science sensors that logged while it glided "
+                  f"({', '.join(log.payload) or 'none'})",
+    }
     u = fit.vehicle.uncertainty
     if u is not None:
         data["uncertainty"] = {
@@ -189,8 +195,8 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
         }
     header = (
         f"Vehicle calibrated by gliderplan calibrate (base: {base}).\n"
-        "Fitted figures say what they were fitted from and carry their bootstrap standard\n"
-        "deviation (sd); the others are the base's."
+        "Fitted figures say what they were fitted from and carry their standard deviation\n"
+        f"(sd); the others say they are the base's ({base}) and why."
     )
     text = to_toml(data, header)
     _check_loads(text, output)

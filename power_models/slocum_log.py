@@ -2,9 +2,10 @@
 
 Returns the time series the calibration needs, on the flight computer's sample times, in
 SI units (volumes in cc): depth, pitch, pumped volume, coulomb counter and current,
-battery voltage, Iridium and actuator-motion flags, what the glider was commanded (pitch,
-pumped volume, climb and dive targets), and the water's in-situ density from the science
-computer's CTD (TEOS-10; NaN where the CTD had no reading).
+battery voltage, Iridium and actuator-motion flags, the pump's own velocity readings and
+its software limit, what the glider was commanded (pitch, pumped volume, climb and dive
+targets), and the water's in-situ density from the science computer's CTD (TEOS-10; NaN
+where the CTD had no reading).
 """
 
 from __future__ import annotations
@@ -36,6 +37,10 @@ _COMMANDS = (("c_ballast_pumped", "commanded_ballast_cc"), ("c_pitch", "commande
 _TARGETS = (("c_climb_target_depth", "climb_target_m"), ("c_dive_target_depth", "dive_target_m"))
 CTD_VARIABLES = ("sci_water_pressure", "sci_water_temp", "sci_water_cond")
 _POSITION = ("m_gps_lat", "m_gps_lon")
+# the pump: its velocity [cc/s] (logged each cycle it moves) and the largest volume its
+# software pumps [cc] (a setting, logged once)
+_PUMP_VELOCITY, _PUMP_LIMIT = "m_ballast_pumped_vel", "x_ballast_pumped_max"
+_SAME_CYCLE_S = 1.0  # a reading this close to a flight sample was logged in its cycle
 # science instruments (the prefix of their variables) -> the power-model device they are
 _PAYLOAD = (
     ("sci_ctd41cp", "ctd"), ("sci_oxy3835", "optode"), ("sci_oxy4", "optode"),
@@ -100,15 +105,17 @@ class FlightLog:
     density_kg_m3: np.ndarray  # in-situ, from the CTD; NaN without a reading
     commanded_ballast_cc: np.ndarray  # NaN where nothing was commanded
     commanded_pitch_rad: np.ndarray
+    pump_velocity_cc_s: np.ndarray  # the pump's velocity reading; NaN where none was logged
     climb_target_m: float = float("nan")
     dive_target_m: float = float("nan")
     payload: tuple[str, ...] = ()  # devices that logged readings (their power is in the log)
+    ballast_limit_cc: float = float("nan")  # x_ballast_pumped_max: the pump's software limit
 
     # the per-sample series, in the order of the fields above
     SERIES = (
         "t_s", "depth_m", "pitch_rad", "ballast_cc", "current_a", "charge_ah", "battery_v",
         "iridium_on", "pump_moving", "battpos_moving", "density_kg_m3",
-        "commanded_ballast_cc", "commanded_pitch_rad",
+        "commanded_ballast_cc", "commanded_pitch_rad", "pump_velocity_cc_s",
     )
 
     def power_w(self) -> np.ndarray:
@@ -193,6 +200,7 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         density_kg_m3=series["density_kg_m3"],
         commanded_ballast_cc=series["commanded_ballast_cc"],
         commanded_pitch_rad=series["commanded_pitch_rad"],
+        pump_velocity_cc_s=series["pump_velocity_cc_s"],
         **{k: v for k, v in optional.items() if not isinstance(v, np.ndarray)},
     )
 
@@ -236,7 +244,8 @@ def _read(logs, name: str) -> tuple[np.ndarray, np.ndarray] | None:  # noqa: ANN
 
 
 def _optional_series(logs, t: np.ndarray) -> dict:  # noqa: ANN001
-    """Commands, targets and the CTD's density on the flight samples' times `t` [epoch s]."""
+    """Commands, targets, the pump's readings and the CTD's density on the flight samples'
+    times `t` [epoch s]."""
     from gliderplan.power_models.seawater import in_situ_density_kg_m3
 
     out: dict[str, np.ndarray | float | tuple[str, ...]] = {}
@@ -249,6 +258,10 @@ def _optional_series(logs, t: np.ndarray) -> dict:  # noqa: ANN001
         if found is not None:
             out[field] = float(found[1][-1])
     out["payload"] = _payload(logs)
+    out["pump_velocity_cc_s"] = _at_samples(_read(logs, _PUMP_VELOCITY), t)
+    limit = _read(logs, _PUMP_LIMIT)
+    if limit is not None:
+        out["ballast_limit_cc"] = float(limit[1][-1])
     out["density_kg_m3"] = np.full(t.size, np.nan)
     out["ctd_t"] = np.empty(0)
     ctd = [_read(logs, name) for name in CTD_VARIABLES]
@@ -278,6 +291,20 @@ def _payload(logs) -> tuple[str, ...]:  # noqa: ANN001
                 logged.append(device)
                 break
     return tuple(dict.fromkeys(logged))
+
+
+def _at_samples(found: tuple[np.ndarray, np.ndarray] | None, t: np.ndarray) -> np.ndarray:
+    """Readings of a variable logged only on some cycles, at the flight samples of the same
+    cycle; NaN at the others (nothing is held or interpolated between readings)."""
+    out = np.full(t.size, np.nan)
+    if found is None or t.size < 2:
+        return out
+    times, values = found
+    after = np.clip(np.searchsorted(t, times), 1, t.size - 1)
+    nearest = np.where(np.abs(t[after - 1] - times) <= np.abs(t[after] - times), after - 1, after)
+    same = np.abs(t[nearest] - times) <= _SAME_CYCLE_S
+    out[nearest[same]] = values[same]
+    return out
 
 
 def _held(found: tuple[np.ndarray, np.ndarray], t: np.ndarray) -> np.ndarray:

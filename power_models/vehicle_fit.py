@@ -2,7 +2,10 @@
 evidence behind it and, from a bootstrap over whole dives, how sure it is.
 
 - energy: hotel, surface and Iridium power, pump and pitch energy (`calibration.py`, from
-  the current sensor);
+  the current sensor); no fixed energy per surfacing on top of a fitted surface power,
+  which holds the air pump and the GPS already;
+- pump: its rate from its own velocity readings, its largest volume from its software
+  limit (the base's pump figures are another glider's);
 - flight: drag Cd0, trim and hull compressibility (`flight_fit.py`, with gliderflight and
   the CTD's density), the pitch the glider flies when commanded a pitch (its pitch servo
   stops inside a deadband), and the turn times: how much longer each half-yo takes than
@@ -24,6 +27,7 @@ from gliderplan.contract.errors import GliderplanError
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.calibration import EnergyFit, fit_energy
 from gliderplan.power_models.dives import Dive, concatenate, split_dives
+from gliderplan.power_models.fit_figure import Figure
 from gliderplan.power_models.flight import DensityProfile, glide_leg
 from gliderplan.power_models.flight_fit import FlightFit, FlightFitError, fit_flight, steady_glides
 from gliderplan.power_models.seawater import density_profile
@@ -33,22 +37,15 @@ from gliderplan.power_models.vehicle import Uncertainty, Vehicle, with_figures
 BOOTSTRAP_RESAMPLES = 40
 SEED = 2014
 SURFACING_KEYS = ("surface_power", "iridium_power", "surface_time", "iridium_time")
+# not resampled over dives: a dive holds a whole surfacing or none; the pump's software
+# limit is a setting, and no fixed surfacing energy beside a fitted surface power is a
+# zero by construction
+NOT_OVER_DIVES = (*SURFACING_KEYS, "surfacing_energy", "max_ballast")
 MIN_PITCH_SAMPLES = 10  # steady samples a half-yo needs to tell its pitch
 
 
 class CalibrationError(GliderplanError):
     """The log cannot support a calibration; the message says why."""
-
-
-@dataclass(frozen=True)
-class Figure:
-    """One figure of the calibrated vehicle [model unit], keyed as in the data file."""
-
-    key: str
-    value: float
-    fitted: bool  # False: the log cannot support it, kept from the base vehicle
-    basis: str  # what it was fitted from, or why it was kept
-    sd: float | None = None  # bootstrap standard deviation [model unit]
 
 
 @dataclass(frozen=True)
@@ -140,6 +137,56 @@ def _turn_times(log: FlightLog, dives: list[Dive], vehicle: Vehicle,
     return figures
 
 
+def _pump_figures(log: FlightLog, parts: seg.Segmentation, base: Vehicle) -> list[Figure]:
+    """The pump's rate [cc/s] from its velocity readings inside its runs
+    (m_ballast_pumped_vel; a yo pumps as much in as out, so the harmonic mean of the two
+    directions' rates gives a yo's pump time), and its largest volume [cc] either side of
+    neutral: its software limit (x_ballast_pumped_max), else the largest volume it pumped."""
+    inside = np.zeros(log.t_s.size, bool)
+    for event in parts.pump_events:
+        inside[event.start:event.stop] = True
+    reading = log.pump_velocity_cc_s[inside]
+    reading = reading[np.isfinite(reading) & (reading != 0.0)]
+    directions = {name: np.abs(reading[mask]) for name, mask in
+                  (("out", reading > 0.0), ("in", reading < 0.0)) if mask.any()}
+    if directions:
+        rate = len(directions) / sum(float(np.mean(1.0 / v)) for v in directions.values())
+        each = ", ".join(f"{k} {np.mean(v):.1f}" for k, v in directions.items())
+        figures = [Figure("pump_rate", rate, True,
+                          f"{reading.size} m_ballast_pumped_vel readings in "
+                          f"{len(parts.pump_events)} pump runs ({each}): {rate:.4g} cc/s "
+                          "for a yo's pump time")]
+    else:
+        figures = [Figure("pump_rate", base.pump_rate_cc_s, False,
+                          "no m_ballast_pumped_vel reading in the log's pump runs")]
+    pumped = np.abs(log.ballast_cc)
+    span = f"m_ballast_pumped spans {np.min(log.ballast_cc):.0f} to {np.max(log.ballast_cc):.0f}"
+    if np.isfinite(log.ballast_limit_cc) and log.ballast_limit_cc > 0.0:
+        figures.append(Figure("max_ballast", log.ballast_limit_cc, True,
+                              f"x_ballast_pumped_max, the pump's software limit either side "
+                              f"of neutral ({span})"))
+    elif pumped.size and np.max(pumped) >= seg.MIN_PUMPED_CC:
+        figures.append(Figure("max_ballast", float(np.max(pumped)), True,
+                              f"the largest volume pumped ({span}; no x_ballast_pumped_max): "
+                              "the pump may reach further", at_least=True))
+    else:
+        figures.append(Figure("max_ballast", base.max_ballast_cc, False,
+                              "the log pumps no volume"))
+    return figures
+
+
+def _surfacing_energy(energy: EnergyFit, base: Vehicle) -> Figure:
+    """No fixed energy per surfacing beside a surface power fitted from the log: the
+    current sensor measured the air pump and the GPS inside it."""
+    surface = next(c for c in energy.coefficients if c.key == "surface_power")
+    if surface.fitted:
+        return Figure("surfacing_energy", 0.0, True,
+                      f"0: the fitted surface power ({surface.basis}) holds the surfacing's "
+                      "air pump and GPS; a fixed energy on top would count them twice")
+    return Figure("surfacing_energy", base.surfacing_fixed_j, False,
+                  "kept with the base's surface power: the log holds too little surface time")
+
+
 def _surfacings(log: FlightLog, parts: seg.Segmentation) -> list[Figure]:
     """Time at the surface before the first Iridium call, and the calls' total time, of
     each surfacing that does not start with the record."""
@@ -176,6 +223,7 @@ def fit_once(log: FlightLog, base: Vehicle, ocean: DensityProfile | None = None
     energy = fit_energy(log, base)
     flight = fit_flight(log, base.flight)
     figures = [Figure(c.key, c.value, c.fitted, c.basis) for c in energy.coefficients]
+    figures += [*_pump_figures(log, parts, base), _surfacing_energy(energy, base)]
     steady = f"{flight.samples} steady-glide samples (gliderflight, CTD density)"
     figures += [
         Figure("flight.drag_cd0", flight.params.drag_cd0, True, steady),
@@ -211,7 +259,7 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
     except FlightFitError as err:
         raise CalibrationError(str(err)) from None
     dives = split_dives(log)
-    spread_keys = [f.key for f in figures if f.fitted and f.key not in SURFACING_KEYS]
+    spread_keys = [f.key for f in figures if f.fitted and f.key not in NOT_OVER_DIVES]
     start = replace(base, flight=vehicle.flight)
     rng = np.random.default_rng(seed)
     draws = []

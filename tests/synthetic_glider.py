@@ -2,9 +2,9 @@
 
 The glider flies the steady-glide model of `power_models.flight` (with trim, hull
 compressibility and a layered ocean) between its turns; a turn is a pump run at the pump
-rate plus a turn time standing still; it surfaces after its last dive for a GPS fix and an
-Iridium call. Its power is constant in each phase, so the coulomb counter and the current
-sensor agree exactly.
+rate (logged as m_ballast_pumped_vel is) plus a turn time standing still; it surfaces
+after its last dive for a GPS fix and an Iridium call. Its power is constant in each
+phase, so the coulomb counter and the current sensor agree exactly.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ PUMP_OUT_J_PER_CC, PUMP_OUT_J_PER_CC_M, PUMP_IN_J_PER_CC = 0.3, 0.012, 0.2
 CD0, TRIM_CC, EPSILON = 0.16, 60.0, 6e-10
 TOP_TURN_S, BOTTOM_TURN_S = 20.0, 12.0
 PITCH_RAD, DIVE_PITCH_ERROR, CLIMB_PITCH_ERROR = 0.43, -0.03, -0.01
-BALLAST_CC, TOP_M = 230.0, 3.0
+BALLAST_CC, TOP_M, PUMP_RATE_CC_S = 230.0, 3.0, 35.0
 SURFACE_S, CALL_S = 130.0, 240.0
 SAMPLE_S, STEP_S = 2.0, 0.25
 
@@ -33,11 +33,12 @@ def ocean(depth_m: np.ndarray) -> np.ndarray:
 
 
 def truth():
-    """The base vehicle with the synthetic glider's flight figures (energy figures apart)."""
+    """The base vehicle with the synthetic glider's flight figures and pump rate (energy
+    figures apart)."""
     base = load_vehicle("slocum_g2_shallow")
     params = dataclasses.replace(base.flight, rho_kg_m3=1024.0, drag_cd0=CD0,
                                  trim_cc=TRIM_CC, compressibility_per_pa=EPSILON)
-    return dataclasses.replace(base, flight=params)
+    return dataclasses.replace(base, flight=params, pump_rate_cc_s=PUMP_RATE_CC_S)
 
 
 def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0)) -> FlightLog:
@@ -45,22 +46,24 @@ def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0)) -> FlightLog:
     the climb to the surface, a GPS fix and an Iridium call."""
     vehicle = truth()
     rate = vehicle.pump_rate_cc_s
-    rows = []  # (time, depth, pitch, ballast, commanded ballast, commanded pitch, power, flags)
+    rows = []  # (time, depth, pitch, ballast, commanded ballast, commanded pitch, power, flags,
+    # pump velocity)
     state = {"t": 0.0, "z": 0.0, "ballast": vehicle.max_ballast_cc, "pitch": 0.0}
 
     def record(power: float, command_cc: float, command_pitch: float, pump: bool = False,
-               call: bool = False) -> None:
+               call: bool = False, velocity: float = 0.0) -> None:
         rows.append((state["t"], state["z"], state["pitch"], state["ballast"], command_cc,
-                     command_pitch, power, pump, call))
+                     command_pitch, power, pump, call, velocity))
 
     def hold(seconds: float, power: float, command_cc: float, command_pitch: float,
              pump: bool = False, call: bool = False, to_cc: float | None = None) -> None:
         start_cc, steps = state["ballast"], max(int(round(seconds / STEP_S)), 1)
+        velocity = 0.0 if to_cc is None else math.copysign(rate, to_cc - start_cc)
         for k in range(steps):
             state["t"] += seconds / steps
             if to_cc is not None:
                 state["ballast"] = start_cc + (to_cc - start_cc) * (k + 1) / steps
-            record(power, command_cc, command_pitch, pump, call)
+            record(power, command_cc, command_pitch, pump, call, velocity)
 
     def turn(to_cc: float, command_pitch: float, top: bool) -> None:
         volume = abs(to_cc - state["ballast"])
@@ -99,7 +102,7 @@ def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0)) -> FlightLog:
 
 def _sampled(rows: np.ndarray) -> FlightLog:
     """The fine steps read every SAMPLE_S seconds, as the flight computer logs."""
-    t, depth, pitch, ballast, command_cc, command_pitch, power, pump, call = rows.T
+    t, depth, pitch, ballast, command_cc, command_pitch, power, pump, call, velocity = rows.T
     energy = np.concatenate(([0.0], np.cumsum(power[1:] * np.diff(t))))
     pick = np.concatenate(([0], np.flatnonzero(np.diff(np.floor(t / SAMPLE_S)) > 0) + 1))
     # the current sensor averages over the sample interval around its reading
@@ -108,12 +111,17 @@ def _sampled(rows: np.ndarray) -> FlightLog:
     current = window / SAMPLE_S / VOLTS
     # a flag is seen at a sample if it was set at any step since the last one
     seen = [np.maximum.reduceat(flag, pick) > 0.5 for flag in (pump, call)]
+    # the pump's velocity is logged on the cycles it moves
+    moving = np.add.reduceat(velocity != 0.0, pick)
+    pump_velocity = np.where(moving > 0, np.add.reduceat(velocity, pick) / np.maximum(moving, 1),
+                             np.nan)
     return FlightLog(
         files=("synthetic",), start_epoch_s=0.0, t_s=t[pick], depth_m=depth[pick],
         pitch_rad=pitch[pick], ballast_cc=ballast[pick], current_a=current,
         charge_ah=energy[pick] / VOLTS / 3600.0, battery_v=np.full(pick.size, VOLTS),
         iridium_on=seen[1], pump_moving=seen[0], battpos_moving=np.zeros(pick.size, bool),
         density_kg_m3=ocean(depth[pick]), commanded_ballast_cc=command_cc[pick],
-        commanded_pitch_rad=command_pitch[pick], climb_target_m=TOP_M, dive_target_m=80.0,
-        payload=("ctd",),
+        commanded_pitch_rad=command_pitch[pick], pump_velocity_cc_s=pump_velocity,
+        climb_target_m=TOP_M, dive_target_m=80.0, payload=("ctd",),
+        ballast_limit_cc=truth().max_ballast_cc,
     )

@@ -54,7 +54,10 @@ def test_a_stated_uncertainty_is_used_and_the_biggest_effect_comes_first(tmp_pat
     swings = {s.figure: s for s in tornado.swings}
     hotel = swings["vehicle hotel_power"]
     assert hotel.step == pytest.approx(0.8) and hotel.basis.startswith("1 sd")
-    assert swings["vehicle pump_rate"].basis.startswith("20 %")  # the file gives it no sd
+    # the pump's rate is fitted to its readings, with a bootstrap sd; the board's idle
+    # power has none stated
+    assert swings["vehicle pump_rate"].basis.startswith("1 sd")
+    assert swings["board ts7800 idle_power"].basis.startswith("20 %")
     # +-0.8 W of hotel load moves more than the computer idle power +-20 % (0.51 W)
     assert tornado.swings[0].figure == "vehicle hotel_power"
     # the swing is the plan made again with the figure moved, nothing else

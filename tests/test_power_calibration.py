@@ -8,6 +8,7 @@ CI=true a skip fails); where it is present, a replay error above 5 % fails loudl
 from __future__ import annotations
 
 import json
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +17,9 @@ import synthetic_glider as sg
 
 from gliderplan.cli.main import main
 from gliderplan.power_models import calibration, load_vehicle
+from gliderplan.power_models.catalog import preset_names, preset_path
 from gliderplan.power_models.slocum_log import FlightLog
-from gliderplan.power_models.vehicle import figure_value, read_vehicle_file
+from gliderplan.power_models.vehicle import FIGURES, figure_value, read_vehicle_file
 
 LOGS = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "slocum-logs"
 needs_logs = pytest.mark.skipif(
@@ -46,6 +48,38 @@ def test_fit_recovers_a_known_glider():
     fitted = {c.key for c in fit.coefficients if c.fitted}
     assert fitted >= {"hotel_power", "surface_power", "iridium_power", "pump_in_energy_per_volume",
                       "pump_out_energy_per_volume", "pump_out_energy_per_volume_depth"}
+
+
+def test_the_pump_and_the_surfacing_are_the_log_s_not_the_base_s():
+    from gliderplan.power_models.vehicle_fit import fit_once
+
+    base = load_vehicle("slocum_g3")  # 20.5 cc/s, +-560 cc, 389 J per surfacing
+    vehicle, figures, _, _ = fit_once(_synthetic_log(), base)
+    fitted = {f.key: f for f in figures if f.fitted}
+    assert vehicle.pump_rate_cc_s == pytest.approx(sg.PUMP_RATE_CC_S, rel=0.01)
+    assert vehicle.max_ballast_cc == sg.truth().max_ballast_cc != base.max_ballast_cc
+    assert "x_ballast_pumped_max" in fitted["max_ballast"].basis
+    # the surface power the log measured holds the air pump and the GPS: nothing on top
+    assert base.surfacing_fixed_j > 0 and vehicle.surfacing_fixed_j == 0.0
+    assert "count them twice" in fitted["surfacing_energy"].basis
+
+
+def test_a_log_without_the_pump_s_readings_keeps_the_base_s_rate_and_says_why():
+    from dataclasses import replace
+
+    from gliderplan.power_models.vehicle_fit import fit_once
+
+    log = _synthetic_log()
+    log = replace(log, pump_velocity_cc_s=np.full(log.t_s.size, np.nan),
+                  ballast_limit_cc=float("nan"))
+    base = load_vehicle("slocum_g3")
+    vehicle, figures, _, _ = fit_once(log, base)
+    by_key = {f.key: f for f in figures}
+    assert not by_key["pump_rate"].fitted and vehicle.pump_rate_cc_s == base.pump_rate_cc_s
+    assert "no m_ballast_pumped_vel" in by_key["pump_rate"].basis
+    # without the pump's limit, the largest volume it pumped: a lower bound, and said so
+    assert by_key["max_ballast"].at_least
+    assert vehicle.max_ballast_cc == pytest.approx(np.max(np.abs(log.ballast_cc)))
 
 
 def test_a_log_at_one_depth_keeps_the_depth_term_of_the_base():
@@ -141,6 +175,85 @@ def test_the_preset_is_this_log_calibrated(capsys, tmp_path):
     for attribute in ("drag_cd0", "trim_cc", "compressibility_per_pa", "rho_kg_m3"):
         assert getattr(mine.flight, attribute) == pytest.approx(
             getattr(preset.flight, attribute), rel=0.01), attribute
+
+
+# every figure the shared log measures: the current sensor phase by phase, the pump's
+# readings and limit, the steady glides with the CTD, the pitch, the turns, the surfacing
+MEASURED = (
+    "hotel_power", "surface_power", "iridium_power", "surfacing_energy",
+    "pump_out_energy_per_volume", "pump_in_energy_per_volume", "pitch_energy", "pump_rate",
+    "max_ballast", "surface_time", "iridium_time", "top_turn_time", "bottom_turn_time",
+    "dive_pitch_error", "climb_pitch_error", "flight.drag_cd0", "flight.trim_volume",
+    "flight.compressibility", "flight.water_density",
+)
+# fitted given a figure the log cannot show, the base's depth term of the pump-in energy
+# (every pump-in run is at the top of a yo)
+DEPENDS_ON_THE_BASE = ("pump_in_energy_per_volume",)
+
+
+@pytest.fixture(scope="module", params=preset_names("vehicle"))
+def calibrated_on(request, tmp_path_factory):
+    """(base, its calibration of the shared log with --validate, the written file)."""
+    if not LOGS.is_dir():
+        pytest.skip(needs_logs.kwargs["reason"])
+    from gliderplan.power_models import calibrate
+
+    out = tmp_path_factory.mktemp(request.param) / "mine.toml"
+    result = calibrate([str(LOGS)], base=request.param, validate=True, output=out)
+    return request.param, result, out
+
+
+def _entry(data: dict, key: str) -> dict:
+    return data["flight"][key[7:]] if key.startswith("flight.") else data[key]
+
+
+@needs_logs
+def test_every_base_preset_calibrates_to_a_forecast_within_the_bounds(calibrated_on):
+    base, result, _ = calibrated_on
+    f = result.report["forecast"]
+    assert abs(f["energy_relative_error"]) < 0.03, (base, f["energy_relative_error"])
+    low, high = f["energy_interval_j"]
+    assert low < f["measured_j"] < high, (base, f["energy_interval_j"], f["measured_j"])
+    assert abs(f["yo_period_relative_error"]) < 0.10, base
+    for kind, error in f["vertical_speed_relative_error"].items():
+        assert abs(error) < 0.10, (base, kind, error)
+    # the forecast names what it took from the base: nothing the log measured
+    assert not set(f["figures_from_base"]) & set(MEASURED), f["figures_from_base"]
+
+
+@needs_logs
+def test_no_base_figure_the_log_measures_survives_calibration(calibrated_on):
+    base, result, out = calibrated_on
+    written = tomllib.loads(out.read_text())
+    preset = tomllib.loads(preset_path("vehicle", base).read_text())
+    logs = "gliderplan calibrate on sebastian-2014-204-05-000, sebastian-2014-204-05-001: "
+    for key in MEASURED:
+        entry = _entry(written, key)
+        assert entry["source"].startswith(logs), (base, key, entry["source"])
+        try:
+            theirs = _entry(preset, key)["source"]
+        except KeyError:
+            continue  # a figure the preset leaves at its default
+        if not theirs.startswith("gliderplan calibrate on"):
+            assert theirs not in entry["source"], (base, key)
+    # the log decides them, not the base: the same from every base
+    mine = read_vehicle_file(out)
+    reference = load_vehicle("slocum_g2_shallow")  # calibrated on this log
+    for key in set(MEASURED) - set(DEPENDS_ON_THE_BASE):
+        assert figure_value(mine, key) == pytest.approx(figure_value(reference, key),
+                                                        rel=1e-4, abs=1e-6), (base, key)
+    # what the hotel load and the surface power hold, said by the log
+    assert written["hotel_includes"]["source"].startswith(logs)
+    assert mine.hotel_includes == ("ctd", "optics")
+    assert "air pump" in written["surface_power"]["source"]
+    assert mine.surfacing_fixed_j == 0.0
+    # every other figure says it is the base's
+    for key in set(FIGURES) - set(MEASURED):
+        try:
+            entry = _entry(written, key)
+        except KeyError:
+            continue
+        assert entry["source"].startswith(f"base {base} ("), (key, entry["source"])
 
 
 @needs_logs

@@ -124,7 +124,10 @@ def test_a_forecast_of_the_synthetic_glider_s_later_dives_is_nearly_exact(synthe
         assert check.predicted_w_mps[kind] == pytest.approx(check.observed.w_mps[kind],
                                                             rel=0.01)
     assert check.counter_bias == pytest.approx(0.0, abs=0.002)
-    assert "pump_rate" in check.from_base  # never fitted: the forecast says so
+    # a depth term the fit part's one pump-in depth cannot show: the forecast says so; the
+    # pump's rate and limit are the log's own
+    assert "pump_in_energy_per_volume_depth" in check.from_base
+    assert not {"pump_rate", "max_ballast"} & set(check.from_base)
 
 
 # ---- uncertainty ---------------------------------------------------------------------
