@@ -32,10 +32,11 @@ def run(path: Path, water: ocean.Ocean, noise: str = "ctd", robust: bool = True,
     assert mission is not None
     config = RunConfig(duration_s=6 * 3600.0, seed=seed, noise=NOISE_PRESETS[noise])
     # the paper's glider, not sebastian: DESIGN.md section 8's nominal G2, trimmed neutral
-    # (symmetric dives and climbs) with Merckelbach et al.'s Cd0 of 0.15
+    # (symmetric dives and climbs) with Merckelbach et al.'s Cd0 of 0.15 and the shallow
+    # pump's nominal 32 cc/s (smerckel/glidersim; sebastian's own pump is faster)
     vehicle = load_vehicle(mission.vehicle).neutral()
-    vehicle = dataclasses.replace(vehicle, flight=dataclasses.replace(vehicle.flight,
-                                                                      drag_cd0=0.15))
+    vehicle = dataclasses.replace(vehicle, pump_rate_cc_s=32.0, flight=dataclasses.replace(
+        vehicle.flight, drag_cd0=0.15))
     return fly(mission, water, config, vehicle, robust_tracker=robust)
 
 
