@@ -88,7 +88,8 @@ def _text(report: dict) -> str:
         f"{'figure':34s} {'value':>11s} {'sd':>9s} {'unit':9s} basis",
     ]
     for f in report["figures"]:
-        mark = "" if f["fitted"] else " (kept from base)"
+        mark = ("" if f["fitted"] else " (kept from base)") + (
+            " (at least)" if f["at_least"] else "")
         sd = f"{f['sd']:9.3g}" if f["sd"] is not None else f"{'':9s}"
         lines.append(f"{f['key']:34s} {f['value']:11.5g} {sd} {f['unit']:9s} {f['basis']}{mark}")
     ins = report["in_sample"]
@@ -144,9 +145,10 @@ def _forecast_text(f: dict) -> list[str]:
                      f"{', '.join(f['figures_from_base'])}")
     stay = f["surface_stay"]
     if stay is not None:
+        low, high = stay["interval_j"]
         lines.append(
-            f"  the record's surface stay after it (not part of the forecast): base figures "
-            f"predict {stay['predicted_j']:.0f} J, measured {stay['measured_j']:.0f} J "
-            f"({stay['relative_error']:+.1%}; from the base: "
+            f"  the record's surface stay after it (not part of the forecast): predicted "
+            f"{stay['predicted_j']:.0f} J (90 % interval {low:.0f}-{high:.0f} J), measured "
+            f"{stay['measured_j']:.0f} J ({stay['relative_error']:+.1%}; from the base: "
             f"{', '.join(stay['figures_from_base']) or 'none'})")
     return lines

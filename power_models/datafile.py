@@ -100,7 +100,7 @@ class Table:
             raise self.error(
                 name, f"expected {{ value = ..., unit = ..., source = ... }}, got {entry!r}"
             )
-        unknown = set(entry) - {"value", "unit", "source", "note", "sd"}
+        unknown = set(entry) - {"value", "unit", "source", "note", "sd", "at_least"}
         if unknown:
             raise self.error(name, f"unknown field(s) {sorted(unknown)}")
         for part in ("value", "unit", "source"):
@@ -144,6 +144,17 @@ class Table:
         ):
             raise self.error(name, f"sd must be a finite number >= 0, got {spread!r}")
         return abs(to_model_unit(float(spread), entry["unit"], dimension))
+
+    def at_least(self, name: str) -> bool:
+        """Whether a figure is marked `at_least = true`: its value is a lower bound (the log
+        saw it cut short), so a draw from its sd never goes below it. Call after
+        `quantity` has checked the entry."""
+        entry = self.data.get(name)
+        if not isinstance(entry, dict) or "at_least" not in entry:
+            return False
+        if not isinstance(entry["at_least"], bool):
+            raise self.error(name, f"at_least must be true or false, got {entry['at_least']!r}")
+        return entry["at_least"]
 
     def text_list(self, name: str) -> list[str]:
         """A list of text values."""

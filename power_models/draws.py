@@ -3,7 +3,8 @@
 A calibrated vehicle file gives each fitted figure a standard deviation and the figures'
 correlation (from the bootstrap over dives). A draw is a multivariate normal sample of
 those figures around their values, kept inside what a data file may hold (a power is
-never negative, a drag coefficient is positive); the other figures stay as they are.
+never negative, a drag coefficient is positive) and above a figure that is a lower bound
+(`at_least`: a call the record cut short); the other figures stay as they are.
 Draws come from a seeded generator, so a forecast's interval is reproducible.
 """
 
@@ -47,6 +48,8 @@ def draw_figures(
         low = options.get("minimum", 0.0)
         if options.get("positive"):
             low = max(low, 1e-9 * abs(mean[j]) if mean[j] else 1e-12)
+        if key in u.at_least:  # a lower bound: the truth is no less
+            low = max(low, mean[j])
         values[:, j] = np.maximum(values[:, j], low)
     return u.keys, values
 

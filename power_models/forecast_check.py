@@ -11,7 +11,8 @@ it, the depth the fit part's dives turned at (the floor less the altimeter's cle
 The forecast ends where the later part's last dive does: the glider back at the
 surface. What follows in the record (the GPS fix and Iridium calls) needs surfacing
 figures the fit part cannot show when it holds no call; it is forecast with the base
-vehicle's figures and reported apart, with those figures named.
+vehicle's figures and reported apart, with those figures named and a 90 % interval from
+the surfacing figures' sd (the base's, for those it gives).
 
 Truth is the coulomb counter (m_coulomb_amphr_total x m_battery); the fit integrates the
 current sensor (m_coulomb_current x m_battery), so the two are compared on the fit part
@@ -34,7 +35,13 @@ from gliderplan.power_models.draws import (
     prediction_spread,
 )
 from gliderplan.power_models.flight import DensityProfile, glide_leg
-from gliderplan.power_models.forecast import Forecast, YoCommand, energy_interval_j, forecast
+from gliderplan.power_models.forecast import (
+    INTERVAL_LEVEL,
+    Forecast,
+    YoCommand,
+    energy_interval_j,
+    forecast,
+)
 from gliderplan.power_models.slocum_log import FlightLog
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.power_models.vehicle_fit import (
@@ -78,6 +85,7 @@ class ForwardCheck:
     from_base: tuple[str, ...]  # figures the forecast uses that the fit part did not give
     stay_predicted_j: float | None  # the record's remaining surface stay, base figures
     stay_measured_j: float | None
+    stay_interval_j: tuple[float, float] | None  # its 90 % interval: the figures' own sd
 
     @property
     def energy_relative_error(self) -> float:
@@ -251,12 +259,20 @@ def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
     quantisation = step * (rng.random(len(drawn)) - rng.random(len(drawn)))
     interval = energy_interval_j(drawn, command, calibration.ocean, noise_j=quantisation)
     fitted = {f.key for f in calibration.figures if f.fitted}
-    stay_pred = stay_meas = None
+    stay_pred = stay_meas = stay_interval = None
     if arrival < log.t_s.size - 1:
         stay = log.slice(arrival, log.t_s.size)
         span = float(stay.t_s[-1] - stay.t_s[0])
         stay_pred = _stay_energy_j(vehicle, span)
         stay_meas = seg.counter_energy_j(stay)
+        # one stay: each surfacing figure drawn with its own sd (a surfacing's spread when
+        # the log shows one surfacing, or an assumed one), not widened for dives to come
+        energies = np.array([_stay_energy_j(v, span) for v in draw_vehicles(
+            vehicle, DEFAULT_DRAWS, rng)]) + step * (rng.random(DEFAULT_DRAWS)
+                                                     - rng.random(DEFAULT_DRAWS))
+        tail = 50.0 * (1.0 - INTERVAL_LEVEL)
+        low, high = np.percentile(energies, [tail, 100.0 - tail])
+        stay_interval = (float(low), float(high))
     return ForwardCheck(
         fit_dives=len(part.fit), later_dives=len(part.later), cut_s=float(log.t_s[cut]),
         calibration=calibration, command=command, forecast=predicted, interval_j=interval,
@@ -264,7 +280,7 @@ def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
         predicted_w_mps=predicted_w_mps(vehicle, command, calibration.ocean),
         counter_bias=bias, counter_step_j=step,
         from_base=tuple(k for k in FORECAST_KEYS if k not in fitted),
-        stay_predicted_j=stay_pred, stay_measured_j=stay_meas,
+        stay_predicted_j=stay_pred, stay_measured_j=stay_meas, stay_interval_j=stay_interval,
     )
 
 

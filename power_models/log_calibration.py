@@ -104,7 +104,8 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
 
 def _figure_json(figure: Figure) -> dict:
     return {"key": figure.key, "value": figure.value, "unit": figure_unit(figure.key),
-            "sd": figure.sd, "fitted": figure.fitted, "basis": figure.basis}
+            "sd": figure.sd, "at_least": figure.at_least, "fitted": figure.fitted,
+            "basis": figure.basis}
 
 
 def _relative(predicted: float, measured: float) -> float:
@@ -118,6 +119,7 @@ def _forecast_json(check: ForwardCheck) -> dict:
     stay = None
     if check.stay_measured_j is not None:
         stay = {"predicted_j": check.stay_predicted_j, "measured_j": check.stay_measured_j,
+                "interval_j": list(check.stay_interval_j),
                 "relative_error": _relative(check.stay_predicted_j, check.stay_measured_j),
                 "figures_from_base": list(stay_from_base(check))}
     return {
@@ -175,6 +177,8 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
                      "source": f"gliderplan calibrate on {logs}: {figure.basis}"}
             if figure.sd is not None:
                 entry["sd"] = float(f"{figure.sd:.3g}")
+            if figure.at_least:
+                entry["at_least"] = True
             table[short] = entry
         elif short in table:  # the base's, and the reason it stays
             why = figure.basis if figure is not None else "not a figure the log measures"

@@ -46,6 +46,7 @@ class Uncertainty:
     sd: np.ndarray  # (k,)
     correlation: np.ndarray  # (k, k)
     source: str
+    at_least: tuple[str, ...] = ()  # lower bounds (a call the record cut short): never drawn below
 
 
 @dataclass(frozen=True)
@@ -371,12 +372,15 @@ def read_vehicle_file(path: Path) -> Vehicle:
     fl = top.table("flight")
     values: dict[str, float] = {}
     spreads: dict[str, float] = {}
+    bounds: set[str] = set()
     for key, (attr, dimension, options) in FIGURES.items():
         table, name = (fl, key[7:]) if key.startswith("flight.") else (top, key)
         values[attr] = table.quantity(name, dimension, **options)
         spread = table.sd(name, dimension)
         if spread is not None:
             spreads[key] = spread
+        if table.at_least(name):
+            bounds.add(key)
     fl.finish()
     if values["nominal_max_depth_m"] <= values["nominal_min_depth_m"]:
         raise top.error("nominal_max_depth", "must be deeper than nominal_min_depth")
@@ -387,7 +391,7 @@ def read_vehicle_file(path: Path) -> Vehicle:
         description=top.text("description", ""),
         flight=params,
         hotel_includes=_hotel_includes(top),
-        uncertainty=_uncertainty(top, spreads),
+        uncertainty=_uncertainty(top, spreads, bounds),
         path=path,
         **{a: v for a, v in values.items() if a not in flight_attrs},
     )
@@ -411,10 +415,10 @@ def _hotel_includes(top: Table) -> tuple[str, ...]:
     return tuple(devices)
 
 
-def _uncertainty(top: Table, spreads: dict[str, float]) -> Uncertainty | None:
+def _uncertainty(top: Table, spreads: dict[str, float], bounds: set[str]) -> Uncertainty | None:
     """The figures' standard deviations and, if the file gives it, their correlation
     (`[uncertainty] figures = [...], correlation = [[...]], source = ...`); without one
-    the figures are taken as independent."""
+    the figures are taken as independent. `bounds`: figures marked `at_least`."""
     keys = tuple(spreads)
     correlation = np.eye(len(keys))
     source = "standard deviations written next to the figures; taken as independent"
@@ -439,4 +443,5 @@ def _uncertainty(top: Table, spreads: dict[str, float]) -> Uncertainty | None:
         table.finish()
     if not keys:
         return None
-    return Uncertainty(keys, np.array([spreads[k] for k in keys]), correlation, source)
+    return Uncertainty(keys, np.array([spreads[k] for k in keys]), correlation, source,
+                       tuple(k for k in keys if k in bounds))

@@ -10,11 +10,13 @@ evidence behind it and, from a bootstrap over whole dives, how sure it is.
   the CTD's density), the pitch the glider flies when commanded a pitch (its pitch servo
   stops inside a deadband), and the turn times: how much longer each half-yo takes than
   the steady glide between its turns and its pump run;
-- surfacing: time at the surface before the Iridium call, and the call's length.
+- surfacing: time at the surface before the Iridium call, and the call's length
+  (`surfacing_fit.py`).
 
 The bootstrap resamples whole dives with replacement, refits, and gives each figure's
-standard deviation and the figures' correlation; a figure seen once (one surfacing) has
-no spread to measure and gets none.
+standard deviation and the figures' correlation. The surfacing figures are spread apart
+(`surfacing_fit.py`): over the surfacings when there are two or more, else by a stated
+assumption; never exact.
 """
 
 from __future__ import annotations
@@ -32,11 +34,16 @@ from gliderplan.power_models.flight import DensityProfile, glide_leg
 from gliderplan.power_models.flight_fit import FlightFit, FlightFitError, fit_flight, steady_glides
 from gliderplan.power_models.seawater import density_profile
 from gliderplan.power_models.slocum_log import FlightLog
+from gliderplan.power_models.surfacing_fit import (
+    SURFACING_KEYS,
+    find_surfacings,
+    surfacing_figures,
+    surfacing_spread,
+)
 from gliderplan.power_models.vehicle import Uncertainty, Vehicle, with_figures
 
 BOOTSTRAP_RESAMPLES = 40
 SEED = 2014
-SURFACING_KEYS = ("surface_power", "iridium_power", "surface_time", "iridium_time")
 # not resampled over dives: a dive holds a whole surfacing or none; the pump's software
 # limit is a setting, and no fixed surfacing energy beside a fitted surface power is a
 # zero by construction
@@ -187,33 +194,6 @@ def _surfacing_energy(energy: EnergyFit, base: Vehicle) -> Figure:
                   "kept with the base's surface power: the log holds too little surface time")
 
 
-def _surfacings(log: FlightLog, parts: seg.Segmentation) -> list[Figure]:
-    """Time at the surface before the first Iridium call, and the calls' total time, of
-    each surfacing that does not start with the record."""
-    at_surface = np.isin(parts.phase, (seg.SURFACE, seg.IRIDIUM))
-    edges = np.diff(np.concatenate(([0], at_surface.astype(np.int8), [0])))
-    dt = np.diff(log.t_s)
-    before, calls, ended = [], [], False
-    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
-        calling = parts.phase[start:stop] == seg.IRIDIUM
-        if start == 0 or not calling.any():
-            continue
-        first_call = start + int(np.argmax(calling))
-        before.append(float(dt[start:first_call].sum()))
-        calls.append(float(dt[start:stop][calling].sum()))
-        ended = ended or stop == parts.phase.size
-    if not calls:
-        return [Figure(k, 0.0, False, "no surfacing with an Iridium call")
-                for k in ("surface_time", "iridium_time")]
-    cut = "; the record ends during the last one: at least this long" if ended else ""
-    return [
-        Figure("surface_time", float(np.mean(before)), True,
-               f"{len(before)} surfacing(s): time at the surface before the Iridium call"),
-        Figure("iridium_time", float(np.mean(calls)), True,
-               f"{len(calls)} surfacing(s): Iridium call time{cut}"),
-    ]
-
-
 def fit_once(log: FlightLog, base: Vehicle, ocean: DensityProfile | None = None
              ) -> tuple[Vehicle, list[Figure], EnergyFit, FlightFit]:
     """One fit of every figure the log supports; the others stay as in `base`."""
@@ -237,7 +217,7 @@ def fit_once(log: FlightLog, base: Vehicle, ocean: DensityProfile | None = None
     vehicle = with_figures(energy.vehicle, {f.key: f.value for f in figures if f.fitted})
     vehicle = replace(vehicle, flight=flight.params)
     figures += _turn_times(log, split_dives(log, parts), vehicle, ocean)
-    figures += _surfacings(log, parts)
+    figures += surfacing_figures(find_surfacings(log, parts))
     vehicle = with_figures(vehicle, {f.key: f.value for f in figures if f.fitted})
     return vehicle, figures, energy, flight
 
@@ -252,15 +232,48 @@ def log_ocean(log: FlightLog) -> DensityProfile:
 
 def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMPLES,
                 seed: int = SEED) -> VehicleFit:
-    """Fit `log` and bootstrap the fit over its whole dives (`resamples` refits)."""
+    """Fit `log`, bootstrap the fit over its whole dives (`resamples` refits) and spread the
+    surfacing figures (`surfacing_fit`); a figure kept from `base` keeps its sd."""
     ocean = log_ocean(log)
     try:
         vehicle, figures, energy, flight = fit_once(log, base, ocean)
     except FlightFitError as err:
         raise CalibrationError(str(err)) from None
     dives = split_dives(log)
+    keys, sd, correlation, refits = _over_dives(log, dives, replace(base, flight=vehicle.flight),
+                                                figures, ocean, resamples, seed)
+    surfacing = surfacing_spread(find_surfacings(log, seg.segment(log)), figures)
+    fitted = {f.key for f in figures if f.fitted}
+    kept = base.uncertainty
+    kept_keys = () if kept is None else tuple(k for k in kept.keys if k not in fitted)
+    kept_sd = {} if kept is None else dict(zip(kept.keys, kept.sd, strict=True))
+    blocks = [(keys, sd, correlation), (surfacing.keys, surfacing.sd, surfacing.correlation),
+              (kept_keys, np.array([kept_sd[k] for k in kept_keys]), np.eye(len(kept_keys)))]
+    all_keys = tuple(k for block in blocks for k in block[0])
+    spread = dict(zip(all_keys, np.concatenate([b[1] for b in blocks]), strict=True))
+    figures = [replace(f, sd=spread.get(f.key), basis=f"{f.basis}; {surfacing.basis[f.key]}"
+                       if f.key in surfacing.basis else f.basis) for f in figures]
+    uncertainty = None
+    if all_keys:
+        source = f"gliderplan calibrate: bootstrap over {len(dives)} dives, {refits} refits"
+        if surfacing.keys:
+            source += f"; {surfacing.source}"
+        if kept_keys:
+            source += f"; {', '.join(kept_keys)}: the base's sd, independent"
+        at_least = (*surfacing.at_least,
+                    *(k for k in kept_keys if kept is not None and k in kept.at_least))
+        uncertainty = Uncertainty(all_keys, np.array([spread[k] for k in all_keys]),
+                                  _block_diagonal([b[2] for b in blocks]), source, at_least)
+    return VehicleFit(replace(vehicle, uncertainty=uncertainty), tuple(figures), energy,
+                      flight, ocean, len(dives), refits)
+
+
+def _over_dives(log: FlightLog, dives: list[Dive], start: Vehicle, figures: list[Figure],
+                ocean: DensityProfile, resamples: int, seed: int
+                ) -> tuple[tuple[str, ...], np.ndarray, np.ndarray, int]:
+    """(keys, sd [model units], correlation, refits) of the fitted figures that vary when
+    whole dives are resampled with replacement and the log refitted from `start`."""
     spread_keys = [f.key for f in figures if f.fitted and f.key not in NOT_OVER_DIVES]
-    start = replace(base, flight=vehicle.flight)
     rng = np.random.default_rng(seed)
     draws = []
     for _ in range(resamples if len(dives) >= 2 else 0):
@@ -276,14 +289,17 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
     sd = samples.std(axis=0, ddof=1) if len(draws) >= 3 else np.zeros(len(spread_keys))
     varying = sd > 1e-9 * np.abs(samples.mean(axis=0)) if len(draws) else sd > 0.0
     keys = tuple(k for k, v in zip(spread_keys, varying, strict=True) if v)
-    spread = dict(zip(keys, sd[varying], strict=True))
-    figures = [replace(f, sd=spread.get(f.key)) for f in figures]
-    uncertainty = None
-    if keys:
-        correlation = np.atleast_2d(np.corrcoef(samples[:, varying], rowvar=False))
-        uncertainty = Uncertainty(
-            keys, sd[varying], correlation,
-            f"gliderplan calibrate: bootstrap over {len(dives)} dives, {len(draws)} refits")
-    return VehicleFit(replace(vehicle, uncertainty=uncertainty), tuple(figures), energy,
-                       flight, ocean, len(dives), len(draws))
+    correlation = np.atleast_2d(np.corrcoef(samples[:, varying], rowvar=False)) if keys \
+        else np.eye(0)
+    return keys, sd[varying], correlation, len(draws)
+
+
+def _block_diagonal(blocks: list[np.ndarray]) -> np.ndarray:
+    """One correlation matrix of independent groups of figures."""
+    size = sum(b.shape[0] for b in blocks)
+    out, at = np.eye(size), 0
+    for block in blocks:
+        out[at:at + block.shape[0], at:at + block.shape[0]] = block
+        at += block.shape[0]
+    return out
 

@@ -269,7 +269,8 @@ def draw_figures(vehicle: Vehicle, relative_sd: dict[str, float],
     """Vehicle figures drawn around their values: jointly normal with the vehicle file's
     standard deviations and correlations where it has them, else independent with the
     scenario file's relative spread. Figures stay positive (a draw at or below zero is
-    clipped to 1 % of the value); always one standard normal per figure drawn."""
+    clipped to 1 % of the value) and a lower bound (`at_least`) is never drawn below;
+    always one standard normal per figure drawn."""
     keys: list[str] = []
     sd: list[float] = []
     correlation = np.eye(0)
@@ -289,8 +290,11 @@ def draw_figures(vehicle: Vehicle, relative_sd: dict[str, float],
     z = np.array([_normal_quantile(float(u)) for u in rng.random(len(keys))])
     offsets = np.asarray(sd) * (factor @ z)
     values = {}
+    bounds = () if vehicle.uncertainty is None else vehicle.uncertainty.at_least
     for key, offset in zip(keys, offsets, strict=True):
         nominal = figure_value(vehicle, key)
         floor = 0.01 * abs(nominal) if nominal > 0.0 else -math.inf
+        if key in bounds:  # a lower bound (a call the log saw cut short): no less
+            floor = nominal
         values[key] = max(nominal + float(offset), floor)
     return values

@@ -41,9 +41,15 @@ def truth():
     return dataclasses.replace(base, flight=params, pump_rate_cc_s=PUMP_RATE_CC_S)
 
 
-def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0)) -> FlightLog:
+def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0),
+                  calls_s: tuple[float, ...] = (CALL_S,)) -> FlightLog:
     """100 s at the surface, a dive to each of `bottoms` (turning at TOP_M between them),
-    the climb to the surface, a GPS fix and an Iridium call."""
+    the climb to the surface, a GPS fix and an Iridium call: one surfacing per call time in
+    `calls_s`, evenly among the dives, the last after the last dive (the record ends in
+    its call)."""
+    if len(bottoms) % len(calls_s):
+        raise ValueError("the surfacings must split the dives evenly")
+    per_surfacing = len(bottoms) // len(calls_s)
     vehicle = truth()
     rate = vehicle.pump_rate_cc_s
     rows = []  # (time, depth, pitch, ballast, commanded ballast, commanded pitch, power, flags,
@@ -92,11 +98,13 @@ def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0)) -> FlightLog:
     for k, bottom in enumerate(bottoms):
         turn(-BALLAST_CC, -PITCH_RAD, top=True)
         glide(bottom, -PITCH_RAD)
-        last = k == len(bottoms) - 1
-        turn(vehicle.max_ballast_cc if last else BALLAST_CC, PITCH_RAD, top=False)
-        glide(0.0 if last else TOP_M, PITCH_RAD)
-    hold(SURFACE_S, SURFACE_W, vehicle.max_ballast_cc, math.nan)
-    hold(CALL_S, IRIDIUM_W, vehicle.max_ballast_cc, math.nan, call=True)
+        up = (k + 1) % per_surfacing == 0
+        turn(vehicle.max_ballast_cc if up else BALLAST_CC, PITCH_RAD, top=False)
+        glide(0.0 if up else TOP_M, PITCH_RAD)
+        if up:
+            hold(SURFACE_S, SURFACE_W, vehicle.max_ballast_cc, math.nan)
+            hold(calls_s[k // per_surfacing], IRIDIUM_W, vehicle.max_ballast_cc, math.nan,
+                 call=True)
     return _sampled(np.array(rows, float))
 
 

@@ -8,6 +8,7 @@ CI=true a skip fails); where it is present, a replay error above 5 % fails loudl
 from __future__ import annotations
 
 import json
+import math
 import tomllib
 from pathlib import Path
 
@@ -89,6 +90,43 @@ def test_a_log_at_one_depth_keeps_the_depth_term_of_the_base():
     assert not kept.fitted and fit.vehicle.pump_out_j_per_cc_m == base.pump_out_j_per_cc_m
 
 
+SURFACING = ("surface_power", "iridium_power", "surface_time", "iridium_time")
+
+
+def test_two_or_more_surfacings_are_resampled_for_their_spread():
+    from gliderplan.power_models.vehicle_fit import fit_vehicle
+
+    calls = (200.0, 300.0, 250.0)  # the synthetic glider's surface stays are alike but these
+    fit = fit_vehicle(sg.synthetic_log(calls_s=calls), load_vehicle("slocum_g3"), resamples=8)
+    by_key = {f.key: f for f in fit.figures}
+    u = fit.vehicle.uncertainty
+    assert set(SURFACING) <= set(u.keys)
+    call = by_key["iridium_time"]
+    # the bootstrap's sd of a mean of three: the calls' spread / sqrt(3)
+    assert call.sd == pytest.approx(np.std(calls) / math.sqrt(3), rel=0.15)
+    assert "bootstrap over 3 surfacings" in call.basis
+    assert call.at_least and u.at_least == ("iridium_time",)  # the record ends in the last
+    # three surfacings alike: no spread to resample, so a stated one, not none
+    stay = by_key["surface_time"]
+    assert "assumption, 30 % of the value" in stay.basis
+    assert stay.sd == pytest.approx(0.3 * stay.value)
+    order = list(u.keys)
+    dive = next(k for k in order if k not in SURFACING)  # a figure of the dives' bootstrap
+    assert u.correlation[order.index("iridium_time"), order.index(dive)] == 0.0
+
+
+def test_a_single_surfacing_gets_a_stated_spread_never_none():
+    from gliderplan.power_models.surfacing_fit import ASSUMED_RELATIVE_SD
+    from gliderplan.power_models.vehicle_fit import fit_vehicle
+
+    fit = fit_vehicle(_synthetic_log(), load_vehicle("slocum_g3"), resamples=4)
+    for f in fit.figures:
+        if f.key in SURFACING:
+            assert f.sd == pytest.approx(ASSUMED_RELATIVE_SD[f.key] * f.value), f.key
+            assert "sd: assumption" in f.basis and "1 surfacing(s)" in f.basis, f.key
+    assert set(SURFACING) <= set(fit.vehicle.uncertainty.keys)
+
+
 def test_replay_of_the_synthetic_glider_is_nearly_exact():
     result = calibration.validate(_synthetic_log(), load_vehicle("slocum_g3"))
     assert abs(result.relative_error) < 0.01
@@ -140,8 +178,18 @@ def test_real_log_writes_every_fitted_figure_with_its_sd_and_source(capsys, tmp_
     assert set(vehicle.uncertainty.keys) >= {"hotel_power", "flight.drag_cd0",
                                              "flight.trim_volume", "top_turn_time"}
     assert np.all(vehicle.uncertainty.sd > 0)
-    # ... the one surfacing gives none
-    assert "surface_time" not in vehicle.uncertainty.keys
+    # ... the one surfacing shows none, so its figures get a spread the file calls an
+    # assumption, independent of the rest; the call the record cut short is a lower bound
+    data = tomllib.loads(text)
+    for key in SURFACING:
+        assert key in vehicle.uncertainty.keys, key
+        assert "sd: assumption" in data[key]["source"] and data[key]["sd"] > 0, key
+    assert data["iridium_time"]["at_least"] is True
+    assert vehicle.uncertainty.at_least == ("iridium_time",)
+    assert "surfacing figures: assumed" in data["uncertainty"]["source"]
+    order = list(vehicle.uncertainty.keys)
+    corr = vehicle.uncertainty.correlation
+    assert corr[order.index("surface_time"), order.index("hotel_power")] == 0.0
     # light in the North Sea water its CTD measured (1023-1025 kg/m3), not 1025
     assert 1023.0 < vehicle.flight.rho_kg_m3 < 1025.0 and vehicle.flight.trim_cc > 0
     assert vehicle.hotel_includes == ("ctd", "optics")  # they logged throughout

@@ -189,6 +189,7 @@ UNCERTAINTY = '\n[uncertainty]\nfigures = ["hotel_power"]\ncorrelation = [[{}]]\
         ("", UNCERTAINTY.format(1), "uncertainty.figures", "no sd next to the figure"),
         (", sd = 0.1", UNCERTAINTY.format(0.5), "uncertainty.correlation",
          "expected a symmetric 1 x 1 matrix"),
+        (', sd = 0.1, at_least = "yes"', "", "hotel_power", "at_least must be true or false"),
     ],
 )
 def test_uncertainty_is_checked(tmp_path, sd, tail, key, message):

@@ -23,9 +23,9 @@ from gliderplan.language import check_source
 from gliderplan.planner.plan import plan_mission
 from gliderplan.power_models import flight, load_sensor, load_vehicle
 from gliderplan.power_models.catalog import preset_path
-from gliderplan.power_models.draws import draw_figures, prediction_spread
+from gliderplan.power_models.draws import draw_figures, draw_vehicles, prediction_spread
 from gliderplan.power_models.flight_fit import fit_flight, steady_glides
-from gliderplan.power_models.forecast import YoCommand, forecast
+from gliderplan.power_models.forecast import YoCommand, energy_interval_j, forecast
 from gliderplan.power_models.forecast_check import check_as_given, check_forward
 from gliderplan.power_models.seawater import density_profile, in_situ_density_kg_m3
 from gliderplan.power_models.vehicle import Uncertainty, figure_value
@@ -151,6 +151,63 @@ def test_draws_follow_the_written_spread_and_correlation():
     assert draw_figures(huge, 1000)[1][:, 0].min() == 0.0
 
 
+def test_a_lower_bound_is_never_drawn_below():
+    vehicle = load_vehicle("slocum_g2_shallow")  # its one call was cut short by the record
+    assert "iridium_time" in vehicle.uncertainty.at_least
+    keys, values = draw_figures(vehicle, 4000, np.random.default_rng(5))
+    calls = values[:, keys.index("iridium_time")]
+    assert calls.min() == vehicle.iridium_s  # half the draws sit on the bound ...
+    assert np.mean(calls > vehicle.iridium_s) == pytest.approx(0.5, abs=0.05)  # ... half above
+    assert calls.max() > 1.5 * vehicle.iridium_s
+
+
+SURFACING = ("surface_power", "iridium_power", "surface_time", "iridium_time")
+
+
+def _spread_of(vehicle, surfacing: bool):
+    """The vehicle with only the surfacing figures' spread (True), or only the others'."""
+    u = vehicle.uncertainty
+    keep = np.array([(k in SURFACING) == surfacing for k in u.keys])
+    keys = tuple(k for k, kept in zip(u.keys, keep, strict=True) if kept)
+    return dataclasses.replace(vehicle, uncertainty=Uncertainty(
+        keys, u.sd[keep], u.correlation[np.ix_(keep, keep)], u.source,
+        tuple(k for k in u.at_least if k in keys)))
+
+
+def test_the_month_s_interval_holds_the_surfacing_figures_spread():
+    vehicle = load_vehicle("slocum_g2_shallow")
+    command = YoCommand(3.0, 38.0, 0.454, 0.454, 230.0, 40)
+    month = 30 * 86400.0
+    nominal = forecast(vehicle, command, horizon_s=month)
+
+    def width(v):
+        low, high = energy_interval_j(draw_vehicles(v, 200, np.random.default_rng(1)), command,
+                                      horizon_s=month)
+        assert low < nominal.energy_j < high
+        return high - low
+
+    # 125 surfacings: their figures' spread (20-30 %) alone moves the month by more than
+    # half the energy they draw (a longer stay takes its time from the dives, which draw
+    # nearly as much), and it widens the whole interval
+    at_surface = sum(nominal.energy_by_component_j[k] for k in ("surface", "iridium"))
+    assert width(_spread_of(vehicle, surfacing=True)) > 0.3 * at_surface
+    assert width(vehicle) > 1.1 * width(_spread_of(vehicle, surfacing=False))
+
+
+def test_scenario_draws_use_the_surfacing_figures_spread():
+    from gliderplan.sim.scenarios import draw_figures as scenario_figures
+
+    vehicle = load_vehicle("slocum_g2_shallow")
+    rng = np.random.default_rng(2)
+    drawn = [scenario_figures(vehicle, {}, rng) for _ in range(400)]
+    for key in SURFACING:
+        values = np.array([d[key] for d in drawn])
+        spread = dict(zip(vehicle.uncertainty.keys, vehicle.uncertainty.sd, strict=True))[key]
+        assert values.std() > 0.3 * spread, key
+    calls = np.array([d["iridium_time"] for d in drawn])
+    assert calls.min() >= vehicle.iridium_s  # a call the log saw cut short: no shorter
+
+
 def test_a_prediction_interval_is_wider_for_fewer_fitted_dives():
     assert prediction_spread(4, 3) == pytest.approx(math.sqrt(1 + 4 / 3))
     assert prediction_spread(7, 1e4) == pytest.approx(1.0, abs=1e-3)
@@ -246,6 +303,11 @@ def test_real_log_forward_forecast_is_within_three_percent_of_the_counter(real_r
         assert abs(error) < 0.10, (kind, f)
     assert "relative_error" in real_report  # the replay stays, labelled as such
     assert real_report["validation"]["kind"].startswith("replay")
+    # the surface stay after it, with the surfacing figures' spread (not a forecast: the
+    # base's surfacing figures come from this log)
+    stay = f["surface_stay"]
+    low, high = stay["interval_j"]
+    assert low < stay["measured_j"] < high and high - low > 0.2 * stay["predicted_j"], stay
 
 
 @needs_logs
