@@ -478,7 +478,7 @@ class FastForward:
             profile = self._depths(glide, depth, count)
             up = np.flatnonzero(profile[1:] <= SURFACE_DEPTH_M)
             climb = int(up[0]) + 1 if len(up) else count
-            if climb < count:  # the last climbing tick is clamped at the surface
+            if len(up):  # the last climbing tick is clamped at the surface, the run's last too
                 profile[climb] = max(0.0, float(profile[climb]))
             legs.append((0, climb, glide, 0))
             depths.append(profile[:climb])

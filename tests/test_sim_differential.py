@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from gliderplan.cli.main import main
@@ -268,12 +268,22 @@ def random_missions(draw) -> str:
             + "\n".join(states))
 
 
+_SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return ends a run on the tick the climb surfaces
+    "mission random\nstate s0\nbegin\n  flightroute noheading\n  flightprofile yo(0, 10, .3, .3)\n"
+    "  sensors missiontime, depth\n  events\n    case missiontime >= 1800 exit\n"
+    "    case depth > 10 call s1\nend\nstate s1\nbegin\n  flightroute noheading\n"
+    "  flightprofile surface\n  sensors missiontime, depth\n  events\n"
+    "    case missiontime >= 253 return\nend\n")
+
+
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(source=random_missions(), ocean=st.sampled_from(["bench", "sea-trial", "uniform"]),
        noise=st.sampled_from(["none", "ctd", "nonmonotonic"]),
        current=st.tuples(st.sampled_from([0.0, 0.05, -0.12]), st.sampled_from([0.0, 0.07])),
        seed=st.integers(0, 2**31), tick_s=st.sampled_from([4.0, 2.0, 3.7]),
        start_s=st.floats(9e8, 2e9), rigid=st.booleans())
+@example(source=_SURFACED_ON_THE_RUN_S_LAST_TICK, ocean="bench", noise="none",
+         current=(0.0, 0.0), seed=0, tick_s=4.0, start_s=9e8, rigid=True)
 def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean, noise,
                                                                   current, seed, tick_s,
                                                                   start_s, rigid):
