@@ -59,6 +59,7 @@ def scenario_executor(workers: int, scheduler: str | None = None
             pool.shutdown(wait=True, cancel_futures=True)
         return
     try:
+        import dask
         from distributed import Client, LocalCluster
     except ImportError:
         raise BackendError(f"--scheduler {scheduler}: Dask distributed is not installed "
@@ -66,8 +67,15 @@ def scenario_executor(workers: int, scheduler: str | None = None
     cluster = None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None)
+            # Scenarios are CPU-bound Python in batches of seconds: no sampling profiler in
+            # the workers, and glibc's malloc left to size its own heap (Dask's trim
+            # threshold sends every large array to mmap, a page fault per page each run).
+            environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ"))
+            environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+            with dask.config.set({"distributed.worker.profile.enabled": False,
+                                  "distributed.nanny.pre-spawn-environ": environ}):
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
+                                       processes=True, dashboard_address=None)
             client = Client(cluster)
         else:
             client = Client(scheduler, timeout=10)
