@@ -27,6 +27,7 @@ from gliderplan.planner.rates import (
     clock_columns,
     state_mode_powers,
     state_profiles,
+    yo_band,
 )
 from gliderplan.power_models.board import Board
 
@@ -79,10 +80,9 @@ def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occ
                          "planned at the nominal speed's time")
             continue
         rates = state_profiles(hardware, state, occupancy, notes)[0]
-        args = [ir.evaluate(a, {}, occupancy.variables[name]) for a in state.profiles[0].args]
-        low, high = args[0], args[1]
-        if state.profiles[0].kind == "thermotrackyo":
-            high = min(high, low + args[5])
+        args = tuple(ir.evaluate(a, {}, occupancy.variables[name])
+                     for a in state.profiles[0].args)
+        low, high = yo_band(state.profiles[0], args)
         pitch = rates.pitch_rad
         load = vehicle.hotel_w + float(np.nanmin(state_mode_powers(hardware, state)))
         c0 = float(vehicle.transit_coefficient(low, high, pitch, 0.0))

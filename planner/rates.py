@@ -48,12 +48,18 @@ def computer_power_w(board: Board, cycles_per_tick: float, tick_s: float = TICK_
     return None if np.isnan(power) else power
 
 
-def _yo_band(profile: ir.Profile, args: tuple[float, ...]) -> tuple[float, float]:
+def yo_band(profile: ir.Profile, args: tuple[float, ...]) -> tuple[float, float]:
+    """The depth band [m] a yo profile is planned at: its own, or for a `thermotrackyo` the
+    band tracking flies on average. Once it has found the thermocline at depth z it flies
+    [max(min, z - h), min(max, z + h)], h = depth_threshold / 2; z is not known before
+    flight, so the band is planned at its mean width over a thermocline anywhere in
+    [min, max] (2 h - h^2 / L, L = max - min, for h <= L), centred in the range."""
     low, high = args[0], args[1]
-    if profile.kind == "thermotrackyo":
-        # Tracking narrows the band to depth_threshold around the thermocline: more
-        # inflections per hour; plan for it (the costlier case).
-        high = min(high, low + args[5])
+    if profile.kind == "thermotrackyo" and high > low:
+        span, half = high - low, args[5] / 2.0
+        width = span if half >= span else 2.0 * half - half * half / span
+        middle = 0.5 * (low + high)
+        low, high = middle - 0.5 * width, middle + 0.5 * width
     return low, high
 
 
@@ -69,13 +75,17 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
     pitch0 = vehicle.nominal_pitch_rad
     if profile.kind in ("yo", "thermotrackyo"):
         args = _profile_args(profile, variables)
-        low, high = _yo_band(profile, args)
+        low, high = yo_band(profile, args)
         pitch = 0.5 * (args[2] + args[3])
         if not (math.isfinite(low) and math.isfinite(high) and 0.0 <= low < high
                 and 0.0 < pitch < math.pi / 2):
             low, high, pitch = vehicle.nominal_min_depth_m, vehicle.nominal_max_depth_m, pitch0
             notes.append(f"{where}: arguments unknown before flight; planned as a yo "
                          f"{low:g}-{high:g} m (the vehicle's nominal)")
+        elif profile.kind == "thermotrackyo":
+            notes.append(f"{where}: thermocline tracking planned as a yo {low:.3g}-{high:.3g} m, "
+                         f"the band it flies on average for a thermocline anywhere in "
+                         f"{args[0]:g}-{args[1]:g} m")
         try:
             speed = float(vehicle.optimal_speed_mps(fixed_load_w, low, high, pitch))
             ballast = min(float(vehicle.yo_ballast_cc(speed, pitch, low, high)),

@@ -505,3 +505,25 @@ def test_every_example_is_planned_to_the_solver_s_full_accuracy(path):
     Fig. 2 reported optimal_inaccurate)."""
     result = plan_mission(mission(str(path.relative_to(ROOT))))
     assert result.solver_status == "optimal"
+
+
+@pytest.mark.parametrize(("low", "high", "threshold"), [(5, 20, 10), (2, 30, 6), (10, 14, 10),
+                                                        (0, 60, 80), (5, 20, 20)])
+def test_thermocline_tracking_is_planned_at_the_band_it_flies_on_average(low, high, threshold):
+    """thermotrackyo flies [max(min, z - h), min(max, z + h)] once it has found the
+    thermocline at z; planned at that band's mean width over z anywhere in [min, max],
+    centred: against the band averaged over z directly."""
+    from gliderplan.language import ir
+    from gliderplan.planner.rates import yo_band
+
+    profile = ir.Profile("thermotrackyo", ())
+    planned = yo_band(profile, (low, high, 0.454, 0.454, 6.0, threshold))
+    z = np.linspace(low, high, 200_001)
+    flown_low = np.maximum(low, z - threshold / 2)
+    flown_high = np.minimum(high, z + threshold / 2)
+    def mean(x: np.ndarray) -> float:  # over z uniform in [min, max]
+        return float(np.trapezoid(x, z)) / (high - low)
+
+    assert planned[1] - planned[0] == pytest.approx(mean(flown_high - flown_low), rel=1e-6)
+    assert 0.5 * sum(planned) == pytest.approx(mean(0.5 * (flown_low + flown_high)), abs=1e-6)
+    assert yo_band(ir.Profile("yo", ()), (low, high, 0.454, 0.454)) == (low, high)

@@ -118,22 +118,23 @@ def _mutate(data: bytes, old: bytes, new: bytes, fix_crc: bool = True) -> bytes:
     (b"mission sampleMission", b"mission 9bad", 2, "NAME"),
     (b"budget_j ", b"budget_j  ", 5, "one space"),
     (b"components hotel pump", b"components hotel hotel", 7, "named twice"),
-    # one assumption: sebastian's hotel load holds the CTD (line 9)
-    (b"assumptions 1", b"assumptions 2", 10, "expected 'assume'"),
-    (b"states 3", b"states 65", 10, "out of range"),
-    (b"predict 1000 2", b"predict -1000 2", 12, "predicted time must be >= 0"),
-    (b"predict 1000 2", b"predict 1000 2.5", 12, "COUNT"),
-    (b"energy 2413.64 ", b"energy ", 13, "takes 8 fields"),
-    (b"energy 2413.64 ", b"energy -2413.64 ", 13, "energy of hotel must be >= 0"),
-    (b"\nend\n", b"\nend \n", 16, "one space"),
-    (b"sensor temp 300 300", b"sensor temp 300 301", 14, "ON_S"),
-    (b"profile 0 1 ", b"profile 0 0.5 ", 15, "sum to"),
-    (b"profile 0 1 ", b"profile 1 1 ", 15, "out of order"),
+    # two assumptions (lines 9, 10): the tracking band s2 is planned at, and sebastian's
+    # hotel load holding the CTD
+    (b"assumptions 2", b"assumptions 3", 11, "expected 'assume'"),
+    (b"states 3", b"states 65", 11, "out of range"),
+    (b"predict 1000 2", b"predict -1000 2", 13, "predicted time must be >= 0"),
+    (b"predict 1000 2", b"predict 1000 2.5", 13, "COUNT"),
+    (b"energy 2413.64 ", b"energy ", 14, "takes 8 fields"),
+    (b"energy 2413.64 ", b"energy -2413.64 ", 14, "energy of hotel must be >= 0"),
+    (b"\nend\n", b"\nend \n", 17, "one space"),
+    (b"sensor temp 300 300", b"sensor temp 300 301", 15, "ON_S"),
+    (b"profile 0 1 ", b"profile 0 0.5 ", 16, "sum to"),
+    (b"profile 0 1 ", b"profile 1 1 ", 16, "out of order"),
     (b"computer ts7800 300", b"computer ts7800 inf", 4, "NUMBER"),
     (b"budget_j ", b"budget_j -", 5, "budget_j must be >= 0"),
     (b"predicted_j ", b"predicted_j -", 6, "predicted_j must be >= 0"),
-    (b"\nend\n", b"\nfin\n", 16, "expected 'end'"),
-    (b"sensor temp 300 300", b"sensor temp 300", 14, "3 fields"),
+    (b"\nend\n", b"\nfin\n", 17, "expected 'end'"),
+    (b"sensor temp 300 300", b"sensor temp 300", 15, "3 fields"),
 ])
 def test_reader_rejects_and_names_the_line(annotated, old, new, line, message):
     _, plan = annotated
