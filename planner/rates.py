@@ -19,8 +19,7 @@ from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy
 from gliderplan.power_models.board import Board
-from gliderplan.power_models.flight import FlightModelError
-from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.power_models.vehicle import Vehicle, flying_yo
 
 
 @dataclass(frozen=True)
@@ -86,15 +85,12 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
             notes.append(f"{where}: thermocline tracking planned as a yo {low:.3g}-{high:.3g} m, "
                          f"the band it flies on average for a thermocline anywhere in "
                          f"{args[0]:g}-{args[1]:g} m")
-        try:
+        with flying_yo(where, vehicle, low, high):
             speed = float(vehicle.optimal_speed_mps(fixed_load_w, low, high, pitch))
             ballast = min(float(vehicle.yo_ballast_cc(speed, pitch, low, high)),
                           vehicle.max_ballast_cc)
             per_hour = float(vehicle.inflections_per_hour(low, high, pitch, ballast))
             actuators_w = float(vehicle.profile_power_w(low, high, pitch, ballast))
-        except FlightModelError as err:
-            raise FlightModelError(f"{where}: a yo {low:g}-{high:g} m on vehicle "
-                                   f"{vehicle.name}: {err}") from None
         pitch_w = vehicle.pitch_energy_j * per_hour / 3600.0
         power = {Component.HOTEL: vehicle.hotel_w, Component.PUMP: actuators_w - pitch_w,
                  Component.PITCH: pitch_w, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}

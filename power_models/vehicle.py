@@ -21,6 +21,8 @@ So u* = (P / 2c)^(1/3): a hungrier hotel load makes the best glider faster.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -31,7 +33,7 @@ from gliderplan.contract.units import UNITS
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
-from gliderplan.power_models.flight import DensityProfile, FlightParams
+from gliderplan.power_models.flight import DensityProfile, FlightModelError, FlightParams
 
 Array = np.ndarray
 
@@ -345,6 +347,18 @@ FIGURES: dict[str, tuple[str, str, dict]] = {
     "flight.trim_volume": ("trim_cc", "volume", {"default": 0.0, "minimum": -np.inf}),
     "flight.compressibility": ("compressibility_per_pa", "compressibility", {"default": 0.0}),
 }
+
+
+@contextmanager
+def flying_yo(where: str, vehicle: Vehicle, min_depth_m: float, max_depth_m: float
+              ) -> Iterator[None]:
+    """Names the state (`where`), the yo band [m] and the vehicle in a FlightModelError
+    raised inside: a yo the vehicle cannot fly, said alike by `plan` and `sim`."""
+    try:
+        yield
+    except FlightModelError as err:
+        raise FlightModelError(f"{where}: a yo {min_depth_m:g}-{max_depth_m:g} m on vehicle "
+                               f"{vehicle.name}: {err}") from None
 
 
 def figure_unit(key: str) -> str:

@@ -17,6 +17,7 @@ from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.planfile import Plan, load_plan
 
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
+    from gliderplan.power_models.vehicle import Vehicle
     from gliderplan.sim.energy import FlightCheck, RunEnergy
     from gliderplan.sim.loop import RunRecord
     from gliderplan.sim.vehicle import Current
@@ -58,6 +59,25 @@ def check_state_dir(state_dir: Path, runtime: str) -> None:
         raise UsageError(f"--state-dir {state_dir}: holds an earlier flight's "
                          f"{', '.join(earlier)}, which the runtime would resume or extend; "
                          "name an empty or new directory")
+
+
+def refuse_unflyable_yos(mission: CheckedMission, vehicle: Vehicle, plan: Plan | None) -> None:
+    """FlightModelError (bad input, exit 1, as `plan` says it) for a yo of constant depths
+    the vehicle cannot fly with the pitch and volume it would be flown at: one deeper than
+    its trim and pumped volume climb back from would leave the simulated glider sinking.
+    A yo whose band reads variables is left to the flight."""
+    from gliderplan.power_models.vehicle import flying_yo
+
+    for i, state in enumerate(mission.states):
+        for k, profile in enumerate(state.profiles):
+            args = profile.constant_args()
+            if profile.kind not in ("yo", "thermotrackyo") or args is None:
+                continue
+            planned = plan.states[i].profiles[k] if plan is not None else None
+            pitch = planned.pitch_rad if planned else 0.5 * (args[2] + args[3])
+            ballast = planned.ballast_cc if planned else vehicle.unplanned_ballast_cc
+            with flying_yo(f"{state.name}: flightprofile {k}", vehicle, args[0], args[1]):
+                vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)
 
 
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
@@ -139,6 +159,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                        noise=NOISE_PRESETS[noise], current=current or Current(),
                        start_epoch_s=start)
     plan = None if plan_path is None else load_plan(plan_path, mission)
+    refuse_unflyable_yos(mission, vehicle, plan)
     if key_path is not None:
         if plan_path is None:
             raise UsageError("--key: the key checks a plan's signature; give --plan too")
