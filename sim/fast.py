@@ -69,11 +69,6 @@ SHORT_RUN_TICKS = 32  # a run costs about what the loop pays for this many ticks
 
 _COMMAND_F32 = struct.Struct("<4f")
 _ONE_F32 = struct.Struct("<f")
-_DEPTH, _LAT, _LON, _HEADING, _TEMP, _CONDUCTIVITY, _SALINITY, _ENERGY = (
-    SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "heading", "temp",
-                                      "conductivity", "salinity", "energy_left"))
-_HALFCYCLE, _WPTDIST, _WPTREACHED, _TIMEOFDAY = (
-    SENSOR_BY_NAME[n].index for n in ("halfcycle", "wptdist", "wptreached", "timeofday"))
 
 
 class _S:
@@ -85,11 +80,12 @@ class _S:
     TEMP, CONDUCTIVITY, SALINITY, CURRENT, HALFCYCLE, WPTDIST, WPTREACHED, TIMEOFDAY = (
         SENSOR_BY_NAME[n].index for n in ("temp", "conductivity", "salinity", "current",
                                           "halfcycle", "wptdist", "wptreached", "timeofday"))
+    ENERGY_LEFT = SENSOR_BY_NAME["energy_left"].index
 
 
 # the executor's own, set before every tick's events
-_RUNTIME_READINGS = (_HALFCYCLE, _WPTDIST, _WPTREACHED)
-_TEMP_BIT = 1 << _TEMP
+_RUNTIME_READINGS = (_S.HALFCYCLE, _S.WPTDIST, _S.WPTREACHED)
+_TEMP_BIT = 1 << _S.TEMP
 _DIVE, _CLIMB = pilot.DIVE, pilot.CLIMB
 
 
@@ -192,11 +188,11 @@ class FastForward:
                        for x in (e.condition, *(a.value for a in e.assignments))]
         expressions += [a for s in mission.states for p in s.profiles for a in p.args]
         self._executor_reads = sorted(compiled.sensors_read(expressions)
-                                      | {_S.MISSIONTIME, _DEPTH, _LAT, _LON, _TEMP})
+                                      | {_S.MISSIONTIME, _S.DEPTH, _S.LAT, _S.LON, _S.TEMP})
         self._covered = [[_covered(p) for p in s.profiles] for s in mission.states]
         # the battery reading changes within a run (the loop's gauge): a mission that reads
         # it is flown tick by tick
-        self._reads_energy = _ENERGY in self._executor_reads
+        self._reads_energy = _S.ENERGY_LEFT in self._executor_reads
         self._rigid = not self.glider.speed_depends_on_depth
         self._ocean = hasattr(science.ocean, "water_along")
         c = self.glider.current
@@ -764,7 +760,7 @@ class _Readings:
             case _S.ALTITUDE:
                 return _f32(BOTTOM_DEPTH_M - f.depth_m[first:stop])
             case _S.LAT | _S.LON:
-                degrees = (self.nav.dr_lat if index == _LAT else self.nav.dr_lon)[first:stop]
+                degrees = (self.nav.dr_lat if index == _S.LAT else self.nav.dr_lon)[first:stop]
                 return _f32(degrees_to_ddmm_array(degrees))
             case _S.BATTERY:
                 return np.full(n, _f32_scalar(BATTERY_V))
@@ -786,16 +782,16 @@ class _Readings:
             case _S.WPTDIST:  # the runtime's own, from this tick's position readings
                 route = self.fast.ex.route
                 return np.array([route.distance_m(a, b) for a, b in zip(
-                    self.sensor(_LAT, first, stop).tolist(),
-                    self.sensor(_LON, first, stop).tolist(), strict=True)])
+                    self.sensor(_S.LAT, first, stop).tolist(),
+                    self.sensor(_S.LON, first, stop).tolist(), strict=True)])
             case _S.TIMEOFDAY:
                 return _f32(np.fmod(self.fast.science.start_epoch_s + self.time_s[first:stop],
                                     SECONDS_PER_DAY))
-        return np.full(n, _f32_scalar(_CONSTANT_READINGS[index]))
+        return np.full(n, _f32_scalar(CONSTANT_READINGS[index]))
 
     def sensor_at(self, index: int, tick: int) -> float:
         """Sensor `index`'s value sent at one tick of the run (binary32)."""
-        if index in _CONSTANT_READINGS:
+        if index in CONSTANT_READINGS:
             return _F32_CONSTANTS[index]
         f = self.flight
         match index:
@@ -810,7 +806,7 @@ class _Readings:
             case _S.LAT | _S.LON:
                 nav = self.nav
                 return _f32_scalar(degrees_to_ddmm(float(
-                    (nav.dr_lat if index == _LAT else nav.dr_lon)[tick])))
+                    (nav.dr_lat if index == _S.LAT else nav.dr_lon)[tick])))
             case _S.BATTERY:
                 return _F32_BATTERY
         return float(self.sensor(index, tick, tick + 1)[0])
@@ -865,9 +861,9 @@ class _Readings:
 # the waypoints reached, which no tick of a run changes), the flight (depth, pitch,
 # altitude, the fixed readings), the CTD, the route (position, heading).
 _SCHEDULE, _FLIGHT, _CTD, _NAV = range(4)
-_STAGE_OF = {_S.MISSIONTIME: _SCHEDULE, _TIMEOFDAY: _SCHEDULE, _WPTREACHED: _SCHEDULE,
-             _TEMP: _CTD, _CONDUCTIVITY: _CTD, _SALINITY: _CTD, _LAT: _NAV, _LON: _NAV,
-             _HEADING: _NAV, _WPTDIST: _NAV}
+_STAGE_OF = {_S.MISSIONTIME: _SCHEDULE, _S.TIMEOFDAY: _SCHEDULE, _S.WPTREACHED: _SCHEDULE,
+             _S.TEMP: _CTD, _S.CONDUCTIVITY: _CTD, _S.SALINITY: _CTD, _S.LAT: _NAV, _S.LON: _NAV,
+             _S.HEADING: _NAV, _S.WPTDIST: _NAV}
 
 
 @dataclass(frozen=True)
@@ -927,8 +923,7 @@ def _staged(state: ir.State) -> _Events:
 
 
 # the science computer's fixed readings (sim/science.py, `readings`)
-_CONSTANT_READINGS = CONSTANT_READINGS
-_F32_CONSTANTS = {k: _f32_scalar(v) for k, v in _CONSTANT_READINGS.items()}
+_F32_CONSTANTS = {k: _f32_scalar(v) for k, v in CONSTANT_READINGS.items()}
 _F32_BATTERY = _f32_scalar(BATTERY_V)
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from gliderplan.language import ir
-from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.power_models.vehicle import Vehicle, flying_yo
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
 
@@ -83,3 +83,22 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
     return record
+
+
+def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
+                         plan: Plan | None) -> None:
+    """FlightModelError (bad input, exit 1, as `plan` says it) for a yo of constant depths
+    the vehicle cannot fly with the pitch and volume it would be flown at: one deeper than
+    its trim and pumped volume climb back from would leave the simulated glider sinking
+    (`gliderplan sim` and `montecarlo` ask before they fly).
+    A yo whose band reads variables is left to the flight."""
+    for i, state in enumerate(mission.states):
+        for k, profile in enumerate(state.profiles):
+            args = profile.constant_args()
+            if profile.kind not in ("yo", "thermotrackyo") or args is None:
+                continue
+            planned = plan.states[i].profiles[k] if plan is not None else None
+            pitch = planned.pitch_rad if planned else 0.5 * (args[2] + args[3])
+            ballast = planned.ballast_cc if planned else vehicle.unplanned_ballast_cc
+            with flying_yo(f"{state.name}: flightprofile {k}", vehicle, args[0], args[1]):
+                vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)

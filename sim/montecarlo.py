@@ -290,6 +290,7 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import plots
     from gliderplan.sim.backends import check_run_size, scenario_executor
+    from gliderplan.sim.flight import refuse_unflyable_yos
     from gliderplan.sim.outputs import parquet_bytes
     from gliderplan.sim.scenarios import read_spec
 
@@ -300,9 +301,11 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_HORIZON_S
     spec = read_spec(scenario_file)
     plan = None if plan_path is None else load_plan(plan_path, mission)
+    vehicle = load_vehicle(mission.vehicle)
+    refuse_unflyable_yos(mission, vehicle, plan)
     budget_j = plan.budget_j if plan is not None else \
         mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
-    job = Job(mission, plan, load_vehicle(mission.vehicle), spec, budget_j, seed, duration,
+    job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
               robust_tracker=tracker == "robust")
     with scenario_executor(workers, scheduler) as executor:
         result = run_montecarlo(job, scenarios, executor, workers, progress)

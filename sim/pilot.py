@@ -202,12 +202,15 @@ class Waypoints:
         self.k = 0
         self.reached = 0
 
+    def _advances(self) -> bool:
+        """Whether reaching the waypoint flown to moves on to another."""
+        return self.loops or self.k + 1 < len(self.points)
+
     def may_reach(self) -> bool:
         """Whether reaching the waypoint flown to would count (advance, or end the list).
         A list that does not loop reaches one waypoint per advance, so it has reached its
         last once it has reached more than its index."""
-        return self.arrives and (self.loops or self.k + 1 < len(self.points)
-                                 or self.reached <= self.k)
+        return self.arrives and (self._advances() or self.reached <= self.k)
 
     def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
         """Distance [m] to the waypoint flown to; NaN without a position or a waypoint."""
@@ -224,7 +227,7 @@ class Waypoints:
         north, east = offset_m(lat, lon, *self.points[self.k])
         if math.hypot(north, east) <= self.radius_m and self.may_reach():
             self.reached += 1
-            if self.loops or self.k + 1 < len(self.points):
+            if self._advances():
                 self.k = (self.k + 1) % len(self.points)
                 north, east = offset_m(lat, lon, *self.points[self.k])
         return bearing_rad(north, east), True

@@ -17,7 +17,6 @@ from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.planfile import Plan, load_plan
 
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
-    from gliderplan.power_models.vehicle import Vehicle
     from gliderplan.sim.energy import FlightCheck, RunEnergy
     from gliderplan.sim.loop import RunRecord
     from gliderplan.sim.vehicle import Current
@@ -61,25 +60,6 @@ def check_state_dir(state_dir: Path, runtime: str) -> None:
                          "name an empty or new directory")
 
 
-def refuse_unflyable_yos(mission: CheckedMission, vehicle: Vehicle, plan: Plan | None) -> None:
-    """FlightModelError (bad input, exit 1, as `plan` says it) for a yo of constant depths
-    the vehicle cannot fly with the pitch and volume it would be flown at: one deeper than
-    its trim and pumped volume climb back from would leave the simulated glider sinking.
-    A yo whose band reads variables is left to the flight."""
-    from gliderplan.power_models.vehicle import flying_yo
-
-    for i, state in enumerate(mission.states):
-        for k, profile in enumerate(state.profiles):
-            args = profile.constant_args()
-            if profile.kind not in ("yo", "thermotrackyo") or args is None:
-                continue
-            planned = plan.states[i].profiles[k] if plan is not None else None
-            pitch = planned.pitch_rad if planned else 0.5 * (args[2] + args[3])
-            ballast = planned.ballast_cc if planned else vehicle.unplanned_ballast_cc
-            with flying_yo(f"{state.name}: flightprofile {k}", vehicle, args[0], args[1]):
-                vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)
-
-
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, runtime: str = "python",
                 ocean: str = "bench", noise: str = "ctd", tracker: str = "robust",
@@ -121,7 +101,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim import export, outputs
     from gliderplan.sim import plots as drawing
     from gliderplan.sim.export import parse_utc, utc_text
-    from gliderplan.sim.flight import fly
+    from gliderplan.sim.flight import fly, refuse_unflyable_yos
     from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig
     from gliderplan.sim.ocean import load_ocean
     from gliderplan.sim.plotter import PlotProcess

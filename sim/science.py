@@ -52,11 +52,18 @@ BATTERY_V = 15.0  # assumption: alkaline pack voltage, constant over the run
 CONSTANT_READINGS: dict[int, float] = {SENSOR_BY_NAME[name].index: value for name, value in (
     ("roll", 0.0), ("oxygen", 250.0), ("chlorophyll", 1.0), ("backscatter", 0.001),
     ("modem", 0.0))}
-_BLANK_READINGS = tuple(CONSTANT_READINGS.get(i, math.nan) for i in range(N_SENSORS))
-# the readings `ScienceComputer.readings` measures each tick, in the order it lists them
-_MEASURED = tuple(SENSOR_BY_NAME[name].index for name in (
-    "missiontime", "depth", "pitch", "heading", "altitude", "lat", "lon", "battery", "temp",
-    "conductivity", "salinity", "current", "timeofday", "energy_left"))
+_ROLL, _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, _MODEM = (
+    CONSTANT_READINGS[SENSOR_BY_NAME[name].index]
+    for name in ("roll", "oxygen", "chlorophyll", "backscatter", "modem"))
+# `ScienceComputer.readings` lists every sensor's reading in the registry's order (a list
+# built whole each tick, the loop's hot path): the order it writes, by name, checked here
+_READINGS_ORDER = ("missiontime", "depth", "pitch", "roll", "heading", "altitude", "lat",
+                   "lon", "battery", "temp", "conductivity", "salinity", "oxygen",
+                   "chlorophyll", "backscatter", "current", "modem", "halfcycle", "wptdist",
+                   "timeofday", "energy_left", "wptreached")
+if _READINGS_ORDER != tuple(s.name for s in SENSORS) or len(SENSORS) != N_SENSORS:
+    raise ImportError("sim/science.py: ScienceComputer.readings lists the sensors in another "
+                      "order than the registry: update _READINGS_ORDER and the list")
 _NOISE_BLOCK = 4096  # random numbers drawn per numpy call
 SECONDS_PER_DAY = 86400.0
 
@@ -187,15 +194,16 @@ class ScienceComputer:
             measured += self.noise.spike_c * self.spikes.next()
         depth = max(0.0, g.depth_m + noise.depth_sigma_m * z_depth)
         c = self.glider.current
-        values = list(_BLANK_READINGS)  # the constants; the runtime's readings stay NaN
-        for index, value in zip(_MEASURED, (
-                time_s, depth, g.pitch_rad, g.heading_rad, BOTTOM_DEPTH_M - g.depth_m,
-                degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
-                measured, conductivity_s_m(measured, salinity), salinity,
-                math.hypot(c.north_mps, c.east_mps),
-                math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
-                self.energy_left_j), strict=True):
-            values[index] = value
+        values = [  # in _READINGS_ORDER; the runtime's own readings are never sent: NaN
+            time_s, depth, g.pitch_rad, _ROLL, g.heading_rad, BOTTOM_DEPTH_M - g.depth_m,
+            degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
+            measured, conductivity_s_m(measured, salinity), salinity,
+            _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, math.hypot(c.north_mps, c.east_mps), _MODEM,
+            math.nan, math.nan,  # halfcycle, wptdist
+            math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
+            self.energy_left_j,
+            math.nan,  # wptreached
+        ]
         mask = powered_mask(self.sensor_power)
         self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan
         return mask, values

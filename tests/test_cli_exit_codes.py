@@ -152,11 +152,13 @@ CASES = [
     ("a yo deeper than the vehicle can climb back from", [  # once an internal error
         ["plan", "{deep}"], ["compare-sbc", "{deep}"], ["report", "{deep}", "-o", "out"],
         ["sim", "{deep}", "-o", "out"],  # the simulated glider once sank to 501 m, exit 0
+        ["montecarlo", "{deep}", "--scenarios", "2", "-o", "out"],
         ["power", "energy", "--max-depth", "500"],
         ["power", "speed", "--hotel-w", "1", "--max-depth", "500"],
     ], ExitCode.BAD_INPUT, "the glider cannot climb below "),
     ("a pitch the calibrated glider would fly below 0", [  # its dive error is -2.2 deg
         ["plan", "{flat}"], ["compare-sbc", "{flat}"], ["sim", "{flat}", "-o", "out"],
+        ["montecarlo", "{flat}", "--scenarios", "2", "-o", "out"],
         ["power", "energy", "--pitch-deg", "1"],
     ], ExitCode.BAD_INPUT, "a glide's pitch must lie strictly between 0 and pi/2 rad"),
     ("a negative seed", [

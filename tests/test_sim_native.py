@@ -6,6 +6,7 @@ test_sim_fast.py; here, that they stay inside the arrays they are given."""
 
 from __future__ import annotations
 
+import ast
 import os
 import shutil
 import subprocess
@@ -14,9 +15,19 @@ from pathlib import Path
 
 import pytest
 
-NATIVE = Path(__file__).resolve().parents[1] / "sim" / "native.c"
-FLAGS = ["-std=c11", "-O1", "-g", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off",
-         "-fno-builtin-sin", "-fno-builtin-cos", "-fsanitize=address,undefined",
+REPO = Path(__file__).resolve().parents[1]
+NATIVE = REPO / "sim" / "native.c"
+
+
+def build_flags() -> list[str]:
+    """The flags setup.py builds native.c with (those that keep Python's bits among them)."""
+    for node in ast.walk(ast.parse((REPO / "setup.py").read_text())):
+        if isinstance(node, ast.keyword) and node.arg == "extra_compile_args":
+            return ast.literal_eval(node.value)
+    raise AssertionError("setup.py gives native.c no extra_compile_args")
+
+
+FLAGS = [*build_flags(), "-O1", "-g", "-fsanitize=address,undefined",
          "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-shared", "-fPIC"]
 
 EXERCISE = r"""
