@@ -124,7 +124,8 @@ def _forecast_text(f: dict) -> list[str]:
         f"forward forecast: fit on {f['fit']}; forecast {f['forecast']}",
         f"  given: yo {c['yo_band_m'][0]:.1f}-{c['yo_band_m'][1]:.1f} m, pitch "
         f"{c['dive_pitch_rad']:.3f}/{c['climb_pitch_rad']:.3f} rad, {c['ballast_cc']:.0f} cc, "
-        f"surface after {c['dives_before_surfacing']} dives, the fit part's CTD",
+        f"surfacing after {' + '.join(map(str, c['surfacing_cycles']))} dives, the fit "
+        "part's CTD and surfacings",
         f"  energy     predicted {f['predicted_j']:7.0f} J  measured {f['measured_j']:7.0f} J  "
         f"{f['energy_relative_error']:+.2%}  (90 % interval {lo:.0f}-{hi:.0f} J)",
         f"  time       predicted {f['time_s']['predicted']:7.0f} s  measured "

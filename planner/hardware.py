@@ -12,10 +12,11 @@ from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, ExitCode, same_clock
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
-from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
+from gliderplan.power_models import load_battery, load_board, load_vehicle
 from gliderplan.power_models.battery import energy_to_j
 from gliderplan.power_models.board import Board, board_spec
 from gliderplan.power_models.catalog import preset_names
+from gliderplan.power_models.devices import sensor_on
 from gliderplan.power_models.sensor import Sensor
 from gliderplan.power_models.vehicle import Vehicle
 
@@ -125,7 +126,7 @@ def load_hardware(mission: ir.CheckedMission, *, battery: str | None = None,
     else:
         energy, preset_reserve = parse_battery(battery)
         reserve = mission.battery.reserve_fraction if preset_reserve is None else preset_reserve
-    devices = {d: load_sensor(d) for d in mission_devices(mission)}
+    devices = {d: sensor_on(vehicle, d) for d in mission_devices(mission)}
     overridden = frozenset(k for k, v in (("battery", battery), ("computer", computer)) if v)
     return Hardware(vehicle, board, modes, energy, reserve, devices, overridden,
                     cycles_per_tick, board_modes, held)

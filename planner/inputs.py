@@ -30,6 +30,7 @@ from gliderplan.planner.rates import (
     yo_band,
 )
 from gliderplan.power_models.board import Board
+from gliderplan.power_models.devices import base_power_w, held_power_w
 
 SENSOR_PERIOD_S = 300.0  # on/off period of a duty-cycled sensor (long against its warm-up)
 PROFILE_CYCLE_S = 1800.0  # period over which alternative profiles alternate (a few yos)
@@ -84,7 +85,9 @@ def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occ
                      for a in state.profiles[0].args)
         low, high = yo_band(state.profiles[0], args)
         pitch = rates.pitch_rad
-        load = vehicle.hotel_w + float(np.nanmin(state_mode_powers(hardware, state)))
+        # billed per second of the leg: the base load and the computer (the instruments
+        # are billed per metre, for their on-time)
+        load = base_power_w(vehicle) + float(np.nanmin(state_mode_powers(hardware, state)))
         c0 = float(vehicle.transit_coefficient(low, high, pitch, 0.0))
         k = float(vehicle.transit_coefficient(low, high, pitch, 1.0)) - c0
         e = float(vehicle.pitch_j_per_m(low, high, pitch))
@@ -230,9 +233,10 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
     quality_min = {p.sensor: p.quality_min for p in mission.sensor_preferences
                    if p.quality_min > 0.0}
     cols = list(zip(*duty, strict=True)) if duty else [()] * 7
-    held = set(hardware.vehicle.hotel_includes)  # counted once: in the hotel load
-    notes += [f"{name}: in the vehicle's hotel load, not added again"
-              for name in dict.fromkeys(k[1] for k in devs) if name in held]
+    held = held_power_w(hardware.vehicle)  # billed as they run: the base load is without
+    notes += [f"{name}: in the vehicle's hotel load ({held[name]:.3g} W), billed for the "
+              "time the mission runs it" for name in dict.fromkeys(k[1] for k in devs)
+              if name in held]
     return PlanInputs(
         mission=mission, hardware=hardware, occupancy=occupancy,
         states=tuple(s.name for s in mission.states),
@@ -242,12 +246,11 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
         weight=np.array(cols[4], float), duty_lo=np.array(cols[5], float),
         duty_hi=np.array(cols[6], float), fixed=tuple(fixed),
         dev_state=np.array([k[0] for k in devs], int), dev_name=tuple(k[1] for k in devs),
-        dev_power_w=np.array([0.0 if k[1] in held else hardware.devices[k[1]].on_power_w
-                              for k in devs], float),
+        dev_power_w=np.array([hardware.devices[k[1]].on_power_w for k in devs], float),
         dev_lo=np.array(dev_lo, float),
         dev_hi=np.array([1.0 if a else lo for a, lo in zip(dev_auto, dev_lo, strict=True)]),
-        dev_warmup_j=np.array([hardware.devices[k[1]].warmup_j if auto and k[1] not in held
-                               else 0.0 for k, auto in zip(devs, dev_auto, strict=True)], float),
+        dev_warmup_j=np.array([hardware.devices[k[1]].warmup_j if auto else 0.0
+                               for k, auto in zip(devs, dev_auto, strict=True)], float),
         prof_state=np.array(prof_state, int), profiles=tuple(profiles),
         clocks=clocks,
         mode_state=np.repeat(np.arange(n_s), len(clocks)),

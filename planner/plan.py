@@ -39,6 +39,7 @@ from gliderplan.planner.planfile import (
     StatePlan,
     as_written,
 )
+from gliderplan.power_models.devices import base_power_w
 
 _ON_EDGE = 1e-6  # a duty this close to 0 or 1 does not cycle (no warm-ups)
 _SHARE_EDGE = 1e-5  # a profile share this small is solver noise (5 ms of a 500 s state)
@@ -158,6 +159,7 @@ def choose_plan(model: PlanModel, budget_j: float, origin: str = "") -> Choice:
             raise PlanningError(f"the quality floor {floor:g} cannot be reached: the best "
                                 f"this mission can do is {best.quality:.4g}")
         _check_budget(inputs, chosen, budget_j, origin)
+        least = chosen  # the floor's least energy: no budget below it can be planned on
         priced = model.solve_quality(chosen.model_energy_j)
         shadow = priced.budget_dual if priced.optimal else 0.0
         if priced.status == "optimal" and priced.quality > chosen.quality:
@@ -292,7 +294,7 @@ def state_energy_j(inputs: PlanInputs, sol: Solution) -> list[dict[str, float]]:
     times = state_times_s(inputs, sol)
     tr, vehicle = inputs.transit, inputs.hardware.vehicle
     for i, s in enumerate(tr.state):
-        result[s][Component.HOTEL] = vehicle.hotel_w * float(times[s])
+        result[s][Component.HOTEL] = base_power_w(vehicle) * float(times[s])
         result[s][Component.PUMP] = float(tr.length_m[i] * tr.pump_j[i] / sol.pace[i] ** 2)
         result[s][Component.PITCH] = float(tr.length_m[i] * tr.pitch_j_per_m[i])
     n_modes = len(inputs.clocks)

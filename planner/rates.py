@@ -19,6 +19,7 @@ from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy
 from gliderplan.power_models.board import Board
+from gliderplan.power_models.devices import base_power_w
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 
 
@@ -92,7 +93,7 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
             per_hour = float(vehicle.inflections_per_hour(low, high, pitch, ballast))
             actuators_w = float(vehicle.profile_power_w(low, high, pitch, ballast))
         pitch_w = vehicle.pitch_energy_j * per_hour / 3600.0
-        power = {Component.HOTEL: vehicle.hotel_w, Component.PUMP: actuators_w - pitch_w,
+        power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: actuators_w - pitch_w,
                  Component.PITCH: pitch_w, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
         return ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch, ballast)
     # surface and hover do not glide: the plan file still carries a glide command, the
@@ -107,8 +108,8 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
                  Component.SURFACE: vehicle.surface_w * (1.0 - call_fraction) + fixed_w,
                  Component.IRIDIUM: vehicle.iridium_w * call_fraction}
     else:  # hover: holds a depth with small corrections, counted in the hotel load
-        power = {Component.HOTEL: vehicle.hotel_w, Component.PUMP: 0.0, Component.PITCH: 0.0,
-                 Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
+        power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: 0.0,
+                 Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
     return ProfileRates(index, profile.kind, power, 0.0, speed, pitch0, ballast)
 
 

@@ -64,4 +64,5 @@ def concatenate(log: FlightLog, dives: list[Dive]) -> FlightLog:
         for name in FlightLog.SERIES
         if name not in ("t_s", "charge_ah")
     }
-    return replace(log, t_s=np.concatenate(times), charge_ah=np.concatenate(charge), **joined)
+    return replace(log, t_s=np.concatenate(times), charge_ah=np.concatenate(charge),
+                   device_on=np.concatenate([p.devices_on() for p in pieces]), **joined)

@@ -4,7 +4,10 @@ A calibrated vehicle file gives each fitted figure a standard deviation and the 
 correlation (from the bootstrap over dives). A draw is a multivariate normal sample of
 those figures around their values, kept inside what a data file may hold (a power is
 never negative, a drag coefficient is positive) and above a figure that is a lower bound
-(`at_least`: a call the record cut short); the other figures stay as they are.
+(`at_least`: a call the record cut short); the other figures stay as they are. A draw in
+which the instruments the hotel load holds draw more than the hotel load itself (their
+published figures are wide, the load is measured) is drawn again: a base load is never
+negative.
 Draws come from a seeded generator, so a forecast's interval is reproducible.
 """
 
@@ -12,10 +15,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from gliderplan.power_models.vehicle import FIGURES, Vehicle, figure_value, with_figures
+from gliderplan.power_models.devices import held_power_w
+from gliderplan.power_models.vehicle import (
+    Vehicle,
+    device_key,
+    figure_spec,
+    figure_value,
+    with_figures,
+)
 
 DEFAULT_DRAWS = 400
 DEFAULT_SEED = 11
+MAX_REDRAWS = 50  # a row still unphysical after this many (vanishingly rare) bills a 0 W base
 
 
 def prediction_spread(fitted_dives: int, forecast_dives: float) -> float:
@@ -38,13 +49,20 @@ def draw_figures(
     rng = rng or np.random.default_rng(DEFAULT_SEED)
     mean = np.array([figure_value(vehicle, k) for k in u.keys])
     # correlated standard normals, then scaled: the figures' units differ by 20 orders of
-    # magnitude, too many for one covariance matrix; and a correlation written to 3
-    # decimals may be a hair short of positive semi-definite
-    eigenvalues, vectors = np.linalg.eigh(u.correlation)
-    root = vectors * np.sqrt(np.clip(eigenvalues, 0.0, None))
-    values = mean + (rng.standard_normal((n, len(mean))) @ root.T) * (u.sd * spread)
+    # magnitude, too many for one covariance matrix
+    root = correlation_root(u.correlation)
+
+    def draw(rows: int) -> np.ndarray:
+        return mean + (rng.standard_normal((rows, len(mean))) @ root.T) * (u.sd * spread)
+
+    values = draw(n)
+    for _ in range(MAX_REDRAWS if held_power_w(vehicle) else 0):
+        bad = np.flatnonzero(_base_w(vehicle, u.keys, values) < 0.0)
+        if not bad.size:
+            break
+        values[bad] = draw(bad.size)
     for j, key in enumerate(u.keys):
-        options = FIGURES[key][2]
+        options = figure_spec(key)[2]
         low = options.get("minimum", 0.0)
         if options.get("positive"):
             low = max(low, 1e-9 * abs(mean[j]) if mean[j] else 1e-12)
@@ -52,6 +70,26 @@ def draw_figures(
             low = max(low, mean[j])
         values[:, j] = np.maximum(values[:, j], low)
     return u.keys, values
+
+
+def correlation_root(correlation: np.ndarray) -> np.ndarray:
+    """R with R R^T = `correlation`, its negative eigenvalues taken as 0: a correlation
+    written to 3 decimals may be a hair short of positive semi-definite, where a Cholesky
+    factorisation fails."""
+    eigenvalues, vectors = np.linalg.eigh(correlation)
+    return vectors * np.sqrt(np.clip(eigenvalues, 0.0, None))
+
+
+def _base_w(vehicle: Vehicle, keys: tuple[str, ...], values: np.ndarray) -> np.ndarray:
+    """(n,) [W] the base load of each drawn row: its hotel load less the instruments the
+    hotel holds (`devices.base_power_w` over rows of figures)."""
+    def column(key: str) -> np.ndarray | float:
+        return values[:, keys.index(key)] if key in keys else figure_value(vehicle, key)
+
+    held = held_power_w(vehicle)
+    return column("hotel_power") - sum(
+        (column(device_key(d)) if vehicle.device(d) is not None else w)
+        for d, w in held.items())
 
 
 def draw_vehicles(

@@ -2,8 +2,9 @@
 what a pilot knows before flying them, and compare with the coulomb counter.
 
 The forecast is given the later part's commanded yo band, pitch and pumped volume, its
-surfacing schedule (the number of dives before the glider climbs to the surface: a
-command of the yo behaviour) and the ocean (the fit part's CTD). Durations, speeds, yo
+surfacing schedule (the number of dives before each climb to the surface: a command of
+the yo and surface behaviours; the stays at the surface between them are forecast with
+the fit part's surfacing figures) and the ocean (the fit part's CTD). Durations, speeds, yo
 periods, pumped volumes and energies of the later part are outputs, never inputs. The
 bottom of the band is the dive target or, when the sea floor stopped the dives before
 it, the depth the fit part's dives turned at (the floor less the altimeter's clearance).
@@ -40,7 +41,7 @@ from gliderplan.power_models.forecast import (
     Forecast,
     YoCommand,
     energy_interval_j,
-    forecast,
+    forecast_cycles,
 )
 from gliderplan.power_models.slocum_log import FlightLog
 from gliderplan.power_models.vehicle import Vehicle
@@ -54,6 +55,7 @@ from gliderplan.power_models.vehicle_fit import (
 )
 
 SPEED_BAND_MARGIN = 0.15  # vertical speeds are compared on the band less 15 % at each end
+MIN_STAY_S = 60.0  # [s] at the surface between two dives: a surfacing, not a shallow turn
 MIN_FIT_DIVES = 2
 
 
@@ -63,7 +65,7 @@ class Observed:
 
     time_s: float  # from the cut to the arrival at the surface
     energy_j: float  # coulomb counter over that span
-    yo_period_s: float  # mean time between successive turns of a kind
+    yo_period_s: float  # mean time between successive turns of a kind, the surface not between
     w_mps: dict[str, float]  # mean vertical speed of dives / climbs over the speed band
     yos: int
 
@@ -72,6 +74,7 @@ class Observed:
 class ForwardCheck:
     fit_dives: int
     later_dives: int
+    cycles: tuple[int, ...]  # the later part's dives before each climb to the surface
     cut_s: float  # record time where the later part starts
     calibration: VehicleFit  # of the fit part
     command: YoCommand
@@ -140,8 +143,10 @@ def _observed(log: FlightLog, later: list[Dive], cut: int, arrival: int,
     t, z = log.t_s, log.depth_m
     turns = {"top": [d.top_turn for d in later if d.top_turn is not None],
              "bottom": [d.bottom_turn for d in later if d.bottom_turn is not None]}
+    # a period between two turns with a stay at the surface in between is no yo's
     periods = [t[b.moving] - t[a.moving] for events in turns.values()
-               for a, b in zip(events[:-1], events[1:], strict=True)]
+               for a, b in zip(events[:-1], events[1:], strict=True)
+               if not _stayed_at_surface(log, a.stop, b.moving)]
     speeds: dict[str, list[float]] = {"dive": [], "climb": []}
     for k, dive in enumerate(later):
         halves = [("dive", dive.top_turn, dive.bottom_turn)]
@@ -200,6 +205,39 @@ class LaterPart:
     arrival: int  # sample where its last climb reaches the surface
     command: YoCommand
     observed: Observed
+    cycles: tuple[int, ...]  # dives before each climb to the surface
+    from_surface: bool  # the later part starts at the surface (not at the yo's top)
+
+    def forecast(self, vehicle: Vehicle, ocean: DensityProfile | None) -> Forecast:
+        """The later part forecast by `vehicle` through `ocean`."""
+        return forecast_cycles(vehicle, self.command, self.cycles, ocean, self.from_surface)
+
+
+def _stayed_at_surface(log: FlightLog, start: int, stop: int) -> bool:
+    """Whether the glider stayed at the surface between samples `start` and `stop`: an
+    Iridium call, or MIN_STAY_S above SURFACE_DEPTH_M (a yo turning near the surface
+    touches it for a moment)."""
+    span = slice(start, max(stop, start + 1))
+    shallow = log.depth_m[span][:-1] < seg.SURFACE_DEPTH_M
+    stay = float(np.sum(np.diff(log.t_s[span])[shallow[:len(log.t_s[span]) - 1]]))
+    return bool(log.iridium_on[span].any()) or stay >= MIN_STAY_S
+
+
+def _cycles(log: FlightLog, later: list[Dive]) -> tuple[int, ...]:
+    """Dives before each climb to the surface: a dive is the last of its cycle when the
+    glider stayed at the surface before the next one's top turn (the record's last one
+    always)."""
+    counts, dives = [], 0
+    for dive, after in zip(later, later[1:] + [None], strict=True):
+        dives += 1
+        if after is None or dive.bottom_turn is None or after.top_turn is None:
+            surfaced = after is None
+        else:
+            surfaced = _stayed_at_surface(log, dive.bottom_turn.stop, after.top_turn.moving)
+        if surfaced:
+            counts.append(dives)
+            dives = 0
+    return tuple(counts)
 
 
 def later_part(log: FlightLog, fit_share: float = 0.5) -> LaterPart:
@@ -214,7 +252,10 @@ def later_part(log: FlightLog, fit_share: float = 0.5) -> LaterPart:
     command = _command(log, fit, later)
     cut, arrival = later[0].start, _arrival(log, later)
     observed = _observed(log, later, cut, arrival, _speed_band(command))
-    return LaterPart(fit, later, cut, arrival, command, observed)
+    top = later[0].top_turn
+    from_surface = top is not None and log.depth_m[top.moving] < seg.SURFACE_DEPTH_M
+    return LaterPart(fit, later, cut, arrival, command, observed, _cycles(log, later),
+                     from_surface)
 
 
 def predicted_w_mps(vehicle: Vehicle, command: YoCommand,
@@ -234,7 +275,7 @@ def check_as_given(log: FlightLog, vehicle: Vehicle, fit_share: float = 0.5) -> 
     fitted on."""
     part = later_part(log, fit_share)
     ocean = log_ocean(log.slice(0, part.cut + 1))
-    predicted = forecast(vehicle, part.command, ocean)
+    predicted = part.forecast(vehicle, ocean)
     w = predicted_w_mps(vehicle, part.command, ocean)
     o = part.observed
     return {"energy": predicted.energy_j / o.energy_j - 1.0,
@@ -250,14 +291,15 @@ def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
     fit_log = log.slice(0, cut + 1)
     calibration = fit_vehicle(fit_log, base, resamples)
     vehicle = calibration.vehicle
-    predicted = forecast(vehicle, command, calibration.ocean)
+    predicted = part.forecast(vehicle, calibration.ocean)
     bias, step = _bias(fit_log)
     rng = np.random.default_rng(DEFAULT_SEED)
     drawn = draw_vehicles(vehicle, DEFAULT_DRAWS, rng,
                           prediction_spread(len(part.fit), len(part.later)))
     # the counter is read at both ends of the span: each reading is off by up to a step
     quantisation = step * (rng.random(len(drawn)) - rng.random(len(drawn)))
-    interval = energy_interval_j(drawn, command, calibration.ocean, noise_j=quantisation)
+    interval = energy_interval_j(drawn, command, calibration.ocean, noise_j=quantisation,
+                                 cycles=part.cycles, from_surface=part.from_surface)
     fitted = {f.key for f in calibration.figures if f.fitted}
     stay_pred = stay_meas = stay_interval = None
     if arrival < log.t_s.size - 1:
@@ -274,7 +316,8 @@ def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
         low, high = np.percentile(energies, [tail, 100.0 - tail])
         stay_interval = (float(low), float(high))
     return ForwardCheck(
-        fit_dives=len(part.fit), later_dives=len(part.later), cut_s=float(log.t_s[cut]),
+        fit_dives=len(part.fit), later_dives=len(part.later), cycles=part.cycles,
+        cut_s=float(log.t_s[cut]),
         calibration=calibration, command=command, forecast=predicted, interval_j=interval,
         observed=part.observed, speed_band_m=_speed_band(command),
         predicted_w_mps=predicted_w_mps(vehicle, command, calibration.ocean),

@@ -27,8 +27,10 @@ from gliderplan.power_models.forecast_check import ForwardCheck, check_forward, 
 from gliderplan.power_models.model_writer import to_toml
 from gliderplan.power_models.slocum_log import FlightLog, read_flight_log
 from gliderplan.power_models.vehicle import (
+    DEVICE_FIGURES,
     FIGURES,
     Vehicle,
+    device_key,
     figure_unit,
     load_vehicle,
     read_vehicle_file,
@@ -70,7 +72,8 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
         "dives": fit.dives,
         "bootstrap_refits": fit.resamples,
         "figures": [_figure_json(f) for f in fit.figures],
-        "hotel_includes": list(log.payload),
+        "hotel_includes": list(fit.vehicle.hotel_includes),
+        "devices": _devices_json(fit),
         "pump_events": fit.energy.pump_events,
         "pump_rms_j": fit.energy.pump_rms_j,
         "flight_rms_w_mps": fit.flight.rms_w_mps,
@@ -100,6 +103,23 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
     if output is not None:
         report["output"] = str(_write_vehicle(Path(output), name, base, fit, log))
     return Calibration(fit.vehicle, report, relative_error)
+
+
+def _devices_json(fit: VehicleFit) -> dict:
+    """The glide's power split: the base load, each device's figure and what it rests on,
+    the devices merged into the base."""
+    d = fit.devices
+    figures = {f.key: f for f in fit.figures}
+    return {
+        "base_w": d.base_w,
+        "glide_s": d.glide_s,
+        "rms_w": d.rms_w,
+        "merged_into_base": list(d.merged),
+        "table": [{"device": f.device, "kind": f.kind, "on_power_w": f.on_power_w,
+                   "sd_w": figures[device_key(f.device)].sd, "duty": f.duty,
+                   "fitted": f.fitted, "in_hotel": f.held, "basis": f.basis,
+                   "flag": f.flag or None} for f in d.figures],
+    }
 
 
 def _figure_json(figure: Figure) -> dict:
@@ -136,7 +156,7 @@ def _forecast_json(check: ForwardCheck) -> dict:
                     f"({check.cut_s:.0f} s to the surface), from the fit alone",
         "command": {"yo_band_m": [c.top_m, c.bottom_m], "dive_pitch_rad": c.dive_pitch_rad,
                     "climb_pitch_rad": c.climb_pitch_rad, "ballast_cc": c.ballast_cc,
-                    "dives_before_surfacing": c.dives_per_surfacing},
+                    "surfacing_cycles": list(check.cycles)},
         "time_s": {"predicted": f.time_to_surface_s, "measured": o.time_s},
         "yo_period_s": {"predicted": f.yo_period_s, "measured": o.yo_period_s},
         "vertical_speed_mps": speeds,
@@ -169,6 +189,10 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
     data["name"] = name
     data["description"] = f"calibrated from {', '.join(Path(f).name for f in log.files)}"
     figures = {f.key: f for f in fit.figures}
+    data["devices"] = {
+        device.name: _device_table(device.kind, [figures.get(device_key(device.name, k))
+                                                 for k in DEVICE_FIGURES], logs)
+        for device in fit.vehicle.devices}
     for key in FIGURES:
         table, short = (data["flight"], key[7:]) if key.startswith("flight.") else (data, key)
         figure = figures.get(key)
@@ -184,11 +208,13 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
             why = figure.basis if figure is not None else "not a figure the log measures"
             table[short] = {**table[short],
                             "source": f"base {base} ({why}): {table[short]['source']}"}
+    held = fit.vehicle.hotel_includes
     data["hotel_includes"] = {
-        "devices": list(log.payload),
+        "devices": list(held),
         "source": f"gliderplan calibrate on {logs}: the fitted hotel load is the whole "
-                  "glider gliding, with the science sensors that logged while it glided "
-                  f"({', '.join(log.payload) or 'none'})",
+                  "glider gliding, with the instruments on throughout its glides and the "
+                  f"fin's moving share ({', '.join(held) or 'none'}); a mission that does not "
+                  "run an instrument is billed without it",
     }
     u = fit.vehicle.uncertainty
     if u is not None:
@@ -206,6 +232,20 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
     _check_loads(text, output)
     write_atomically(output, text)
     return output
+
+
+def _device_table(kind: str, figures: list[Figure | None], logs: str) -> dict:
+    """A `[devices.NAME]` table: its kind and each figure with unit, source and sd."""
+    table: dict = {"kind": kind}
+    for key, figure in zip(DEVICE_FIGURES, figures, strict=True):
+        if figure is None:
+            continue
+        entry = {"value": float(f"{figure.value:.6g}"), "unit": figure_unit(figure.key),
+                 "source": f"gliderplan calibrate on {logs}: {figure.basis}"}
+        if figure.sd is not None:
+            entry["sd"] = float(f"{figure.sd:.3g}")
+        table[key] = entry
+    return table
 
 
 def _check_loads(text: str, output: Path) -> None:

@@ -33,14 +33,17 @@ def _is_table(entry: dict[str, Any]) -> bool:
 
 
 def to_toml(data: dict[str, Any], header: str = "") -> str:
-    """TOML text of a model file: top-level keys, then one level of [tables]."""
+    """TOML text of a model file: top-level keys, then [tables], a table of tables as
+    [name.sub] (the device table: [devices.dvl])."""
     lines = [f"# {line}" for line in header.splitlines()]
     tables = {k: v for k, v in data.items() if isinstance(v, dict) and _is_table(v)}
     for key, value in data.items():
         if key not in tables:
             lines.append(f"{key} = {_toml_value(value)}")
     for name, table in tables.items():
-        lines.append("")
-        lines.append(f"[{name}]")
-        lines.extend(f"{k} = {_toml_value(v)}" for k, v in table.items())
+        nested = all(isinstance(v, dict) and _is_table(v) for v in table.values())
+        for sub_name, sub in (table.items() if nested else [(None, table)]):
+            lines.append("")
+            lines.append(f"[{name}.{sub_name}]" if nested else f"[{name}]")
+            lines.extend(f"{k} = {_toml_value(v)}" for k, v in sub.items())
     return "\n".join(lines) + "\n"

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 ALL_SCIENCE = 0  # sensor_type 0: C_SCIENCE_ALL_ON, every instrument at once
 
 
@@ -28,7 +30,8 @@ class Instrument:
 
     @property
     def switch(self) -> str:
-        """The flight computer's sampling-interval variable, e.g. `c_flntu_on`."""
+        """The flight computer's sampling-interval variable, e.g. `c_flntu_on`, in lower
+        case (the firmware writes some with capitals: `c_bb3sloV2_on`, `c_FIRe_on`)."""
         return f"c_{self.name.lower()}_on"
 
 
@@ -67,6 +70,19 @@ _TABLE = (
 INSTRUMENTS: dict[int, Instrument] = {i.sensor_type: i for i in _TABLE}
 # sensor_type numbers the firmware has deleted (a mission naming one is refused by it)
 DELETED = {2: "HS2", 7: "WHPAR", 8: "WHGPBM", 36: "OHF", 55: "GAMMA_RAD5"}
+
+
+def sampling_duty(interval_s: np.ndarray | float, warmup_s: float, sample_hz: float
+                  ) -> np.ndarray:
+    """Share of the time [1] an instrument is powered when sampled every `interval_s` [s]
+    (a `c_<name>_on` value or a `sample` behaviour's `intersample_time`): 0 when < 0 (off)
+    or unknown (NaN), 1 when 0 (as fast as possible); else its warm-up [s] and one sample
+    period (1 / `sample_hz` [Hz]) each interval, at most 1."""
+    interval = np.asarray(interval_s, float)
+    awake = warmup_s + 1.0 / sample_hz
+    with np.errstate(divide="ignore", invalid="ignore"):
+        duty = np.where(interval > 0.0, np.minimum(awake / interval, 1.0), 1.0)
+    return np.where(np.isfinite(interval) & (interval >= 0.0), duty, 0.0)
 
 
 def devices() -> tuple[str, ...]:

@@ -4,8 +4,10 @@ Returns the time series the calibration needs, on the flight computer's sample t
 SI units (volumes in cc): depth, pitch, pumped volume, coulomb counter and current,
 battery voltage, Iridium and actuator-motion flags, the pump's own velocity readings and
 its software limit, what the glider was commanded (pitch, pumped volume, climb and dive
-targets), and the water's in-situ density from the science computer's CTD (TEOS-10; NaN
-where the CTD had no reading).
+targets), the water's in-situ density from the science computer's CTD (TEOS-10; NaN
+where the CTD had no reading), and the state of each device with a power figure of its
+own: each science instrument's share of the time it was powered, from the flight
+computer's switch for it (`slocum_instruments`), and whether the fin moved.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import read_input
+from gliderplan.power_models import slocum_instruments
 
 # dbd variable -> field; the first is the time base every other series is synced onto.
 _SERIES = (
@@ -41,6 +44,8 @@ _POSITION = ("m_gps_lat", "m_gps_lon")
 # software pumps [cc] (a setting, logged once)
 _PUMP_VELOCITY, _PUMP_LIMIT = "m_ballast_pumped_vel", "x_ballast_pumped_max"
 _SAME_CYCLE_S = 1.0  # a reading this close to a flight sample was logged in its cycle
+_FIN = "m_fin"  # the fin's measured position [rad]
+FIN_MOVE_RAD = 0.002  # the fin moved between two samples when its position changed more
 # science instruments (the prefix of their variables) -> the power-model device they are
 _PAYLOAD = (
     ("sci_ctd41cp", "ctd"), ("sci_oxy3835", "optode"), ("sci_oxy4", "optode"),
@@ -110,6 +115,10 @@ class FlightLog:
     dive_target_m: float = float("nan")
     payload: tuple[str, ...] = ()  # devices that logged readings (their power is in the log)
     ballast_limit_cc: float = float("nan")  # x_ballast_pumped_max: the pump's software limit
+    device_names: tuple[str, ...] = ()  # the columns of `device_on`
+    # (n, len(device_names)) [1]: the share of each sample's cycle a device was on (an
+    # instrument: its sampling duty; the fin: 1 if it moved before the next sample)
+    device_on: np.ndarray | None = None
 
     # the per-sample series, in the order of the fields above
     SERIES = (
@@ -125,7 +134,13 @@ class FlightLog:
     def slice(self, start: int, stop: int) -> FlightLog:
         """Samples start..stop-1 (times stay relative to the whole log's start)."""
         cut = {name: getattr(self, name)[start:stop] for name in self.SERIES}
-        return replace(self, **cut)
+        return replace(self, **cut, device_on=self.devices_on()[start:stop])
+
+    def devices_on(self) -> np.ndarray:
+        """`device_on`, (n, 0) for a log without device states."""
+        if self.device_on is None:
+            return np.zeros((self.t_s.size, 0))
+        return self.device_on
 
 
 def expand_log_paths(paths: list[str]) -> list[str]:
@@ -165,6 +180,7 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         synced = logs.get_sync(*(name for name, _ in _SERIES))
         volt_t, volt = logs.get("m_battery")
         optional = _optional_series(logs, np.asarray(synced[0], float))
+        names, states = _device_states(logs, np.asarray(synced[0], float))
     except (dbdreader.DbdError, OSError, ValueError) as err:
         raise LogError(f"cannot read the logs: {' '.join(str(err).split())}") from None
     for name in files:
@@ -201,6 +217,8 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         commanded_ballast_cc=series["commanded_ballast_cc"],
         commanded_pitch_rad=series["commanded_pitch_rad"],
         pump_velocity_cc_s=series["pump_velocity_cc_s"],
+        device_names=names,
+        device_on=states[good],
         **{k: v for k, v in optional.items() if not isinstance(v, np.ndarray)},
     )
 
@@ -277,6 +295,35 @@ def _optional_series(logs, t: np.ndarray) -> dict:  # noqa: ANN001
                                         lat, lon)
             out["density_kg_m3"] = np.interp(t, pressure_t[real], rho, np.nan, np.nan)
     return out
+
+
+def _device_states(logs, t: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:  # noqa: ANN001
+    """(device names, (n, k) on-shares at the flight samples' times `t` [epoch s]) of every
+    science device whose switch the logs hold and that was ever on, and of the fin if its
+    position is logged. An instrument sampled every N s is powered for its warm-up and one
+    sample each interval (`slocum_instruments.sampling_duty`, with its preset's figures);
+    several instruments of one device (two optics pucks) count as on when either is."""
+    from gliderplan.power_models.sensor import load_sensor
+
+    logged = {n.lower(): n for kind in logs.parameterNames.values() for n in kind}
+    names, columns = [], []
+    for device in slocum_instruments.devices():
+        preset = load_sensor(device)
+        shares = [slocum_instruments.sampling_duty(_held(found, t), preset.warmup_s,
+                                                   preset.sample_hz)
+                  for instrument in slocum_instruments.instruments_of(device)
+                  if instrument.switch in logged
+                  and (found := _read(logs, logged[instrument.switch])) is not None]
+        if shares and np.max(shares) > 0.0:
+            names.append(device)
+            columns.append(np.max(shares, axis=0))
+    fin = _read(logs, _FIN) if _FIN in logged else None
+    if fin is not None:
+        position = _held(fin, t)
+        moved = np.abs(np.diff(position)) > FIN_MOVE_RAD
+        names.append("fin")
+        columns.append(np.append(moved, False).astype(float))
+    return tuple(names), np.column_stack(columns) if columns else np.zeros((t.size, 0))
 
 
 def _payload(logs) -> tuple[str, ...]:  # noqa: ANN001

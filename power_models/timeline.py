@@ -37,14 +37,17 @@ def energy_by_component_j(
     vehicle: Vehicle,
     board: Board | None = None,
     sensors: list[Sensor] | tuple[Sensor, ...] = (),
+    gliding_w: float | None = None,
 ) -> dict[str, np.ndarray]:
-    """Energy [J] per step of each component: the vehicle's base load by phase (hotel,
-    surface, Iridium), pump runs, battery shifts, the computer and the sensors (with a
-    warm-up at every switch-on). A missing board or sensor list contributes nothing."""
+    """Energy [J] per step of each component: the vehicle's load by phase (hotel while it
+    glides, at `gliding_w` [W], default its whole hotel load; surface, Iridium), pump runs,
+    battery shifts, the computer and the sensors (with a warm-up at every switch-on). A
+    missing board or sensor list contributes nothing."""
     phase, dt = timeline.phase, timeline.dt_s
     gliding = (phase == GLIDE) | (phase == PUMP) | (phase == PITCH)
+    hotel_w = vehicle.hotel_w if gliding_w is None else gliding_w
     parts = {
-        Component.HOTEL: np.where(gliding, vehicle.hotel_w * dt, 0.0),
+        Component.HOTEL: np.where(gliding, hotel_w * dt, 0.0),
         Component.SURFACE: np.where(phase == SURFACE, vehicle.surface_w * dt, 0.0),
         Component.IRIDIUM: np.where(phase == IRIDIUM, vehicle.iridium_w * dt, 0.0),
         Component.PUMP: vehicle.pump_energy_j(timeline.depth_m, timeline.pumped_out_cc)

@@ -52,6 +52,29 @@ class Uncertainty:
 
 
 @dataclass(frozen=True)
+class Device:
+    """A device of the glider with a power figure of its own: a science instrument (named
+    as its sensor preset, e.g. "dvl") or an actuator of the flight ("fin").
+
+    An instrument draws `on_power_w` [W] while the mission runs it; an actuator draws it
+    while it moves, which it does for `duty` [1] of the time the glider glides."""
+
+    name: str
+    kind: str  # "sensor" | "actuator"
+    on_power_w: float
+    duty: float = 1.0
+
+
+DEVICE_KINDS = ("sensor", "actuator")
+# a device's figures in the vehicle file's [devices.NAME] table: key -> (attribute,
+# dimension, options as for FIGURES)
+DEVICE_FIGURES: dict[str, tuple[str, str, dict]] = {
+    "on_power": ("on_power_w", "power", {}),
+    "duty": ("duty", "dimensionless", {"default": 1.0, "maximum": 1.0}),
+}
+
+
+@dataclass(frozen=True)
 class Vehicle:
     """A glider's energy figures. Powers [W], energies [J], volumes [cc], times [s]."""
 
@@ -79,8 +102,14 @@ class Vehicle:
     dive_pitch_error_rad: float = 0.0  # |flown| - |commanded| pitch of a dive (servo deadband)
     climb_pitch_error_rad: float = 0.0  # the same for a climb
     hotel_includes: tuple[str, ...] = ()  # devices ("ctd", "computer", ...) in the hotel load
+    devices: tuple[Device, ...] = ()  # devices with figures of their own (the file's [devices])
+    base_drift_w: float = 0.0  # sd [W] of the hotel load between deployments (another year)
     uncertainty: Uncertainty | None = field(default=None, compare=False)
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
+
+    def device(self, name: str) -> Device | None:
+        """The device table's entry for `name`, or None."""
+        return next((d for d in self.devices if d.name == name), None)
 
     def neutral(self) -> Vehicle:
         """The same glider trimmed neutral in uniform water of its reference density, its
@@ -176,7 +205,7 @@ class Vehicle:
             self.top_turn_s + self.bottom_turn_s
         )
 
-    def _yo_cycle(
+    def yo_cycle(
         self,
         min_depth_m: Array | float,
         max_depth_m: Array | float,
@@ -211,7 +240,7 @@ class Vehicle:
         ballast_cc: Array | float,
     ) -> Array:
         """Inflections per hour [h-1] of a yo (two per dive-climb cycle)."""
-        time, _, _ = self._yo_cycle(min_depth_m, max_depth_m, pitch_rad, ballast_cc)
+        time, _, _ = self.yo_cycle(min_depth_m, max_depth_m, pitch_rad, ballast_cc)
         return 2.0 * 3600.0 / time
 
     def profile_power_w(
@@ -222,7 +251,7 @@ class Vehicle:
         ballast_cc: Array | float,
     ) -> Array:
         """Mean pump + pitch-motor power [W] of flying a yo, excluding the hotel load."""
-        time, energy, _ = self._yo_cycle(min_depth_m, max_depth_m, pitch_rad, ballast_cc)
+        time, energy, _ = self.yo_cycle(min_depth_m, max_depth_m, pitch_rad, ballast_cc)
         return energy / time
 
     def energy_per_km_j(
@@ -236,7 +265,7 @@ class Vehicle:
         """Energy [J] per horizontal km of a yo with a hotel load `hotel_w` [W]
         (default: the vehicle's own; pass vehicle + board + sensors for a mission)."""
         hotel = self.hotel_w if hotel_w is None else np.asarray(hotel_w, float)
-        time, energy, distance = self._yo_cycle(min_depth_m, max_depth_m, pitch_rad, ballast_cc)
+        time, energy, distance = self.yo_cycle(min_depth_m, max_depth_m, pitch_rad, ballast_cc)
         return 1000.0 * (hotel * time + energy) / distance
 
     def transit_coefficient(
@@ -252,7 +281,7 @@ class Vehicle:
         c holds the pump energy and the hotel load spent while pumping (both grow with the
         pumped volume, hence with u^2); `hotel_w` [W] defaults to the vehicle's own. The
         closed form is exact for a glider trimmed neutral in uniform water without
-        compressibility; a calibrated trim and compressibility are in `_yo_cycle` only.
+        compressibility; a calibrated trim and compressibility are in `yo_cycle` only.
         """
         hotel = self.hotel_w if hotel_w is None else np.asarray(hotel_w, float)
         band = np.asarray(max_depth_m, float) - np.asarray(min_depth_m, float)
@@ -306,7 +335,11 @@ class Vehicle:
 
 def load_vehicle(spec: str) -> Vehicle:
     """Load a vehicle: a preset name (`slocum_g2_shallow`, ...) or a path to a .toml file."""
-    return read_vehicle_file(resolve("vehicle", spec))
+    from gliderplan.power_models.devices import check_hotel  # it bills devices of vehicles
+
+    vehicle = read_vehicle_file(resolve("vehicle", spec))
+    check_hotel(vehicle)
+    return vehicle
 
 
 # file key -> (attribute, dimension, options); a flight key is "flight.<key>". Every figure
@@ -361,21 +394,46 @@ def flying_yo(where: str, vehicle: Vehicle, min_depth_m: float, max_depth_m: flo
                                f"{vehicle.name}: {err}") from None
 
 
+def figure_spec(key: str) -> tuple[str, str, dict]:
+    """(attribute, dimension, options) of a figure by its data-file key: a key of FIGURES, or
+    a device's "devices.NAME.on_power" / "devices.NAME.duty". KeyError for any other."""
+    if key.startswith("devices."):
+        _, _, figure = key.rpartition(".")
+        return DEVICE_FIGURES[figure]
+    return FIGURES[key]
+
+
+def device_key(device: str, figure: str = "on_power") -> str:
+    """The data-file key of a device's figure."""
+    return f"devices.{device}.{figure}"
+
+
 def figure_unit(key: str) -> str:
     """The model's unit of a figure, as a data file writes it."""
-    dimension = FIGURES[key][1]
+    dimension = figure_spec(key)[1]
     return next(u for u, factor in UNITS[dimension].items() if factor == 1.0)
 
 
 def with_figures(vehicle: Vehicle, values: dict[str, float]) -> Vehicle:
     """A copy of `vehicle` with figures replaced, keyed as in the data file [model units]."""
-    top = {FIGURES[k][0]: float(v) for k, v in values.items() if not k.startswith("flight.")}
+    top = {FIGURES[k][0]: float(v) for k, v in values.items()
+           if not k.startswith(("flight.", "devices."))}
     fl = {FIGURES[k][0]: float(v) for k, v in values.items() if k.startswith("flight.")}
-    return replace(vehicle, flight=replace(vehicle.flight, **fl), **top)
+    devices = tuple(
+        replace(d, **{DEVICE_FIGURES[f][0]: float(values[device_key(d.name, f)])
+                      for f in DEVICE_FIGURES if device_key(d.name, f) in values})
+        for d in vehicle.devices)
+    return replace(vehicle, flight=replace(vehicle.flight, **fl), devices=devices, **top)
 
 
 def figure_value(vehicle: Vehicle, key: str) -> float:
     """A figure of `vehicle` by its data-file key [model unit]."""
+    if key.startswith("devices."):
+        name, figure = key[len("devices."):].rsplit(".", 1)
+        device = vehicle.device(name)
+        if device is None:
+            raise KeyError(key)
+        return float(getattr(device, DEVICE_FIGURES[figure][0]))
     owner = vehicle.flight if key.startswith("flight.") else vehicle
     return float(getattr(owner, FIGURES[key][0]))
 
@@ -400,11 +458,14 @@ def read_vehicle_file(path: Path) -> Vehicle:
         raise top.error("nominal_max_depth", "must be deeper than nominal_min_depth")
     flight_attrs = {FIGURES[k][0] for k in FIGURES if k.startswith("flight.")}
     params = FlightParams(**{a: v for a, v in values.items() if a in flight_attrs})
+    devices = _devices(top, spreads, bounds)
     vehicle = Vehicle(
         name=top.text("name"),
         description=top.text("description", ""),
         flight=params,
-        hotel_includes=_hotel_includes(top),
+        hotel_includes=_hotel_includes(top, devices),
+        devices=devices,
+        base_drift_w=top.quantity("base_drift", "power", 0.0),
         uncertainty=_uncertainty(top, spreads, bounds),
         path=path,
         **{a: v for a, v in values.items() if a not in flight_attrs},
@@ -413,20 +474,51 @@ def read_vehicle_file(path: Path) -> Vehicle:
     return vehicle
 
 
-def _hotel_includes(top: Table) -> tuple[str, ...]:
-    """Devices the hotel load already holds (`hotel_includes = { devices = [...], source }`)."""
+def _devices(top: Table, spreads: dict[str, float], bounds: set[str]) -> tuple[Device, ...]:
+    """The `[devices.NAME]` tables: `kind`, `on_power` and (an actuator's) `duty`, each
+    figure with its source and, when calibrated, its sd (into `spreads`, keyed
+    "devices.NAME.FIGURE"). A sensor must be named as a sensor preset."""
+    if not top.has("devices"):
+        return ()
+    devices = []
+    tables = top.table("devices")
+    for name in tables.data:
+        table = tables.table(name)
+        kind = table.text("kind")
+        if kind not in DEVICE_KINDS:
+            raise table.error("kind", f"expected one of {', '.join(DEVICE_KINDS)}, got {kind!r}")
+        if kind == "sensor" and name not in preset_names("sensor"):
+            raise table.error(None, f"unknown sensor device {name!r}; expected one of "
+                              f"{', '.join(preset_names('sensor'))}")
+        figures = {}
+        for figure, (attr, dimension, options) in DEVICE_FIGURES.items():
+            figures[attr] = table.quantity(figure, dimension, **options)
+            spread = table.sd(figure, dimension)
+            if spread is not None:
+                spreads[device_key(name, figure)] = spread
+            if table.at_least(figure):
+                bounds.add(device_key(name, figure))
+        table.finish()
+        devices.append(Device(name, kind, **figures))
+    tables.finish()
+    return tuple(devices)
+
+
+def _hotel_includes(top: Table, devices: tuple[Device, ...]) -> tuple[str, ...]:
+    """Devices the hotel load already holds (`hotel_includes = { devices = [...], source }`):
+    a sensor preset, the computer, or a device of the file's own table."""
     if not top.has("hotel_includes"):
         return ()
     table = top.table("hotel_includes")
-    devices = table.text_list("devices")
+    devices_held = table.text_list("devices")
     table.text("source")
-    known = {*preset_names("sensor"), Component.COMPUTER}
-    for device in devices:
+    known = {*preset_names("sensor"), Component.COMPUTER, *(d.name for d in devices)}
+    for device in devices_held:
         if device not in known:
             raise table.error("devices", f"unknown device {device!r}; expected one of "
                               f"{', '.join(sorted(known))}")
     table.finish()
-    return tuple(devices)
+    return tuple(devices_held)
 
 
 def _uncertainty(top: Table, spreads: dict[str, float], bounds: set[str]) -> Uncertainty | None:

@@ -4,6 +4,9 @@ evidence behind it and, from a bootstrap over whole dives, how sure it is.
 - energy: hotel, surface and Iridium power, pump and pitch energy (`calibration.py`, from
   the current sensor); no fixed energy per surfacing on top of a fitted surface power,
   which holds the air pump and the GPS already;
+- devices: the glide's power split into a base load and each logged device's
+  (`device_fit.py`): an instrument the log cannot separate keeps its published figure,
+  with the sd its published span gives, and the hotel load holds it;
 - pump: its rate from its own velocity readings, its largest volume from its software
   limit (the base's pump figures are another glider's);
 - flight: drag Cd0, trim and hull compressibility (`flight_fit.py`, with gliderflight and
@@ -28,6 +31,7 @@ import numpy as np
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.calibration import EnergyFit, fit_energy
+from gliderplan.power_models.device_fit import DeviceFit, fit_devices
 from gliderplan.power_models.dives import Dive, concatenate, split_dives
 from gliderplan.power_models.fit_figure import Figure
 from gliderplan.power_models.flight import DensityProfile, glide_leg
@@ -40,7 +44,13 @@ from gliderplan.power_models.surfacing_fit import (
     surfacing_figures,
     surfacing_spread,
 )
-from gliderplan.power_models.vehicle import Uncertainty, Vehicle, with_figures
+from gliderplan.power_models.vehicle import (
+    Device,
+    Uncertainty,
+    Vehicle,
+    device_key,
+    with_figures,
+)
 
 BOOTSTRAP_RESAMPLES = 40
 SEED = 2014
@@ -61,6 +71,7 @@ class VehicleFit:
     figures: tuple[Figure, ...]
     energy: EnergyFit
     flight: FlightFit
+    devices: DeviceFit
     ocean: DensityProfile  # the water the log flew through (its CTD)
     dives: int
     resamples: int  # bootstrap refits that succeeded
@@ -194,15 +205,42 @@ def _surfacing_energy(energy: EnergyFit, base: Vehicle) -> Figure:
                   "kept with the base's surface power: the log holds too little surface time")
 
 
+def _device_figures(fit: DeviceFit) -> list[Figure]:
+    """The device table's figures: each device's power (fitted, or its published figure
+    with that figure's sd), and an actuator's share of the glide it moves."""
+    figures = []
+    for f in fit.figures:
+        basis = f"{f.basis}; FLAGGED: {f.flag}" if f.flag else f.basis
+        figures.append(Figure(device_key(f.device), f.on_power_w, f.fitted, basis, f.sd_w))
+        if f.kind == "actuator":
+            figures.append(Figure(device_key(f.device, "duty"), f.duty, f.fitted,
+                                  f"the share of {fit.glide_s:.0f} s of glide it moved"))
+    return figures
+
+
+def with_devices(vehicle: Vehicle, fit: DeviceFit, logged: tuple[str, ...]) -> Vehicle:
+    """`vehicle` with the device table and the hotel load's devices of a device fit; a
+    device the log says nothing of (not in `logged`) stays as the vehicle has it."""
+    fitted = {f.device for f in fit.figures}
+    table = tuple(d for d in vehicle.devices if d.name not in fitted) + tuple(
+        Device(f.device, f.kind, f.on_power_w, f.duty if f.kind == "actuator" else 1.0)
+        for f in fit.figures)
+    held = tuple(d for d in vehicle.hotel_includes if d not in logged) + tuple(
+        f.device for f in fit.figures if f.held)
+    return replace(vehicle, devices=table, hotel_includes=held)
+
+
 def fit_once(log: FlightLog, base: Vehicle, ocean: DensityProfile | None = None
-             ) -> tuple[Vehicle, list[Figure], EnergyFit, FlightFit]:
+             ) -> tuple[Vehicle, list[Figure], EnergyFit, FlightFit, DeviceFit]:
     """One fit of every figure the log supports; the others stay as in `base`."""
     parts = seg.segment(log)
     if ocean is None:
         ocean = log_ocean(log)
     energy = fit_energy(log, base)
     flight = fit_flight(log, base.flight)
+    devices = fit_devices(log, parts, seg.interval_energy_j(log))
     figures = [Figure(c.key, c.value, c.fitted, c.basis) for c in energy.coefficients]
+    figures += _device_figures(devices)
     figures += [*_pump_figures(log, parts, base), _surfacing_energy(energy, base)]
     steady = f"{flight.samples} steady-glide samples (gliderflight, CTD density)"
     figures += [
@@ -214,12 +252,13 @@ def fit_once(log: FlightLog, base: Vehicle, ocean: DensityProfile | None = None
                "samples: the water the trim is given in"),
     ]
     figures += _pitch_errors(log)
-    vehicle = with_figures(energy.vehicle, {f.key: f.value for f in figures if f.fitted})
+    vehicle = with_devices(energy.vehicle, devices, log.device_names)
+    vehicle = with_figures(vehicle, {f.key: f.value for f in figures if f.fitted})
     vehicle = replace(vehicle, flight=flight.params)
     figures += _turn_times(log, split_dives(log, parts), vehicle, ocean)
     figures += surfacing_figures(find_surfacings(log, parts))
     vehicle = with_figures(vehicle, {f.key: f.value for f in figures if f.fitted})
-    return vehicle, figures, energy, flight
+    return vehicle, figures, energy, flight, devices
 
 
 def log_ocean(log: FlightLog) -> DensityProfile:
@@ -236,7 +275,7 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
     surfacing figures (`surfacing_fit`); a figure kept from `base` keeps its sd."""
     ocean = log_ocean(log)
     try:
-        vehicle, figures, energy, flight = fit_once(log, base, ocean)
+        vehicle, figures, energy, flight, devices = fit_once(log, base, ocean)
     except FlightFitError as err:
         raise CalibrationError(str(err)) from None
     dives = split_dives(log)
@@ -247,8 +286,12 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
     kept = base.uncertainty
     kept_keys = () if kept is None else tuple(k for k in kept.keys if k not in fitted)
     kept_sd = {} if kept is None else dict(zip(kept.keys, kept.sd, strict=True))
+    # published figures of devices the log cannot separate: their own sd, independent
+    published = [f for f in figures if not f.fitted and f.sd is not None]
     blocks = [(keys, sd, correlation), (surfacing.keys, surfacing.sd, surfacing.correlation),
-              (kept_keys, np.array([kept_sd[k] for k in kept_keys]), np.eye(len(kept_keys)))]
+              (kept_keys, np.array([kept_sd[k] for k in kept_keys]), np.eye(len(kept_keys))),
+              (tuple(f.key for f in published), np.array([f.sd for f in published]),
+               np.eye(len(published)))]
     all_keys = tuple(k for block in blocks for k in block[0])
     spread = dict(zip(all_keys, np.concatenate([b[1] for b in blocks]), strict=True))
     figures = [replace(f, sd=spread.get(f.key), basis=f"{f.basis}; {surfacing.basis[f.key]}"
@@ -260,12 +303,15 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
             source += f"; {surfacing.source}"
         if kept_keys:
             source += f"; {', '.join(kept_keys)}: the base's sd, independent"
+        if published:
+            source += "; " + ", ".join(f.key for f in published) + ": published figures " \
+                "(sd from their published span), independent"
         at_least = (*surfacing.at_least,
                     *(k for k in kept_keys if kept is not None and k in kept.at_least))
         uncertainty = Uncertainty(all_keys, np.array([spread[k] for k in all_keys]),
                                   _block_diagonal([b[2] for b in blocks]), source, at_least)
     return VehicleFit(replace(vehicle, uncertainty=uncertainty), tuple(figures), energy,
-                      flight, ocean, len(dives), refits)
+                      flight, devices, ocean, len(dives), refits)
 
 
 def _over_dives(log: FlightLog, dives: list[Dive], start: Vehicle, figures: list[Figure],
@@ -279,7 +325,7 @@ def _over_dives(log: FlightLog, dives: list[Dive], start: Vehicle, figures: list
     for _ in range(resamples if len(dives) >= 2 else 0):
         picked = [dives[i] for i in rng.integers(0, len(dives), len(dives))]
         try:
-            _, refit, _, _ = fit_once(concatenate(log, picked), start, ocean)
+            _, refit, _, _, _ = fit_once(concatenate(log, picked), start, ocean)
         except (FlightFitError, ValueError):
             continue  # a resample without enough steady glides: it says nothing
         values = {f.key: f.value for f in refit if f.fitted}

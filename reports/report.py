@@ -330,10 +330,15 @@ class Star:
 
 def _star(model, frontier: pd.DataFrame, report: dict) -> Star:
     """Where the plan sits against the curve. A plan is on the curve's model when it
-    needs the least budget the curve starts at (a plan given by --plan may have been made
-    for another computer or workload, or on simulated times; a battery moves only the
-    budget, not the curve)."""
+    needs the least budget the curve's model gives its objective: where the curve starts,
+    or for a mission that minimises energy to a quality floor, that floor's least energy
+    (a plan given by --plan may have been made for another computer or workload, or on
+    simulated times; a battery moves only the budget, not the curve)."""
+    objective = model.inputs.mission.objective
     least = float(frontier["budget_j"].iloc[0])
+    if objective.sense == "minimize_energy" and objective.quality_floor:
+        floor = model.solve_energy(objective.quality_floor)
+        least = floor.model_energy_j if floor.optimal else math.nan
     budgeted = float(report["budgeted_energy_j"])
     same = math.isclose(report["minimum_energy_j"], least, rel_tol=1e-6)
     best = model.solve_quality(budgeted).quality if same else math.nan

@@ -4,8 +4,8 @@ Every component is integrated over the run's ticks with `power_models.timeline` 
 vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
 pitch motor, the surface and Iridium phases, the computer at the clock of each state
 from its workload per tick, and each sensor device from its on/off timeline (with a
-warm-up at every switch-on), except what the vehicle's hotel load already holds
-(`hotel_includes`: a fitted hotel load measured with the CTD logging has it inside).
+warm-up at every switch-on) at the vehicle's own figure (`power_models.devices`): the
+hotel load is billed less the instruments it holds, which are billed while they run.
 `check_flight` compares the run with the plan's prediction per state, which the plan file
 carries.
 
@@ -27,8 +27,9 @@ from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
 from gliderplan.planner.planfile import Plan
-from gliderplan.power_models import load_board, load_sensor
+from gliderplan.power_models import load_board
 from gliderplan.power_models.catalog import preset_names
+from gliderplan.power_models.devices import base_power_w, sensor_on
 from gliderplan.power_models.timeline import Timeline, energy_by_component_j, sensor_energy_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.loop import RunRecord
@@ -88,7 +89,8 @@ class Billing:
     def __init__(self, mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None,
                  dt: float) -> None:
         self.vehicle, self.dt, self.n_states = vehicle, dt, len(mission.states)
-        self.held = vehicle.hotel_includes  # devices whose power the hotel load already holds
+        self.held = vehicle.hotel_includes  # the computer in it: not billed again
+        self.gliding_w = base_power_w(vehicle)  # the instruments it holds: billed as they run
         board = load_board(mission.computer.board, mission.computer.clock_mhz)
         if plan is not None and plan.computer in preset_names("board") \
                 and plan.computer != board.name:
@@ -111,7 +113,7 @@ class Billing:
 
         self.computer_w = np.array([tick_j(i) / dt for i in range(self.n_states)])  # [W]
         self.boot_j = board.boot_j  # booted at its default clock in the first tick
-        self.sensors = {d: load_sensor(d) for d in DEVICES if d not in self.held}
+        self.sensors = {d: sensor_on(vehicle, d) for d in DEVICES}
 
     def per_tick_j(self, c: Mapping[str, np.ndarray], boot: bool = True
                    ) -> dict[str, np.ndarray]:
@@ -123,7 +125,7 @@ class Billing:
         timeline = Timeline(dt_s=dt, phase=c["phase"].astype(np.int8), depth_m=c["depth_m"],
                             pumped_out_cc=c["pumped_out_cc"], pumped_in_cc=c["pumped_in_cc"],
                             inflection=c["inflection"].astype(bool))
-        parts = energy_by_component_j(timeline, vehicle)
+        parts = energy_by_component_j(timeline, vehicle, gliding_w=self.gliding_w)
         computer = self.computer_w[np.minimum(state, self.n_states - 1)] * dt
         if boot:
             computer[:1] += self.boot_j

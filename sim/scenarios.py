@@ -32,6 +32,7 @@ import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import read_input_text
+from gliderplan.power_models.draws import correlation_root
 from gliderplan.power_models.vehicle import FIGURES, Vehicle, figure_value, with_figures
 from gliderplan.sim.ocean import InternalWave, Thermocline
 from gliderplan.sim.science import SensorNoise
@@ -286,7 +287,7 @@ def draw_figures(vehicle: Vehicle, relative_sd: dict[str, float],
         return {}
     full = np.eye(len(keys))
     full[:correlation.shape[0], :correlation.shape[0]] = correlation
-    factor = np.linalg.cholesky(full + 1e-12 * np.eye(len(keys)))
+    factor = correlation_root(full)
     z = np.array([_normal_quantile(float(u)) for u in rng.random(len(keys))])
     offsets = np.asarray(sd) * (factor @ z)
     values = {}

@@ -55,7 +55,7 @@ def test_the_pump_and_the_surfacing_are_the_log_s_not_the_base_s():
     from gliderplan.power_models.vehicle_fit import fit_once
 
     base = load_vehicle("slocum_g3")  # 20.5 cc/s, +-560 cc, 389 J per surfacing
-    vehicle, figures, _, _ = fit_once(_synthetic_log(), base)
+    vehicle, figures, *_ = fit_once(_synthetic_log(), base)
     fitted = {f.key: f for f in figures if f.fitted}
     assert vehicle.pump_rate_cc_s == pytest.approx(sg.PUMP_RATE_CC_S, rel=0.01)
     assert vehicle.max_ballast_cc == sg.truth().max_ballast_cc != base.max_ballast_cc
@@ -74,7 +74,7 @@ def test_a_log_without_the_pump_s_readings_keeps_the_base_s_rate_and_says_why():
     log = replace(log, pump_velocity_cc_s=np.full(log.t_s.size, np.nan),
                   ballast_limit_cc=float("nan"))
     base = load_vehicle("slocum_g3")
-    vehicle, figures, _, _ = fit_once(log, base)
+    vehicle, figures, *_ = fit_once(log, base)
     by_key = {f.key: f for f in figures}
     assert not by_key["pump_rate"].fitted and vehicle.pump_rate_cc_s == base.pump_rate_cc_s
     assert "no m_ballast_pumped_vel" in by_key["pump_rate"].basis
@@ -192,7 +192,8 @@ def test_real_log_writes_every_fitted_figure_with_its_sd_and_source(capsys, tmp_
     assert corr[order.index("surface_time"), order.index("hotel_power")] == 0.0
     # light in the North Sea water its CTD measured (1023-1025 kg/m3), not 1025
     assert 1023.0 < vehicle.flight.rho_kg_m3 < 1025.0 and vehicle.flight.trim_cc > 0
-    assert vehicle.hotel_includes == ("ctd", "optics")  # they logged throughout
+    # they logged throughout; the fin moved through every glide
+    assert vehicle.hotel_includes == ("ctd", "optics", "fin")
 
 
 @needs_logs
@@ -209,7 +210,11 @@ def test_the_preset_is_this_log_calibrated(capsys, tmp_path):
         assert figure_value(preset, f["key"]) == pytest.approx(f["value"], rel=1e-5,
                                                                abs=1e-5), f["key"]
     spread = dict(zip(preset.uncertainty.keys, preset.uncertainty.sd, strict=True))
-    assert spread.keys() == {f["key"] for f in fitted if f["sd"] is not None}
+    # the instruments the log cannot separate keep their published figures and spread
+    published = {f["key"] for f in report["figures"] if f["key"].startswith("devices.")
+                 and not f["fitted"]}
+    assert published == {"devices.ctd.on_power", "devices.optics.on_power"}
+    assert spread.keys() == {f["key"] for f in fitted if f["sd"] is not None} | published
     for f in fitted:
         if f["sd"] is not None:
             assert spread[f["key"]] == pytest.approx(f["sd"], rel=5e-3), f["key"]
@@ -232,7 +237,8 @@ MEASURED = (
     "pump_out_energy_per_volume", "pump_in_energy_per_volume", "pitch_energy", "pump_rate",
     "max_ballast", "surface_time", "iridium_time", "top_turn_time", "bottom_turn_time",
     "dive_pitch_error", "climb_pitch_error", "flight.drag_cd0", "flight.trim_volume",
-    "flight.compressibility", "flight.water_density",
+    "flight.compressibility", "flight.water_density", "devices.fin.on_power",
+    "devices.fin.duty",
 )
 # fitted given a figure the log cannot show, the base's depth term of the pump-in energy
 # (every pump-in run is at the top of a yo)
@@ -252,6 +258,9 @@ def calibrated_on(request, tmp_path_factory):
 
 
 def _entry(data: dict, key: str) -> dict:
+    if key.startswith("devices."):
+        _, device, figure = key.split(".")
+        return data["devices"][device][figure]
     return data["flight"][key[7:]] if key.startswith("flight.") else data[key]
 
 
@@ -292,7 +301,7 @@ def test_no_base_figure_the_log_measures_survives_calibration(calibrated_on):
                                                         rel=1e-4, abs=1e-6), (base, key)
     # what the hotel load and the surface power hold, said by the log
     assert written["hotel_includes"]["source"].startswith(logs)
-    assert mine.hotel_includes == ("ctd", "optics")
+    assert mine.hotel_includes == ("ctd", "optics", "fin")
     assert "air pump" in written["surface_power"]["source"]
     assert mine.surfacing_fixed_j == 0.0
     # every other figure says it is the base's

@@ -207,7 +207,45 @@ def test_the_hotel_load_names_known_devices(tmp_path):
                       'devices = ["ctd", "sonar"]')
     with pytest.raises(ModelFileError, match=r"hotel_includes\.devices: unknown device 'sonar'"):
         load_vehicle(str(path))
-    assert load_vehicle("slocum_g2_shallow").hotel_includes == ("ctd", "optics")
+    assert load_vehicle("slocum_g2_shallow").hotel_includes == ("ctd", "optics", "fin")
+
+
+DVL = """
+[devices.dvl]
+kind = "sensor"
+on_power = { value = 1.0, unit = "W", sd = 0.1, source = "test" }
+"""
+
+
+def test_a_device_table_gives_each_device_its_figures(tmp_path):
+    path = tmp_path / "dvl.toml"
+    path.write_text(preset_path("vehicle", "slocum_g3").read_text() + DVL)
+    vehicle = load_vehicle(str(path))
+    assert vehicle.device("dvl").on_power_w == 1.0 and vehicle.device("dvl").kind == "sensor"
+    assert "devices.dvl.on_power" in vehicle.uncertainty.keys
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('kind = "sensor"', 'kind = "motor"', r"devices\.dvl\.kind: expected one of sensor, actuator"),
+    ("[devices.dvl]", "[devices.sonar]", r"devices\.sonar: unknown sensor device 'sonar'"),
+    ('value = 1.0, unit = "W"', 'value = 1.0, unit = "J"', r"devices\.dvl\.on_power: unit 'J'"),
+    ('value = 1.0, unit = "W"', 'value = -1.0, unit = "W"', r"devices\.dvl\.on_power: must be"),
+    ("on_power", "on_pwer", r"devices\.dvl\.on_power: missing"),
+])
+def test_a_bad_device_table_is_refused_naming_the_key(tmp_path, old, new, message):
+    path = tmp_path / "dvl.toml"
+    path.write_text(preset_path("vehicle", "slocum_g3").read_text() + DVL.replace(old, new))
+    with pytest.raises(ModelFileError, match=message):
+        load_vehicle(str(path))
+
+
+def test_a_hotel_load_smaller_than_the_instruments_it_holds_is_refused(tmp_path):
+    text = preset_path("vehicle", "slocum_g2_shallow").read_text()
+    path = tmp_path / "small.toml"
+    path.write_text(text.replace("hotel_power = { value = 2.41364", "hotel_power = { value = 0.5"))
+    with pytest.raises(ModelFileError, match=r"hotel_power: 0\.5 W is less than the "
+                                             r"instruments hotel_includes says it holds"):
+        load_vehicle(str(path))
 
 
 # ---- every preset figure agrees with the numbers its source quotes ------------------------

@@ -14,6 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -91,12 +92,15 @@ def test_the_plans_star_is_on_or_under_the_pareto_curve(survey_dir):
     planned = json.loads((survey_dir / "thermoclineSurvey.plan.json").read_text())
     curve = pd.read_csv(survey_dir / "pareto.csv")
     budgeted = planned["budgeted_energy_j"]
-    # the curve starts at the least budget, and the minimum-energy plan takes just that
-    assert curve["budget_j"].iloc[0] == pytest.approx(planned["minimum_energy_j"], rel=1e-9)
-    assert (curve["budget_j"] >= planned["minimum_energy_j"] * (1 - 1e-9)).all()
-    assert budgeted == pytest.approx(curve["budget_j"].iloc[0], rel=1e-6)
-    # of the plans with the least energy it flies the best: on the curve, not under it
-    assert planned["quality"] == pytest.approx(curve["quality"].iloc[0], abs=1e-6)
+    # the curve starts at the least budget of any quality; the survey's floor (0.5) costs
+    # energy (its sensors are billed), and the minimum-energy plan takes just what it needs
+    assert curve["budget_j"].iloc[0] <= planned["minimum_energy_j"] * (1 + 1e-9)
+    assert budgeted == pytest.approx(planned["minimum_energy_j"], rel=1e-6)
+    # of the plans with that energy it flies the best: on the curve (between its points,
+    # a concave curve lies above its chords), not above it
+    between = float(np.interp(budgeted, curve["budget_j"], curve["quality"]))
+    assert between - 1e-3 <= planned["quality"] <= between + 0.02
+    assert planned["quality"] >= 0.5 - 1e-6
     # it draws less than it takes; the star is drawn at what it takes, and the page says so
     assert planned["energy_j"] < budgeted
     page = (survey_dir / "report.html").read_text()

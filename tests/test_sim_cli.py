@@ -54,7 +54,9 @@ def test_timeseries_columns_and_summary(tmp_path):
                    "temp_on", "oxygen_on", "power_hotel_w", "power_pump_w",
                    "power_computer_w", "power_total_w", "battery_remaining_j"):
         assert column in table.columns, column
-    assert "power_ctd_w" not in table.columns  # sebastian's hotel load holds its CTD
+    # sebastian's hotel load holds its CTD: it is billed apart, only while it runs (s2)
+    assert (table["power_ctd_w"] > 0).groupby(table["state"]).any().to_dict()["s2"]
+    assert not (table["power_ctd_w"] > 0)[table["state"] == "s1"].any()
     assert len(table) == 626 and table["time_s"].iloc[-1] == 2500.0
     flying = table[table["state"] != ""]  # the last row: the tick of the exit
     assert flying["temp_on"].groupby(flying["state"]).any().to_dict() == {

@@ -2,7 +2,8 @@
 believes a three-hour survey lasts one hour) is flagged, with the cause.
 
 The predictions are computed here from the power models, independently of the
-simulator: hotel load, yo pump and pitch power, computer and CTD for the planned time.
+simulator: the hotel load less the instruments it holds (the CTD and optics of sebastian's
+log), yo pump and pitch power, computer and CTD for the planned time.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from gliderplan.cli.main import main
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
 from gliderplan.language import check_file
 from gliderplan.power_models import load_board, load_sensor, load_vehicle
+from gliderplan.power_models.catalog import preset_names
 
 MISSION = Path(__file__).resolve().parent / "missions" / "sim_budget.mission"
 PITCH_RAD, BALLAST_CC = 0.454, 233.0
@@ -28,8 +30,10 @@ def predicted_components_j(time_s: float) -> dict[str, float]:
     vehicle = load_vehicle("slocum_g2_shallow")
     board = load_board("ts7800", 300.0)
     busy = board.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / TICK_S)
+    held_w = sum(load_sensor(d).on_power_w for d in vehicle.hotel_includes
+                 if d in preset_names("sensor"))  # the instruments, not the fin
     return {
-        "hotel": vehicle.hotel_w * time_s,
+        "hotel": (vehicle.hotel_w - held_w) * time_s,
         "pump_and_pitch": float(vehicle.profile_power_w(3, 30, PITCH_RAD, BALLAST_CC)) * time_s,
         "computer": float(board.power_w(busy)) * time_s,
         "ctd": load_sensor("ctd").on_power_w * time_s,
