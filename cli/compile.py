@@ -16,17 +16,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_mission_argument(parser)
     parser.add_argument("--plan", metavar="PLANFILE",
                         help="plan file to check against the mission and copy beside the binary")
-    parser.add_argument("--target", choices=tuple(TARGETS), default="host",
+    parser.add_argument("--target", choices=tuple(TARGETS),
                         help="; ".join(f"{t.name}: {t.description}" for t in TARGETS.values())
-                        + " (default host)")
+                        + " (default host; a mission with 'computer none' must say)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="directory for MISSION.c, the binary and the plan")
 
 
 def run(args: argparse.Namespace) -> int:
-    from gliderplan.runtime.build import compile_mission
+    from gliderplan.runtime.build import build_target, compile_mission
 
     mission = load_mission(args)
-    binary = compile_mission(mission, args.output, args.target, args.plan)
-    print(f"{binary} ({args.target})", file=sys.stderr)
+    target = build_target(mission, args.target)
+    binary = compile_mission(mission, args.output, target, args.plan)
+    print(f"{binary} ({target})", file=sys.stderr)
     return 0

@@ -50,6 +50,7 @@ MAX_PLAN_ENERGY_J = 1e10  # [J] a budget or prediction (the largest Slocum pack 
 MAX_PLAN_INFLECTIONS = 1e9  # a state's predicted inflections (as many as its visits may be)
 MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
 CLOCK_TOLERANCE_MHZ = 1e-6  # [MHz] a plan's clock is the board's within this
+NO_BOARD = "none"  # `computer none`: no board to set; its plans' clocks are all 0
 
 
 def same_clock(clock_mhz: float, board_clock_mhz: float) -> bool:

@@ -28,7 +28,7 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "PLAN_FORMAT_VERSION")),
     ("what a plan may ask for", (
         "MAX_PLAN_TIME_S", "MAX_PLAN_SPEED_MPS", "MAX_PLAN_ENERGY_J", "MAX_PLAN_INFLECTIONS",
-        "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ")),
+        "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ", "NO_BOARD")),
     ("signed plans", ("PLAN_KEY_BYTES", "MAX_PLAN_SEQUENCE")),
     ("the library routines (docs/pilot.md)", (
         "SURFACE_PITCH_RAD", "TRACK_WINDOW", "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
@@ -78,8 +78,11 @@ def _comments(definitions: object) -> dict[str, str]:
     return found
 
 
-def _value(name: str, value: float) -> str:
-    """C text of a value: `repr` of a float is the shortest that reads back exactly."""
+def _value(name: str, value: float | str) -> str:
+    """C text of a value: `repr` of a float is the shortest that reads back exactly; a
+    word becomes a string literal."""
+    if isinstance(value, str):
+        return f'"{value}"'
     return f"0x{value:02X}u" if name in HEX else repr(value)
 
 

@@ -10,7 +10,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import TypeVar
 
-from gliderplan.contract import MAX_STACK_DEPTH, RUNTIME_CYCLES_PER_TICK, TICK_S
+from gliderplan.contract import MAX_STACK_DEPTH, NO_BOARD, RUNTIME_CYCLES_PER_TICK, TICK_S
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
 from gliderplan.language.flow import check_flow
@@ -100,6 +100,13 @@ class _Checker:
                 case ast.VehicleDecl():
                     self.preset_known("vehicle", decl.preset, decl.is_file)
                     fields["vehicle"] = decl.preset.text
+                case ast.ComputerDecl() if decl.board.text == NO_BOARD:
+                    fields["computer"] = self.computer = ir.Computer(NO_BOARD)
+                    if decl.clock is not None:
+                        self.error(f"'computer {NO_BOARD}' has no clock", decl.clock.span,
+                                   "the glider's own computers run the mission, unclocked "
+                                   f"by it: write 'computer {NO_BOARD}', or name a board, "
+                                   "e.g. 'computer ts7800 @ 300 MHz'")
                 case ast.ComputerDecl():
                     known = self.preset_known("board", decl.board, decl.is_file)
                     clock_mhz = None
@@ -155,7 +162,7 @@ class _Checker:
             return True
         from gliderplan.power_models.catalog import preset_names
 
-        names = preset_names(kind)
+        names = preset_names(kind) + ([NO_BOARD] if kind == "board" else [])
         if name.text not in names:
             hint = did_you_mean(name.text, names) or f"presets: {', '.join(names)}"
             self.error(f"unknown {kind} preset '{name.text}'", name.span,
@@ -460,6 +467,13 @@ class _Checker:
         """A state's `computer clock | sleep | workload` settings, checked against the
         board's data file: a clock it has, a sleep it wakes from on the serial line, a
         workload one of its clocks runs within the runtime's tick."""
+        if self.computer.is_none:
+            for item in items:
+                self.error(f"state '{state}' sets 'computer {item.setting}', but the mission "
+                           f"has no board to set ('computer {NO_BOARD}')", item.span,
+                           "the glider's own computers run the mission: remove the line, "
+                           "or name a board, e.g. 'computer ts7800'")
+            return ir.NO_COMPUTER_USE
         seen: dict[str, ast.ComputerItem] = {}
         for item in items:
             if item.setting in seen:

@@ -13,7 +13,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, is_dataclass
 from functools import cached_property
 
-from gliderplan.contract import DEFAULT_STACK_DEPTH
+from gliderplan.contract import DEFAULT_STACK_DEPTH, NO_BOARD
 
 # ---- expressions (no spans: the checker has reported everything by now) ----------
 
@@ -301,8 +301,14 @@ class SensorPreference:
 
 @dataclass(frozen=True)
 class Computer:
-    board: str  # preset name or path to a board file
+    board: str  # preset name, path to a board file, or "none" (contract.NO_BOARD)
     clock_mhz: float | None = None  # None: the board's default (or the planner picks)
+
+    @property
+    def is_none(self) -> bool:
+        """`computer none`: the glider's own computers run the mission, no board is added
+        (their power is in the vehicle's base load)."""
+        return self.board == NO_BOARD
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S, Component
+from gliderplan.contract import NO_BOARD, RUNTIME_CYCLES_PER_TICK, TICK_S, Component
 from gliderplan.contract.units import to_model_unit
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware, HardwareError, load_hardware
@@ -127,6 +127,13 @@ class Comparison:
     crossovers: tuple[Crossover, ...]
 
 
+def compared_specs(mission: ir.CheckedMission, specs: Sequence[str]) -> tuple[str, ...]:
+    """The boards to compare on `mission`: `specs`, and for a `computer none` mission
+    `none` as well, so that what each board adds to the glider's own computers shows."""
+    extra = (NO_BOARD,) if mission.computer.is_none and NO_BOARD not in specs else ()
+    return (*specs, *extra)
+
+
 def board_label(hardware: Hardware) -> str:
     """"ts7800@300" for a board held at one of its clocks; the bare name for a board of
     one clock ("ts5500") or whose clock the planner picks ("ts7800")."""
@@ -219,6 +226,8 @@ def assumed_figures(spec: str, hardware: Hardware, sleeping: bool) -> dict[str, 
     they are assumptions: data-file key -> "value unit: source". Clock modes the board is
     not held at are left out, and the sleep figures unless a state sleeps on it."""
     path, _ = board_spec(spec)
+    if path is None:  # none: no board, no figures
+        return {}
     entries = file_entries(path)
     clocks = {m.clock_mhz for m in (hardware.modes if hardware.held else hardware.board_modes)}
     unused = {key.split(".")[0] for key, value, unit, _ in entries
@@ -249,8 +258,10 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
                    cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> Comparison:
     """The boards of `specs` ("ts5500", "ts7800@500", a board file) planned on `mission`
     with `battery` (default: the mission's) at `cycles_per_tick`, and the workloads at
-    which their ranking flips. Raises HardwareError/ModelFileError for a bad spec,
-    PlanningError when the mission cannot be planned at all."""
+    which their ranking flips; a `computer none` mission adds `none` (`compared_specs`),
+    which draws nothing beside the boards and so takes no part in their ranking. Raises
+    HardwareError/ModelFileError for a bad spec, PlanningError when the mission cannot be
+    planned at all."""
     occupancy = mission_occupancy(mission)
     reference_hw = load_hardware(mission, battery=battery, cycles_per_tick=cycles_per_tick)
     model = model_for(build_inputs(mission, reference_hw, occupancy))
@@ -262,7 +273,7 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
                             "mission's time")
     others_w = (reference.predicted_j - reference.components_j[Component.COMPUTER]) / flown_s
     results = []
-    for spec in specs:
+    for spec in compared_specs(mission, specs):
         hardware = load_hardware(mission, battery=battery, computer=spec,
                                  cycles_per_tick=cycles_per_tick)
         model = model_for(build_inputs(mission, hardware, occupancy), model)
@@ -278,14 +289,16 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
                                        hardware.sleeps(st) for st in mission.states)),
                                    runtime_code(hardware, mission, planned.plan,
                                                 cycles_per_tick)))
-    capacity = max(m.cycles_per_s * TICK_S for r in results for m in r.hardware.board_modes)
+    boards = [r for r in results if not r.board.is_none]
+    capacity = max((m.cycles_per_s * TICK_S for r in boards for m in r.hardware.board_modes),
+                   default=10.0 * cycles_per_tick)  # none alone: it has no capacity to reach
     workload = np.geomspace(min(1e4, cycles_per_tick), 1.1 * capacity, _GRID_POINTS)
 
     def curve(w: np.ndarray) -> dict[str, np.ndarray]:
         return {r.name: energy_curve_j(r.hardware, mission, r.planned.plan, w)
                 for r in results}
 
-    names = [r.name for r in results]
+    names = [r.name for r in boards]
     return Comparison(mission.name, cycles_per_tick, reference_hw.battery_j,
                       reference_hw.budget_j, board_label(reference_hw), tuple(results),
                       workload, curve(workload), crossovers(curve, names, workload))

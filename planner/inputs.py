@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract import NO_BOARD
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
@@ -32,6 +33,8 @@ from gliderplan.planner.rates import (
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.devices import base_power_w, held_power_w
 
+NO_BOARD_NOTE = (f"computer {NO_BOARD}: the glider's own computers run the mission (their "
+                 "power is in the vehicle's base load); no extra board is charged")
 SENSOR_PERIOD_S = 300.0  # on/off period of a duty-cycled sensor (long against its warm-up)
 PROFILE_CYCLE_S = 1800.0  # period over which alternative profiles alternate (a few yos)
 
@@ -176,6 +179,14 @@ def _bounds(mission: ir.CheckedMission, state: ir.State, sensor: str, alpha: flo
     return lo, min(max(hi, lo), 1.0)
 
 
+def _no_board_notes(mission: ir.CheckedMission) -> list[str]:
+    """What a plan on `computer none` rests on: no board is charged, and the states' own
+    computer settings (a mission planned with `--computer none`) have no board to set."""
+    return [NO_BOARD_NOTE, *(f"{s.name}: its computer settings do not apply: there is no "
+                             f"board to set (computer {NO_BOARD})"
+                             for s in mission.states if not s.computer.is_default)]
+
+
 def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
                  occupancy: Occupancy) -> PlanInputs:
     notes: list[str] = list(occupancy.notes)
@@ -188,11 +199,15 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
     prof_state: list[int] = []
     clocks = clock_columns(hardware, mission)
     powers = [state_mode_powers(hardware, state, clocks) for state in mission.states]
+    if hardware.board.is_none:
+        notes += _no_board_notes(mission)
     for state, power in zip(mission.states, powers, strict=True):
         if not np.isfinite(power).any():
             raise PlanInputError(f"computer {hardware.board.name}: no clock keeps up with "
                                  f"the work per tick of state {state.name} "
                                  f"({hardware.cycles(state):,.0f} cycles)")
+        if hardware.board.is_none:
+            continue  # its notes say that the state's settings do not apply
         if state.computer.sleep and not hardware.sleeps(state):
             notes.append(f"{state.name}: board {hardware.board.name} cannot sleep between "
                          "ticks; planned awake")

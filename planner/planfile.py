@@ -34,6 +34,7 @@ from gliderplan.contract import (
     MAX_PLAN_TIME_S,
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
+    NO_BOARD,
     PLAN_FORMAT_VERSION,
     RUNTIME_CYCLES_PER_TICK,
     FlightLimits,
@@ -172,8 +173,8 @@ class Plan:
 
     mission: str
     mission_hash: str  # CheckedMission.hash of the mission it was made for
-    computer: str  # board preset or a user board's name
-    clock_mhz: float  # the board's default clock
+    computer: str  # board preset, a user board's name, or "none" (contract.NO_BOARD)
+    clock_mhz: float  # the board's default clock; 0 for none
     budget_j: float  # usable energy [J] = (1 - reserve) x battery
     predicted_j: float  # predicted energy of the whole mission [J]
     states: tuple[StatePlan, ...]  # in the mission's order
@@ -190,6 +191,14 @@ class Plan:
         """Predicted energy [J] per component over the mission."""
         return {c: float(sum(s.energy_by_component_j.get(c, 0.0) for s in self.states))
                 for c in self.components}
+
+
+def computer_text(computer: str, clock_mhz: float) -> str:
+    """A plan's computer as people read it: "ts7800 @ 300 MHz", or for `computer none`
+    "none (the glider's own computers)"."""
+    if computer == NO_BOARD:
+        return f"{NO_BOARD} (the glider's own computers)"
+    return f"{computer} @ {clock_mhz:g} MHz"
 
 
 # ---- writing ---------------------------------------------------------------------------
@@ -273,14 +282,18 @@ class _Cursor:
         self.check(value <= high, f"{what} {value:g} exceeds {high:g}")
         return value
 
-    def clock(self, text: str, limits: FlightLimits | None) -> float:
-        """A clock [MHz] > 0, and with `limits` one of the board's."""
+    def clock(self, text: str, limits: FlightLimits | None, no_board: bool) -> float:
+        """A clock [MHz]: 0 in a plan for `computer none` (`no_board`), which has no clock
+        to set, whatever board the mission is built for; else > 0, and with `limits` one
+        of the board's."""
         value = self.number(text, "clock")
+        if no_board:
+            self.check(value == 0, f"clock {value:g} MHz: computer {NO_BOARD} has no clock "
+                       "to set, its clocks are 0")
+            return value
         self.check(value > 0, "the clock must be > 0 MHz")
         if limits is not None:
-            self.check(limits.has_clock(value),
-                       f"clock {value:g} MHz: the board has "
-                       f"{', '.join(f'{c:g}' for c in limits.clocks_mhz)} MHz")
+            self.check(limits.has_clock(value), f"clock {value:g} MHz: {_board_clocks(limits)}")
         return value
 
     def count(self, text: str, what: str, low: int, high: int) -> int:
@@ -294,6 +307,14 @@ class _Cursor:
     def check(self, ok: bool, message: str) -> None:
         if not ok:
             raise PlanFileError(self.at, message)
+
+
+def _board_clocks(limits: FlightLimits) -> str:
+    """The clocks a plan may name on the board of `limits`, as its reader says them."""
+    if limits.clocks_mhz == (0.0,):  # flight_limits of `computer none`
+        return (f"the mission names no board (computer {NO_BOARD}): a plan for it says "
+                f"'computer {NO_BOARD} 0'")
+    return f"the board has {', '.join(f'{c:g}' for c in limits.clocks_mhz)} MHz"
 
 
 def _split_lines(data: bytes) -> list[str]:
@@ -346,7 +367,8 @@ def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | No
                   "plan made for another version of the mission (hash differs)")
     computer, clock = cur.next("computer", 2)
     computer = cur.name(computer)
-    clock_mhz = cur.clock(clock, limits)
+    no_board = computer == NO_BOARD
+    clock_mhz = cur.clock(clock, limits, no_board)
     budget = cur.number(cur.next("budget_j", 1)[0], "budget_j", 0.0, MAX_PLAN_ENERGY_J)
     predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j", 0.0, MAX_PLAN_ENERGY_J)
     components = [cur.name(c) for c in cur.next("components", None)]
@@ -361,7 +383,8 @@ def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | No
         cur.check(n_states == len(mission.states),
                   f"{n_states} states, the mission has {len(mission.states)}")
     states = tuple(_state_block(cur, components, None if mission is None
-                                else mission.states[i], limits) for i in range(n_states))
+                                else mission.states[i], limits, no_board)
+                   for i in range(n_states))
     (checksum,) = cur.next("crc32", 1)
     cur.check(bool(_HEX8.match(checksum)), "crc32 must be 8 lowercase hex digits")
     body = data[: data.rfind(b"crc32 ")]
@@ -399,16 +422,17 @@ def _assumption(cur: _Cursor) -> Assumption:
 
 
 def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
-                 limits: FlightLimits | None) -> StatePlan:
-    """A state block; `state`, the mission's, is what it must fit (None: no mission), and
-    `limits` the vehicle's and board's (None: the bounds every vehicle shares)."""
+                 limits: FlightLimits | None, no_board: bool) -> StatePlan:
+    """A state block; `state`, the mission's, is what it must fit (None: no mission),
+    `limits` the vehicle's and board's (None: the bounds every vehicle shares), `no_board`
+    whether the plan is for `computer none`."""
     name, clock, cycle, n_sensors, n_profiles = cur.next("state", 5)
     start = cur.at
     name = cur.name(name)
     if state is not None:
         cur.check(name == state.name, f"state {name!r} where the mission has {state.name!r}")
-    clock_mhz, cycle_s = cur.clock(clock, limits), cur.number(cycle, "cycle", 0.0,
-                                                              MAX_PLAN_TIME_S)
+    clock_mhz = cur.clock(clock, limits, no_board)
+    cycle_s = cur.number(cycle, "cycle", 0.0, MAX_PLAN_TIME_S)
     cur.check(cycle_s > 0, "cycle must be > 0")
     n_sensors = cur.count(n_sensors, "sensors", 0, MAX_PLAN_SENSORS)
     n_profiles = cur.count(n_profiles, "profiles", 1, MAX_PROFILE_ALTERNATIVES)
@@ -490,15 +514,24 @@ def load_plan(path: str | Path, mission: CheckedMission,
         raise PlanRejected(str(err)) from None
 
 
-def plan_board_limits(mission: CheckedMission, plan: Plan) -> FlightLimits:
-    """The limits a simulated flight of `plan` keeps: the mission's vehicle, on the board the
-    plan was made for when that is a preset (the simulator bills that board), else on the
-    mission's computer."""
-    from gliderplan.planner.limits import flight_limits
+def flown_board(mission: CheckedMission, plan: Plan | None) -> str:
+    """The board a simulated flight of `plan` runs on and is billed for: the one the plan
+    was made for when that is a preset or `none`, else the mission's computer (a user's
+    board file is known to the plan by its name only)."""
     from gliderplan.power_models.catalog import preset_names
 
-    return flight_limits(mission, plan.computer if plan.computer in preset_names("board")
-                         else None)
+    if plan is not None and (plan.computer == NO_BOARD
+                             or plan.computer in preset_names("board")):
+        return plan.computer
+    return mission.computer.board
+
+
+def plan_board_limits(mission: CheckedMission, plan: Plan) -> FlightLimits:
+    """The limits a simulated flight of `plan` keeps: the mission's vehicle, on the board
+    it flies on (`flown_board`)."""
+    from gliderplan.planner.limits import flight_limits
+
+    return flight_limits(mission, flown_board(mission, plan))
 
 
 def read_plan_file(path: str | Path, mission: CheckedMission | None = None) -> Plan:

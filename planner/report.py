@@ -7,7 +7,7 @@ import math
 from gliderplan.contract import SBD_MT_MESSAGE_BYTES
 from gliderplan.language import ir
 from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, PlanResult
-from gliderplan.planner.planfile import StatePlan
+from gliderplan.planner.planfile import StatePlan, computer_text
 
 REPORT_VERSION = 1
 
@@ -100,7 +100,7 @@ def report_text(result: PlanResult) -> str:
     """A readable summary: what each state does, energy by component, quality, price."""
     plan = result.plan
     lines = [f"mission {plan.mission}: {result.objective.replace('_', ' ')} on "
-             f"{plan.computer} @ {plan.clock_mhz:g} MHz",
+             f"{computer_text(plan.computer, plan.clock_mhz)}",
              f"quality {result.quality:.4f}   energy {_wh(plan.predicted_j)} Wh of a "
              f"{_wh(plan.budget_j)} Wh budget ({100 * plan.predicted_j / plan.budget_j:.1f} %)"
              f"   least budget {_wh(result.minimum_energy_j)} Wh",
@@ -115,7 +115,8 @@ def report_text(result: PlanResult) -> str:
                         "the shadow price is at this confidence")
     lines += _table(["state", "time h", "clock MHz", "plan"],
                     [[s.name, f"{s.time_s / 3600:.2f}",
-                      f"{s.clock_mhz:g}" + (", asleep between ticks" if s.sleep else ""),
+                      (f"{s.clock_mhz:g}" if s.clock_mhz else "-")  # 0: computer none
+                      + (", asleep between ticks" if s.sleep else ""),
                       _does(s, m.profiles)]
                      for s, m in zip(plan.states, result.mission.states, strict=True)])
     components = list(plan.components_j)

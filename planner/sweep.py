@@ -13,7 +13,7 @@ import pandas as pd
 
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
 from gliderplan.language import ir
-from gliderplan.planner.compare import COMPUTERS
+from gliderplan.planner.compare import COMPUTERS, compared_specs
 from gliderplan.planner.hardware import load_hardware
 from gliderplan.planner.inputs import build_inputs
 from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel, model_for
@@ -74,18 +74,21 @@ def _row(model: PlanModel, budget_j: float) -> dict:
 def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
               budget_j: float | None = None, progress: Progress | None = None,
               cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK) -> pd.DataFrame:
-    """The plan on each computer, at the mission's budget or `budget_j`. The model is
-    re-used while its structure stays (a fixed clock), rebuilt when it changes (a board
-    whose clocks the planner chooses among)."""
+    """The plan on each computer (and on none beside them for a `computer none` mission),
+    at the mission's budget or `budget_j`. The model is re-used while its structure stays
+    (a fixed clock), rebuilt when it changes (a board whose clocks the planner chooses
+    among)."""
     occupancy = mission_occupancy(mission)
     model = None
     rows = []
+    specs = compared_specs(mission, specs)
     for i, spec in enumerate(specs):
         hardware = load_hardware(mission, computer=spec, cycles_per_tick=cycles_per_tick)
         model = model_for(build_inputs(mission, hardware, occupancy), model)
         budget = hardware.budget_j if budget_j is None else budget_j
-        rows.append({"computer": f"{hardware.board.name}@{hardware.board.clock_mhz:g}",
-                     **_row(model, budget)})
+        board = hardware.board
+        rows.append({"computer": board.name if board.is_none
+                     else f"{board.name}@{board.clock_mhz:g}", **_row(model, budget)})
         if progress:
             progress(i + 1, len(specs))
     return pd.DataFrame(rows)

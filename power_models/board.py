@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import same_clock
+from gliderplan.contract import NO_BOARD, same_clock
 from gliderplan.power_models.catalog import is_path_spec, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
 from gliderplan.power_models.errors import ModelFileError
@@ -85,6 +85,11 @@ class Board:
     # and the cycles an instruction takes on its CPU; None: not measured on this board.
     runtime_instructions: float | None = None
     cycles_per_instruction: float | None = None
+
+    @property
+    def is_none(self) -> bool:
+        """Whether this is `computer none` (`NoBoard`): no board at all."""
+        return False
 
     @property
     def runtime_code_cycles(self) -> float | None:
@@ -182,14 +187,40 @@ class Board:
         return self.tick_energy(cycles_per_tick, tick_s, sleep).total_j / tick_s
 
 
+class NoBoard(Board):
+    """`computer none`: no board beside the glider's own computers, whose power the
+    vehicle's base (hotel) load already holds. It adds nothing to that load: 0 W busy or
+    idle, no sleep, no boot. Its one clock, 0 MHz, is the plan file's "no clock to set";
+    its throughput is unbounded, since no board of ours has to keep up with the work."""
+
+    @property
+    def is_none(self) -> bool:
+        return True
+
+    def at_clock(self, clock_mhz: float) -> Board:
+        """Itself at its clock 0; ValueError for any other: it has no clock to set."""
+        if not self.has_clock(clock_mhz):
+            raise ValueError(f"computer {NO_BOARD} has no clock to set ({clock_mhz:g} MHz "
+                             "asked): the glider's own computers run the mission")
+        return self
+
+
+NO_BOARD_MODEL = NoBoard(
+    name=NO_BOARD, description="no extra board: the glider's own computers run the "
+    "mission; their power is in the vehicle's base load",
+    clock_mhz=0.0, active_w=0.0, idle_w=0.0, sleep=None, boot_s=0.0, boot_j=0.0,
+    cycles_per_s=float("inf"), cycles_per_clock=float("inf"),
+    clock_modes=(ClockMode(0.0, 0.0, 0.0),), boot_j_given=True)
+
+
 _SPEC = re.compile(
     r"^\s*(?P<name>[^@]+?)\s*(?:@\s*(?P<clock>[0-9]+(?:\.[0-9]+)?)\s*(?:MHz)?)?\s*$", re.I
 )
 
 
-def board_spec(spec: str) -> tuple[Path, float | None]:
+def board_spec(spec: str) -> tuple[Path | None, float | None]:
     """The file and the clock [MHz] (None: not given) of a spec such as "ts7800@500",
-    "ts7800 @ 500 MHz", "ts5500" or "boards/mine.toml"."""
+    "ts7800 @ 500 MHz", "ts5500" or "boards/mine.toml"; no file for "none"."""
     if is_path_spec(spec):
         return resolve("board", spec), None
     match = _SPEC.match(spec)
@@ -197,25 +228,28 @@ def board_spec(spec: str) -> tuple[Path, float | None]:
         raise ModelFileError(spec, None, "expected NAME, NAME@CLOCK_MHZ or a path to a .toml file",
                              usage=True)
     clock = float(match["clock"]) if match["clock"] else None
+    if match["name"] == NO_BOARD:
+        return None, clock
     return resolve("board", match["name"]), clock
 
 
 def load_board(spec: str, clock_mhz: float | None = None) -> Board:
-    """Load a board: a preset name, "ts7800@500" (clock in MHz) or a path to a .toml file.
+    """Load a board: a preset name, "ts7800@500" (clock in MHz), a path to a .toml file,
+    or "none" (`NO_BOARD_MODEL`).
 
     `clock_mhz` overrides a clock in the spec; without either the board runs at its file's
     `default_clock`. Raises ModelFileError (naming the file and key) for a bad file, an
     unknown preset or an unavailable clock.
     """
     path, spec_clock = board_spec(spec)
-    board = read_board_file(path)
+    board = NO_BOARD_MODEL if path is None else read_board_file(path)
     wanted = clock_mhz if clock_mhz is not None else spec_clock
     if wanted is None:
         return board
     try:
         return board.at_clock(wanted)
     except ValueError as err:
-        raise ModelFileError(str(path), "mode", str(err), usage=True) from None
+        raise ModelFileError(str(path or spec), "mode", str(err), usage=True) from None
 
 
 def read_board_file(path: Path) -> Board:
@@ -240,6 +274,8 @@ def read_board_file(path: Path) -> Board:
     boot_s = top.quantity("boot_time", "time")
     boot_given = top.has("boot_energy")
     instructions, cpi = _runtime_code(top)
+    if top.text("name") == NO_BOARD:  # a plan file could not tell it from `computer none`
+        raise top.error("name", f"'{NO_BOARD}' is taken: it means no board (`computer none`)")
     template = Board(
         name=top.text("name"),
         description=top.text("description", ""),

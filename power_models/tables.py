@@ -47,9 +47,9 @@ def model_figures(kind: str, spec: str, clock_mhz: float | None = None) -> dict:
         "kind": kind,
         "name": model.name,
         "description": model.description,
-        "file": str(path),
-        "figures": [{"key": k, "value": v, "unit": u, "source": s}
-                    for k, v, u, s in file_entries(path)],
+        "file": None if path is None else str(path),  # none: no board, no file
+        "figures": [] if path is None else [{"key": k, "value": v, "unit": u, "source": s}
+                                            for k, v, u, s in file_entries(path)],
         "derived": _derived(kind, model),
     }
 

@@ -257,11 +257,18 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
         written.append(path)
     title = f"{mission.name}: tradeoff report"
     subtitle = (f"mission {source or mission.name} (hash {mission.hash[:12]}), planned on "
-                f"{report['computer']['board']} @ {report['computer']['clock_mhz']:g} MHz; "
+                f"{_computer(report)}; "
                 "every figure's numbers are in the CSV file named under it")
     html_path = out / HTML
     write_atomically(html_path, page(title, subtitle, sections))
     return Report(html_path, (html_path, *written), tuple(s.id for s in sections))
+
+
+def _computer(report: dict) -> str:
+    """The plan report's computer as people read it."""
+    from gliderplan.planner.planfile import computer_text
+
+    return computer_text(report["computer"]["board"], report["computer"]["clock_mhz"])
 
 
 # ---- sections ---------------------------------------------------------------------------
@@ -290,8 +297,7 @@ def _summary_section(mission: CheckedMission, source: str, hardware, report: dic
         ("mission", esc(f"{mission.name} ({source})" if source else mission.name)),
         ("states", esc(", ".join(s.name for s in mission.states))),
         ("vehicle", esc(hardware.vehicle.name)),
-        ("computer", esc(f"{report['computer']['board']} @ "
-                         f"{report['computer']['clock_mhz']:g} MHz")),
+        ("computer", esc(_computer(report))),
         ("battery", esc(f"{_wh(hardware.battery_j):,.4g} Wh, reserve "
                         f"{100 * hardware.reserve_fraction:.3g} %")),
         ("budget", esc(f"{_wh(budget):,.4g} Wh usable")),
@@ -433,13 +439,15 @@ def _sbc_section(comparison, tables: dict[str, pd.DataFrame]) -> Section:
                "board_energy_wh": "board energy [Wh]", "share_of_mission": "share [1]",
                "mission_energy_wh": "mission energy [Wh]", "quality": "quality [1]",
                "endurance_days": "endurance [d]"}
-    cheapest = min(comparison.boards, key=lambda r: r.energy.total_j)
+    cheapest = sbc.cheapest_board(comparison)
+    alone = sbc.no_board_text(comparison)
     flips = "; ".join(f"at {sbc.cycles_text(x.cycles_per_tick)} {x.reason} "
                       f"({sbc.equivalents_text(x)})" for x in comparison.crossovers)
     code = "".join(f"<li>{esc(line)}</li>" for line in sbc.runtime_code_lines(comparison))
     text = (f"<p>The TS-5500 and the TS-7800 at 300 and 500 MHz on this mission at the same "
             f"battery and workload ({comparison.cycles_per_tick:,.0f} cycles per tick): "
-            f"cheapest is {esc(cheapest.name)}. Where the ranking changes: "
+            f"cheapest is {esc(cheapest.name)}"
+            + (f"; {esc(alone)}" if alone else "") + ". Where the ranking changes: "
             f"{esc(flips) or 'nowhere up to the fastest board'}.</p>",
             f"<p>The {esc(sbc.workload_basis(comparison))}.</p>",
             f'<ul class="notes">{code}</ul>',

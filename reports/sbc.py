@@ -48,11 +48,35 @@ def workload_basis(comparison: Comparison) -> str:
             "cycles, an assumption)")
 
 
+def boards(comparison: Comparison) -> list[BoardResult]:
+    """The compared boards, without `none` (no board: nothing to rank or measure)."""
+    return [r for r in comparison.boards if not r.board.is_none]
+
+
+def cheapest_board(comparison: Comparison) -> BoardResult:
+    """The board that costs the mission least energy (`none` aside)."""
+    return min(boards(comparison) or comparison.boards, key=lambda r: r.energy.total_j)
+
+
+def no_board_text(comparison: Comparison) -> str | None:
+    """What the cheapest board adds to a mission on the glider's own computers, where
+    `none` is compared beside the boards (a `computer none` mission); else None."""
+    none = next((r for r in comparison.boards if r.board.is_none), None)
+    if none is None or not boards(comparison):
+        return None
+    cheapest, alone = cheapest_board(comparison), none.planned.plan.predicted_j
+    more = cheapest.planned.plan.predicted_j - alone
+    return (f"without a board ({none.name}: the glider's own computers, whose power is in "
+            f"the vehicle's base load) the mission takes {_wh(alone):.3g} Wh; the cheapest "
+            f"board, {cheapest.name}, adds {_wh(more):.3g} Wh ({100 * more / alone:.1f} %), "
+            f"{_wh(cheapest.energy.total_j):.3g} Wh of it its own")
+
+
 def runtime_code_lines(comparison: Comparison) -> list[str]:
     """How the workload relates to the runtime's measured code, board by board: its
     cycles, their share of the workload, and what the rest costs the board on the mission."""
     lines, unmeasured = [], []
-    for r in comparison.boards:
+    for r in boards(comparison):
         code = r.runtime_code
         if code is None:
             unmeasured.append(r.name)
@@ -86,8 +110,17 @@ def _wh(joules: float) -> float:
 
 
 def _clock(result: BoardResult) -> float | None:
-    """The board's clock [MHz], or None when the planner picks it per state."""
-    return None if len(result.hardware.modes) > 1 else result.board.clock_mhz
+    """The board's clock [MHz], or None when the planner picks it per state or there is
+    no board (none)."""
+    if len(result.hardware.modes) > 1 or result.board.is_none:
+        return None
+    return result.board.clock_mhz
+
+
+def _clock_text(result: BoardResult) -> str:
+    if result.board.is_none:
+        return "-"
+    return "auto" if _clock(result) is None else f"{_clock(result):g}"
 
 
 def board_json(result: BoardResult, comparison_cycles: float) -> dict[str, Any]:
@@ -97,7 +130,7 @@ def board_json(result: BoardResult, comparison_cycles: float) -> dict[str, Any]:
     return {
         "description": board.description,
         "clock_mhz": _clock(result),
-        "clocks_mhz": [m.clock_mhz for m in result.hardware.modes],
+        "clocks_mhz": [] if board.is_none else [m.clock_mhz for m in result.hardware.modes],
         "active_power_w": board.active_w,
         "idle_power_w": board.idle_w,
         "sleep_power_w": sleep.power_w if sleep else None,
@@ -234,16 +267,17 @@ def comparison_text(comparison: Comparison) -> str:
     """The table a person reads, the crossovers and every assumption behind them."""
     c = comparison
     given = "" if c.cycles_per_tick == RUNTIME_CYCLES_PER_TICK else ", given"
-    lines = [f"mission {c.mission}: {len(c.boards)} boards at {c.cycles_per_tick:,.0f} cycles "
-             f"per {TICK_S:g} s tick (workload{given}: below), battery "
-             f"{_wh(c.battery_j):,.4g} Wh ({_wh(c.budget_j):,.4g} Wh usable)", ""]
+    none = " and none (no extra board)" if len(boards(c)) < len(c.boards) else ""
+    lines = [f"mission {c.mission}: {len(boards(c))} boards{none} at "
+             f"{c.cycles_per_tick:,.0f} cycles per {TICK_S:g} s tick (workload{given}: "
+             f"below), battery {_wh(c.battery_j):,.4g} Wh ({_wh(c.budget_j):,.4g} Wh usable)", ""]
     header = ["board", "clock MHz", "active W", "idle W", "boot s", "board Wh", "active Wh",
               "idle Wh", "sleep+wake Wh", "boot Wh", "share", "mission Wh", "quality",
               "endurance d"]
     rows = []
     for r in c.boards:
         e, b = r.energy, r.board
-        rows.append([r.name, _num(_clock(r), "g") if _clock(r) else "auto",
+        rows.append([r.name, _clock_text(r),
                      _num(b.active_w, "g") + _assumed(r, "active_power"),
                      _num(b.idle_w, "g") + _assumed(r, "idle_power"),
                      _num(b.boot_s, "g") + _assumed(r, "boot_time"), _num(_wh(e.total_j)),
@@ -255,9 +289,11 @@ def comparison_text(comparison: Comparison) -> str:
                      _num(r.planned.quality, ".4f"), _num(r.endurance_days, ".1f")])
     lines += _table(header, rows)
     lines.append("* an assumption, not a measurement (below)")
-    cheapest = min(c.boards, key=lambda r: r.energy.total_j)
+    cheapest = cheapest_board(c)
     lines += ["", f"cheapest board on this mission: {cheapest.name} "
               f"({_wh(cheapest.energy.total_j):.3g} Wh)"]
+    if (alone := no_board_text(c)) is not None:
+        lines.append(alone)
     over = [r.name for r in c.boards if r.planned.status != "optimal"]
     if over:
         lines.append(f"over the battery on: {', '.join(over)} (the least-energy plan shown)")
@@ -268,7 +304,7 @@ def comparison_text(comparison: Comparison) -> str:
         lines.append("  none up to the fastest board's capacity")
     for x in c.crossovers:
         lines.append(f"  {cycles_text(x.cycles_per_tick)}: {' < '.join(x.before) or '-'} "
-                     f"becomes {' < '.join(x.after) or 'none'}; {x.reason}")
+                     f"becomes {' < '.join(x.after) or '-'}; {x.reason}")
         lines.append(f"    ({equivalents_text(x)})")
     lines += ["", "assumptions (figures without a measurement behind them):"]
     lines += [f"  {line}" for line in assumption_lines(c, workload=False)]

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from gliderplan.contract import FlightLimits
+from gliderplan.contract import NO_BOARD, FlightLimits
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import OutputFileError, output_directory, write_atomically
 from gliderplan.language.codegen_c import generate_c
@@ -204,12 +204,26 @@ def build_key(mission_c: str, include: Path, sources: list[Path], board: Target,
     return digest.hexdigest()
 
 
-def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = "host",
+def build_target(mission: CheckedMission, target: str | None) -> str:
+    """The target to build `mission` for: `target`, else the host; UsageError for a
+    mission without a board (`computer none`) and no `target`, which has nothing to
+    build for unless told."""
+    if target is not None:
+        return target
+    if mission.computer.is_none:
+        raise UsageError(f"mission {mission.name} names no board (computer {NO_BOARD}): "
+                         f"there is no board to build for; give --target "
+                         f"{'|'.join(TARGETS)}")
+    return "host"
+
+
+def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str | None = None,
                     plan_path: str | Path | None = None,
                     limits: FlightLimits | None = None) -> Path:
     """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>: the
-    pipeline of `gliderplan compile`. With `plan_path`, the plan is first checked by the
-    runtime's own reader (`runtime_accepts`) and then copied beside the binary.
+    pipeline of `gliderplan compile`, for `target` (default: `build_target`, the host).
+    With `plan_path`, the plan is first checked by the runtime's own reader
+    (`runtime_accepts`) and then copied beside the binary.
 
     `limits` (the default ballast, the pump's volume, the board's clocks) are by default
     those of the mission's vehicle on the target's board (the mission's computer for the
@@ -220,6 +234,7 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str = 
     """
     if Path(out_dir).exists() and not Path(out_dir).is_dir():
         raise UsageError(f"-o {out_dir}: not a directory")
+    target = build_target(mission, target)
     board = find_target(target)
     if limits is None:
         from gliderplan.planner.limits import flight_limits

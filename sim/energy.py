@@ -26,9 +26,8 @@ import numpy as np
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
-from gliderplan.planner.planfile import Plan
+from gliderplan.planner.planfile import Plan, flown_board
 from gliderplan.power_models import load_board
-from gliderplan.power_models.catalog import preset_names
 from gliderplan.power_models.devices import base_power_w, sensor_on
 from gliderplan.power_models.timeline import Timeline, energy_by_component_j, sensor_energy_j
 from gliderplan.power_models.vehicle import Vehicle
@@ -83,18 +82,17 @@ def account(record: RunRecord, mission: ir.CheckedMission, vehicle: Vehicle,
 
 class Billing:
     """How a tick is billed: the vehicle's loads, the computer at the clock of each state
-    (the plan's board when it names a preset, else the mission's), each sensor device.
-    The model files are read once, here."""
+    (the plan's board when it names a preset or none, else the mission's; nothing for
+    `computer none`), each sensor device. The model files are read once, here."""
 
     def __init__(self, mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None,
                  dt: float) -> None:
         self.vehicle, self.dt, self.n_states = vehicle, dt, len(mission.states)
         self.held = vehicle.hotel_includes  # the computer in it: not billed again
         self.gliding_w = base_power_w(vehicle)  # the instruments it holds: billed as they run
-        board = load_board(mission.computer.board, mission.computer.clock_mhz)
-        if plan is not None and plan.computer in preset_names("board") \
-                and plan.computer != board.name:
-            board = load_board(plan.computer, plan.clock_mhz)
+        spec = flown_board(mission, plan)
+        board = load_board(spec, mission.computer.clock_mhz if spec == mission.computer.board
+                           else plan.clock_mhz)
 
         def tick_j(state: int) -> float:
             """The board's energy in a tick of `state`: at the clock, the work per tick and

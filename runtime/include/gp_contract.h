@@ -37,6 +37,7 @@
 #define GP_MAX_PLAN_INFLECTIONS 1000000000.0
 #define GP_MAX_BOARD_CLOCKS 8  /**< clocks of one board the compiled mission lists */
 #define GP_CLOCK_TOLERANCE_MHZ 1e-06  /**< [MHz] a plan's clock is the board's within this */
+#define GP_NO_BOARD "none"  /**< `computer none`: no board to set; its plans' clocks are all 0 */
 
 /* ---- signed plans */
 

@@ -109,7 +109,8 @@ typedef struct {
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
     double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc] */
     double reserve_j;             /**< energy left at which the guard ends the mission [J] */
-    const double *clocks_mhz;     /**< the clocks of the board it flies on [MHz] */
+    const double *clocks_mhz;     /**< the clocks of the board it flies on [MHz]; {0}:
+                                       no board (`computer none`), no clock to set */
     uint8_t n_clocks;             /**< 1..GP_MAX_BOARD_CLOCKS */
     const char *const *sensor_names;  /**< GP_N_SENSORS names, registry order */
 } gp_mission;

@@ -25,7 +25,8 @@ typedef struct {
 } gp_plan_profile;
 
 typedef struct {
-    double clock_mhz, cycle_s;
+    double clock_mhz;                /**< [MHz]; 0: no clock to set (`computer none`) */
+    double cycle_s;
     uint8_t sleep;                   /**< 1: the board sleeps between ticks */
     double cycles_per_tick;          /**< the work the plan assumed [cycles]; 0: the runtime's */
     uint8_t n_sensors, n_profiles;
@@ -56,7 +57,8 @@ typedef struct {
 
 /**
  * @brief Read a plan file strictly against the compiled mission: its form, its values
- *        within the contract's bounds, the vehicle's pump and the board's clocks, and
+ *        within the contract's bounds, the vehicle's pump and the board's clocks (a plan
+ *        for `computer none`, clocks 0, flies on any build), and
  *        with a key its signature.
  * @param auth NULL: no key; a signed plan's tag is read but not checked. Else the plan
  *             must be signed with auth->key, with a sequence number above auth->last_seq

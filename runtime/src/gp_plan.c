@@ -397,11 +397,28 @@ static int amount_field(reader *r, int index, const char *what, double most, dou
     return 0;
 }
 
-/* A clock [MHz] of the board the mission flies on, in field `index`. */
-static int clock_field(reader *r, int index, const gp_mission *mission, double *out)
+/* The mission was compiled for no board (`computer none`): its one clock is 0. */
+static int built_for_no_board(const gp_mission *mission)
+{
+    return mission->n_clocks == 1 && mission->clocks_mhz[0] == 0;
+}
+
+/* A clock [MHz] in field `index`: in a plan for `computer none` (`no_board`) 0, there
+ * being no clock to set, whatever board the mission was compiled for; else one of the
+ * clocks of the board the mission flies on, above 0. */
+static int clock_field(reader *r, int index, const gp_mission *mission, int no_board,
+                       double *out)
 {
     if (number_field(r, index, "CLOCK_MHZ", out) < 0) {
         return -1;
+    }
+    if (no_board) {
+        return *out == 0 ? 0 : fail(r, "clock %g MHz: computer " GP_NO_BOARD " has no clock "
+                                       "to set, its clocks are 0", *out);
+    }
+    if (built_for_no_board(mission)) {
+        return fail(r, "clock %g MHz: the mission names no board (computer " GP_NO_BOARD
+                       "): a plan for it says 'computer " GP_NO_BOARD " 0'", *out);
     }
     for (int i = 0; i < mission->n_clocks; i++) {
         if (fabs(*out - mission->clocks_mhz[i]) <= GP_CLOCK_TOLERANCE_MHZ) {
@@ -486,7 +503,8 @@ static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
                        "version of '%.32s')", mission->name);
     }
     if (expect(r, "computer", 3) < 0 || name_field(r, 1, "computer") < 0
-        || clock_field(r, 2, mission, &plan->clock_mhz) < 0) {
+        || clock_field(r, 2, mission, field_is(&r->fields[1], GP_NO_BOARD),
+                       &plan->clock_mhz) < 0) {
         return -1;
     }
     memcpy(plan->computer, r->fields[1].start, r->fields[1].len);
@@ -645,8 +663,9 @@ static int read_power(reader *r, const gp_state *state, gp_plan_state *out)
     return 0;
 }
 
+/* State block `s`; `no_board`: the plan is for `computer none`. */
 static int read_state(reader *r, const gp_mission *mission, int n_components, int s,
-                      gp_plan_state *out)
+                      int no_board, gp_plan_state *out)
 {
     const gp_state *state = &mission->states[s];
     int n_sensors, n_profiles, logged_from = 0;
@@ -657,7 +676,7 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
         return fail(r, "state '%.*s' where the mission has '%.32s'", (int)r->fields[1].len,
                     r->fields[1].start, state->name);
     }
-    if (clock_field(r, 2, mission, &out->clock_mhz) < 0
+    if (clock_field(r, 2, mission, no_board, &out->clock_mhz) < 0
         || number_field(r, 3, "CYCLE_S", &out->cycle_s) < 0
         || count_field(r, 4, "N_SENSORS", 0, GP_MAX_PLAN_SENSORS, &n_sensors) < 0
         || count_field(r, 5, "N_PROFILES", 1, GP_MAX_PROFILE_ALTERNATIVES, &n_profiles) < 0) {
@@ -713,8 +732,9 @@ int gp_plan_read(const char *text, size_t len, const gp_mission *mission,
     if (read_header(&r, mission, &plan) < 0) {
         return -1;
     }
+    int no_board = strcmp(plan.computer, GP_NO_BOARD) == 0;
     for (int s = 0; s < plan.n_states; s++) {
-        if (read_state(&r, mission, plan.n_components, s, &plan.states[s]) < 0) {
+        if (read_state(&r, mission, plan.n_components, s, no_board, &plan.states[s]) < 0) {
             return -1;
         }
     }

@@ -207,6 +207,76 @@ void test_plan_should_read_a_states_power_line_where_its_mission_sleeps(void)
     CHECK_NEAR(plan.states[0].cycles_per_tick, 0, 0);
 }
 
+/* `body` with its first `from` replaced by `to`, in place (`from` must be there). */
+static void replace_in(char *body, const char *from, const char *to)
+{
+    static char rest[GP_MAX_PLAN_BYTES];
+    char *at = strstr(body, from);
+    if (at == NULL) {
+        gp_test_fail(__FILE__, __LINE__, from);
+        return;
+    }
+    snprintf(rest, sizeof rest, "%s", at + strlen(from));
+    snprintf(at, GP_MAX_PLAN_BYTES - (size_t)(at - body), "%s%s", to, rest);
+}
+
+/* The good plan made for `computer none` (every clock 0: no clock to set) with the
+ * first `from` replaced by `to` ("" for none), checksummed. */
+static size_t none_variant(const char *from, const char *to)
+{
+    static char body[GP_MAX_PLAN_BYTES];
+    snprintf(body, sizeof body, "%s", GOOD_BODY);
+    replace_in(body, "computer ts7800 300", "computer none 0");
+    replace_in(body, "state s1 300", "state s1 0");
+    replace_in(body, "state s2 500", "state s2 0");
+    replace_in(body, "state s3 300", "state s3 0");
+    if (*from) {
+        replace_in(body, from, to);
+    }
+    return with_crc(body);
+}
+
+/* Fig. 2 compiled for no board (`computer none`): its one clock is 0. */
+static const gp_mission *fig2_for_no_board(void)
+{
+    static const double clocks_mhz[] = {0.0};
+    static gp_mission mission;
+    mission = gp_mission_table;
+    mission.clocks_mhz = clocks_mhz;
+    mission.n_clocks = 1;
+    return &mission;
+}
+
+void test_plan_should_accept_computer_none_on_any_build(void)
+{
+    const gp_mission *builds[] = {&gp_mission_table, fig2_for_no_board()};
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    for (int i = 0; i < 2; i++) {
+        CHECK_INT(gp_plan_read(text, none_variant("", ""), builds[i], NULL, &plan, error), 0);
+        CHECK_INT(error[0], 0);
+        CHECK(strcmp(plan.computer, "none") == 0);
+        CHECK_NEAR(plan.clock_mhz, 0, 0);
+        CHECK_NEAR(plan.states[1].clock_mhz, 0, 0);  /* the runtime leaves the clock alone */
+    }
+}
+
+void test_plan_should_reject_clocks_on_computer_none_and_boards_on_its_build(void)
+{
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    CHECK_INT(read_text(none_variant("computer none 0", "computer none 300"), error), -1);
+    CHECK_CONTAINS(error, "line 4: clock 300 MHz: computer none has no clock to set");
+    CHECK_INT(read_text(none_variant("state s2 0", "state s2 500"), error), -1);
+    CHECK_CONTAINS(error, "line 17: clock 500 MHz: computer none has no clock to set");
+    const gp_mission *none = fig2_for_no_board();
+    CHECK_INT(gp_plan_read(text, with_crc(GOOD_BODY), none, NULL, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 4: clock 300 MHz: the mission names no board (computer none)");
+    size_t len = variant("computer ts7800 300", "computer ts7800 0");
+    CHECK_INT(gp_plan_read(text, len, none, NULL, &plan, error), -1);
+    CHECK_CONTAINS(error, "line 4: clock 0 MHz: the mission names no board (computer none)");
+}
+
 void test_plan_should_reject_a_file_of_only_its_checksum_line(void)
 {
     /* Found by fuzz/fuzz_plan.c: the reader ran past the end of the text. */
