@@ -42,6 +42,10 @@ SAME_SWITCHING = 0.01  # devices whose states differ less (time-weighted) switch
 SPAN_SDS = 4.0
 UNSPANNED_RELATIVE_SD = 0.5
 MIN_RELATIVE_SD = 0.2
+# one sd of a device's share of a group's fitted power split by published figures, as a
+# share of its figure, scaled by (1 - its share): the published figures' ratio is known no
+# better than the figures themselves
+SPLIT_RELATIVE_SD = 0.5
 ACTUATORS = ("fin",)
 
 
@@ -56,7 +60,9 @@ class DeviceFigure:
     fitted: bool  # False: its published figure (the log cannot separate it)
     held: bool  # in the hotel load (on throughout the glide, or an actuator of the flight)
     basis: str  # what it rests on
-    sd_w: float | None = None  # [W] for a published figure: from its published span
+    # [W] a published figure's sd (from its published span); for a fitted figure split
+    # from a group's, the split's sd (the bootstrap adds the fit's)
+    sd_w: float | None = None
     flag: str = ""  # a fitted figure outside the device's published span, said why
 
 
@@ -205,15 +211,18 @@ def fit_devices(log: FlightLog, parts: seg.Segmentation, energy_j: np.ndarray) -
             continue
         published_w = {m: load_sensor(m).on_power_w for m in members}
         whole = sum(published_w.values())
-        together = f"switching with {', '.join(m for m in members if m != members[0])}; " \
-            if len(members) > 1 else ""
         for m in members:
-            watts = float(total) * published_w[m] / whole if whole > 0 else float(total) / len(
-                members)
-            split = (f"{together}their fitted {float(total):.3g} W split by their published "
-                     "figures") if len(members) > 1 else "fitted"
+            part = published_w[m] / whole if whole > 0 else 1.0 / len(members)
+            watts = float(total) * part
+            split, sd = "fitted", None
+            if len(members) > 1:
+                others = ", ".join(o for o in members if o != m)
+                split = (f"switching with {others}: their fitted {float(total):.3g} W split by "
+                         f"their published figures (the split's sd "
+                         f"{SPLIT_RELATIVE_SD:.0%} of its figure x (1 - its share))")
+                sd = SPLIT_RELATIVE_SD * watts * (1.0 - part)
             figures.append(DeviceFigure(m, "sensor", watts, duty, True, False,
-                                        f"{glide}, on {duty:.0%} of it: {split}",
+                                        f"{glide}, on {duty:.0%} of it: {split}", sd,
                                         flag=_flag(m, watts)))
     rms = float(np.sqrt(np.average(residual ** 2, weights=weight)))
     order = {name: k for k, name in enumerate(names)}

@@ -281,6 +281,10 @@ def fit_vehicle(log: FlightLog, base: Vehicle, resamples: int = BOOTSTRAP_RESAMP
     dives = split_dives(log)
     keys, sd, correlation, refits = _over_dives(log, dives, replace(base, flight=vehicle.flight),
                                                 figures, ocean, resamples, seed)
+    # a fitted figure with an sd of its own (devices that switch together, split by their
+    # published figures): that split's uncertainty, beside the bootstrap's
+    own = {f.key: f.sd for f in figures if f.fitted and f.sd is not None}
+    sd = np.hypot(sd, [own.get(k, 0.0) for k in keys])
     surfacing = surfacing_spread(find_surfacings(log, seg.segment(log)), figures)
     fitted = {f.key for f in figures if f.fitted}
     kept = base.uncertainty

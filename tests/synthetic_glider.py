@@ -4,7 +4,9 @@ The glider flies the steady-glide model of `power_models.flight` (with trim, hul
 compressibility and a layered ocean) between its turns; a turn is a pump run at the pump
 rate (logged as m_ballast_pumped_vel is) plus a turn time standing still; it surfaces
 after its last dive for a GPS fix and an Iridium call. Its power is constant in each
-phase, so the coulomb counter and the current sensor agree exactly.
+phase, so the coulomb counter and the current sensor agree exactly. Devices may be given
+a power and the dives they run in (submerged): their switches are logged, their power is
+in the current.
 """
 
 from __future__ import annotations
@@ -42,24 +44,30 @@ def truth():
 
 
 def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0),
-                  calls_s: tuple[float, ...] = (CALL_S,)) -> FlightLog:
+                  calls_s: tuple[float, ...] = (CALL_S,),
+                  devices: dict[str, tuple[float, frozenset[int]]] | None = None) -> FlightLog:
     """100 s at the surface, a dive to each of `bottoms` (turning at TOP_M between them),
     the climb to the surface, a GPS fix and an Iridium call: one surfacing per call time in
     `calls_s`, evenly among the dives, the last after the last dive (the record ends in
-    its call)."""
+    its call). `devices`: name -> (power [W], the dives (from 0) it is on in, while
+    submerged)."""
+    devices = devices or {}
     if len(bottoms) % len(calls_s):
         raise ValueError("the surfacings must split the dives evenly")
     per_surfacing = len(bottoms) // len(calls_s)
     vehicle = truth()
     rate = vehicle.pump_rate_cc_s
     rows = []  # (time, depth, pitch, ballast, commanded ballast, commanded pitch, power, flags,
-    # pump velocity)
-    state = {"t": 0.0, "z": 0.0, "ballast": vehicle.max_ballast_cc, "pitch": 0.0}
+    # pump velocity, each device on)
+    state = {"t": 0.0, "z": 0.0, "ballast": vehicle.max_ballast_cc, "pitch": 0.0, "dive": -1}
 
     def record(power: float, command_cc: float, command_pitch: float, pump: bool = False,
                call: bool = False, velocity: float = 0.0) -> None:
+        on = [state["dive"] in dives and state["z"] > 0.5 for _, dives in devices.values()]
+        power += sum(w for (w, _), running in zip(devices.values(), on, strict=True)
+                     if running)
         rows.append((state["t"], state["z"], state["pitch"], state["ballast"], command_cc,
-                     command_pitch, power, pump, call, velocity))
+                     command_pitch, power, pump, call, velocity, *on))
 
     def hold(seconds: float, power: float, command_cc: float, command_pitch: float,
              pump: bool = False, call: bool = False, to_cc: float | None = None) -> None:
@@ -96,6 +104,7 @@ def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0),
 
     hold(100.0, SURFACE_W, vehicle.max_ballast_cc, PITCH_RAD)
     for k, bottom in enumerate(bottoms):
+        state["dive"] = k
         turn(-BALLAST_CC, -PITCH_RAD, top=True)
         glide(bottom, -PITCH_RAD)
         up = (k + 1) % per_surfacing == 0
@@ -105,12 +114,14 @@ def synthetic_log(bottoms=(20.0, 40.0, 60.0, 40.0, 40.0, 40.0),
             hold(SURFACE_S, SURFACE_W, vehicle.max_ballast_cc, math.nan)
             hold(calls_s[k // per_surfacing], IRIDIUM_W, vehicle.max_ballast_cc, math.nan,
                  call=True)
-    return _sampled(np.array(rows, float))
+    return _sampled(np.array(rows, float), tuple(devices))
 
 
-def _sampled(rows: np.ndarray) -> FlightLog:
+def _sampled(rows: np.ndarray, devices: tuple[str, ...] = ()) -> FlightLog:
     """The fine steps read every SAMPLE_S seconds, as the flight computer logs."""
-    t, depth, pitch, ballast, command_cc, command_pitch, power, pump, call, velocity = rows.T
+    t, depth, pitch, ballast, command_cc, command_pitch, power, pump, call, velocity = \
+        rows.T[:10]
+    switches = rows[:, 10:]
     energy = np.concatenate(([0.0], np.cumsum(power[1:] * np.diff(t))))
     pick = np.concatenate(([0], np.flatnonzero(np.diff(np.floor(t / SAMPLE_S)) > 0) + 1))
     # the current sensor averages over the sample interval around its reading
@@ -131,5 +142,6 @@ def _sampled(rows: np.ndarray) -> FlightLog:
         density_kg_m3=ocean(depth[pick]), commanded_ballast_cc=command_cc[pick],
         commanded_pitch_rad=command_pitch[pick], pump_velocity_cc_s=pump_velocity,
         climb_target_m=TOP_M, dive_target_m=80.0, payload=("ctd",),
-        ballast_limit_cc=truth().max_ballast_cc,
+        ballast_limit_cc=truth().max_ballast_cc, device_names=devices,
+        device_on=switches[pick] if devices else None,
     )
