@@ -30,6 +30,9 @@ class Sensor:
     sample_hz: float
     quality_alpha: float  # [1] curvature of the quality utility
     energy_per_byte_j: float | None = None  # communication devices only
+    # [W] the span of published on-powers for this class of device (low, high); a fitted
+    # figure outside it is worth a second look. None: the file gives none
+    power_range_w: tuple[float, float] | None = None
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
 
     def utility(self, duty: np.ndarray | float) -> np.ndarray:
@@ -52,7 +55,8 @@ class Sensor:
 
 
 def load_sensor(spec: str) -> Sensor:
-    """Load a sensor: a preset name (`ctd`, `optode`, ...) or a path to a .toml file."""
+    """Load a sensor: a preset name (`ctd`, `optode`, `optics`, `adcp`, `dvl`, `logger`,
+    `modem`) or a path to a .toml file."""
     return read_sensor_file(resolve("sensor", spec))
 
 
@@ -74,6 +78,7 @@ def read_sensor_file(path: Path) -> Sensor:
             if top.has("energy_per_byte")
             else None
         ),
+        power_range_w=top.span("power_range", "power"),
         path=path,
     )
     top.finish()
