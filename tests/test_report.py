@@ -101,7 +101,8 @@ def test_the_plans_star_is_on_or_under_the_pareto_curve(survey_dir):
     assert planned["energy_j"] < budgeted
     page = (survey_dir / "report.html").read_text()
     assert f"the plan: {budgeted / 3600:.4g} Wh of budget" in page
-    assert f"the plan: {planned['energy_j'] / 3600:.4g} Wh" not in page
+    if f"{planned['energy_j'] / 3600:.4g}" != f"{budgeted / 3600:.4g}":  # not the same here
+        assert f"the plan: {planned['energy_j'] / 3600:.4g} Wh" not in page
     assert "The star is the plan" in page and "predicted to draw" in page
     assert "It lies on the curve" in page
 
