@@ -126,6 +126,9 @@ def _show_text(data: dict) -> str:
     ]
     lines += [f"{r['key']:34s} {r['value']:10.6g} {r['unit']:9s} {r['source']}"
               for r in data["figures"]]
+    for r in data["ranges"]:  # a published span, low-high
+        span = f"{r['low']:g}-{r['high']:g}"
+        lines.append(f"{r['key']:34s} {span:>10s} {r['unit']:9s} {r['source']}")
     if data["derived"]:
         lines += ["", "derived:"]
         lines += [f"  {d['what']:50s} {d['value']:10.4g} {d['unit']}" for d in data["derived"]]

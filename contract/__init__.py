@@ -142,6 +142,9 @@ SENSORS: tuple[SensorInfo, ...] = (
     SensorInfo("wptreached", 21, "1", None, "waypoints the route has reached since the state "
                "was entered (a goto list counts on, lap after lap); 0 for nav and noheading",
                "runtime"),
+    SensorInfo("groundspeed", 22, "m/s", "dvl", "speed over the sea floor (DVL bottom track)"),
+    SensorInfo("shear", 23, "1/s", "logger",
+               "microstructure velocity shear (microstructure logger)"),
 )
 N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
 # Sensors without a device of their own: always powered while logged, in the hotel load.

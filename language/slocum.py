@@ -35,6 +35,8 @@ from gliderplan.contract import MAX_ROUTE_POINTS as MAX_POINTS
 from gliderplan.contract import SURFACE_PITCH_RAD, WAYPOINT_RADIUS_M
 from gliderplan.language.ir import DEFAULT_BATTERY
 from gliderplan.language.slocum_files import Arg, Behavior, SlocumFileError, SlocumMission, Where
+from gliderplan.language.slocum_files import number_text as _number
+from gliderplan.language.slocum_sampling import ALL_ON_SWITCH, SWITCHES, ScienceBay
 
 # Behaviors this translation reads, and real Slocum behaviors it knows but leaves out.
 TRANSLATED = ("abend", "surface", "goto_list", "goto_wpt", "yo", "prepare_to_dive", "sample",
@@ -45,23 +47,7 @@ NOT_TRANSLATED = ("dive_to", "climb_to", "set_heading", "thruster", "drift_at_de
 DEFAULT_PITCH_RAD = 0.454  # a yo whose pitch is a battery position, not an angle
 AT_SURFACE_M = 0.3  # shallower, the glider is at the surface (sim.vehicle.SURFACE_DEPTH_M)
 SAMEDEPTH_CHANGE_M = 1.0  # abend samedepth_for: "the same depth" is within this [m]
-# sample's sensor_type -> (our sensors, what the Slocum name means)
-SENSOR_TYPES: dict[int, tuple[tuple[str, ...], str]] = {
-    0: (("temp", "conductivity", "salinity", "oxygen", "chlorophyll", "backscatter"),
-        "C_SCIENCE_ALL_ON: every science sensor"),
-    1: (("temp", "conductivity", "salinity"), "C_PROFILE_ON: the CTD"),
-    19: (("chlorophyll", "backscatter"), "C_FLNTU_ON: the fluorometer and turbidity sensor"),
-    43: (("current",), "C_DVL_ON: the Doppler velocity log, as the ADCP"),
-}
-# sensors_in's c_*_on arguments -> our sensors
-SENSORS_IN: dict[str, tuple[str, ...]] = {
-    "c_science_all_on": SENSOR_TYPES[0][0],
-    "c_profile_on": SENSOR_TYPES[1][0],
-    "c_flntu_on": SENSOR_TYPES[19][0],
-    "c_dvl_on": SENSOR_TYPES[43][0],
-}
 FLIGHT_SENSORS = ("missiontime", "depth", "pitch", "lat", "lon")
-DIVING, HOVERING, CLIMBING, ON_SURFACE = 1, 2, 4, 8  # sample's state_to_sample bits
 # surface's start_when modes translated that read when_secs: when they surface
 WHEN_SECS_MODES = {9: "when_secs after it last reached the surface",
                    12: "when_secs after it last left the surface"}
@@ -95,11 +81,6 @@ class _State:
     expect: str | None = None
 
 
-def _number(value: float) -> str:
-    """A value as the mission writes it: 50, 0.43, 43200."""
-    return f"{value:.10g}"
-
-
 def _at(arg: Arg) -> str:
     return f"{arg.where.path.name}:{arg.where.line}"
 
@@ -116,8 +97,10 @@ class _Translator:
         self.bookkeeping: list[str] = []  # the survey's assignments, checked last
         self.surface_states: list[_State] = []
         self.survey_sensors: dict[str, str] = {}  # sensor -> duty ("" always on)
-        self.survey_notes: list[str] = []  # what sample and sensors_in leave out
+        self.survey_notes: list[str] = []  # what sample and sensors_in make of the bay
         self.surface_sensors: dict[str, str] = {}
+        self.band: tuple[float, float] | None = None  # the yo's, [m]
+        self.pitches: list[float] = []  # [rad] of its dives and climbs
         self.reads: set[str] = set()  # runtime readings the survey's events read
         self.abort_needed = False
         self.done_needed = False
@@ -189,10 +172,7 @@ class _Translator:
                 self.survey_events.append(f"# the yo's end ({why}) ends the mission "
                                           "(end_action 0: quit)")
                 self.survey_events.append(f"case {condition} goto done")
-        for behavior in by_name.get("sensors_in", []):
-            self.sensors_in(behavior, science_all_on)
-        for behavior in by_name.get("sample", []):
-            self.sample(behavior)
+        self.science(yo, science_all_on)
         prepare = self.single(by_name, "prepare_to_dive")
         states = []
         if prepare is not None:
@@ -228,7 +208,7 @@ class _Translator:
                 verb = "controls" if enabled else "does not control"
                 self.header.append(f"sensor {arg.name} {arg.text} ({_at(arg)}): "
                                    f"c_science_all_on {verb} the science sensors")
-            elif arg.name in SENSORS_IN:
+            elif arg.name.lower() in SWITCHES or arg.name.lower() == ALL_ON_SWITCH:
                 self.header.append(f"sensor {arg.name} {arg.text} ({_at(arg)}): read with "
                                    "sensors_in")
             else:
@@ -241,7 +221,7 @@ class _Translator:
 
     # ---- route
     def route(self, behavior: Behavior) -> tuple[str, list[str]]:
-        comment = [f"{behavior.name} ({_source(behavior)})"]
+        comment = [f"{behavior.name} ({behavior.source})"]
         if behavior.name == "goto_wpt":
             return self.goto_wpt(behavior, comment)
         points = behavior.waypoints
@@ -331,7 +311,7 @@ class _Translator:
             raise SlocumFileError(f"{behavior.mafile or behavior.where}: the yo climbs to "
                                   f"c_target_depth {_number(top)} m, not above its "
                                   f"d_target_depth {_number(bottom)} m")
-        comment = [f"yo ({_source(behavior)}): between c_target_depth {_number(top)} m and "
+        comment = [f"yo ({behavior.source}): between c_target_depth {_number(top)} m and "
                    f"d_target_depth {_number(bottom)} m"]
         pitches = []
         for leg in ("d", "c"):
@@ -358,6 +338,7 @@ class _Translator:
         if behavior.value("start_when", 2) not in (0, 1, 2):
             comment += self.leave_out(behavior, ["start_when"],
                                       "the yo starts as soon as the glider dives")
+        self.pitches, self.band = pitches, (top, bottom)
         profile = (f"yo({_number(top)}, {_number(bottom)}, {_number(pitches[0])}, "
                    f"{_number(pitches[1])})")
         half_cycles = behavior.value("num_half_cycles_to_do", -1)
@@ -368,13 +349,13 @@ class _Translator:
         n = int(half_cycles)
         turn = f"depth >= {_number(bottom)}" if n % 2 else f"depth <= {_number(top)}"
         self.reads.add("halfcycle")
-        self.pitches, self.band, self.half_cycles = pitches, (top, bottom), n
+        self.half_cycles = n
         return (profile, comment, (f"halfcycle > {n} || halfcycle == {n} && {turn}",
                                    f"num_half_cycles_to_do {n}"))
 
     # ---- abend
     def abend(self, behavior: Behavior, has_route: bool) -> None:
-        events = [f"# abend ({_source(behavior)})"]
+        events = [f"# abend ({behavior.source})"]
         overtime = behavior.value("overtime", -1)
         if overtime > 0:
             self.horizon_s = min(self.horizon_s, overtime)
@@ -435,7 +416,7 @@ class _Translator:
         name = f"surface_{number}"
         when = int(behavior.value("start_when", 0))
         secs = behavior.value("when_secs", 180.0)
-        head = f"# surface ({_source(behavior)}): start_when {when}"
+        head = f"# surface ({behavior.source}): start_when {when}"
         call = f"set surfaced_s = missiontime call {name}"
         self.variables.setdefault("surfaced_s", (0.0, "when the glider last reached the "
                                                       "surface [s]"))
@@ -578,7 +559,7 @@ class _Translator:
         end = int(behavior.value("end_action", 1))
         keystroke = behavior.value("keystroke_wait_time", 300.0)
         gps = behavior.value("gps_wait_time", 300.0)
-        comment = [f"surface ({_source(behavior)})", *notes]
+        comment = [f"surface ({behavior.source})", *notes]
         match end:
             case 0:
                 wait, action, why = gps, "exit", "end_action 0: quit once at the surface " \
@@ -615,74 +596,26 @@ class _Translator:
         return _State(name, comment, "noheading", "surface", [], events)
 
     # ---- science sensors
-    def note(self, behavior: Behavior, notes: list[str]) -> None:
-        """What a science behavior leaves out, as comments of the survey state."""
-        self.survey_notes += [f"{behavior.name} ({_source(behavior)}): {n}" for n in notes]
+    def science(self, yo: Behavior | None, science_all_on: bool) -> None:
+        """The devices the sample and sensors_in behaviors switch on, in priority order."""
+        from gliderplan.language.ir import DEFAULT_VEHICLE
 
-    def sensors_in(self, behavior: Behavior, science_all_on: bool) -> None:
-        for arg in behavior.args.values():
-            if arg.name not in SENSORS_IN or arg.value < 0:
+        band = None if self.band is None else (*self.band, *self.pitches)
+        bay = ScienceBay(self.warn, self.leave_out, yo, band, DEFAULT_VEHICLE, science_all_on)
+        for behavior in self.mission.behaviors:
+            if behavior.missing_mafile is not None:
                 continue
-            if arg.name == "c_science_all_on" and not science_all_on:
-                continue
-            for sensor in SENSORS_IN[arg.name]:
-                self.survey_sensors.setdefault(sensor, "")
-                self.surface_sensors.setdefault(sensor, "")
-            if arg.value > 0:
-                self.note(behavior, self.leave_out(behavior, [arg.name],
-                                                   "sampled as fast as the CTD goes"))
-        self.note(behavior, self.leave_out(
-            behavior, [n for n in behavior.args if n not in SENSORS_IN],
-            "the flight sensors' sampling intervals: the simulated glider reads them every "
-            "tick"))
-
-    def sample(self, behavior: Behavior) -> None:
-        kind = int(behavior.value("sensor_type", 0))
-        if kind not in SENSOR_TYPES:
-            self.note(behavior, self.leave_out(behavior, ["sensor_type"], "gliderplan's "
-                                               "power models have no such sensor"))
-            return
-        sensors, _ = SENSOR_TYPES[kind]
-        interval = behavior.value("intersample_time", 0)
-        if interval < 0:
-            return  # sampling off: the behavior does nothing
-        if interval > 0:
-            self.note(behavior, self.leave_out(behavior, ["intersample_time"], "the sensor "
-                                               "stays on: a duty follows from the plan"))
-        states = int(behavior.value("state_to_sample", DIVING))
-        yo_bits = states & (DIVING | CLIMBING)
-        if yo_bits == DIVING | CLIMBING:
-            duty = ""
-        elif yo_bits:
-            duty = "0.5"
-            self.note(behavior, self.leave_out(
-                behavior, ["state_to_sample"], "sampling only on "
-                + ("dives" if yo_bits == DIVING else "climbs")
-                + " is duty 0.5 over the yo, not tied to the legs"))
-        else:
-            duty = None
-            if states & HOVERING:
-                self.note(behavior, self.leave_out(
-                    behavior, ["state_to_sample"], "the simulated glider never hovers: "
-                    "the sensor samples " + ("only at the surface" if states & ON_SURFACE
-                                             else "never")))
-        for sensor in sensors:
-            if duty is not None:
-                self.survey_sensors[sensor] = duty
-            if states & ON_SURFACE:
-                self.surface_sensors.setdefault(sensor, "")
-        self.note(behavior, self.leave_out(
-            behavior, [n for n in ("sample_time_after_state_change",)
-                       if behavior.value(n, 0) > 0], "sensors switch with the state, at once"))
-        depths = (behavior.value("min_depth", -5), behavior.value("max_depth", 2000))
-        if depths[0] > 0 or depths[1] < 1000:
-            self.note(behavior, self.leave_out(behavior, ["min_depth", "max_depth"],
-                                               "the sensor samples at every depth"))
+            if behavior.name == "sample":
+                bay.sample(behavior)
+            elif behavior.name == "sensors_in":
+                bay.sensors_in(behavior)
+        self.survey_sensors, self.surface_sensors = bay.sensors()
+        self.survey_notes += bay.notes + bay.union_notes()
 
     # ---- states
     def prepare_to_dive(self, behavior: Behavior) -> _State:
         wait = behavior.value("wait_time", 720.0)
-        comment = [f"prepare_to_dive ({_source(behavior)}): at the surface, wait_time "
+        comment = [f"prepare_to_dive ({behavior.source}): at the surface, wait_time "
                    f"{_number(wait)} s for a GPS fix"]
         self.warn(behavior.where, f"prepare_to_dive: the glider waits the whole wait_time "
                   f"{_number(wait)} s (a real one dives as soon as it has its GPS fix)")
@@ -756,11 +689,6 @@ class _Translator:
                     lines.append(f"    {event}")
             lines.append("end")
         return "\n".join(lines) + "\n"
-
-
-def _source(behavior: Behavior) -> str:
-    where = f"{behavior.where.path.name}:{behavior.where.line}"
-    return f"{where}, {behavior.mafile.name}" if behavior.mafile else where
 
 
 @dataclass(frozen=True)

@@ -67,6 +67,12 @@ class Behavior:
         arg = self.args.get(name)
         return arg.value if arg is not None else default
 
+    @property
+    def source(self) -> str:
+        """Where the behavior is, as comments name it: `m.mi:75, sample10.ma`."""
+        where = f"{self.where.path.name}:{self.where.line}"
+        return f"{where}, {self.mafile.name}" if self.mafile else where
+
 
 @dataclass(frozen=True)
 class SlocumMission:
@@ -78,6 +84,11 @@ class SlocumMission:
 _SETTING = re.compile(r"^(b_arg|sensor):\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(([^)]*)\)\s+(\S+)\s*$")
 _BEHAVIOR = re.compile(r"^behavior:\s*([A-Za-z_][A-Za-z0-9_]*)\s*$")
 _NUMBER = re.compile(r"^[-+]?(\d+(\.\d*)?|\.\d+)([eE][-+]?\d+)?$")
+
+
+def number_text(value: float) -> str:
+    """A value as the translated mission writes it: 50, 0.43, 43200."""
+    return f"{value:.10g}"
 
 
 def _split_comment(raw: str) -> tuple[str, str]:

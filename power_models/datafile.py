@@ -156,6 +156,40 @@ class Table:
             raise self.error(name, f"at_least must be true or false, got {entry['at_least']!r}")
         return entry["at_least"]
 
+    def span(self, name: str, dimension: str) -> tuple[float, float] | None:
+        """An optional range `{ low = ..., high = ..., unit = ..., source = ... }` in the
+        model's unit of `dimension` (the published span of a figure, e.g. a device's
+        power), or None when the file has none; low <= high, both finite and >= 0."""
+        self.used.add(name)
+        if name not in self.data:
+            return None
+        entry = self.data[name]
+        shape = "{ low = ..., high = ..., unit = ..., source = ... }"
+        if not isinstance(entry, dict):
+            raise self.error(name, f"expected {shape}, got {entry!r}")
+        unknown = set(entry) - {"low", "high", "unit", "source", "note"}
+        missing = [p for p in ("low", "high", "unit", "source") if p not in entry]
+        if unknown or missing:
+            what = f"unknown field(s) {sorted(unknown)}" if unknown else f"missing {missing[0]!r}"
+            raise self.error(name, f"{what}: expected {shape}")
+        unit, source = entry["unit"], entry["source"]
+        if not isinstance(source, str) or not source.strip():
+            raise self.error(name, "source must say where the numbers come from")
+        if not isinstance(unit, str) or unit not in UNITS[dimension]:
+            raise self.error(name, f"unit {unit!r} is not a unit of {dimension} "
+                                   f"(use one of {accepted_units(dimension)})")
+        ends = []
+        for part in ("low", "high"):
+            value = entry[part]
+            if isinstance(value, bool) or not isinstance(value, int | float) or not (
+                    math.isfinite(value) and value >= 0):
+                raise self.error(name, f"{part} must be a finite number >= 0, got {value!r}")
+            ends.append(to_model_unit(float(value), unit, dimension))
+        if ends[0] > ends[1]:
+            raise self.error(name, f"low {entry['low']} {unit} is above high "
+                                   f"{entry['high']} {unit}")
+        return ends[0], ends[1]
+
     def text_list(self, name: str) -> list[str]:
         """A list of text values."""
         self.used.add(name)
@@ -225,6 +259,15 @@ def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
 
     walk("", data)
     return rows
+
+
+def file_spans(path: Path) -> list[tuple[str, float, float, str, str]]:
+    """Every top-level range of a model file (`Table.span`) as (key, low, high, unit,
+    source), as written; call after the file has loaded."""
+    data = tomllib.loads(read_input_text(path, "model file"))
+    return [(key, item["low"], item["high"], item["unit"], item["source"])
+            for key, item in data.items()
+            if isinstance(item, dict) and "low" in item and "high" in item]
 
 
 def figure_sources(path: Path, key: str) -> tuple[str, ...]:

@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 
-from gliderplan.contract.units import UNITS, to_model_unit
 from gliderplan.power_models.catalog import resolve
 from gliderplan.power_models.datafile import read_model_file
 
@@ -31,8 +30,8 @@ class Sensor:
     sample_hz: float
     quality_alpha: float  # [1] curvature of the quality utility
     energy_per_byte_j: float | None = None  # communication devices only
-    # [W] the span of published figures for this class of device (a calibrated figure
-    # outside it is flagged), None if the file gives none
+    # [W] the span of published on-powers for this class of device (low, high); a fitted
+    # figure outside it is worth a second look. None: the file gives none
     power_range_w: tuple[float, float] | None = None
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
 
@@ -56,7 +55,8 @@ class Sensor:
 
 
 def load_sensor(spec: str) -> Sensor:
-    """Load a sensor: a preset name (`ctd`, `optode`, ...) or a path to a .toml file."""
+    """Load a sensor: a preset name (`ctd`, `optode`, `optics`, `adcp`, `dvl`, `logger`,
+    `modem`) or a path to a .toml file."""
     return read_sensor_file(resolve("sensor", spec))
 
 
@@ -78,30 +78,8 @@ def read_sensor_file(path: Path) -> Sensor:
             if top.has("energy_per_byte")
             else None
         ),
-        power_range_w=_power_range(top),
+        power_range_w=top.span("power_range", "power"),
         path=path,
     )
     top.finish()
     return sensor
-
-
-def _power_range(top) -> tuple[float, float] | None:  # noqa: ANN001
-    """`power_range = { low, high, unit, source }` [W], or None."""
-    if not top.has("power_range"):
-        return None
-    table = top.table("power_range")
-    unit = table.text("unit")
-    table.text("source")
-    if unit not in UNITS["power"]:
-        raise table.error("unit", f"expected a unit of power, got {unit!r}")
-    bounds = []
-    for key in ("low", "high"):
-        table.used.add(key)
-        value = table.data.get(key)
-        if isinstance(value, bool) or not isinstance(value, int | float) or not value >= 0.0:
-            raise table.error(key, f"expected a number >= 0, got {value!r}")
-        bounds.append(to_model_unit(float(value), unit, "power"))
-    if bounds[0] > bounds[1]:
-        raise table.error("high", "must not be below low")
-    table.finish()
-    return bounds[0], bounds[1]

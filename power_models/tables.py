@@ -30,7 +30,7 @@ def model_figures(kind: str, spec: str, clock_mhz: float | None = None) -> dict:
     from gliderplan.power_models import load_battery, load_board, load_sensor, load_vehicle
     from gliderplan.power_models.board import board_spec
     from gliderplan.power_models.catalog import resolve
-    from gliderplan.power_models.datafile import file_entries
+    from gliderplan.power_models.datafile import file_entries, file_spans
 
     if kind not in KINDS:
         raise UsageError(f"{kind!r}: not a kind of model ({', '.join(KINDS)})")
@@ -50,6 +50,10 @@ def model_figures(kind: str, spec: str, clock_mhz: float | None = None) -> dict:
         "file": None if path is None else str(path),  # none: no board, no file
         "figures": [] if path is None else [{"key": k, "value": v, "unit": u, "source": s}
                                             for k, v, u, s in file_entries(path)],
+        # published spans (a sensor's `power_range`): what a fitted figure is checked against
+        "ranges": [] if path is None else [
+            {"key": k, "low": low, "high": high, "unit": u, "source": s}
+            for k, low, high, u, s in file_spans(path)],
         "derived": _derived(kind, model),
     }
 

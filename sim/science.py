@@ -48,19 +48,22 @@ _TEMP_BIT = 1 << next(s.index for s in SENSORS if s.name == "temp")
 BOTTOM_DEPTH_M = 200.0  # assumption: water depth for the altimeter reading
 BATTERY_V = 15.0  # assumption: alkaline pack voltage, constant over the run
 # Readings the simulated glider holds constant, by sensor index: no roll, and the optode,
-# optics and modem of a quiet shelf sea (assumption). The fast executor sends the same.
+# optics, modem, DVL and microstructure logger of a quiet shelf sea without currents
+# (assumption: over the ground a Slocum's ~0.35 m/s through the water, DESIGN.md section 8;
+# shear 0.01 1/s, a dissipation near 1e-9 W/kg). The fast executor sends the same.
 CONSTANT_READINGS: dict[int, float] = {SENSOR_BY_NAME[name].index: value for name, value in (
     ("roll", 0.0), ("oxygen", 250.0), ("chlorophyll", 1.0), ("backscatter", 0.001),
-    ("modem", 0.0))}
-_ROLL, _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, _MODEM = (
+    ("modem", 0.0), ("groundspeed", 0.35), ("shear", 0.01))}
+_ROLL, _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, _MODEM, _GROUNDSPEED, _SHEAR = (
     CONSTANT_READINGS[SENSOR_BY_NAME[name].index]
-    for name in ("roll", "oxygen", "chlorophyll", "backscatter", "modem"))
+    for name in ("roll", "oxygen", "chlorophyll", "backscatter", "modem", "groundspeed",
+                 "shear"))
 # `ScienceComputer.readings` lists every sensor's reading in the registry's order (a list
 # built whole each tick, the loop's hot path): the order it writes, by name, checked here
 _READINGS_ORDER = ("missiontime", "depth", "pitch", "roll", "heading", "altitude", "lat",
                    "lon", "battery", "temp", "conductivity", "salinity", "oxygen",
                    "chlorophyll", "backscatter", "current", "modem", "halfcycle", "wptdist",
-                   "timeofday", "energy_left", "wptreached")
+                   "timeofday", "energy_left", "wptreached", "groundspeed", "shear")
 if _READINGS_ORDER != tuple(s.name for s in SENSORS) or len(SENSORS) != N_SENSORS:
     raise ImportError("sim/science.py: ScienceComputer.readings lists the sensors in another "
                       "order than the registry: update _READINGS_ORDER and the list")
@@ -203,6 +206,7 @@ class ScienceComputer:
             math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
             self.energy_left_j,
             math.nan,  # wptreached
+            _GROUNDSPEED, _SHEAR,
         ]
         mask = powered_mask(self.sensor_power)
         self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan

@@ -189,6 +189,23 @@ def test_the_vocabulary_fits_the_runtime_and_the_plan_file():
         and contract.N_SENSORS <= 32
 
 
+def test_the_pilots_sensor_table_is_the_contracts_and_every_device_has_a_preset():
+    from gliderplan.power_models.catalog import preset_names
+
+    rows = re.findall(r"^\| (\d+) \| `(\w+)` \| ([^|]+) \| ([^|]+) \|",
+                      (ROOT / "docs" / "pilot.md").read_text(), re.M)
+    assert [(int(i), name, unit.strip()) for i, name, unit, _ in rows] == [
+        (s.index, s.name, s.unit) for s in contract.SENSORS]
+    assert [d.strip().strip("`") for *_, d in rows] == [
+        s.device or ("runtime" if s.source == "runtime" else "-") for s in contract.SENSORS]
+    # the devices Slocum gliders carry: a DVL and a microstructure logger among them
+    by_name = {s.name: s for s in contract.SENSORS}
+    assert (by_name["groundspeed"].device, by_name["groundspeed"].unit) == ("dvl", "m/s")
+    assert (by_name["shear"].device, by_name["shear"].unit) == ("logger", "1/s")
+    for device in {s.device for s in contract.SENSORS if s.device}:
+        assert device in preset_names("sensor"), f"no power model of the {device}"
+
+
 def test_a_unit_means_the_same_in_a_mission_a_data_file_and_an_option(tmp_path):
     source = "mission m\nbattery 10 Ah at 14.4 V\nstate s begin flightprofile surface end\n"
     from_mission = check_source(source, "m.mission").mission.battery.energy_j

@@ -82,17 +82,17 @@ def check_guard_fired(summary: dict, series, reserve_j: float) -> None:
 
 @pytest.mark.parametrize("runtime", ["python", "c"])
 def test_an_undersized_battery_ends_the_mission_in_a_called_state(tmp_path, runtime):
-    """Fig. 2 on 17 kJ with half in reserve: the guard ends the mission in s2, called
+    """Fig. 2 on 16 kJ with half in reserve: the guard ends the mission in s2, called
     from s1, at the same tick on both runtimes; the stack is emptied."""
     mission = tmp_path / "small.mission"
     mission.write_text(FIG2.read_text().replace("battery 1.2 kWh reserve 15 %",
-                                                "battery 17 kJ reserve 50 %"))
+                                                "battery 16 kJ reserve 50 %"))
     options = ["--runtime", runtime]
     if runtime == "c":
         options += ["--state-dir", str(tmp_path / "state")]
     trace, summary, series = fly(mission, tmp_path / "run", *options)
     assert trace == ["0,start,,s1,0", "500,call,s1,s2,1", "1280,reserve,s2,,0"]
-    check_guard_fired(summary, series, 8.5e3)
+    check_guard_fired(summary, series, 8e3)
     assert series["stack_depth"].iloc[-2] == 1  # in s2 at depth 1 until the guard
     if runtime == "c":  # the runtime's own log says so too
         log = (tmp_path / "state" / "events.log").read_text().splitlines()

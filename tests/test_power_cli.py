@@ -36,6 +36,19 @@ def test_show_vehicle_text_table(capsys):
     assert "pump_out_energy_per_volume" in out and "J/(cc m)" in out and "optimal speed" in out
 
 
+@pytest.mark.parametrize(("name", "span"), [("dvl", "0.75-3.5"), ("logger", "0.75-3"),
+                                            ("ctd", "21-240")])
+def test_show_sensor_prints_its_published_power_range(capsys, name, span):
+    assert main(["power", "show", "sensor", name]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("power_range"))
+    assert line.split()[1:3] == [span, "mW" if name == "ctd" else "W"]
+    data = _json(capsys, ["power", "show", "sensor", name, "--json"])
+    (entry,) = data["ranges"]
+    assert entry["key"] == "power_range" and f"{entry['low']:g}-{entry['high']:g}" == span
+    assert entry["source"] in line
+    assert _json(capsys, ["power", "show", "vehicle", "slocum_g3", "--json"])["ranges"] == []
+
+
 def test_energy_table_matches_the_model(capsys):
     data = _json(
         capsys,

@@ -133,6 +133,16 @@ def test_units_are_converted(tmp_path):
             "unknown key",
         ),
         ("sensor", "ctd", 'kind = "sensor"', 'kind = "board"', "kind", "expected a 'sensor'"),
+        ("sensor", "dvl", "low = 0.75, high = 3.5", "low = 3.5, high = 0.75", "power_range",
+         "low 3.5 W is above high 0.75 W"),
+        ("sensor", "dvl", 'high = 3.5, unit = "W"', 'high = 3.5, unit = "Wh"', "power_range",
+         "not a unit of power"),
+        ("sensor", "dvl", "low = 0.75, high = 3.5", "low = 0.75", "power_range",
+         "missing 'high'"),
+        ("sensor", "dvl", "low = 0.75, high = 3.5", "low = -1, high = 3.5", "power_range",
+         "low must be a finite number >= 0"),
+        ("sensor", "logger", 'unit = "W", source = "assumption: 0.75-3 W', 'unit = "W", '
+         'source = "", note = "assumption: 0.75-3 W', "power_range", "source must say"),
     ],
 )
 def test_mistakes_name_the_file_and_the_key(tmp_path, kind, preset, old, new, key, message):
@@ -147,6 +157,15 @@ def test_mistakes_name_the_file_and_the_key(tmp_path, kind, preset, old, new, ke
         loader(str(path))
     assert str(caught.value).startswith(f"{path}: {key}: ")
     assert message in str(caught.value)
+
+
+def test_a_sensor_file_without_a_power_range_loads_without_one(tmp_path):
+    text = preset_path("sensor", "dvl").read_text()
+    path = tmp_path / "mine.toml"
+    path.write_text("\n".join(line for line in text.splitlines()
+                              if not line.startswith("power_range")))
+    assert load_sensor(str(path)).power_range_w is None
+    assert load_sensor("dvl").power_range_w == pytest.approx((0.75, 3.5))
 
 
 def test_unknown_key_suggests_the_right_one(tmp_path):
@@ -305,6 +324,19 @@ def test_a_preset_figure_is_a_number_its_source_quotes(file, key, entry):
     assert any(math.isclose(entry["value"], q, rel_tol=1e-3) for q in quoted), (
         f"{file}: {key} = {entry['value']} {entry['unit']}, but its source quotes "
         f"{quoted}: {entry['source']}")
+
+
+SPANS = [(path.name, tomllib.loads(path.read_text())["power_range"])
+         for path in sorted(DATA_DIR.glob("sensor_*.toml"))]
+
+
+@pytest.mark.parametrize(("file", "span"), SPANS, ids=[f for f, _ in SPANS])
+def test_a_sensor_presets_power_range_is_what_its_source_quotes(file, span):
+    quoted = _quoted_in_any_unit(span["source"], span["unit"])
+    for end in ("low", "high"):
+        assert any(math.isclose(span[end], q, rel_tol=1e-3) for q in quoted), (
+            f"{file}: power_range {end} = {span[end]} {span['unit']}, but its source quotes "
+            f"{quoted}: {span['source']}")
 
 
 def test_the_source_check_reads_ranges_and_spreads():

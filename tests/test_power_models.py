@@ -17,7 +17,8 @@ from gliderplan.power_models.errors import ModelFileError
 def test_catalog_lists_the_presets_the_language_names():
     assert preset_names("board") == ["ts5500", "ts7800"]
     assert {"slocum_g2_shallow", "slocum_g3"} <= set(preset_names("vehicle"))
-    assert {"ctd", "optode", "optics", "adcp", "modem"} <= set(preset_names("sensor"))
+    assert {"ctd", "optode", "optics", "adcp", "dvl", "logger", "modem"} <= set(
+        preset_names("sensor"))
     assert {"alkaline", "lithium_primary", "rechargeable"} <= set(preset_names("battery"))
     with pytest.raises(ValueError, match="unknown model kind"):
         preset_names("boat")
@@ -110,7 +111,7 @@ def test_boot_energy_follows_the_clock():
     assert fast.boot_j / slow.boot_j == pytest.approx(4.14 / 3.42)
 
 
-@pytest.mark.parametrize("name", ["ctd", "optode", "optics", "adcp", "modem"])
+@pytest.mark.parametrize("name", ["ctd", "optode", "optics", "adcp", "dvl", "logger", "modem"])
 def test_sensor_quality_is_concave_from_zero_to_one(name):
     sensor = load_sensor(name)
     duty = np.linspace(0.0, 1.0, 101)
@@ -123,6 +124,26 @@ def test_sensor_quality_is_concave_from_zero_to_one(name):
 def test_ctd_is_the_sea_bird_figure():
     ctd = load_sensor("ctd")
     assert ctd.on_power_w == pytest.approx(0.24) and ctd.sample_hz == 0.5
+
+
+def test_every_device_a_slocum_instrument_is_has_a_preset_and_a_sensor():
+    from gliderplan.contract import SENSORS
+    from gliderplan.power_models.slocum_instruments import devices
+
+    logged = {s.device for s in SENSORS if s.device is not None}
+    for device in devices():
+        assert device in preset_names("sensor"), device
+        assert device in logged, f"no sensor of the language is the {device}"
+    assert load_sensor("dvl").on_power_w == pytest.approx(1.3)  # Nortek 1 MHz (DUNE)
+    assert load_sensor("logger").on_power_w == pytest.approx(1.5)  # the stated assumption
+
+
+@pytest.mark.parametrize("name", preset_names("sensor"))
+def test_every_sensor_preset_gives_the_published_span_of_its_class(name):
+    sensor = load_sensor(name)
+    assert sensor.power_range_w is not None, f"{name}: no power_range"
+    low, high = sensor.power_range_w
+    assert 0.0 < low <= sensor.on_power_w <= high  # its own figure is one of the span
 
 
 def test_cycling_a_sensor_costs_its_warm_up():

@@ -14,7 +14,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 
@@ -96,16 +95,18 @@ def test_the_plans_star_is_on_or_under_the_pareto_curve(survey_dir):
     # energy (its sensors are billed), and the minimum-energy plan takes just what it needs
     assert curve["budget_j"].iloc[0] <= planned["minimum_energy_j"] * (1 + 1e-9)
     assert budgeted == pytest.approx(planned["minimum_energy_j"], rel=1e-6)
-    # of the plans with that energy it flies the best: on the curve (between its points,
-    # a concave curve lies above its chords), not above it
-    between = float(np.interp(budgeted, curve["budget_j"], curve["quality"]))
-    assert between - 1e-3 <= planned["quality"] <= between + 0.02
+    # of the plans with that energy it flies the best: on the curve, which rises with the
+    # budget, so between the curve's points below and above its budget
+    below = curve[curve["budget_j"] <= budgeted]["quality"].max()
+    above = curve[curve["budget_j"] >= budgeted]["quality"].min()
+    assert below - 1e-6 <= planned["quality"] <= above + 1e-6
     assert planned["quality"] >= 0.5 - 1e-6
     # it draws less than it takes; the star is drawn at what it takes, and the page says so
     assert planned["energy_j"] < budgeted
     page = (survey_dir / "report.html").read_text()
     assert f"the plan: {budgeted / 3600:.4g} Wh of budget" in page
-    assert f"the plan: {planned['energy_j'] / 3600:.4g} Wh" not in page
+    if f"{planned['energy_j'] / 3600:.4g}" != f"{budgeted / 3600:.4g}":  # not the same here
+        assert f"the plan: {planned['energy_j'] / 3600:.4g} Wh" not in page
     assert "The star is the plan" in page and "predicted to draw" in page
     assert "It lies on the curve" in page
 

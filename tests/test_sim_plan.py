@@ -270,3 +270,38 @@ def test_a_plan_no_vehicle_can_fly_is_refused_naming_the_line(tmp_path, capsys, 
     else:  # the runtime's reader words it in the plan format's field names
         assert "survey.plan" in err[0] and f"line {where}: " in err[0]
     assert not (out / "summary.json").exists() and not (out / "sim_budget").exists()
+
+
+DEVICES_MISSION = """mission devices
+horizon 2 h
+
+state s1
+begin
+  flightroute noheading
+  flightprofile yo(3, 30, .454, .454)
+  sensors missiontime, depth, groundspeed, shear duty 0.5
+  events
+    case groundspeed > 0.3 && shear > 0 && missiontime >= 1800 exit
+end
+"""
+
+
+@pytest.mark.parametrize("runtime", ["python", "c"])
+def test_the_dvl_and_the_microstructure_logger_are_read_and_billed(tmp_path, runtime):
+    # the DVL always on, the logger on half the time: both runtimes read their constant
+    # readings (0.35 m/s, 0.01 1/s) and the simulator bills each device's preset
+    mission = tmp_path / "devices.mission"
+    mission.write_text(DEVICES_MISSION)
+    assert main(["plan", str(mission), "-o", str(tmp_path / "d.plan")]) == 0
+    assert main(["sim", str(mission), "--plan", str(tmp_path / "d.plan"), "--runtime",
+                 runtime, "-o", str(tmp_path / "run")]) == 0
+    trace = (tmp_path / "run" / "trace.csv").read_text().splitlines()[1:]
+    assert trace == ["0,start,,s1,0", "1800,exit,s1,,0"]  # the event read both readings
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    billed, seconds = summary["energy_by_component_j"], summary["simulated_s"]
+    dvl, logger = load_sensor("dvl"), load_sensor("logger")
+    assert billed["dvl"] == pytest.approx(dvl.on_power_w * seconds, rel=0.01)
+    # half the time, plus a warm-up at each switch-on (one per period of the plan)
+    assert 0.5 * logger.on_power_w * seconds <= billed["logger"] \
+        <= 0.6 * logger.on_power_w * seconds
+    assert summary["plan_check"]["verdict"] == "pass"

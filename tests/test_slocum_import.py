@@ -20,6 +20,8 @@ from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import check_file
 from gliderplan.language.slocum import import_mission
 from gliderplan.language.slocum_files import SlocumFileError
+from gliderplan.language.slocum_sampling import yo_phases
+from gliderplan.power_models import load_sensor
 from gliderplan.sim.geo import ddmm_to_degrees
 from gliderplan.sim.science import NOISE_PRESETS
 
@@ -60,13 +62,16 @@ def flown(tmp_path_factory) -> dict[str, Path]:
     """Each real mission imported, checked, planned and flown for its 7-day horizon."""
     _needs_missions()
     runs = {}
-    for name, extra in (("helgo", ["--allow-missing-mafiles"]), ("nsb3", [])):
+    # helgo's c_science_all_on powers every science device gliderplan models (a warning),
+    # more than the default pack holds for 7 days: it is planned on a larger battery
+    for name, extra, battery in (("helgo", ["--allow-missing-mafiles"], ["--battery", "3kWh"]),
+                                 ("nsb3", [], [])):
         out = tmp_path_factory.mktemp(name)
         mission = out / f"{name}.mission"
         assert main(["import-slocum", str(MISSIONS / name / f"{name}.mi"), *extra,
                      "-o", str(mission)]) == 0
         assert main(["check", "--strict", str(mission)]) == 0
-        assert main(["plan", str(mission), "-o", str(out / f"{name}.plan")]) == 0
+        assert main(["plan", str(mission), *battery, "-o", str(out / f"{name}.plan")]) == 0
         assert main(["sim", str(mission), "--plan", str(out / f"{name}.plan"),
                      "-o", str(out / "run")]) == 0
         runs[name] = out
@@ -175,7 +180,7 @@ def test_import_reports_warnings_with_file_and_line(tmp_path, capsys):
     assert re.search(r"nsb3\.mi:91: warning: sensors_in: not translated: c_att_time 0", err)
     text = (tmp_path / "n.mission").read_text()
     assert "# sensors_in (nsb3.mi:89): not translated: c_att_time 0, c_alt_time -1" in text
-    assert "# sample (nsb3.mi:83, sample13.ma): not translated: sensor_type 39" in text
+    assert "sensor_type 39" not in err  # the logger is a device of the power model
 
 
 def test_a_missing_ma_file_stops_the_import_with_its_line(tmp_path, capsys):
@@ -234,6 +239,18 @@ YO_MA = ("behavior_name=yo\n<start:b_arg>\n b_arg: d_target_depth(m) 20\n"
                      "<end:b_arg>\n"},
      "surfac10.ma:3: when_secs 0 s is no time to wait: start_when 12 surfaces when_secs "
      "after it last left the surface"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: nth_yo_to_sample(nodim) 0\n", {},
+     "m.mi:3: nth_yo_to_sample 0: no yo to sample"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: state_to_sample(enum) 16\n", {},
+     "m.mi:3: state_to_sample 16 is no sum of 1 diving, 2 hovering, 4 climbing and 8 on the "
+     "surface (0-15)"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 1.5\n", {},
+     "m.mi:2: sensor_type 1.5 is not a whole number"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: min_depth(m) 30\n"
+     " b_arg: max_depth(m) 10\n", {},
+     "m.mi:4: sample between min_depth 30 m and max_depth 10 m: no depth lies between"),
+    ("behavior: sample\n b_arg: args_from_file(enum) 12\n", {},
+     "m.mi:2: args_from_file 12: no file"),
 ])
 def test_bad_slocum_files_stop_with_one_line_naming_file_and_line(tmp_path, capsys, mi,
                                                                   mafiles, message):
@@ -309,7 +326,8 @@ def test_a_synthetic_mission_translates_every_surfacing_mode(tmp_path):
     assert "case mod(timeofday, 3600) >= 900 && mod(timeofday, 3600) < 960" in text
     assert "start_when 13: at a date, not translated" in text
     assert "flightroute nav(3910.5, -7349)" in text
-    assert "temp duty 0.5" in text  # sampled on dives only
+    dives = yo_phases(3, 20, 0.45, 0.45, "slocum_g2_shallow").dive_share
+    assert f"temp duty {dives:.2g}," in text and 0.5 < dives < 0.7  # sampled on dives only
     assert main(["sim", str(out), "--duration", "4h", "--start", "2024-06-01T06:10Z",
                  "-o", str(tmp_path / "run")]) == 0
     trace = (tmp_path / "run" / "trace.csv").read_text()
@@ -361,10 +379,13 @@ def test_science_behaviors_say_what_they_leave_out_in_the_mission(tmp_path, caps
     err = capsys.readouterr().err
     text = out.read_text()
     assert "m.mi:5: warning: sample: not translated: state_to_sample 2" in err
-    assert "# sample (m.mi:3): not translated: state_to_sample 2 (the simulated glider " \
-           "never hovers: the sensor samples never)" in text
+    assert "# sample (m.mi:3): not translated: state_to_sample 2 (the yo never hovers: the " \
+           "sensor samples never)" in text
     assert "chlorophyll" not in text.split("state survey")[1].split("end")[0]
-    assert "# sample (m.mi:6): not translated: intersample_time 10" in text
+    # a sample every 10 s: the CTD's 2 s warm-up and one 2 s sample (0.5 Hz) in every 10
+    assert "# sample (m.mi:6): ctd (sensor_type 1 PROFILE) diving and climbing: duty 0.4 " \
+           "in the yo, intersample_time 10 s: (its warm-up 2 s + 2 s a sample) / 10 s" in text
+    assert "temp duty 0.4, conductivity duty 0.4, salinity duty 0.4" in text
     assert "m.mi:11: warning: sensors_in: not translated: c_att_time 0" in err
     assert "# sensors_in (m.mi:10): not translated: c_att_time 0, u_battery_time 10" in text
 
@@ -486,3 +507,177 @@ def test_surfacings_that_can_never_start_are_a_comment_and_a_warning(tmp_path, c
     assert main(["import-slocum", str(path), "-o", str(tmp_path / "n.mission")]) == 0
     assert "m.mi:2: warning: surface: start_when 8 (when a waypoint is reached) never " \
            "happens: goto_wpt is flown as nav" in capsys.readouterr().err
+
+
+
+# ---- the science bay: sample and sensors_in -----------------------------------------------
+def _import(tmp_path: Path, capsys, mi: str, *options: str) -> tuple[str, str]:
+    """(the translated mission, the warnings) of a mission with YO_MA's 3-20 m yo; it
+    checks (a mission that never exits is a warning)."""
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA)
+    out = tmp_path / "s.mission"
+    assert main(["import-slocum", str(path), *options, "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert main(["check", str(out)]) == 0
+    capsys.readouterr()
+    return out.read_text(), err
+
+
+def _logged(text: str, state: str = "survey") -> dict[str, str]:
+    """A state's science sensors -> duty ("" always on)."""
+    line = next(x for x in text.split(f"state {state}\n")[1].splitlines()
+                if x.strip().startswith("sensors "))
+    science = [u.split(" duty ") for u in line.split("sensors ")[1].split(", ")]
+    return {u[0]: (u[1] if len(u) > 1 else "") for u in science
+            if u[0] not in ("missiontime", "depth", "pitch", "lat", "lon", "halfcycle",
+                            "wptdist", "wptreached", "timeofday", "energy_left")}
+
+
+def test_nsb3_samples_its_ctd_and_flntu_in_the_yo_and_leaves_the_logger_and_dvl_off(
+        tmp_path, capsys):
+    _needs_missions()
+    out = tmp_path / "n.mission"
+    assert main(["import-slocum", str(MISSIONS / "nsb3" / "nsb3.mi"), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    text = out.read_text()
+    # sample10.ma and sample11.ma: state_to_sample 5, intersample_time 0
+    assert _logged(text) == {s: "" for s in ("temp", "conductivity", "salinity",
+                                             "chlorophyll", "backscatter")}
+    assert "# sample (nsb3.mi:78, sample11.ma): optics (sensor_type 19 FLNTU) diving and " \
+           "climbing: always on in the yo" in text
+    # sample13.ma (the MicroRider) and sample14.ma (the DVL): intersample_time -1
+    assert "# sample (nsb3.mi:83, sample13.ma): logger (sensor_type 39 LOGGER): " \
+           "intersample_time -1: off" in text
+    assert "# sample (nsb3.mi:86, sample14.ma): dvl (sensor_type 43 DVL): intersample_time " \
+           "-1: off" in text
+    assert "shear" not in text and "groundspeed" not in text
+    assert not [line for line in err.splitlines() if "warning: sample" in line]
+    # the CTD at the surface too: sensors_in's c_profile_on 0, below the samples
+    assert _logged(text, "surface_3") == {"temp": "", "conductivity": "", "salinity": ""}
+    assert "# ctd: sampled by sample (nsb3.mi:75, sample10.ma) and sensors_in (nsb3.mi:89): " \
+           "the union of their phases" in text
+
+
+def test_a_device_sampled_on_dives_only_is_on_for_the_share_of_the_yo_the_glider_dives(
+        tmp_path, capsys):
+    text, err = _import(tmp_path, capsys, "behavior: yo\n b_arg: args_from_file(enum) 10\n"
+                        "behavior: sample\n b_arg: sensor_type(enum) 43\n"
+                        " b_arg: state_to_sample(enum) 1\n")
+    duty = float(_logged(text)["groundspeed"])
+    assert f"# sample (m.mi:3): dvl (sensor_type 43 DVL) diving only: duty {duty:.2g} in the " \
+           "yo, the share of a 3-20 m yo spent diving on slocum_g2_shallow" in text
+    out = tmp_path / "s.mission"
+    assert main(["plan", str(out), "-o", str(tmp_path / "s.plan")]) == 0
+    assert main(["sim", str(out), "--plan", str(tmp_path / "s.plan"), "--duration", "6h",
+                 "-o", str(tmp_path / "run")]) == 0
+    table = _series(tmp_path)
+    survey = table[table["state"] == "survey"]
+    # the simulated glider dives (nose down: the dive and the turn at the top that starts
+    # it) for that share of the yo, and the planned DVL draws its power for as long
+    diving = float((survey["pitch_rad"] < 0).mean())
+    assert diving == pytest.approx(duty, abs=0.02)
+    period_s, on_s = next(map(float, line.split()[2:4]) for line in (
+        tmp_path / "s.plan").read_text().splitlines() if line.startswith("sensor groundspeed"))
+    assert on_s / period_s == pytest.approx(duty, abs=0.01)
+    dvl_j = float(survey["power_dvl_w"].sum()) * TICK_S
+    expected_w = float(load_sensor("dvl").mean_power_w(diving, period_s))  # + its warm-ups
+    assert dvl_j == pytest.approx(expected_w * len(survey) * TICK_S, rel=0.02)
+
+
+def test_intervals_depths_and_every_nth_yo_scale_the_duty_and_say_why(tmp_path, capsys):
+    mi = ("behavior: surface\n b_arg: start_when(enum) 9\n b_arg: when_secs(s) 3600\n"
+          "behavior: yo\n b_arg: args_from_file(enum) 10\n"
+          "behavior: sample\n b_arg: sensor_type(enum) 59\n b_arg: state_to_sample(enum) 13\n"
+          " b_arg: intersample_time(s) 10\n b_arg: nth_yo_to_sample(nodim) 3\n"
+          " b_arg: max_depth(m) 10\n")
+    text, err = _import(tmp_path, capsys, mi)
+    # the CTD41CP2 is the ctd: 7 m of the 3-20 m band, one yo in 3, 4 s of every 10 s
+    duty = 7 / 17 / 3 * 0.4
+    assert _logged(text)["temp"] == f"{duty:.2g}"
+    assert f"duty {duty:.2g} in the yo = 0.41 (min_depth -5 m to max_depth 10 m keep 3-10 m " \
+           "of the 3-20 m yo (at an even vertical speed)) x 0.33 (nth_yo_to_sample 3: one yo " \
+           "in 3) x 0.4 (intersample_time 10 s: (its warm-up 2 s + 2 s a sample) / 10 s)" \
+           in text
+    assert _logged(text, "surface_1")["temp"] == "0.4"  # at the surface: the interval only
+    assert "warning: sample" not in err
+
+
+@pytest.mark.parametrize("mi, line, warning, comment", [
+    ("behavior: sample\n b_arg: state_to_sample(enum) 5\n", 1,
+     "sample: no sensor_type: read as 0 (C_SCIENCE_ALL_ON), the default this translation "
+     "assumes", "every science device (sensor_type 0 C_SCIENCE_ALL_ON) diving and climbing"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 999\n", 2,
+     "sample: sensor_type 999 is no instrument the Slocum firmware knows: the forecast does "
+     "not power it", "sensor_type 999 (no instrument the Slocum firmware knows): the forecast "
+     "does not power it"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 51\n", 2,
+     "sample: sensor_type 51 is SUNA, an instrument gliderplan has no power model of: the "
+     "forecast does not power it", "sensor_type 51 (SUNA, an instrument gliderplan has no "
+     "power model of)"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 2\n", 2,
+     "sample: sensor_type 2 is HS2, deleted from the Slocum firmware", "(HS2, deleted"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: state_to_sample(enum) 0\n", 3,
+     "sample: state_to_sample 0: no state to sample in: sensor_type 1 is never switched on",
+     "ctd (sensor_type 1 PROFILE): state_to_sample 0, in no state: off"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: state_to_sample(enum) 5\n"
+     " b_arg: nth_yo_to_sample(nodim) -2\n", 4,
+     "sample: not translated: nth_yo_to_sample -2 (m.mi:6): the first yo, which it leaves "
+     "out, is sampled as the others; then one yo in 2", "duty 0.5 in the yo, "
+     "nth_yo_to_sample -2: one yo in 2"),
+    ("behavior: sample\n b_arg: sensor_type(enum) 1\n b_arg: state_to_sample(enum) 5\n"
+     " b_arg: tod_start(hhmm) 600\n", 4,
+     "sample: not translated: tod_start 600 (m.mi:6): gliderplan's models have no "
+     "counterpart", "not translated: tod_start 600"),
+    ("behavior: sensors_in\n b_arg: c_suna_on(sec) 0\n", 2,
+     "sensors_in: c_suna_on is SUNA, an instrument gliderplan has no power model of: the "
+     "forecast does not power it", "c_suna_on (SUNA, an instrument gliderplan has no power "
+     "model of): the forecast does not power it"),
+])
+def test_what_the_science_bay_cannot_power_is_a_warning_at_its_line_and_a_comment(
+        tmp_path, capsys, mi, line, warning, comment):
+    text, err = _import(tmp_path, capsys, "behavior: yo\n b_arg: args_from_file(enum) 10\n"
+                        + mi)
+    assert f"m.mi:{line + 2}: warning: {warning}" in err, err
+    survey_comments = text.split("state survey")[0]
+    assert comment in survey_comments
+
+
+def test_a_sample_whose_ma_file_is_missing_is_left_out_when_allowed(tmp_path, capsys):
+    mi = ("behavior: yo\n b_arg: args_from_file(enum) 10\n"
+          "behavior: sample\n b_arg: args_from_file(enum) 12\n")
+    text, err = _import(tmp_path, capsys, mi, "--allow-missing-mafiles")
+    assert "m.mi:3: warning: sample: its .ma file" in err and "sample12.ma is missing" in err
+    assert "# left out: sample (m.mi:3), its .ma file sample12.ma is missing" in text
+    assert _logged(text) == {}
+
+
+def test_several_behaviors_of_one_device_sample_the_union_of_their_phases(tmp_path, capsys):
+    # the DVL: sampled on dives by one sample and on climbs by another: always on; the
+    # optode: off on dives (the first behavior), on everywhere else by sensors_in
+    mi = ("behavior: yo\n b_arg: args_from_file(enum) 10\n"
+          "behavior: sample\n b_arg: sensor_type(enum) 43\n b_arg: state_to_sample(enum) 1\n"
+          "behavior: sample\n b_arg: sensor_type(enum) 43\n b_arg: state_to_sample(enum) 4\n"
+          "behavior: sample\n b_arg: sensor_type(enum) 54\n b_arg: state_to_sample(enum) 1\n"
+          " b_arg: intersample_time(s) -1\n"
+          "behavior: sensors_in\n b_arg: c_oxy4_on(sec) 0\n")
+    text, err = _import(tmp_path, capsys, mi)
+    climbs = yo_phases(3, 20, 0.45, 0.45, "slocum_g2_shallow").climb_share
+    assert _logged(text) == {"groundspeed": "", "oxygen": f"{climbs:.2g}"}
+    assert "# dvl: sampled by sample (m.mi:3) and sample (m.mi:6): the union of their " \
+           "phases" in text
+    assert "# optode: sampled by sample (m.mi:9) and sensors_in (m.mi:13)" in text
+
+
+def test_sensors_in_reads_every_switch_of_the_science_bay(tmp_path, capsys):
+    mi = ("behavior: yo\n b_arg: args_from_file(enum) 10\n"
+          "behavior: sensors_in\n b_arg: c_ad2cp_on(sec) 60\n b_arg: c_uModem_on(sec) 0\n"
+          " b_arg: c_microrider_on(sec) -1\n b_arg: c_bb3slo_on(sec) 0\n")
+    text, err = _import(tmp_path, capsys, mi)
+    # the AD2CP every 60 s: its 5 s start-up and a 1 s ping ensemble
+    assert _logged(text) == {"current": "0.1", "modem": "", "chlorophyll": "",
+                             "backscatter": ""}
+    assert "# sensors_in (m.mi:3): adcp (c_ad2cp_on 60): duty 0.1 in every state, " \
+           "intersample_time 60 s: (its warm-up 5 s + 1 s a sample) / 60 s" in text
+    assert "# sensors_in (m.mi:3): logger (c_microrider_on -1): off" in text
+    assert "warning:" not in err

@@ -65,7 +65,7 @@
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
 
-#define GP_N_SENSORS 22  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
+#define GP_N_SENSORS 24  /**< the array's length (HELLO's `n_sensors`); at most 32 (u32 masks) */
 /** Sensors without a device of their own: always powered while logged, in the hotel load. */
 #define GP_FLIGHT_SENSORS_MASK 0x3E01FFu
 
@@ -96,6 +96,8 @@ enum {
     GP_SENSOR_ENERGY_LEFT = 20,
     /** waypoints the route has reached since the state was entered (a goto list counts on, lap after lap); 0 for nav and noheading [1] */
     GP_SENSOR_WPTREACHED = 21,
+    GP_SENSOR_GROUNDSPEED = 22,  /**< speed over the sea floor (DVL bottom track) [m/s] */
+    GP_SENSOR_SHEAR = 23,  /**< microstructure velocity shear (microstructure logger) [1/s] */
 };
 
 /* ---- COMMAND's flags */

@@ -8,7 +8,7 @@
 
 #include "gp_mission.h"
 
-_Static_assert(GP_N_SENSORS == 22, "the runtime and the compiler disagree on the sensor array");
+_Static_assert(GP_N_SENSORS == 24, "the runtime and the compiler disagree on the sensor array");
 
 /* ---- state 0: s1 ---------------------------------------- */
 
@@ -136,6 +136,8 @@ static const char *const sensor_names[GP_N_SENSORS] = {
     "timeofday",
     "energy_left",
     "wptreached",
+    "groundspeed",
+    "shear",
 };
 
 static const gp_state states[3] = {
