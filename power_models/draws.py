@@ -51,9 +51,18 @@ def draw_figures(
     # correlated standard normals, then scaled: the figures' units differ by 20 orders of
     # magnitude, too many for one covariance matrix
     root = correlation_root(u.correlation)
+    low = np.zeros(len(mean))
+    for j, key in enumerate(u.keys):
+        options = figure_spec(key)[2]
+        low[j] = options.get("minimum", 0.0)
+        if options.get("positive"):
+            low[j] = max(low[j], 1e-9 * abs(mean[j]) if mean[j] else 1e-12)
+        if key in u.at_least:  # a lower bound: the truth is no less
+            low[j] = max(low[j], mean[j])
 
     def draw(rows: int) -> np.ndarray:
-        return mean + (rng.standard_normal((rows, len(mean))) @ root.T) * (u.sd * spread)
+        normal = mean + (rng.standard_normal((rows, len(mean))) @ root.T) * (u.sd * spread)
+        return np.maximum(normal, low)
 
     values = draw(n)
     for _ in range(MAX_REDRAWS if held_power_w(vehicle) else 0):
@@ -61,14 +70,6 @@ def draw_figures(
         if not bad.size:
             break
         values[bad] = draw(bad.size)
-    for j, key in enumerate(u.keys):
-        options = figure_spec(key)[2]
-        low = options.get("minimum", 0.0)
-        if options.get("positive"):
-            low = max(low, 1e-9 * abs(mean[j]) if mean[j] else 1e-12)
-        if key in u.at_least:  # a lower bound: the truth is no less
-            low = max(low, mean[j])
-        values[:, j] = np.maximum(values[:, j], low)
     return u.keys, values
 
 
