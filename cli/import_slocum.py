@@ -1,6 +1,7 @@
 """`gliderplan import-slocum`: translate a Slocum layered-control mission (.mi and its .ma files).
 
   import-slocum MISSION.mi [--mafiles DIR] -o OUT.mission [--horizon 7d]
+                [--vehicle SPEC] [--computer SPEC] [--battery SPEC]
 
 Writes OUT.mission in the gliderplan language and checks it. What has no counterpart
 stays in OUT.mission as a comment and is reported as a warning (FILE:LINE: warning:
@@ -12,6 +13,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+
+from gliderplan.language.slocum import Hardware
 
 ORDER = 5
 DEFAULT_HORIZON = "7d"
@@ -28,20 +31,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="how long the mission is planned and simulated for (a Slocum "
                              "mission runs until its pilot ends it; default 7d, or abend's "
                              "overtime when shorter)")
+    defaults = Hardware()
+    parser.add_argument("--vehicle", metavar="PRESET|FILE",
+                        help=f"the glider it flies on (default {defaults.vehicle}; give your "
+                             "calibrated glider: gliderplan calibrate -o)")
+    parser.add_argument("--computer", metavar="SPEC",
+                        help=f"an extra board that runs the mission (default {defaults.computer}"
+                             ": the glider's own computers)")
+    parser.add_argument("--battery", metavar="SPEC",
+                        help=f"its battery as a mission writes it (default '{defaults.battery}',"
+                             " the Slocum alkaline pack)")
     parser.add_argument("--allow-missing-mafiles", action="store_true",
                         help="leave out a behavior whose .ma file is missing (a warning) "
                              "instead of stopping")
 
 
 def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     from gliderplan.cli.sim import parse_duration_s
     from gliderplan.language.slocum import import_mission
 
+    given = {k: getattr(args, k) for k in ("vehicle", "computer", "battery")
+             if getattr(args, k) is not None}
+    hardware = replace(Hardware(), **given, given=frozenset(given))
     imported = import_mission(args.mission, args.output, args.mafiles,
                               parse_duration_s(args.horizon, "--horizon"),
-                              args.allow_missing_mafiles)
+                              args.allow_missing_mafiles, hardware)
     for warning in imported.warnings:
         print(warning, file=sys.stderr)
+    said = ", ".join(f"{k} {getattr(hardware, k)}" + ("" if k in given else " (default)")
+                     for k in ("vehicle", "computer", "battery"))
     print(f"wrote {imported.path}: {imported.states} states, {len(imported.warnings)} "
-          "warning(s)", file=sys.stderr)
+          f"warning(s); {said}", file=sys.stderr)
     return 0

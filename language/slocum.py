@@ -65,6 +65,49 @@ class Warning_:
 
 
 @dataclass(frozen=True)
+class Hardware:
+    """What an imported mission flies on: a vehicle (preset or file), its computer
+    (`none`: the glider's own, in its base load; a Slocum mission needs no extra board)
+    and its battery, as the mission's `vehicle`, `computer` and `battery` lines write them.
+    `given` names those the user gave (the others are defaults, and the mission says so)."""
+
+    vehicle: str = "slocum_g2_shallow"
+    computer: str = "none"
+    battery: str = "7.8 MJ reserve 15 %"  # the Slocum alkaline pack (ir.DEFAULT_BATTERY)
+    given: frozenset[str] = frozenset()
+
+    def check(self) -> None:
+        """UsageError, with the checker's diagnostics, for a vehicle, computer or battery a
+        mission could not name (an unknown preset, a malformed battery)."""
+        from gliderplan.contract.errors import UsageError
+        from gliderplan.language import check_source
+
+        header = "\n".join(["mission hardware", *self.lines(), "state s", "begin",
+                            "  flightroute noheading", "  flightprofile surface",
+                            "  sensors missiontime", "  events",
+                            "    case missiontime >= 1 exit", "end", ""])
+        result = check_source(header, "import-slocum")
+        if not result.ok:
+            raise UsageError("--vehicle, --computer or --battery: not what a mission can fly "
+                             "on", details=result.render())
+
+    def lines(self) -> list[str]:
+        """The mission's hardware lines, each saying where it came from."""
+        def note(what: str, default_why: str) -> str:
+            return f"import-slocum --{what}" if what in self.given else \
+                f"the default of import-slocum --{what}: {default_why}"
+
+        vehicle = self.vehicle if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.vehicle) \
+            else f'"{self.vehicle}"'
+        computer = self.computer if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*(\s*@.*)?",
+                                                 self.computer) else f'"{self.computer}"'
+        return [f"vehicle {vehicle}    # " + note("vehicle", "a preset; give your glider"),
+                f"computer {computer}    # " + note("computer", "the glider's own computers, in "
+                                                    "its base load: no extra board"),
+                f"battery {self.battery}    # " + note("battery", "the Slocum alkaline pack")]
+
+
+@dataclass(frozen=True)
 class Translation:
     source: str  # the mission, in the gliderplan language
     warnings: tuple[Warning_, ...]
@@ -86,9 +129,10 @@ def _at(arg: Arg) -> str:
 
 
 class _Translator:
-    def __init__(self, mission: SlocumMission, horizon_s: float) -> None:
+    def __init__(self, mission: SlocumMission, horizon_s: float, hardware: Hardware) -> None:
         self.mission = mission
         self.horizon_s = horizon_s
+        self.hardware = hardware
         self.warnings: list[Warning_] = []
         self.header: list[str] = []
         self.variables: dict[str, tuple[float, str]] = {}
@@ -669,7 +713,7 @@ class _Translator:
                  "# Behaviors in priority order: " + ", ".join(
                      f"{b.name} ({b.where.line})" for b in self.mission.behaviors) + "."]
         lines += [f"# {c}" for c in self.header]
-        lines += [f"mission {name}",
+        lines += [f"mission {name}", *self.hardware.lines(),
                   f"horizon {_number(self.horizon_s)} s    # planned and simulated for this "
                   "long (the Slocum mission runs until its pilot ends it)", ""]
         for var, (initial, why) in self.variables.items():
@@ -700,7 +744,8 @@ class Imported:
 
 def import_mission(mi: str | Path, output: str | Path, mafiles: str | Path | None = None,
                    horizon_s: float = 7 * 86400.0,
-                   allow_missing_mafiles: bool = False) -> Imported:
+                   allow_missing_mafiles: bool = False,
+                   hardware: Hardware = Hardware()) -> Imported:
     """Translate the Slocum mission `mi` (its .ma files in `mafiles`), check the result and
     write it to `output` atomically (`gliderplan import-slocum`). `horizon_s` [s]: how long
     the mission is planned and flown; `allow_missing_mafiles`: leave out a behavior whose
@@ -717,7 +762,9 @@ def import_mission(mi: str | Path, output: str | Path, mafiles: str | Path | Non
 
     if mafiles is not None and not Path(mafiles).is_dir():
         raise UsageError(f"--mafiles {mafiles}: no such directory")
-    translation = translate(read_mission(mi, mafiles, allow_missing_mafiles), horizon_s)
+    hardware.check()
+    translation = translate(read_mission(mi, mafiles, allow_missing_mafiles), horizon_s,
+                            hardware)
     checked = check_source(translation.source, str(output))
     if checked.mission is None:  # a bug of the translation: show why, write nothing
         raise GliderplanError(f"{output}: the translation of {mi} does not check (not "
@@ -726,10 +773,14 @@ def import_mission(mi: str | Path, output: str | Path, mafiles: str | Path | Non
     return Imported(Path(output), len(checked.mission.states), translation.warnings)
 
 
-def translate(mission: SlocumMission, horizon_s: float = 7 * 86400.0) -> Translation:
+def translate(mission: SlocumMission, horizon_s: float = 7 * 86400.0,
+              hardware: Hardware = Hardware()) -> Translation:
     """The mission in the gliderplan language, planned for `horizon_s` [s] (or abend's
-    overtime when shorter), and what could not be carried over. Raises SlocumFileError
-    (FILE:LINE: message) for an unknown behavior or values that contradict each other."""
-    translator = _Translator(mission, horizon_s)
+    overtime when shorter) on `hardware`, and what could not be carried over. Raises
+    SlocumFileError (FILE:LINE: message) for an unknown behavior or values that contradict
+    each other."""
+    from gliderplan.language.formatter import format_source
+
+    translator = _Translator(mission, horizon_s, hardware)
     source = translator.run()
-    return Translation(source, tuple(translator.warnings))
+    return Translation(format_source(source), tuple(translator.warnings))

@@ -18,6 +18,7 @@ from gliderplan.cli.main import main
 from gliderplan.contract import ExitCode
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import check_file
+from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.language.slocum import import_mission
 from gliderplan.language.slocum_files import SlocumFileError
 from gliderplan.language.slocum_sampling import yo_phases
@@ -357,7 +358,7 @@ def test_abend_on_minimum_charge_reads_the_batterys_coulomb_counter(tmp_path):
     imported = import_mission(path, out)
     assert imported.warnings == ()
     text = out.read_text()
-    assert "case energy_left < 7792200 goto abort    # remaining_charge_min 99.9 %" in text
+    assert _has(text, "case energy_left < 7792200 goto abort  # remaining_charge_min 99.9 %")
     assert main(["sim", str(out), "--duration", "3h", "-o", str(tmp_path / "run")]) == 0
     trace = pd.read_csv(tmp_path / "run" / "trace.csv")
     aborted = trace[(trace["kind"] == "goto") & (trace["to_state"] == "abort")]
@@ -385,7 +386,7 @@ def test_science_behaviors_say_what_they_leave_out_in_the_mission(tmp_path, caps
     # a sample every 10 s: the CTD's 2 s warm-up and one 2 s sample (0.5 Hz) in every 10
     assert "# sample (m.mi:6): ctd (sensor_type 1 PROFILE) diving and climbing: duty 0.4 " \
            "in the yo, intersample_time 10 s: (its warm-up 2 s + 2 s a sample) / 10 s" in text
-    assert "temp duty 0.4, conductivity duty 0.4, salinity duty 0.4" in text
+    assert _has(text, "temp duty 0.4, conductivity duty 0.4, salinity duty 0.4")
     assert "m.mi:11: warning: sensors_in: not translated: c_att_time 0" in err
     assert "# sensors_in (m.mi:10): not translated: c_att_time 0, u_battery_time 10" in text
 
@@ -436,8 +437,8 @@ def test_a_finite_goto_list_surfaces_at_each_waypoint_and_at_its_end(tmp_path, c
     assert "m.mi:5: warning: surface: not translated: when_secs -60" in err
     text = out.read_text()
     assert "# not translated: when_secs -60 (start_when 8 does not read it" in text
-    assert "case wptreached > wpt_surfaced_1 set wpt_surfaced_1 = wptreached, surfaced_s = " \
-           "missiontime call surface_1" in text
+    assert _has(text, "case wptreached > wpt_surfaced_1 set wpt_surfaced_1 = wptreached, "
+                "surfaced_s = missiontime call surface_1")
     assert "case wptreached >= 4 set surfaced_s = missiontime call surface_2" in text
     assert main(["check", "--strict", str(out)]) == 0
     assert main(["sim", str(out), "--duration", "1d", "-o", str(tmp_path / "run")]) == 0
@@ -525,13 +526,17 @@ def _import(tmp_path: Path, capsys, mi: str, *options: str) -> tuple[str, str]:
 
 
 def _logged(text: str, state: str = "survey") -> dict[str, str]:
-    """A state's science sensors -> duty ("" always on)."""
-    line = next(x for x in text.split(f"state {state}\n")[1].splitlines()
-                if x.strip().startswith("sensors "))
-    science = [u.split(" duty ") for u in line.split("sensors ")[1].split(", ")]
-    return {u[0]: (u[1] if len(u) > 1 else "") for u in science
-            if u[0] not in ("missiontime", "depth", "pitch", "lat", "lon", "halfcycle",
-                            "wptdist", "wptreached", "timeofday", "energy_left")}
+    """A state's science sensors -> duty ("" always on), as the checked mission has them."""
+    from gliderplan.language import check_source
+
+    uses = check_source(text).checked().state(state).sensors
+    return {u.name: "" if u.duty is None else format(u.duty, ".10g") for u in uses
+            if SENSOR_BY_NAME[u.name].device is not None}
+
+
+def _has(text: str, line: str) -> bool:
+    """Whether the mission holds `line`, however the canonical layout spaces or wraps it."""
+    return " ".join(line.split()) in " ".join(text.split())
 
 
 def test_nsb3_samples_its_ctd_and_flntu_in_the_yo_and_leaves_the_logger_and_dvl_off(
@@ -681,3 +686,44 @@ def test_sensors_in_reads_every_switch_of_the_science_bay(tmp_path, capsys):
            "intersample_time 60 s: (its warm-up 5 s + 1 s a sample) / 60 s" in text
     assert "# sensors_in (m.mi:3): logger (c_microrider_on -1): off" in text
     assert "warning:" not in err
+
+
+def test_an_imported_mission_names_its_hardware_and_is_in_canonical_layout(tmp_path, capsys):
+    """A Slocum mission runs on the glider's own computers: `computer none` by default, as
+    the output says; the options name others; the mission is as `fmt` writes it."""
+    _needs_missions()
+    for name in ("nsb3", "helgo"):
+        out = tmp_path / f"{name}.mission"
+        assert main(["import-slocum", str(MISSIONS / name / f"{name}.mi"), "-o", str(out),
+                     "--allow-missing-mafiles"]) == 0
+        err = capsys.readouterr().err
+        assert "vehicle slocum_g2_shallow (default), computer none (default)" in err
+        mission = check_file(str(out)).checked()
+        assert mission.computer.board == "none" and mission.vehicle == "slocum_g2_shallow"
+        assert _has(out.read_text(), "computer none  # the default of import-slocum --computer")
+        assert main(["fmt", "--check", str(out)]) == 0, name
+    out = tmp_path / "given.mission"
+    assert main(["import-slocum", str(MISSIONS / "nsb3" / "nsb3.mi"), "-o", str(out),
+                 "--vehicle", "slocum_g3", "--computer", "ts7800 @ 500 MHz",
+                 "--battery", "1 kWh reserve 10 %"]) == 0
+    assert "vehicle slocum_g3, computer ts7800 @ 500 MHz, battery 1 kWh reserve 10 %" in \
+        capsys.readouterr().err
+    mission = check_file(str(out)).checked()
+    assert (mission.vehicle, mission.computer.board, mission.computer.clock_mhz) == (
+        "slocum_g3", "ts7800", 500.0)
+    assert mission.battery.energy_j == pytest.approx(3.6e6)
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--vehicle", "nosuch", "unknown vehicle preset 'nosuch'"),
+    ("--computer", "ts9999", "ts9999"),
+    ("--battery", "10 parsecs", "'parsecs' is not a unit of energy"),
+])
+def test_hardware_a_mission_cannot_name_is_bad_usage(tmp_path, capsys, option, value, message):
+    _needs_missions()
+    out = tmp_path / "x.mission"
+    code = main(["import-slocum", str(MISSIONS / "nsb3" / "nsb3.mi"), "-o", str(out),
+                 option, value])
+    err = capsys.readouterr().err
+    assert code == ExitCode.USAGE and message in err and "Traceback" not in err
+    assert not out.exists()
