@@ -111,6 +111,13 @@ class Vehicle:
         """The device table's entry for `name`, or None."""
         return next((d for d in self.devices if d.name == name), None)
 
+    def ballasted_for(self, surface_rho_kg_m3: float) -> Vehicle:
+        """The glider ballasted for other water, of `surface_rho_kg_m3` [kg m-3] at the
+        surface: a pilot trims a glider for the sea it will fly in, so its trim volume (net
+        buoyancy at zero pumped volume, `flight.trim_volume`) holds relative to that water
+        as it held in its calibration water."""
+        return replace(self, flight=replace(self.flight, rho_kg_m3=float(surface_rho_kg_m3)))
+
     def neutral(self) -> Vehicle:
         """The same glider trimmed neutral in uniform water of its reference density, its
         hull not compressible, turning while it pumps and flying the pitch it is commanded:

@@ -30,6 +30,7 @@ import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import read_input_text
+from gliderplan.power_models.flight import DensityProfile
 from gliderplan.sim import native
 
 Number = float | np.ndarray
@@ -297,3 +298,20 @@ def load_ocean(spec: str) -> Ocean:
                              f"(presets: {', '.join(PRESETS)}; or Slocum logs: FILE.ebd|DIR)",
                              usage=True)
     return read_profile_csv(path)
+
+
+def density_profile_of(ocean: Ocean, depths_m: np.ndarray, latitude_deg: float = 45.0
+                       ) -> DensityProfile:
+    """The in-situ density [kg m-3] of `ocean` at `depths_m` [m] (TEOS-10), averaged over
+    its casts or waves (a forecast flies through it for days): the water the flight
+    model flies in."""
+    import gsw
+
+    times = np.asarray(getattr(ocean, "casts_s", None) or np.linspace(0.0, 86400.0, 25))
+    depth, time = np.meshgrid(np.asarray(depths_m, float), times)
+    temp = np.asarray(ocean.temperature_c(depth, time), float)
+    salinity = np.asarray(ocean.salinity_psu(depth, time), float)
+    pressure = gsw.p_from_z(-depth, latitude_deg)
+    absolute = gsw.SA_from_SP(salinity, pressure, 0.0, latitude_deg)
+    rho = gsw.rho(absolute, gsw.CT_from_t(absolute, temp, pressure), pressure)
+    return DensityProfile(np.asarray(depths_m, float), rho.mean(axis=0))

@@ -1,0 +1,76 @@
+"""`gliderplan forecast`: what a mission will cost on a glider, by device, with its interval.
+
+  forecast MISSION [--vehicle FILE|PRESET] [--ocean LOGDIR|PRESET|CSV] [--duration T] [--json]
+
+MISSION is a gliderplan mission or a Slocum `.mi` (its .ma files in mafiles/ beside it, as
+`import-slocum` reads them). Prints the energy, the duration, the yos and the surfacings,
+the energy of each device and every assumption the forecast rests on. The vehicle
+defaults to the mission's; calibrate yours from its logs (`gliderplan calibrate`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+ORDER = 55
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("mission", metavar="MISSION",
+                        help="a mission (.mission), or a Slocum mission (.mi) with its .ma files")
+    parser.add_argument("--vehicle", metavar="FILE|PRESET",
+                        help="the glider: a calibrated vehicle file (gliderplan calibrate -o) "
+                             "or a preset (default: the mission's)")
+    parser.add_argument("--ocean", metavar="LOGDIR|PRESET|CSV",
+                        help="the water it flies in: a glider's science logs (*.ebd or a "
+                             "directory), a profile CSV or a preset (bench, sea-trial, "
+                             "uniform); default: the vehicle's reference water")
+    parser.add_argument("--duration", metavar="T",
+                        help="how long (3600s, 6h, 30d; default: the mission's horizon, else "
+                             "30d)")
+    parser.add_argument("--mafiles", metavar="DIR",
+                        help="with a .mi: the directory of its .ma files")
+    parser.add_argument("--json", action="store_true", help="print the forecast as JSON")
+
+
+def run(args: argparse.Namespace) -> int:
+    from gliderplan.cli.sim import parse_duration_s
+    from gliderplan.planner.forecast import forecast_mission, load_forecast_mission, water
+
+    duration = None if args.duration is None else parse_duration_s(args.duration)
+    mission, warnings = load_forecast_mission(args.mission, args.mafiles)
+    for warning in warnings:
+        print(warning, file=sys.stderr)
+    ocean, source = water(args.ocean)
+    result = forecast_mission(mission, vehicle=args.vehicle, duration_s=duration, ocean=ocean,
+                              ocean_source=source)
+    print(json.dumps(result.to_json(), indent=2) if args.json else _text(result.to_json()))
+    return 0
+
+
+def _energy(joules: float, large: bool) -> str:
+    return f"{joules / 3.6e6:.4g} kWh" if large else f"{joules / 1e3:.4g} kJ"
+
+
+def _text(f: dict) -> str:
+    low, high = f["energy_interval_j"]
+    days = f["duration_s"] / 86400.0
+    large = f["energy_j"] >= 3.6e6
+    lines = [
+        f"mission {f['mission']} on vehicle {f['vehicle']}, computer {f['computer']}",
+        f"energy     {_energy(f['energy_j'], large)}, {f['interval_level']:.0%} interval "
+        f"{_energy(low, large)} to {_energy(high, large)}",
+        f"duration   {days:.3g} d ({f['duration_s']:,.0f} s)",
+        f"yos        {f['yos']:,.0f}",
+        f"surfacings {f['surfacings']:,.0f}",
+        "",
+        "energy by device:",
+    ]
+    total = f["energy_j"] or 1.0
+    for name, joules in sorted(f["devices"].items(), key=lambda kv: -kv[1]):
+        if joules > 0.0:
+            lines.append(f"  {name:10s} {joules / 1e3:12,.1f} kJ  {joules / total:6.1%}")
+    lines += ["", "assumptions:"] + [f"  - {a}" for a in f["assumptions"]]
+    return "\n".join(lines)
