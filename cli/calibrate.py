@@ -100,8 +100,10 @@ def _text(report: dict) -> str:
         f"in-sample energy: predicted {ins['predicted_j']:.0f} J, coulomb counter "
         f"{ins['measured_j']:.0f} J ({ins['relative_error']:+.2%})",
     ]
+    lines += [""] + _devices_text(report["devices"])
     if "forecast" in report:
         lines += [""] + _forecast_text(report["forecast"])
+        lines += [""] + _configurations_text(report["configurations"])
         val = report["validation"]
         parts = ", ".join(f"{k} {v:.0f} J" for k, v in val["predicted_by_component_j"].items())
         lines += [
@@ -114,6 +116,37 @@ def _text(report: dict) -> str:
     if "output" in report:
         lines += ["", f"wrote {report['output']}"]
     return "\n".join(lines)
+
+
+def _devices_text(d: dict) -> list[str]:
+    lines = [f"power by device over {d['glide_s']:.0f} s of glide (the base load "
+             f"{d['base_w']:.3g} W; the fit's residual RMS {d['rms_w']:.2f} W):"]
+    for row in d["table"]:
+        sd = f" +- {row['sd_w']:.2g}" if row["sd_w"] is not None else ""
+        how = "fitted" if row["fitted"] else "published"
+        where = ", in the hotel load" if row["in_hotel"] else ""
+        flag = f"  FLAGGED: {row['flag']}" if row["flag"] else ""
+        lines.append(f"  {row['device']:8s} {row['on_power_w']:6.3g} W{sd} ({how}{where}): "
+                     f"{row['basis']}{flag}")
+    if d["merged_into_base"]:
+        lines.append(f"  merged into the base (the log cannot separate them, no published "
+                     f"figure): {', '.join(d['merged_into_base'])}")
+    return lines
+
+
+def _configurations_text(c: dict) -> list[str]:
+    fitted = ", ".join(c["fitted_on"]["devices"]) or "none"
+    if c["not_possible"]:
+        return [f"cross-configuration check: not possible: {c['not_possible']}"]
+    lines = [f"cross-configuration check: fit on {c['fitted_on']['dives']} dives running "
+             f"{fitted}; each other set of devices forecast from it (its own durations):"]
+    for f in c["forecasts"]:
+        low, high = f["interval_j"]
+        lines.append(f"  {', '.join(f['devices']) or 'none'} ({f['dives']} dives): predicted "
+                     f"{f['predicted_j']:.0f} J, measured {f['measured_j']:.0f} J, "
+                     f"{f['relative_error']:+.2%} (90 % interval {low:.0f}-{high:.0f} J"
+                     f"{'' if f['inside'] else ', MISSED'})")
+    return lines
 
 
 def _forecast_text(f: dict) -> list[str]:

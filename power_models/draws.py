@@ -13,6 +13,8 @@ Draws come from a seeded generator, so a forecast's interval is reproducible.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from gliderplan.power_models.devices import held_power_w
@@ -39,10 +41,11 @@ def prediction_spread(fitted_dives: int, forecast_dives: float) -> float:
 
 def draw_figures(
     vehicle: Vehicle, n: int = DEFAULT_DRAWS, rng: np.random.Generator | None = None,
-    spread: float = 1.0,
+    spread: float | Mapping[str, float] = 1.0,
 ) -> tuple[tuple[str, ...], np.ndarray]:
     """(keys, (n, k) values [model units]) of the uncertain figures, drawn jointly, their
-    standard deviations multiplied by `spread`."""
+    standard deviations multiplied by `spread` (one factor, or one per key, 1 for a key
+    it does not name)."""
     u = vehicle.uncertainty
     if u is None:
         return (), np.zeros((n, 0))
@@ -60,8 +63,11 @@ def draw_figures(
         if key in u.at_least:  # a lower bound: the truth is no less
             low[j] = max(low[j], mean[j])
 
+    factor = np.array([spread.get(k, 1.0) for k in u.keys]) if isinstance(spread, Mapping) \
+        else spread
+
     def draw(rows: int) -> np.ndarray:
-        normal = mean + (rng.standard_normal((rows, len(mean))) @ root.T) * (u.sd * spread)
+        normal = mean + (rng.standard_normal((rows, len(mean))) @ root.T) * (u.sd * factor)
         return np.maximum(normal, low)
 
     values = draw(n)
@@ -95,7 +101,7 @@ def _base_w(vehicle: Vehicle, keys: tuple[str, ...], values: np.ndarray) -> np.n
 
 def draw_vehicles(
     vehicle: Vehicle, n: int = DEFAULT_DRAWS, rng: np.random.Generator | None = None,
-    spread: float = 1.0,
+    spread: float | Mapping[str, float] = 1.0,
 ) -> list[Vehicle]:
     """`n` vehicles with their uncertain figures drawn jointly (`draw_figures`); [vehicle]
     if it has none."""

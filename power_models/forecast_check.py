@@ -44,6 +44,7 @@ from gliderplan.power_models.forecast import (
     forecast_cycles,
 )
 from gliderplan.power_models.slocum_log import FlightLog
+from gliderplan.power_models.surfacing_fit import SURFACING_KEYS, find_surfacings
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.power_models.vehicle_fit import (
     BOOTSTRAP_RESAMPLES,
@@ -294,8 +295,15 @@ def check_forward(log: FlightLog, base: Vehicle, fit_share: float = 0.5,
     predicted = part.forecast(vehicle, calibration.ocean)
     bias, step = _bias(fit_log)
     rng = np.random.default_rng(DEFAULT_SEED)
+    # the dives and the stays to come scatter about the fitted means: each figure's sd
+    # widened for how many of its own kind the fit saw and the forecast flies
+    dives = prediction_spread(len(part.fit), len(part.later))
+    later_stays = len(part.cycles) - 1
+    stays = prediction_spread(len(find_surfacings(fit_log, seg.segment(fit_log)).found),
+                              later_stays) if later_stays else 1.0
+    keys = () if vehicle.uncertainty is None else vehicle.uncertainty.keys
     drawn = draw_vehicles(vehicle, DEFAULT_DRAWS, rng,
-                          prediction_spread(len(part.fit), len(part.later)))
+                          {k: stays if k in SURFACING_KEYS else dives for k in keys})
     # the counter is read at both ends of the span: each reading is off by up to a step
     quantisation = step * (rng.random(len(drawn)) - rng.random(len(drawn)))
     interval = energy_interval_j(drawn, command, calibration.ocean, noise_j=quantisation,

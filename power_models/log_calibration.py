@@ -22,6 +22,7 @@ from gliderplan.contract.files import read_input_text, write_atomically
 from gliderplan.power_models import calibration
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.catalog import resolve
+from gliderplan.power_models.config_check import ConfigurationCheck, check_configurations
 from gliderplan.power_models.errors import ModelFileError
 from gliderplan.power_models.forecast_check import ForwardCheck, check_forward, stay_from_base
 from gliderplan.power_models.model_writer import to_toml
@@ -100,9 +101,23 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
             "relative_error": replay.relative_error,
         }
         report["forecast"] = _forecast_json(forward)
+        report["configurations"] = _configurations_json(check_configurations(log, vehicle))
     if output is not None:
         report["output"] = str(_write_vehicle(Path(output), name, base, fit, log))
     return Calibration(fit.vehicle, report, relative_error)
+
+
+def _configurations_json(check: ConfigurationCheck) -> dict:
+    """The cross-configuration check: fitted on one set of devices, each other forecast."""
+    return {
+        "fitted_on": {"devices": list(check.fitted_devices), "dives": check.fitted_dives},
+        "forecasts": [{"devices": list(f.devices), "dives": f.dives,
+                       "predicted_j": f.predicted_j, "measured_j": f.measured_j,
+                       "interval_j": list(f.interval_j), "relative_error": f.relative_error,
+                       "inside": f.interval_j[0] <= f.measured_j <= f.interval_j[1]}
+                      for f in check.forecasts],
+        "not_possible": check.reason or None,
+    }
 
 
 def _devices_json(fit: VehicleFit) -> dict:

@@ -35,6 +35,10 @@ _SERIES = (
     ("m_is_battpos_moving", "battpos_moving"),
 )
 REQUIRED_VARIABLES = tuple(name for name, _ in _SERIES) + ("m_battery",)
+# what a calibration needs each for, to say so when a log lacks it
+_NEEDED_FOR = {"m_coulomb_amphr_total": "the coulomb counter, the energy drawn",
+               "m_coulomb_current": "the current, which power is fitted to",
+               "m_battery": "the battery's voltage", "m_depth": "the depth"}
 # optional: what the pilot commanded, and the CTD (density for the flight model)
 _COMMANDS = (("c_ballast_pumped", "commanded_ballast_cc"), ("c_pitch", "commanded_pitch_rad"))
 _TARGETS = (("c_climb_target_depth", "climb_target_m"), ("c_dive_target_depth", "dive_target_m"))
@@ -177,6 +181,7 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         raise LogError(f"{cache}: cache directory not found", usage=True)
     try:
         logs = dbdreader.MultiDBD(filenames=files, cacheDir=cache)
+        _check_required(logs)
         synced = logs.get_sync(*(name for name, _ in _SERIES))
         volt_t, volt = logs.get("m_battery")
         optional = _optional_series(logs, np.asarray(synced[0], float))
@@ -221,6 +226,16 @@ def read_flight_log(paths: list[str], cache_dir: str | None = None) -> FlightLog
         device_on=states[good],
         **{k: v for k, v in optional.items() if not isinstance(v, np.ndarray)},
     )
+
+
+def _check_required(logs) -> None:  # noqa: ANN001
+    """LogError naming every variable a calibration needs that the logs do not hold."""
+    held = {n for kind in logs.parameterNames.values() for n in kind}
+    missing = [n for n in REQUIRED_VARIABLES if n not in held]
+    if missing:
+        said = ", ".join(f"{n} ({_NEEDED_FOR[n]})" if n in _NEEDED_FOR else n for n in missing)
+        raise LogError(f"the logs hold no {said}: calibration needs the glider's flight logs "
+                       "(.dbd, or .sbd/.mbd with these variables) beside its science logs")
 
 
 def _check_complete(name: str) -> None:

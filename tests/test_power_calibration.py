@@ -17,12 +17,14 @@ import pytest
 import synthetic_glider as sg
 
 from gliderplan.cli.main import main
+from gliderplan.contract import ExitCode
 from gliderplan.power_models import calibration, load_vehicle
 from gliderplan.power_models.catalog import preset_names, preset_path
 from gliderplan.power_models.slocum_log import FlightLog
 from gliderplan.power_models.vehicle import FIGURES, figure_value, read_vehicle_file
 
 LOGS = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "slocum-logs"
+COMET = LOGS.parent / "slocum-logs-comet-2016"
 needs_logs = pytest.mark.skipif(
     not LOGS.is_dir(),
     reason="real Slocum logs not found at ../shared/data/slocum-logs (relative to the project "
@@ -96,23 +98,38 @@ SURFACING = ("surface_power", "iridium_power", "surface_time", "iridium_time")
 def test_two_or_more_surfacings_are_resampled_for_their_spread():
     from gliderplan.power_models.vehicle_fit import fit_vehicle
 
-    calls = (200.0, 300.0, 250.0)  # the synthetic glider's surface stays are alike but these
+    calls = (100.0, 400.0, 250.0)  # the synthetic glider's surface stays are alike but these
     fit = fit_vehicle(sg.synthetic_log(calls_s=calls), load_vehicle("slocum_g3"), resamples=8)
     by_key = {f.key: f for f in fit.figures}
     u = fit.vehicle.uncertainty
     assert set(SURFACING) <= set(u.keys)
     call = by_key["iridium_time"]
-    # the bootstrap's sd of a mean of three: the calls' spread / sqrt(3)
-    assert call.sd == pytest.approx(np.std(calls) / math.sqrt(3), rel=0.15)
-    assert "bootstrap over 3 surfacings" in call.basis
-    assert call.at_least and u.at_least == ("iridium_time",)  # the record ends in the last
-    # three surfacings alike: no spread to resample, so a stated one, not none
+    # the record ends in the last call: the two whole stays give the figure, the bootstrap's
+    # sd of a mean of two: the calls' spread / sqrt(2)
+    assert call.value == pytest.approx(250.0, rel=0.02)
+    assert "the last, which the record cuts short, left out" in call.basis
+    assert call.sd == pytest.approx(np.std(calls[:2]) / math.sqrt(2), rel=0.15)
+    assert "bootstrap over 2 surfacings" in call.basis and "independent" in call.basis
+    assert not call.at_least and u.at_least == ()
+    # stays alike but for their calls: no spread to resample, so a stated one, not none
     stay = by_key["surface_time"]
     assert "assumption, 30 % of the value" in stay.basis
     assert stay.sd == pytest.approx(0.3 * stay.value)
     order = list(u.keys)
     dive = next(k for k in order if k not in SURFACING)  # a figure of the dives' bootstrap
     assert u.correlation[order.index("iridium_time"), order.index(dive)] == 0.0
+
+
+def test_a_few_alike_stays_are_spread_as_one_stay_scatters():
+    """Two stays whose calls barely differ cannot show how stays differ: the sd is no less
+    than the assumed scatter of a stay (30 %) over the stays seen."""
+    from gliderplan.power_models.vehicle_fit import fit_vehicle
+
+    fit = fit_vehicle(sg.synthetic_log(calls_s=(240.0, 245.0, 240.0)),
+                      load_vehicle("slocum_g3"), resamples=4)
+    call = next(f for f in fit.figures if f.key == "iridium_time")
+    assert call.sd == pytest.approx(0.3 * call.value / math.sqrt(2), rel=1e-6)
+    assert "raised to the assumed scatter of a stay (30 %) over 2 stays" in call.basis
 
 
 def test_a_single_surfacing_gets_a_stated_spread_never_none():
@@ -185,7 +202,8 @@ def test_real_log_writes_every_fitted_figure_with_its_sd_and_source(capsys, tmp_
         assert key in vehicle.uncertainty.keys, key
         assert "sd: assumption" in data[key]["source"] and data[key]["sd"] > 0, key
     assert data["iridium_time"]["at_least"] is True
-    assert vehicle.uncertainty.at_least == ("iridium_time",)
+    # its one stay is cut short in its call: both its times are lower bounds
+    assert vehicle.uncertainty.at_least == ("surface_time", "iridium_time")
     assert "surfacing figures: assumed" in data["uncertainty"]["source"]
     order = list(vehicle.uncertainty.keys)
     corr = vehicle.uncertainty.correlation
@@ -419,3 +437,15 @@ def test_calibrate_is_the_command_as_one_call(tmp_path):
     written = read_vehicle_file(tmp_path / "sebastian.toml")
     assert written.name == "sebastian"
     assert written.hotel_w == pytest.approx(result.vehicle.hotel_w, rel=1e-5)
+
+
+def test_logs_without_the_coulomb_counter_are_refused_naming_what_is_missing(capsys):
+    """Science logs alone hold no counter, current or depth: the calibration says which
+    variables it needs and exits 1, with nothing written."""
+    science = sorted(COMET.glob("*.ebd"))[:1] if COMET.is_dir() else []
+    if not science:
+        pytest.skip("the comet 2016 logs are not present")
+    assert main(["calibrate", str(science[0])]) == ExitCode.BAD_INPUT
+    err = capsys.readouterr().err
+    assert "m_coulomb_amphr_total (the coulomb counter, the energy drawn)" in err
+    assert "Traceback" not in err

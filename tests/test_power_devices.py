@@ -174,3 +174,28 @@ def test_calibrate_writes_the_device_table(tmp_path, monkeypatch):
     assert data["hotel_includes"]["devices"] == ["logger"]
     mine = load_vehicle(str(out))
     assert mine.device("dvl").on_power_w == pytest.approx(DVL_W, rel=1e-4)
+
+
+def test_a_configuration_is_forecast_from_the_fit_of_another():
+    """Half the dives run a DVL beside the logger, half the logger alone: fitted on the
+    first (the DVL on throughout them: its published figure), the second's energy is
+    forecast from it, inside its interval."""
+    from gliderplan.power_models.config_check import check_configurations
+
+    log = sg.synthetic_log(BOTTOMS, devices={"dvl": (DVL_W, frozenset({0, 1, 2, 3})),
+                                             "logger": (LOGGER_W, frozenset(range(8)))})
+    check = check_configurations(log, load_vehicle("slocum_g3"))
+    assert check.fitted_devices == ("dvl", "logger") and check.reason == ""
+    (other,) = check.forecasts
+    assert other.devices == ("logger",) and other.dives >= 3
+    assert abs(other.relative_error) < 0.1
+    assert other.interval_j[0] <= other.measured_j <= other.interval_j[1]
+
+
+def test_a_log_with_one_configuration_says_it_cannot_be_cross_checked():
+    from gliderplan.power_models.config_check import check_configurations
+
+    log = sg.synthetic_log(BOTTOMS[:4], devices={"logger": (LOGGER_W, frozenset(range(4)))})
+    check = check_configurations(log, load_vehicle("slocum_g3"))
+    assert check.forecasts == ()
+    assert check.reason.startswith("every dive ran the same instruments (logger)")
