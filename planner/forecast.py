@@ -20,8 +20,8 @@ vehicle's own figures (calibrated from its logs, or a preset):
 The 90 % interval draws the vehicle's figures from its uncertainty (fitted figures with
 their bootstrap sd, published figures with the sd of their published span), forecasts each
 draw, and adds the drift of the base load between deployments (a forecast is always for
-another deployment than the calibration's: `Vehicle.base_drift_w`, or DRIFT_W where the
-file gives none, for the time the glider glides).
+another deployment than the calibration's: `Vehicle.base_drift_w`, or the stated default
+`deployments.DEFAULT_DRIFT_W` where the file gives none, for the time the glider glides).
 """
 
 from __future__ import annotations
@@ -37,18 +37,13 @@ from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.occupancy import Occupancy, mission_occupancy
 from gliderplan.planner.rates import yo_band
 from gliderplan.power_models import load_board, load_vehicle
+from gliderplan.power_models.deployments import DEFAULT_DRIFT_W, DRIFT_SOURCE
 from gliderplan.power_models.devices import gliding_power_w, held_instruments
 from gliderplan.power_models.draws import DEFAULT_DRAWS, DEFAULT_SEED, draw_vehicles
 from gliderplan.power_models.flight import DensityProfile
 from gliderplan.power_models.forecast import INTERVAL_LEVEL
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 
-# [W] sd of a glider's base load between deployments where its file states none: the same
-# glider's base load moved by ~0.5 W between years (DESIGN.md section 11, a fit on real
-# flights of one glider in two years)
-DRIFT_W = 0.5
-DRIFT_SOURCE = ("the same Slocum's base load moved by ~0.5 W between two years' deployments "
-                "(DESIGN.md section 11)")
 WATER_DEPTHS_M = np.arange(0.0, 1001.0, 5.0)  # where a given ocean's density is taken [m]
 
 
@@ -257,7 +252,7 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
                                   else DEFAULT_HORIZON_S)
     bills = bill_states(mission, glider, occupancy, ocean)
     rng = np.random.default_rng(seed)
-    drift_w = glider.base_drift_w or DRIFT_W
+    drift_w = glider.base_drift_w or DEFAULT_DRIFT_W
     gliding_s = sum(b.gliding_s for b in bills.values())
     energies = np.array([sum(sum(b.energy_j.values()) for b in
                              bill_states(mission, v, occupancy, ocean).values())

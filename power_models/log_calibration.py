@@ -14,7 +14,7 @@ from __future__ import annotations
 import re
 import tempfile
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from gliderplan.contract.errors import UsageError
@@ -23,10 +23,16 @@ from gliderplan.power_models import calibration
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.catalog import resolve
 from gliderplan.power_models.config_check import ConfigurationCheck, check_configurations
+from gliderplan.power_models.deployments import (
+    DEFAULT_DRIFT_W,
+    DRIFT_SOURCE,
+    combine,
+    split_deployments,
+)
 from gliderplan.power_models.errors import ModelFileError
 from gliderplan.power_models.forecast_check import ForwardCheck, check_forward, stay_from_base
 from gliderplan.power_models.model_writer import to_toml
-from gliderplan.power_models.slocum_log import FlightLog, read_flight_log
+from gliderplan.power_models.slocum_log import FlightLog, expand_log_paths, read_flight_log
 from gliderplan.power_models.vehicle import (
     DEVICE_FIGURES,
     FIGURES,
@@ -63,12 +69,25 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
     if output is not None and not str(output).endswith(".toml"):
         raise UsageError(f"{output}: the output file must end in .toml")
     vehicle = load_vehicle(base)
-    log = read_flight_log(logs, cache)
-    fit = fit_vehicle(log, vehicle)
+    deployments = split_deployments(expand_log_paths(logs))
+    each = [read_flight_log(list(d.files), cache) for d in deployments]
+    log = each[-1]  # the latest: the glider as it flies now
+    if len(each) == 1:
+        fit = fit_vehicle(log, vehicle)
+        fit = replace(fit, vehicle=replace(fit.vehicle, base_drift_w=DEFAULT_DRIFT_W))
+        drift_source = f"assumption: one deployment shows no drift; {DRIFT_SOURCE}"
+    else:
+        fits = [fit_vehicle(one, vehicle) for one in each]
+        fit, drift_source = combine(fits, deployments)
     whole = calibration.predict_energy_j(log, fit.vehicle)
     measured = seg.counter_energy_j(log)
     report: dict = {
-        "logs": [Path(f).name for f in log.files],
+        "logs": [Path(f).name for d in deployments for f in d.files],
+        "deployments": [{"name": d.name, "logs": [Path(f).name for f in d.files],
+                         "hotel_power_w": h} for d, h in zip(
+                             deployments, [fit.vehicle.hotel_w] if len(each) == 1 else
+                             [f.vehicle.hotel_w for f in fits], strict=True)],
+        "base_drift": {"value_w": fit.vehicle.base_drift_w, "source": drift_source},
         "duration_s": float(log.t_s[-1]),
         "dives": fit.dives,
         "bootstrap_refits": fit.resamples,
@@ -103,7 +122,8 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
         report["forecast"] = _forecast_json(forward)
         report["configurations"] = _configurations_json(check_configurations(log, vehicle))
     if output is not None:
-        report["output"] = str(_write_vehicle(Path(output), name, base, fit, log))
+        report["output"] = str(_write_vehicle(Path(output), name, base, fit, log,
+                                              drift_source))
     return Calibration(fit.vehicle, report, relative_error)
 
 
@@ -192,7 +212,7 @@ def _log_names(log: FlightLog) -> str:
 
 
 def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
-                   log: FlightLog) -> Path:
+                   log: FlightLog, drift_source: str) -> Path:
     """Write the base vehicle's file with every fitted figure replaced (value, sd, what it
     was fitted from), every other figure saying it is the base's and why, the fit's
     correlation and the devices the hotel load holds."""
@@ -223,6 +243,8 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
             why = figure.basis if figure is not None else "not a figure the log measures"
             table[short] = {**table[short],
                             "source": f"base {base} ({why}): {table[short]['source']}"}
+    data["base_drift"] = {"value": float(f"{fit.vehicle.base_drift_w:.3g}"), "unit": "W",
+                          "source": f"gliderplan calibrate on {logs}: {drift_source}"}
     held = fit.vehicle.hotel_includes
     data["hotel_includes"] = {
         "devices": list(held),

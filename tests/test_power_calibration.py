@@ -20,6 +20,7 @@ from gliderplan.cli.main import main
 from gliderplan.contract import ExitCode
 from gliderplan.power_models import calibration, load_vehicle
 from gliderplan.power_models.catalog import preset_names, preset_path
+from gliderplan.power_models.deployments import Deployment
 from gliderplan.power_models.slocum_log import FlightLog
 from gliderplan.power_models.vehicle import FIGURES, figure_value, read_vehicle_file
 
@@ -417,6 +418,9 @@ def test_a_calibration_that_would_not_load_leaves_the_output_alone(capsys, tmp_p
     # a pump that gives energy back: the fitted pump-out energy per cc comes out negative
     monkeypatch.setattr(sg, "PUMP_OUT_J_PER_CC", -2.0)
     monkeypatch.setattr(log_calibration, "read_flight_log", lambda *_: _synthetic_log())
+    monkeypatch.setattr(log_calibration, "expand_log_paths", list)
+    monkeypatch.setattr(log_calibration, "split_deployments",
+                        lambda files: [Deployment(tuple(files), None)])
     out = tmp_path / "mine.toml"
     out.write_text("the pilot's earlier file\n")
     code = main(["calibrate", str(tmp_path), "-o", str(out)])

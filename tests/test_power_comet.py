@@ -93,3 +93,39 @@ def test_a_mission_without_the_dvl_and_logger_is_forecast_without_them(comet, ca
     gliding = data["states"]["survey"]["time_s"]
     glide_j = sum(data["devices"][k] for k in ("hotel", "fin", "ctd", "optics"))
     assert glide_j / gliding == pytest.approx(hotel - 1.5 - 1.3, rel=0.01)
+
+
+def test_two_deployments_pool_their_device_figures_and_measure_the_drift(capsys, tmp_path):
+    """Two deployments in one calibration (sebastian 2014 and comet 2016 stand in for two
+    years of one glider: the mechanics are the same): each is fitted alone, a device figure
+    both fitted is their inverse-variance mean, the hotel load is the latest's, and the
+    spread of their hotel loads is the drift a forecast adds."""
+    _needs_comet()
+    sebastian = DATA / "slocum-logs"
+    out = tmp_path / "both.toml"
+    assert main(["calibrate", str(sebastian), str(COMET), "--json", "-o", str(out)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    first, latest = report["deployments"]
+    assert first["name"].startswith("sebastian") and latest["name"].startswith("comet")
+    assert report["base_drift"]["value_w"] == pytest.approx(
+        abs(latest["hotel_power_w"] - first["hotel_power_w"]) / 2 ** 0.5)
+    fin = next(f for f in report["figures"] if f["key"] == "devices.fin.on_power")
+    assert fin["basis"].startswith("fitted on 2 deployments")
+    written = tomllib.loads(out.read_text())
+    assert written["hotel_power"]["value"] == pytest.approx(latest["hotel_power_w"], rel=1e-5)
+    assert written["base_drift"]["value"] == pytest.approx(report["base_drift"]["value_w"],
+                                                           rel=1e-2)
+    mission = tmp_path / "m.mission"
+    mission.write_text((Path(__file__).parents[1] / "examples" / "fig2.mission").read_text())
+    assert main(["forecast", str(mission), "--vehicle", str(out), "--json"]) == 0
+    said = json.loads(capsys.readouterr().out)["assumptions"]
+    assert any("its file's base_drift" in a for a in said)
+
+
+def test_the_drift_between_deployments_says_what_it_rests_on():
+    from gliderplan.power_models.deployments import DEFAULT_DRIFT_W, drift_w
+
+    sd, said = drift_w([2.0, 2.5, 3.0])
+    assert sd == pytest.approx(0.5) and said.startswith("the sd of the hotel loads of its 3")
+    close, why = drift_w([2.0, 2.1])
+    assert close == DEFAULT_DRIFT_W and "two say little" in why

@@ -13,6 +13,7 @@ import synthetic_glider as sg
 
 from gliderplan.power_models import load_sensor, load_vehicle
 from gliderplan.power_models import segments as seg
+from gliderplan.power_models.deployments import Deployment
 from gliderplan.power_models.device_fit import fit_devices
 from gliderplan.power_models.devices import base_power_w, gliding_power_w
 from gliderplan.power_models.draws import draw_vehicles
@@ -164,6 +165,9 @@ def test_calibrate_writes_the_device_table(tmp_path, monkeypatch):
 
     log = sg.synthetic_log(BOTTOMS, devices=SWITCHING)
     monkeypatch.setattr(log_calibration, "read_flight_log", lambda logs, cache: log)
+    monkeypatch.setattr(log_calibration, "expand_log_paths", list)
+    monkeypatch.setattr(log_calibration, "split_deployments",
+                        lambda files: [Deployment(tuple(files), None)])
     out = tmp_path / "mine.toml"
     log_calibration.calibrate(["synthetic"], base="slocum_g3", output=out)
     data = tomllib.loads(out.read_text())
