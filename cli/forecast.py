@@ -44,8 +44,9 @@ def run(args: argparse.Namespace) -> int:
     for warning in warnings:
         print(warning, file=sys.stderr)
     ocean, source = water(args.ocean)
+    imported = tuple(w for w in warnings if w.startswith("import-slocum: "))
     result = forecast_mission(mission, vehicle=args.vehicle, duration_s=duration, ocean=ocean,
-                              ocean_source=source)
+                              ocean_source=source, said=imported)
     print(json.dumps(result.to_json(), indent=2) if args.json else _text(result.to_json()))
     return 0
 

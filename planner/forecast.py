@@ -208,7 +208,8 @@ def _scaled(bill: StateBill, share: float) -> StateBill:
 def load_forecast_mission(path: str, mafiles: str | None = None
                           ) -> tuple[ir.CheckedMission, tuple[str, ...]]:
     """(the checked mission, warnings) of a gliderplan mission file, or of a Slocum `.mi`
-    translated as `import-slocum` translates it (its warnings: what it could not carry)."""
+    translated as `import-slocum` translates it (its warnings: what it could not carry,
+    each "import-slocum: FILE:LINE: warning: ...")."""
     from gliderplan.language import check_file, check_source
 
     if not path.lower().endswith(".mi"):
@@ -219,7 +220,7 @@ def load_forecast_mission(path: str, mafiles: str | None = None
 
     translation = translate(read_mission(path, mafiles, False))
     checked = check_source(translation.source, path)
-    return checked.checked(), tuple(str(w) for w in translation.warnings)
+    return checked.checked(), tuple(f"import-slocum: {w}" for w in translation.warnings)
 
 
 def water(spec: str | None) -> tuple[DensityProfile | None, str | None]:
@@ -239,10 +240,11 @@ def water(spec: str | None) -> tuple[DensityProfile | None, str | None]:
 def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
                      duration_s: float | None = None, ocean: DensityProfile | None = None,
                      ocean_source: str | None = None, draws: int = DEFAULT_DRAWS,
-                     seed: int = DEFAULT_SEED) -> MissionForecast:
+                     seed: int = DEFAULT_SEED, said: tuple[str, ...] = ()) -> MissionForecast:
     """Forecast `mission` (on `vehicle`, a preset or file, default its own) for
     `duration_s` [s] (default its horizon, else DEFAULT_HORIZON_S) through `ocean`
-    (default uniform water of the vehicle's reference density)."""
+    (default uniform water of the vehicle's reference density); `said`: what else the
+    forecast rests on (what a Slocum mission's import could not carry over)."""
     spec = vehicle or mission.vehicle
     glider = load_vehicle(spec)
     if ocean is not None:
@@ -265,7 +267,7 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
                              (float(low), float(high)), ())
     notes = _assumptions(mission, glider, spec, occupancy, result, drift_w, draws,
                          ocean_source)
-    return replace(result, assumptions=tuple(notes))
+    return replace(result, assumptions=tuple(notes) + said)
 
 
 def _band_density(mission: ir.CheckedMission, ocean: DensityProfile, vehicle: Vehicle

@@ -111,6 +111,9 @@ def test_forecast_of_a_slocum_mission_runs_on_its_own_computers(capsys):
     assert data["devices"]["ctd"] > 0 and data["devices"]["optics"] > 0
     assert "dvl" not in data["devices"] and "logger" not in data["devices"]
     assert data["surfacings"] == pytest.approx(10 * 8, abs=2)  # every 3 h
+    # what the import could not carry over is an assumption of the forecast
+    assert any(a.startswith("import-slocum: ") and "d_use_pitch 1" in a
+               for a in data["assumptions"])
     text = capsys.readouterr()
     assert main(["forecast", str(MISSIONS / "nsb3" / "nsb3.mi"), "--duration", "1d"]) == 0
     out = capsys.readouterr().out
