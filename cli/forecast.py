@@ -64,7 +64,8 @@ def _text(f: dict) -> str:
         f"energy     {_energy(f['energy_j'], large)}, {f['interval_level']:.0%} interval "
         f"{_energy(low, large)} to {_energy(high, large)}",
         f"duration   {days:.3g} d ({f['duration_s']:,.0f} s)",
-        f"yos        {f['yos']:,.0f}",
+        f"yos        {f['yos']:,.0f} ({f['interval_level']:.0%} interval "
+        f"{f['yos_interval'][0]:,.0f} to {f['yos_interval'][1]:,.0f})",
         f"surfacings {f['surfacings']:,.0f}",
         "",
         "energy by device:",

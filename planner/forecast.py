@@ -68,6 +68,7 @@ class MissionForecast:
     states: dict[str, StateBill]
     interval_j: tuple[float, float]  # central INTERVAL_LEVEL of the energy [J]
     assumptions: tuple[str, ...]
+    yos_interval: tuple[float, float] = (math.nan, math.nan)  # and of the yos flown
 
     @property
     def energy_j(self) -> float:
@@ -95,7 +96,8 @@ class MissionForecast:
             "mission": self.mission, "vehicle": self.vehicle, "computer": self.computer,
             "energy_j": self.energy_j, "energy_interval_j": list(self.interval_j),
             "interval_level": INTERVAL_LEVEL, "duration_s": self.duration_s,
-            "yos": self.yos, "surfacings": self.surfacings, "devices": self.devices_j,
+            "yos": self.yos, "yos_interval": list(self.yos_interval),
+            "surfacings": self.surfacings, "devices": self.devices_j,
             "states": {name: {"time_s": b.time_s, "visits": b.visits, "yos": b.yos,
                               "surfacings": b.surfacings, "energy_j": b.energy_j}
                        for name, b in self.states.items()},
@@ -256,15 +258,13 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
     rng = np.random.default_rng(seed)
     drift_w = glider.base_drift_w or DEFAULT_DRIFT_W
     gliding_s = sum(b.gliding_s for b in bills.values())
-    energies = np.array([sum(sum(b.energy_j.values()) for b in
-                             bill_states(mission, v, occupancy, ocean).values())
-                         for v in draw_vehicles(glider, draws, rng)])
+    drawn = [bill_states(mission, v, occupancy, ocean) for v in draw_vehicles(glider, draws, rng)]
+    energies = np.array([sum(sum(b.energy_j.values()) for b in d.values()) for d in drawn])
     energies = energies + rng.normal(0.0, drift_w, energies.size) * gliding_s
-    tail = 50.0 * (1.0 - INTERVAL_LEVEL)
-    low, high = np.percentile(energies, [tail, 100.0 - tail])
+    yos = np.array([sum(b.yos for b in d.values()) for d in drawn])
     result = MissionForecast(mission.name, glider.name, _computer_name(mission),
                              float(sum(b.time_s for b in bills.values())), bills,
-                             (float(low), float(high)), ())
+                             _central(energies), (), _central(yos))
     notes = _assumptions(mission, glider, spec, occupancy, result, drift_w, draws,
                          ocean_source)
     return replace(result, assumptions=tuple(notes) + said)
@@ -284,6 +284,13 @@ def _band_density(mission: ir.CheckedMission, ocean: DensityProfile, vehicle: Ve
             if math.isfinite(bottom):
                 deepest = max(deepest, bottom)
     return float(np.mean(ocean.at(np.linspace(0.0, deepest, 50))))
+
+
+def _central(values: np.ndarray) -> tuple[float, float]:
+    """The central INTERVAL_LEVEL of `values`."""
+    tail = 50.0 * (1.0 - INTERVAL_LEVEL)
+    low, high = np.percentile(values, [tail, 100.0 - tail])
+    return float(low), float(high)
 
 
 def _computer_name(mission: ir.CheckedMission) -> str:

@@ -62,6 +62,8 @@ def test_the_forecast_adds_up_by_device_and_states_its_interval():
     assert low < data["energy_j"] < high
     assert data["duration_s"] == pytest.approx(2 * DAY)
     assert data["yos"] > 100 and data["surfacings"] == 3  # at 12, 24 and 36 h
+    assert data["yos_interval"][0] <= data["yos"] <= data["yos_interval"][1]
+    assert data["yos_interval"][1] > data["yos_interval"][0]  # the flight figures' spread
     assert data["devices"]["computer"] == 0.0  # computer none
     assert any("computer none" in a and "no extra board" in a for a in data["assumptions"])
 
