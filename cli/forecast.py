@@ -41,10 +41,14 @@ def run(args: argparse.Namespace) -> int:
 
     duration = None if args.duration is None else parse_duration_s(args.duration)
     mission, warnings = load_forecast_mission(args.mission, args.mafiles)
-    for warning in warnings:
-        print(warning, file=sys.stderr)
-    ocean, source = water(args.ocean)
     imported = tuple(w for w in warnings if w.startswith("import-slocum: "))
+    for warning in warnings:
+        if warning not in imported:  # a mission's own warnings
+            print(warning, file=sys.stderr)
+    if imported:
+        print(f"{args.mission}: {len(imported)} setting(s) the import could not carry over: "
+              "listed with the assumptions", file=sys.stderr)
+    ocean, source = water(args.ocean)
     result = forecast_mission(mission, vehicle=args.vehicle, duration_s=duration, ocean=ocean,
                               ocean_source=source, said=imported)
     print(json.dumps(result.to_json(), indent=2) if args.json else _text(result.to_json()))

@@ -308,9 +308,11 @@ def density_profile_of(ocean: Ocean, depths_m: np.ndarray, latitude_deg: float =
     import gsw
 
     times = np.asarray(getattr(ocean, "casts_s", None) or np.linspace(0.0, 86400.0, 25))
-    depth, time = np.meshgrid(np.asarray(depths_m, float), times)
-    temp = np.asarray(ocean.temperature_c(depth, time), float)
-    salinity = np.asarray(ocean.salinity_psu(depth, time), float)
+    depth, time = (a.ravel() for a in np.meshgrid(np.asarray(depths_m, float), times))
+    shape = (times.size, np.size(depths_m))
+    temp = np.asarray(ocean.temperature_c(depth, time), float).reshape(shape)
+    salinity = np.asarray(ocean.salinity_psu(depth, time), float).reshape(shape)
+    depth = depth.reshape(shape)
     pressure = gsw.p_from_z(-depth, latitude_deg)
     absolute = gsw.SA_from_SP(salinity, pressure, 0.0, latitude_deg)
     rho = gsw.rho(absolute, gsw.CT_from_t(absolute, temp, pressure), pressure)

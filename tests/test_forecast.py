@@ -181,3 +181,14 @@ def test_a_mission_with_errors_is_refused_with_its_diagnostics(tmp_path, capsys)
     bad.write_text("mission m\nstate s\nbegin\n  flightprofile yoo(3, 20, .4, .4)\nend\n")
     assert main(["forecast", str(bad)]) == ExitCode.BAD_INPUT
     assert "bad.mission:4" in capsys.readouterr().err
+
+
+def test_the_water_of_a_glider_s_logs_is_the_water_flown(capsys):
+    logs = ROOT.parent / "shared" / "data" / "slocum-logs-comet-2016"
+    if not logs.is_dir():
+        pytest.skip("the comet 2016 logs are not present")
+    data = _forecast(capsys, str(ROOT / "examples" / "fig2.mission"), "--ocean", str(logs))
+    water = next(a for a in data["assumptions"] if a.startswith("water: "))
+    low, high = (float(x) for x in water.split("(TEOS-10) ")[1].split(" kg/m3")[0].split("-"))
+    assert 1000.0 < low <= high < 1012.0  # the Baltic's brackish water, not the ocean's
+    assert data["energy_interval_j"][0] < data["energy_j"] < data["energy_interval_j"][1]
