@@ -88,7 +88,8 @@ def _text(report: dict) -> str:
         f"{'figure':34s} {'value':>11s} {'sd':>9s} {'unit':9s} basis",
     ]
     for f in report["figures"]:
-        mark = ("" if f["fitted"] else " (kept from base)") + (
+        kept = " (published figure)" if f["key"].startswith("devices.") else " (kept from base)"
+        mark = ("" if f["fitted"] else kept) + (
             " (at least)" if f["at_least"] else "")
         sd = f"{f['sd']:9.3g}" if f["sd"] is not None else f"{'':9s}"
         lines.append(f"{f['key']:34s} {f['value']:11.5g} {sd} {f['unit']:9s} {f['basis']}{mark}")
