@@ -55,6 +55,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="bench (default), sea-trial, uniform; a CSV file "
                              "depth_m,temperature_c[,salinity_psu][,time_s]; or Slocum "
                              "science logs to replay: FILE.ebd or a directory of them")
+    parser.add_argument("--floor", metavar="DEPTH_M",
+                        help="a flat sea floor at DEPTH_M metres: the altimeter reads the "
+                             "height above it and the glider stops there (default: none, "
+                             "the altimeter out of range; with --ocean LOGS the floor the "
+                             "glider's flight logs saw)")
     parser.add_argument("--noise", choices=("none", "ctd", "nonmonotonic"), default="ctd",
                         help="sensor noise: ctd (default), none, or nonmonotonic (the "
                              "fluctuations of the paper's first sea trial)")
@@ -115,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
             noise=args.noise, tracker=args.tracker, current=_current(args.current),
             seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=args.start,
             netcdf=args.netcdf, progress=progress, key_path=args.key,
-            state_dir=args.state_dir, faults=args.faults)
+            state_dir=args.state_dir, faults=args.faults, floor=args.floor)
     finally:
         if progress is not None:
             progress.finish()
@@ -123,6 +128,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"{mission.name}: {record.ended} after {_time_text(record.columns['time_s'][-1])}, "
           f"{len(record.trace)} transitions, {result.energy.total_j / 1e3:.1f} kJ; "
           f"plan check: {check.verdict}", file=sys.stderr)
+    stops = any(p.has_altimeter_stop for s in mission.states for p in s.profiles)
+    if args.floor is not None or stops or result.record.grounded_ticks \
+            or _replayed(args.ocean):
+        for note in result.water_notes:
+            print(f"  {note}", file=sys.stderr)
     if check.causes:
         print("  over the plan's prediction:" if check.verdict == "over prediction"
               else "  cause:",
@@ -134,6 +144,15 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return ExitCode.INTERRUPTED
     return ExitCode.OVER_BUDGET if check.verdict == "violation" else ExitCode.OK
+
+
+def _replayed(ocean: str) -> bool:
+    """Whether `--ocean` names Slocum logs, which give a sea floor (or say why not)."""
+    from pathlib import Path
+
+    from gliderplan.sim.ocean import PRESETS
+
+    return ocean not in PRESETS and (Path(ocean).is_dir() or ocean.lower().endswith(".ebd"))
 
 
 def _time_text(seconds: float) -> str:

@@ -68,8 +68,7 @@ def _sensors_read(mission: ir.CheckedMission) -> int:
                 names |= ir.sensors_read(arg)
             if PROFILES[profile.kind].tracks_thermocline:
                 names.add("temp")
-            at = PROFILES[profile.kind].index("altitude")
-            if at is not None and at < len(profile.args):  # the yo's altimeter stop
+            if profile.has_altimeter_stop:
                 names.add("altitude")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}

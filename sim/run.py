@@ -36,6 +36,7 @@ class RunResult:
     check: FlightCheck  # the flight against the plan ("no plan" without one)
     plan: Plan | None
     files: tuple[Path, ...]  # the run's files, written atomically
+    water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
 
     @property
     def interrupted(self) -> bool:
@@ -60,6 +61,15 @@ def check_state_dir(state_dir: Path, runtime: str) -> None:
                          "name an empty or new directory")
 
 
+def grounding(record: RunRecord) -> dict | None:
+    """Whether the glider reached the sea floor: the first time [s] and the ticks it ended
+    there (None: it never did)."""
+    if not record.grounded_ticks:
+        return None
+    return {"first_s": record.first_grounded_s, "ticks": record.grounded_ticks,
+            "time_s": record.grounded_ticks * record.tick_s}
+
+
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, runtime: str = "python",
                 ocean: str = "bench", noise: str = "ctd", tracker: str = "robust",
@@ -68,7 +78,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 netcdf: bool = False,
                 progress: Callable[[float, float], None] | None = None,
                 plots: bool = True, key_path: str | Path | None = None,
-                state_dir: str | Path | None = None, faults: str | None = None) -> RunResult:
+                state_dir: str | Path | None = None, faults: str | None = None,
+                floor: float | str | None = None) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
@@ -91,6 +102,10 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `faults`: a fault SPEC (sim/faults.py) injected into the C runtime's line and board;
     the run then also writes the runtime's own events.log, and summary.json says what the
     faults did.
+    `floor`: the sea floor's depth [m] (a number, or the text of `sim --floor`), a flat
+    floor under the whole run; default: none, or under replayed Slocum logs the floor they
+    saw (sim.ocean.load_water). The glider stops at the floor; summary.json says where the
+    floor came from and whether the glider reached it (`sea_floor`, `grounded`).
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -103,7 +118,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim.export import parse_utc, utc_text
     from gliderplan.sim.flight import fly, refuse_unflyable_yos
     from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig
-    from gliderplan.sim.ocean import load_ocean
+    from gliderplan.sim.ocean import flat_floor, load_water, parse_floor
     from gliderplan.sim.plotter import PlotProcess
     from gliderplan.sim.science import NOISE_PRESETS
     from gliderplan.sim.vehicle import Current
@@ -131,13 +146,16 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
             raise UsageError("--faults: faults are injected into the C runtime's line and "
                              "board: add --runtime c")
         fault_spec = parse_faults(faults)
+    sea_floor = None if floor is None else \
+        parse_floor(floor) if isinstance(floor, str) else flat_floor(floor)
     vehicle = load_vehicle(mission.vehicle)
-    water = load_ocean(ocean)
+    given = load_water(ocean, sea_floor)
+    water = given.ocean
     if start is None:
         start = getattr(water, "start_epoch_s", None) or DEFAULT_START_EPOCH_S
     config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
                        noise=NOISE_PRESETS[noise], current=current or Current(),
-                       start_epoch_s=start)
+                       start_epoch_s=start, floor=given.floor)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     refuse_unflyable_yos(mission, vehicle, plan)
     if key_path is not None:
@@ -180,7 +198,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
                 "ocean": ocean, "noise": noise, "tracker": tracker, "seed": seed,
                 "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
-                "vehicle": mission.vehicle, "start_utc": utc_text(start)}
+                "vehicle": mission.vehicle, "start_utc": utc_text(start),
+                "sea_floor": given.floor_note, "grounded": grounding(record)}
         table = outputs.timeseries_table(record, used, mission.battery.energy_j)
         contents["trace.csv"] = outputs.trace_csv(record.trace)
         contents["timeseries.parquet"] = outputs.parquet_bytes(
@@ -198,5 +217,11 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     written = [name for name in (*RUN_FILES, NETCDF_FILE) if name in contents]
     for name in written:
         write_atomically(out / name, contents[name])
-    return RunResult(record, used, check, plan, tuple(out / name for name in written))
+    notes = [given.floor_note]
+    if record.grounded_ticks:
+        notes.append(f"the glider reached the sea floor at {record.first_grounded_s:g} s and "
+                     f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
+                     "the water: give it an altimeter stop, yo's fifth argument)")
+    return RunResult(record, used, check, plan, tuple(out / name for name in written),
+                     tuple(notes))
 

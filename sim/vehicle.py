@@ -6,7 +6,9 @@ time after the pump run), moves its battery toward the commanded pitch, and glid
 rest of the tick at the steady-glide speeds of `power_models.flight` for that pitch and
 its net buoyancy at its depth (pumped volume, trim, the hull squeezed by sea pressure).
 Commanded to the surface it climbs, takes a GPS fix (`surface_s`) that resets its dead
-reckoning, makes its Iridium call (`iridium_s`) and waits there. Horizontally it flies
+reckoning, makes its Iridium call (`iridium_s`) and waits there. It cannot go below the
+sea floor (`floor_m`, which the science computer sets each tick): a glide or a hover
+that would take it deeper stops at the floor, and the tick counts as grounded. Horizontally it flies
 the commanded heading; a depth-averaged current drifts the true position but not the
 dead-reckoned one, which is what the glider reports (Slocum DDMM.MMMM) until the next fix.
 
@@ -131,6 +133,8 @@ class GliderSim:
         self._turning_to = 0.0  # sign of the buoyancy the last inflection went to
         self._turn_left_s = 0.0  # time the current inflection still turns after pumping
         self._geometry: dict[float, tuple[float, float]] = {}
+        self.floor_m = math.inf  # [m] the sea floor under the glider this tick (inf: none)
+        self.grounded = False  # the last step stopped at the sea floor
 
     def _per_root(self, pitch_rad: float) -> tuple[float, float]:
         """(u, w) [m s-1] per square root of the net buoyancy [cc] at a pitch [rad]
@@ -148,7 +152,7 @@ class GliderSim:
              heading_rad: float, heading_valid: bool, surface: bool) -> None:
         """Fly one tick under a command (COMMAND fields, docs/protocol.md)."""
         self.pumped_out_cc = self.pumped_in_cc = 0.0
-        self.inflection = False
+        self.inflection = self.grounded = False
         if heading_valid:
             self.heading_rad = heading_rad
         if surface and self.depth_m <= SURFACE_DEPTH_M:
@@ -156,7 +160,10 @@ class GliderSim:
             return
         self.surface_time_s = -1.0
         dz, distance, hovering = self.below_surface(depth_target_m, pitch_rad, ballast_cc)
-        self.depth_m = self.depth_m + dz if hovering else max(0.0, self.depth_m + dz)
+        depth = self.depth_m + dz if hovering else max(0.0, self.depth_m + dz)
+        if depth > self.floor_m:  # the sea floor stops it
+            depth, self.grounded = self.floor_m, True
+        self.depth_m = depth
         self._drift(distance, self.tick_s)
 
     @property
