@@ -159,16 +159,17 @@ class MeasuredProfile:
     def _interpolate(self, table: tuple[tuple[float, ...], ...], depth_m: Number,
                      time_s: Number) -> Number:
         if isinstance(depth_m, np.ndarray) or isinstance(time_s, np.ndarray):
-            depth = np.asarray(depth_m, float)
+            depth, time = np.broadcast_arrays(np.asarray(depth_m, float),
+                                              np.asarray(time_s, float))
+            shape, depth, time = depth.shape, depth.ravel(), time.ravel()
             casts = np.array([np.interp(depth, self.depths_m, row) for row in table])
             if len(self.casts_s) == 1:
-                return casts[0]
-            time = np.broadcast_to(np.asarray(time_s, float), depth.shape)
+                return casts[0].reshape(shape)
             k = np.clip(np.searchsorted(self.casts_s, time) - 1, 0, len(self.casts_s) - 2)
             t0, t1 = np.asarray(self.casts_s)[k], np.asarray(self.casts_s)[k + 1]
             w = np.clip((time - t0) / (t1 - t0), 0.0, 1.0)
-            index = np.arange(depth.size).reshape(depth.shape)
-            return casts[k, index] * (1.0 - w) + casts[k + 1, index] * w
+            index = np.arange(depth.size)
+            return (casts[k, index] * (1.0 - w) + casts[k + 1, index] * w).reshape(shape)
         # one reading per tick: plain floats are ~10x faster than numpy scalars
         if len(self.casts_s) == 1:
             return _interp_scalar(self.depths_m, table[0], depth_m)
