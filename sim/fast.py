@@ -14,8 +14,9 @@ A run of ticks, in order:
 2. the flight: a yo leg after leg, each leg's depths the running sum (cumsum, the same
    additions in the same order) of the depth changes of `GliderSim.glide_from` (the
    actuators settling, then steady), the depth readings with their noise giving the tick
-   the leg turns; a compressible hull's depths, each the last plus the glide's change at
-   it, tick after tick in C (sim/native.c); a surfacing: the climb, then the ticks at
+   the leg turns; a compressible hull's depths (or any hull's in a stratified ocean),
+   each the last plus the glide's change at it, tick after tick in C (sim/native.c); a
+   surfacing: the climb, then the ticks at
    the surface. Over a sea floor the run ends before the tick that would take the
    glider below it, or on which a dive turns at the yo's altimeter stop (the loop flies
    those ticks);
@@ -641,6 +642,8 @@ class FastForward:
         flight = self.glider.vehicle.flight
         weight = flight.rho_kg_m3 * flight.g_m_s2  # net_buoyancy_cc's (rho g) depth
         squeeze = flight.hull_volume_cc * flight.compressibility_per_pa
+        water = self.glider.stratification
+        lift = None if water is None else (water.lift_cc, water.step_m)
         # beyond `near` of an edge no reading can reach it
         near = tuple(edges[d] + (1.0 if d == _CLIMB else -1.0) * (
             spread + 1e-6 * max(1.0, abs(edges[d]))) for d in (_CLIMB, _DIVE))
@@ -661,7 +664,7 @@ class FastForward:
                 glides += [second, third]  # the next legs' glides, again and again
             flown, leg_depths, stop = native.squeezed_yo(
                 [(self._rows_of(glide), glide.settled) for glide in glides], weight, squeeze,
-                noise[j:], near, edge, leg == _DIVE, count - j, float(depths[-1][-1]))
+                noise[j:], near, edge, leg == _DIVE, count - j, float(depths[-1][-1]), lift)
             for n, (start, ticks) in enumerate(flown.tolist()):
                 legs.append((j + start, ticks, glides[0 if n == 0 else 2 - n % 2],
                              leg if n % 2 == 0 else 1 - leg))

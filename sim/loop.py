@@ -22,6 +22,7 @@ from gliderplan.contract import (
 )
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, Transition, start
+from gliderplan.power_models.flight import DensityProfile
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
@@ -51,6 +52,8 @@ class RunConfig:
     start_lon_deg: float | None = None
     start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
     floor: SeaFloor | None = None  # the sea floor (None: none)
+    # the in-situ density flown through (None: uniform water of the vehicle's reference)
+    water: DensityProfile | None = None
 
 
 @dataclass
@@ -272,6 +275,6 @@ def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
                  vehicle: Vehicle) -> ScienceComputer:
     """The science computer over a glider put in the water at the mission's start."""
     lat, lon = start_position(mission, config)
-    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current)
+    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current, water=config.water)
     return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s,
                            config.start_epoch_s, config.floor)

@@ -243,6 +243,40 @@ def test_replayed_logs_give_the_floor_the_glider_saw(tmp_path, capsys):
     assert 33.0 < table["depth_m"].max() < 37.0
 
 
+def test_the_water_given_is_flown_at_its_density_with_the_glider_ballasted_for_it(tmp_path,
+                                                                                   capsys):
+    mission = REPO / "examples" / "thermocline_survey.mission"
+    runs = {}
+    for name, args in (("default", []), ("bench", ["--ocean", "bench"])):
+        out = tmp_path / name
+        assert main(["sim", str(mission), "--duration", "3h", *args, "-o", str(out)]) == 0
+        runs[name] = (capsys.readouterr().err, json.loads((out / "summary.json").read_text()),
+                      pd.read_parquet(out / "timeseries.parquet"))
+    err, summary, table = runs["bench"]
+    said = summary["water_density"]
+    assert said.startswith("water: bench: in-situ density (TEOS-10) 1021.0-1030.1 kg/m3")
+    # ballasted as `gliderplan forecast` ballasts it: one definition of the band's density
+    from gliderplan.language import check_file
+    from gliderplan.planner.forecast import WATER_DEPTHS_M
+    from gliderplan.planner.rates import band_density
+    from gliderplan.power_models import load_vehicle
+    from gliderplan.sim.ocean import density_profile_of, load_ocean
+
+    checked = check_file(str(mission)).checked()
+    rho = band_density(checked, density_profile_of(load_ocean("bench"), WATER_DEPTHS_M),
+                       load_vehicle(checked.vehicle))
+    assert 1024.5 < rho < 1025.5  # the survey's 5-40 m of the bench water, not the 1024.3
+    assert f"flown at each depth; the glider ballasted for {rho:.1f} kg/m3" in said
+    assert f"  {said}" in err
+    default_err, default, default_table = runs["default"]
+    assert default["water_density"] == ("water: uniform, the vehicle's reference density "
+                                        "(1024.3 kg/m3)")
+    assert "water:" not in default_err  # the default says nothing on the terminal
+    # the same temperatures, another water: the glides differ
+    assert table["temperature_c"].iloc[0] == default_table["temperature_c"].iloc[0]
+    assert not table["depth_m"].equals(default_table["depth_m"])
+
+
 def test_a_long_run_shows_progress(tmp_path, capsys):
     mission = REPO / "tests" / "missions" / "sim_month.mission"
     assert main(["sim", str(mission), "--duration", "5d", "-o", str(tmp_path / "r")]) == 0

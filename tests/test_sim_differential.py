@@ -222,6 +222,33 @@ def test_the_fast_executor_flies_over_a_sea_floor_as_the_reference(floor, rigid)
     assert (depth[survey] < bottom[survey] - 2.0).all()
 
 
+@pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
+@pytest.mark.parametrize(("name", "ocean", "floor"), [
+    ("examples/thermocline_survey.mission", "sea-trial", None),
+    ("examples/fig2_annotated.mission", "bench", None),
+    ("tests/missions/sim_altimeter.mission", "sea-trial", flat_floor(38.0))])
+def test_the_fast_executor_flies_the_water_s_density_as_the_reference(name, ocean, floor,
+                                                                       rigid):
+    # the water's in-situ density at each depth (sim --ocean): a rigid hull's speed then
+    # changes with depth too, and its yos are flown as a compressible hull's are
+    from gliderplan.sim.ocean import density_profile_of, load_water
+    from gliderplan.sim.run import flown_water
+
+    mission = check_file(str(REPO / name)).mission
+    vehicle = load_vehicle(mission.vehicle)
+    if rigid:
+        vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
+    given = load_water(ocean, floor)
+    ballasted, density, _ = flown_water(mission, vehicle, given, ocean)
+    assert np.ptp(density_profile_of(given.ocean, np.arange(0.0, 60.0)).rho_kg_m3) > 1.0
+    config = RunConfig(duration_s=min(86400.0, mission.horizon_s or 86400.0), seed=9,
+                       noise=NOISE_PRESETS["ctd"], floor=floor, water=density)
+    flown = flown_alike(mission, config, given.ocean, vehicle=ballasted)
+    uniform = fly(mission, given.ocean, replace(config, water=None), ballasted)
+    assert not np.array_equal(flown.columns["depth_m"], uniform.columns["depth_m"][
+        :len(flown.columns["depth_m"])])  # the density changes the flight
+
+
 # Random missions: three states (a start state that calls one and goes to the other),
 # every profile and route the simulator flies, conditions on time, depth, temperature,
 # position, the runtime's readings (the yo's leg, the distance to the waypoint, the
