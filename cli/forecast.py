@@ -1,6 +1,7 @@
 """`gliderplan forecast`: what a mission will cost on a glider, by device, with its interval.
 
-  forecast MISSION [--vehicle FILE|PRESET] [--ocean LOGDIR|PRESET|CSV] [--duration T] [--json]
+  forecast MISSION [--vehicle FILE|PRESET] [--ocean LOGDIR|PRESET|CSV] [--floor DEPTH_M]
+           [--duration T] [--json]
 
 MISSION is a gliderplan mission or a Slocum `.mi` (its .ma files in mafiles/ beside it, as
 `import-slocum` reads them). Prints the energy, the duration, the yos and the surfacings,
@@ -27,6 +28,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the water it flies in: a glider's science logs (*.ebd or a "
                              "directory), a profile CSV or a preset (bench, sea-trial, "
                              "uniform); default: the vehicle's reference water")
+    parser.add_argument("--floor", metavar="DEPTH_M",
+                        help="the sea floor's depth [m]: a yo with an altimeter stop is "
+                             "planned to turn above it (default: the floor the logs of "
+                             "--ocean LOGDIR saw, else unknown: planned to max_depth)")
     parser.add_argument("--duration", metavar="T",
                         help="how long (3600s, 6h, 30d; default: the mission's horizon, else "
                              "30d)")
@@ -48,9 +53,13 @@ def run(args: argparse.Namespace) -> int:
     if imported:
         print(f"{args.mission}: {len(imported)} setting(s) the import could not carry over: "
               "listed with the assumptions", file=sys.stderr)
-    ocean, source = water(args.ocean)
+    from gliderplan.sim.ocean import parse_floor
+
+    floor = None if args.floor is None else parse_floor(args.floor)
+    ocean, source, floor, floor_note = water(args.ocean, floor)
     result = forecast_mission(mission, vehicle=args.vehicle, duration_s=duration, ocean=ocean,
-                              ocean_source=source, said=imported)
+                              ocean_source=source, floor=floor, floor_note=floor_note,
+                              said=imported)
     print(json.dumps(result.to_json(), indent=2) if args.json else _text(result.to_json()))
     return 0
 

@@ -51,10 +51,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --runtime c: the runtime keeps its checkpoints and event "
                              "log in DIR as on the glider (created if missing; must hold no "
                              "checkpoint)")
-    parser.add_argument("--ocean", default="bench", metavar="PRESET|FILE",
-                        help="bench (default), sea-trial, uniform; a CSV file "
+    parser.add_argument("--ocean", metavar="PRESET|FILE",
+                        help="bench, sea-trial, uniform; a CSV file "
                              "depth_m,temperature_c[,salinity_psu][,time_s]; or Slocum "
-                             "science logs to replay: FILE.ebd or a directory of them")
+                             "science logs to replay: FILE.ebd or a directory of them. The "
+                             "glider flies its in-situ density, ballasted for it as "
+                             "forecast does (default: bench's temperatures in uniform water "
+                             "of the vehicle's reference density)")
+    parser.add_argument("--floor", metavar="DEPTH_M",
+                        help="a flat sea floor at DEPTH_M metres: the altimeter reads the "
+                             "height above it and the glider stops there (default: none, "
+                             "the altimeter out of range; with --ocean LOGS the floor the "
+                             "glider's flight logs saw)")
     parser.add_argument("--noise", choices=("none", "ctd", "nonmonotonic"), default="ctd",
                         help="sensor noise: ctd (default), none, or nonmonotonic (the "
                              "fluctuations of the paper's first sea trial)")
@@ -115,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
             noise=args.noise, tracker=args.tracker, current=_current(args.current),
             seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=args.start,
             netcdf=args.netcdf, progress=progress, key_path=args.key,
-            state_dir=args.state_dir, faults=args.faults)
+            state_dir=args.state_dir, faults=args.faults, floor=args.floor)
     finally:
         if progress is not None:
             progress.finish()
@@ -123,6 +131,14 @@ def run(args: argparse.Namespace) -> int:
     print(f"{mission.name}: {record.ended} after {_time_text(record.columns['time_s'][-1])}, "
           f"{len(record.trace)} transitions, {result.energy.total_j / 1e3:.1f} kJ; "
           f"plan check: {check.verdict}", file=sys.stderr)
+    stops = any(p.has_altimeter_stop for s in mission.states for p in s.profiles)
+    density, floor = result.water_notes[0], result.water_notes[1:]
+    if args.ocean is not None:
+        print(f"  {density}", file=sys.stderr)
+    if args.floor is not None or stops or result.record.grounded_ticks \
+            or _replayed(args.ocean):
+        for note in floor:
+            print(f"  {note}", file=sys.stderr)
     if check.causes:
         print("  over the plan's prediction:" if check.verdict == "over prediction"
               else "  cause:",
@@ -134,6 +150,16 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return ExitCode.INTERRUPTED
     return ExitCode.OVER_BUDGET if check.verdict == "violation" else ExitCode.OK
+
+
+def _replayed(ocean: str | None) -> bool:
+    """Whether `--ocean` names Slocum logs, which give a sea floor (or say why not)."""
+    from pathlib import Path
+
+    from gliderplan.sim.ocean import PRESETS
+
+    return ocean is not None and ocean not in PRESETS and (
+        Path(ocean).is_dir() or ocean.lower().endswith(".ebd"))
 
 
 def _time_text(seconds: float) -> str:

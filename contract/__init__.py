@@ -23,7 +23,7 @@ MAX_STACK_DEPTH = 32  # the state stack: the largest `stack N` (or --max-stack)
 DEFAULT_STACK_DEPTH = 8  # the state stack of a mission without `stack N`
 MAX_EVENTS_PER_STATE = 255  # events of one state (a uint8_t count)
 MAX_PROFILE_ALTERNATIVES = 8  # `flightprofile a | b | ...` alternatives of one state
-MAX_PROFILE_ARGS = 6  # arguments of one flight profile
+MAX_PROFILE_ARGS = 7  # arguments of one flight profile
 MAX_ROUTE_POINTS = 64  # (lat, lon) points of one state's route
 MAX_SWEEP_WAYPOINTS = 256  # waypoints a `sweep` route expands to
 # Operators and calls nested in one expression (a sum of n terms is n - 1 deep). Every
@@ -158,6 +158,9 @@ RUNTIME_READINGS_MASK = sum(1 << s.index for s in SENSORS if s.source == "runtim
 
 SURFACE_PITCH_RAD = 0.454  # [rad] pitch of the climb to the surface
 TRACK_WINDOW = 64  # (depth, temp) readings the thermocline tracker keeps per leg
+# where yo and thermotrackyo take their altimeter stop [m] (the registry's `altitude`)
+YO_ALTITUDE_ARG = 4  # yo's argument: a dive turns at this height above the sea floor
+THERMOTRACKYO_ALTITUDE_ARG = 6  # thermotrackyo's argument, as yo's
 WAYPOINT_RADIUS_M = 50.0  # [m] a waypoint closer than this is reached
 EARTH_RADIUS_M = 6371000.0  # [m] of the sphere positions and headings are computed on
 

@@ -31,7 +31,8 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ", "NO_BOARD")),
     ("signed plans", ("PLAN_KEY_BYTES", "MAX_PLAN_SEQUENCE")),
     ("the library routines (docs/pilot.md)", (
-        "SURFACE_PITCH_RAD", "TRACK_WINDOW", "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
+        "SURFACE_PITCH_RAD", "TRACK_WINDOW", "YO_ALTITUDE_ARG", "THERMOTRACKYO_ALTITUDE_ARG",
+        "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (
         "PROTOCOL_VERSION", "MAX_PAYLOAD", "MAX_WIRE", "PLAN_PIECE", "MAX_LINK_PLAN",
         "COMMAND_MAX_SIZE", "NO_STATE")),

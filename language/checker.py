@@ -379,17 +379,19 @@ class _Checker:
         info = self.registered(invocation.name, PROFILES, "flight profile", "profiles")
         if info is None:
             return None
-        if len(invocation.args) != len(info.params) or any(
+        if not info.required <= len(invocation.args) <= len(info.params) or any(
                 isinstance(a, ast.Point) for a in invocation.args):
-            self.error(f"'{name}' takes {len(info.params)} argument(s), "
+            takes = str(len(info.params)) if info.required == len(info.params) else \
+                f"{info.required} or {len(info.params)}"
+            self.error(f"'{name}' takes {takes} argument(s), "
                        f"got {len(invocation.args)}", invocation.span,
-                       f"{name}({', '.join(p.name + ' [' + p.unit + ']' for p in info.params)})")
+                       f"{name}({', '.join(_parameter(p) for p in info.params)})")
             return None
         args = [self.expression(a, allow_sensors=False) for a in invocation.args]
         if None in args:
             return None
         values = {}
-        for arg, node, spec in zip(args, invocation.args, info.params, strict=True):
+        for arg, node, spec in zip(args, invocation.args, info.params, strict=False):
             if not ir.variables_read(arg):
                 value = ir.evaluate(arg, {}, {})
                 if self.in_range(value, spec, name, node.span):
@@ -651,6 +653,10 @@ class _Checker:
         return value
 
     def in_range(self, value: float, spec: ParamSpec, owner: str, span: ast.Span) -> bool:
+        if not math.isfinite(value):
+            self.error(f"{spec.name} of '{owner}' is {value:g}, not a finite number", span,
+                       _range_hint(spec))
+            return False
         too_low = value < spec.low or (spec.low_open and value == spec.low)
         too_high = value > spec.high or (spec.high_open and value == spec.high)
         if too_low or too_high:
@@ -688,7 +694,16 @@ def _interval(spec: ParamSpec) -> str:
     return f"{low}{spec.low:g}, {spec.high:g}{high}"
 
 
+def _parameter(spec: ParamSpec) -> str:
+    """'name [unit]', in brackets for an argument that may be left out."""
+    text = f"{spec.name} [{spec.unit}]"
+    return f"[{text}]" if spec.optional else text
+
+
 def _range_hint(spec: ParamSpec) -> str | None:
+    if spec.name == "altitude":
+        return ("the height above the sea floor at which a dive turns (Slocum's "
+                "d_target_altitude), 0 or more; 0: no altimeter stop")
     if spec.unit == "rad":
         return "pitch is in radians: 26 degrees is 0.454"
     if spec.unit == "m":

@@ -68,6 +68,8 @@ def _sensors_read(mission: ir.CheckedMission) -> int:
                 names |= ir.sensors_read(arg)
             if PROFILES[profile.kind].tracks_thermocline:
                 names.add("temp")
+            if profile.has_altimeter_stop:
+                names.add("altitude")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}
     return sum(1 << SENSOR_BY_NAME[name].index for name in names)

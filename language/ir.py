@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, fields, is_dataclass
 from functools import cached_property
 
 from gliderplan.contract import DEFAULT_STACK_DEPTH, NO_BOARD
+from gliderplan.language.registry import PROFILES
 
 # ---- expressions (no spans: the checker has reported everything by now) ----------
 
@@ -203,6 +204,13 @@ class Profile:
 
     kind: str  # yo | thermotrackyo | surface | hover
     args: tuple[Expr, ...]
+
+    @property
+    def has_altimeter_stop(self) -> bool:
+        """Whether it is given an altimeter stop (a yo's `altitude` argument): the runtime
+        then reads the altitude."""
+        at = PROFILES[self.kind].index("altitude")
+        return at is not None and at < len(self.args)
 
     def constant_args(self) -> tuple[float, ...] | None:
         """Argument values when none reads a variable or sensor, else None."""

@@ -29,6 +29,7 @@ class ParamSpec:
     high: float = math.inf
     low_open: bool = False  # True: low itself is not allowed
     high_open: bool = False
+    optional: bool = False  # may be left out (only the last arguments of a profile)
 
 
 @dataclass(frozen=True)
@@ -40,9 +41,21 @@ class ProfileInfo:
     description: str
     tracks_thermocline: bool = False
 
+    @property
+    def required(self) -> int:
+        """How many of its arguments a profile must be given."""
+        return sum(not p.optional for p in self.params)
+
+    def index(self, name: str) -> int | None:
+        """Position of the argument called `name`, or None."""
+        return next((i for i, p in enumerate(self.params) if p.name == name), None)
+
 
 _DEPTH = dict(unit="m", low=0.0)
 _PITCH = dict(unit="rad", low=0.0, high=math.pi / 2, low_open=True, high_open=True)
+# Slocum's d_target_altitude: a dive also turns when the altimeter reads at most this
+# height above the sea floor; left out or 0: no altimeter stop
+_ALTITUDE = ParamSpec("altitude", unit="m", low=0.0, optional=True)
 
 PROFILES: dict[str, ProfileInfo] = {
     p.name: p
@@ -54,8 +67,10 @@ PROFILES: dict[str, ProfileInfo] = {
                 ParamSpec("max_depth", **_DEPTH),
                 ParamSpec("dive_pitch", **_PITCH),
                 ParamSpec("climb_pitch", **_PITCH),
+                _ALTITUDE,
             ),
-            "dive and climb between two depths",
+            "dive and climb between two depths (a dive also turns at `altitude` above "
+            "the sea floor)",
         ),
         ProfileInfo(
             "thermotrackyo",
@@ -66,6 +81,7 @@ PROFILES: dict[str, ProfileInfo] = {
                 ParamSpec("climb_pitch", **_PITCH),
                 ParamSpec("temp_threshold", unit="degC", low=0.0, low_open=True),
                 ParamSpec("depth_threshold", unit="m", low=0.0, low_open=True),
+                _ALTITUDE,
             ),
             "yo whose depth band follows the thermocline",
             tracks_thermocline=True,
@@ -124,6 +140,16 @@ ROUTES: dict[str, RouteInfo] = {
         ),
     )
 }
+
+
+
+def altitude_stop_m(kind: str, args: tuple[float, ...]) -> float:
+    """[m] the height above the sea floor at which a yo's dive turns (its `altitude`
+    argument), 0 where it has none (no altimeter stop); NaN stays NaN."""
+    info = PROFILES.get(kind)
+    at = None if info is None else info.index("altitude")
+    return args[at] if at is not None and at < len(args) else 0.0
+
 
 # Functions usable in conditions and assignments: name -> argument count.
 FUNCTIONS: dict[str, int] = {"abs": 1, "min": 2, "max": 2, "mod": 2}

@@ -367,24 +367,29 @@ class _Translator:
                 comment += self.leave_out(
                     behavior, [f"{leg}_use_pitch", f"{leg}_pitch_value"],
                     f"a battery position is no pitch angle; flown at {DEFAULT_PITCH_RAD} rad")
-        comment += self.leave_out(
-            behavior, ["d_target_altitude"] if behavior.value("d_target_altitude", -1) > 0
-            else [], "the yo turns at d_target_depth only (the simulated sea floor is deeper)")
+        altitude = behavior.value("d_target_altitude", -1)
+        if altitude > 0:  # the altimeter stop: yo's fifth argument
+            comment.append(f"d_target_altitude {_number(altitude)} m: a dive also turns "
+                           f"{_number(altitude)} m above the sea floor (the altimeter stop, "
+                           "yo's fifth argument)")
         comment += self.leave_out(
             behavior, ["d_bpump_value", "c_bpump_value"],
             "the plan, or else the vehicle's full pump stroke, sets the buoyancy")
         comment += self.leave_out(
             behavior, [n for n in ("d_stop_when_hover_for", "d_stop_when_stalled_for",
-                                   "c_stop_when_hover_for", "c_stop_when_stalled_for",
-                                   "c_target_altitude")
+                                   "c_stop_when_hover_for", "c_stop_when_stalled_for")
                        if behavior.value(n, -1) > 0],
             "the simulated glider neither hovers nor stalls in a yo")
+        comment += self.leave_out(
+            behavior, ["c_target_altitude"] if behavior.value("c_target_altitude", -1) > 0
+            else [], "a climb turns at c_target_depth only, never at a height above the floor")
         if behavior.value("start_when", 2) not in (0, 1, 2):
             comment += self.leave_out(behavior, ["start_when"],
                                       "the yo starts as soon as the glider dives")
         self.pitches, self.band = pitches, (top, bottom)
+        stop = f", {_number(altitude)}" if altitude > 0 else ""
         profile = (f"yo({_number(top)}, {_number(bottom)}, {_number(pitches[0])}, "
-                   f"{_number(pitches[1])})")
+                   f"{_number(pitches[1])}{stop})")
         half_cycles = behavior.value("num_half_cycles_to_do", -1)
         if half_cycles <= 0:
             self.yo_never = f"num_half_cycles_to_do {_number(half_cycles)}: the yo never ends"
@@ -392,6 +397,9 @@ class _Translator:
             return profile, comment, None
         n = int(half_cycles)
         turn = f"depth >= {_number(bottom)}" if n % 2 else f"depth <= {_number(top)}"
+        if n % 2 and altitude > 0:  # the last dive may turn at the altimeter stop
+            turn = f"({turn} || altitude <= {_number(altitude)})"
+            self.reads.add("altitude")
         self.reads.add("halfcycle")
         self.half_cycles = n
         return (profile, comment, (f"halfcycle > {n} || halfcycle == {n} && {turn}",

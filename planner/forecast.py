@@ -5,7 +5,9 @@ and its visits. Each state is then billed as the glider flies it without a plan,
 vehicle's own figures (calibrated from its logs, or a preset):
 
 - a yo: the commanded band (a `thermotrackyo` at the band it flies on average, as the
-  planner takes it), pitch and the pump's full stroke (what the glider pumps unplanned),
+  planner takes it; over a known sea floor, `--floor` or the logs of `--ocean`, a dive with
+  an altimeter stop turns at min(max_depth, floor - altitude), the floor's median), pitch
+  and the pump's full stroke (what the glider pumps unplanned),
   through the water given (`--ocean`), at the vehicle's gliding load by device
   (`power_models.devices`: the base, the fin, each instrument the state logs at its duty;
   an instrument the hotel load holds that the state does not run is taken out), and its
@@ -28,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,7 +38,7 @@ from gliderplan.contract import DEFAULT_HORIZON_S, RUNTIME_CYCLES_PER_TICK, TICK
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.occupancy import Occupancy, mission_occupancy
-from gliderplan.planner.rates import yo_band
+from gliderplan.planner.rates import altimeter_note, band_density, floored_args, yo_band
 from gliderplan.power_models import load_board, load_vehicle
 from gliderplan.power_models.deployments import DEFAULT_DRIFT_W, DRIFT_SOURCE
 from gliderplan.power_models.devices import gliding_power_w, held_instruments
@@ -43,6 +46,9 @@ from gliderplan.power_models.draws import DEFAULT_DRAWS, DEFAULT_SEED, draw_vehi
 from gliderplan.power_models.flight import DensityProfile
 from gliderplan.power_models.forecast import INTERVAL_LEVEL
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
+
+if TYPE_CHECKING:
+    from gliderplan.sim.ocean import SeaFloor
 
 WATER_DEPTHS_M = np.arange(0.0, 1001.0, 5.0)  # where a given ocean's density is taken [m]
 
@@ -119,9 +125,9 @@ def instruments(state: ir.State) -> dict[str, float]:
 
 
 def _yo(vehicle: Vehicle, state: ir.State, occupancy: Occupancy, time_s: float,
-        ocean: DensityProfile | None) -> StateBill:
+        ocean: DensityProfile | None, floor_m: float | None = None) -> StateBill:
     profile = state.profiles[0]
-    args = tuple(ir.evaluate(a, {}, occupancy.variables[state.name]) for a in profile.args)
+    args = floored_args(profile.kind, _args(state, occupancy), floor_m)
     low, high = yo_band(profile, args)
     if not (math.isfinite(low) and math.isfinite(high) and 0.0 <= low < high):
         low, high = vehicle.nominal_min_depth_m, vehicle.nominal_max_depth_m
@@ -136,6 +142,12 @@ def _yo(vehicle: Vehicle, state: ir.State, occupancy: Occupancy, time_s: float,
     energy[Component.PUMP] = float(actuators_j) * cycles - pitch_j
     energy[Component.PITCH] = pitch_j
     return StateBill(time_s, occupancy.visits[state.name], cycles, 0.0, time_s, energy)
+
+
+def _args(state: ir.State, occupancy: Occupancy) -> tuple[float, ...]:
+    """The arguments of the state's (first) profile, at its variables' values."""
+    return tuple(ir.evaluate(a, {}, occupancy.variables[state.name])
+                 for a in state.profiles[0].args)
 
 
 def _surface(vehicle: Vehicle, state: ir.State, occupancy: Occupancy, time_s: float
@@ -169,8 +181,10 @@ def _computer_w(mission: ir.CheckedMission, state: ir.State) -> float:
 
 
 def bill_states(mission: ir.CheckedMission, vehicle: Vehicle, occupancy: Occupancy,
-                ocean: DensityProfile | None = None) -> dict[str, StateBill]:
-    """Each state of `mission` flown by `vehicle` for the time `occupancy` gives it."""
+                ocean: DensityProfile | None = None, floor_m: float | None = None
+                ) -> dict[str, StateBill]:
+    """Each state of `mission` flown by `vehicle` for the time `occupancy` gives it, over
+    a sea floor `floor_m` [m] deep (None: unknown)."""
     bills: dict[str, StateBill] = {}
     for state in mission.states:
         time_s = occupancy.time_s.get(state.name, 0.0)
@@ -178,7 +192,7 @@ def bill_states(mission: ir.CheckedMission, vehicle: Vehicle, occupancy: Occupan
             continue
         kind = state.profiles[0].kind
         if kind in ("yo", "thermotrackyo"):
-            bills[state.name] = _yo(vehicle, state, occupancy, time_s, ocean)
+            bills[state.name] = _yo(vehicle, state, occupancy, time_s, ocean, floor_m)
         elif kind == "surface":
             bills[state.name] = _surface(vehicle, state, occupancy, time_s)
         else:
@@ -225,40 +239,49 @@ def load_forecast_mission(path: str, mafiles: str | None = None
     return checked.checked(), tuple(f"import-slocum: {w}" for w in translation.warnings)
 
 
-def water(spec: str | None) -> tuple[DensityProfile | None, str | None]:
-    """(density profile, what it is) of an ocean spec as `sim --ocean` takes it (science
-    logs, a CSV, a preset); (None, None) without one."""
+def water(spec: str | None, floor: SeaFloor | None = None
+          ) -> tuple[DensityProfile | None, str | None, SeaFloor | None, str | None]:
+    """(density profile, what it is, sea floor, what it is or why there is none) of an
+    ocean spec and a floor as `sim --ocean`, `--floor` take them (`sim.ocean.load_water`:
+    science logs give the floor they saw); Nones without them."""
     if spec is None:
-        return None, None
-    from gliderplan.sim.ocean import density_profile_of, load_ocean
+        return None, None, floor, None if floor is None else floor.describe()
+    from gliderplan.sim.ocean import density_profile_of, load_water
 
-    profile = density_profile_of(load_ocean(spec), WATER_DEPTHS_M)
+    given = load_water(spec, floor)
+    profile = density_profile_of(given.ocean, WATER_DEPTHS_M)
     return profile, (f"{spec}: in-situ density (TEOS-10) {profile.rho_kg_m3.min():.1f}-"
                      f"{profile.rho_kg_m3.max():.1f} kg/m3 over 0-1000 m, the glider "
                      "ballasted for its mean over the depths the mission flies, as its trim "
-                     "was in its calibration water")
+                     "was in its calibration water"), given.floor, given.floor_note
 
 
 def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
                      duration_s: float | None = None, ocean: DensityProfile | None = None,
                      ocean_source: str | None = None, draws: int = DEFAULT_DRAWS,
-                     seed: int = DEFAULT_SEED, said: tuple[str, ...] = ()) -> MissionForecast:
+                     seed: int = DEFAULT_SEED, floor: SeaFloor | None = None,
+                     floor_note: str | None = None, said: tuple[str, ...] = ()
+                     ) -> MissionForecast:
     """Forecast `mission` (on `vehicle`, a preset or file, default its own) for
     `duration_s` [s] (default its horizon, else DEFAULT_HORIZON_S) through `ocean`
-    (default uniform water of the vehicle's reference density); `said`: what else the
-    forecast rests on (what a Slocum mission's import could not carry over)."""
+    (default uniform water of the vehicle's reference density) over the sea floor `floor`
+    (its median; default unknown: a yo is planned to its max_depth; `floor_note` says
+    what it is or why there is none); `said`: what else the forecast rests on (what a
+    Slocum mission's import could not carry over)."""
     spec = vehicle or mission.vehicle
     glider = load_vehicle(spec)
+    floor_m = None if floor is None else floor.median_m
     if ocean is not None:
-        glider = glider.ballasted_for(_band_density(mission, ocean, glider))
+        glider = glider.ballasted_for(band_density(mission, ocean, glider, floor_m))
     horizon = duration_s if duration_s is not None else mission.horizon_s
     occupancy = mission_occupancy(mission, horizon if horizon is not None
                                   else DEFAULT_HORIZON_S)
-    bills = bill_states(mission, glider, occupancy, ocean)
+    bills = bill_states(mission, glider, occupancy, ocean, floor_m)
     rng = np.random.default_rng(seed)
     drift_w = glider.base_drift_w or DEFAULT_DRIFT_W
     gliding_s = sum(b.gliding_s for b in bills.values())
-    drawn = [bill_states(mission, v, occupancy, ocean) for v in draw_vehicles(glider, draws, rng)]
+    drawn = [bill_states(mission, v, occupancy, ocean, floor_m)
+             for v in draw_vehicles(glider, draws, rng)]
     energies = np.array([sum(sum(b.energy_j.values()) for b in d.values()) for d in drawn])
     energies = energies + rng.normal(0.0, drift_w, energies.size) * gliding_s
     yos = np.array([sum(b.yos for b in d.values()) for d in drawn])
@@ -267,23 +290,20 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
                              _central(energies), (), _central(yos))
     notes = _assumptions(mission, glider, spec, occupancy, result, drift_w, draws,
                          ocean_source)
+    notes += _floor_notes(mission, occupancy, result, floor_m, floor_note)
     return replace(result, assumptions=tuple(notes) + said)
 
 
-def _band_density(mission: ir.CheckedMission, ocean: DensityProfile, vehicle: Vehicle
-                  ) -> float:
-    """[kg m-3] the mean density of `ocean` from the surface to the deepest a yo of the
-    mission turns (its arguments as written; the vehicle's nominal where they are
-    variables): the water a pilot ballasts the glider for."""
-    deepest = vehicle.nominal_max_depth_m
+def _floor_notes(mission: ir.CheckedMission, occupancy: Occupancy, result: MissionForecast,
+                 floor_m: float | None, floor_note: str | None) -> list[str]:
+    """What the forecast assumed of the sea floor and of each yo's altimeter stop."""
+    notes = [] if floor_note is None else [f"sea floor: {floor_note}"]
     for state in mission.states:
         profile = state.profiles[0]
-        if profile.kind in ("yo", "thermotrackyo"):
-            initial = {v.name: v.initial for v in mission.variables}
-            bottom = ir.evaluate(profile.args[1], {}, initial)
-            if math.isfinite(bottom):
-                deepest = max(deepest, bottom)
-    return float(np.mean(ocean.at(np.linspace(0.0, deepest, 50))))
+        if state.name in result.states and profile.kind in ("yo", "thermotrackyo"):
+            note = altimeter_note(state.name, profile.kind, _args(state, occupancy), floor_m)
+            notes += [] if note is None else [note]
+    return notes
 
 
 def _central(values: np.ndarray) -> tuple[float, float]:

@@ -16,10 +16,12 @@ import numpy as np
 
 from gliderplan.contract import TICK_S, Component
 from gliderplan.language import ir
+from gliderplan.language.registry import altitude_stop_m
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.devices import base_power_w
+from gliderplan.power_models.flight import DensityProfile
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 
 
@@ -63,6 +65,56 @@ def yo_band(profile: ir.Profile, args: tuple[float, ...]) -> tuple[float, float]
     return low, high
 
 
+MIN_FLOORED_BAND_M = 1.0  # [m] a yo whose stop lies above its min_depth turns about there
+
+
+def floored_args(kind: str, args: tuple[float, ...], floor_m: float | None
+                 ) -> tuple[float, ...]:
+    """A yo's arguments with the depth its dives turn at over a sea floor `floor_m` [m]
+    (None: unknown, the band as written): max_depth becomes min(max_depth, floor -
+    altitude) for a yo with an altimeter stop, and at least MIN_FLOORED_BAND_M below
+    min_depth."""
+    stop = altitude_stop_m(kind, args)
+    if floor_m is None or not stop > 0.0 or floor_m - stop >= args[1]:
+        return args
+    bottom = max(floor_m - stop, args[0] + MIN_FLOORED_BAND_M)
+    return (args[0], bottom, *args[2:])
+
+
+def altimeter_note(where: str, kind: str, args: tuple[float, ...],
+                   floor_m: float | None = None) -> str | None:
+    """What a plan assumes of a yo's altimeter stop (None: it has none)."""
+    stop = altitude_stop_m(kind, args)
+    if not stop > 0.0:
+        return None
+    if floor_m is None:
+        return (f"{where}: turns at {stop:g} m above the sea floor: planned to max_depth "
+                f"({args[1]:g} m), the floor unknown")
+    bottom = floored_args(kind, args, floor_m)[1]
+    return (f"{where}: turns at {stop:g} m above the sea floor: planned to {bottom:.3g} m, "
+            f"min(max_depth {args[1]:g} m, the floor's {floor_m:.3g} m less {stop:g} m)")
+
+
+def band_density(mission: ir.CheckedMission, ocean: DensityProfile, vehicle: Vehicle,
+                 floor_m: float | None = None) -> float:
+    """[kg m-3] the mean density of `ocean` from the surface to the deepest a yo of the
+    mission turns (its arguments as written, at the variables' initial values; the
+    vehicle's nominal where they are variables; over a sea floor `floor_m` [m], where the
+    altimeter turns it, and never below the floor): the water a pilot ballasts the glider
+    for. `gliderplan forecast` and `sim --ocean` ballast with it (`Vehicle.ballasted_for`)."""
+    deepest = vehicle.nominal_max_depth_m
+    initial = {v.name: v.initial for v in mission.variables}
+    for state in mission.states:
+        profile = state.profiles[0]
+        if profile.kind in ("yo", "thermotrackyo"):
+            bottom = floored_args(profile.kind, _profile_args(profile, initial), floor_m)[1]
+            if math.isfinite(bottom):
+                deepest = max(deepest, bottom)
+    if floor_m is not None:
+        deepest = min(deepest, floor_m)
+    return float(np.mean(ocean.at(np.linspace(0.0, deepest, 50))))
+
+
 def _profile_args(profile: ir.Profile, variables: dict[str, float]) -> tuple[float, ...]:
     return tuple(ir.evaluate(a, {}, variables) for a in profile.args)
 
@@ -86,6 +138,8 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
             notes.append(f"{where}: thermocline tracking planned as a yo {low:.3g}-{high:.3g} m, "
                          f"the band it flies on average for a thermocline anywhere in "
                          f"{args[0]:g}-{args[1]:g} m")
+        if (note := altimeter_note(where, profile.kind, args)) is not None:
+            notes.append(note)
         with flying_yo(where, vehicle, low, high):
             speed = float(vehicle.optimal_speed_mps(fixed_load_w, low, high, pitch))
             ballast = min(float(vehicle.yo_ballast_cc(speed, pitch, low, high)),

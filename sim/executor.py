@@ -37,9 +37,9 @@ if TYPE_CHECKING:
 # COMMAND's `transition` of each kind the reference semantics reports.
 _KIND_CODES = {name: kind for kind, name in TRANSITION_NAMES.items()}
 _F32 = struct.Struct(f"<{N_SENSORS}f")
-_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _WPTREACHED, _ENERGY = (
+_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _WPTREACHED, _ENERGY, _ALTITUDE = (
     SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp", "halfcycle", "wptdist",
-                                      "wptreached", "energy_left"))
+                                      "wptreached", "energy_left", "altitude"))
 _SURFACE_PITCH_F32 = struct.unpack("<f", struct.pack("<f", SURFACE_PITCH_RAD))[0]
 
 
@@ -190,15 +190,15 @@ class PythonRuntime:
         if k != self.profile_k:
             self.profile_k = k
             routine = pilot.PROFILE_ROUTINES[profile.kind]
-            self.routine = routine(depth, args, self.robust) if profile.kind == "thermotrackyo" \
-                else routine(depth, args)
+            self.routine = routine(depth, args, self.robust, s[_ALTITUDE]) \
+                if profile.kind == "thermotrackyo" else routine(depth, args, s[_ALTITUDE])
         if state_plan is not None:
             planned = state_plan.profiles[k]
             pitch, ballast = planned.pitch_rad, planned.ballast_cc
         else:
             pitch, ballast = None, self.default_ballast_cc
         target, pitch_cmd, ballast_cmd, surface = self.routine.command(
-            depth, s[_TEMP], args, pitch, ballast)
+            depth, s[_TEMP], args, pitch, ballast, s[_ALTITUDE])
         heading, valid = self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
                  | (FLAG_HEADING if valid else 0))

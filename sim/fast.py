@@ -14,9 +14,12 @@ A run of ticks, in order:
 2. the flight: a yo leg after leg, each leg's depths the running sum (cumsum, the same
    additions in the same order) of the depth changes of `GliderSim.glide_from` (the
    actuators settling, then steady), the depth readings with their noise giving the tick
-   the leg turns; a compressible hull's depths, each the last plus the glide's change at
-   it, tick after tick in C (sim/native.c); a surfacing: the climb, then the ticks at
-   the surface;
+   the leg turns; a compressible hull's depths (or any hull's in a stratified ocean),
+   each the last plus the glide's change at it, tick after tick in C (sim/native.c); a
+   surfacing: the climb, then the ticks at
+   the surface. Over a sea floor the run ends before the tick that would take the
+   glider below it, or on which a dive turns at the yo's altimeter stop (the loop flies
+   those ticks);
 3. the CTD along those depths (its lag is a recursion, one number at a time, in C);
 4. the events: every condition over the run's readings at once; the run ends before
    the first tick on which one holds;
@@ -45,14 +48,13 @@ import numpy as np
 
 from gliderplan.contract import SURFACE_PITCH_RAD
 from gliderplan.language import ir
-from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.language.registry import SENSOR_BY_NAME, altitude_stop_m
 from gliderplan.sim import compiled, native, pilot
 from gliderplan.sim.executor import PythonRuntime
 from gliderplan.sim.geo import degrees_to_ddmm, degrees_to_ddmm_array
 from gliderplan.sim.loop import Columns
 from gliderplan.sim.science import (
     BATTERY_V,
-    BOTTOM_DEPTH_M,
     CONSTANT_READINGS,
     DEVICE_MASKS,
     SECONDS_PER_DAY,
@@ -187,7 +189,9 @@ class FastForward:
         expressions = [x for s in mission.states for e in s.events
                        for x in (e.condition, *(a.value for a in e.assignments))]
         expressions += [a for s in mission.states for p in s.profiles for a in p.args]
-        self._executor_reads = sorted(compiled.sensors_read(expressions)
+        altimeter = {_S.ALTITUDE} if any(p.has_altimeter_stop for s in mission.states
+                                         for p in s.profiles) else set()
+        self._executor_reads = sorted(compiled.sensors_read(expressions) | altimeter
                                       | {_S.MISSIONTIME, _S.DEPTH, _S.LAT, _S.LON, _S.TEMP})
         self._covered = [[_covered(p) for p in s.profiles] for s in mission.states]
         # the battery reading changes within a run (the loop's gauge): a mission that reads
@@ -246,7 +250,9 @@ class FastForward:
         flight = self._flight(i, k, state_plan, count)
         if flight is None or flight.count == 0:
             return 0
-        count = flight.count
+        count = self._above_floor(flight, time_s, count)
+        if count == 0:
+            return 0
         values.flight = flight
         noise = sci.normal.peek(count)
         depth = flight.depth_m[:count]
@@ -290,6 +296,28 @@ class FastForward:
         self._commit_glider(flight, nav, count)
         values.commit_held(count)
         return count
+
+    def _above_floor(self, flight: _Flight, time_s: np.ndarray, count: int) -> int:
+        """The first `count` ticks of the flight (`count` at most its own) up to the first
+        on which the glider would end below the sea floor (the loop stops it there), or
+        on which a yo's dive reads the altimeter at its stop (the loop turns it)."""
+        count = min(count, flight.count)
+        floor = self.science.floor
+        if floor is None:
+            return count
+        bottom = floor.depth_along(time_s[:count])
+        stops = flight.depth_m[1:count + 1] > bottom
+        ex = self.ex
+        profile = ex.state.profiles[ex.profile_k]
+        stop = altitude_stop_m(profile.kind, ex.constant_args[ex.state_i][ex.profile_k] or
+                               ex.argument_fns[ex.state_i][ex.profile_k](ex.s,
+                                                                         ex.machine.variables))
+        if profile.kind == "yo" and stop > 0.0 and flight.legs:
+            lengths = [ticks for _, ticks, _, _ in flight.legs]
+            diving = np.repeat([leg == _DIVE for _, _, _, leg in flight.legs], lengths)
+            altitude = _f32(bottom - flight.depth_m[:count])  # as the executor reads it
+            stops[:len(diving)] |= diving[:count] & (altitude[:len(diving)] <= stop)
+        return _first(stops, count)
 
     def _until_event(self, stage: int, values: _Readings, count: int) -> int:
         """The run's ticks before the first on which one of the events checked at `stage`
@@ -614,6 +642,8 @@ class FastForward:
         flight = self.glider.vehicle.flight
         weight = flight.rho_kg_m3 * flight.g_m_s2  # net_buoyancy_cc's (rho g) depth
         squeeze = flight.hull_volume_cc * flight.compressibility_per_pa
+        water = self.glider.stratification
+        lift = None if water is None else (water.lift_cc, water.step_m)
         # beyond `near` of an edge no reading can reach it
         near = tuple(edges[d] + (1.0 if d == _CLIMB else -1.0) * (
             spread + 1e-6 * max(1.0, abs(edges[d]))) for d in (_CLIMB, _DIVE))
@@ -634,7 +664,7 @@ class FastForward:
                 glides += [second, third]  # the next legs' glides, again and again
             flown, leg_depths, stop = native.squeezed_yo(
                 [(self._rows_of(glide), glide.settled) for glide in glides], weight, squeeze,
-                noise[j:], near, edge, leg == _DIVE, count - j, float(depths[-1][-1]))
+                noise[j:], near, edge, leg == _DIVE, count - j, float(depths[-1][-1]), lift)
             for n, (start, ticks) in enumerate(flown.tolist()):
                 legs.append((j + start, ticks, glides[0 if n == 0 else 2 - n % 2],
                              leg if n % 2 == 0 else 1 - leg))
@@ -758,7 +788,10 @@ class _Readings:
                     return np.full(n, _f32_scalar(g.heading_rad))
                 return _f32(np.concatenate([[g.heading_rad], steered])[first:stop])
             case _S.ALTITUDE:
-                return _f32(BOTTOM_DEPTH_M - f.depth_m[first:stop])
+                floor = self.fast.science.floor
+                if floor is None:
+                    return np.full(n, math.nan)
+                return _f32(floor.depth_along(self.time_s[first:stop]) - f.depth_m[first:stop])
             case _S.LAT | _S.LON:
                 degrees = (self.nav.dr_lat if index == _S.LAT else self.nav.dr_lon)[first:stop]
                 return _f32(degrees_to_ddmm_array(degrees))
@@ -802,7 +835,11 @@ class _Readings:
             case _S.PITCH:
                 return _f32_scalar(float(f.pitch_rad[tick]))
             case _S.ALTITUDE:
-                return _f32_scalar(BOTTOM_DEPTH_M - float(f.depth_m[tick]))
+                floor = self.fast.science.floor
+                if floor is None:
+                    return math.nan
+                return _f32_scalar(floor.depth_at(float(self.time_s[tick]))
+                                   - float(f.depth_m[tick]))
             case _S.LAT | _S.LON:
                 nav = self.nav
                 return _f32_scalar(degrees_to_ddmm(float(

@@ -22,10 +22,11 @@ from gliderplan.contract import (
 )
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault, Transition, start
+from gliderplan.power_models.flight import DensityProfile
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
-from gliderplan.sim.ocean import Ocean
+from gliderplan.sim.ocean import Ocean, SeaFloor
 from gliderplan.sim.science import ScienceComputer, SensorNoise
 from gliderplan.sim.vehicle import Current, GliderSim
 
@@ -50,6 +51,9 @@ class RunConfig:
     start_lat_deg: float | None = None  # None: 500 m south of the mission's first point
     start_lon_deg: float | None = None
     start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
+    floor: SeaFloor | None = None  # the sea floor (None: none)
+    # the in-situ density flown through (None: uniform water of the vehicle's reference)
+    water: DensityProfile | None = None
 
 
 @dataclass
@@ -70,6 +74,8 @@ class RunRecord:
     entry_variables: dict[str, dict[str, float]] | None = None
     # events the Python executor fired, as its COMMANDs count them (None for the C runtime)
     events_fired: int | None = None
+    grounded_ticks: int = 0  # ticks the glider ended at the sea floor
+    first_grounded_s: float = math.nan  # missiontime [s] of the first of them
 
     def visits(self) -> dict[str, int]:
         """Stays in each state flown: every transition into it (the start, a goto, a call,
@@ -252,7 +258,9 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     n = len(arrays["state"])
     trace = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
     return RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
-                     tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0))
+                     tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0),
+                     grounded_ticks=science.grounded_ticks,
+                     first_grounded_s=science.first_grounded_s)
 
 
 def _close_row(cols: dict[str, list], state: int) -> None:
@@ -267,6 +275,6 @@ def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
                  vehicle: Vehicle) -> ScienceComputer:
     """The science computer over a glider put in the water at the mission's start."""
     lat, lon = start_position(mission, config)
-    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current)
+    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current, water=config.water)
     return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s,
-                           config.start_epoch_s)
+                           config.start_epoch_s, config.floor)

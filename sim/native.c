@@ -75,24 +75,52 @@ static int reaches(double depth_m, double edge, int diving)
     return diving ? reading >= edge : reading <= edge;
 }
 
+/* The water's buoyancy [cc] at depth `d` [m] from its table (`n` values every `step` m
+ * from the surface, linear between, held beyond the last): vehicle.Stratification.at,
+ * the same operations in the same order. */
+static double lift_at(const double *lift, long n, double step, double d)
+{
+    double x = d / step;
+    if (!(x < (double)(n - 1))) {
+        return lift[n - 1];
+    }
+    if (x <= 0.0) {
+        return lift[0];
+    }
+    long i = (long)x;
+    return lift[i] + (lift[i + 1] - lift[i]) * (x - (double)i);
+}
+
+/* The water a leg flies through: no table (n 0, uniform water of the reference density)
+ * or vehicle.Stratification's. */
+typedef struct {
+    const double *lift;
+    long n;
+    double step;
+} water;
+
 /* The ticks of one yo leg from depth `depths_m[0]`, at most `limit`: tick t (from 1)
  * flies row min(t - 1, settled) of `rows` (4 numbers a row: sign of the buoyancy,
  * volume plus trim [cc], signed vertical speed per square root of a cc [m s-1], time
  * gliding [s]); its depth is the last plus speed sqrt(max(0, sign (base - squeeze
- * (weight d)))) glide_s. The leg ends on the first tick t < limit whose reading, its
+ * (weight d) [+ lift(d)]))) glide_s, the water's lift where it has a table. The leg ends on the first tick t < limit whose reading, its
  * depth plus noise[t], reaches `edge` (only a depth beyond `near` is tried), or before
  * a depth the glider would clamp at the surface (*stop = 1). Writes depths_m[1..] and
  * returns the leg's ticks. */
 static long leg(const double *rows, long settled, double weight, double squeeze,
-                const double *noise, double near, double edge, int diving, long limit,
-                double *depths_m, int *stop)
+                const water *w, const double *noise, double near, double edge, int diving,
+                long limit, double *depths_m, int *stop)
 {
     double d = depths_m[0];
     for (long t = 1; t <= limit; t++) {
         const double *row = rows + 4 * (t - 1 < settled ? t - 1 : settled);
         double glide_s = row[3];
         if (t > settled || glide_s != 0.0) {  /* settling: pumping or turning all tick */
-            double x = row[0] * (row[1] - squeeze * (weight * d));
+            double net = row[1] - squeeze * (weight * d);
+            if (w->n > 0) {
+                net = net + lift_at(w->lift, w->n, w->step, d);
+            }
+            double x = row[0] * net;
             d = d + row[2] * sqrt(x < 0.0 ? 0.0 : x) * glide_s;
             if (d < 0.0) {  /* the glider would clamp it at the surface */
                 *stop = 1;
@@ -107,7 +135,8 @@ static long leg(const double *rows, long settled, double weight, double squeeze,
     return limit;
 }
 
-/* A yo of a compressible hull over `count` ticks, leg after leg from depth `depths_m[0]`:
+/* A yo of a compressible hull (or through stratified water: `lift`, `n_lift` values every
+ * `lift_step` m, n_lift 0 for none) over `count` ticks, leg after leg from `depths_m[0]`:
  * the first leg (direction `dive`: 1 diving, 0 climbing) flies glide 0, then the legs
  * alternate between glides 1 and 2 (those from the actuators settled by the leg before)
  * as long as each leg lasts until its glide settles. `rows[g]`, `settled[g]`: glide g's
@@ -116,15 +145,17 @@ static long leg(const double *rows, long settled, double weight, double squeeze,
  * leg, 2 numbers a leg, count + 1 legs at most); *stop = 1 when the run must stop before
  * a tick that would clamp at the surface. Returns the number of legs. */
 long gpn_squeezed_yo(const double *const *rows, const long *settled, long glides,
-                     double weight, double squeeze, const double *noise, const double *near,
+                     double weight, double squeeze, const double *lift, long n_lift,
+                     double lift_step, const double *noise, const double *near,
                      const double *edge, int dive, long count, double *depths_m, long *legs,
                      int *stop)
 {
     long j = 0, n = 0;
+    water w = {lift, n_lift, lift_step};
     *stop = 0;
     while (j < count) {
         long g = n == 0 ? 0 : 2 - n % 2;
-        long ticks = leg(rows[g], settled[g], weight, squeeze, noise + j, near[dive],
+        long ticks = leg(rows[g], settled[g], weight, squeeze, &w, noise + j, near[dive],
                          edge[dive], dive, count - j, depths_m + j, stop);
         if (ticks == 0 && *stop) {
             break;

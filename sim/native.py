@@ -30,8 +30,9 @@ def _load(path: str | None = None) -> ctypes.CDLL:
         "gpn_tanh": (None, [pointer, pointer, count]),
         "gpn_atan2": (None, [pointer, pointer, pointer, count]),
         "gpn_lag": (None, [pointer, count, real, real, pointer]),
-        "gpn_squeezed_yo": (count, [pointer, pointer, count, real, real, pointer, pointer,
-                                    pointer, flag, count, pointer, pointer, pointer]),
+        "gpn_squeezed_yo": (count, [pointer, pointer, count, real, real, pointer, count, real,
+                                    pointer, pointer, pointer, flag, count, pointer, pointer,
+                                    pointer]),
         "gpn_route": (count, [pointer, real, flag, pointer, count, count, real, pointer, real,
                               pointer, pointer]),
     }
@@ -89,21 +90,27 @@ def first_order_lag(water_c: np.ndarray, before_c: float, keep: float) -> np.nda
 
 def squeezed_yo(glides: list[tuple[np.ndarray, int]], weight: float, squeeze: float,
                 noise: np.ndarray, near: tuple[float, float], edge: tuple[float, float],
-                dive: bool, count: int, depth_m: float) -> tuple[np.ndarray, np.ndarray, bool]:
+                dive: bool, count: int, depth_m: float,
+                lift: tuple[tuple[float, ...], float] | None = None
+                ) -> tuple[np.ndarray, np.ndarray, bool]:
     """A compressible hull's yo from `depth_m` (native.c's `gpn_squeezed_yo`; `glides`:
-    each glide's rows and settled row; `near`, `edge`: climbing, diving): (each leg's first
-    tick and ticks, the depths before each tick and after the last of them, whether the
-    run stops before a tick that would clamp at the surface)."""
+    each glide's rows and settled row; `near`, `edge`: climbing, diving; `lift`: the
+    water's buoyancy table [cc] and its step [m], vehicle.Stratification's, None in
+    uniform water): (each leg's first tick and ticks, the depths before each tick and after
+    the last of them, whether the run stops before a tick that would clamp at the
+    surface)."""
     rows = (ctypes.c_void_p * 3)(*(_address(r) for r, _ in glides))
     settled = (ctypes.c_long * 3)(*(n for _, n in glides))
     noise, bounds = _doubles(noise), _doubles((*near, *edge))
+    table = _doubles(lift[0] if lift is not None else (0.0,))
+    n_lift, step = (len(table), lift[1]) if lift is not None else (0, 1.0)
     depths = np.empty(count + 1)
     depths[0] = depth_m
     legs = np.empty((count + 1, 2), np.dtype("l"))  # C's long
     stop = ctypes.c_int()
-    n = _C.gpn_squeezed_yo(rows, settled, len(glides), weight, squeeze, _address(noise),
-                           _address(bounds), _address(bounds, 2), dive, count, _address(depths),
-                           _address(legs), ctypes.byref(stop))
+    n = _C.gpn_squeezed_yo(rows, settled, len(glides), weight, squeeze, _address(table),
+                           n_lift, step, _address(noise), _address(bounds), _address(bounds, 2),
+                           dive, count, _address(depths), _address(legs), ctypes.byref(stop))
     flown = int(legs[n - 1].sum()) if n else 0
     return legs[:n], depths[:flown + 1], bool(stop.value)
 

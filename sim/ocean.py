@@ -1,4 +1,5 @@
-"""The simulated ocean: water temperature and salinity against depth and time.
+"""The simulated ocean: water temperature and salinity against depth and time, and the
+sea floor under it.
 
 Two kinds of water column share one interface (`temperature_c(depth_m, time_s)` and
 `salinity_psu(depth_m, time_s)`, each on floats or numpy arrays):
@@ -10,6 +11,11 @@ Two kinds of water column share one interface (`temperature_c(depth_m, time_s)` 
 
 Presets: `bench` (the paper's Fig. 5 bench case: 24 C over 7 C, one internal wave),
 `sea-trial` (its Atlantic deployment: thermocline at 10-18 m) and `uniform`.
+
+The sea floor (`SeaFloor`, by `load_water`): none by default (the altimeter reads NaN, as
+out of range, and nothing stops a dive), a flat one at `sim --floor DEPTH_M`, or under
+replayed Slocum logs the floor the glider saw (`sim.slocum_ocean`): a profile along
+time, met at the times the glider met it, as the casts are.
 
 Notes
 -----
@@ -28,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import read_input_text
 from gliderplan.power_models.flight import DensityProfile
 from gliderplan.sim import native
@@ -153,16 +159,17 @@ class MeasuredProfile:
     def _interpolate(self, table: tuple[tuple[float, ...], ...], depth_m: Number,
                      time_s: Number) -> Number:
         if isinstance(depth_m, np.ndarray) or isinstance(time_s, np.ndarray):
-            depth = np.asarray(depth_m, float)
+            depth, time = np.broadcast_arrays(np.asarray(depth_m, float),
+                                              np.asarray(time_s, float))
+            shape, depth, time = depth.shape, depth.ravel(), time.ravel()
             casts = np.array([np.interp(depth, self.depths_m, row) for row in table])
             if len(self.casts_s) == 1:
-                return casts[0]
-            time = np.broadcast_to(np.asarray(time_s, float), depth.shape)
+                return casts[0].reshape(shape)
             k = np.clip(np.searchsorted(self.casts_s, time) - 1, 0, len(self.casts_s) - 2)
             t0, t1 = np.asarray(self.casts_s)[k], np.asarray(self.casts_s)[k + 1]
             w = np.clip((time - t0) / (t1 - t0), 0.0, 1.0)
-            index = np.arange(depth.size).reshape(depth.shape)
-            return casts[k, index] * (1.0 - w) + casts[k + 1, index] * w
+            index = np.arange(depth.size)
+            return (casts[k, index] * (1.0 - w) + casts[k + 1, index] * w).reshape(shape)
         # one reading per tick: plain floats are ~10x faster than numpy scalars
         if len(self.casts_s) == 1:
             return _interp_scalar(self.depths_m, table[0], depth_m)
@@ -298,6 +305,88 @@ def load_ocean(spec: str) -> Ocean:
                              f"(presets: {', '.join(PRESETS)}; or Slocum logs: FILE.ebd|DIR)",
                              usage=True)
     return read_profile_csv(path)
+
+
+@dataclass(frozen=True)
+class SeaFloor:
+    """The sea floor's depth [m] against the run's time [s]: linear between the samples,
+    held beyond the first and the last (one sample: a flat floor). `source` says where it
+    comes from."""
+
+    times_s: tuple[float, ...]  # strictly increasing
+    depths_m: tuple[float, ...]  # each > 0
+    source: str
+
+    def depth_at(self, time_s: float) -> float:
+        """Depth [m] of the floor under the glider at `time_s` [s]."""
+        return _interp_scalar(self.times_s, self.depths_m, time_s)
+
+    def depth_along(self, time_s: np.ndarray) -> np.ndarray:
+        """`depth_at` at each time of an array [s], bit for bit."""
+        return _interp_exact(self.times_s, self.depths_m, np.asarray(time_s, float))
+
+    @property
+    def median_m(self) -> float:
+        """[m] the median of its samples: the depth of water a forecast plans for."""
+        return float(np.median(self.depths_m))
+
+    def describe(self) -> str:
+        low, high = min(self.depths_m), max(self.depths_m)
+        depth = f"{low:.1f} m" if low == high else \
+            f"{low:.1f}-{high:.1f} m along time (median {self.median_m:.1f} m)"
+        return f"sea floor at {depth}: {self.source}"
+
+
+def flat_floor(depth_m: float, option: str = "--floor") -> SeaFloor:
+    """A flat sea floor at `depth_m` [m]; UsageError (naming `option`) unless it is a
+    finite depth below the surface."""
+    if not (isinstance(depth_m, int | float) and math.isfinite(depth_m) and depth_m > 0.0):
+        raise UsageError(f"{option} {depth_m!r}: the sea floor's depth must be a finite number "
+                         "of metres, above 0")
+    return SeaFloor((0.0,), (float(depth_m),), f"{option} {depth_m:g}")
+
+
+def parse_floor(text: str, option: str = "--floor") -> SeaFloor:
+    """`flat_floor` of a command line's text; UsageError naming `option` for one that is
+    not a number."""
+    try:
+        depth = float(text)
+    except ValueError:
+        raise UsageError(f"{option} {text!r}: expected the sea floor's depth in metres, "
+                         "e.g. 40") from None
+    return flat_floor(depth, option)
+
+
+@dataclass(frozen=True)
+class Water:
+    """What a run flies through: the water column, the sea floor under it (None: none)
+    and what the floor is or why there is none (for the run's summary and a forecast's
+    assumptions)."""
+
+    ocean: Ocean
+    floor: SeaFloor | None
+    floor_note: str
+
+
+NO_FLOOR_NOTE = ("no sea floor: the altimeter reads NaN (out of range) and no dive is "
+                 "stopped (sim --floor DEPTH_M sets one)")
+
+
+def load_water(spec: str, floor: SeaFloor | None = None) -> Water:
+    """The ocean of `spec` (`load_ocean`) and its sea floor: `floor` if given, else for
+    replayed Slocum logs the floor their flight logs saw (none, and the note says why,
+    where they hold no floor reading), else none."""
+    path = Path(spec)
+    if spec not in PRESETS and (path.is_dir() or path.suffix.lower() == ".ebd"):
+        from gliderplan.sim.slocum_ocean import read_logged_ocean
+
+        logged = read_logged_ocean(path)
+        if floor is not None:
+            return Water(logged.profile, floor, floor.describe())
+        return Water(logged.profile, logged.floor,
+                     logged.floor.describe() if logged.floor is not None else
+                     f"{spec}: {logged.floor_note}; " + NO_FLOOR_NOTE)
+    return Water(load_ocean(spec), floor, NO_FLOOR_NOTE if floor is None else floor.describe())
 
 
 def density_profile_of(ocean: Ocean, depths_m: np.ndarray, latitude_deg: float = 45.0

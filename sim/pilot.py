@@ -18,8 +18,10 @@ from gliderplan.contract import (
     EARTH_RADIUS_M,
     MAX_SWEEP_WAYPOINTS,
     SURFACE_PITCH_RAD,
+    THERMOTRACKYO_ALTITUDE_ARG,
     TRACK_WINDOW,
     WAYPOINT_RADIUS_M,
+    YO_ALTITUDE_ARG,
 )
 from gliderplan.sim.geo import bearing_rad, ddmm_to_degrees, offset_m
 
@@ -30,20 +32,35 @@ DIVE, CLIMB = 0, 1
 
 
 # ---- flight profiles -----------------------------------------------------------------
-# command(d, temp, args, pitch, ballast) -> (depth_target_m, pitch_rad, ballast_cc,
-# surface); `pitch` replaces the profile's own pitch arguments when a plan gives one.
+# command(d, temp, args, pitch, ballast, altitude) -> (depth_target_m, pitch_rad,
+# ballast_cc, surface); `pitch` replaces the profile's own pitch arguments when a plan
+# gives one; `altitude` is the altimeter's reading [m] (NaN: no floor in its range).
+
+def at_altimeter_stop(args: tuple[float, ...], at: int, altitude_m: float) -> bool:
+    """Whether a yo's dive turns on the altimeter: its `altitude` argument (at index `at`;
+    left out or <= 0: no stop) is positive and the reading at or below it (a NaN reading
+    never is)."""
+    return len(args) > at and args[at] > 0.0 and altitude_m <= args[at]
+
 
 class Yo:
-    """yo(min, max, dive_pitch, climb_pitch). `halfcycle`: the leg flown, 1 the first."""
+    """yo(min, max, dive_pitch, climb_pitch[, altitude]). `halfcycle`: the leg flown, 1
+    the first. A dive turns at `max`, or where the altimeter reads `altitude` or less."""
 
-    def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
-        self.leg = DIVE if depth_m < args[1] else CLIMB
+    ALTITUDE_AT = YO_ALTITUDE_ARG
+
+    def __init__(self, depth_m: float, args: tuple[float, ...],
+                 altitude_m: float = math.nan) -> None:
+        self.leg = DIVE if depth_m < args[1] and not at_altimeter_stop(
+            args, self.ALTITUDE_AT, altitude_m) else CLIMB
         self.halfcycle = 1
 
     def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
-                ballast: float) -> tuple[float, float, float, bool]:
+                ballast: float, altitude: float = math.nan
+                ) -> tuple[float, float, float, bool]:
         low, high = args[0], args[1]
-        if self.leg == DIVE and d >= high:
+        if self.leg == DIVE and (d >= high or at_altimeter_stop(args, YO_ALTITUDE_ARG,
+                                                                altitude)):
             self.leg = CLIMB
             self.halfcycle += 1
         elif self.leg == CLIMB and d <= low:
@@ -60,19 +77,24 @@ def _yo_command(leg: int, low: float, high: float, args: tuple[float, ...],
 
 
 class ThermoTrackYo:
-    """thermotrackyo(min, max, dive_pitch, climb_pitch, temp_threshold, depth_threshold):
-    a yo whose band follows the thermocline (robust or naive detection).
+    """thermotrackyo(min, max, dive_pitch, climb_pitch, temp_threshold, depth_threshold[,
+    altitude]): a yo whose band follows the thermocline (robust or naive detection), its
+    dives turning at the altimeter stop as yo's.
 
     Each tick: first the leg turns at the band's edge (a leg that turns without a
     detection resets the band), then the reading, which belongs to the leg now flown,
     is compared with the leg's window and, if it detects nothing, joins the window.
     """
 
-    def __init__(self, depth_m: float, args: tuple[float, ...], robust: bool = True) -> None:
+    ALTITUDE_AT = THERMOTRACKYO_ALTITUDE_ARG
+
+    def __init__(self, depth_m: float, args: tuple[float, ...], robust: bool = True,
+                 altitude_m: float = math.nan) -> None:
         self.robust = robust
         self.low, self.high = args[0], args[1]
         self.halfcycle = 1
-        self._new_leg(DIVE if depth_m < args[1] else CLIMB)
+        self._new_leg(DIVE if depth_m < args[1] and not at_altimeter_stop(
+            args, self.ALTITUDE_AT, altitude_m) else CLIMB)
 
     def _new_leg(self, leg: int) -> None:
         self.leg = leg
@@ -82,9 +104,11 @@ class ThermoTrackYo:
         self.detected = False
 
     def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
-                ballast: float) -> tuple[float, float, float, bool]:
+                ballast: float, altitude: float = math.nan
+                ) -> tuple[float, float, float, bool]:
         leg = self.leg
-        if leg == DIVE and d >= self.high:
+        if leg == DIVE and (d >= self.high or at_altimeter_stop(
+                args, THERMOTRACKYO_ALTITUDE_ARG, altitude)):
             leg = CLIMB
         elif leg == CLIMB and d <= self.low:
             leg = DIVE
@@ -149,22 +173,26 @@ class ThermoTrackYo:
 class Surface:
     halfcycle = 0
 
-    def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
+    def __init__(self, depth_m: float, args: tuple[float, ...],
+                 altitude_m: float = math.nan) -> None:
         pass
 
     def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
-                ballast: float) -> tuple[float, float, float, bool]:
+                ballast: float, altitude: float = math.nan
+                ) -> tuple[float, float, float, bool]:
         return 0.0, SURFACE_PITCH_RAD, ballast, True
 
 
 class Hover:
     halfcycle = 0
 
-    def __init__(self, depth_m: float, args: tuple[float, ...]) -> None:
+    def __init__(self, depth_m: float, args: tuple[float, ...],
+                 altitude_m: float = math.nan) -> None:
         pass
 
     def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
-                ballast: float) -> tuple[float, float, float, bool]:
+                ballast: float, altitude: float = math.nan
+                ) -> tuple[float, float, float, bool]:
         return args[0], 0.0, 0.0, False
 
 

@@ -17,8 +17,11 @@ from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.planfile import Plan, load_plan
 
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
+    from gliderplan.power_models.flight import DensityProfile
+    from gliderplan.power_models.vehicle import Vehicle
     from gliderplan.sim.energy import FlightCheck, RunEnergy
     from gliderplan.sim.loop import RunRecord
+    from gliderplan.sim.ocean import Water
     from gliderplan.sim.vehicle import Current
 
 RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png",
@@ -36,6 +39,7 @@ class RunResult:
     check: FlightCheck  # the flight against the plan ("no plan" without one)
     plan: Plan | None
     files: tuple[Path, ...]  # the run's files, written atomically
+    water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
 
     @property
     def interrupted(self) -> bool:
@@ -60,22 +64,57 @@ def check_state_dir(state_dir: Path, runtime: str) -> None:
                          "name an empty or new directory")
 
 
+def flown_water(mission: CheckedMission, vehicle: Vehicle, given: Water, spec: str
+                ) -> tuple[Vehicle, DensityProfile, str]:
+    """(the vehicle ballasted for the water, the in-situ density it flies through, what
+    that is): the ocean's density profile (TEOS-10, `sim.ocean.density_profile_of`, as
+    `gliderplan forecast` takes it) and its mean over the depths the mission flies (over
+    the floor's median, where the water has one)."""
+    from gliderplan.planner.forecast import WATER_DEPTHS_M
+    from gliderplan.planner.rates import band_density
+    from gliderplan.sim.ocean import density_profile_of
+
+    density = density_profile_of(given.ocean, WATER_DEPTHS_M)
+    floor_m = None if given.floor is None else given.floor.median_m
+    rho = band_density(mission, density, vehicle, floor_m)
+    note = (f"water: {spec}: in-situ density (TEOS-10) {density.rho_kg_m3.min():.1f}-"
+            f"{density.rho_kg_m3.max():.1f} kg/m3 over 0-{WATER_DEPTHS_M[-1]:.0f} m, flown "
+            f"at each depth; the glider ballasted for {rho:.1f} kg/m3, its mean over the "
+            f"depths the mission flies (trimmed in {vehicle.flight.rho_kg_m3:.1f} kg/m3 as "
+            "calibrated)")
+    return vehicle.ballasted_for(rho), density, note
+
+
+def grounding(record: RunRecord) -> dict | None:
+    """Whether the glider reached the sea floor: the first time [s] and the ticks it ended
+    there (None: it never did)."""
+    if not record.grounded_ticks:
+        return None
+    return {"first_s": record.first_grounded_s, "ticks": record.grounded_ticks,
+            "time_s": record.grounded_ticks * record.tick_s}
+
+
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, runtime: str = "python",
-                ocean: str = "bench", noise: str = "ctd", tracker: str = "robust",
+                ocean: str | None = None, noise: str = "ctd", tracker: str = "robust",
                 current: Current | None = None, seed: int = 0, tick_s: float = TICK_S,
                 duration_s: float | None = None, start_utc: str | None = None,
                 netcdf: bool = False,
                 progress: Callable[[float, float], None] | None = None,
                 plots: bool = True, key_path: str | Path | None = None,
-                state_dir: str | Path | None = None, faults: str | None = None) -> RunResult:
+                state_dir: str | Path | None = None, faults: str | None = None,
+                floor: float | str | None = None) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
     sensor a state logs is always on). `runtime`: "python" (the reference executor) or
     "c" (the compiled runtime over a pseudo-terminal). `ocean`: a preset (bench,
     sea-trial, uniform), a CSV file, or Slocum science logs to replay (FILE.ebd or a
-    directory). `noise`: a key of
+    directory): the glider flies its temperature, salinity and in-situ density (TEOS-10),
+    ballasted for the mean density over the depths the mission flies, as `gliderplan
+    forecast` flies it (`planner.rates.band_density`, `Vehicle.ballasted_for`); default:
+    the bench preset's temperatures in uniform water of the vehicle's reference density.
+    `noise`: a key of
     `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
     `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
     horizon, else 30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the
@@ -91,6 +130,10 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `faults`: a fault SPEC (sim/faults.py) injected into the C runtime's line and board;
     the run then also writes the runtime's own events.log, and summary.json says what the
     faults did.
+    `floor`: the sea floor's depth [m] (a number, or the text of `sim --floor`), a flat
+    floor under the whole run; default: none, or under replayed Slocum logs the floor they
+    saw (sim.ocean.load_water). The glider stops at the floor; summary.json says where the
+    floor came from and whether the glider reached it (`sea_floor`, `grounded`).
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -103,7 +146,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim.export import parse_utc, utc_text
     from gliderplan.sim.flight import fly, refuse_unflyable_yos
     from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig
-    from gliderplan.sim.ocean import load_ocean
+    from gliderplan.sim.ocean import flat_floor, load_water, parse_floor
     from gliderplan.sim.plotter import PlotProcess
     from gliderplan.sim.science import NOISE_PRESETS
     from gliderplan.sim.vehicle import Current
@@ -131,13 +174,20 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
             raise UsageError("--faults: faults are injected into the C runtime's line and "
                              "board: add --runtime c")
         fault_spec = parse_faults(faults)
+    sea_floor = None if floor is None else \
+        parse_floor(floor) if isinstance(floor, str) else flat_floor(floor)
     vehicle = load_vehicle(mission.vehicle)
-    water = load_ocean(ocean)
+    given = load_water(ocean or "bench", sea_floor)
+    water = given.ocean
+    density, density_note = None, (f"water: uniform, the vehicle's reference density "
+                                   f"({vehicle.flight.rho_kg_m3:.1f} kg/m3)")
+    if ocean is not None:
+        vehicle, density, density_note = flown_water(mission, vehicle, given, ocean)
     if start is None:
         start = getattr(water, "start_epoch_s", None) or DEFAULT_START_EPOCH_S
     config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
                        noise=NOISE_PRESETS[noise], current=current or Current(),
-                       start_epoch_s=start)
+                       start_epoch_s=start, floor=given.floor, water=density)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     refuse_unflyable_yos(mission, vehicle, plan)
     if key_path is not None:
@@ -178,9 +228,11 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 contents["depth.png"] = drawing.depth_png(series[0])
                 contents["energy.png"] = drawing.energy_png(series[1])
         meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
-                "ocean": ocean, "noise": noise, "tracker": tracker, "seed": seed,
+                "ocean": ocean or "bench", "water_density": density_note, "noise": noise,
+                "tracker": tracker, "seed": seed,
                 "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
-                "vehicle": mission.vehicle, "start_utc": utc_text(start)}
+                "vehicle": mission.vehicle, "start_utc": utc_text(start),
+                "sea_floor": given.floor_note, "grounded": grounding(record)}
         table = outputs.timeseries_table(record, used, mission.battery.energy_j)
         contents["trace.csv"] = outputs.trace_csv(record.trace)
         contents["timeseries.parquet"] = outputs.parquet_bytes(
@@ -198,5 +250,11 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     written = [name for name in (*RUN_FILES, NETCDF_FILE) if name in contents]
     for name in written:
         write_atomically(out / name, contents[name])
-    return RunResult(record, used, check, plan, tuple(out / name for name in written))
+    notes = [density_note, given.floor_note]
+    if record.grounded_ticks:
+        notes.append(f"the glider reached the sea floor at {record.first_grounded_s:g} s and "
+                     f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
+                     "the water: give it an altimeter stop, yo's fifth argument)")
+    return RunResult(record, used, check, plan, tuple(out / name for name in written),
+                     tuple(notes))
 

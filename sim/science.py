@@ -11,6 +11,8 @@ sign from one reading to the next (a cell that is not flushed, microstructure): 
 than the change per reading inside the thermocline, it makes every other reading go
 the "wrong" way, which is what reset the naive tracker's window in the paper's first
 sea trial.
+The altimeter reads the height of the sea floor above the glider (the floor's depth less
+the glider's, without noise), NaN where the run has no floor (out of range).
 Every random number comes from one numpy Generator seeded per run: a run is
 deterministic for its seed.
 """
@@ -34,7 +36,7 @@ from gliderplan.contract import (
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
 from gliderplan.sim import native
 from gliderplan.sim.geo import degrees_to_ddmm
-from gliderplan.sim.ocean import Ocean
+from gliderplan.sim.ocean import Ocean, SeaFloor
 from gliderplan.sim.vehicle import GliderSim
 
 # sent every tick: the glider's own flight sensors (not the runtime's readings)
@@ -45,7 +47,6 @@ for _s in SENSORS:
         DEVICE_MASKS[_s.device] = DEVICE_MASKS.get(_s.device, 0) | (1 << _s.index)
 
 _TEMP_BIT = 1 << next(s.index for s in SENSORS if s.name == "temp")
-BOTTOM_DEPTH_M = 200.0  # assumption: water depth for the altimeter reading
 BATTERY_V = 15.0  # assumption: alkaline pack voltage, constant over the run
 # Readings the simulated glider holds constant, by sensor index: no roll, and the optode,
 # optics, modem, DVL and microstructure logger of a quiet shelf sea without currents
@@ -160,8 +161,12 @@ class ScienceComputer:
     """The sensor array over a simulated glider in a simulated ocean."""
 
     def __init__(self, glider: GliderSim, ocean: Ocean, noise: SensorNoise, seed: int,
-                 tick_s: float, start_epoch_s: float = 0.0) -> None:
+                 tick_s: float, start_epoch_s: float = 0.0, floor: SeaFloor | None = None
+                 ) -> None:
         self.glider, self.ocean, self.noise, self.tick_s = glider, ocean, noise, tick_s
+        self.floor = floor  # the sea floor (None: none, the altimeter out of range)
+        self.grounded_ticks = 0  # ticks the glider ended at the floor
+        self.first_grounded_s = math.nan  # missiontime [s] of the first
         self.start_epoch_s = start_epoch_s  # UTC of missiontime 0 [s since 1970]
         self.rng = np.random.default_rng(seed)
         self.sensor_power = 0  # from the last COMMAND; nothing is powered before the first
@@ -179,12 +184,18 @@ class ScienceComputer:
         self.water_temperature_c = math.nan  # at the glider, this tick (for the record)
         self.ctd_temperature_c = math.nan  # the CTD's reading sent this tick; NaN: CTD off
         self.energy_left_j = math.nan  # the coulomb counter's reading (sim.energy.BatteryGauge)
+        self._time_s = 0.0  # missiontime [s] of the last readings
 
     def readings(self, tick: int) -> tuple[int, list[float]]:
         """(mask, values): the sensor array at `tick` (every sensor's value [registry units]) and
         which of them the SENSORS frame carries."""
         g, noise = self.glider, self.noise
-        time_s = tick * self.tick_s
+        time_s = self._time_s = tick * self.tick_s
+        if self.floor is not None:
+            g.floor_m = floor = self.floor.depth_at(time_s)
+            altitude = floor - g.depth_m
+        else:
+            altitude = math.nan
         z_temp, z_depth = self.normal.next()
         temp, salinity = self.ocean.water_at(g.depth_m, time_s)
         self.water_temperature_c = temp
@@ -198,7 +209,7 @@ class ScienceComputer:
         depth = max(0.0, g.depth_m + noise.depth_sigma_m * z_depth)
         c = self.glider.current
         values = [  # in _READINGS_ORDER; the runtime's own readings are never sent: NaN
-            time_s, depth, g.pitch_rad, _ROLL, g.heading_rad, BOTTOM_DEPTH_M - g.depth_m,
+            time_s, depth, g.pitch_rad, _ROLL, g.heading_rad, altitude,
             degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
             measured, conductivity_s_m(measured, salinity), salinity,
             _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, math.hypot(c.north_mps, c.east_mps), _MODEM,
@@ -241,8 +252,13 @@ class ScienceComputer:
               heading_rad: float, flags: int, sensor_power: int) -> None:
         """Fly one tick under a COMMAND and switch the sensors it powers."""
         self.sensor_power = sensor_power
-        self.glider.step(depth_target_m, pitch_rad, ballast_cc, heading_rad,
-                         bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE))
+        g = self.glider
+        g.step(depth_target_m, pitch_rad, ballast_cc, heading_rad,
+               bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE))
+        if g.grounded:
+            if not self.grounded_ticks:
+                self.first_grounded_s = self._time_s
+            self.grounded_ticks += 1
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,11 @@ the log ends. Practical salinity and depth follow TEOS-10 (gsw) from the CTD's
 conductivity, temperature and pressure, at the latitude of the glider's GPS fixes when
 its flight logs (*.dbd) lie beside the science logs, else at 45 degrees (which moves a
 depth by less than 0.3 %).
+
+The sea floor the glider saw comes from those flight logs too: its own water depth
+(`m_water_depth`, where positive), else its depth plus its altimeter's reading
+(`m_depth + m_altitude`, where the altimeter had one), a profile along time on the
+casts' clock. Logs without either give no floor (and say why).
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.power_models.slocum_log import check_log_headers
-from gliderplan.sim.ocean import MeasuredProfile, OceanFileError
+from gliderplan.sim.ocean import MeasuredProfile, OceanFileError, SeaFloor
 
 BIN_M = 1.0  # depth bin of a cast [m]
 TURN_M = 2.0  # a leg ends when the glider has come back this far from its extreme [m]
@@ -36,6 +41,8 @@ class LoggedOcean:
     profile: MeasuredProfile  # its start_epoch_s: the first logged CTD sample
     latitude_deg: float
     files: tuple[Path, ...]
+    floor: SeaFloor | None = None  # the floor the glider saw, on the casts' clock
+    floor_note: str = ""  # why there is no floor
 
 
 def science_logs(path: str | Path) -> list[Path]:
@@ -59,21 +66,67 @@ def _cache_dir(files: list[Path]) -> str | None:
     return str(cac) if cac.is_dir() else None
 
 
-def _latitude_deg(files: list[Path], cache: str | None) -> float:
-    """Median GPS latitude [deg] from the flight logs beside the science logs."""
+def _flight_logs(files: list[Path], cache: str | None):
+    """The flight logs (*.dbd) beside the science logs, as one dbdreader.MultiDBD, or
+    (None, why not)."""
     import dbdreader
 
     flight = [f.with_suffix(".dbd") for f in files if f.with_suffix(".dbd").is_file()]
     if not flight:
-        return DEFAULT_LATITUDE_DEG
+        return None, "no flight logs (*.dbd) beside the science logs"
     try:
         check_log_headers(flight)
-        logs = dbdreader.MultiDBD(filenames=[str(f) for f in flight], cacheDir=cache)
+        return dbdreader.MultiDBD(filenames=[str(f) for f in flight], cacheDir=cache), ""
+    except (GliderplanError, dbdreader.DbdError, OSError, ValueError) as err:
+        return None, f"the flight logs cannot be read: {err}"
+
+
+def _latitude_deg(logs) -> float:
+    """Median GPS latitude [deg] from the flight logs (None: the default)."""
+    import dbdreader
+
+    if logs is None:
+        return DEFAULT_LATITUDE_DEG
+    try:
         _, lat = logs.get("m_gps_lat")
-    except (GliderplanError, dbdreader.DbdError, OSError, ValueError):
+    except (dbdreader.DbdError, OSError, ValueError):
         return DEFAULT_LATITUDE_DEG
     lat = lat[np.isfinite(lat) & (np.abs(lat) <= 90.0)]
     return float(np.median(lat)) if lat.size else DEFAULT_LATITUDE_DEG
+
+
+def floor_readings(logs) -> tuple[np.ndarray, np.ndarray, str]:
+    """(times [s since 1970], depths [m], what they are) of the sea floor the flight logs
+    saw: `m_water_depth` where positive, else `m_depth + m_altitude` where the altimeter
+    had a reading; empty arrays and why where they hold neither."""
+    import dbdreader
+
+    for sensors in (("m_water_depth",), ("m_altitude", "m_depth")):
+        try:
+            time, *values = logs.get_sync(*sensors) if len(sensors) > 1 else \
+                logs.get(*sensors)
+        except (dbdreader.DbdError, OSError, ValueError):
+            continue
+        depth = values[0] if len(sensors) == 1 else values[0] + values[1]
+        valid = np.isfinite(time) & np.isfinite(depth) & (values[0] > 0.0)
+        if valid.any():
+            return time[valid], depth[valid], " + ".join(reversed(sensors))
+    return np.empty(0), np.empty(0), ("the flight logs hold no floor reading (m_water_depth, "
+                                      "or m_depth with an m_altitude reading)")
+
+
+def _floor(logs, start_epoch_s: float, path: str | Path) -> tuple[SeaFloor | None, str]:
+    """The floor the glider saw on the casts' clock (time 0 at `start_epoch_s`), or
+    (None, why not)."""
+    if logs is None:
+        return None, "no flight logs (*.dbd) beside the science logs, which give the floor"
+    time, depth, what = floor_readings(logs)
+    if not len(time):
+        return None, what
+    times, first = np.unique(time - start_epoch_s, return_index=True)
+    return SeaFloor(tuple(float(t) for t in times), tuple(float(d) for d in depth[first]),
+                    f"{path}: {what} of the flight logs, {len(times)} readings along time, "
+                    "met when the glider met them"), ""
 
 
 def leg_starts(depth_m: np.ndarray, turn_m: float = TURN_M) -> list[int]:
@@ -116,14 +169,17 @@ def read_logged_ocean(path: str | Path) -> LoggedOcean:
                              "sci_water_pressure) in the science logs")
     time, temp = time[valid], temp[valid]
     pressure_dbar = pressure[valid] * BAR_TO_DBAR
-    latitude = _latitude_deg(files, cache)
+    flight, why = _flight_logs(files, cache)
+    latitude = _latitude_deg(flight)
     salinity = gsw.SP_from_C(conductivity[valid] * S_M_TO_MS_CM, temp, pressure_dbar)
     depth = -gsw.z_from_p(pressure_dbar, latitude)
     profile = _casts(time - time[0], depth, temp, salinity, float(time[0]))
     if profile is None:
         raise OceanFileError(f"{path}: the CTD samples hold no dive or climb of "
                              f"{MIN_LEG_M:g} m or more")
-    return LoggedOcean(profile, latitude, tuple(files))
+    floor, floor_note = _floor(flight, float(time[0]), path) if flight is not None else \
+        (None, why)
+    return LoggedOcean(profile, latitude, tuple(files), floor, floor_note)
 
 
 def _casts(time_s: np.ndarray, depth_m: np.ndarray, temp_c: np.ndarray,

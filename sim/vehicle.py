@@ -6,9 +6,16 @@ time after the pump run), moves its battery toward the commanded pitch, and glid
 rest of the tick at the steady-glide speeds of `power_models.flight` for that pitch and
 its net buoyancy at its depth (pumped volume, trim, the hull squeezed by sea pressure).
 Commanded to the surface it climbs, takes a GPS fix (`surface_s`) that resets its dead
-reckoning, makes its Iridium call (`iridium_s`) and waits there. Horizontally it flies
+reckoning, makes its Iridium call (`iridium_s`) and waits there. It cannot go below the
+sea floor (`floor_m`, which the science computer sets each tick): a glide or a hover
+that would take it deeper stops at the floor, and the tick counts as grounded. Horizontally it flies
 the commanded heading; a depth-averaged current drifts the true position but not the
 dead-reckoned one, which is what the glider reports (Slocum DDMM.MMMM) until the next fix.
+
+Through a stratified ocean (`Stratification`: `sim --ocean`) the net buoyancy carries the
+water's in-situ density at the glider's depth, (Vg - trim)(1 - rho0 / rho(z)) (flight.py's
+model), the glider trimmed in water of rho0 (`Vehicle.ballasted_for`); without one it
+flies uniform water of its reference density.
 
 One `GliderSim` is stepped once per tick; it is mutable for speed (a 30-day run is
 650 000 ticks) and its per-tick outputs feed `power_models.timeline`.
@@ -23,7 +30,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from gliderplan.contract import EARTH_RADIUS_M
-from gliderplan.power_models.flight import glide_geometry, net_buoyancy_cc
+from gliderplan.power_models.flight import (
+    DensityProfile,
+    FlightParams,
+    glide_geometry,
+    net_buoyancy_cc,
+)
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim import native
@@ -43,6 +55,50 @@ class Current:
 
     north_mps: float = 0.0
     east_mps: float = 0.0
+
+
+STRATIFICATION_STEP_M = 1.0  # [m] between the depths the water's buoyancy is tabled at
+
+
+@dataclass(frozen=True)
+class Stratification:
+    """The buoyancy [cc] the water's density adds to a glider at each depth,
+    (Vg - trim)(1 - rho0 / rho(z)) (`flight.net_buoyancy_cc` with an in-situ density),
+    tabled every `step_m` [m] from the surface, linear between, held beyond the last. One
+    interpolation, written alike here (`at`, `along`) and in sim/native.c (`lift_at`), so
+    that the tick-by-tick loop and the fast executor add the very same numbers."""
+
+    step_m: float
+    lift_cc: tuple[float, ...]
+
+    @classmethod
+    def of(cls, flight: FlightParams, water: DensityProfile) -> Stratification:
+        """The table of a glider of `flight` through `water` to its deepest depth."""
+        depths = np.arange(0.0, float(np.max(water.depth_m)) + STRATIFICATION_STEP_M,
+                           STRATIFICATION_STEP_M)
+        lift = net_buoyancy_cc(flight, 0.0, depths, water.at(depths)) \
+            - net_buoyancy_cc(flight, 0.0, depths)
+        return cls(STRATIFICATION_STEP_M, tuple(float(v) for v in lift))
+
+    def at(self, depth_m: float) -> float:
+        """[cc] at one depth [m]."""
+        x = depth_m / self.step_m
+        last = len(self.lift_cc) - 1
+        if not x < last:  # beyond the table (or NaN)
+            return self.lift_cc[last]
+        if x <= 0.0:
+            return self.lift_cc[0]
+        i = int(x)
+        return self.lift_cc[i] + (self.lift_cc[i + 1] - self.lift_cc[i]) * (x - i)
+
+    def along(self, depth_m: np.ndarray) -> np.ndarray:
+        """`at` at each depth of an array, bit for bit."""
+        lift = np.asarray(self.lift_cc)
+        x = np.asarray(depth_m, float) / self.step_m
+        last = len(lift) - 1
+        i = np.clip(np.floor(np.where(np.isfinite(x), x, 0.0)), 0, max(last - 1, 0)).astype(int)
+        inside = lift[i] + (lift[np.minimum(i + 1, last)] - lift[i]) * (x - i)
+        return np.where(~(x < last), lift[last], np.where(x <= 0.0, lift[0], inside))
 
 
 Positions = tuple[float, float, float, float]  # dead-reckoned lat, lon, true lat, lon [deg]
@@ -112,8 +168,13 @@ class GliderSim:
     """
 
     def __init__(self, vehicle: Vehicle, tick_s: float, lat_deg: float, lon_deg: float,
-                 current: Current = Current(), depth_m: float = 0.0) -> None:
+                 current: Current = Current(), depth_m: float = 0.0,
+                 water: DensityProfile | None = None) -> None:
+        """`water`: the in-situ density the glider flies through (None: uniform water of
+        its reference density)."""
         self.vehicle = vehicle
+        self.stratification = None if water is None else Stratification.of(vehicle.flight,
+                                                                           water)
         self.tick_s = tick_s
         self.current = current
         self.depth_m = depth_m
@@ -131,6 +192,8 @@ class GliderSim:
         self._turning_to = 0.0  # sign of the buoyancy the last inflection went to
         self._turn_left_s = 0.0  # time the current inflection still turns after pumping
         self._geometry: dict[float, tuple[float, float]] = {}
+        self.floor_m = math.inf  # [m] the sea floor under the glider this tick (inf: none)
+        self.grounded = False  # the last step stopped at the sea floor
 
     def _per_root(self, pitch_rad: float) -> tuple[float, float]:
         """(u, w) [m s-1] per square root of the net buoyancy [cc] at a pitch [rad]
@@ -148,7 +211,7 @@ class GliderSim:
              heading_rad: float, heading_valid: bool, surface: bool) -> None:
         """Fly one tick under a command (COMMAND fields, docs/protocol.md)."""
         self.pumped_out_cc = self.pumped_in_cc = 0.0
-        self.inflection = False
+        self.inflection = self.grounded = False
         if heading_valid:
             self.heading_rad = heading_rad
         if surface and self.depth_m <= SURFACE_DEPTH_M:
@@ -156,14 +219,19 @@ class GliderSim:
             return
         self.surface_time_s = -1.0
         dz, distance, hovering = self.below_surface(depth_target_m, pitch_rad, ballast_cc)
-        self.depth_m = self.depth_m + dz if hovering else max(0.0, self.depth_m + dz)
+        depth = self.depth_m + dz if hovering else max(0.0, self.depth_m + dz)
+        if depth > self.floor_m:  # the sea floor stops it
+            depth, self.grounded = self.floor_m, True
+        self.depth_m = depth
         self._drift(distance, self.tick_s)
 
     @property
     def speed_depends_on_depth(self) -> bool:
-        """Whether the hull's compressibility makes the glide speed change with depth."""
+        """Whether the hull's compressibility, or the water's density, makes the glide
+        speed change with depth."""
         flight = self.vehicle.flight
-        return flight.hull_volume_cc * flight.compressibility_per_pa != 0.0
+        return flight.hull_volume_cc * flight.compressibility_per_pa != 0.0 \
+            or self.stratification is not None
 
     def below_surface(self, depth_target_m: float, pitch_rad: float, ballast_cc: float
                       ) -> tuple[float, float, bool]:
@@ -267,6 +335,8 @@ class GliderSim:
         `glide_s` [s] from `depth_m` [m] with `ballast_cc` pumped, at a pitch whose speeds
         per square root of the net buoyancy are `per_root`: `below_surface`'s glide."""
         net = net_buoyancy_cc(self.vehicle.flight, ballast_cc, depth_m)
+        if self.stratification is not None:
+            net = net + self.stratification.at(depth_m)
         root = math.sqrt(max(math.copysign(1.0, ballast_cc) * net, 0.0))
         u, w = per_root[0] * root, per_root[1] * root
         return (-w if ballast_cc > 0.0 else w) * glide_s, u * glide_s
@@ -277,6 +347,8 @@ class GliderSim:
         (the fast executor's): `u_per_root` [m s-1 cc^-1/2], `ballast_cc` [cc], `glide_s`
         [s] and the depth each tick starts at [m]."""
         net = net_buoyancy_cc(self.vehicle.flight, ballast_cc, depth_m)
+        if self.stratification is not None:
+            net = net + self.stratification.along(depth_m)
         root = np.sqrt(np.maximum(np.copysign(1.0, ballast_cc) * net, 0.0))
         return u_per_root * root * glide_s
 

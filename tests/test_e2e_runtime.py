@@ -30,6 +30,8 @@ import serial
 
 from gliderplan.cli.main import main
 from gliderplan.contract import (
+    FLAG_CLIMBING,
+    FLAG_DONE,
     NO_STATE,
     PLAN_FORMAT_VERSION,
     PROTOCOL_VERSION,
@@ -594,6 +596,49 @@ def test_compiled_survey_follows_the_reference_semantics(cache, line, tmp_path, 
     assert machine.exited
     assert actual == expected
     assert len(expected) > 10  # the readings make the survey move between its states
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_compiled_altimeter_stop_turns_the_dives_as_the_python_executor_does(cache, line,
+                                                                            tmp_path, seed):
+    # yo and thermotrackyo with an altimeter stop, then a yo without one, fed the same
+    # frames: depths up and down, altitude readings near the stop, missing (NaN) or far
+    from gliderplan.power_models import load_vehicle
+    from gliderplan.sim.executor import PythonRuntime
+
+    source = ROOT / "tests" / "missions" / "sim_altimeter.mission"
+    mission = check_source(source.read_text(), str(source)).mission
+    assert main(["compile", str(source), "-o", str(tmp_path / "bin"), "--target", "host"]) == 0
+    mask = read_mask(mission)
+    assert mask >> SENSOR_BY_NAME["altitude"].index & 1  # the routine reads the altimeter
+    vehicle = load_vehicle(mission.vehicle)
+    reference = PythonRuntime(mission, None, vehicle.unplanned_ballast_cc, True,
+                              vehicle.max_ballast_cc)
+    process = line.start([str(tmp_path / "bin" / mission.name)])
+    link = line.link()
+    link.wait_hello(30)
+    rng = random.Random(seed)
+    depth, turns = 3.0, 0
+    for tick in range(4000):
+        altitude = rng.choice([math.nan, 40.0 - depth, 4.0, 3.99, 4.01, rng.uniform(0, 9)])
+        values = {0: tick * TICK_S, 1: f32(depth), 5: f32(altitude), 6: 5441.0, 7: 647.0,
+                  9: f32(rng.uniform(8.0, 20.0))}
+        values = {i: v for i, v in values.items() if mask >> i & 1}
+        command = link.step(tick, values)
+        array = [values.get(i, math.nan) for i in range(len(SENSORS))]
+        expected = reference.step(tick, mask, array)
+        expected = expected._replace(**{k: f32(getattr(expected, k)) for k in (
+            "depth_target_m", "pitch_rad", "ballast_cc", "heading_rad")})  # as the link has it
+        assert command == expected, tick
+        climbing = command.flags & FLAG_CLIMBING
+        turns += climbing and depth < 30.0 and command.depth_target_m == 3.0 \
+            and command.state == 0  # a dive the altimeter turned, well above 50 m
+        depth = min(max(depth + (-1.5 if climbing else 1.5) * rng.uniform(0.5, 1.5), 0.0), 55.0)
+        if command.flags & FLAG_DONE:
+            break
+    assert link.wait_release() == ReleaseReason.MISSION_EXITED
+    assert process.wait(30) == 0
+    assert turns > 0
 
 
 # ---- the boards' CPU models under qemu-user (-cpu arm926, -cpu 486) -----------------

@@ -152,7 +152,59 @@ def test_the_water_given_is_the_water_flown(capsys):
     assert "bench: in-situ density (TEOS-10)" in water and "ballasted for it" in water
 
 
+LOGS = ROOT.parent / "shared" / "data" / "slocum-logs"
+
+
+def _yo_forecast(profile: str, floor: float | None = None):
+    text = SURVEY.format(vehicle="slocum_g2_shallow", computer="none", sensors="temp")
+    mission = check_source(text.replace("yo(3, 36, .43, .43)", profile), "m.mission").checked()
+    from gliderplan.sim.ocean import flat_floor
+
+    return forecast_mission(mission, duration_s=2 * DAY, draws=8,
+                            floor=None if floor is None else flat_floor(floor))
+
+
+def test_a_yo_with_an_altimeter_stop_is_planned_to_max_depth_where_the_floor_is_unknown():
+    stopped = _yo_forecast("yo(3, 50, .43, .43, 4)")
+    assert stopped.energy_j == _yo_forecast("yo(3, 50, .43, .43)").energy_j
+    assert "yo: turns at 4 m above the sea floor: planned to max_depth (50 m), the floor " \
+           "unknown" in stopped.assumptions
+
+
+def test_over_a_known_floor_the_band_ends_where_the_altimeter_turns_the_dive():
+    over = _yo_forecast("yo(3, 50, .43, .43, 4)", floor=40.0)
+    band = _yo_forecast("yo(3, 36, .43, .43)")  # the band it flies: 40 m less 4 m
+    assert (over.energy_j, over.yos) == (band.energy_j, band.yos)
+    assert over.yos > 1.3 * _yo_forecast("yo(3, 50, .43, .43, 4)").yos  # shorter yos
+    assert "yo: turns at 4 m above the sea floor: planned to 36 m, min(max_depth 50 m, the " \
+           "floor's 40 m less 4 m)" in over.assumptions
+    assert "sea floor: sea floor at 40.0 m: --floor 40" not in over.assumptions  # no note given
+    # a floor deeper than the band changes nothing; a yo without a stop ignores the floor
+    assert _yo_forecast("yo(3, 50, .43, .43, 4)", floor=80.0).energy_j == \
+        _yo_forecast("yo(3, 50, .43, .43)").energy_j
+    assert _yo_forecast("yo(3, 50, .43, .43)", floor=40.0).energy_j == \
+        _yo_forecast("yo(3, 50, .43, .43)").energy_j
+
+
+def test_the_floor_of_replayed_logs_sets_the_band(capsys):
+    if not (MISSIONS.is_dir() and LOGS.is_dir()):
+        pytest.skip("the Slocum missions or logs are not present")
+    nsb3 = str(MISSIONS / "nsb3" / "nsb3.mi")
+    data = _forecast(capsys, nsb3, "--duration", "2d", "--ocean", str(LOGS))
+    notes = data["assumptions"]
+    assert any(a.startswith("sea floor: sea floor at 38.7-40.6 m along time (median 39.2 m)")
+               for a in notes)
+    assert "survey: turns at 4 m above the sea floor: planned to 35.2 m, min(max_depth 50 m, " \
+           "the floor's 39.2 m less 4 m)" in notes
+    flat = _forecast(capsys, nsb3, "--duration", "2d", "--ocean", str(LOGS), "--floor", "60")
+    assert data["yos"] > 1.2 * flat["yos"]  # over 60 m of water it dives to 50 m
+
+
 @pytest.mark.parametrize("args, code, message", [
+    (["examples/fig2.mission", "--floor", "-40"], ExitCode.USAGE,
+     "--floor -40.0: the sea floor's depth must be a finite number"),
+    (["examples/fig2.mission", "--floor", "deep"], ExitCode.USAGE,
+     "--floor 'deep': expected the sea floor's depth in metres"),
     (["nosuch.mission"], ExitCode.USAGE, "nosuch.mission"),
     (["examples/fig2.mission", "--duration", "soon"], ExitCode.USAGE, "--duration 'soon'"),
     (["examples/fig2.mission", "--vehicle", "nosuch"], ExitCode.USAGE,

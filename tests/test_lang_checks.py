@@ -47,7 +47,21 @@ CASES = [
     ({"event": "case depth > 5 set depth = 1 exit"},
      "error: unknown variable 'depth' | sensors are read-only"),
     # arguments
-    ({"profile": "yo(5, 20, .454)"}, "error: 'yo' takes 4 argument(s), got 3"),
+    ({"profile": "yo(5, 20, .454)"}, "error: 'yo' takes 4 or 5 argument(s), got 3 | "
+     "yo(min_depth [m], max_depth [m], dive_pitch [rad], climb_pitch [rad], [altitude [m]])"),
+    ({"profile": "yo(5, 20, .454, .454, 4, 1)"}, "error: 'yo' takes 4 or 5 argument(s), got 6"),
+    ({"profile": "thermotrackyo(5, 20, .454, .454, 3, 6, 4, 1)"},
+     "error: 'thermotrackyo' takes 6 or 7 argument(s), got 8"),
+    ({"profile": "yo(5, 20, .454, .454, -4)"},
+     "error: altitude of 'yo' is -4 m, outside [0, inf] | the height above the sea floor"),
+    ({"profile": "thermotrackyo(5, 20, .454, .454, 3, 6, -1)"},
+     "error: altitude of 'thermotrackyo' is -1 m, outside"),
+    ({"profile": "yo(5, 20, .454, .454, 0/0)"},
+     "error: altitude of 'yo' is nan, not a finite number"),
+    ({"profile": "yo(5, 20, .454, .454, 1/0)"},
+     "error: altitude of 'yo' is inf, not a finite number"),
+    ({"profile": "yo(5, 20, .454, .454, depth)"}, "error: sensor 'depth' cannot be used here"),
+    ({"profile": "yo(5, 20, .454, .454, floor)"}, "error: unknown sensor or variable 'floor'"),
     ({"route": "nav(3910.5)"}, "error: 'nav' takes lat [DDMM.MMMM], lon [DDMM.MMMM]"),
     ({"route": "sweep(100, (3910, -7349), (3911, -7349))"}, "error: 'sweep' takes spacing"),
     ({"profile": "yo(-5, 20, .454, .454)"}, "error: min_depth of 'yo' is -5 m, outside"),
@@ -228,3 +242,13 @@ def test_checking_leaves_the_cycle_collector_as_it_found_it():
         assert not gc.isenabled()
     finally:
         gc.enable()
+
+
+@pytest.mark.parametrize("profile", ["yo(5, 20, .454, .454, 4)", "yo(5, 20, .454, .454, 0)",
+                                     "yo(5, 20, .454, .454, v)",
+                                     "thermotrackyo(5, 20, .454, .454, 3, 6, 4)"])
+def test_a_yo_s_altimeter_stop_is_an_optional_last_argument(profile):
+    assert _diagnostics(decl="var v = 2", profile=profile) == []
+    args = check_source(_TEMPLATE.format(**{**_DEFAULTS, "decl": "var v = 2",
+                                            "profile": profile})).mission.states[0].profiles[0]
+    assert len(args.args) == profile.count(",") + 1  # kept as written, not filled in

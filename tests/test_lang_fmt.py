@@ -52,6 +52,15 @@ def test_canonical_layout():
     )
 
 
+def test_fmt_keeps_a_yo_s_altimeter_stop():
+    source = ("mission m\nstate s1 begin flightprofile yo(3,50,.405,.405,4)|"
+              "thermotrackyo(3,50,.4,.4,2,6,  4.5) sensors depth events case depth>60 exit end\n")
+    formatted = format_source(source)
+    assert "flightprofile yo(3, 50, .405, .405, 4) | thermotrackyo(3, 50, .4, .4, 2, 6, 4.5)" \
+        in formatted
+    assert check_source(formatted).mission.hash == check_source(source).mission.hash
+
+
 def test_comments_inside_a_statement_move_before_it():
     source = ("mission m\nstate s1\n# before begin\nbegin\n  flightprofile yo(5, 20,\n"
               "    # inside\n    .454, .454)\n  events\n    case depth > 3 &&  # mid\n"

@@ -50,6 +50,20 @@ def test_a_plan_imports_neither_the_tables_nor_the_plotting_of_sweeps(tmp_path):
     assert (code, loaded & {"pandas", "matplotlib"}, "cvxpy" in loaded) == (0, set(), True)
 
 
+def test_a_yo_s_altimeter_stop_is_planned_to_max_depth_and_said_so():
+    from gliderplan.language import check_source
+    from gliderplan.planner import make_plan
+
+    source = ("mission m\nstate s\nbegin\n  flightroute noheading\n"
+              "  flightprofile yo(3, 50, .454, .454, 4)\n  sensors missiontime, depth\n"
+              "  events\n    case missiontime >= 7200 exit\nend\n")
+    stopped = make_plan(check_source(source).checked()).plan
+    plain = make_plan(check_source(source.replace(", 4)", ")")).checked()).plan
+    assert ("s", "flightprofile 0: turns at 4 m above the sea floor: planned to max_depth "
+            "(50 m), the floor unknown") in [(a.subject, a.text) for a in stopped.assumptions]
+    assert stopped.states[0].energy_j == plain.states[0].energy_j
+
+
 def test_output_writes_plan_and_report(tmp_path):
     out = tmp_path / "survey.plan"
     run = gliderplan("plan", SURVEY, "-o", str(out), "--json")

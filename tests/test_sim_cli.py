@@ -105,6 +105,10 @@ def test_bad_durations_are_usage_errors(text):
     (["--plan", "missing.plan"], 2, "missing.plan: no such file"),
     (["--current", "north"], 2, "--current 'north'"),
     (["--tick", "0"], 2, "--tick 0"),
+    (["--floor", "-3"], 2, "--floor -3.0: the sea floor's depth must be a finite number"),
+    (["--floor", "0"], 2, "--floor 0.0: the sea floor's depth must be a finite number"),
+    (["--floor", "nan"], 2, "--floor nan: the sea floor's depth must be a finite number"),
+    (["--floor", "deep"], 2, "--floor 'deep': expected the sea floor's depth in metres"),
 ])
 def test_bad_input_is_a_message_not_a_traceback(tmp_path, capsys, args, code, message):
     out = tmp_path / "run"
@@ -191,6 +195,86 @@ def test_the_ocean_replays_the_slocum_logs(tmp_path):
     table = pd.read_parquet(out / "timeseries.parquet")
     assert table["temperature_c"][table["depth_m"] < 3].min() > 19.5
     assert table["temperature_c"][table["depth_m"] > 19].max() < 15.3
+
+
+ALTIMETER = REPO / "tests" / "missions" / "sim_altimeter.mission"
+
+
+def test_a_sea_floor_turns_the_dives_at_the_altimeter_stop_and_stops_the_glider(tmp_path,
+                                                                                capsys):
+    out = tmp_path / "run"
+    assert main(["sim", str(ALTIMETER), "--floor", "38", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "sea floor at 38.0 m: --floor 38" in err
+    assert "the glider reached the sea floor at" in err  # the last yo, without a stop
+    table = pd.read_parquet(out / "timeseries.parquet")
+    survey = table[table["state"] == "survey"]
+    # each dive turned 4 m above the floor: the band's 50 m is never reached
+    assert 33.0 < survey["depth_m"].max() < 36.0
+    assert table["depth_m"].max() == 38.0  # the floor stops the yo without a stop
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["sea_floor"] == "sea floor at 38.0 m: --floor 38"
+    grounded = summary["grounded"]
+    assert grounded["first_s"] > 9000.0 and grounded["ticks"] > 0  # in the last state
+    assert table["depth_m"][table["time_s"] >= grounded["first_s"] + 4.0].iloc[0] == 38.0
+
+
+def test_without_a_floor_the_altimeter_reads_nothing_and_the_yo_turns_at_its_band(tmp_path,
+                                                                                  capsys):
+    out = tmp_path / "run"
+    assert main(["sim", str(ALTIMETER), "-o", str(out)]) == 0
+    # the mission has an altimeter stop: the run says it never fires
+    assert "  no sea floor: the altimeter reads NaN (out of range)" in capsys.readouterr().err
+    table = pd.read_parquet(out / "timeseries.parquet")
+    assert table["depth_m"][table["state"] == "survey"].max() >= 50.0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["sea_floor"].startswith("no sea floor") and summary["grounded"] is None
+
+
+@pytest.mark.skipif(not LOGS.is_dir() and os.environ.get("CI") != "true",
+                    reason="the Slocum sample logs are not present")
+def test_replayed_logs_give_the_floor_the_glider_saw(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["sim", str(ALTIMETER), "--ocean", str(LOGS), "--duration", "1h",
+                 "-o", str(out)]) == 0
+    assert "sea floor at 38.7-40.6 m along time (median 39.2 m)" in capsys.readouterr().err
+    table = pd.read_parquet(out / "timeseries.parquet")
+    # the German Bight's 39 m: dives turn some 4 m above it, above 37 m
+    assert 33.0 < table["depth_m"].max() < 37.0
+
+
+def test_the_water_given_is_flown_at_its_density_with_the_glider_ballasted_for_it(tmp_path,
+                                                                                   capsys):
+    mission = REPO / "examples" / "thermocline_survey.mission"
+    runs = {}
+    for name, args in (("default", []), ("bench", ["--ocean", "bench"])):
+        out = tmp_path / name
+        assert main(["sim", str(mission), "--duration", "3h", *args, "-o", str(out)]) == 0
+        runs[name] = (capsys.readouterr().err, json.loads((out / "summary.json").read_text()),
+                      pd.read_parquet(out / "timeseries.parquet"))
+    err, summary, table = runs["bench"]
+    said = summary["water_density"]
+    assert said.startswith("water: bench: in-situ density (TEOS-10) 1021.0-1030.1 kg/m3")
+    # ballasted as `gliderplan forecast` ballasts it: one definition of the band's density
+    from gliderplan.language import check_file
+    from gliderplan.planner.forecast import WATER_DEPTHS_M
+    from gliderplan.planner.rates import band_density
+    from gliderplan.power_models import load_vehicle
+    from gliderplan.sim.ocean import density_profile_of, load_ocean
+
+    checked = check_file(str(mission)).checked()
+    rho = band_density(checked, density_profile_of(load_ocean("bench"), WATER_DEPTHS_M),
+                       load_vehicle(checked.vehicle))
+    assert 1024.5 < rho < 1025.5  # the survey's 5-40 m of the bench water, not the 1024.3
+    assert f"flown at each depth; the glider ballasted for {rho:.1f} kg/m3" in said
+    assert f"  {said}" in err
+    default_err, default, default_table = runs["default"]
+    assert default["water_density"] == ("water: uniform, the vehicle's reference density "
+                                        "(1024.3 kg/m3)")
+    assert "water:" not in default_err  # the default says nothing on the terminal
+    # the same temperatures, another water: the glides differ
+    assert table["temperature_c"].iloc[0] == default_table["temperature_c"].iloc[0]
+    assert not table["depth_m"].equals(default_table["depth_m"])
 
 
 def test_a_long_run_shows_progress(tmp_path, capsys):

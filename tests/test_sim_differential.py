@@ -26,7 +26,7 @@ from gliderplan.language import check_file, check_source
 from gliderplan.power_models import load_vehicle
 from gliderplan.sim.flight import fly
 from gliderplan.sim.loop import RunConfig
-from gliderplan.sim.ocean import load_ocean
+from gliderplan.sim.ocean import SeaFloor, flat_floor, load_ocean
 from gliderplan.sim.science import NOISE_PRESETS
 from gliderplan.sim.vehicle import Current
 
@@ -38,6 +38,7 @@ RUN_OPTIONS = {
     "sim_first_sea_run.mission": ["--ocean", "sea-trial"],
     "sim_sea_trial.mission": ["--ocean", "sea-trial", "--noise", "nonmonotonic"],
     "sim_month.mission": ["--duration", "1d"],
+    "sim_altimeter.mission": ["--floor", "38"],  # dives turn 4 m above it, the last yo grounds
     "survey_month.mission": ["--duration", "1d"],
 }
 
@@ -199,6 +200,55 @@ def test_the_fast_executor_flies_a_hand_written_schedule_as_the_reference(tmp_pa
     flown_alike(mission, RunConfig(duration_s=14400.0, seed=5), "bench", plan)
 
 
+# floors under the altimeter mission: flat, shallower than a dive's turn, and one that
+# rises and falls along the run as a glider's logged floor does
+FLOORS = [flat_floor(38.0), flat_floor(20.0),
+          SeaFloor((0.0, 1800.0, 4000.0, 9000.0), (45.0, 31.0, 52.5, 36.0), "along time")]
+
+
+@pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
+@pytest.mark.parametrize("floor", FLOORS, ids=["38m", "20m", "along-time"])
+def test_the_fast_executor_flies_over_a_sea_floor_as_the_reference(floor, rigid):
+    mission = check_file(str(REPO / "tests" / "missions" / "sim_altimeter.mission")).mission
+    config = RunConfig(duration_s=mission.horizon_s or 12600.0, seed=4,
+                       noise=NOISE_PRESETS["ctd"], floor=floor)
+    flown = flown_alike(mission, config, "sea-trial", rigid=rigid)
+    assert flown.grounded_ticks > 0  # the last yo, without a stop, reaches the floor
+    depth = flown.columns["depth_m"]
+    bottom = floor.depth_along(flown.columns["time_s"])
+    assert (depth <= bottom).all()
+    survey = flown.columns["state"] == 0
+    # every dive of the survey turned at its stop: 4 m above the floor, never at 50 m
+    assert (depth[survey] < bottom[survey] - 2.0).all()
+
+
+@pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
+@pytest.mark.parametrize(("name", "ocean", "floor"), [
+    ("examples/thermocline_survey.mission", "sea-trial", None),
+    ("examples/fig2_annotated.mission", "bench", None),
+    ("tests/missions/sim_altimeter.mission", "sea-trial", flat_floor(38.0))])
+def test_the_fast_executor_flies_the_water_s_density_as_the_reference(name, ocean, floor,
+                                                                       rigid):
+    # the water's in-situ density at each depth (sim --ocean): a rigid hull's speed then
+    # changes with depth too, and its yos are flown as a compressible hull's are
+    from gliderplan.sim.ocean import density_profile_of, load_water
+    from gliderplan.sim.run import flown_water
+
+    mission = check_file(str(REPO / name)).mission
+    vehicle = load_vehicle(mission.vehicle)
+    if rigid:
+        vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
+    given = load_water(ocean, floor)
+    ballasted, density, _ = flown_water(mission, vehicle, given, ocean)
+    assert np.ptp(density_profile_of(given.ocean, np.arange(0.0, 60.0)).rho_kg_m3) > 1.0
+    config = RunConfig(duration_s=min(86400.0, mission.horizon_s or 86400.0), seed=9,
+                       noise=NOISE_PRESETS["ctd"], floor=floor, water=density)
+    flown = flown_alike(mission, config, given.ocean, vehicle=ballasted)
+    uniform = fly(mission, given.ocean, replace(config, water=None), ballasted)
+    assert not np.array_equal(flown.columns["depth_m"], uniform.columns["depth_m"][
+        :len(flown.columns["depth_m"])])  # the density changes the flight
+
+
 # Random missions: three states (a start state that calls one and goes to the other),
 # every profile and route the simulator flies, conditions on time, depth, temperature,
 # position, the runtime's readings (the yo's leg, the distance to the waypoint, the
@@ -208,11 +258,15 @@ _PROFILES = st.one_of(
     st.builds(lambda lo, band, p, q: f"yo({lo}, {lo + band}, {p}, {q})",
               st.integers(0, 8), st.integers(2, 50), st.sampled_from([".3", ".454", ".6"]),
               st.sampled_from([".3", ".454", ".6"])),
+    st.builds(lambda lo, band, stop: f"yo({lo}, {lo + band}, .454, .454, {stop})",
+              st.integers(0, 8), st.integers(2, 50), st.sampled_from(["0", "2", "4.5", "top"])),
     st.just("yo(top, bottom, .454, .454)"),
     st.just("surface"),
     st.builds(lambda d: f"hover({d})", st.integers(0, 20)),
     st.builds(lambda lo, hi, t: f"thermotrackyo({lo}, {hi}, .454, .454, {t}, 6)",
               st.integers(1, 5), st.integers(20, 60), st.integers(1, 6)),
+    st.builds(lambda lo, hi, stop: f"thermotrackyo({lo}, {hi}, .454, .454, 2, 6, {stop})",
+              st.integers(1, 5), st.integers(20, 60), st.sampled_from(["3", "top"])),
 )
 _ROUTES = st.sampled_from([
     "noheading", "nav(3910.5, -7349.8058)", "nav(3910.2, -7349.9)",
@@ -227,7 +281,7 @@ _CONDITIONS = st.sampled_from([
     "abs(depth - b) < 1", "max(temp, 0) > {c} && missiontime >= {t}",
     "halfcycle >= {h}", "halfcycle == {h} && depth >= {d}", "wptdist < {w}",
     "mod(timeofday, 3600) >= {t} && mod(timeofday, 3600) < {t} + 60",
-    "wptreached >= {n}", "wptreached > b - 10 && depth > {d}",
+    "wptreached >= {n}", "wptreached > b - 10 && depth > {d}", "altitude < {d}",
 ])
 _ASSIGNMENTS = st.sampled_from([
     "", "set a = missiontime + {t} ", "set b = depth + 3 ", "set top = max(depth - 5, 1), "
@@ -281,17 +335,18 @@ _SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return ends a run on the tick the clim
        noise=st.sampled_from(["none", "ctd", "nonmonotonic"]),
        current=st.tuples(st.sampled_from([0.0, 0.05, -0.12]), st.sampled_from([0.0, 0.07])),
        seed=st.integers(0, 2**31), tick_s=st.sampled_from([4.0, 2.0, 3.7]),
-       start_s=st.floats(9e8, 2e9), rigid=st.booleans())
+       start_s=st.floats(9e8, 2e9), rigid=st.booleans(),
+       floor=st.sampled_from([None, 12.0, 30.0, 55.0]))
 @example(source=_SURFACED_ON_THE_RUN_S_LAST_TICK, ocean="bench", noise="none",
-         current=(0.0, 0.0), seed=0, tick_s=4.0, start_s=9e8, rigid=True)
+         current=(0.0, 0.0), seed=0, tick_s=4.0, start_s=9e8, rigid=True, floor=None)
 def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean, noise,
                                                                   current, seed, tick_s,
-                                                                  start_s, rigid):
+                                                                  start_s, rigid, floor):
     result = check_source(source, "random.mission")
     assert result.mission is not None, result.render()
     config = RunConfig(tick_s=tick_s, duration_s=12000.0, seed=seed,
                        noise=NOISE_PRESETS[noise], current=Current(*current),
-                       start_epoch_s=start_s)
+                       start_epoch_s=start_s, floor=None if floor is None else flat_floor(floor))
     flown_alike(result.mission, config, ocean, rigid=rigid)
 
 

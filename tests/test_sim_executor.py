@@ -328,6 +328,26 @@ def test_a_yo_counts_its_half_cycles():
     assert legs == [1, 1, 2, 2, 3, 3, 4, 4, 5]
 
 
+@pytest.mark.parametrize("routine", ["yo", "thermotrackyo"])
+def test_a_dive_turns_at_the_altimeter_stop_as_the_c_runtime_s_test_has_it(routine):
+    # the rows of runtime/tests/test_pilot.c, test_yo_should_turn_a_dive_at_its_altimeter_stop
+    args = (3.0, 50.0, 0.4, 0.5, 4.0) if routine == "yo" else \
+        (3.0, 50.0, 0.4, 0.5, 30.0, 6.0, 4.0)
+    yo = pilot.PROFILE_ROUTINES[routine](3.0, args, altitude_m=40.0)
+    flown = []
+    for depth, altitude in ((3.0, 40.0), (30.0, math.nan), (35.0, 4.01), (35.5, 4.0),
+                            (33.0, 2.0), (3.0, 40.0), (20.0, 3.0)):
+        target = yo.command(depth, math.nan, args, None, 230.0, altitude)[0]
+        flown.append((target, yo.halfcycle))
+    assert flown == [(50, 1), (50, 1), (50, 1), (3, 2), (3, 2), (50, 3), (3, 4)]
+    assert pilot.PROFILE_ROUTINES[routine](20.0, args, altitude_m=2.0).leg == pilot.CLIMB
+    unstopped = args[:-1] + (0.0,)  # 0: no altimeter stop; left out, alike
+    for stop in (unstopped, args[:-1]):
+        yo = pilot.PROFILE_ROUTINES[routine](20.0, stop, altitude_m=0.5)
+        yo.command(20.0, math.nan, stop, None, 230.0, 0.5)
+        assert yo.leg == pilot.DIVE
+
+
 GOTO_LIST = REPO / "tests" / "missions" / "sim_goto_list.mission"
 
 

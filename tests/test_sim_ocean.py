@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -11,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from gliderplan.contract.errors import UsageError
 from gliderplan.power_models.slocum_log import LogError
 from gliderplan.sim import ocean
 from gliderplan.sim.ocean import OceanFileError
@@ -127,6 +129,81 @@ def test_logs_that_are_not_there_say_what_is_needed(tmp_path):
     (tmp_path / "bad.ebd").write_bytes(b"not a log")
     with pytest.raises(LogError, match=r"bad.ebd: not a Slocum log \(no dbd_label line"):
         ocean.load_ocean(str(tmp_path / "bad.ebd"))
+
+
+def test_replayed_logs_give_the_floor_their_flight_logs_saw():
+    _needs_logs()
+    water = ocean.load_water(str(LOGS))
+    floor = water.floor
+    assert floor is not None and len(floor.times_s) >= 40  # m_water_depth along the flight
+    assert floor.median_m == pytest.approx(39.2, abs=0.1)
+    assert 38.0 < min(floor.depths_m) and max(floor.depths_m) < 41.0
+    assert np.all(np.diff(floor.times_s) > 0.0)
+    assert water.floor_note.startswith("sea floor at 38.7-40.6 m along time")
+    assert "m_water_depth" in water.floor_note
+    # on the casts' clock: both start at the first CTD sample
+    assert 0.0 < floor.times_s[0] < water.ocean.casts_s[-1]
+    times = np.linspace(-100.0, 9000.0, 37)
+    assert floor.depth_along(times).tolist() == [floor.depth_at(t) for t in times]
+    # --floor overrides what the logs saw
+    assert ocean.load_water(str(LOGS), ocean.flat_floor(25.0)).floor.depths_m == (25.0,)
+
+
+def test_science_logs_without_their_flight_logs_have_no_floor_and_say_so(tmp_path):
+    _needs_logs()
+    first = sorted(LOGS.glob("*.ebd"))[0]
+    alone = tmp_path / first.name
+    alone.write_bytes(first.read_bytes())  # a scratch copy, without the .dbd beside it
+    shutil.copytree(LOGS / "cac", tmp_path / "cac")
+    water = ocean.load_water(str(alone))
+    assert water.floor is None
+    assert "no flight logs (*.dbd) beside the science logs" in water.floor_note
+    assert "no sea floor" in water.floor_note
+
+
+class _Logs:
+    """Flight logs as dbdreader gives them, from arrays."""
+
+    def __init__(self, **series: tuple[list[float], list[float]]) -> None:
+        self.series = {k: (np.array(t, float), np.array(v, float)) for k, (t, v) in
+                       series.items()}
+
+    def get(self, name):
+        return self.series[name]
+
+    def get_sync(self, first, *others):
+        t, v = self.series[first]
+        return (t, v, *(np.interp(t, *self.series[o]) for o in others))
+
+
+def test_the_floor_is_the_glider_s_water_depth_else_its_depth_plus_altitude():
+    from gliderplan.sim.slocum_ocean import floor_readings
+
+    water_depth = _Logs(m_water_depth=([10.0, 20.0, 30.0], [-1.0, 41.0, 42.0]))
+    time, depth, what = floor_readings(water_depth)
+    assert (time.tolist(), depth.tolist(), what) == ([20.0, 30.0], [41.0, 42.0], "m_water_depth")
+    altimeter = _Logs(m_water_depth=([10.0], [-1.0]),
+                      m_altitude=([10.0, 20.0, 30.0], [-1.0, 5.0, 4.0]),
+                      m_depth=([0.0, 40.0], [0.0, 40.0]))
+    time, depth, what = floor_readings(altimeter)
+    assert (time.tolist(), depth.tolist(), what) == ([20.0, 30.0], [25.0, 34.0],
+                                                     "m_depth + m_altitude")
+    nothing = _Logs(m_water_depth=([10.0], [-1.0]), m_altitude=([10.0], [-1.0]),
+                    m_depth=([10.0], [20.0]))
+    time, _, what = floor_readings(nothing)
+    assert not len(time) and what.startswith("the flight logs hold no floor reading")
+
+
+@pytest.mark.parametrize("depth", [-3.0, 0.0, float("nan"), float("inf")])
+def test_a_floor_must_be_a_finite_depth_below_the_surface(depth):
+    with pytest.raises(UsageError, match="--floor .*: the sea floor's depth must be a finite"):
+        ocean.flat_floor(depth)
+
+
+def test_a_floor_that_is_no_number_names_the_option():
+    with pytest.raises(UsageError, match="--floor 'deep': expected the sea floor's depth"):
+        ocean.parse_floor("deep")
+    assert ocean.parse_floor("40").depth_at(123.0) == 40.0
 
 
 def test_legs_split_at_the_turns_not_at_noise():

@@ -166,7 +166,10 @@ def test_nsb3_surfaces_every_when_secs_after_reaching_the_surface(flown):
 def test_the_translation_says_what_it_left_out(flown, capsys):
     text = (flown["helgo"] / "helgo.mission").read_text()
     assert "left out: sample (helgo.mi:58), its .ma file sample50.ma is missing" in text
-    assert "not translated: d_target_altitude 5" in text
+    # the altimeter stop is kept: yo's fifth argument, with a comment, and no warning
+    assert "flightprofile yo(3, 50, 0.43, 0.43, 5)" in text
+    assert "# d_target_altitude 5 m: a dive also turns 5 m above the sea floor" in text
+    assert "not translated: d_target_altitude" not in text
     assert "flightroute goto_list(50, (5441, 647), (5413.5, 621.6), (5416, 723))" in text
 
 
@@ -182,6 +185,38 @@ def test_import_reports_warnings_with_file_and_line(tmp_path, capsys):
     text = (tmp_path / "n.mission").read_text()
     assert "# sensors_in (nsb3.mi:89): not translated: c_att_time 0, c_alt_time -1" in text
     assert "sensor_type 39" not in err  # the logger is a device of the power model
+
+
+def test_nsb3_keeps_its_altimeter_stop_and_turns_above_the_north_sea_floor(tmp_path, capsys):
+    _needs_missions()
+    out = tmp_path / "n.mission"
+    assert main(["import-slocum", str(MISSIONS / "nsb3" / "nsb3.mi"), "-o", str(out)]) == 0
+    assert "d_target_altitude" not in capsys.readouterr().err  # no warning: it is translated
+    text = out.read_text()
+    assert "flightprofile yo(3, 50, 0.454, 0.454, 4)" in text  # yo10.ma: 50 m, 4 m above
+    # flown over a floor of 40 m (the German Bight's 33-45 m) the dives turn near 36 m
+    assert main(["sim", str(out), "--floor", "40", "--duration", "6h",
+                 "-o", str(tmp_path / "run")]) == 0
+    table = pd.read_parquet(tmp_path / "run" / "timeseries.parquet")
+    bottoms, _ = _turns(table["depth_m"][table["state"] == "survey"].to_numpy())
+    assert len(bottoms) > 5
+    assert max(bottoms) < 37.0  # the stop, and the tick the pump takes to turn
+    assert 36.0 - READING_ERROR_M <= float(np.median(bottoms))  # a surfacing cuts a few short
+
+
+def test_a_climb_s_altitude_is_still_left_out_and_an_odd_yo_ends_at_the_stop(tmp_path, capsys):
+    yo = YO_MA.replace("num_half_cycles_to_do(nodim) -1",
+                       "num_half_cycles_to_do(nodim) 3\n b_arg: d_target_altitude(m) 4\n"
+                       " b_arg: c_target_altitude(m) 6")
+    path = _mission(tmp_path, "behavior: yo\n b_arg: args_from_file(enum) 10\n", yo10_ma=yo)
+    out = tmp_path / "m.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "not translated: c_target_altitude 6" in err and "d_target_altitude" not in err
+    text = out.read_text()
+    assert "flightprofile yo(3, 20, 0.45, 0.45, 4)" in text
+    # the third leg, a dive, ends where it turns: at 20 m or 4 m above the floor
+    assert "halfcycle > 3 || halfcycle == 3 && (depth >= 20 || altitude <= 4)" in text
 
 
 def test_a_missing_ma_file_stops_the_import_with_its_line(tmp_path, capsys):

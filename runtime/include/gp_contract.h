@@ -14,7 +14,7 @@
 #define GP_MAX_STACK_DEPTH 32  /**< the state stack: the largest `stack N` (or --max-stack) */
 #define GP_MAX_EVENTS_PER_STATE 255  /**< events of one state (a uint8_t count) */
 #define GP_MAX_PROFILE_ALTERNATIVES 8  /**< `flightprofile a | b | ...` alternatives of one state */
-#define GP_MAX_PROFILE_ARGS 6  /**< arguments of one flight profile */
+#define GP_MAX_PROFILE_ARGS 7  /**< arguments of one flight profile */
 #define GP_MAX_ROUTE_POINTS 64  /**< (lat, lon) points of one state's route */
 #define GP_MAX_SWEEP_WAYPOINTS 256  /**< waypoints a `sweep` route expands to */
 /** characters of a mission, state or computer name in a plan file */
@@ -48,6 +48,8 @@
 
 #define GP_SURFACE_PITCH_RAD 0.454  /**< [rad] pitch of the climb to the surface */
 #define GP_TRACK_WINDOW 64  /**< (depth, temp) readings the thermocline tracker keeps per leg */
+#define GP_YO_ALTITUDE_ARG 4  /**< yo's argument: a dive turns at this height above the sea floor */
+#define GP_THERMOTRACKYO_ALTITUDE_ARG 6  /**< thermotrackyo's argument, as yo's */
 #define GP_WAYPOINT_RADIUS_M 50.0  /**< [m] a waypoint closer than this is reached */
 /** [m] of the sphere positions and headings are computed on */
 #define GP_EARTH_RADIUS_M 6371000.0

@@ -55,15 +55,22 @@ typedef struct {
 /** What the pilot did this tick: turned the yo, detected the thermocline. */
 enum { GP_PILOT_TURNED = 1, GP_PILOT_DETECTED = 2 };
 
-/** @brief Enter a profile: band = [min, max], window empty, leg from the depth. */
-void gp_pilot_enter(gp_pilot *pilot, const gp_profile_input *in, double depth_m);
+/**
+ * @brief Enter a profile: band = [min, max], window empty, leg from the depth and the
+ *        altimeter (a yo enters climbing at or below its altimeter stop).
+ * @param altitude_m the altitude reading, height above the sea floor [m] (NaN: none)
+ */
+void gp_pilot_enter(gp_pilot *pilot, const gp_profile_input *in, double depth_m,
+                    double altitude_m);
 
 /**
- * @brief One tick of the profile: turn the leg if due, track the thermocline,
- *        command depth target, pitch and ballast.
+ * @brief One tick of the profile: turn the leg if due (a dive at the band's bottom, or
+ *        at the yo's altimeter stop), track the thermocline, command depth target, pitch
+ *        and ballast.
+ * @param altitude_m the altitude reading [m]; NaN (out of range) never turns a dive
  * @return GP_PILOT_TURNED | GP_PILOT_DETECTED bits
  */
 int gp_pilot_step(gp_pilot *pilot, const gp_profile_input *in, double depth_m, double temp_c,
-                  gp_pilot_command *out);
+                  double altitude_m, gp_pilot_command *out);
 
 #endif /* GP_PILOT_H */

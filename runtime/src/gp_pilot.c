@@ -16,13 +16,25 @@ static void start_leg(gp_pilot *pilot, uint8_t leg)
     pilot->previous_c = NAN;
 }
 
-void gp_pilot_enter(gp_pilot *pilot, const gp_profile_input *in, double depth_m)
+/* The yo's altimeter stop (Slocum's d_target_altitude): whether the altitude reading is
+ * at or below the profile's `altitude` argument. An argument left out (0) or <= 0 is no
+ * stop; a NaN reading (no floor in the altimeter's range) never stops a dive. */
+static int at_altimeter_stop(const gp_profile_input *in, double altitude_m)
+{
+    double stop = in->args[in->kind == GP_PROFILE_THERMOTRACKYO ? GP_THERMOTRACKYO_ALTITUDE_ARG
+                                                                : GP_YO_ALTITUDE_ARG];
+    return stop > 0.0 && altitude_m <= stop;
+}
+
+void gp_pilot_enter(gp_pilot *pilot, const gp_profile_input *in, double depth_m,
+                    double altitude_m)
 {
     memset(pilot, 0, sizeof *pilot);
     pilot->lo_m = in->args[0];
     pilot->hi_m = in->args[1];
     pilot->halfcycle = in->kind == GP_PROFILE_YO || in->kind == GP_PROFILE_THERMOTRACKYO;
-    start_leg(pilot, depth_m < in->args[1] ? GP_LEG_DIVE : GP_LEG_CLIMB);
+    int dive = depth_m < in->args[1] && !(pilot->halfcycle && at_altimeter_stop(in, altitude_m));
+    start_leg(pilot, dive ? GP_LEG_DIVE : GP_LEG_CLIMB);
 }
 
 static double median_of_recent(const gp_pilot *pilot)
@@ -159,7 +171,7 @@ static int track_thermocline(gp_pilot *pilot, const gp_profile_input *in, double
 }
 
 static int fly_yo(gp_pilot *pilot, const gp_profile_input *in, double depth_m, double temp_c,
-                  gp_pilot_command *out)
+                  double altitude_m, gp_pilot_command *out)
 {
     int tracking = in->kind == GP_PROFILE_THERMOTRACKYO;
     int changed = 0;
@@ -168,7 +180,7 @@ static int fly_yo(gp_pilot *pilot, const gp_profile_input *in, double depth_m, d
         pilot->hi_m = in->args[1];
     }
     uint8_t leg = pilot->leg;
-    if (leg == GP_LEG_DIVE && depth_m >= pilot->hi_m) {
+    if (leg == GP_LEG_DIVE && (depth_m >= pilot->hi_m || at_altimeter_stop(in, altitude_m))) {
         leg = GP_LEG_CLIMB;
     } else if (leg == GP_LEG_CLIMB && depth_m <= pilot->lo_m) {
         leg = GP_LEG_DIVE;
@@ -197,12 +209,12 @@ static int fly_yo(gp_pilot *pilot, const gp_profile_input *in, double depth_m, d
 }
 
 int gp_pilot_step(gp_pilot *pilot, const gp_profile_input *in, double depth_m, double temp_c,
-                  gp_pilot_command *out)
+                  double altitude_m, gp_pilot_command *out)
 {
     switch (in->kind) {
     case GP_PROFILE_YO:
     case GP_PROFILE_THERMOTRACKYO:
-        return fly_yo(pilot, in, depth_m, temp_c, out);
+        return fly_yo(pilot, in, depth_m, temp_c, altitude_m, out);
     case GP_PROFILE_SURFACE:
         *out = (gp_pilot_command){0.0, GP_SURFACE_PITCH_RAD, in->ballast_cc,
                                   GP_FLAG_SURFACE | GP_FLAG_CLIMBING};

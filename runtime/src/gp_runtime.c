@@ -47,12 +47,13 @@ static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options 
         profile->args(rt->sensors, rt->machine.vars, in.args);
     }
     if (now.profile != rt->profile) {  /* entering the state or switching alternative */
-        gp_pilot_enter(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH]);
+        gp_pilot_enter(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH],
+                       rt->sensors[GP_SENSOR_ALTITUDE]);
         rt->profile = now.profile;
     }
     gp_pilot_command vertical;
     gp_pilot_step(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH], rt->sensors[GP_SENSOR_TEMP],
-                  &vertical);
+                  rt->sensors[GP_SENSOR_ALTITUDE], &vertical);
     double heading;
     int heading_valid = gp_route_step(&rt->route, &state->route, rt->sensors[GP_SENSOR_LAT],
                                       rt->sensors[GP_SENSOR_LON], &heading);

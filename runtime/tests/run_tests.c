@@ -11,6 +11,8 @@
     X(test_mission_check_should_accept_fig2_and_reject_bad_tables)          \
     X(test_yo_should_turn_at_its_depths)                                    \
     X(test_yo_should_start_climbing_below_max_and_use_planned_pitch)        \
+    X(test_yo_should_turn_a_dive_at_its_altimeter_stop)                     \
+    X(test_thermotrackyo_should_turn_a_dive_at_its_altimeter_stop)          \
     X(test_surface_and_hover_should_command_fixed_attitudes)                \
     X(test_naive_tracker_should_detect_a_clean_cast)                        \
     X(test_naive_tracker_should_never_detect_a_noisy_cast)                  \

@@ -1,7 +1,7 @@
 /* Flight profiles of docs/pilot.md: yo leg turns as a trace table, and the
  * thermocline trackers on clean and noisy casts.
  *
- *   yo:    DIVE --(depth >= max)--> CLIMB --(depth <= min)--> DIVE
+ *   yo:    DIVE --(depth >= max || altitude <= stop)--> CLIMB --(depth <= min)--> DIVE
  *   cast:  20 degC above 15 m, 10 degC below 21 m, linear in between
  */
 #include <math.h>
@@ -35,10 +35,10 @@ void test_yo_should_turn_at_its_depths(void)
     gp_profile_input in = yo_input(5, 10);
     gp_pilot pilot;
     gp_pilot_command out;
-    gp_pilot_enter(&pilot, &in, rows[0].depth);
+    gp_pilot_enter(&pilot, &in, rows[0].depth, NAN);
     CHECK_INT(pilot.halfcycle, 1);
     for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
-        gp_pilot_step(&pilot, &in, rows[i].depth, NAN, &out);
+        gp_pilot_step(&pilot, &in, rows[i].depth, NAN, NAN, &out);
         CHECK_NEAR(out.depth_target_m, rows[i].target, 0);
         CHECK_NEAR(out.pitch_rad, rows[i].pitch, 1e-12);
         CHECK_NEAR(out.ballast_cc, rows[i].ballast, 0);
@@ -46,7 +46,7 @@ void test_yo_should_turn_at_its_depths(void)
         CHECK_INT(pilot.halfcycle, halfcycle[i]);
     }
     gp_profile_input surface = {.kind = GP_PROFILE_SURFACE, .plan_pitch_rad = NAN};
-    gp_pilot_enter(&pilot, &surface, 4.0);
+    gp_pilot_enter(&pilot, &surface, 4.0, NAN);
     CHECK_INT(pilot.halfcycle, 0);  /* not a yo */
 }
 
@@ -56,12 +56,60 @@ void test_yo_should_start_climbing_below_max_and_use_planned_pitch(void)
     in.plan_pitch_rad = 0.3;
     gp_pilot pilot;
     gp_pilot_command out;
-    gp_pilot_enter(&pilot, &in, 12.0);
+    gp_pilot_enter(&pilot, &in, 12.0, NAN);
     CHECK_INT(pilot.leg, GP_LEG_CLIMB);
-    gp_pilot_step(&pilot, &in, 12.0, NAN, &out);
+    gp_pilot_step(&pilot, &in, 12.0, NAN, NAN, &out);
     CHECK_NEAR(out.pitch_rad, 0.3, 0);
-    gp_pilot_step(&pilot, &in, 5.0, NAN, &out);
+    gp_pilot_step(&pilot, &in, 5.0, NAN, NAN, &out);
     CHECK_NEAR(out.pitch_rad, -0.3, 0);
+}
+
+void test_yo_should_turn_a_dive_at_its_altimeter_stop(void)
+{
+    static const struct {
+        double depth, altitude;
+        double target;
+        unsigned halfcycle;
+    } rows[] = {
+        {3.0, 40.0, 50, 1},
+        {30.0, NAN, 50, 1},   /* the floor out of the altimeter's range: no stop */
+        {35.0, 4.01, 50, 1},
+        {35.5, 4.0, 3, 2},    /* at the stop: climb, 14 m above max */
+        {33.0, 2.0, 3, 2},    /* a climbing leg ignores the altimeter */
+        {3.0, 40.0, 50, 3},
+        {20.0, 3.0, 3, 4},    /* below the stop */
+    };
+    gp_profile_input in = yo_input(3, 50);
+    in.args[GP_YO_ALTITUDE_ARG] = 4.0;
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, rows[0].depth, rows[0].altitude);
+    for (unsigned i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        gp_pilot_step(&pilot, &in, rows[i].depth, NAN, rows[i].altitude, &out);
+        CHECK_NEAR(out.depth_target_m, rows[i].target, 0);
+        CHECK_INT(pilot.halfcycle, rows[i].halfcycle);
+    }
+    gp_pilot_enter(&pilot, &in, 20.0, 2.0);  /* entered at the stop: climbing */
+    CHECK_INT(pilot.leg, GP_LEG_CLIMB);
+    in.args[GP_YO_ALTITUDE_ARG] = 0.0;      /* 0: no altimeter stop */
+    gp_pilot_enter(&pilot, &in, 20.0, 0.5);
+    gp_pilot_step(&pilot, &in, 20.0, NAN, 0.5, &out);
+    CHECK_INT(pilot.leg, GP_LEG_DIVE);
+}
+
+void test_thermotrackyo_should_turn_a_dive_at_its_altimeter_stop(void)
+{
+    gp_profile_input in = {.kind = GP_PROFILE_THERMOTRACKYO,
+                           .args = {2, 60, 0.4, 0.4, 3, 6, 5.0}, .plan_pitch_rad = NAN,
+                           .ballast_cc = 230};
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, 10.0, 30.0);
+    CHECK_INT(gp_pilot_step(&pilot, &in, 10.0, 15.0, 30.0, &out), 0);
+    CHECK_INT(gp_pilot_step(&pilot, &in, 35.0, 15.0, 5.0, &out) & GP_PILOT_TURNED,
+              GP_PILOT_TURNED);
+    CHECK_INT(pilot.leg, GP_LEG_CLIMB);
+    CHECK_NEAR(out.depth_target_m, 2, 0);
 }
 
 void test_surface_and_hover_should_command_fixed_attitudes(void)
@@ -72,14 +120,14 @@ void test_surface_and_hover_should_command_fixed_attitudes(void)
                               .ballast_cc = 200};
     gp_pilot pilot;
     gp_pilot_command out;
-    gp_pilot_enter(&pilot, &surface, 3);
-    gp_pilot_step(&pilot, &surface, 3, NAN, &out);
+    gp_pilot_enter(&pilot, &surface, 3, NAN);
+    gp_pilot_step(&pilot, &surface, 3, NAN, NAN, &out);
     CHECK_NEAR(out.depth_target_m, 0, 0);
     CHECK_NEAR(out.pitch_rad, GP_SURFACE_PITCH_RAD, 0);
     CHECK_NEAR(out.ballast_cc, 200, 0);
     CHECK(out.flags & GP_FLAG_SURFACE);
-    gp_pilot_enter(&pilot, &hover, 3);
-    gp_pilot_step(&pilot, &hover, 3, NAN, &out);
+    gp_pilot_enter(&pilot, &hover, 3, NAN);
+    gp_pilot_step(&pilot, &hover, 3, NAN, NAN, &out);
     CHECK_NEAR(out.depth_target_m, 12.5, 0);
     CHECK_NEAR(out.pitch_rad, 0, 0);
     CHECK_NEAR(out.ballast_cc, 0, 0);
@@ -112,12 +160,12 @@ static dive_result dive(int naive, double noise_c)
     gp_pilot_command out;
     dive_result result = {0, 0, 0};
     unsigned seed = 12345;
-    gp_pilot_enter(&pilot, &in, 0);
+    gp_pilot_enter(&pilot, &in, 0, NAN);
     for (int i = 0; i < 156; i++) {
         double depth = 0.25 * i;
         double jitter = ((double)(gp_test_random(&seed) % 1000) / 1000.0 - 0.5) * 0.2 * noise_c;
         double temp = cast_temp(depth) + (i % 2 ? noise_c : -noise_c) + jitter;
-        if (gp_pilot_step(&pilot, &in, depth, temp, &out) & GP_PILOT_DETECTED) {
+        if (gp_pilot_step(&pilot, &in, depth, temp, NAN, &out) & GP_PILOT_DETECTED) {
             result.detections++;
             result.lo = pilot.lo_m;
             result.hi = pilot.hi_m;
@@ -160,10 +208,10 @@ void test_tracker_should_turn_at_the_band_and_reset_a_lost_band(void)
                            .plan_pitch_rad = NAN, .ballast_cc = 230};
     gp_pilot pilot;
     gp_pilot_command out;
-    gp_pilot_enter(&pilot, &in, 0);
+    gp_pilot_enter(&pilot, &in, 0, NAN);
     double depth = 0;
     for (int i = 0; i < 200 && pilot.leg == GP_LEG_DIVE; i++, depth += 0.25) {
-        gp_pilot_step(&pilot, &in, depth, cast_temp(depth), &out);
+        gp_pilot_step(&pilot, &in, depth, cast_temp(depth), NAN, &out);
     }
     CHECK_INT(pilot.leg, GP_LEG_CLIMB);
     CHECK(depth < 25);           /* turned at the band's bottom, not at 40 m */
@@ -171,7 +219,7 @@ void test_tracker_should_turn_at_the_band_and_reset_a_lost_band(void)
     CHECK(hi < 40);
     /* climb through water of one temperature: no detection; the turn forgets the band */
     for (int i = 0; i < 400 && pilot.leg == GP_LEG_CLIMB; i++, depth -= 0.25) {
-        gp_pilot_step(&pilot, &in, depth, 15.0, &out);
+        gp_pilot_step(&pilot, &in, depth, 15.0, NAN, &out);
     }
     CHECK_INT(pilot.leg, GP_LEG_DIVE);
     CHECK_NEAR(pilot.lo_m, 5, 0);
@@ -185,9 +233,9 @@ void test_tracker_should_ignore_missing_readings(void)
                            .plan_pitch_rad = NAN, .ballast_cc = 230};
     gp_pilot pilot;
     gp_pilot_command out;
-    gp_pilot_enter(&pilot, &in, 0);
+    gp_pilot_enter(&pilot, &in, 0, NAN);
     for (int i = 0; i < 100; i++) {
-        CHECK_INT(gp_pilot_step(&pilot, &in, 1.0, NAN, &out), 0);
+        CHECK_INT(gp_pilot_step(&pilot, &in, 1.0, NAN, NAN, &out), 0);
     }
     CHECK_INT(pilot.n_window, 0);
 }
@@ -211,15 +259,15 @@ void test_robust_tracker_should_skip_its_walk_only_where_it_changes_nothing(void
         gp_pilot summarized, walking;
         gp_pilot_command out_s, out_w;
         double depth = 50;
-        gp_pilot_enter(&summarized, &in, depth);
-        gp_pilot_enter(&walking, &in, depth);
+        gp_pilot_enter(&summarized, &in, depth, NAN);
+        gp_pilot_enter(&walking, &in, depth, NAN);
         for (int tick = 0; tick < 300; tick++) {
             depth += ((double)(gp_test_random(&seed) % 41) - 15) / 10.0;  /* -1.5..+2.5 m */
             double temp = 0.5 * (double)(gp_test_random(&seed) % 9) + (depth < 60 ? 10 : 0);
             int before = summarized.n_window;
             walking.summarized = 0;  /* forget the summary: walk the window */
-            int r_s = gp_pilot_step(&summarized, &in, depth, temp, &out_s);
-            int r_w = gp_pilot_step(&walking, &in, depth, temp, &out_w);
+            int r_s = gp_pilot_step(&summarized, &in, depth, temp, NAN, &out_s);
+            int r_w = gp_pilot_step(&walking, &in, depth, temp, NAN, &out_w);
             /* a reading dropped (walked), or all kept and one more (skipped) */
             walked += r_s == 0 && summarized.n_window > 0 && summarized.n_window <= before;
             skipped += r_s == 0 && summarized.n_window == before + 1;
