@@ -18,8 +18,8 @@ $(STAMP): pyproject.toml setup.py sim/native.c
 
 # The whole pipeline on the built-in examples: check, plan under the battery budget,
 # compile mission and plan to C, fly them on the simulated glider over a
-# pseudo-terminal, sweep the survey's quality against its budget, and write the
-# tradeoff report of the annotated Fig. 2 mission.
+# pseudo-terminal, sweep the survey's quality against its budget, forecast a month's
+# survey by device, and write the tradeoff report of the annotated Fig. 2 mission.
 DEMO := out/demo
 GP := $(BIN)/gliderplan
 demo: $(STAMP)
@@ -28,6 +28,7 @@ demo: $(STAMP)
 	$(GP) compile examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan -o $(DEMO)/build
 	$(GP) sim examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan --runtime c -o $(DEMO)/run
 	$(GP) plan examples/thermocline_survey.mission --sweep 20 -o $(DEMO)/sweep
+	$(GP) forecast examples/survey_month.mission --duration 30d
 	@echo "demo: plan and report in $(DEMO)/fig2.plan{,.json}; binary in $(DEMO)/build;"
 	@echo "      flight (trace.csv, summary.json, depth.png, energy.png) in $(DEMO)/run;"
 	@echo "      Pareto sweep (pareto.csv, pareto.png, computers.csv, batteries.csv) in $(DEMO)/sweep"
