@@ -30,6 +30,10 @@ MAX_SWEEP_WAYPOINTS = 256  # waypoints a `sweep` route expands to
 # stage that reads a mission walks its expressions (the mission's hash, the C code, the
 # simulator's compiled conditions): a bound keeps them all within Python's stack.
 MAX_EXPRESSION_DEPTH = 100
+# Entries the parser's stack may hold: brackets and operators open at once (an expression
+# MAX_EXPRESSION_DEPTH deep, bracketed at every level, needs fewer). Parsing stays linear
+# in the text and a 16 MiB file of brackets is refused at its first token past it.
+MAX_PARSE_DEPTH = 1000
 MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a plan file
 MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
 MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]

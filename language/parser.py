@@ -8,9 +8,10 @@ from pathlib import Path
 
 from lark import Lark, UnexpectedInput
 
+from gliderplan.contract import MAX_PARSE_DEPTH
 from gliderplan.language import ast
 from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, error
-from gliderplan.language.lalr import Parser
+from gliderplan.language.lalr import Parser, TooDeep
 
 GRAMMAR = Path(__file__).with_name("mission.lark")
 
@@ -294,11 +295,18 @@ def _blank_before(text: str, offset: int) -> str:
 
 
 def parse(text: str) -> ast.Mission:
-    """Parse mission source; raise MissionSyntaxError with every syntax error found."""
+    """Parse mission source; raise MissionSyntaxError with every syntax error found (one
+    at the first token nested deeper than MAX_PARSE_DEPTH: parsing stays linear)."""
     try:
-        return _parser().parse(text, "start")
+        return _parser().parse(text, "start", MAX_PARSE_DEPTH)
     except UnexpectedInput as err:
         raise MissionSyntaxError(_all_syntax_errors(err, text)) from None
+    except TooDeep as err:
+        _, line, column, end_line, end_column = err.token
+        raise MissionSyntaxError([error(
+            f"nested more than {MAX_PARSE_DEPTH} deep (brackets and operators together)",
+            ast.Span(line, column, end_line, end_column),
+            "split the expression with a variable ('set v = ...')")]) from None
 
 
 def _all_syntax_errors(first: UnexpectedInput, text: str) -> list[Diagnostic]:
