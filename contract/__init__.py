@@ -34,6 +34,9 @@ MAX_EXPRESSION_DEPTH = 100
 # MAX_EXPRESSION_DEPTH deep, bracketed at every level, needs fewer). Parsing stays linear
 # in the text and a 16 MiB file of brackets is refused at its first token past it.
 MAX_PARSE_DEPTH = 1000
+# Scenarios one Monte Carlo run or confidence plan may fly: a million month-long flights
+# is days of work on a workstation, and more than any stated confidence needs in practice
+MAX_SCENARIOS = 1_000_000
 MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a plan file
 MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
 MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]

@@ -13,9 +13,8 @@ import signal
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+from gliderplan.contract import MAX_SCENARIOS
 from gliderplan.contract.errors import UsageError
-
-MAX_SCENARIOS = 1_000_000
 
 
 class BackendError(UsageError):
