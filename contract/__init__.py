@@ -37,6 +37,9 @@ MAX_PARSE_DEPTH = 1000
 # Scenarios one Monte Carlo run or confidence plan may fly: a million month-long flights
 # is days of work on a workstation, and more than any stated confidence needs in practice
 MAX_SCENARIOS = 1_000_000
+# Years a simulated run may start in (inclusive): its dates, and a horizon on, are written
+# by every output (NetCDF's seconds since 1970, ISO 8601 text, OG1.0's YYYYmmddTHHMMss)
+START_YEARS = (1970, 2100)
 MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a plan file
 MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
 MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gliderplan.contract import TICK_S, ExitCode
+from gliderplan.contract import START_YEARS, TICK_S, ExitCode
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import InputFileError, read_input_text, write_atomically
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
@@ -50,7 +50,9 @@ def start_epoch_s(meta: dict) -> float:
 
 
 def parse_utc(text: str) -> float:
-    """ISO 8601 UTC ('2014-07-24T12:00:00Z', '2014-07-24') to seconds since 1970."""
+    """ISO 8601 UTC ('2014-07-24T12:00:00Z', '2014-07-24') to seconds since 1970, within
+    the years a run may start in (`contract.START_YEARS`: a run's dates, a month or a
+    year on, must still be dates every format writes)."""
     try:
         moment = datetime.fromisoformat(text.strip().replace("Z", "+00:00"))
     except ValueError:
@@ -58,6 +60,9 @@ def parse_utc(text: str) -> float:
             from None
     if moment.tzinfo is None:
         moment = moment.replace(tzinfo=UTC)
+    first, last = START_YEARS
+    if not first <= moment.astimezone(UTC).year <= last:
+        raise ValueError(f"{text!r}: a run starts between {first} and {last}")
     return moment.timestamp()
 
 

@@ -470,3 +470,17 @@ def test_a_long_run_is_plotted_from_a_decimated_series_that_keeps_its_extremes()
         stretch = depth[start:start + width]
         assert depth[mine].max() == stretch.max() and depth[mine].min() == stretch.min()
     assert decimated(depth[:500]).tolist() == list(range(500))  # short runs: every tick
+
+
+@pytest.mark.parametrize("start", ["9999-12-31T23:59Z", "0001-01-01T00:00Z", "2101-01-01",
+                                   "1969-12-31T23:00Z"])
+def test_a_start_outside_the_years_a_run_may_start_in_is_bad_usage(tmp_path, capsys, start):
+    """Dates at the calendar's edges crashed the run or the export that read it."""
+    from gliderplan.contract import START_YEARS, ExitCode
+
+    code = main(["sim", str(FIG2), "--start", start, "--duration", "600s", "-o",
+                 str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    assert code == ExitCode.USAGE
+    assert f"a run starts between {START_YEARS[0]} and {START_YEARS[1]}" in err
+    assert not (tmp_path / "run").exists()
