@@ -172,6 +172,10 @@ class _Translator:
 
     # ---- the whole mission
     def run(self) -> str:
+        if not self.mission.behaviors:
+            self.warn(Where(self.mission.path, 1), "no behavior: the translated mission only "
+                      "waits at the surface (is this a Slocum mission file?)")
+            self.header.append("no behavior in the Slocum mission: it only waits at the surface")
         by_name: dict[str, list[Behavior]] = {}
         for behavior in self.mission.behaviors:
             if behavior.name not in TRANSLATED + NOT_TRANSLATED:

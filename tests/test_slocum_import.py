@@ -762,3 +762,9 @@ def test_hardware_a_mission_cannot_name_is_bad_usage(tmp_path, capsys, option, v
     err = capsys.readouterr().err
     assert code == ExitCode.USAGE and message in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_a_mission_with_no_behavior_says_it_only_waits_at_the_surface(tmp_path, capsys):
+    text, err = _import(tmp_path, capsys, "# an empty file\n")
+    assert "m.mi:1: warning: no behavior" in err
+    assert "only waits at the surface" in text
