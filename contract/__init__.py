@@ -90,6 +90,10 @@ MAX_PLAN_SEQUENCE = 4_294_967_295  # a signed plan's `seq` (a u32); 1 is the fir
 # larger file and anything but a regular file (a device such as /dev/zero, a named pipe)
 # before reading a byte of it.
 MAX_INPUT_BYTES = 16 * 1024 * 1024  # [bytes] far beyond any real input; guards the readers
+# Data files (TOML model and scenario files, JSON reports and summaries) are parsed by
+# `contract.files.parse_data`: tables and arrays nested deeper than this, or a number that
+# is not finite (TOML and Python's JSON read `nan` and `inf`), are refused with the key.
+MAX_DATA_DEPTH = 32  # the shipped files nest 3 deep, the JSON reports 6
 
 # ---- the sensor array ----------------------------------------------------------------
 

@@ -2,7 +2,9 @@
 
 Reading: one function, `read_input`, so that every input (mission, plan, model, scenario,
 ocean and run files) is refused alike when it is missing, a directory, a device or a named
-pipe, or larger than `MAX_INPUT_BYTES`, with one line naming the file.
+pipe, or larger than `MAX_INPUT_BYTES`, with one line naming the file. Every data file
+(TOML or JSON) is then parsed by one function, `parse_data` (`read_data` does both), which
+bounds its nesting (`MAX_DATA_DEPTH`) and refuses a number that is not finite.
 
 Writing: atomically. A crash, a full disk or Ctrl-C leaves either the old file or the new
 one, never half of one (the promise README.md makes).
@@ -12,18 +14,29 @@ from __future__ import annotations
 
 import codecs
 import errno
+import json
+import math
 import os
 import stat
 import tempfile
 from pathlib import Path
 
-from gliderplan.contract import MAX_INPUT_BYTES
+from gliderplan.contract import MAX_DATA_DEPTH, MAX_INPUT_BYTES
 from gliderplan.contract.errors import GliderplanError, UsageError
 
 
 class InputFileError(GliderplanError):
     """A file that cannot be read as the input it should be; `usage` when the path names
     no file that could be one (missing, a directory, a device or pipe, unreadable)."""
+
+
+class DataFileError(InputFileError):
+    """A data file (TOML or JSON) that does not parse or breaks the bounds of `parse_data`:
+    the file `where`, the dotted `key` at fault (None: the whole file) and the `problem`."""
+
+    def __init__(self, where: str, key: str | None, problem: str) -> None:
+        self.where, self.key, self.problem = where, key, problem
+        super().__init__(f"{where}: {key}: {problem}" if key else f"{where}: {problem}")
 
 
 class OutputFileError(UsageError):
@@ -79,6 +92,56 @@ def read_input_text(path: str | Path, what: str) -> str:
         line = data[: err.start].count(b"\n") + 1
         raise InputFileError(f"{path}:{line}: not UTF-8 text (byte 0x{data[err.start]:02x}), "
                              f"not a {what}") from None
+
+
+def read_data(path: str | Path, what: str, *, finite: bool = True) -> dict:
+    """The table a TOML (or, for a name ending in .json, JSON) data file `path` holds,
+    read by `read_input_text` and checked by `parse_data`; InputFileError naming the file."""
+    syntax = "json" if str(path).endswith(".json") else "toml"
+    return parse_data(read_input_text(path, what), str(path), syntax, finite=finite)
+
+
+def parse_data(text: str, where: str, syntax: str = "toml", *, finite: bool = True) -> dict:
+    """The top-level table of data `text` ("toml" or "json" `syntax`), refused with
+    InputFileError naming `where` (the file) and the key when it does not parse, is not a
+    table, nests tables or arrays more than MAX_DATA_DEPTH deep, or (`finite`) holds a
+    number that is not finite: the one parser of every data file gliderplan reads."""
+    import tomllib
+
+    try:
+        data = json.loads(text) if syntax == "json" else tomllib.loads(text)
+    except RecursionError:
+        raise DataFileError(where, None, f"tables or arrays nested more than "
+                            f"{MAX_DATA_DEPTH} deep") from None
+    except (tomllib.TOMLDecodeError, ValueError) as err:
+        raise DataFileError(where, None, f"not valid {syntax.upper()}: {err}") from None
+    if not isinstance(data, dict):
+        raise DataFileError(where, None, f"expected a {syntax.upper()} table (object), got "
+                            f"{type(data).__name__}")
+    _check_data(data, where, finite)
+    return data
+
+
+def _check_data(data: dict, where: str, finite: bool) -> None:
+    """Walk `data` without recursion: its depth, and (`finite`) its numbers."""
+    pending: list[tuple[str, object, int]] = [("", data, 0)]
+    while pending:
+        key, value, depth = pending.pop()
+        if isinstance(value, dict | list):
+            if depth > MAX_DATA_DEPTH:
+                shown = key if len(key) <= 60 else f"{key[:57]}..."
+                raise DataFileError(where, shown, f"tables or arrays nested more than "
+                                    f"{MAX_DATA_DEPTH} deep")
+            items = value.items() if isinstance(value, dict) else \
+                ((f"[{i}]", v) for i, v in enumerate(value))
+            for name, item in items:
+                inner = f"{key}{name}" if name.startswith("[") else \
+                    f"{key}.{name}" if key else str(name)
+                pending.append((inner, item, depth + 1))
+        elif finite and isinstance(value, float) and not math.isfinite(value):
+            parent, _, leaf = key.rpartition(".")
+            raise DataFileError(where, parent or None,
+                                f"{leaf} must be a finite number, got {value!r}")
 
 
 def _open_problem(err: OSError, what: str) -> str:

@@ -13,12 +13,11 @@ from __future__ import annotations
 
 import re
 import tempfile
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import read_input_text, write_atomically
+from gliderplan.contract.files import read_data, write_atomically
 from gliderplan.power_models import calibration
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.catalog import resolve
@@ -216,7 +215,7 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
     """Write the base vehicle's file with every fitted figure replaced (value, sd, what it
     was fitted from), every other figure saying it is the base's and why, the fit's
     correlation and the devices the hotel load holds."""
-    data = tomllib.loads(read_input_text(resolve("vehicle", base), "vehicle file"))
+    data = read_data(resolve("vehicle", base), "vehicle file")
     name = name or re.sub(r"[^A-Za-z0-9_]", "_", output.stem)
     if not _NAME.fullmatch(name):
         raise UsageError(f"vehicle name {name!r} must match [A-Za-z_][A-Za-z0-9_]{{0,31}}")

@@ -16,14 +16,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import (
-    InputFileError,
-    read_input,
-    read_input_text,
-    write_atomically,
-)
+from gliderplan.contract.files import InputFileError, read_data, read_input, write_atomically
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
@@ -50,14 +45,10 @@ def _wh(joules: float) -> float:
 
 def _json(path: Path, what: str) -> dict:
     try:
-        data = json.loads(read_input_text(path, "JSON file"))
+        return read_data(path, "JSON file", finite=False)  # a summary may hold NaN
     except InputFileError as err:  # say what the file should have been
-        raise UsageError(f"{err} ({what})") from None
-    except json.JSONDecodeError as err:
-        raise UsageError(f"{path}: cannot read {what}: {err}") from None
-    if not isinstance(data, dict):
-        raise UsageError(f"{path}: {what}: expected a JSON object")
-    return data
+        raise InputFileError(f"{err} ({what})", usage=err.exit_code == ExitCode.USAGE) \
+            from None
 
 
 def _regular(path: Path, what: str) -> None:

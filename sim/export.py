@@ -24,7 +24,7 @@ import numpy as np
 
 from gliderplan.contract import TICK_S, ExitCode
 from gliderplan.contract.errors import GliderplanError, UsageError
-from gliderplan.contract.files import InputFileError, read_input_text, write_atomically
+from gliderplan.contract.files import InputFileError, read_data, write_atomically
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
 from gliderplan.sim.slocum_ocean import leg_starts
 from gliderplan.sim.vehicle import SURFACE_DEPTH_M
@@ -373,12 +373,10 @@ def read_run(run_dir: str | Path) -> tuple[pd.DataFrame, dict]:
     run_dir = Path(run_dir)
     series, summary = run_dir / "timeseries.parquet", run_dir / "summary.json"
     try:
-        meta = json.loads(read_input_text(summary, "run summary"))
+        meta = read_data(summary, "run summary")
     except InputFileError as err:
         raise ExportError(f"{err}; is {run_dir} a run of gliderplan sim?",
                           usage=err.exit_code == ExitCode.USAGE) from None
-    except ValueError as err:
-        raise ExportError(f"{summary}: cannot read: {err}") from None
     if not series.is_file():  # read whole by pyarrow: a month's run is larger than one input
         raise ExportError(f"{series}: no such file; is {run_dir} a run of gliderplan sim?",
                           usage=True)
@@ -391,6 +389,4 @@ def read_run(run_dir: str | Path) -> tuple[pd.DataFrame, dict]:
     missing = {"time_s", "depth_m", "lat_deg", "lon_deg", "temp_reading_c"} - set(table.columns)
     if missing:
         raise ExportError(f"{series}: no column {', '.join(sorted(missing))}")
-    if not isinstance(meta, dict):
-        raise ExportError(f"{summary}: not a run summary")
     return table, meta

@@ -22,7 +22,6 @@ seeds are children of one `numpy.random.SeedSequence`, one per scenario index.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -31,7 +30,7 @@ from statistics import NormalDist
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
-from gliderplan.contract.files import read_input_text
+from gliderplan.contract.files import DataFileError, parse_data, read_input_text
 from gliderplan.power_models.draws import correlation_root
 from gliderplan.power_models.vehicle import FIGURES, Vehicle, figure_value, with_figures
 from gliderplan.sim.ocean import InternalWave, Thermocline
@@ -130,9 +129,9 @@ def read_spec(path: str | Path | None = None) -> ScenarioSpec:
         where = str(path)
         text = read_input_text(path, "scenario file")
     try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ScenarioFileError(f"{where}: not valid TOML: {err}") from None
+        data = parse_data(text, where)
+    except DataFileError as err:
+        raise ScenarioFileError(str(err)) from None
     if data.get("kind") != "scenarios":
         raise ScenarioFileError(f"{where}: kind: expected \"scenarios\", got "
                                 f"{data.get('kind')!r}")

@@ -117,7 +117,7 @@ ROWS = [
      "[0, inf]"),
     ("scenarios NaN", ["montecarlo", FIG2, "--scenarios", "2", "--scenario-file",
                        "nan.scenarios.toml", "-o", "out"], BAD,
-     "nan.scenarios.toml: ocean.thermocline_depth_m: mean: expected a finite number, got nan"),
+     "nan.scenarios.toml: ocean.thermocline_depth_m: mean must be a finite number, got nan"),
     ("scenarios missing figure", ["montecarlo", FIG2, "--scenarios", "2", "--scenario-file",
                                   "missing.scenarios.toml", "-o", "out"], BAD,
      "missing.scenarios.toml: ocean.wave_period_s: missing"),

@@ -154,7 +154,7 @@ def test_profiles_are_dives_and_climbs_not_the_surface():
     (["export", "{run}"], 2, "--netcdf, --geojson and/or --kml"),
     (["export", "{missing}", "--kml"], 2, "nope: no such directory"),
     (["export", "{empty}", "--kml"], 2, "summary.json: no such file; is"),
-    (["export", "{broken}", "--kml"], 1, "summary.json: cannot read"),
+    (["export", "{broken}", "--kml"], 1, "summary.json: not valid JSON"),
 ])
 def test_export_refuses_bad_input_in_one_line(run, tmp_path, capsys, argv, code, message):
     (tmp_path / "empty").mkdir()
@@ -182,7 +182,8 @@ def test_export_run_is_the_call_behind_export(run, tmp_path):
     with pytest.raises(ExportError) as refused:
         export_run(tmp_path / "bad", ["kml"])
     assert refused.value.exit_code == ExitCode.BAD_INPUT
-    assert str(refused.value) == f"{tmp_path / 'bad' / 'summary.json'}: not a run summary"
+    assert str(refused.value).startswith(f"{tmp_path / 'bad' / 'summary.json'}: expected a "
+                                         "JSON table (object), got list; is ")
     assert not (tmp_path / "bad" / "track.kml").exists()
 
 
