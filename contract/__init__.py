@@ -49,6 +49,9 @@ MAX_PLAN_SPEED_MPS = 2.0  # [m/s] a planned horizontal speed (a glider makes 0.2
 MAX_PLAN_ENERGY_J = 1e10  # [J] a budget or prediction (the largest Slocum pack is 12 MJ)
 MAX_PLAN_INFLECTIONS = 1e9  # a state's predicted inflections (as many as its visits may be)
 MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
+# A sensor's weight in the quality objective is relative to the others': a ratio past this
+# is beyond what the solver resolves (its tolerance is ~1e-8), and 1e308 overflowed it.
+MAX_SENSOR_WEIGHT = 1e6
 CLOCK_TOLERANCE_MHZ = 1e-6  # [MHz] a plan's clock is the board's within this
 NO_BOARD = "none"  # `computer none`: no board to set; its plans' clocks are all 0
 
@@ -183,6 +186,10 @@ RUNTIME_CYCLES_PER_TICK = 200_000.0  # [cycles]
 # A mission without `horizon` is planned over this time, and a run of it (sim, montecarlo)
 # ends here if it has not exited: the plan's budget and the flight cover the same time.
 DEFAULT_HORIZON_S = 30 * 86400.0  # [s] 30 days
+# A simulated run keeps one row per tick in memory (about 400 bytes of columns, then the
+# tables written from them): a run of more ticks is refused before it starts, saying how
+# long it would be (`sim --tick 0.1` of a 30-day mission is 26 million ticks, ~10 GB).
+MAX_RUN_TICKS = 3_000_000  # 139 days at the 4 s tick; ~1.3 GB
 
 
 # ---- energy components --------------------------------------------------------------

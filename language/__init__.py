@@ -9,6 +9,7 @@ MissionError for the commands that go on with the mission.
 from __future__ import annotations
 
 import gc
+import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -91,7 +92,9 @@ def _check_source(source: str, filename: str, stack_depth: int | None) -> CheckR
     except MissionSyntaxError as err:
         return CheckResult(filename, source, None, err.diagnostics)
     try:
-        mission, diagnostics = check(syntax, stack_depth)
+        # the files a mission names are beside it (a text of no file: the working folder)
+        base_dir = "" if filename.startswith("<") else os.path.dirname(filename)
+        mission, diagnostics = check(syntax, stack_depth, base_dir)
     except RecursionError:
         from gliderplan.language.parser import TOO_DEEP
 

@@ -169,6 +169,9 @@ def _declaration(decl: ast.Declaration) -> str:
         case ast.ComputerDecl(board, is_file, clock):
             at = f" @ {_quantity(clock)}" if clock else ""
             return f"computer {_preset(board, is_file)}{at}"
+        case ast.BatteryDecl(None, _, reserve, _, preset, is_file):
+            text = f"battery {_preset(preset, is_file)}"
+            return text + (f" reserve {_quantity(reserve)}" if reserve else "")
         case ast.BatteryDecl(capacity, voltage, reserve):
             text = f"battery {_quantity(capacity)}"
             text += f" at {_quantity(voltage)}" if voltage else ""

@@ -299,6 +299,7 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
     duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_HORIZON_S
+    RunConfig(duration_s=duration)  # a run too long to hold: refused here, not in a worker
     spec = read_spec(scenario_file)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     vehicle = load_vehicle(mission.vehicle)
