@@ -189,7 +189,7 @@ DEFAULT_HORIZON_S = 30 * 86400.0  # [s] 30 days
 # A simulated run keeps one row per tick in memory (about 400 bytes of columns, then the
 # tables written from them): a run of more ticks is refused before it starts, saying how
 # long it would be (`sim --tick 0.1` of a 30-day mission is 26 million ticks, ~10 GB).
-MAX_RUN_TICKS = 3_000_000  # 139 days at the 4 s tick; ~1.3 GB
+MAX_SIMULATED_TICKS = 3_000_000  # 139 days at the 4 s tick; ~1.3 GB
 
 
 # ---- energy components --------------------------------------------------------------
