@@ -53,15 +53,15 @@ class RunConfig:
     start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
 
     def __post_init__(self) -> None:
-        """A run too long to hold is refused before it starts (contract.MAX_SIMULATED_TICKS)."""
+        """A run too long to hold is refused before it starts (MAX_SIMULATED_TICKS)."""
         ticks = self.duration_s / self.tick_s
         if ticks > MAX_SIMULATED_TICKS:
             from gliderplan.contract.errors import UsageError
 
             raise UsageError(
                 f"a run of {self.duration_s / 86400:.4g} d at a {self.tick_s:g} s tick is "
-                f"{ticks:,.0f} ticks, more than the {MAX_SIMULATED_TICKS:,} one run holds in memory "
-                "(one row a tick): fly a shorter time (--duration, the mission's horizon) "
+                f"{ticks:,.0f} ticks, more than the {MAX_SIMULATED_TICKS:,} one run holds in "
+                "memory (one row a tick): fly a shorter time (--duration, the mission's horizon) "
                 "or a longer tick (--tick)")
 
 
