@@ -16,6 +16,7 @@ import importlib
 import os
 import pkgutil
 import select
+import signal
 import sys
 from collections.abc import Sequence
 from types import ModuleType
@@ -60,6 +61,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The argument parser; with `command`, only that subcommand's (if it is one)."""
     parser = _Parser(prog="gliderplan", description="Mission language, power-aware planner, "
                      "C runtime and simulator for Slocum-class underwater gliders.")
+    parser.add_argument("--version", action="version", version=f"gliderplan {version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, module in subcommands(command).items():
@@ -70,21 +72,52 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (a scheduler, `kill`, a shutting-down system): raised where Ctrl-C's
+    KeyboardInterrupt is, so that every command stops as it does on Ctrl-C: a simulation
+    writes what it flew, children (the C runtime, worker processes) are stopped and
+    temporary files removed on the way out; the exit status is then 143."""
+
+
+_terminated = False  # a SIGTERM arrived: an interrupted command exits 143, not 130
+
+
+def _on_sigterm(signum: int, frame: object) -> None:
+    global _terminated
+    _terminated = True
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one does not cut the clean-up
+    raise Terminated
+
+
+def _stop_code() -> ExitCode:
+    return ExitCode.TERMINATED if _terminated else ExitCode.INTERRUPTED
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit code (`contract.ExitCode`)."""
+    global _terminated
     argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["--version"]:
+        print(f"gliderplan {version()}")
+        return ExitCode.OK
     # The top-level parser has no option but --help, so a first word is the command.
     command = argv[0] if argv and not argv[0].startswith("-") else None
     args = build_parser(command).parse_args(argv)
+    _terminated = False
+    try:
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread (a test's, or an embedding program's)
+        previous = None
     try:
         code = int(args._run(args))
         sys.stdout.flush()  # here, where a reader that went away is handled below
-        return code
+        return _stop_code() if code == ExitCode.INTERRUPTED else code
     except GliderplanError as err:
         return report(args.command, err)
     except KeyboardInterrupt:
-        print(f"gliderplan {args.command}: interrupted", file=sys.stderr)
-        return ExitCode.INTERRUPTED
+        print(f"gliderplan {args.command}: {'terminated' if _terminated else 'interrupted'}",
+              file=sys.stderr)
+        return _stop_code()
     except Exception as err:  # a bug: say so plainly; the traceback only on request
         if isinstance(err, BrokenPipeError) and _stdout_reader_gone():
             # Like `cat | head`: no message, and nothing more to print. Python flushes
@@ -97,6 +130,20 @@ def main(argv: Sequence[str] | None = None) -> int:
               "  (this is a bug in gliderplan; rerun with GLIDERPLAN_DEBUG=1 for details)",
               file=sys.stderr)
         return ExitCode.INTERNAL
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def version() -> str:
+    """The installed gliderplan's version (its distribution's metadata)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as installed
+
+    try:
+        return installed("gliderplan")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "unknown (not installed)"
 
 
 def _stdout_reader_gone() -> bool:

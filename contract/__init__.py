@@ -326,4 +326,5 @@ class ExitCode(IntEnum):
     OVER_BUDGET = 3  # a simulated run broke its plan's energy budget
     INTERNAL = 70  # a bug in gliderplan (EX_SOFTWARE of sysexits.h)
     INTERRUPTED = 130  # stopped by Ctrl-C (128 + SIGINT)
+    TERMINATED = 143  # stopped by SIGTERM, as by Ctrl-C: outputs written, children stopped
     BROKEN_PIPE = 141  # the reader of stdout went away (`| head`): stopped quietly (128 + SIGPIPE)
