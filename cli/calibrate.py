@@ -71,8 +71,14 @@ def run(args: argparse.Namespace) -> int:
 
     if args.max_error is not None and not args.validate:
         raise UsageError("--max-error needs --validate")
-    result = calibrate(args.logs, cache=args.cache, base=args.base, validate=args.validate,
-                       output=args.output, name=args.name)
+    from gliderplan.cli.progress import Steps
+
+    steps = Steps("calibrate")
+    try:
+        result = calibrate(args.logs, cache=args.cache, base=args.base, validate=args.validate,
+                           output=args.output, name=args.name, progress=steps)
+    finally:
+        steps.finish()
     print(json.dumps(result.report, indent=2) if args.json else _text(result.report))
     if args.max_error is not None and abs(result.relative_error) > args.max_error:
         raise GliderplanError(f"forecast energy error {result.relative_error:+.1%} exceeds "

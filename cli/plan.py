@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import sys
 
 from gliderplan.cli.common import add_cycles_argument, add_mission_argument, load_mission, seed
 from gliderplan.contract.errors import UsageError
@@ -106,20 +105,25 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _sweep(mission, args: argparse.Namespace) -> int:  # noqa: ANN001
+    from gliderplan.cli.progress import ProgressBar
     from gliderplan.planner import sweep_mission
 
-    live = sys.stderr.isatty()  # a counter rewritten in place only reads on a terminal
+    bars: dict[str, ProgressBar] = {}
 
     def progress(label: str, done: int, total: int) -> None:
-        if live:
-            print(f"\r{label}: {done}/{total}", end="\n" if done == total else "",
-                  file=sys.stderr, flush=True)
-        elif done == total:
-            print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
+        if label not in bars:
+            for bar in bars.values():
+                bar.finish()
+            bars[label] = ProgressBar(lambda d, t: f"{label}: {d:.0f} of {t:.0f}")
+        bars[label](done, total)
 
-    sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
-                          computer=args.computer, progress=progress,
-                          cycles_per_tick=args.cycles_per_tick)
+    try:
+        sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
+                              computer=args.computer, progress=progress,
+                              cycles_per_tick=args.cycles_per_tick)
+    finally:
+        for bar in bars.values():
+            bar.finish()
     if args.json:
         print(json.dumps({"pareto": sweep.pareto.to_dict("records"),
                           "computers": sweep.computers.to_dict("records"),

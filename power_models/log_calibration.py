@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import re
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -58,19 +59,25 @@ class Calibration:
 
 def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_g2_shallow",
               validate: bool = False, output: str | Path | None = None,
-              name: str | None = None) -> Calibration:
+              name: str | None = None,
+              progress: Callable[[str], None] | None = None) -> Calibration:
     """Fit `base` (a preset or a .toml file) to the logs (files or directories; `cache`:
     dbdreader's .cac directory, default the logs' cac/). With `validate`, fit the earlier
     whole dives and forecast the later ones, and replay the held-out half. With `output`
     (a .toml path), write the calibrated vehicle, named `name` (default: the file's stem).
+    `progress(step)` is told each step as it starts (a fit takes tens of seconds).
     Raises LogError, ModelFileError, CalibrationError, or UsageError for an output that is
     not a .toml."""
     if output is not None and not str(output).endswith(".toml"):
         raise UsageError(f"{output}: the output file must end in .toml")
+    step = progress or (lambda _: None)
     vehicle = load_vehicle(base)
     deployments = split_deployments(expand_log_paths(logs))
+    step(f"reading {sum(len(d.files) for d in deployments)} log file(s)")
     each = [read_flight_log(list(d.files), cache) for d in deployments]
     log = each[-1]  # the latest: the glider as it flies now
+    step("fitting the figures, each with its bootstrap over dives" +
+         (f" ({len(each)} deployments)" if len(each) > 1 else ""))
     if len(each) == 1:
         fit = fit_vehicle(log, vehicle)
         fit = replace(fit, vehicle=replace(fit.vehicle, base_drift_w=DEFAULT_DRIFT_W))
@@ -104,7 +111,9 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
     }
     relative_error = None
     if validate:
+        step("validating: the held-out dives replayed")
         replay = calibration.validate(log, vehicle)
+        step("validating: the later dives forecast from the earlier")
         forward = check_forward(log, vehicle)
         relative_error = forward.energy_relative_error
         report["relative_error"] = replay.relative_error
@@ -119,6 +128,7 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
             "relative_error": replay.relative_error,
         }
         report["forecast"] = _forecast_json(forward)
+        step("validating: each set of instruments forecast from another")
         report["configurations"] = _configurations_json(check_configurations(log, vehicle))
     if output is not None:
         report["output"] = str(_write_vehicle(Path(output), name, base, fit, log,
