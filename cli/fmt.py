@@ -28,8 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Every file is formatted; exit 1 if any fails (alone, a file exits with its error's
-    code: 2 for one that does not exist)."""
+    """Every file is formatted; the exit code is the worst of the files' (a file that does
+    not exist exits 2 alone or beside others, a file that does not parse 1)."""
     # Imported here: every command's module is loaded for --help, and `check` must start fast.
     from gliderplan.language.formatter import format_file
 
@@ -37,17 +37,15 @@ def run(args: argparse.Namespace) -> int:
     for path in args.missions:
         try:
             source, formatted = format_file(path)
-        except GliderplanError as err:  # unreadable, or does not parse: the others go on
-            alone = report("fmt", err)
-            code = max(code, alone if len(args.missions) == 1 else ExitCode.BAD_INPUT)
-            continue
-        if args.check:
-            if formatted != source:
-                print(f"{path}: would be reformatted")
-                code = max(code, ExitCode.BAD_INPUT)
-        elif args.write:
-            if formatted != source:
-                write_atomically(path, formatted)
-        else:
-            sys.stdout.write(formatted)
+            if args.check:
+                if formatted != source:
+                    print(f"{path}: would be reformatted")
+                    code = max(code, ExitCode.BAD_INPUT)
+            elif args.write:
+                if formatted != source:  # a read-only file is refused, not replaced
+                    write_atomically(path, formatted)
+            else:
+                sys.stdout.write(formatted)
+        except GliderplanError as err:  # unreadable, does not parse, read-only: go on
+            code = max(code, report("fmt", err))
     return code

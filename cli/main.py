@@ -113,6 +113,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout.flush()  # here, where a reader that went away is handled below
         return _stop_code() if code == ExitCode.INTERRUPTED else code
     except GliderplanError as err:
+        if getattr(args, "json", False):  # the error as JSON where the result would be
+            print_json(err.to_json(args.command))
         return report(args.command, err)
     except KeyboardInterrupt:
         print(f"gliderplan {args.command}: {'terminated' if _terminated else 'interrupted'}",
@@ -126,13 +128,36 @@ def main(argv: Sequence[str] | None = None) -> int:
             return ExitCode.BROKEN_PIPE
         if os.environ.get("GLIDERPLAN_DEBUG"):
             raise
-        print(f"gliderplan {args.command}: internal error: {type(err).__name__}: {err}\n"
+        said = f"internal error: {type(err).__name__}: {err}"
+        if getattr(args, "json", False):
+            print_json(GliderplanError(said).to_json(args.command) | {"exit_code": 70})
+        print(f"gliderplan {args.command}: {said}\n"
               "  (this is a bug in gliderplan; rerun with GLIDERPLAN_DEBUG=1 for details)",
               file=sys.stderr)
         return ExitCode.INTERNAL
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+
+
+def print_json(data: object) -> None:
+    """A command's --json result on stdout (docs/json.md): indented, no NaN (null)."""
+    import json
+
+    print(json.dumps(_no_nan(data), indent=2))
+
+
+def _no_nan(data: object) -> object:
+    """`data` with every float that is not finite as None: JSON has no NaN."""
+    import math
+
+    if isinstance(data, float) and not math.isfinite(data):
+        return None
+    if isinstance(data, dict):
+        return {k: _no_nan(v) for k, v in data.items()}
+    if isinstance(data, list | tuple):
+        return [_no_nan(v) for v in data]
+    return data
 
 
 def version() -> str:

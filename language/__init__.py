@@ -40,10 +40,15 @@ class CheckResult:
     def render(self) -> str:
         return render_all(self.diagnostics, self.filename, self.source)
 
+    def diagnostics_json(self) -> list[dict]:
+        """Every diagnostic as a JSON object (`Diagnostic.to_json`)."""
+        return [d.to_json(self.filename) for d in self.diagnostics]
+
     def checked(self) -> CheckedMission:
         """The checked mission; MissionError (with the diagnostics) if it has errors."""
         if self.mission is None:
-            raise MissionError(f"{self.filename}: mission has errors", details=self.render())
+            raise MissionError(f"{self.filename}: mission has errors", details=self.render(),
+                               diagnostics=self.diagnostics_json(), file=self.filename)
         return self.mission
 
 

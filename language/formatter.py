@@ -69,7 +69,9 @@ def format_file(path: str | Path) -> tuple[str, str]:
         return text, format_source(text)
     except MissionSyntaxError as err:
         raise MissionError(f"{path}: does not parse, left as it is",
-                           details=render_all(err.diagnostics, str(path), text)) from None
+                           details=render_all(err.diagnostics, str(path), text),
+                           diagnostics=[d.to_json(str(path)) for d in err.diagnostics],
+                           file=str(path)) from None
     except FormatError as err:
         raise FormatError(f"{path}: {err}") from None
 
