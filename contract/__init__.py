@@ -324,6 +324,7 @@ class ExitCode(IntEnum):
     BAD_INPUT = 1  # a bad mission, an infeasible budget, a failed validation
     USAGE = 2  # bad command-line usage: a missing file, a malformed option
     OVER_BUDGET = 3  # a simulated run broke its plan's energy budget
+    OVER_PREDICTION = 4  # with --strict-prediction: a run spent more than its plan predicted
     INTERNAL = 70  # a bug in gliderplan (EX_SOFTWARE of sysexits.h)
     INTERRUPTED = 130  # stopped by Ctrl-C (128 + SIGINT)
     TERMINATED = 143  # stopped by SIGTERM, as by Ctrl-C: outputs written, children stopped

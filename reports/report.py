@@ -276,8 +276,8 @@ def _verdict(summary: dict) -> str:
     if simulated is not None and budget:
         text += f" and a budget of {_wh(budget):,.4g} Wh ({100 * simulated / budget:.1f} % used)"
     causes = check.get("causes") or []
-    if causes:
-        text += "; " + esc("; ".join(causes))
+    if causes:  # below the run's one verdict: the states that overran their own prediction
+        text += "<br>states over their own prediction: " + esc("; ".join(causes))
     return text
 
 
