@@ -516,8 +516,9 @@ def _montecarlo_section(frame: pd.DataFrame, summary: dict, directory: Path) -> 
                              f"(95 % interval {100 * low:.1f} to {100 * high:.1f} %)")),
         ("energy", esc(spread(energy, J_PER_WH, "Wh"))),
         ("duration", esc(spread(duration, 3600.0, "h"))),
-        ("battery exhausted before the end", esc(f"{summary.get('exhausted_before_end', 0)} "
-                                                 "scenarios")),
+        ("exceeded the usable charge drawn", esc(
+            f"{summary.get('exceeded_drawn_usable_charge', 0)} scenarios (usable share drawn "
+            f"from {summary.get('usable_share_drawn_from', 'the scenario file')})")),
         ("plan flown", esc(summary.get("plan") or "none: every sensor always on")),
     ]
     budget = summary.get("budget_j")

@@ -77,6 +77,17 @@ class Distribution:
     low: float = -math.inf  # bounds a normal is clipped to
     high: float = math.inf
 
+    def text(self) -> str:
+        """The distribution as written, for a reader: 'normal (mean 0.97, sd 0.03, within
+        0.8-1.02)', 'uniform 0.9-1', 'fixed 0.95'."""
+        if self.kind == "fixed":
+            return f"fixed {self.a:g}"
+        if self.kind == "uniform":
+            return f"uniform {self.a:g}-{self.b:g}"
+        bounds = f", within {self.low:g}-{self.high:g}" if math.isfinite(self.low) or \
+            math.isfinite(self.high) else ""
+        return f"normal (mean {self.a:g}, sd {self.b:g}{bounds})"
+
     def draw(self, rng: np.random.Generator) -> float:
         """One value; every kind takes exactly one number from `rng`, so that changing
         one distribution never shifts the draws of the others."""
