@@ -11,9 +11,10 @@ Every form takes --json. The tables come from `gliderplan.power_models.tables`.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
+from gliderplan.cli.main import print_json
+from gliderplan.contract.errors import UsageError
 from gliderplan.power_models.tables import KINDS
 
 
@@ -102,6 +103,9 @@ def run(args: argparse.Namespace) -> int:
             data = tables.presets(args.kind)
             text = "\n".join(f"{kind}: {', '.join(names)}" for kind, names in data.items())
         case "show":
+            if args.clock is not None and args.kind != "board":
+                raise UsageError(f"--clock: a {args.kind} has no clock; it is for "
+                                 "'power show board'")
             data = tables.model_figures(args.kind, args.spec, args.clock)
             text = _show_text(data)
         case "energy":
@@ -114,7 +118,10 @@ def run(args: argparse.Namespace) -> int:
                                          min_depth_m=args.min_depth,
                                          max_depths_m=args.max_depth, pitch_deg=args.pitch_deg)
             text = _speed_text(data)
-    print(json.dumps(data, indent=2) if args.json else text)
+    if args.json:
+        print_json(data)
+    else:
+        print(text)
     return 0
 
 

@@ -129,6 +129,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"{mission.name}: {record.ended} after {_time_text(record.columns['time_s'][-1])}, "
           f"{len(record.trace)} transitions, {result.energy.total_j / 1e3:.1f} kJ; "
           f"plan check: {check.headline}", file=sys.stderr)
+    if duration_s is None and mission.horizon_s is None and record.ended == "duration":
+        print(f"  ran to the default horizon, {DEFAULT_HORIZON_S / 86400:g} d: the mission names "
+              "none (--duration sets another)", file=sys.stderr)
     if check.causes:
         print("  states over their own prediction:" if check.verdict != "violation" or
               "planned" in check.causes[0] else "  where it went:", file=sys.stderr)

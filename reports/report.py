@@ -281,6 +281,16 @@ def _verdict(summary: dict) -> str:
     return text
 
 
+def _battery_text(report: dict, hardware) -> str:
+    """The battery the plan was made for (`plan --battery` may have replaced the
+    mission's; its report says which), else the mission's."""
+    battery = report.get("battery") or {}
+    if not battery.get("energy_j"):  # a report of an older gliderplan
+        battery = {"energy_j": hardware.battery_j, "reserve_fraction": hardware.reserve_fraction}
+    energy_j, reserve = battery["energy_j"], battery["reserve_fraction"]
+    return f"{_wh(energy_j):,.4g} Wh, reserve {100 * reserve:.3g} %"
+
+
 def _summary_section(mission: CheckedMission, source: str, hardware, report: dict,
                      plan_file: Path, summary: dict, run_origin: str) -> Section:
     budget = report["budget_j"]
@@ -289,8 +299,7 @@ def _summary_section(mission: CheckedMission, source: str, hardware, report: dic
         ("states", esc(", ".join(s.name for s in mission.states))),
         ("vehicle", esc(hardware.vehicle.name)),
         ("computer", esc(_computer(report))),
-        ("battery", esc(f"{_wh(hardware.battery_j):,.4g} Wh, reserve "
-                        f"{100 * hardware.reserve_fraction:.3g} %")),
+        ("battery", esc(_battery_text(report, hardware))),
         ("budget", esc(f"{_wh(budget):,.4g} Wh usable")),
         ("objective", esc(report["objective"].replace("_", " "))),
         ("predicted energy", esc(f"{_wh(report['energy_j']):,.4g} Wh "
