@@ -23,12 +23,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--kml", action="store_true", help="track.kml: the track")
     parser.add_argument("-o", "--output", metavar="DIR",
                         help="where to write (default: RUNDIR)")
+    parser.add_argument("--json", action="store_true",
+                        help="print the files written as JSON (docs/json.md)")
 
 
 def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.export import FORMATS, export_run
 
-    for path in export_run(args.run, [name for name in FORMATS if getattr(args, name)],
-                           args.output):
+    written = export_run(args.run, [name for name in FORMATS if getattr(args, name)],
+                         args.output)
+    for path in written:
         print(f"wrote {path}", file=sys.stderr)
+    if args.json:
+        from gliderplan.cli.main import print_json
+
+        print_json({"ok": True, "run": args.run, "files": [str(p) for p in written]})
     return 0
