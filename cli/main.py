@@ -18,12 +18,14 @@ import pkgutil
 import select
 import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import ModuleType
+from typing import TextIO
 
 import gliderplan.cli
 from gliderplan.contract import ExitCode
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import OutputFileError
 
 
 def subcommands(only: str | None = None) -> dict[str, ModuleType]:
@@ -108,6 +110,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
     except ValueError:  # not the main thread (a test's, or an embedding program's)
         previous = None
+    real_stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
         code = int(args._run(args))
         sys.stdout.flush()  # here, where a reader that went away is handled below
@@ -136,6 +139,7 @@ def main(argv: Sequence[str] | None = None) -> int:
               file=sys.stderr)
         return ExitCode.INTERNAL
     finally:
+        sys.stdout = real_stdout
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
 
@@ -169,6 +173,35 @@ def version() -> str:
         return installed("gliderplan")
     except PackageNotFoundError:  # run from a source tree that was never installed
         return "unknown (not installed)"
+
+
+class _Stdout:
+    """sys.stdout while a command runs: a write that fails for want of space or of a
+    device (stdout on a full disk, /dev/full) is a result that cannot be written where
+    asked, as for -o (OutputFileError, exit 2), and what is still buffered is dropped
+    rather than failing again at exit. A reader that went away stays a BrokenPipeError."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+
+    def _guarded(self, call: Callable[[], object]) -> object:
+        try:
+            return call()
+        except BrokenPipeError:
+            raise
+        except OSError as err:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+            raise OutputFileError(f"cannot write the output (stdout): "
+                                  f"{err.strerror or err}") from None
+
+    def write(self, text: str) -> object:
+        return self._guarded(lambda: self._stream.write(text))
+
+    def flush(self) -> object:
+        return self._guarded(self._stream.flush)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._stream, name)
 
 
 def _stdout_reader_gone() -> bool:
