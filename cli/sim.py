@@ -19,7 +19,7 @@ import re
 import sys
 
 from gliderplan.cli.common import add_mission_argument, load_mission, seed
-from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S, ExitCode
+from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
 
@@ -37,6 +37,9 @@ def parse_duration_s(text: str, option: str = "--duration") -> float:
     seconds = float(match[1]) * UNITS["time"][match[2]]
     if not math.isfinite(seconds) or seconds <= 0.0:
         raise UsageError(f"{option} {text!r}: must be a positive time")
+    if seconds > MAX_PLAN_TIME_S:  # what a plan, a horizon and an expect bound may span
+        raise UsageError(f"{option} {text!r}: must be at most "
+                         f"{MAX_PLAN_TIME_S / 86400 / 365:g} years")
     return seconds
 
 

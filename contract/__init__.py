@@ -190,6 +190,9 @@ DEFAULT_HORIZON_S = 30 * 86400.0  # [s] 30 days
 # tables written from them): a run of more ticks is refused before it starts, saying how
 # long it would be (`sim --tick 0.1` of a 30-day mission is 26 million ticks, ~10 GB).
 MAX_SIMULATED_TICKS = 3_000_000  # 139 days at the 4 s tick; ~1.3 GB
+# Worker processes of one Monte Carlo run or confidence plan on this machine: a local pool
+# starts them all at once (`--workers 100000` forked until the machine had no more).
+MAX_WORKERS = 256
 
 
 # ---- energy components --------------------------------------------------------------

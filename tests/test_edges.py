@@ -186,6 +186,22 @@ CASES = [
     ("montecarlo of 10,000 days", ["montecarlo", str(FIG2), "--scenarios", "2",
                                    "--duration", "10000d", "-o", "out"], USAGE,
      "ticks, more than the"),
+    ("montecarlo --workers 100000", ["montecarlo", str(FIG2), "--scenarios", "2",
+                                     "--workers", "100000", "-o", "out"], USAGE,
+     "--workers 100000: at most 256 worker processes"),  # once forked until none were left
+    ("plan --confidence --workers 100000", ["plan", str(FIG2), "--confidence", "0.9",
+                                            "--workers", "100000"], USAGE,
+     "--workers 100000: at most 256"),
+    ("forecast of 1e300 days", ["forecast", str(FIG2), "--duration", "1e300d"], USAGE,
+     "--duration '1e300d': must be at most 10 years"),  # once forecast, exit 0
+    ("import-slocum over 1e300 days", ["import-slocum", "x.mi", "--horizon", "1e300d", "-o",
+                                       "out"], USAGE, "--horizon '1e300d': must be at most"),
+    ("power energy below the deepest ocean", ["power", "energy", "--max-depth", "1e308"],
+     USAGE, "--max-depth must be at most 11,000 m, the deepest ocean"),
+    ("power speed for a 1e308 W hotel load", ["power", "speed", "--hotel-w", "1e308"], USAGE,
+     "--hotel-w values must be at most 1000 W"),  # once overflowed, exit 0
+    ("power energy from a NaN top", ["power", "energy", "--min-depth", "nan"], USAGE,
+     "--min-depth must be >= 0"),  # once printed a table of NaN, exit 0
     # named pipes and symbolic-link loops
     ("a named pipe for a metadata file", ["export", "{nan-summary}", "--format", "og1",
                                           "--metadata", "{pipe.toml}"], USAGE,
