@@ -14,7 +14,6 @@ import argparse
 import math
 
 from gliderplan.cli.main import print_json
-from gliderplan.contract.errors import UsageError
 from gliderplan.power_models.tables import KINDS
 
 
@@ -103,9 +102,6 @@ def run(args: argparse.Namespace) -> int:
             data = tables.presets(args.kind)
             text = "\n".join(f"{kind}: {', '.join(names)}" for kind, names in data.items())
         case "show":
-            if args.clock is not None and args.kind != "board":
-                raise UsageError(f"--clock: a {args.kind} has no clock; it is for "
-                                 "'power show board'")
             data = tables.model_figures(args.kind, args.spec, args.clock)
             text = _show_text(data)
         case "energy":

@@ -183,8 +183,8 @@ CASES = [
     # a run longer than memory holds: refused at once, saying how long it would be
     ("sim --tick 0.1 of a 30-day mission", ["sim", str(MONTH), "--tick", "0.1", "-o", "out"],
      USAGE, f"is 25,920,000 ticks, more than the {MAX_SIMULATED_TICKS:,} one run holds"),
-    ("montecarlo of 10,000 days", ["montecarlo", str(FIG2), "--scenarios", "2",
-                                   "--duration", "10000d", "-o", "out"], USAGE,
+    ("montecarlo of 3,000 days", ["montecarlo", str(FIG2), "--scenarios", "2",
+                                   "--duration", "3000d", "-o", "out"], USAGE,
      "ticks, more than the"),
     ("montecarlo --workers 100000", ["montecarlo", str(FIG2), "--scenarios", "2",
                                      "--workers", "100000", "-o", "out"], USAGE,
@@ -235,8 +235,6 @@ CASES = [
      "--key works only with --plan"),
     ("calibrate --name alone", ["calibrate", ".", "--name", "g1"], USAGE,
      "--name works only with --output"),
-    ("power show --clock of a vehicle", ["power", "show", "vehicle", "slocum_g3", "--clock",
-                                         "300"], USAGE, "--clock: a vehicle has no clock"),
     ("fmt --json alone", ["fmt", "--json", str(FIG2)], USAGE,
      "--json says what --check or --write did"),
     ("forecast --mafiles of a mission", ["forecast", str(FIG2), "--mafiles", "."], USAGE,
@@ -246,8 +244,8 @@ CASES = [
     # a board feature the target lacks
     ("a TS-7800 sleep built for the TS-5500", ["compile", "{sleepy.mission}", "--target",
                                                "ts5500", "-o", "out"], BAD,
-     "cannot run on board ts5500 (target ts5500; clocks 133 MHz): the mission's computer "
-     "runs at 300 MHz; state s1 asks to 'sleep between ticks'"),
+     "cannot run on board ts5500 (target ts5500; clocks 133 MHz): state s1 asks to 'sleep "
+     "between ticks'"),
     # one exit code per kind of error, whatever the number of files
     ("a missing mission beside a good one: check", ["check", str(FIG2), "none.mission"], USAGE,
      "none.mission: no such file"),
