@@ -8,13 +8,28 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint sysdeps clean
+.PHONY: demo test lint sysdeps clean lock
 
-$(STAMP): pyproject.toml setup.py sim/native.c
+# Installs are reproducible: every package at the version constraints.txt pins (`make
+# lock` updates it on purpose).
+$(STAMP): pyproject.toml setup.py sim/native.c constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[test]'
+	$(BIN)/pip install --quiet -c constraints.txt -e '.[test]'
 	touch $@
+
+# A fresh resolve of pyproject.toml's ranges into constraints.txt, in a scratch venv;
+# then `make clean test` and commit both.
+LOCK_VENV := .venv-lock
+lock:
+	rm -rf $(LOCK_VENV)
+	$(PYTHON) -m venv $(LOCK_VENV)
+	$(LOCK_VENV)/bin/pip install --quiet --upgrade pip
+	$(LOCK_VENV)/bin/pip install --quiet -e '.[test]'
+	{ sed -n '/^#/p' constraints.txt; $(LOCK_VENV)/bin/pip freeze --exclude-editable; } \
+		> constraints.txt.new
+	mv constraints.txt.new constraints.txt
+	rm -rf $(LOCK_VENV)
 
 # The whole pipeline on the built-in examples: check, plan under the battery budget,
 # compile mission and plan to C, fly them on the simulated glider over a

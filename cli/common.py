@@ -44,6 +44,22 @@ def seed(text: str) -> int:
     return value
 
 
+def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]]) -> None:
+    """UsageError for an option given without one of the options it works with: `needs`
+    maps an option ("--scenarios") to those ("--confidence", "--occupancy-from-sim"); an
+    option is given when its value is neither None nor False."""
+    from gliderplan.contract.errors import UsageError
+
+    def given(option: str) -> bool:
+        return getattr(args, option.lstrip("-").replace("-", "_")) not in (None, False)
+
+    for option, partners in needs.items():
+        if given(option) and not any(given(p) for p in partners):
+            raise UsageError(f"{option} works only with {' or '.join(partners)}: give "
+                             f"{'one of them' if len(partners) > 1 else 'it'} too, or leave "
+                             f"{option} out")
+
+
 def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cycles-per-tick", type=cycles_per_tick, metavar="N",
                         default=RUNTIME_CYCLES_PER_TICK,

@@ -12,8 +12,10 @@ defaults to the mission's; calibrate yours from its logs (`gliderplan calibrate`
 from __future__ import annotations
 
 import argparse
-import json
 import sys
+
+from gliderplan.cli.main import print_json
+from gliderplan.contract.errors import UsageError
 
 ORDER = 55
 
@@ -44,6 +46,9 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.cli.sim import parse_duration_s
     from gliderplan.planner.forecast import forecast_mission, load_forecast_mission, water
 
+    if args.mafiles is not None and not args.mission.lower().endswith(".mi"):
+        raise UsageError(f"--mafiles: {args.mission} is no Slocum .mi mission; the .ma files "
+                         "are read for one alone")
     duration = None if args.duration is None else parse_duration_s(args.duration)
     mission, warnings = load_forecast_mission(args.mission, args.mafiles)
     imported = tuple(w for w in warnings if w.startswith("import-slocum: "))
@@ -60,7 +65,10 @@ def run(args: argparse.Namespace) -> int:
     result = forecast_mission(mission, vehicle=args.vehicle, duration_s=duration, ocean=ocean,
                               ocean_source=source, floor=floor, floor_note=floor_note,
                               said=imported)
-    print(json.dumps(result.to_json(), indent=2) if args.json else _text(result.to_json()))
+    if args.json:
+        print_json(result.to_json())
+    else:
+        print(_text(result.to_json()))
     return 0
 
 
@@ -80,9 +88,10 @@ def _text(f: dict) -> str:
         f"yos        {f['yos']:,.0f} ({f['interval_level']:.0%} interval "
         f"{f['yos_interval'][0]:,.0f} to {f['yos_interval'][1]:,.0f})",
         f"surfacings {f['surfacings']:,.0f}",
-        "",
-        "energy by device:",
     ]
+    if f["defaults"]:
+        lines.append(f"defaults   {', '.join(f['defaults'])} (not named by the mission)")
+    lines += ["", "energy by device:"]
     total = f["energy_j"] or 1.0
     for name, joules in sorted(f["devices"].items(), key=lambda kv: -kv[1]):
         if joules > 0.0:

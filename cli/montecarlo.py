@@ -15,11 +15,11 @@ Ctrl-C keeps the scenarios that finished (exit 130).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 
 from gliderplan.cli.common import add_mission_argument, load_mission, seed
+from gliderplan.cli.main import print_json
 from gliderplan.contract import ExitCode
 
 ORDER = 65
@@ -69,7 +69,10 @@ def run(args: argparse.Namespace) -> int:
     finally:
         progress.finish()
     summary = run_.summary
-    print(json.dumps(summary, indent=2) if args.json else _verdict(mission.name, summary))
+    if args.json:
+        print_json(summary)
+    else:
+        print(_verdict(mission.name, summary))
     if run_.result.interrupted:
         print(f"  interrupted: {len(run_.result.rows)} of {args.scenarios} scenarios "
               f"finished; the files in {args.output} hold them", file=sys.stderr)
@@ -78,11 +81,16 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _verdict(name: str, s: dict) -> str:
+    """What the scenarios did, as a pilot reads it: how often the budget held, the energy
+    drawn, how many passed the usable charge drawn for them, how the runs ended."""
     low, high = s["probability_interval_95"]
     e = s["energy_j"]
+    ended = ", ".join(f"{count} by {how}" for how, count in s["ended"].items())
     return (f"{name}: the budget held in {s['budget_held']} of {s['scenarios']} scenarios: "
             f"{100 * s['probability_budget_holds']:.1f} % (95 % interval "
             f"{100 * low:.1f}-{100 * high:.1f} %)\n"
             f"  energy {e['p05'] / 1e3:,.0f} / {e['p50'] / 1e3:,.0f} / {e['p95'] / 1e3:,.0f} kJ "
-            f"(5 / 50 / 95 %) against a budget of {s['budget_j'] / 1e3:,.0f} kJ; "
-            f"{s['exhausted_before_end']} ran out before the end")
+            f"(5 / 50 / 95 %) against a budget of {s['budget_j'] / 1e3:,.0f} kJ\n"
+            f"  {s['exceeded_drawn_usable_charge']} exceeded the usable charge drawn for the "
+            f"scenario (the budget times a usable share drawn from "
+            f"{s['usable_share_drawn_from']}); the runs ended: {ended}")

@@ -11,9 +11,9 @@ Every form takes --json. The tables come from `gliderplan.power_models.tables`.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
+from gliderplan.cli.main import print_json
 from gliderplan.power_models.tables import KINDS
 
 
@@ -114,7 +114,10 @@ def run(args: argparse.Namespace) -> int:
                                          min_depth_m=args.min_depth,
                                          max_depths_m=args.max_depth, pitch_deg=args.pitch_deg)
             text = _speed_text(data)
-    print(json.dumps(data, indent=2) if args.json else text)
+    if args.json:
+        print_json(data)
+    else:
+        print(text)
     return 0
 
 

@@ -4,10 +4,11 @@ Writes RUNDIR/trace.csv, timeseries.parquet, summary.json, depth.png and energy.
 (and trajectory.nc with --netcdf); with --runtime c and --state-dir DIR the runtime's
 own checkpoint and events.log in DIR (and with --faults its events.log in RUNDIR too).
 Without --plan every sensor a state logs is always on. --faults SPEC injects faults
-into the C runtime's line and board (docs/reliability.md). Exit status 3: the run spent
-more than the plan's budget (a plan violation; summary.json names the cause). A run
-within its budget in which a state spent more than 5 % over its prediction says "plan
-check: over prediction" and names the state and the component (exit 0).
+into the C runtime's line and board (docs/reliability.md). The plan check is one verdict
+from the run's total: exit status 3, the run spent more than the plan's budget (a plan
+violation); "over prediction", it spent more than the plan predicted by more than the 5 %
+tolerance but kept its budget (exit 0, or 4 with --strict-prediction); the states that
+overran their own prediction are listed below it, with the component responsible.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import re
 import sys
 
 from gliderplan.cli.common import add_mission_argument, load_mission, seed
-from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S, ExitCode
+from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
 
@@ -36,6 +37,9 @@ def parse_duration_s(text: str, option: str = "--duration") -> float:
     seconds = float(match[1]) * UNITS["time"][match[2]]
     if not math.isfinite(seconds) or seconds <= 0.0:
         raise UsageError(f"{option} {text!r}: must be a positive time")
+    if seconds > MAX_PLAN_TIME_S:  # what a plan, a horizon and an expect bound may span
+        raise UsageError(f"{option} {text!r}: must be at most "
+                         f"{MAX_PLAN_TIME_S / 86400 / 365:g} years")
     return seconds
 
 
@@ -90,6 +94,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --runtime c: faults to inject on the line and into the "
                              "runtime's board, e.g. drop=0.01,flip=1e-4,dup=0.01,burst=5@0.001,"
                              "disconnect=600s@3600s,kill=10 (docs/reliability.md)")
+    parser.add_argument("--strict-prediction", action="store_true",
+                        help="exit 4 when the run spent more than the plan predicted by more "
+                             "than its tolerance (5 %%), although within its budget")
+    parser.add_argument("--json", action="store_true",
+                        help="print the run's summary (summary.json) and its files as JSON")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
                         help="directory for the run's files")
 
@@ -130,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     record, check = result.record, result.check
     print(f"{mission.name}: {record.ended} after {_time_text(record.columns['time_s'][-1])}, "
           f"{len(record.trace)} transitions, {result.energy.total_j / 1e3:.1f} kJ; "
-          f"plan check: {check.verdict}", file=sys.stderr)
+          f"plan check: {check.headline}", file=sys.stderr)
     stops = any(p.has_altimeter_stop for s in mission.states for p in s.profiles)
     density, floor = result.water_notes[0], result.water_notes[1:]
     if args.ocean is not None:
@@ -139,17 +148,34 @@ def run(args: argparse.Namespace) -> int:
             or _replayed(args.ocean):
         for note in floor:
             print(f"  {note}", file=sys.stderr)
+    if duration_s is None and mission.horizon_s is None and record.ended == "duration":
+        print(f"  ran to the default horizon, {DEFAULT_HORIZON_S / 86400:g} d: the mission names "
+              "none (--duration sets another)", file=sys.stderr)
     if check.causes:
-        print("  over the plan's prediction:" if check.verdict == "over prediction"
-              else "  cause:",
-              file=sys.stderr)
+        print("  states over their own prediction:" if check.verdict != "violation" or
+              "planned" in check.causes[0] else "  where it went:", file=sys.stderr)
     for cause in check.causes:
         print(f"    {cause}", file=sys.stderr)
     if result.interrupted:
         print(f"  interrupted: the outputs in {args.output} cover the part flown",
               file=sys.stderr)
-        return ExitCode.INTERRUPTED
-    return ExitCode.OVER_BUDGET if check.verdict == "violation" else ExitCode.OK
+        code = ExitCode.INTERRUPTED
+    elif check.verdict == "violation":
+        code = ExitCode.OVER_BUDGET
+    elif check.verdict == "over prediction" and args.strict_prediction:
+        code = ExitCode.OVER_PREDICTION
+    else:
+        code = ExitCode.OK
+    if args.json:
+        import json
+
+        from gliderplan.cli.main import print_json
+
+        written = next(f for f in result.files if f.name == "summary.json")
+        summary = json.loads(written.read_text())  # as written: what a pipeline reads later
+        print_json({"ok": code == ExitCode.OK, "exit_code": int(code), **summary,
+                    "files": [str(f) for f in result.files]})
+    return code
 
 
 def _replayed(ocean: str | None) -> bool:

@@ -59,6 +59,9 @@ MAX_PLAN_SPEED_MPS = 2.0  # [m/s] a planned horizontal speed (a glider makes 0.2
 MAX_PLAN_ENERGY_J = 1e10  # [J] a budget or prediction (the largest Slocum pack is 12 MJ)
 MAX_PLAN_INFLECTIONS = 1e9  # a state's predicted inflections (as many as its visits may be)
 MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
+# A sensor's weight in the quality objective is relative to the others': a ratio past this
+# is beyond what the solver resolves (its tolerance is ~1e-8), and 1e308 overflowed it.
+MAX_SENSOR_WEIGHT = 1e6
 CLOCK_TOLERANCE_MHZ = 1e-6  # [MHz] a plan's clock is the board's within this
 NO_BOARD = "none"  # `computer none`: no board to set; its plans' clocks are all 0
 
@@ -100,6 +103,10 @@ MAX_PLAN_SEQUENCE = 4_294_967_295  # a signed plan's `seq` (a u32); 1 is the fir
 # larger file and anything but a regular file (a device such as /dev/zero, a named pipe)
 # before reading a byte of it.
 MAX_INPUT_BYTES = 16 * 1024 * 1024  # [bytes] far beyond any real input; guards the readers
+# Data files (TOML model and scenario files, JSON reports and summaries) are parsed by
+# `contract.files.parse_data`: tables and arrays nested deeper than this, or a number that
+# is not finite (TOML and Python's JSON read `nan` and `inf`), are refused with the key.
+MAX_DATA_DEPTH = 32  # the shipped files nest 3 deep, the JSON reports 6
 
 # ---- the sensor array ----------------------------------------------------------------
 
@@ -192,6 +199,13 @@ RUNTIME_CYCLES_PER_TICK = 200_000.0  # [cycles]
 # A mission without `horizon` is planned over this time, and a run of it (sim, montecarlo)
 # ends here if it has not exited: the plan's budget and the flight cover the same time.
 DEFAULT_HORIZON_S = 30 * 86400.0  # [s] 30 days
+# A simulated run keeps one row per tick in memory (about 400 bytes of columns, then the
+# tables written from them): a run of more ticks is refused before it starts, saying how
+# long it would be (`sim --tick 0.1` of a 30-day mission is 26 million ticks, ~10 GB).
+MAX_SIMULATED_TICKS = 3_000_000  # 139 days at the 4 s tick; ~1.3 GB
+# Worker processes of one Monte Carlo run or confidence plan on this machine: a local pool
+# starts them all at once (`--workers 100000` forked until the machine had no more).
+MAX_WORKERS = 256
 
 
 # ---- energy components --------------------------------------------------------------
@@ -326,6 +340,8 @@ class ExitCode(IntEnum):
     BAD_INPUT = 1  # a bad mission, an infeasible budget, a failed validation
     USAGE = 2  # bad command-line usage: a missing file, a malformed option
     OVER_BUDGET = 3  # a simulated run broke its plan's energy budget
+    OVER_PREDICTION = 4  # with --strict-prediction: a run spent more than its plan predicted
     INTERNAL = 70  # a bug in gliderplan (EX_SOFTWARE of sysexits.h)
     INTERRUPTED = 130  # stopped by Ctrl-C (128 + SIGINT)
+    TERMINATED = 143  # stopped by SIGTERM, as by Ctrl-C: outputs written, children stopped
     BROKEN_PIPE = 141  # the reader of stdout went away (`| head`): stopped quietly (128 + SIGPIPE)

@@ -9,6 +9,7 @@ MissionError for the commands that go on with the mission.
 from __future__ import annotations
 
 import gc
+import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -39,10 +40,15 @@ class CheckResult:
     def render(self) -> str:
         return render_all(self.diagnostics, self.filename, self.source)
 
+    def diagnostics_json(self) -> list[dict]:
+        """Every diagnostic as a JSON object (`Diagnostic.to_json`)."""
+        return [d.to_json(self.filename) for d in self.diagnostics]
+
     def checked(self) -> CheckedMission:
         """The checked mission; MissionError (with the diagnostics) if it has errors."""
         if self.mission is None:
-            raise MissionError(f"{self.filename}: mission has errors", details=self.render())
+            raise MissionError(f"{self.filename}: mission has errors", details=self.render(),
+                               diagnostics=self.diagnostics_json(), file=self.filename)
         return self.mission
 
 
@@ -91,7 +97,9 @@ def _check_source(source: str, filename: str, stack_depth: int | None) -> CheckR
     except MissionSyntaxError as err:
         return CheckResult(filename, source, None, err.diagnostics)
     try:
-        mission, diagnostics = check(syntax, stack_depth)
+        # the files a mission names are beside it (a text of no file: the working folder)
+        base_dir = "" if filename.startswith("<") else os.path.dirname(filename)
+        mission, diagnostics = check(syntax, stack_depth, base_dir)
     except RecursionError:
         from gliderplan.language.parser import TOO_DEEP
 

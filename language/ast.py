@@ -151,10 +151,12 @@ class ComputerDecl(Node):
 
 
 class BatteryDecl(Node):
-    capacity: Quantity
+    capacity: Quantity | None  # None for a preset or a file
     voltage: Quantity | None
     reserve: Quantity | None
     span: Span = NO_SPAN
+    preset: Ident | None = None  # `battery alkaline`, or a file path written as a string
+    is_file: bool = False
 
 
 class HorizonDecl(Node):

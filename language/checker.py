@@ -7,10 +7,19 @@ needs them. Every pass reports all it finds, never just the first problem.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable, Mapping
 from typing import TypeVar
 
-from gliderplan.contract import MAX_STACK_DEPTH, NO_BOARD, RUNTIME_CYCLES_PER_TICK, TICK_S
+from gliderplan.contract import (
+    MAX_PLAN_ENERGY_J,
+    MAX_PLAN_TIME_S,
+    MAX_SENSOR_WEIGHT,
+    MAX_STACK_DEPTH,
+    NO_BOARD,
+    RUNTIME_CYCLES_PER_TICK,
+    TICK_S,
+)
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
 from gliderplan.language.flow import check_flow
@@ -29,9 +38,11 @@ T = TypeVar("T")
 
 
 class _Checker:
-    def __init__(self, mission: ast.Mission, stack_depth: int | None):
+    def __init__(self, mission: ast.Mission, stack_depth: int | None, base_dir: str = ""):
         self.mission = mission
         self.stack_depth_override = stack_depth
+        self.base_dir = base_dir  # the mission's folder: the files it names are beside it
+        self.written: list[tuple[str, str]] = []  # (field, file as written) of each file
         self.diagnostics: list[Diagnostic] = []
         self.variables: dict[str, ast.VarDecl] = {}
         self.state_names = {s.name.text for s in mission.states}
@@ -99,7 +110,7 @@ class _Checker:
             match decl:
                 case ast.VehicleDecl():
                     self.preset_known("vehicle", decl.preset, decl.is_file)
-                    fields["vehicle"] = decl.preset.text
+                    fields["vehicle"] = self.beside("vehicle", decl.preset.text, decl.is_file)
                 case ast.ComputerDecl() if decl.board.text == NO_BOARD:
                     fields["computer"] = self.computer = ir.Computer(NO_BOARD)
                     if decl.clock is not None:
@@ -114,7 +125,8 @@ class _Checker:
                         clock_mhz = mhz[0]
                         if clock_mhz <= 0:
                             self.error("clock must be positive", decl.clock.span)
-                    fields["computer"] = self.computer = ir.Computer(decl.board.text, clock_mhz)
+                    board = self.beside("computer", decl.board.text, decl.is_file)
+                    fields["computer"] = self.computer = ir.Computer(board, clock_mhz)
                     if known and clock_mhz is not None and clock_mhz > 0 and \
                             (board := self.board(decl.clock.span)) is not None:
                         self.clock_known(board, clock_mhz, decl.clock.span,
@@ -124,8 +136,11 @@ class _Checker:
                         fields["battery"] = battery
                 case ast.HorizonDecl():
                     if (horizon := self.quantity(decl.duration, "time")) is not None:
-                        if horizon[0] <= 0:
-                            self.error("horizon must be positive", decl.duration.span)
+                        if not TICK_S <= horizon[0] <= MAX_PLAN_TIME_S:
+                            self.error(f"horizon must lie between one tick ({TICK_S:g} s) and "
+                                       f"{MAX_PLAN_TIME_S / 86400 / 365:g} years",
+                                       decl.duration.span, "the time the mission is planned "
+                                       "and simulated for, e.g. 'horizon 30 d'")
                         fields["horizon_s"] = horizon[0]
                 case ast.ObjectiveDecl():
                     fields["objective"] = self.objective(decl)
@@ -146,6 +161,7 @@ class _Checker:
                         fields["stack_depth"] = int(depth)
         if self.stack_depth_override is not None:
             fields["stack_depth"] = self.stack_depth_override
+        fields["files_as_written"] = tuple(self.written)
         fields["sensor_preferences"] = tuple(prefs)
         fields["variables"] = tuple(variables)
         fields["defaults_used"] = tuple(
@@ -154,6 +170,15 @@ class _Checker:
             if kind not in seen
         )
         return fields
+
+    def beside(self, field: str, spec: str, is_file: bool) -> str:
+        """The file a mission names (`vehicle "my.toml"`), found beside the mission rather
+        than in the working directory: resolved here, once, for every later stage (the
+        IR holds the path, its hash the text as written); a preset name as it is."""
+        if not is_file or os.path.isabs(spec) or not self.base_dir:
+            return spec
+        self.written.append((field, spec))
+        return os.path.join(self.base_dir, spec)
 
     def preset_known(self, kind: str, name: ast.Ident, is_file: bool) -> bool:
         """False, with an error, for a preset name that is not shipped; a user's file is
@@ -171,13 +196,15 @@ class _Checker:
         return True
 
     def battery(self, decl: ast.BatteryDecl) -> ir.Battery | None:
-        capacity = self.quantity(decl.capacity, "energy", "charge")
         reserve = 0.0
         if decl.reserve is not None and (fraction := self.quantity(decl.reserve, "fraction")):
             reserve = fraction[0]
             if not 0 <= reserve < 1:
                 self.error("reserve must be at least 0 % and below 100 %", decl.reserve.span,
                            "the reserve is the part of the battery the plan must not use")
+        if decl.preset is not None:
+            return self.battery_pack(decl, reserve if decl.reserve is not None else None)
+        capacity = self.quantity(decl.capacity, "energy", "charge")
         if capacity is None:
             return None
         energy_j, dimension = capacity
@@ -195,7 +222,30 @@ class _Checker:
         if energy_j <= 0:
             self.error("battery capacity must be positive", decl.capacity.span)
             return None
+        if energy_j > MAX_PLAN_ENERGY_J:
+            self.error(f"a battery of {energy_j:.3g} J is larger than any plan can carry "
+                       f"({MAX_PLAN_ENERGY_J:g} J; the largest Slocum pack holds 12 MJ)",
+                       decl.capacity.span)
+            return None
         return ir.Battery(energy_j, reserve)
+
+    def battery_pack(self, decl: ast.BatteryDecl, reserve: float | None) -> ir.Battery | None:
+        """`battery alkaline` or `battery "pack.toml"`: the pack's energy, and its reserve
+        unless the line gives one (the part the pack's `usable_fraction` leaves), as
+        `plan --battery PRESET` reads it."""
+        if not self.preset_known("battery", decl.preset, decl.is_file):
+            return None
+        from gliderplan.contract.errors import GliderplanError
+        from gliderplan.power_models.battery import load_battery
+
+        spec = self.beside("battery", decl.preset.text, decl.is_file)
+        try:
+            pack = load_battery(spec)
+        except GliderplanError as err:
+            self.error(f"battery {decl.preset.text}: {err}", decl.preset.span)
+            return None
+        return ir.Battery(pack.energy_j, 1.0 - pack.usable_fraction if reserve is None
+                          else reserve)
 
     def objective(self, decl: ast.ObjectiveDecl) -> ir.Objective:
         wanted = {("maximize", "quality"), ("minimize", "energy")}
@@ -206,8 +256,9 @@ class _Checker:
                        "'objective minimize energy quality >= N'")
             return ir.Objective()
         floor = decl.quality_floor.value if decl.quality_floor else 0.0
-        if floor < 0:
-            self.error("a quality floor cannot be negative", decl.quality_floor.span)
+        if not 0 <= floor <= 1:
+            self.error("a quality floor must lie between 0 and 1", decl.quality_floor.span,
+                       "quality runs from 0 (no science) to 1 (every sensor always on)")
         if pair == ("maximize", "quality"):
             if decl.quality_floor is not None:
                 self.warning("a quality floor has no effect when maximizing quality",
@@ -226,8 +277,10 @@ class _Checker:
         for bound in decl.bounds:
             if bound.kind == "weight":
                 weight = bound.value.value
-                if not 0 <= weight < math.inf:
-                    self.error("a weight must be a finite number, 0 or more", bound.value.span)
+                if not 0 <= weight <= MAX_SENSOR_WEIGHT:
+                    self.error(f"a weight must lie between 0 and {MAX_SENSOR_WEIGHT:g}",
+                               bound.value.span, "weights are relative to each other: "
+                               "1 and 3 say the second sensor counts three times as much")
         duty_min, duty_max, quality_min = self.bounds(decl.bounds, decl.sensor.text)
         return ir.SensorPreference(decl.sensor.text, weight, duty_min, duty_max, quality_min)
 
@@ -434,7 +487,7 @@ class _Checker:
         low, high = self.quantity(item.low, "time"), self.quantity(item.high, "time")
         if low is None or high is None:
             return None
-        if not 0 <= low[0] <= high[0]:
+        if not 0 <= low[0] <= high[0]:  # past the horizon (at most 10 y): runs to it
             self.error("expected time must be a range 'low .. high' with 0 <= low <= high",
                        item.span)
             return None
@@ -718,12 +771,13 @@ def _signature(params: tuple[ParamSpec, ...], min_points: int, max_points: int) 
     return ", ".join(parts) if parts else "no arguments"
 
 
-def check(mission: ast.Mission, stack_depth: int | None = None
+def check(mission: ast.Mission, stack_depth: int | None = None, base_dir: str = ""
           ) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
     """Check a parsed mission; the IR is None when there are errors. `stack_depth`
-    replaces the mission's own (1 to the runtime's MAX_STACK_DEPTH)."""
+    replaces the mission's own (1 to the runtime's MAX_STACK_DEPTH). `base_dir`: the
+    mission's folder, where the files it names are looked for ("": the working one)."""
     if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
         raise ValueError(f"a stack depth of {stack_depth} is outside 1..{MAX_STACK_DEPTH}")
-    checker = _Checker(mission, stack_depth)
+    checker = _Checker(mission, stack_depth, base_dir)
     checked = checker.run()
     return checked, sorted(checker.diagnostics, key=lambda d: (d.span.line, d.span.column))

@@ -69,7 +69,9 @@ def format_file(path: str | Path) -> tuple[str, str]:
         return text, format_source(text)
     except MissionSyntaxError as err:
         raise MissionError(f"{path}: does not parse, left as it is",
-                           details=render_all(err.diagnostics, str(path), text)) from None
+                           details=render_all(err.diagnostics, str(path), text),
+                           diagnostics=[d.to_json(str(path)) for d in err.diagnostics],
+                           file=str(path)) from None
     except FormatError as err:
         raise FormatError(f"{path}: {err}") from None
 
@@ -169,6 +171,9 @@ def _declaration(decl: ast.Declaration) -> str:
         case ast.ComputerDecl(board, is_file, clock):
             at = f" @ {_quantity(clock)}" if clock else ""
             return f"computer {_preset(board, is_file)}{at}"
+        case ast.BatteryDecl(None, _, reserve, _, preset, is_file):
+            text = f"battery {_preset(preset, is_file)}"
+            return text + (f" reserve {_quantity(reserve)}" if reserve else "")
         case ast.BatteryDecl(capacity, voltage, reserve):
             text = f"battery {_quantity(capacity)}"
             text += f" at {_quantity(voltage)}" if voltage else ""

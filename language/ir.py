@@ -355,6 +355,10 @@ class CheckedMission:
     sensor_preferences: tuple[SensorPreference, ...] = ()
     stack_depth: int = DEFAULT_STACK_DEPTH
     defaults_used: tuple[str, ...] = ()  # which annotations were defaulted, for reports
+    # (field, text as written) of each file the mission names relative to its folder:
+    # `vehicle` and `computer.board` hold the path found there; the hash, the text
+    files_as_written: tuple[tuple[str, str], ...] = field(default=(),
+                                                          metadata={"omit_default": True})
 
     def state(self, name: str) -> State:
         return self.states[self.state_index[name]]
@@ -380,6 +384,11 @@ class CheckedMission:
         """SHA-256 (hex) of the canonical JSON, excluding `defaults_used` (not semantic)."""
         data = _encode(self)
         data.pop("defaults_used")
+        for name, text in data.pop("files_as_written", ()):  # where it was checked from
+            if name == "computer":                               # does not change it
+                data["computer"]["board"] = text
+            elif name == "vehicle":
+                data["vehicle"] = text
         canonical = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
         import hashlib  # here, not at the top: `gliderplan check` starts faster without it
 

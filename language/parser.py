@@ -81,6 +81,11 @@ class _Build:
         capacity, voltage, reserve = children
         return ast.BatteryDecl(capacity, voltage, reserve, ast.Span(*where))
 
+    def battery_preset(self, where, children):
+        preset, reserve = children
+        name, is_file = _preset(preset)
+        return ast.BatteryDecl(None, None, reserve, ast.Span(*where), name, is_file)
+
     def voltage(self, where, children):
         return children[0]
 

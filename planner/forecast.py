@@ -37,7 +37,7 @@ import numpy as np
 from gliderplan.contract import DEFAULT_HORIZON_S, RUNTIME_CYCLES_PER_TICK, TICK_S, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
-from gliderplan.planner.occupancy import Occupancy, mission_occupancy
+from gliderplan.planner.occupancy import DEFAULT_HORIZON_NOTE, Occupancy, mission_occupancy
 from gliderplan.planner.rates import altimeter_note, band_density, floored_args, yo_band
 from gliderplan.power_models import load_board, load_vehicle
 from gliderplan.power_models.deployments import DEFAULT_DRIFT_W, DRIFT_SOURCE
@@ -75,6 +75,7 @@ class MissionForecast:
     interval_j: tuple[float, float]  # central INTERVAL_LEVEL of the energy [J]
     assumptions: tuple[str, ...]
     yos_interval: tuple[float, float] = (math.nan, math.nan)  # and of the yos flown
+    defaults: tuple[str, ...] = ()  # what the forecast took by default: "horizon 30 d", ...
 
     @property
     def energy_j(self) -> float:
@@ -107,7 +108,7 @@ class MissionForecast:
             "states": {name: {"time_s": b.time_s, "visits": b.visits, "yos": b.yos,
                               "surfacings": b.surfacings, "energy_j": b.energy_j}
                        for name, b in self.states.items()},
-            "assumptions": list(self.assumptions),
+            "assumptions": list(self.assumptions), "defaults": list(self.defaults),
         }
 
 
@@ -291,7 +292,14 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
     notes = _assumptions(mission, glider, spec, occupancy, result, drift_w, draws,
                          ocean_source)
     notes += _floor_notes(mission, occupancy, result, floor_m, floor_note)
-    return replace(result, assumptions=tuple(notes) + said)
+    defaults = []  # what neither the mission nor the caller named
+    if vehicle is None and "vehicle" in mission.defaults_used:
+        defaults.append(f"vehicle {spec}")
+    if "computer" in mission.defaults_used:
+        defaults.append(f"computer {result.computer}")
+    if DEFAULT_HORIZON_NOTE in occupancy.notes:
+        defaults.append(f"horizon {DEFAULT_HORIZON_S / 86400:g} d")
+    return replace(result, assumptions=tuple(notes) + said, defaults=tuple(defaults))
 
 
 def _floor_notes(mission: ir.CheckedMission, occupancy: Occupancy, result: MissionForecast,

@@ -153,6 +153,11 @@ def _assign(event: ir.Event, time_s: float, variables: dict[str, float]) -> dict
     return result
 
 
+# what the walk notes when a mission without `horizon` runs to the default one
+DEFAULT_HORIZON_NOTE = (f"horizon {DEFAULT_HORIZON_S / 86400:g} d (default): the mission names "
+                        "none and does not exit before it")
+
+
 def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None) -> Occupancy:
     """Walk the mission's timeline; `horizon_s` defaults to the mission's `horizon`."""
     notes: list[str] = []
@@ -214,7 +219,7 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
         machine, _ = act(mission, Machine(state, machine.stack, _assign(event, fire_s, variables)),
                          event, fire_s)
     if horizon_defaulted and trace and trace[-1].ended_by == "horizon":
-        notes.append(f"horizon: {DEFAULT_HORIZON_S:g} s (default)")
+        notes.append(DEFAULT_HORIZON_NOTE)
     return _summarise(mission, trace, notes, legs)
 
 

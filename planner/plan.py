@@ -84,6 +84,8 @@ class PlanResult:
     confidence: object | None = None  # planner.confidence.Confidence of a plan at a confidence
     status: str = "optimal"  # "infeasible": `least_energy_plan`, beyond the budget
     upload_bytes: int = 0  # [bytes] of the plan file as sent to the glider (0: not written)
+    battery_j: float = 0.0  # [J] the battery the plan was made for (0: not known)
+    reserve_fraction: float = 0.0  # [1] and its reserve
 
 
 def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
@@ -385,7 +387,8 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
         budgeted_energy_j=sol.model_energy_j, solver_status=sol.status, solve_s=sol.solve_s,
         solver_iterations=sol.iterations,
         state_quality=tuple(_state_quality(inputs, sol, s)
-                            for s in range(len(inputs.mission.states))))
+                            for s in range(len(inputs.mission.states))),
+        battery_j=hardware.battery_j, reserve_fraction=hardware.reserve_fraction)
 
 
 def _transit_profile(inputs: PlanInputs, sol: Solution, i: int,

@@ -51,6 +51,7 @@ def report_json(result: PlanResult) -> dict:
         "quality": result.quality,
         "energy_j": plan.predicted_j,
         "budget_j": plan.budget_j,
+        "battery": {"energy_j": result.battery_j, "reserve_fraction": result.reserve_fraction},
         "budgeted_energy_j": result.budgeted_energy_j,
         "minimum_energy_j": result.minimum_energy_j,
         "shadow_price": result.shadow_price,
@@ -107,6 +108,10 @@ def report_text(result: PlanResult) -> str:
              f"shadow price {result.shadow_price:.4g} quality per extra Wh"
              + ("  (the budget is not the limit)" if result.shadow_price < 1e-9 else ""),
              "", "what each state does:"]
+    defaults = [a.text.split(" (default)")[0] for a in plan.assumptions
+                if " (default)" in a.text]
+    if defaults:  # beside the prediction, which rests on them
+        lines.insert(3, f"defaults: {', '.join(defaults)} (not named by the mission)")
     if result.confidence is not None:
         c = result.confidence
         lines.insert(3, f"confidence {c.achieved:.3g} (asked {c.requested:g}): the budget "

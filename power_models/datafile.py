@@ -16,12 +16,11 @@ from __future__ import annotations
 import difflib
 import math
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from gliderplan.contract.files import read_input_text
+from gliderplan.contract.files import DataFileError, read_data
 from gliderplan.contract.units import UNITS, accepted_units, to_model_unit
 from gliderplan.power_models.errors import ModelFileError
 
@@ -224,10 +223,9 @@ def read_model_file(path: Path, kind: str) -> Table:
     """Parse a model file and check that it describes a `kind` ("board", "vehicle", ...)."""
     shown = str(path)
     try:
-        data = tomllib.loads(read_input_text(path, f"{kind} file"))
-    except tomllib.TOMLDecodeError as err:
-        raise ModelFileError(shown, None, f"not valid TOML: {err}") from None
-    top = Table(shown, "", data)
+        top = Table(shown, "", read_data(path, f"{kind} file"))
+    except DataFileError as err:  # the model's own error, naming the file and key
+        raise ModelFileError(shown, err.key, err.problem) from None
     top.text("description", "")
     found = top.text("kind")
     if found != kind:
@@ -242,7 +240,7 @@ def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
     For display (`gliderplan power show`); call after the file has loaded, so its shape is
     known to be valid.
     """
-    data = tomllib.loads(read_input_text(path, "model file"))
+    data = read_data(path, "model file")
     rows: list[tuple[str, float, str, str]] = []
 
     def walk(prefix: str, table: dict[str, Any]) -> None:
@@ -264,7 +262,7 @@ def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
 def file_spans(path: Path) -> list[tuple[str, float, float, str, str]]:
     """Every top-level range of a model file (`Table.span`) as (key, low, high, unit,
     source), as written; call after the file has loaded."""
-    data = tomllib.loads(read_input_text(path, "model file"))
+    data = read_data(path, "model file")
     return [(key, item["low"], item["high"], item["unit"], item["source"])
             for key, item in data.items()
             if isinstance(item, dict) and "low" in item and "high" in item]

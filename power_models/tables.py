@@ -15,6 +15,10 @@ KINDS = ("board", "sensor", "vehicle", "battery")
 DEFAULT_VEHICLE = "slocum_g2_shallow"
 YO_BOTTOMS_M = (10.0, 20.0, 40.0, 100.0)  # rows of the energy table by default
 SPEEDS_MPS = (0.15, 0.2, 0.25, 0.3, 0.35, 0.4)  # columns of the energy table by default
+# Inputs checked against what exists: no ocean is deeper (Challenger Deep, ~10,935 m), and
+# a hotel load past 1 kW is no glider's (an AUV's is ~50 W: DESIGN.md section 11).
+DEEPEST_OCEAN_M = 11_000.0  # [m]
+MAX_HOTEL_W = 1000.0  # [W]
 
 
 def presets(kind: str | None = None) -> dict[str, list[str]]:
@@ -117,11 +121,14 @@ def _profile(vehicle_spec: str, min_depth_m: float | None, max_depths_m: list[fl
     pitch = vehicle.nominal_pitch_rad if pitch_deg is None else math.radians(pitch_deg)
     if not 0.0 < pitch < math.pi / 2:
         raise UsageError("--pitch-deg must lie strictly between 0 and 90")
-    if low < 0.0 or any(h <= low for h in highs):
+    if not 0.0 <= low < DEEPEST_OCEAN_M or any(h <= low for h in highs):
         raise UsageError(
             f"every --max-depth must be deeper than --min-depth ({low:g} m), "
             "and --min-depth must be >= 0"
         )
+    if any(h > DEEPEST_OCEAN_M for h in highs):
+        raise UsageError(f"--max-depth must be at most {DEEPEST_OCEAN_M:,.0f} m, the deepest "
+                         "ocean")
     return vehicle, low, highs, pitch
 
 
@@ -140,6 +147,8 @@ def energy_per_km(vehicle: str = DEFAULT_VEHICLE, *, min_depth_m: float | None =
     if any(u <= 0.0 for u in speeds):
         raise UsageError("--speed values must be > 0 m/s")
     hotel = model.hotel_w if hotel_w is None else hotel_w
+    if not hotel <= MAX_HOTEL_W:
+        raise UsageError(f"--hotel-w must be at most {MAX_HOTEL_W:g} W")
     if hotel < 0.0:
         raise UsageError("--hotel-w must be >= 0 W")
     # the neutral volume for each speed plus the trim offset of each band (yo_ballast_cc)
@@ -172,6 +181,8 @@ def optimal_speeds(hotel_w: list[float], vehicle: str = DEFAULT_VEHICLE, *,
     model, low, highs, pitch = _profile(vehicle, min_depth_m, max_depths_m, pitch_deg, ())
     if any(h < 0.0 for h in hotel_w):
         raise UsageError("--hotel-w values must be >= 0 W")
+    if any(not h <= MAX_HOTEL_W for h in hotel_w):
+        raise UsageError(f"--hotel-w values must be at most {MAX_HOTEL_W:g} W")
     rows = []
     for high in highs:
         for hotel in hotel_w:

@@ -16,14 +16,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import (
-    InputFileError,
-    read_input,
-    read_input_text,
-    write_atomically,
-)
+from gliderplan.contract.files import InputFileError, read_data, read_input, write_atomically
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
@@ -50,14 +45,10 @@ def _wh(joules: float) -> float:
 
 def _json(path: Path, what: str) -> dict:
     try:
-        data = json.loads(read_input_text(path, "JSON file"))
+        return read_data(path, "JSON file", finite=False)  # a summary may hold NaN
     except InputFileError as err:  # say what the file should have been
-        raise UsageError(f"{err} ({what})") from None
-    except json.JSONDecodeError as err:
-        raise UsageError(f"{path}: cannot read {what}: {err}") from None
-    if not isinstance(data, dict):
-        raise UsageError(f"{path}: {what}: expected a JSON object")
-    return data
+        raise InputFileError(f"{err} ({what})", usage=err.exit_code == ExitCode.USAGE) \
+            from None
 
 
 def _regular(path: Path, what: str) -> None:
@@ -285,9 +276,19 @@ def _verdict(summary: dict) -> str:
     if simulated is not None and budget:
         text += f" and a budget of {_wh(budget):,.4g} Wh ({100 * simulated / budget:.1f} % used)"
     causes = check.get("causes") or []
-    if causes:
-        text += "; " + esc("; ".join(causes))
+    if causes:  # below the run's one verdict: the states that overran their own prediction
+        text += "<br>states over their own prediction: " + esc("; ".join(causes))
     return text
+
+
+def _battery_text(report: dict, hardware) -> str:
+    """The battery the plan was made for (`plan --battery` may have replaced the
+    mission's; its report says which), else the mission's."""
+    battery = report.get("battery") or {}
+    if not battery.get("energy_j"):  # a report of an older gliderplan
+        battery = {"energy_j": hardware.battery_j, "reserve_fraction": hardware.reserve_fraction}
+    energy_j, reserve = battery["energy_j"], battery["reserve_fraction"]
+    return f"{_wh(energy_j):,.4g} Wh, reserve {100 * reserve:.3g} %"
 
 
 def _summary_section(mission: CheckedMission, source: str, hardware, report: dict,
@@ -298,8 +299,7 @@ def _summary_section(mission: CheckedMission, source: str, hardware, report: dic
         ("states", esc(", ".join(s.name for s in mission.states))),
         ("vehicle", esc(hardware.vehicle.name)),
         ("computer", esc(_computer(report))),
-        ("battery", esc(f"{_wh(hardware.battery_j):,.4g} Wh, reserve "
-                        f"{100 * hardware.reserve_fraction:.3g} %")),
+        ("battery", esc(_battery_text(report, hardware))),
         ("budget", esc(f"{_wh(budget):,.4g} Wh usable")),
         ("objective", esc(report["objective"].replace("_", " "))),
         ("predicted energy", esc(f"{_wh(report['energy_j']):,.4g} Wh "
@@ -525,8 +525,9 @@ def _montecarlo_section(frame: pd.DataFrame, summary: dict, directory: Path) -> 
                              f"(95 % interval {100 * low:.1f} to {100 * high:.1f} %)")),
         ("energy", esc(spread(energy, J_PER_WH, "Wh"))),
         ("duration", esc(spread(duration, 3600.0, "h"))),
-        ("battery exhausted before the end", esc(f"{summary.get('exhausted_before_end', 0)} "
-                                                 "scenarios")),
+        ("exceeded the usable charge drawn", esc(
+            f"{summary.get('exceeded_drawn_usable_charge', 0)} scenarios (usable share drawn "
+            f"from {summary.get('usable_share_drawn_from', 'the scenario file')})")),
         ("plan flown", esc(summary.get("plan") or "none: every sensor always on")),
     ]
     budget = summary.get("budget_j")

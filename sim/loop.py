@@ -15,6 +15,7 @@ import numpy as np
 
 from gliderplan.contract import (
     DEFAULT_HORIZON_S,
+    MAX_SIMULATED_TICKS,
     NO_STATE,
     TICK_S,
     TRANSITION_NAMES,
@@ -54,6 +55,18 @@ class RunConfig:
     floor: SeaFloor | None = None  # the sea floor (None: none)
     # the in-situ density flown through (None: uniform water of the vehicle's reference)
     water: DensityProfile | None = None
+
+    def __post_init__(self) -> None:
+        """A run too long to hold is refused before it starts (MAX_SIMULATED_TICKS)."""
+        ticks = self.duration_s / self.tick_s
+        if ticks > MAX_SIMULATED_TICKS:
+            from gliderplan.contract.errors import UsageError
+
+            raise UsageError(
+                f"a run of {self.duration_s / 86400:.4g} d at a {self.tick_s:g} s tick is "
+                f"{ticks:,.0f} ticks, more than the {MAX_SIMULATED_TICKS:,} one run holds in "
+                "memory (one row a tick): fly a shorter time (--duration, the mission's horizon) "
+                "or a longer tick (--tick)")
 
 
 @dataclass

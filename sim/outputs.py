@@ -26,10 +26,12 @@ def trace_csv(trace: list[Transition]) -> str:
     return "\n".join(rows) + "\n"
 
 
-def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
+def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float,
+                     salinity_psu: np.ndarray | None = None):
     """One row per tick: time, depth, pitch, water temperature and the CTD's reading (NaN
-    while it is off), state, stack depth, each sensor's power, power per component [W],
-    battery remaining [J]."""
+    while it is off), the water's practical salinity [PSU] (`salinity_psu`, as the
+    simulated CTD reads it when it is on), state, stack depth, each sensor's power, power
+    per component [W], battery remaining [J]."""
     import pyarrow as pa
 
     c = record.columns
@@ -41,6 +43,8 @@ def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
         "pitch_rad": c["pitch_rad"],
         "temperature_c": c["temperature_c"],
         "temp_reading_c": c["temp_reading_c"],
+        **({} if salinity_psu is None else {"salinity_psu": np.broadcast_to(
+            np.asarray(salinity_psu, np.float64), c["time_s"].shape).copy()}),
         "state": _strings(names + [""], np.where(state == NO_STATE, len(names), state)),
         "stack_depth": c["stack_depth"].astype(np.int16),
         "profile": c["profile"].astype(np.int16),

@@ -232,8 +232,12 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 "tracker": tracker, "seed": seed,
                 "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
                 "vehicle": mission.vehicle, "start_utc": utc_text(start),
-                "sea_floor": given.floor_note, "grounded": grounding(record)}
-        table = outputs.timeseries_table(record, used, mission.battery.energy_j)
+                "sea_floor": given.floor_note, "grounded": grounding(record),
+                "current_mps": {"north": config.current.north_mps,
+                                "east": config.current.east_mps}}
+        columns = record.columns  # the water's salinity where the glider was: the CTD's
+        salinity = water.water_along(columns["depth_m"], columns["time_s"])[1]
+        table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
         contents["trace.csv"] = outputs.trace_csv(record.trace)
         contents["timeseries.parquet"] = outputs.parquet_bytes(
             table, dictionary=outputs.TIMESERIES_DICTIONARY)

@@ -22,7 +22,6 @@ seeds are children of one `numpy.random.SeedSequence`, one per scenario index.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -31,7 +30,7 @@ from statistics import NormalDist
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
-from gliderplan.contract.files import read_input_text
+from gliderplan.contract.files import DataFileError, parse_data, read_input_text
 from gliderplan.power_models.draws import correlation_root
 from gliderplan.power_models.vehicle import FIGURES, Vehicle, figure_value, with_figures
 from gliderplan.sim.ocean import InternalWave, Thermocline
@@ -77,6 +76,17 @@ class Distribution:
     b: float = 0.0  # - | high | sd
     low: float = -math.inf  # bounds a normal is clipped to
     high: float = math.inf
+
+    def text(self) -> str:
+        """The distribution as written, for a reader: 'normal (mean 0.97, sd 0.03, within
+        0.8-1.02)', 'uniform 0.9-1', 'fixed 0.95'."""
+        if self.kind == "fixed":
+            return f"fixed {self.a:g}"
+        if self.kind == "uniform":
+            return f"uniform {self.a:g}-{self.b:g}"
+        bounds = f", within {self.low:g}-{self.high:g}" if math.isfinite(self.low) or \
+            math.isfinite(self.high) else ""
+        return f"normal (mean {self.a:g}, sd {self.b:g}{bounds})"
 
     def draw(self, rng: np.random.Generator) -> float:
         """One value; every kind takes exactly one number from `rng`, so that changing
@@ -130,9 +140,9 @@ def read_spec(path: str | Path | None = None) -> ScenarioSpec:
         where = str(path)
         text = read_input_text(path, "scenario file")
     try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ScenarioFileError(f"{where}: not valid TOML: {err}") from None
+        data = parse_data(text, where)
+    except DataFileError as err:
+        raise ScenarioFileError(str(err)) from None
     if data.get("kind") != "scenarios":
         raise ScenarioFileError(f"{where}: kind: expected \"scenarios\", got "
                                 f"{data.get('kind')!r}")

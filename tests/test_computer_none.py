@@ -74,7 +74,7 @@ def test_check_accepts_computer_none_and_carries_it_into_the_json(fig2_none, cap
     mission = checked(fig2_text())
     assert mission.computer == ir.Computer("none") and mission.computer.is_none
     assert "computer" not in mission.defaults_used
-    assert run_json(capsys, "check", str(fig2_none))["computer"] == {"board": "none",
+    assert run_json(capsys, "check", str(fig2_none))["mission"]["computer"] == {"board": "none",
                                                                     "clock_mhz": None}
     assert mission.hash != checked(fig2_text("computer ts7800")).hash
     assert "\ncomputer none\n" in format_source(fig2_text())

@@ -277,13 +277,17 @@ def test_the_water_given_is_flown_at_its_density_with_the_glider_ballasted_for_i
     assert not table["depth_m"].equals(default_table["depth_m"])
 
 
-def test_a_long_run_shows_progress(tmp_path, capsys):
+def test_a_long_run_shows_progress(tmp_path, capsys, monkeypatch):
     mission = REPO / "tests" / "missions" / "sim_month.mission"
+    monkeypatch.setenv("GLIDERPLAN_PROGRESS_S", "0")  # a line per update
     assert main(["sim", str(mission), "--duration", "5d", "-o", str(tmp_path / "r")]) == 0
-    lines = capsys.readouterr().err.splitlines()  # not a terminal: one line per update
-    bars = [line for line in lines if line.startswith("[")]
-    assert len(bars) >= 2 and all("of 5.00 d simulated" in bar for bar in bars)
+    lines = capsys.readouterr().err.splitlines()  # not a terminal: plain lines
+    bars = [line for line in lines if line.startswith("progress: ")]
+    assert len(bars) >= 2 and all("of 5.00 d simulated (" in bar for bar in bars)
     assert "\r" not in "".join(lines)
+    monkeypatch.delenv("GLIDERPLAN_PROGRESS_S")  # by default, a line every 15 s at most
+    assert main(["sim", str(mission), "--duration", "5d", "-o", str(tmp_path / "r")]) == 0
+    assert "progress: " not in capsys.readouterr().err  # this run takes a few seconds
 
 
 def test_a_current_carries_the_glider_east(tmp_path):

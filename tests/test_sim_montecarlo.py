@@ -148,11 +148,12 @@ def test_ctrl_c_on_a_pool_keeps_what_finished_and_the_log_has_a_line_per_update(
     run = subprocess.Popen(
         [sys.executable, "-m", "gliderplan.cli", "montecarlo", str(SURVEY), "--scenarios",
          "200", "--workers", "2", "-o", str(out)],
-        stderr=subprocess.PIPE, text=True, start_new_session=True)
+        stderr=subprocess.PIPE, text=True, start_new_session=True,
+        env={**os.environ, "GLIDERPLAN_PROGRESS_S": "0"})  # a line per update in the log
     logged, counts = [], []
-    for line in run.stderr:  # a log, not a terminal: one line per update
+    for line in run.stderr:  # a log, not a terminal: plain lines
         logged.append(line)
-        counts.append(int(line.split("] ")[1].split(" of ")[0]))
+        counts.append(int(line.split("progress: ")[1].split(" of ")[0]))
         if counts[-1] >= 3:
             break
     os.killpg(run.pid, signal.SIGINT)  # Ctrl-C at a terminal reaches the workers too

@@ -232,7 +232,7 @@ def test_a_run_over_its_prediction_says_so_even_within_its_budget(tmp_path, caps
     assert code == 0 and check["simulated_j"] < check["budget_j"]
     assert check["simulated_j"] > check["predicted_j"] * 1.05
     assert check["verdict"] == "over prediction"
-    assert "plan check: over prediction" in err and "over the plan's prediction:" in err
+    assert "plan check: over prediction: " in err and "states over their own prediction:" in err
     # the state that overran, the component that overran most, and why
     assert any(re.match(r"track: .* \((\w+) \+[\d.]+ kJ\); \d+ inflections planned", c)
                for c in check["causes"])
