@@ -164,6 +164,9 @@ SENSORS: tuple[SensorInfo, ...] = (
                "microstructure velocity shear (microstructure logger)"),
 )
 N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
+# The sensor devices, each once, in the array's order: what a surfacing report counts the
+# on-time of, by its place here (docs/plan-update.md), and what the simulator bills.
+SENSOR_DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
 # Sensors without a device of their own: always powered while logged, in the hotel load.
 FLIGHT_SENSORS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
 # The runtime's own readings (never on the link).

@@ -47,6 +47,7 @@ TAG_BYTES = 32
 # the smallest update: header and tag, no change
 MIN_UPDATE_BYTES = UPDATE_HEADER_BYTES + TAG_BYTES
 MAX_CHANGES = 255  # the header's count is a u8
+_MAX_MANTISSA = 10**UPDATE_MAX_DIGITS - 1
 _HEADER = struct.Struct(f"<2sBII{UPDATE_HASH_BYTES}s{UPDATE_HASH_BYTES}sB")
 assert _HEADER.size == UPDATE_HEADER_BYTES
 
@@ -175,7 +176,6 @@ class Refused(Exception):
         self.status, self.message = status, message
 
 
-_MAX_MANTISSA = 10**UPDATE_MAX_DIGITS - 1
 _VARINT_BYTES = 8  # 56 bits: a line or a mantissa fits with room
 
 
@@ -420,13 +420,22 @@ def change_groups(held: bytes, target: Plan, digits: int = 9) -> list[_Group]:
     return groups
 
 
+@dataclass(frozen=True)
+class UpdateChain:
+    """Updates to send in order, and the plan file the glider holds once they are applied."""
+
+    updates: tuple[bytes, ...]
+    plan_file: bytes
+    plan_files: tuple[bytes, ...] = ()  # the plan file each update makes, in order
+
+
 def make_updates(held: bytes, target: Plan, key: bytes, *, first_seq: int | None = None,
                  max_updates: int = 1, digits: int = 9,
-                 check=None) -> list[bytes]:
+                 check=None) -> UpdateChain:
     """The updates, each at most MAX_UPDATE_BYTES, that turn the signed plan file `held`
     into `target` for what the glider flies: one if the changes fit, else a chain (each
     made against the plan the one before makes, sequence numbers from `first_seq`, by
-    default one more than `held`'s), at most `max_updates`. [] when nothing changes.
+    default one more than `held`'s), at most `max_updates`; none when nothing changes.
     UpdateError saying what to cut when they do not fit; `check(plan_file)` reads each
     plan made (PlanFileError: it cannot be flown)."""
     seq = _signed_seq(held)
@@ -435,7 +444,7 @@ def make_updates(held: bytes, target: Plan, key: bytes, *, first_seq: int | None
                           "an update names it by its sequence number")
     groups = change_groups(held, target, digits)
     if not groups:
-        return []
+        return UpdateChain((), held)
     room = MAX_UPDATE_BYTES - MIN_UPDATE_BYTES
     too_big = [g for g in groups if g.size > room]
     if too_big:
@@ -456,7 +465,7 @@ def make_updates(held: bytes, target: Plan, key: bytes, *, first_seq: int | None
             f"allowed: cut the changes to {', '.join(g.what for g in largest)}, allow "
             "more updates (--max-updates), or send a whole plan (gliderplan plan --sign)")
     new_seq = seq + 1 if first_seq is None else first_seq
-    updates = []
+    updates, plan_files = [], []
     for batch in batches:
         if not seq < new_seq <= MAX_PLAN_SEQUENCE:
             raise UpdateError(f"sequence number {new_seq}: must lie in {seq + 1}.."
@@ -468,9 +477,10 @@ def make_updates(held: bytes, target: Plan, key: bytes, *, first_seq: int | None
             check(new_file)
         update = PlanUpdate(seq, new_seq, plan_hash(held), plan_hash(new_file), changes)
         updates.append(update.pack(key))
-        assert len(updates[-1]) <= MAX_UPDATE_BYTES, "a batch is sized to fit" 
+        assert len(updates[-1]) <= MAX_UPDATE_BYTES, "a batch is sized to fit"
+        plan_files.append(new_file)
         held, seq, new_seq = new_file, new_seq, new_seq + 1
-    return updates
+    return UpdateChain(tuple(updates), held, tuple(plan_files))
 
 
 def describe(data: bytes) -> str:

@@ -1,8 +1,8 @@
 """The C runtime's input readers under libFuzzer with ASan and UBSan (runtime/fuzz).
 
 The frame decoder, the plan reader, the command line and the plan-update applier each
-run for FUZZ_SECONDS
-from their committed corpus (40 s under CI=true: two minutes in all; 15 s elsewhere, or
+run for FUZZ_SECONDS from their committed corpus (40 s under CI=true: under three minutes
+in all; 15 s elsewhere, or
 GLIDERPLAN_FUZZ_SECONDS), and every committed input, the crashes found so far among
 them, is replayed as a regression test.
 """
