@@ -69,6 +69,8 @@ DEFAULT_CONFIDENCE = 0.95  # a plan that states none (made without --confidence)
 ON_STEP_S = Decimal("0.1")  # [s] the on-time an update sets, rounded to this
 SHARE_STEP = Decimal("0.0001")  # a profile share, rounded to this
 IF_INFEASIBLE = ("refuse", "least-energy")
+RETRIES = ((SOLVER, {}), (SOLVER, {"equilibrate_enable": False}),
+           (SOLVER, {"static_regularization_constant": 1e-7}), (cp.SCS, {}))
 
 
 class ReplanInfeasible(PlanningError):
@@ -77,15 +79,15 @@ class ReplanInfeasible(PlanningError):
 
 
 def stated_confidence(plan: Plan) -> float | None:
-    """The confidence a plan was made at, as its assumptions say it ("plan at confidence
-    X: ..."), else None."""
+    """The confidence a plan was asked at, as its assumptions say it ("plan at confidence X
+    (asked Y): ..."; a plan that says only what it achieved: X), else None."""
+    import re
+
     for assumption in plan.assumptions:
-        words = assumption.text.split()
-        if words[:3] == ["plan", "at", "confidence"] and len(words) > 3:
-            try:
-                return float(words[3].rstrip(":"))
-            except ValueError:
-                return None
+        found = re.match(r"plan at confidence ([0-9.]+)(?: \(asked ([0-9.]+)\))?",
+                         assumption.text)
+        if found:
+            return float(found[2] or found[1])
     return None
 
 
@@ -122,19 +124,27 @@ class ChanceModel:
         self.quality_problem = cp.Problem(cp.Maximize(model.quality), [*common, self.constraint])
         self.energy_problem = cp.Problem(cp.Minimize(mean), [*common, self.constraint,
                                                              model.quality >= model.p_floor])
+        # the least the rest needs: with the mission's quality floor, or (a mission that
+        # maximises quality) none, a second-order-cone problem without the quality's cones
         self.least_problem = cp.Problem(cp.Minimize(self.held),
                                         [*common, model.quality >= model.p_floor])
-        for problem in (self.quality_problem, self.energy_problem, self.least_problem):
+        self.least_free_problem = cp.Problem(cp.Minimize(self.held), common)
+        for problem in (self.quality_problem, self.energy_problem, self.least_problem,
+                        self.least_free_problem):
             assert problem.is_dcp(dpp=True), "the chance model must stay DCP and DPP"
 
     def solve(self, problem: cp.Problem) -> tuple[str, float]:
-        """Solve; (status, wall time [s])."""
+        """Solve; (status, wall time [s]). Clarabel now and then stalls on the exponential
+        cones of a problem whose numbers are fine (a few in a month of replans): it is
+        asked again without equilibration, then with more regularisation, then SCS is."""
         start = time.perf_counter()
-        try:
-            problem.solve(solver=SOLVER)
-        except cp.SolverError:
-            pass
-        return problem.status or "solver_error", time.perf_counter() - start
+        for solver, options in RETRIES:
+            try:
+                problem.solve(solver=solver, **options)
+            except cp.SolverError:  # its status would still be the last solve's
+                continue
+            return problem.status or "solver_error", time.perf_counter() - start
+        return "solver_error", time.perf_counter() - start
 
 
 def _root(cov: np.ndarray) -> np.ndarray:
@@ -282,16 +292,16 @@ class Replanner:
         times = {s.name: s.time_s for s in plan.states}
         occupancy = measured_occupancy(mission, times, {s.name: s.visits for s in plan.states},
                                        note="time in each state: the plan's")
+        # every state's time is the plan's, transit legs' too: their speed is not replanned
         self.inputs = build_inputs(mission, hardware, occupancy)
-        if self.inputs.transit.size:
-            raise PlanningError("replanning takes each state's time left from the plan; a "
-                                "transit leg's time would depend on its speed")
         self.devices = dict.fromkeys(self.inputs.dev_name)
         powers = {d: hardware.devices[d].on_power_w for d in self.devices}
         spreads = {} if spec is None else spec.vehicle_relative_sd
         self.belief: Belief = prior_belief(hardware.vehicle, powers, usable_prior(spec),
                                            spreads)
         self.device_w = powers
+        self.warmup_j = {d: hardware.devices[d].warmup_j for d in self.devices}
+        self.flying = plan  # the plan the glider flies: the duties its devices cycle at
         self.curve = DischargeCurve.nominal(NOMINAL_BUS_V)
         self.chance = ChanceModel(self.inputs, len(self.belief.names))
         self.clock_onehot = self._clocks()
@@ -324,14 +334,34 @@ class Replanner:
         expected = {g: sum(self.rates[s].get(g, 0.0) * t for s, t in flown.items())
                     for g in COMPONENT_GROUPS}
         on_before = {} if before is None else before.device_on_s
+        cycling = self._cycling()
         for device in self.devices:
             if report.device_on_s and (before is None or before.device_on_s):
                 on = report.device_on_s.get(device, 0.0) - on_before.get(device, 0.0)
-                expected[device] = self.device_w[device] * on
+                switch_ons = sum(t / cycling[s][device] for s, t in flown.items()
+                                 if device in cycling[s])
+                expected[device] = self.device_w[device] * on \
+                    + self.warmup_j[device] * switch_ons
             else:
                 expected[device] = sum(self.rates[s].get(device, 0.0) * t
                                        for s, t in flown.items())
         return expected
+
+    def _cycling(self) -> dict[str, dict[str, float]]:
+        """State -> device -> its period [s], for the devices the plan flown switches on
+        and off there (each switch-on costs a warm-up)."""
+        from gliderplan.language.registry import SENSOR_BY_NAME
+
+        cycling: dict[str, dict[str, float]] = {}
+        for state in self.flying.states:
+            duties: dict[str, tuple[float, float]] = {}
+            for x in state.sensors:
+                device = SENSOR_BY_NAME[x.name].device
+                if device:
+                    duty, period = duties.get(device, (0.0, x.period_s))
+                    duties[device] = (max(duty, x.duty), period)
+            cycling[state.name] = {d: p for d, (duty, p) in duties.items() if 0.0 < duty < 1.0}
+        return cycling
 
     def _flown_between(self, before: SurfacingReport | None, report: SurfacingReport,
                        span_s: float) -> dict[str, float]:
@@ -444,6 +474,7 @@ class Replanner:
         """The plan for the rest of the mission after `report` (observed already), from the
         plan the glider holds (`held`, a plan file of this mission)."""
         held_plan = read_plan_bytes(held, self.mission)
+        self.flying = held_plan
         used = report.energy_used_j if report.energy_used_j is not None else \
             (self.last.energy_used_j if self.last is not None else 0.0)
         remaining = self.remaining_s(report)
@@ -455,8 +486,14 @@ class Replanner:
         status, solve_s = chance.solve(problem)
         least = None
         result_status = "updated"
+        if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE, cp.INFEASIBLE,
+                          cp.INFEASIBLE_INACCURATE):
+            raise PlanningError(f"the solver could not replan the rest of the mission "
+                                f"({status}): the glider keeps flying its current plan")
         if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-            least_status, spent = chance.solve(chance.least_problem)
+            least_problem = chance.least_problem if objective == "minimize_energy" \
+                else chance.least_free_problem
+            least_status, spent = chance.solve(least_problem)
             solve_s += spent
             if least_status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
                 raise PlanningError(f"the rest of the mission cannot be planned "

@@ -16,14 +16,17 @@ filter's (a Bayesian update of a linear-Gaussian model, one scalar observation):
 with R the interval's noise: the counter's (read out every 256 s) and what the figures do
 not explain (the ocean moves the pump's work between intervals), MODEL_NOISE of the
 interval's energy. The prior is the vehicle file's: each figure's sd (a calibrated file's
-bootstrap), else the scenario file's relative spread, else a stated default; the base load
+bootstrap), else the scenario file's relative spread, else (an instrument) a quarter of
+its published span, as calibration keeps a device it cannot tell apart; the base load
 is the hotel load less the instruments it holds, so its multiplier is correlated (negatively)
 with theirs.
 
 The battery's usable share (of its rating) is not in the counter: it is read from the
 battery's voltage through a discharge curve (`DischargeCurve`, an assumption: linear from
-its nominal voltage at full to 70 % of it when the usable energy is spent), from the latest
-reading alone (the readings share the curve's error), combined with the prior.
+its nominal voltage at full to 70 % of it when the usable energy is spent): the slope of
+the readings against the energy drawn says how much the pack holds, combined with the
+prior once the readings span enough of it to tell; the prior is a Student-t's, whose
+weight fades where the readings contradict it by far (a pack far off its rating).
 """
 
 from __future__ import annotations
@@ -38,11 +41,12 @@ from gliderplan.power_models.devices import base_power_w, held_power_w
 from gliderplan.power_models.vehicle import Vehicle, device_key, figure_value
 
 DEFAULT_RELATIVE_SD = 0.10  # a figure no file gives a spread for (assumption)
-DEFAULT_DEVICE_RELATIVE_SD = 0.10  # a device's published figure, taken as it is (assumption)
+DEFAULT_DEVICE_RELATIVE_SD = 0.10  # a device with no preset and no stated spread (assumption)
 COMPUTER_RELATIVE_SD = 0.02  # a board's measured active and idle power (assumption)
 MODEL_NOISE = 0.02  # [1] of an interval's energy, what the figures do not explain (assumption)
 COUNTER_NOISE_J = 2000.0  # [J] the counter read out every 256 s: ~5 W x 256 s at each end / 2
-CURVE_ERROR = 0.01  # [1] depth of discharge the curve may be off by (assumption)
+CURVE_SLOPE_ERROR = 0.01  # [1] of the curve's slope, what its shape may be off by (assumption)
+USABLE_PRIOR_DOF = 4.0  # degrees of freedom of the usable share's Student-t prior (assumption)
 COMPONENT_GROUPS = (*VEHICLE_COMPONENTS, Component.COMPUTER)
 
 
@@ -54,7 +58,7 @@ class DischargeCurve:
 
     full_v: float
     empty_v: float
-    noise_v: float = 0.05
+    noise_v: float = 0.02  # a surfacing's mean of the battery's readings
 
     @classmethod
     def nominal(cls, volts: float) -> DischargeCurve:
@@ -64,10 +68,6 @@ class DischargeCurve:
         """[V] at depth of discharge `depth` [1]."""
         return self.full_v - (self.full_v - self.empty_v) * depth
 
-    def depth(self, voltage: float) -> tuple[float, float]:
-        """(depth of discharge, its sd) [1] a reading [V] says."""
-        span = self.full_v - self.empty_v
-        return (self.full_v - voltage) / span, math.hypot(self.noise_v / span, CURVE_ERROR)
 
 
 @dataclass(frozen=True)
@@ -106,6 +106,7 @@ class Belief:
     usable_prior: tuple[float, float]
     intervals: int = 0
     sources: tuple[str, ...] = ()  # where each prior spread comes from
+    readings: tuple[tuple[float, float], ...] = ()  # (drawn of the budget [1], voltage [V])
 
     @property
     def sd(self) -> np.ndarray:
@@ -124,19 +125,38 @@ class Belief:
 
     def observe_battery(self, used_j: float, voltage_v: float | None, budget_j: float,
                         curve: DischargeCurve) -> Belief:
-        """The usable share after a voltage reading, `used_j` [J] drawn of a budget of
-        `budget_j` [J] at the rating: the prior combined with the latest reading only."""
+        """The usable share after one more voltage reading, `used_j` [J] drawn of a budget
+        of `budget_j` [J] at the rating: the slope of the voltage against the energy drawn,
+        over every reading so far (its intercept, the full pack's voltage, left free: it
+        moves with the water's temperature), against the curve's, combined with the
+        prior. Until the readings span enough of the pack to tell, the prior alone."""
+        readings = self.readings if voltage_v is None else \
+            (*self.readings, (used_j / budget_j, voltage_v))
         mean, sd = self.usable_prior
-        if voltage_v is None or used_j <= 0.0 or sd <= 0.0:
-            return replace(self, usable_mean=mean, usable_sd=sd)
-        depth, depth_sd = curve.depth(voltage_v)
-        if depth <= depth_sd:  # too little drawn for the curve to tell anything
-            return replace(self, usable_mean=mean, usable_sd=sd)
-        seen = used_j / (budget_j * depth)
-        seen_sd = seen * depth_sd / depth
-        weight = sd**-2 + seen_sd**-2
-        return replace(self, usable_mean=(mean / sd**2 + seen / seen_sd**2) / weight,
-                       usable_sd=weight**-0.5)
+        state = replace(self, readings=readings, usable_mean=mean, usable_sd=sd)
+        if len(readings) < 3 or sd <= 0.0:
+            return state
+        depth = np.array([r[0] for r in readings])  # drawn, of the budget at its rating
+        volts = np.array([r[1] for r in readings])
+        spread = float(np.sum((depth - depth.mean()) ** 2))
+        if spread <= 0.0:
+            return state
+        slope = -float(np.sum((depth - depth.mean()) * (volts - volts.mean()))) / spread
+        slope_sd = math.hypot(curve.noise_v / math.sqrt(spread), CURVE_SLOPE_ERROR * slope)
+        if slope <= 3.0 * slope_sd:  # too little drawn for the curve to tell anything
+            return state
+        seen = (curve.full_v - curve.empty_v) / slope  # the share at which the pack is spent
+        seen_sd = seen * slope_sd / slope
+        # a Student-t prior (USABLE_PRIOR_DOF): where the readings contradict the prior by
+        # far, the prior's weight fades (a pack can be far off what it is rated, or drawn to
+        # hold); near it, it is the normal prior's
+        posterior, weight = mean, 1.0
+        for _ in range(20):
+            conflict = ((posterior - mean) / sd) ** 2
+            weight = (USABLE_PRIOR_DOF + 1.0) / (USABLE_PRIOR_DOF + conflict)
+            precision = weight / sd**2 + seen_sd**-2
+            posterior = (weight * mean / sd**2 + seen / seen_sd**2) / precision
+        return replace(state, usable_mean=posterior, usable_sd=precision**-0.5)
 
     def moves(self) -> list[FigureMove]:
         """Every figure group's move from its prior (multiplier 1)."""
@@ -164,6 +184,19 @@ def _has(vehicle: Vehicle, key: str) -> bool:
     return True
 
 
+def _published_spread(device: str) -> tuple[float, str]:
+    """(sd / figure, where it comes from) of an instrument the vehicle file has no figure
+    for: its preset's published figure, sd a quarter of the published span, as calibration
+    keeps a device the log cannot tell apart (power_models/device_fit.py)."""
+    from gliderplan.power_models.catalog import preset_names
+    from gliderplan.power_models.device_fit import _published
+
+    if device not in preset_names("sensor"):
+        return DEFAULT_DEVICE_RELATIVE_SD, "assumed"
+    figure, sd, _ = _published(device)
+    return (sd / figure if figure > 0 else DEFAULT_DEVICE_RELATIVE_SD), "published span"
+
+
 def prior_belief(vehicle: Vehicle, devices: dict[str, float], usable: tuple[float, float],
                  spreads: dict[str, float] | None = None) -> Belief:
     """The belief before any interval: `devices` maps each device the mission runs to its
@@ -189,8 +222,9 @@ def prior_belief(vehicle: Vehicle, devices: dict[str, float], usable: tuple[floa
                                                   default=DEFAULT_RELATIVE_SD)
     rel["computer"], sources["computer"] = COMPUTER_RELATIVE_SD, "assumed"
     for device in devices:
-        rel[device], sources[device] = combined(device_key(device),
-                                                default=DEFAULT_DEVICE_RELATIVE_SD)
+        rel[device], sources[device] = combined(device_key(device), default=math.nan)
+        if not math.isfinite(rel[device]):
+            rel[device], sources[device] = _published_spread(device)
     base = base_power_w(vehicle)
     hotel_rel, sources["hotel"] = combined("hotel_power", default=DEFAULT_RELATIVE_SD)
     held = held_power_w(vehicle)

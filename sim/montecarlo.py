@@ -100,8 +100,8 @@ def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
 STATIC_COLUMNS = ("energy_j", "held", "exhausted_s", "duration_s", "ended", "quality",
                   "plan_check")
 LINK_COLUMNS = ("surfacings", "updates_applied", "updates_refused", "replans_least_energy",
-                "replans_not_sent", "up_bytes", "down_bytes", "up_messages", "down_messages",
-                "update_bytes_max")
+                "replans_not_sent", "replans_failed", "up_bytes", "down_bytes", "up_messages",
+                "down_messages", "update_bytes_max")
 
 
 def _row(job: Job, scenario, record: RunRecord) -> dict:  # noqa: ANN001
@@ -327,6 +327,7 @@ def replanning(table) -> dict:  # noqa: ANN001
             "updates_refused": int(table["updates_refused"].sum()),
             "replans_least_energy": int(table["replans_least_energy"].sum()),
             "replans_not_sent": int(table["replans_not_sent"].sum()),
+            "replans_failed": int(table["replans_failed"].sum()),
             "sbd_limits_bytes": {"up": SBD_MO_SHORT_BYTES, "down": SBD_MT_SHORT_BYTES},
         },
     }

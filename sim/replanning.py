@@ -29,8 +29,9 @@ from gliderplan.contract import (
     UpdateStatus,
 )
 from gliderplan.language import ir
+from gliderplan.planner.plan import PlanningError
 from gliderplan.planner.planfile import read_plan_bytes
-from gliderplan.planner.replan import ReplanInfeasible, Replanner
+from gliderplan.planner.replan import Replanner
 from gliderplan.planner.update import UpdateError, apply_update, make_updates
 from gliderplan.power_models.posterior import DischargeCurve
 from gliderplan.power_models.telemetry import (
@@ -64,6 +65,7 @@ class LinkLog:
     unchanged: int = 0  # replans that changed nothing: no update sent
     least_energy: int = 0  # replans that found the budget short at the confidence
     not_sent: int = 0  # replans whose changes no update could carry
+    not_replanned: int = 0  # surfacings whose replan failed (refused or the solver): no update
     refusals: list[str] = field(default_factory=list)
     events: list[dict] = field(default_factory=list)  # one per surfacing
 
@@ -75,6 +77,7 @@ class LinkLog:
             "surfacings": self.surfacings, "updates_applied": self.applied,
             "updates_refused": self.refused, "replans_unchanged": self.unchanged,
             "replans_least_energy": self.least_energy, "replans_not_sent": self.not_sent,
+            "replans_failed": self.not_replanned,
             "up_bytes": self.up_bytes, "down_bytes": self.down_bytes,
             "up_bytes_per_day": self.up_bytes / days, "down_bytes_per_day": self.down_bytes / days,
             "up_messages": self.up_messages, "down_messages": self.down_messages,
@@ -117,9 +120,10 @@ class ShoreLoop:
 
     def report(self, tick: int, columns: Columns, used_j: float, lat_deg: float,
                lon_deg: float) -> SurfacingReport:
-        """What the glider sends up at a surfacing before `tick`."""
+        """What the glider sends up at a surfacing: its counter's last reading `used_j` [J],
+        taken before tick `tick`, and what it flew up to then."""
         arrays = columns.arrays()
-        rows = slice(self.counted, len(arrays["state"]))
+        rows = slice(self.counted, min(tick, len(arrays["state"])))
         power = arrays["sensor_power"][rows].astype(np.int64)
         for device in SENSOR_DEVICES:
             self.on_s[device] += float(np.count_nonzero(power & DEVICE_BITS[device])) \
@@ -129,7 +133,7 @@ class ShoreLoop:
         self.counted = rows.stop
         depth = used_j / (self.replanner.plan.budget_j * self.usable_truth)
         volts = self.curve.voltage(depth) + self.rng.normal(0.0, self.curve.noise_v)
-        current = int(arrays["state"][-1]) if len(arrays["state"]) else -1
+        current = int(arrays["state"][rows.stop - 1]) if rows.stop else -1
         return SurfacingReport(
             tick * self.tick_s, used_j / J_PER_AH, float(volts), degrees_to_ddmm(lat_deg),
             degrees_to_ddmm(lon_deg),
@@ -164,8 +168,9 @@ class ShoreLoop:
         replanner.observe(report)
         try:
             result = replanner.replan(self.held, report)
-        except ReplanInfeasible as err:  # only with if_infeasible="refuse"
-            event["status"] = "infeasible"
+        except PlanningError as err:  # infeasible (with if_infeasible="refuse"), or the
+            event["status"] = "not replanned"  # solver failed: the plan flies on
+            self.log.not_replanned += 1
             self.log.refusals.append(str(err))
             return ()
         event.update(status=result.status, quality=result.quality,
@@ -223,15 +228,17 @@ class PythonVehicle:
 
 def surfacing_hook(shore: ShoreLoop, deliver: Callable[[bytes], tuple[UpdateStatus, int, str]],
                    gauge, glider, battery_j: float):  # noqa: ANN001, ANN201
-    """`sim.loop.simulate`'s surfacing hook: the counter's reading (`gauge`, of a battery of
-    `battery_j` [J]) and the glider's position into the shore's report, each update it
-    sends delivered to the vehicle and its verdict noted for the next report."""
+    """`sim.loop.simulate`'s surfacing hook: the counter's last reading (`gauge`, of a battery
+    of `battery_j` [J]: the report is of when it was read out) and the glider's position into
+    the shore's report, each update it sends delivered to the vehicle and its verdict noted
+    for the next report."""
 
     def surfaced(tick: int, columns: Columns) -> None:
         used = battery_j - gauge.reading(tick, columns)
         if not math.isfinite(used):
             return
-        for update in shore.at_surfacing(tick, columns, used, glider.lat_deg, glider.lon_deg):
+        read = gauge.counted  # the counter was last read out before this tick: the report
+        for update in shore.at_surfacing(read, columns, used, glider.lat_deg, glider.lon_deg):
             shore.acknowledged(*deliver(update))
 
     return surfaced
