@@ -175,7 +175,7 @@ class ReplanResult:
     confidence: float
     time_s: float  # [s] mission time of the report it rests on
     remaining_s: dict[str, float]  # [s] time left in each state
-    used_j: float  # [J] drawn so far, the counter says
+    used_j: float  # [J] drawn so far: the counter, past its last reading the figures
     predicted_used_j: float  # [J] the plan's prediction of it
     budget_left_j: float  # [J] expected: usable share x budget - used
     budget_left_sd_j: float
@@ -372,11 +372,13 @@ class Replanner:
             return {s: max(report.state_time_s.get(s, 0.0) - earlier.get(s, 0.0), 0.0)
                     for s in self.rates}
         total = sum(s.time_s for s in self.plan.states) or 1.0
-        note = "the reports say no time in each state: each interval is shared as the plan " \
-               "shares the mission's time"
+        self._note("the reports say no time in each state: each interval is shared as the "
+                   "plan shares the mission's time")
+        return {s.name: span_s * s.time_s / total for s in self.plan.states}
+
+    def _note(self, note: str) -> None:
         if note not in self.notes:
             self.notes.append(note)
-        return {s.name: span_s * s.time_s / total for s in self.plan.states}
 
     def observe(self, report: SurfacingReport) -> None:
         """Learn from one more report (in time order): the interval since the last one
@@ -470,13 +472,28 @@ class Replanner:
             return sum(s.time_s for s in self.plan.states)
         return self.last.time_s / self.belief.intervals
 
+    def _used_j(self, report: SurfacingReport) -> float:
+        """[J] drawn by the time of `report`: its counter's, else (a gap) the last reading
+        and what the figures learned so far say was drawn since, lest the budget left
+        count the uncounted span as unspent."""
+        if report.energy_used_j is not None:
+            return report.energy_used_j
+        counted = 0.0 if self.last is None else self.last.energy_used_j
+        since = self.expected_j(self.last, report)
+        estimate = sum(float(m) * since.get(n, 0.0)
+                       for n, m in zip(self.belief.names, self.belief.mean, strict=True))
+        since_s = report.time_s - (0.0 if self.last is None else self.last.time_s)
+        self._note(f"no counter reading at {report.time_s / 3600:.1f} h: the "
+                   f"{since_s / 3600:.1f} h since the last are taken to have drawn "
+                   f"{estimate / J_PER_WH:,.1f} Wh, as the figures learned so far say")
+        return counted + estimate
+
     def replan(self, held: bytes, report: SurfacingReport) -> ReplanResult:
         """The plan for the rest of the mission after `report` (observed already), from the
         plan the glider holds (`held`, a plan file of this mission)."""
         held_plan = read_plan_bytes(held, self.mission)
         self.flying = held_plan
-        used = report.energy_used_j if report.energy_used_j is not None else \
-            (self.last.energy_used_j if self.last is not None else 0.0)
+        used = self._used_j(report)
         remaining = self.remaining_s(report)
         left_mean, left_sd = self._parameters(remaining, used)
         chance, model = self.chance, self.chance.model

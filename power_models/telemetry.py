@@ -262,11 +262,16 @@ def _last(logs, name: str) -> float | None:  # noqa: ANN001
 
 def read_telemetry(paths: str | Path | list[str | Path], cache_dir: str | None = None
                    ) -> list[SurfacingReport]:
-    """Reports from a JSON telemetry file or from Slocum logs (files or directories)."""
+    """Reports from JSON telemetry files (one a surfacing, or several in one; in the order
+    given) or from Slocum logs (files or directories)."""
     items = [str(p) for p in ([paths] if isinstance(paths, str | Path) else paths)]
-    if len(items) == 1 and Path(items[0]).suffix.lower() == ".json":
-        return read_json_telemetry(items[0])
-    return read_log_telemetry(items, cache_dir)
+    json_files = [p for p in items if Path(p).suffix.lower() == ".json"]
+    if not json_files:
+        return read_log_telemetry(items, cache_dir)
+    if len(json_files) < len(items):
+        raise TelemetryError(f"{json_files[0]}: JSON telemetry and Slocum logs cannot be mixed: "
+                             "give one or the other")
+    return [r for path in json_files for r in read_json_telemetry(path)]
 
 
 # ---- checks ------------------------------------------------------------------------------

@@ -185,6 +185,41 @@ def test_telemetry_with_gaps_still_replans_and_says_so(tmp_path, signed, capsys)
     assert "no coulomb counter reading (a gap)" in said
 
 
+def test_a_last_report_without_a_counter_still_counts_what_was_drawn_since(signed, short):
+    """The span since the last counter reading is estimated from the figures learned, not
+    taken as unspent: the budget left is close to what a full report would give."""
+    plan, _ = signed
+    held = plan.read_bytes()
+    full = telemetry(plan, (3, 6, 9, 12), dvl=1.3)
+    gap = telemetry(plan, (3, 6, 9, 12), dvl=1.3, coulomb_amphr_total=None, battery_v=None)
+    results = []
+    for reports in (full, gap):
+        replanner = Replanner(short, held, confidence=0.95, spec=read_spec())
+        for r in reports:
+            replanner.observe(r)
+        results.append(replanner.replan(held, reports[-1]))
+    drawn_since = full[-1].energy_used_j - full[-2].energy_used_j
+    assert abs(results[1].used_j - results[0].used_j) < 0.05 * drawn_since
+    assert abs(results[1].budget_left_j - results[0].budget_left_j) < 0.05 * drawn_since
+    assert any("no counter reading at 12.0 h" in n for n in results[1].notes)
+
+
+def test_reports_in_several_json_files_are_read_in_order(tmp_path, signed, capsys):
+    plan, _ = signed
+    reports = telemetry(plan, (3, 6))
+    files = [tmp_path / "s1.json", tmp_path / "s2.json"]
+    for path, r in zip(files, reports, strict=True):
+        path.write_text(write_json_telemetry([r]))
+    code = main(["replan", SHORT, "--plan", str(plan), "--telemetry", *map(str, files)])
+    assert code == ExitCode.OK and "at 6.0 h" in capsys.readouterr().out
+    code = main(["replan", SHORT, "--plan", str(plan), "--telemetry", *map(str, files[::-1])])
+    assert code == ExitCode.BAD_INPUT and "reports out of order" in capsys.readouterr().err
+    code = main(["replan", SHORT, "--plan", str(plan), "--telemetry", str(files[0]),
+                 str(tmp_path)])
+    assert code == ExitCode.BAD_INPUT
+    assert "JSON telemetry and Slocum logs cannot be mixed" in capsys.readouterr().err
+
+
 def test_an_update_needs_the_vehicles_key(tmp_path, signed, capsys):
     plan, _ = signed
     path = write(tmp_path, telemetry(plan, (3,)))
