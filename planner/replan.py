@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from pathlib import Path
@@ -140,7 +141,9 @@ class ChanceModel:
         start = time.perf_counter()
         for solver, options in RETRIES:
             try:
-                problem.solve(solver=solver, **options)
+                with warnings.catch_warnings():  # the status says "optimal_inaccurate"
+                    warnings.filterwarnings("ignore", message="Solution may be inaccurate")
+                    problem.solve(solver=solver, **options)
             except cp.SolverError:  # its status would still be the last solve's
                 continue
             return problem.status or "solver_error", time.perf_counter() - start
