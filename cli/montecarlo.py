@@ -18,7 +18,13 @@ import argparse
 import os
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission, seed
+from gliderplan.cli.common import (
+    add_mission_argument,
+    load_mission,
+    refuse_unpaired,
+    replan_confidence,
+    seed,
+)
 from gliderplan.cli.main import print_json
 from gliderplan.contract import ExitCode
 
@@ -51,7 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fly each scenario twice: the plan alone, and with the shore "
                              "replanning the rest at each surfacing (plan updates); report "
                              "both side by side")
-    parser.add_argument("--confidence", type=float, metavar="P",
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
                         help="with --replan: the confidence the rest is replanned at "
                              "(default: the plan's own, else 0.95)")
     parser.add_argument("--key", metavar="KEYFILE",
@@ -67,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.cli.sim import parse_duration_s
     from gliderplan.sim.montecarlo import montecarlo_mission
 
+    refuse_unpaired(args, {"--confidence": ("--replan",), "--key": ("--replan",)})
     mission = load_mission(args)
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios")
     try:

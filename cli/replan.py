@@ -18,22 +18,16 @@ written and the glider keeps flying its plan.
 from __future__ import annotations
 
 import argparse
-import json
 
-from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.cli.common import (
+    add_mission_argument,
+    load_mission,
+    refuse_unpaired,
+    replan_confidence,
+)
 from gliderplan.contract import ExitCode
 
 ORDER = 32
-
-
-def _confidence(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not 0.5 <= value < 1.0:
-        raise argparse.ArgumentTypeError(f"expected a probability in [0.5, 1), got {text!r}")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -43,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--telemetry", required=True, nargs="+", metavar="T",
                         help="the glider's surfacing reports: a JSON file, or Slocum logs "
                              "(.sbd/.tbd, .dbd/.ebd) or directories of them")
-    parser.add_argument("--confidence", type=_confidence, metavar="P",
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
                         help="the probability the budget holds (default: the plan's own, "
                              "else 0.95)")
     parser.add_argument("--key", metavar="KEYFILE",
@@ -65,15 +59,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from gliderplan.cli.main import print_json
     from gliderplan.planner.replan import replan_mission
 
+    refuse_unpaired(args, {"--seq": ("--key",)})
     mission = load_mission(args)
     run_ = replan_mission(mission, args.plan, args.telemetry, confidence=args.confidence,
                           key_path=args.key, output=args.output, seq=args.seq,
                           max_updates=args.max_updates, scenario_file=args.scenario_file,
                           if_infeasible=args.if_infeasible)
     if args.json:
-        print(json.dumps(run_.to_json(), indent=2))
+        print_json(run_.to_json())
         return ExitCode.OK
     print(f"{mission.name}: {run_.result.text()}")
     for note in run_.notes:

@@ -18,7 +18,13 @@ import math
 import re
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission, seed
+from gliderplan.cli.common import (
+    add_mission_argument,
+    load_mission,
+    refuse_unpaired,
+    replan_confidence,
+    seed,
+)
 from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
@@ -103,7 +109,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="put the shore in the loop: at each surfacing the glider reports, "
                              "the rest of the mission is replanned and the plan update sent "
                              "to the runtime (needs --plan; RUNDIR/replans.csv)")
-    parser.add_argument("--confidence", type=float, metavar="P",
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
                         help="with --replan-every: the confidence the rest is replanned at "
                              "(default: the plan's own, else 0.95)")
     parser.add_argument("--scenario-file", metavar="FILE",
@@ -129,6 +135,8 @@ def _current(text: str):
 def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.run import run_mission
 
+    refuse_unpaired(args, {"--confidence": ("--replan-every",),
+                           "--scenario-file": ("--replan-every",)})
     mission = load_mission(args)
     duration_s = parse_duration_s(args.duration) if args.duration else None
     ticks = (duration_s or mission.horizon_s or DEFAULT_HORIZON_S) / max(args.tick, 1e-9)

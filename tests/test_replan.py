@@ -220,6 +220,29 @@ def test_reports_in_several_json_files_are_read_in_order(tmp_path, signed, capsy
     assert "JSON telemetry and Slocum logs cannot be mixed" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("argv, said", [
+    (["sim", SHORT, "--confidence", "0.9", "-o", "run"], "--confidence works only with "
+     "--replan-every"),
+    (["sim", SHORT, "--scenario-file", "x.toml", "-o", "run"], "--scenario-file works only "
+     "with --replan-every"),
+    (["montecarlo", SHORT, "--scenarios", "2", "--key", "k", "-o", "mc"], "--key works only "
+     "with --replan"),
+    (["montecarlo", SHORT, "--scenarios", "2", "--replan", "--confidence", "1", "-o", "mc"],
+     "expected a probability in [0.5, 1), got '1'"),
+    (["replan", SHORT, "--plan", "p", "--telemetry", "t", "--seq", "3"], "--seq works only "
+     "with --key"),
+])
+def test_replanning_options_without_what_they_need_are_refused(tmp_path, capsys, monkeypatch,
+                                                                argv, said):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as done:
+        code = main(argv)
+        raise SystemExit(code)
+    assert done.value.code == ExitCode.USAGE
+    assert said in capsys.readouterr().err
+    assert not (tmp_path / "run").exists() and not (tmp_path / "mc").exists()
+
+
 def test_an_update_needs_the_vehicles_key(tmp_path, signed, capsys):
     plan, _ = signed
     path = write(tmp_path, telemetry(plan, (3,)))
