@@ -15,6 +15,7 @@ from gliderplan.sim.ocean import Ocean
 if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
     from gliderplan.sim.faults import FaultSpec
+    from gliderplan.sim.replanning import ShoreLoop
 
 RUNTIMES = ("python", "c")
 
@@ -25,7 +26,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         progress: Callable[[float, float], None] | None = None,
         tick_by_tick: bool = False, key_path: str | None = None,
         state_dir: str | Path | None = None,
-        faults: FaultSpec | None = None) -> RunRecord:
+        faults: FaultSpec | None = None, shore: ShoreLoop | None = None) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends.
 
     The Python executor flies runs of ticks at once where nothing can happen between them
@@ -35,7 +36,10 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
     given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
     when it refuses the plan. `faults` (C runtime only) are injected on the line and into
-    the runtime's board; the record says what they did.
+    the runtime's board; the record says what they did. `shore` (sim/replanning.py) is
+    the shore in the loop: at each surfacing the glider's report goes up, and the plan
+    updates it sends back are applied by the runtime (the C runtime's over its link; it
+    must hold the key: `key_path`).
     """
     from gliderplan.sim.energy import BatteryGauge
 
@@ -47,13 +51,21 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         # without a plan: the same buoyancy volume the compiler gives the C runtime
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
                                  vehicle.max_ballast_cc)
+        hook = None
+        if shore is not None:
+            from gliderplan.sim.replanning import PythonVehicle
+
+            hook = _surfacing(shore, PythonVehicle(executor, shore.held, shore.key, mission,
+                                                   _reader(mission, vehicle, plan)).deliver,
+                              gauge, science.glider, mission)
         if tick_by_tick:
-            record = simulate(mission, executor, science, config, progress, gauge=gauge)
+            record = simulate(mission, executor, science, config, progress, gauge=gauge,
+                              on_surfacing=hook)
         else:
             from gliderplan.sim.fast import FastForward
 
             record = simulate(mission, executor, science, config, progress,
-                              FastForward(mission, executor, science), gauge)
+                              FastForward(mission, executor, science), gauge, hook)
         record.entry_variables = executor.entry_variables
         record.events_fired = executor.event_count
         return record
@@ -75,14 +87,35 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                                  config.tick_s)
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)
+    hook = None if shore is None else _surfacing(shore, c_runtime.deliver_update, gauge,
+                                                 science.glider, mission)
     try:
-        record = simulate(mission, c_runtime, science, config, progress, gauge=gauge)
+        record = simulate(mission, c_runtime, science, config, progress, gauge=gauge,
+                          on_surfacing=hook)
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
     return record
+
+
+def _surfacing(shore: ShoreLoop, deliver, gauge, glider,  # noqa: ANN001, ANN202
+               mission: ir.CheckedMission):
+    from gliderplan.sim.replanning import surfacing_hook
+
+    return surfacing_hook(shore, deliver, gauge, glider, mission.battery.energy_j)
+
+
+def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  # noqa: ANN202
+    """How the Python executor's vehicle reads a plan an update makes: strictly, within
+    the vehicle's pump and the board's clocks, as the C runtime does."""
+    from gliderplan.contract import FlightLimits
+    from gliderplan.planner.planfile import plan_board_limits, read_plan_bytes
+
+    board = plan_board_limits(mission, plan).clocks_mhz if plan is not None else (0.0,)
+    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board)
+    return lambda data: read_plan_bytes(data, mission, "", limits)
 
 
 def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,

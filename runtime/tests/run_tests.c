@@ -80,6 +80,12 @@
     X(test_hmac_sha256_should_match_rfc_4231)                               \
     X(test_tags_should_compare_every_byte)                                  \
     X(test_signed_plan_should_carry_the_tag_gliderplan_plan_sign_writes)    \
+    X(test_update_should_make_its_change_and_sign_the_result)               \
+    X(test_update_should_refuse_forged_stale_and_replayed_updates_and_other_plans) \
+    X(test_update_should_refuse_malformed_updates_naming_the_change)        \
+    X(test_update_should_refuse_a_plan_the_reader_refuses)                  \
+    X(test_update_decimal_text_should_write_plan_numbers)                   \
+    X(test_random_updates_should_never_crash_the_applier)                   \
     X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \
     X(test_signed_plan_should_have_a_well_formed_tail)                      \
     X(test_key_file_should_be_64_hex_digits_readable_by_its_owner_only)    \
