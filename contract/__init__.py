@@ -76,7 +76,7 @@ def same_clock(clock_mhz: float, board_clock_mhz: float) -> bool:
 
 # A plan's figures are written with 9 significant digits: two that should agree (a duty and
 # its bound, the prediction and its states' sum) agree within this relative tolerance.
-PLAN_TOLERANCE = 1e-6
+PLAN_ROUNDING = 1e-6
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import NO_BOARD, PLAN_TOLERANCE, FlightLimits
+from gliderplan.contract import NO_BOARD, PLAN_ROUNDING, FlightLimits
 
 if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
@@ -36,7 +36,7 @@ class PlanProblem:
 
 def _above(value: float, bound: float) -> bool:
     """`value` exceeds `bound` by more than the plan file's rounding."""
-    return value > bound + PLAN_TOLERANCE * abs(bound)
+    return value > bound + PLAN_ROUNDING * abs(bound)
 
 
 def plan_problem(plan: Plan, limits: FlightLimits) -> PlanProblem | None:
@@ -50,7 +50,7 @@ def plan_problem(plan: Plan, limits: FlightLimits) -> PlanProblem | None:
         return PlanProblem(BUDGET_LINE, f"budget_j {plan.budget_j:g} J exceeds the mission's "
                            f"battery less its reserve ({limits.max_budget_j:g} J)")
     states_j = sum(s.energy_j for s in plan.states)
-    if abs(plan.predicted_j - states_j) > PLAN_TOLERANCE * max(plan.predicted_j, states_j):
+    if abs(plan.predicted_j - states_j) > PLAN_ROUNDING * max(plan.predicted_j, states_j):
         return PlanProblem(PREDICTED_LINE, f"predicted_j {plan.predicted_j:g} J is not the sum "
                            f"of its states' energy ({states_j:g} J)")
     if not plan.predicted_j > 0:
@@ -62,7 +62,7 @@ def plan_problem(plan: Plan, limits: FlightLimits) -> PlanProblem | None:
         duty = {x.name: x.duty for x in state.sensors}
         for name, low, high in limits.duty_bounds[s] if limits.duty_bounds else ():
             flown = duty.get(name, 1.0)  # a sensor without a line is always on
-            if flown < low - PLAN_TOLERANCE or _above(flown, high):
+            if flown < low - PLAN_ROUNDING or _above(flown, high):
                 return PlanProblem(state.line, f"state {state.name}: sensor {name}: duty "
                                    f"{flown:g} outside the mission's [{low:g}, {high:g}]")
         for k, profile in enumerate(state.profiles):

@@ -788,7 +788,7 @@ static int refuse(char error[GP_PLAN_ERROR_LEN], int line, const char *format, .
 /* `value` exceeds `bound` by more than the plan file's rounding. */
 static int above(double value, double bound)
 {
-    return value > bound + GP_PLAN_TOLERANCE * fabs(bound);
+    return value > bound + GP_PLAN_ROUNDING * fabs(bound);
 }
 
 /* The duty [1] a state's plan gives `sensor`: a sensor without a line is always on. */
@@ -809,7 +809,7 @@ static int check_state(const gp_plan_state *ps, const gp_state *state,
     for (int i = 0; sb != NULL && i < sb->n_duties; i++) {
         const gp_duty_bound *d = &sb->duties[i];
         double flown = planned_duty(ps, d->sensor);
-        if (flown < d->low - GP_PLAN_TOLERANCE || above(flown, d->high)) {
+        if (flown < d->low - GP_PLAN_ROUNDING || above(flown, d->high)) {
             return refuse(error, ps->line, "state %.32s: sensor %.32s: duty %g outside the "
                           "mission's [%g, %g]", state->name, mission->sensor_names[d->sensor],
                           flown, d->low, d->high);
@@ -859,7 +859,7 @@ int gp_plan_check(const gp_plan *plan, const gp_mission *mission,
         states_j += plan->states[s].energy_j;
     }
     if (fabs(plan->predicted_j - states_j)
-        > GP_PLAN_TOLERANCE * fmax(plan->predicted_j, states_j)) {
+        > GP_PLAN_ROUNDING * fmax(plan->predicted_j, states_j)) {
         return refuse(error, PREDICTED_LINE, "predicted_j %g J is not the sum of its states' "
                       "energy (%g J)", plan->predicted_j, states_j);
     }
