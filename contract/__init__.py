@@ -94,8 +94,8 @@ class FlightLimits:
     max_budget_j: float = MAX_PLAN_ENERGY_J  # [J] the battery less its reserve
     pitch_range_rad: tuple[float, float] = (0.0, math.pi / 2)  # [rad] commanded, open
     max_speed_mps: float = MAX_PLAN_SPEED_MPS  # [m/s] the vehicle's fastest glide
-    # [1] per state, per sensor it logs that has a device (in its order): (name, least,
-    # most duty the mission allows); (): no bounds
+    # [1] per state, per sensor it logs with a device and a duty (`auto` or fixed), in its
+    # order: (name, least, most duty the mission allows); (): no bounds
     duty_bounds: tuple[tuple[tuple[str, float, float], ...], ...] = ()
     # [cc] per state, per profile alternative: the volume a plan's ballast must exceed for
     # the glider to leave its turning depth (its trim over the band); () : 0

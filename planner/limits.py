@@ -54,8 +54,9 @@ def flight_limits(mission: CheckedMission, board: str | None = None) -> FlightLi
         duty_bounds=tuple(
             tuple((use.name, *duty_bounds(mission, state, use,
                                           sensor_on(vehicle, device).quality_alpha))
-                  for use in state.sensors
-                  if (device := SENSOR_BY_NAME[use.name].device) is not None)
+                  for use in state.sensors  # one logged without a duty is the plan's to cycle
+                  if (device := SENSOR_BY_NAME[use.name].device) is not None
+                  and use.duty is not None)
             for state in mission.states),
         min_ballast_cc=tuple(tuple(least_ballast_cc(p) for p in state.profiles)
                              for state in mission.states))
