@@ -38,8 +38,10 @@ T = TypeVar("T")
 
 
 class _Checker:
-    def __init__(self, mission: ast.Mission, stack_depth: int | None, base_dir: str = ""):
+    def __init__(self, mission: ast.Mission, stack_depth: int | None, base_dir: str = "",
+                 model_files: bool = False):
         self.mission = mission
+        self.model_files = model_files  # open the vehicle and board files it names
         self.stack_depth_override = stack_depth
         self.base_dir = base_dir  # the mission's folder: the files it names are beside it
         self.written: list[tuple[str, str]] = []  # (field, file as written) of each file
@@ -129,7 +131,7 @@ class _Checker:
                 case ast.VehicleDecl():
                     self.preset_known("vehicle", decl.preset, decl.is_file)
                     fields["vehicle"] = self.beside("vehicle", decl.preset.text, decl.is_file)
-                    if decl.is_file:
+                    if decl.is_file and self.model_files:
                         self._vehicle = self.model_file("vehicle", fields["vehicle"],
                                                         decl.preset)
                 case ast.ComputerDecl() if decl.board.text == NO_BOARD:
@@ -148,7 +150,7 @@ class _Checker:
                             self.error("clock must be positive", decl.clock.span)
                     board = self.beside("computer", decl.board.text, decl.is_file)
                     fields["computer"] = self.computer = ir.Computer(board, clock_mhz)
-                    if decl.is_file:
+                    if decl.is_file and self.model_files:
                         self._board = self.model_file("board", board, decl.board) or False
                     if known and clock_mhz is not None and clock_mhz > 0 and \
                             (board := self.board(decl.clock.span)) is not None:
@@ -808,13 +810,15 @@ def _signature(params: tuple[ParamSpec, ...], min_points: int, max_points: int) 
     return ", ".join(parts) if parts else "no arguments"
 
 
-def check(mission: ast.Mission, stack_depth: int | None = None, base_dir: str = ""
-          ) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
+def check(mission: ast.Mission, stack_depth: int | None = None, base_dir: str = "",
+          model_files: bool = False) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
     """Check a parsed mission; the IR is None when there are errors. `stack_depth`
     replaces the mission's own (1 to the runtime's MAX_STACK_DEPTH). `base_dir`: the
-    mission's folder, where the files it names are looked for ("": the working one)."""
+    mission's folder, where the files it names are looked for ("": the working one).
+    `model_files`: open the vehicle and board files it names, and fly its yos on the
+    vehicle file's figures (a battery file is read always: it is the mission's energy)."""
     if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
         raise ValueError(f"a stack depth of {stack_depth} is outside 1..{MAX_STACK_DEPTH}")
-    checker = _Checker(mission, stack_depth, base_dir)
+    checker = _Checker(mission, stack_depth, base_dir, model_files)
     checked = checker.run()
     return checked, sorted(checker.diagnostics, key=lambda d: (d.span.line, d.span.column))
