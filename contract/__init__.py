@@ -9,6 +9,7 @@ Change a fact here, regenerate the header, and every part follows.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -73,15 +74,32 @@ def same_clock(clock_mhz: float, board_clock_mhz: float) -> bool:
     return abs(clock_mhz - board_clock_mhz) <= CLOCK_TOLERANCE_MHZ
 
 
+# A plan's figures are written with 9 significant digits: two that should agree (a duty and
+# its bound, the prediction and its states' sum) agree within this relative tolerance.
+PLAN_ROUNDING = 1e-6
+
+
 @dataclass(frozen=True)
 class FlightLimits:
-    """The figures of one vehicle and board that bound a plan: the code generator writes
-    them into the compiled mission (`gp_mission.max_ballast_cc`, `clocks_mhz`), the
-    Python plan reader checks them (`planner.limits.flight_limits` loads them)."""
+    """The figures of one mission, vehicle and board that bound a plan: the code generator
+    writes them into the compiled mission (`gp_mission`: `max_ballast_cc`, `clocks_mhz`,
+    `bounds`), `contract.plan_check.plan_problem` holds a plan to them in Python and
+    `gp_plan_check` in C (`planner.limits.flight_limits` loads them). The fields after
+    `clocks_mhz` default to no bound beyond the contract's (a mission table made by hand)."""
 
     default_ballast_cc: float  # [cc] flown where no plan sets one
     max_ballast_cc: float  # [cc] the pump's volume either side of neutral
     clocks_mhz: tuple[float, ...]  # [MHz] the board's clocks, slowest first
+    board: str | None = None  # the board's name a plan names (or NO_BOARD); None: any
+    max_budget_j: float = MAX_PLAN_ENERGY_J  # [J] the battery less its reserve
+    pitch_range_rad: tuple[float, float] = (0.0, math.pi / 2)  # [rad] commanded, open
+    max_speed_mps: float = MAX_PLAN_SPEED_MPS  # [m/s] the vehicle's fastest glide
+    # [1] per state, per sensor it logs with a device and a duty (`auto` or fixed), in its
+    # order: (name, least, most duty the mission allows); (): no bounds
+    duty_bounds: tuple[tuple[tuple[str, float, float], ...], ...] = ()
+    # [cc] per state, per profile alternative: the volume a plan's ballast must exceed for
+    # the glider to leave its turning depth (its trim over the band); () : 0
+    min_ballast_cc: tuple[tuple[float, ...], ...] = ()
 
     def __post_init__(self) -> None:
         if not 1 <= len(self.clocks_mhz) <= MAX_BOARD_CLOCKS:

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from gliderplan.language import ir
-from gliderplan.power_models.vehicle import Vehicle, flying_yo
+from gliderplan.power_models.vehicle import Vehicle, yo_flight_problem
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
 
@@ -127,11 +127,9 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
     A yo whose band reads variables is left to the flight."""
     for i, state in enumerate(mission.states):
         for k, profile in enumerate(state.profiles):
-            args = profile.constant_args()
-            if profile.kind not in ("yo", "thermotrackyo") or args is None:
-                continue
-            planned = plan.states[i].profiles[k] if plan is not None else None
-            pitch = planned.pitch_rad if planned else 0.5 * (args[2] + args[3])
-            ballast = planned.ballast_cc if planned else vehicle.unplanned_ballast_cc
-            with flying_yo(f"{state.name}: flightprofile {k}", vehicle, args[0], args[1]):
-                vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)
+            flown = (None, None) if plan is None else (plan.states[i].profiles[k].pitch_rad,
+                                                       plan.states[i].profiles[k].ballast_cc)
+            problem = yo_flight_problem(f"{state.name}: flightprofile {k}", vehicle,
+                                        profile.kind, profile.constant_args(), *flown)
+            if problem is not None:
+                raise problem

@@ -38,6 +38,8 @@
 #define GP_MAX_BOARD_CLOCKS 8  /**< clocks of one board the compiled mission lists */
 #define GP_CLOCK_TOLERANCE_MHZ 1e-06  /**< [MHz] a plan's clock is the board's within this */
 #define GP_NO_BOARD "none"  /**< `computer none`: no board to set; its plans' clocks are all 0 */
+/** A plan's figures are written with 9 significant digits: two that should agree (a duty and its bound, the prediction and its states' sum) agree within this relative tolerance. */
+#define GP_PLAN_ROUNDING 1e-06
 
 /* ---- signed plans */
 

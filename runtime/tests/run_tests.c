@@ -33,6 +33,7 @@
     X(test_plan_should_reject_bad_files_naming_the_line)                    \
     X(test_plan_should_read_a_states_power_line_where_its_mission_sleeps)   \
     X(test_plan_should_accept_computer_none_on_any_build)                   \
+    X(test_plan_should_be_held_to_its_missions_bounds)                      \
     X(test_plan_should_reject_clocks_on_computer_none_and_boards_on_its_build) \
     X(test_plan_should_reject_a_file_of_only_its_checksum_line)             \
     X(test_plan_should_reject_an_overlong_line)                             \
