@@ -432,6 +432,7 @@ class _Checker:
         goal = self.goal(once.get("sample"))
         specs = self.gliders(gliders, values.get("start_epoch_s"), values.get("period_s"))
         survey = once.get("survey")
+        survey_points = self.survey_points(survey) if survey is not None else None
         if survey is None:
             self.error("no survey: the gliders have nothing to share", ast.NO_SPAN,
                        "add 'survey begin area (lat, lon), ... end' (or transects, or "
@@ -441,7 +442,7 @@ class _Checker:
                        "add 'glider NAME begin vehicle ... battery ... start (lat, lon) end'")
         if self.errors() or survey is None or goal is None or specs is None:
             return None
-        geometry = self.geometry(survey, goal, specs)
+        geometry = self.geometry(survey, survey_points, goal, specs)
         if self.errors() or geometry is None:
             return None
         projection, parts, areas, keepouts, placed = geometry
@@ -701,7 +702,12 @@ class _Checker:
         return None if lat is None or lon is None else (lat, lon)
 
     # ---- the survey's geometry
-    def geometry(self, survey: Setting, goal: Goal, specs: list[dict]):
+    def survey_points(self, survey: Setting) -> dict[int, list]:
+        """Every survey item's points, checked as DDMM.MMMM with the other settings."""
+        return {id(i): [self.point(p) for p in i.values[0]] for i in survey.values}
+
+    def geometry(self, survey: Setting, points: dict[int, list], goal: Goal,
+                 specs: list[dict]):
         from shapely.ops import unary_union
 
         from gliderplan.language.fleet_geometry import (
@@ -719,9 +725,6 @@ class _Checker:
         if not any(i.kind in ("area", "transect", "waypoints") for i in items):
             self.error("the survey has no area, transect or waypoints", survey.span,
                        "add e.g. 'area (3920, -7400), (3950, -7400), (3950, -7330)'")
-            return None
-        points = {id(i): [self.point(p) for p in i.values[0]] for i in items}
-        if self.errors():
             return None
         everything = [p for ps in points.values() for p in ps] + [s["start_ddmm"] for s in specs]
         projection = projection_about(everything)

@@ -73,15 +73,12 @@ def polygon_problem(points: list[XY]) -> str | None:
     from shapely.validation import explain_validity
 
     shape = polygon(points)
+    if shape.area <= 1.0 and shape.convex_hull.area <= 1.0:
+        return "it encloses no area (its corners lie on a line)"
     if not shape.is_valid:
         why = explain_validity(shape)
-        if why.startswith("Self-intersection"):
-            return "its edges cross each other"
-        if shape.area <= 0.0:
-            return "it encloses no area"
-        return why.lower()
-    if shape.area <= 1.0:
-        return "it encloses no area (its corners lie on a line)"
+        return "its edges cross each other" if why.startswith("Self-intersection") \
+            else why.lower()
     return None
 
 

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-MAX_MILP_ARCS = 60_000  # past this, the heuristic (the MILP's LP alone takes seconds)
+MAX_MILP_ARCS = 20_000  # past this, the heuristic (HiGHS takes many seconds past it)
 DEFAULT_TIME_LIMIT_S = 20.0
 
 
@@ -116,21 +116,26 @@ class Assignment:
 def _block_cost(inputs: BlockInputs, g: int, weight, first_pass_m, transit_m):
     """(cost, pass time [s], arrival [s after the fleet's start]) of glider g sweeping
     blocks (arrays or scalars): `weight` their share of the survey, `first_pass_m` one
-    sweep's length, `transit_m` the way to them."""
+    sweep's length, `transit_m` the way to them.
+
+    While the glider sweeps the block, a line's error is that of a line swept every pass
+    (`error_of_pass`); before the glider reaches it and after it stops, the error relaxes
+    towards 1 as the samples age (Gaussian in time, as the covariance: the period's mean
+    integrates it in closed form). The block's neighbours are left out: a per-block cost
+    keeps the assignment a MILP; the local search after it (`planner.fleet.polish`) sees
+    them."""
     rate = inputs.speed_mps[g] * inputs.flight_share
     pass_s = np.asarray(first_pass_m, float) / rate
     arrive = inputs.start_s[g] + inputs.launch_s + np.asarray(transit_m, float) / rate
     stop = min(inputs.start_s[g] + inputs.end_s[g], inputs.period_s)
     # a line is first reached half a pass after the block is, on average
     first = np.minimum(arrive + 0.5 * pass_s, stop)
-    error = inputs.error_of_pass(pass_s)
-    # Outside the time it is swept the block's error relaxes towards 1 as the samples
-    # age: 1 - (1 - e) exp(-dt^2 / T^2), which the period's mean integrates in closed form.
+    swept = inputs.error_of_pass(pass_s)
     memory = inputs.time_scale_s * math.sqrt(math.pi) / 2.0
-    before = first - (1.0 - error) * memory * _erf(first / inputs.time_scale_s)
+    before = first - (1.0 - swept) * memory * _erf(first / inputs.time_scale_s)
     after_s = inputs.period_s - stop
-    after = after_s - (1.0 - error) * memory * math.erf(after_s / inputs.time_scale_s)
-    mean = ((stop - first) * error + before + after) / inputs.period_s
+    after = after_s - (1.0 - swept) * memory * math.erf(after_s / inputs.time_scale_s)
+    mean = ((stop - first) * swept + before + after) / inputs.period_s
     return weight * mean, pass_s, arrive
 
 
@@ -307,17 +312,55 @@ def solve_milp(arcs: Arcs, n_parts: int, n_gliders: int,
                       if bound is not None else None, spent, len(arcs))
 
 
-def lp_bound(arcs: Arcs, n_parts: int, n_gliders: int) -> float | None:
-    """The LP relaxation's optimum: a lower bound on every assignment's objective."""
-    import cvxpy as cp
-
-    flow, each, target = _matrices(arcs, n_parts, n_gliders)
-    y = cp.Variable(len(arcs), nonneg=True)
-    problem = cp.Problem(cp.Minimize(arcs.cost @ y), [flow @ y == target, each @ y == 1,
-                                                       y <= 1])
-    with quiet_stdout():
-        problem.solve(solver=cp.HIGHS, output_flag=False)
-    return float(problem.value) if problem.status == cp.OPTIMAL else None
+def lp_bound(arcs: Arcs, n_parts: int, n_gliders: int, upper: float | None = None,
+             iterations: int = 400) -> float:
+    """A lower bound on every assignment's objective: the Lagrangian dual of "every glider
+    once", by subgradient ascent (Polyak's step towards `upper`, a known objective, with
+    its factor halved when the bound stalls). With those constraints priced (lambda_g),
+    what is left is a shortest path over the cuts, whose LP is integral, so the dual's
+    optimum is the LP relaxation's bound; any lambda gives a valid bound, and the best
+    one met is kept."""
+    order = np.argsort(arcs.stop, kind="stable")
+    first, stop, glider = arcs.first[order], arcs.stop[order], arcs.glider[order]
+    cost = arcs.cost[order]
+    into = np.searchsorted(stop, np.arange(n_parts + 2))
+    lam = np.zeros(n_gliders)
+    best = -math.inf
+    scale = float(np.median(cost)) if len(cost) else 1.0
+    factor, stalled = 1.0, 0
+    for _ in range(iterations):
+        priced = cost - lam[glider]
+        dist = np.full(n_parts + 1, math.inf)
+        dist[0] = 0.0
+        via = np.full(n_parts + 1, -1)
+        for j in range(1, n_parts + 1):
+            lo, hi = into[j], into[j + 1]
+            if lo == hi:
+                continue
+            total = dist[first[lo:hi]] + priced[lo:hi]
+            pick = int(np.argmin(total))
+            dist[j], via[j] = total[pick], lo + pick
+        if not math.isfinite(dist[n_parts]):
+            return math.inf  # no path at all
+        value = dist[n_parts] + lam.sum()
+        if value > best + 1e-12:
+            best, stalled = value, 0
+        else:
+            stalled += 1
+            if stalled >= 15:
+                factor, stalled = factor / 2.0, 0
+        used = np.zeros(n_gliders)
+        j = n_parts
+        while j > 0:
+            used[glider[via[j]]] += 1.0
+            j = first[via[j]]
+        slope = 1.0 - used
+        norm = float(slope @ slope)
+        if norm == 0.0:  # the path uses every glider once: the bound is exact
+            return float(value)
+        target = upper if upper is not None and upper > value else value + 0.1 * scale
+        lam += factor * (target - value) / norm * slope
+    return float(best)
 
 
 def _dp(table: dict, order: list[int], n_parts: int) -> tuple[float, list[tuple[int, int]]]:
@@ -366,7 +409,9 @@ def solve_heuristic(arcs: Arcs, n_parts: int, n_gliders: int,
         return None
     blocks = sorted((Block(g, i, j, entry[g, i, j], table[g][i][j])
                      for g, (i, j) in zip(order, cuts, strict=True)), key=lambda b: b.glider)
-    bound = lp_bound(arcs, n_parts, n_gliders) if with_bound else None
+    bound = lp_bound(arcs, n_parts, n_gliders, cost) if with_bound else None
+    if bound is not None and not math.isfinite(bound):
+        bound = None
     return Assignment(tuple(blocks), cost, "heuristic", "feasible", bound,
                       time.perf_counter() - start, len(arcs))
 

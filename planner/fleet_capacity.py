@@ -64,10 +64,13 @@ def kind_key(glider: GliderSpec, band: tuple[float, float]) -> tuple:
 
 
 def speed_curve(glider: GliderSpec, fleet: Fleet, band: tuple[float, float],
-                figure_keys: tuple[str, ...], moved_keys: frozenset[str] = frozenset()
-                ) -> SpeedCurve:
+                figure_keys: tuple[str, ...], moved_keys: frozenset[str] = frozenset(),
+                like: SpeedCurve | None = None) -> SpeedCurve:
     """Probe the planner for `glider`'s kind flying `band`; the elasticities of those
-    `figure_keys` that the scenarios move (`moved_keys`; the others stay 0)."""
+    `figure_keys` that the scenarios move (`moved_keys`; the others stay 0). `like`: a
+    curve of the same vehicle and band on another board, whose figures' effect in watts
+    this one shares (a board adds power no vehicle figure moves): its elasticities are
+    rescaled to this kind's power instead of probed again."""
     from gliderplan.language import check_source
     from gliderplan.language.ir import Battery
     from gliderplan.planner.hardware import load_hardware
@@ -117,6 +120,15 @@ def speed_curve(glider: GliderSpec, fleet: Fleet, band: tuple[float, float],
         speeds.append(PROBE_LEG_M / faster.time_s)
         water.append(faster.profiles[0].speed_mps)
         power.append(faster.energy_j / faster.time_s)
+    order = np.argsort(speeds)
+    if like is not None:
+        curve = SpeedCurve(band, np.asarray(speeds)[order], np.asarray(water)[order],
+                           np.asarray(power)[order], surfacing_j, launch_j, {}, like.figures)
+        ratio = float(like.power_w(like.speed_mps[len(like.speed_mps) // 2])
+                      / curve.power_w(like.speed_mps[len(like.speed_mps) // 2]))
+        surface = like.surfacing_j / surfacing_j
+        return replace(curve, elasticity={k: (g * ratio, s * surface)
+                                          for k, (g, s) in like.elasticity.items()})
     # elasticities at the middle speed probed
     middle = speeds[len(speeds) // 2]
     horizon = LAUNCH_S + PROBE_LEG_M / middle + fleet.surface_stay_s
@@ -144,7 +156,6 @@ def speed_curve(glider: GliderSpec, fleet: Fleet, band: tuple[float, float],
         glide = (moved_seg.energy_j / moved_seg.time_s) / (base_seg.energy_j / base_seg.time_s)
         surfacing = moved_fix.energy_j / base_fix.energy_j if base_fix.energy_j else 1.0
         elasticity[key] = ((glide - 1.0) / step, (surfacing - 1.0) / step)
-    order = np.argsort(speeds)
     return SpeedCurve(band, np.asarray(speeds)[order], np.asarray(water)[order],
                       np.asarray(power)[order], surfacing_j, launch_j, elasticity, figures)
 

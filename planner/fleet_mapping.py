@@ -28,6 +28,7 @@ import numpy as np
 from gliderplan.language.fleet import FieldScales, Fleet
 
 SAMPLES_PER_SCALE = 4  # thinned samples per length scale along a track
+MAX_SAMPLES = 800  # at most about this many in the whole fleet: thinned further past it
 GRID_POINTS = 400  # about this many points on the survey's plane
 GRID_TIMES = 12  # evaluation times over the period
 CHUNK = 4000  # evaluation points per block of the solve (bounds memory)
@@ -45,6 +46,14 @@ class Grid:
     @property
     def size(self) -> int:
         return len(self.x) * len(self.times)
+
+
+def sample_spacing(fleet: Fleet) -> float:
+    """Distance [m] between the samples kept along a track: a quarter of the length scale,
+    or more when the whole fleet would take more than MAX_SAMPLES (the solve grows with
+    their cube); one figure per fleet, so that plans and flights are judged alike."""
+    reach = sum(0.35 * (fleet.period_s - g.start_offset_s) for g in fleet.gliders)
+    return max(fleet.field.length_m / SAMPLES_PER_SCALE, reach / MAX_SAMPLES)
 
 
 def survey_region(fleet: Fleet):

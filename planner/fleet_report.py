@@ -93,28 +93,48 @@ def _passes(track: Track) -> float:
 
 def why_not(plan: FleetPlan) -> str | None:
     """When the coordinated plan gains less than TARGET_IMPROVEMENT over the equal split:
-    what about this fleet leaves little to coordinate."""
+    what about this fleet leaves little to coordinate, measured on the plans."""
     if plan.improvement >= TARGET_IMPROVEMENT:
         return None
+    fleet = plan.fleet
     caps = plan.baseline_capacities
     reach = [c.distance_m for c in caps]
     spread = max(reach) / max(min(reach), 1.0) - 1.0
-    late = max(g.start_offset_s for g in plan.fleet.gliders)
+    late = max(g.start_offset_s for g in fleet.gliders)
     short = [c.name for c in caps if c.energy_limited]
     reasons = []
-    if spread < 0.3 and not short and late < 0.1 * plan.fleet.period_s:
+    # the error that falls while most gliders are not yet (or no longer) on their lines
+    # is the same whichever way the lines are shared
+    times = plan.grid.times
+    on = np.zeros(len(times))
+    for glider in plan.gliders:
+        track = glider.track
+        arrive = track.start_offset_s + float(track.time_at(min(
+            (v[0] for v in track.line_visits.values() if v), default=track.length_m)))
+        stop = track.start_offset_s + glider.capacity.end_s
+        on += (times >= arrive) & (times <= stop)
+    few = on < 0.5 * len(plan.gliders)
+    per_time = plan.evaluation.errors.mean(axis=1)
+    idle = float(per_time[few].sum() / max(per_time.sum(), 1e-12))
+    if idle > 0.3:
+        reasons.append(f"{100 * idle:.0f} % of the mapping error falls while fewer than half "
+                       "of the gliders are on their lines (late starts, transits, batteries "
+                       "run out), whichever way the lines are shared")
+    if spread < 0.3 and not short and late < 0.1 * fleet.period_s:
         reasons.append(f"the gliders are alike: each flies within {100 * spread:.0f} % of the "
                        "others' distance, none runs out of battery early and they start "
                        "together, so equal blocks are already near the best split")
+    if fleet.goal.spacing_m and fleet.goal.spacing_m < 0.5 * fleet.field.length_m:
+        reasons.append(f"the lines lie {fleet.goal.spacing_m / 1000:g} km apart, less than "
+                       f"half the field's {fleet.field.length_m / 1000:g} km length scale: "
+                       "each line is mapped by its neighbours' samples too, whoever flies "
+                       "them")
     worst = plan.baseline_evaluation.mapping_error
     if worst < 0.1:
         reasons.append(f"even the equal split maps the field well (mapping error "
-                       f"{worst:.3f}): its blocks are swept often against the field's "
-                       f"{hours(plan.fleet.field.time_s)} time scale, and little error is "
-                       "left to remove")
+                       f"{worst:.3f}): little error is left to remove")
     if not reasons:
-        reasons.append("the survey's lines, in the file's order, leave few ways to cut them "
-                       "that differ (few lines per glider)")
+        reasons.append("few lines per glider leave few ways to cut the survey that differ")
     return (f"the coordinated plan lowers the mapping error by {100 * plan.improvement:.1f} %, "
             f"less than {100 * TARGET_IMPROVEMENT:.0f} %: " + "; ".join(reasons))
 
@@ -155,7 +175,12 @@ def report_json(plan: FleetPlan) -> dict:
                   "noise": fleet.field.noise, "source": fleet.field.source,
                   "grid_points": len(plan.grid.x), "grid_times": len(plan.grid.times)},
         "assignment": {"method": a.method, "status": a.status, "objective": a.objective,
-                       "bound": a.bound, "gap": a.gap, "solve_s": a.solve_s, "arcs": a.arcs},
+                       "bound": a.bound, "gap": a.gap, "solve_s": a.solve_s, "arcs": a.arcs,
+                       "polish": None if plan.polish is None else {
+                           "tried": plan.polish.tried, "accepted": plan.polish.accepted,
+                           "mapping_error_before": plan.polish.before,
+                           "mapping_error_after": plan.polish.after,
+                           "seconds": plan.polish.seconds}},
         "baseline": {
             "method": "equal split", "objective": base.objective,
             "finish_time_s": plan.baseline_evaluation.finish_s,
@@ -165,7 +190,7 @@ def report_json(plan: FleetPlan) -> dict:
             "gliders": [{"name": plan.fleet.gliders[b.glider].name,
                          "parts": list(range(b.first, b.stop)),
                          "feasible": b.feasible} for b in base.blocks]},
-        "separation": plan.separation,
+        "separation": {**plan.separation, "closest_m": _finite(plan.separation["closest_m"])},
         "limiting_glider": limiting,
         "lines": [{"index": p.index, "kind": p.kind, "length_m": p.length_m,
                    "a_m": list(p.a), "b_m": list(p.b)} for p in fleet.parts],
@@ -189,7 +214,7 @@ def report_text(report: dict) -> str:
              f"  lines assigned by {report['assignment']['method']} "
              f"({report['assignment']['status']}"
              + (f", gap {100 * report['assignment']['gap']:.2g} %" if report['assignment']['gap']
-                is not None else "") + ")"]
+                is not None else "") + ")" + _polish_text(report['assignment']['polish'])]
     if report["why_not"]:
         lines.append(f"  {report['why_not']}")
     lines.append(f"  {'glider':<10} {'lines':>9} {'km':>6} {'speed':>6} {'until':>7} "
@@ -287,6 +312,14 @@ def load_plan_dir(directory, fleet: Fleet) -> StoredPlan:
         gliders.append(StoredGlider(entry["name"], mission, plan_file,
                                     track_from_json(entry["track"]), entry))
     return StoredPlan(out, report, tuple(gliders))
+
+
+def _polish_text(polish: dict | None) -> str:
+    if not polish or not polish["accepted"]:
+        return ""
+    return (f"; {polish['accepted']} cut{'s' if polish['accepted'] != 1 else ''} moved by one "
+            f"line on the mapping error itself ({polish['mapping_error_before']:.3f} -> "
+            f"{polish['mapping_error_after']:.3f})")
 
 
 def _finite(value: float) -> float | None:

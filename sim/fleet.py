@@ -31,6 +31,7 @@ import numpy as np
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import write_atomically
 from gliderplan.language.fleet import Fleet
+from gliderplan.planner.fleet_mapping import sample_spacing
 from gliderplan.planner.fleet_missions import LAUNCH_S, Track
 from gliderplan.planner.fleet_report import StoredGlider, StoredPlan
 
@@ -204,7 +205,7 @@ def _outcome_of_flight(fleet: Fleet, glider: StoredGlider, flight: dict) -> Glid
     t = np.asarray(flight["time_s"], float)
     step = np.hypot(np.diff(x), np.diff(y))
     along = np.concatenate([[0.0], np.cumsum(step)])
-    spacing = fleet.field.length_m / 4.0
+    spacing = sample_spacing(fleet)
     marks = np.arange(spacing / 2.0, along[-1], spacing) if along[-1] > 0 else np.zeros(0)
     samples = (track.start_offset_s + np.interp(marks, along, t), np.interp(marks, along, x),
                np.interp(marks, along, y))
@@ -264,7 +265,7 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     from gliderplan.planner.fleet_mapping import combined, evaluation_grid, mapping_error
 
     name, at = lose
-    spacing = fleet.field.length_m / 4.0
+    spacing = sample_spacing(fleet)
     grid = evaluation_grid(fleet)
     before, after_kept = [], []
     for glider in stored.gliders:
@@ -408,7 +409,7 @@ def _montecarlo_summary(fleet: Fleet, stored: StoredPlan, rows: dict, complete: 
     from gliderplan.sim.montecarlo import QUANTILES, wilson_interval
 
     grid = evaluation_grid(fleet)
-    spacing = fleet.field.length_m / 4.0
+    spacing = sample_spacing(fleet)
     records, finished, errors = [], 0, []
     for index in complete:
         outcomes = []
