@@ -36,7 +36,7 @@ def _lonlat(fleet: Fleet, points) -> np.ndarray:
 
 def map_figure(fleet: Fleet, report: dict, plan=None, flown: dict | None = None):
     """The survey, each glider's lines, planned track and start; what it flew (dashed)
-    when `flown` (glider -> (lon, lat) array) is given; beside it the time-averaged
+    when `flown` (glider -> rows of lon, lat, time) is given; beside it the time-averaged
     mapping error of the plan when `plan` (a FleetPlan) is given."""
     plt = pyplot()
     panels = 2 if plan is not None else 1
@@ -95,14 +95,15 @@ def map_png(fleet: Fleet, report: dict, plan=None, flown=None) -> bytes:
 
 
 def _track_table(fleet: Fleet, glider: dict, flown: np.ndarray | None = None):
-    """A glider's track as the run exporter's table (time_s, lat_deg, lon_deg)."""
+    """A glider's track as the run exporter's table (time_s, lat_deg, lon_deg); `flown`:
+    (lon, lat, time [s after its start]) rows of what it flew."""
     import pandas as pd
 
     from gliderplan.planner.fleet_report import track_from_json
 
     if flown is not None:
-        return pd.DataFrame({"time_s": np.arange(len(flown), dtype=float),
-                             "lat_deg": flown[:, 1], "lon_deg": flown[:, 0]})
+        return pd.DataFrame({"time_s": flown[:, 2], "lat_deg": flown[:, 1],
+                             "lon_deg": flown[:, 0]})
     track = track_from_json(glider["track"])
     lonlat = _lonlat(fleet, track.points)
     return pd.DataFrame({"time_s": track.time_at(track.distance_m), "lat_deg": lonlat[:, 1],
@@ -189,8 +190,10 @@ def kml(fleet: Fleet, report: dict, flown: dict | None = None) -> str:
         for what, points in tracks:
             text = track_kml(_track_table(fleet, glider, points), _meta(fleet, glider, what))
             for child in ET.fromstring(text).find(f"{{{KML_NS}}}Document"):
-                if child.tag in (f"{{{KML_NS}}}Placemark", f"{{{KML_NS}}}Style"):
+                if child.tag == f"{{{KML_NS}}}Placemark":
                     document.append(child)
+                elif child.tag == f"{{{KML_NS}}}Style" and document.find(child.tag) is None:
+                    document.insert(1, child)  # styles before the features, once
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, "unicode") + "\n"
 

@@ -181,8 +181,8 @@ def fly_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, workers: int = 1,
                    scheduler=scheduler or ("local pool" if workers > 1 else "none"))
     if lose is not None:
         summary["lost"] = replan_after_loss(fleet, stored, lose, summary["mapping_error"])
-    flown = {g.name: np.column_stack([flights[g.name]["lon"], flights[g.name]["lat"]])
-             for g in stored.gliders}
+    flown = {g.name: np.column_stack([flights[g.name]["lon"], flights[g.name]["lat"],
+                                      flights[g.name]["time_s"]]) for g in stored.gliders}
     _write_fleet_files(out, fleet, stored, flown, sim=summary)
     write_atomically(out / "fleet_sim.json", json.dumps(summary, indent=1) + "\n")
     return summary
