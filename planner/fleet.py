@@ -155,22 +155,27 @@ class FleetPlan:
 
 # ---- the plan ----------------------------------------------------------------------------
 
-def plan_fleet(fleet: Fleet, *, seed: int = 0, scenario_file=None,
-               time_limit_s: float = assign.DEFAULT_TIME_LIMIT_S, solver: str = "auto",
-               progress: Progress | None = None) -> FleetPlan:
-    """Plan `fleet` (module docstring). `solver`: "auto" (the MILP up to
-    `assign.MAX_MILP_ARCS` arcs, else the heuristic), "milp" or "heuristic". Raises
-    FleetError, located in the fleet file, for a glider that cannot reach the survey, a
-    fleet that cannot sweep it at its confidence, a vehicle that cannot fly the yo, or
-    gliders planned closer than the separation."""
+@dataclass(frozen=True)
+class Prepared:
+    """What every design round of a fleet's plan shares: the gliders' speed curves, the
+    scenarios (design and validation), the revisit table, the evaluation grid."""
+
+    fleet: Fleet
+    router: object
+    curves: dict[tuple, SpeedCurve]
+    design: Scenarios
+    fresh: Scenarios
+    table: object  # fleet_mapping.RevisitTable
+    grid: Grid
+
+
+def prepare(fleet: Fleet, *, seed: int = 0, scenario_file=None,
+            step: Callable[[str], None] | None = None) -> Prepared:
+    """Probe every glider kind, draw the scenarios, tabulate the revisit error."""
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim.scenarios import read_spec
 
-    began = time.perf_counter()
-    kinds = {kind_key(g, b) for g in fleet.gliders for b in bands(fleet)}
-    step = _Steps(progress, len(kinds) + 2 + len(fleet.gliders))
     spec = read_spec(scenario_file)
-    router = router_for(fleet)
     curves: dict[tuple, SpeedCurve] = {}
     vehicles: dict[tuple, object] = {}
     loaded: dict[str, object] = {}
@@ -189,12 +194,45 @@ def plan_fleet(fleet: Fleet, *, seed: int = 0, scenario_file=None,
             except CapacityError as err:
                 raise fleet.error(f"glider '{glider.name}': {err}", "sample",
                                   "a shallower band, or another vehicle") from None
-            step("probed a kind of glider")
+            if step is not None:
+                step("probed a kind of glider")
     design = draw_scenarios(fleet, curves, vehicles, spec, seed, 0, DESIGN_SCENARIOS)
     fresh = draw_scenarios(fleet, curves, vehicles, spec, seed, DESIGN_SCENARIOS,
                            VALIDATION_SCENARIOS)
-    table = revisit_table(fleet)
-    grid = evaluation_grid(fleet)
+    return Prepared(fleet, router_for(fleet), curves, design, fresh, revisit_table(fleet),
+                    evaluation_grid(fleet))
+
+
+def design_round(prepared: Prepared, quantile: float
+                 ) -> tuple[list[Capacity], assign.BlockInputs, assign.Arcs]:
+    """Each glider's capacity at the design `quantile`, the assignment's inputs and the
+    blocks each glider can fly (a glider with none cannot reach the survey: FleetError)."""
+    fleet, curves = prepared.fleet, prepared.curves
+    caps = [pick([capacity(g, fleet, curves[kind_key(g, b)], kind_key(g, b), prepared.design,
+                           quantile) for b in bands(fleet)]) for g in fleet.gliders]
+    _check_usable(fleet, caps, curves)
+    inputs = block_inputs(fleet, caps, prepared.design, prepared.router, quantile,
+                          prepared.table)
+    arcs = assign.build_arcs(inputs)
+    _check_reachable(fleet, inputs, arcs, caps)
+    return caps, inputs, arcs
+
+
+def plan_fleet(fleet: Fleet, *, seed: int = 0, scenario_file=None,
+               time_limit_s: float = assign.DEFAULT_TIME_LIMIT_S, solver: str = "auto",
+               progress: Progress | None = None) -> FleetPlan:
+    """Plan `fleet` (module docstring). `solver`: "auto" (the MILP up to
+    `assign.MAX_MILP_ARCS` arcs, else the heuristic), "milp" or "heuristic". Raises
+    FleetError, located in the fleet file, for a glider that cannot reach the survey, a
+    fleet that cannot sweep it at its confidence, a vehicle that cannot fly the yo, or
+    gliders planned closer than the separation."""
+    began = time.perf_counter()
+    kinds = {kind_key(g, b) for g in fleet.gliders for b in bands(fleet)}
+    step = _Steps(progress, len(kinds) + 2 + len(fleet.gliders))
+    prepared = prepare(fleet, seed=seed, scenario_file=scenario_file, step=step)
+    router, curves, design, fresh = (prepared.router, prepared.curves, prepared.design,
+                                     prepared.fresh)
+    grid = prepared.grid
     # Split between the budget and the sweep; the scenarios are the fleet's (one ocean), so
     # the gliders mostly fail together and the validation below checks the joint share.
     quantile = (1.0 - fleet.confidence) / 2.0
@@ -202,12 +240,7 @@ def plan_fleet(fleet: Fleet, *, seed: int = 0, scenario_file=None,
     best = None
     passed = None  # the last design share whose plan validated (or whose MILP was feasible)
     for round_ in range(ROUNDS):
-        caps = [pick([capacity(g, fleet, curves[kind_key(g, b)], kind_key(g, b), design,
-                               quantile) for b in bands(fleet)]) for g in fleet.gliders]
-        _check_usable(fleet, caps, curves)
-        inputs = block_inputs(fleet, caps, design, router, quantile, table)
-        arcs = assign.build_arcs(inputs)
-        _check_reachable(fleet, inputs, arcs, caps)
+        caps, inputs, arcs = design_round(prepared, quantile)
         assignment = _solve(arcs, inputs, solver, time_limit_s)
         if round_ == 0:
             step("assigned the lines")
@@ -267,7 +300,8 @@ def plan_fleet(fleet: Fleet, *, seed: int = 0, scenario_file=None,
             f"of {fleet.separation_m:.0f} m", "separation",
             "start them further apart or at different times, widen the line spacing, or "
             "lower the separation")
-    prices = shadow_prices(fleet, caps, assignment, curves, design, quantile, router, table)
+    prices = shadow_prices(fleet, caps, assignment, curves, design, quantile, router,
+                           prepared.table)
     gliders = tuple(GliderPlan(g, c, b, t, m, r, p) for g, c, b, t, m, r, p in zip(
         fleet.gliders, caps, assignment.blocks, tracks,
         [mission_for(fleet, g, c, t) for g, c, t in zip(fleet.gliders, caps, tracks,

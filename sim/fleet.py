@@ -293,19 +293,35 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
                                  charge=min(charge, 1.0),
                                  battery=Battery(spec.battery.energy_j,
                                                  spec.battery.reserve_fraction)))
+    lost_track = next(g.track for g in stored.gliders if g.name == name)
+    visits = {part: [lost_track.start_offset_s + float(lost_track.time_at(d)) for d in seen]
+              for part, seen in lost_track.line_visits.items()}
     result = {"glider": name, "at_s": at, "mapping_error_without_replan": untouched,
+              "lines": sorted(visits),
+              "lines_swept_before": sorted(p for p, t in visits.items() if t and t[0] <= at),
               "survivors": [s.name for s in survivors]}
     if flown_error is not None:
         result["mapping_error_flown"] = flown_error
     if not survivors:
         result["summary"] = "no glider is left to cover its lines"
         return result
-    try:
-        again = plan_fleet(replace(fleet, gliders=tuple(survivors)), seed=0)
-    except GliderplanError as err:
+    again, asked = None, fleet.confidence
+    for confidence in dict.fromkeys((fleet.confidence, 0.5)):
+        # the whole survey again by the finish, at the fleet's confidence, or else at even
+        # odds: what the survivors can promise is part of the answer
+        try:
+            again = plan_fleet(replace(fleet, gliders=tuple(survivors), confidence=confidence),
+                               seed=0)
+            asked = confidence
+            break
+        except GliderplanError as err:
+            reason = err
+    if again is None:
         result["replan"] = None
-        result["summary"] = (f"its lines stay unswept after the loss (mapping error "
-                             f"{untouched:.3f}); the rest cannot take them over: {err}")
+        result["summary"] = (
+            f"it had swept {len(result['lines_swept_before'])} of its {len(visits)} lines "
+            f"once; they stay unswept after the loss (mapping error {untouched:.3f}), and the "
+            f"rest cannot take them over with the whole survey: {reason}")
         return result
     later = []
     for glider in again.gliders:
@@ -314,6 +330,7 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     replanned, _ = mapping_error(combined(before + later), grid, fleet.field)
     result["replan"] = {
         "mapping_error": replanned,
+        "confidence": asked,
         "confidence_lower_bound": again.validation.lower_bound,
         "gliders": [{"name": g.name, "parts": list(g.parts)} for g in again.gliders]}
     result["summary"] = (f"left as planned, its lines go unswept from then on (mapping error "
