@@ -63,6 +63,8 @@ class BlockInputs:
     revisit_s: float | None  # longest a line may wait between sweeps
     error_of_pass: object  # RevisitTable
     time_scale_s: float  # the field's
+    require_sweep: bool = True  # False: a block need only be reached in time (a re-plan
+    # after a loss, when every line has been swept once already)
 
     @property
     def gliders(self) -> int:
@@ -165,7 +167,8 @@ def build_arcs(inputs: BlockInputs) -> Arcs:
             # once even that misses the deadline
             j = np.arange(i + 1, n_parts + 1)
             sweep = cum_len[j] - cum_len[i] + cum_link[j - 1] - cum_link[i]
-            still = inputs.launch_s + (np.minimum(nearest[i], nearest[j - 1]) + sweep) / rate
+            reach = np.minimum(nearest[i], nearest[j - 1])
+            still = inputs.launch_s + (reach + (sweep if inputs.require_sweep else 0.0)) / rate
             j = j[still <= deadline]
             if not len(j):
                 continue
@@ -177,7 +180,8 @@ def build_arcs(inputs: BlockInputs) -> Arcs:
                 end = np.argmin(inputs.transit_m[g, line], axis=1)
                 transit = inputs.transit_m[g, line, end]
                 factor = inputs.transit_factor[g, line, end]  # (J, N)
-                times = inputs.launch_s + (transit[:, None] * factor + scenario) / rate
+                times = inputs.launch_s + (transit[:, None] * factor
+                                           + (scenario if inputs.require_sweep else 0.0)) / rate
                 ok = np.quantile(times, q, axis=1) <= deadline
                 if inputs.revisit_s is not None:
                     pass_q = np.quantile(scenario, q, axis=1) / rate
@@ -217,7 +221,8 @@ def block_of(inputs: BlockInputs, g: int, first: int, stop: int) -> Block:
         line = stop - 1 if last else first
         end = int(np.argmin(inputs.transit_m[g, line]))
         transit = float(inputs.transit_m[g, line, end])
-        times = inputs.launch_s + (transit * inputs.transit_factor[g, line, end] + swept) / rate
+        times = inputs.launch_s + (transit * inputs.transit_factor[g, line, end]
+                                   + (swept if inputs.require_sweep else 0.0)) / rate
         ok = np.quantile(times, 1.0 - inputs.quantile) <= inputs.end_s[g]
         if inputs.revisit_s is not None:
             ok &= 2.0 * np.quantile(swept, 1.0 - inputs.quantile) / rate <= inputs.revisit_s

@@ -92,8 +92,9 @@ def build_track(glider: GliderSpec, block: list[Part], entry_last: bool, distanc
                 speed_mps: float, fleet: Fleet, router: Router) -> Track:
     """The path of `glider` from its launch point over `block` (parts in survey order,
     entered at its last line when `entry_last`), ping-pong passes until `distance_m` [m]
-    (at least the first pass), cut into segments of about one surfacing interval at
-    `speed_mps` (effective [m/s]) and at most SEGMENT_POINTS points."""
+    (where the battery or the survey's end stops it, even within the first pass), cut into
+    segments of about one surfacing interval at `speed_mps` (effective [m/s]) and at most
+    SEGMENT_POINTS points."""
     lines = block_order(block, entry_last)
     points: list[XY] = [glider.start]
     visits: dict[int, list[float]] = {p.index: [] for p in block}
@@ -129,7 +130,7 @@ def build_track(glider: GliderSpec, block: list[Part], entry_last: bool, distanc
             break
     path = np.asarray(points, float)
     cumulative = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
-    end = max(distance_m, first_pass)
+    end = distance_m
     path, cumulative = _cut(path, cumulative, end)
     path, cumulative = _densify(path, cumulative, speed_mps * fleet.surface_every_s)
     every = fleet.surface_every_s

@@ -305,13 +305,17 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     if not survivors:
         result["summary"] = "no glider is left to cover its lines"
         return result
-    again, asked = None, fleet.confidence
-    for confidence in dict.fromkeys((fleet.confidence, 0.5)):
-        # the whole survey again by the finish, at the fleet's confidence, or else at even
-        # odds: what the survivors can promise is part of the answer
+    # every line swept before the loss: the survey is finished, and the others need only
+    # keep mapping; else they must sweep what is left, at the fleet's confidence or at
+    # even odds (what they can promise is part of the answer)
+    finished = len(result["lines_swept_before"]) == len(visits)
+    tries = [(None, False)] if finished else [(fleet.confidence, True), (0.5, True)]
+    again, reason, asked = None, None, None
+    for confidence, sweep in tries:
         try:
-            again = plan_fleet(replace(fleet, gliders=tuple(survivors), confidence=confidence),
-                               seed=0)
+            again = plan_fleet(replace(fleet, gliders=tuple(survivors),
+                                       confidence=confidence or fleet.confidence),
+                               seed=0, require_sweep=sweep)
             asked = confidence
             break
         except GliderplanError as err:
@@ -330,14 +334,20 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     replanned, _ = mapping_error(combined(before + later), grid, fleet.field)
     result["replan"] = {
         "mapping_error": replanned,
+        "sweep_required": not finished,
         "confidence": asked,
         "confidence_lower_bound": again.validation.lower_bound,
         "gliders": [{"name": g.name, "parts": list(g.parts)} for g in again.gliders]}
-    result["summary"] = (f"left as planned, its lines go unswept from then on (mapping error "
-                         f"{untouched:.3f} over the period); planned again from then, the "
-                         f"{len(survivors)} others take all lines over (mapping error "
-                         f"{replanned:.3f}, finishing with at least "
-                         f"{100 * again.validation.lower_bound:.0f} %)")
+    kept = ("it had swept all its lines once, so the survey is finished; "
+            if finished else f"it had swept {len(result['lines_swept_before'])} of its "
+            f"{len(visits)} lines once; ")
+    promise = ("keep mapping them" if finished else
+               f"sweep every line again by the finish in at least "
+               f"{100 * again.validation.lower_bound:.0f} % of scenarios")
+    result["summary"] = (f"{kept}left as planned, its lines go unswept from then on (mapping "
+                         f"error {untouched:.3f} over the period); planned again from then, "
+                         f"the {len(survivors)} others share all the lines and {promise} "
+                         f"(mapping error {replanned:.3f})")
     return result
 
 
