@@ -238,7 +238,7 @@ def _sim_text(s: dict) -> str:
     for g in s["gliders"]:
         lines.append(f"  {g['name']:<10} {g['energy_j'] / 3600:>7.0f} Wh of "
                      f"{g['budget_j'] / 3600:>6.0f} Wh, ended by {g['ended']}, "
-                     f"{g['lines_swept']} lines swept"
+                     f"{g['lines_swept']} line{'' if g['lines_swept'] == 1 else 's'} swept"
                      + ("" if g["swept"] else " (its block not swept once)")
                      + (" LOST" if g["lost"] else ""))
     if s.get("lost"):

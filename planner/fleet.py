@@ -155,6 +155,14 @@ class FleetPlan:
 
 # ---- the plan ----------------------------------------------------------------------------
 
+class UnreachableGliders(FleetError):
+    """Gliders with no block of lines they can fly in time (`names`)."""
+
+    def __init__(self, error: FleetError, names: tuple[str, ...]) -> None:
+        super().__init__(str(error), details=error.details)
+        self.names = names
+
+
 @dataclass(frozen=True)
 class Prepared:
     """What every design round of a fleet's plan shares: the gliders' speed curves, the
@@ -206,7 +214,8 @@ def prepare(fleet: Fleet, *, seed: int = 0, scenario_file=None,
 def design_round(prepared: Prepared, quantile: float, require_sweep: bool = True
                  ) -> tuple[list[Capacity], assign.BlockInputs, assign.Arcs]:
     """Each glider's capacity at the design `quantile`, the assignment's inputs and the
-    blocks each glider can fly (a glider with none cannot reach the survey: FleetError);
+    blocks each glider can fly (a glider with none cannot reach the survey:
+    UnreachableGliders);
     `require_sweep` as for `plan_fleet`."""
     fleet, curves = prepared.fleet, prepared.curves
     caps = [pick([capacity(g, fleet, curves[kind_key(g, b)], kind_key(g, b), prepared.design,
@@ -500,11 +509,13 @@ def _check_reachable(fleet: Fleet, inputs: assign.BlockInputs, arcs: assign.Arcs
             line = int(np.argmin(inputs.transit_m[g].min(axis=1)))
             one = assign.block_of(inputs, g, line, line + 1)
             sweep = inputs.length_m[line] / rate
-            what = (f"cannot sweep even its nearest line in time: {hours(arrive)} to reach "
-                    f"it and {hours(sweep)} along its {inputs.length_m[line] / 1000:.3g} km in "
-                    f"still water at {cap.speed_mps:.2f} m/s, longer in the strongest "
+            along = (f" and {hours(sweep)} along its {inputs.length_m[line] / 1000:.3g} km"
+                     if inputs.require_sweep else "")
+            what = (f"cannot {'sweep' if inputs.require_sweep else 'reach'} even its nearest "
+                    f"line in time: {hours(arrive)} to reach it{along} in still water at "
+                    f"{cap.speed_mps:.2f} m/s, longer in the strongest "
                     f"{100 * inputs.quantile:.3g} % of the design scenarios' currents"
-                    if not one.feasible else "has no block it can sweep in time")
+                    if not one.feasible else "has no block it can fly in time")
         found.append((glider, f"glider '{glider.name}' {what}, and {limit} "
                               f"{hours(cap.end_s)} after it starts"))
     if found:
@@ -513,8 +524,9 @@ def _check_reachable(fleet: Fleet, inputs: assign.BlockInputs, arcs: assign.Arcs
         first, message = found[0]
         more = tuple(error(m, g.start_span, "start it nearer the survey, or earlier")
                      for g, m in found[1:])
-        raise fleet.error(message, first.start_span, "start it nearer the survey, or earlier",
-                          more)
+        raise UnreachableGliders(
+            fleet.error(message, first.start_span, "start it nearer the survey, or earlier",
+                        more), tuple(g.name for g, _ in found))
 
 
 def _infeasible(fleet: Fleet, inputs: assign.BlockInputs, caps: list[Capacity],

@@ -254,27 +254,28 @@ def _write_fleet_files(out: Path, fleet: Fleet, stored: StoredPlan, flown: dict 
 # ---- a lost glider -----------------------------------------------------------------------
 
 def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
-                      flown_error: float | None = None) -> dict:
+                      flown_error: float | None = None, scenario_file=None) -> dict:
     """What the rest of the fleet can still cover when `lose` = (glider, time) is lost:
     the mapping error with its lines left unswept after the loss, and with the fleet
     planned again from then (each survivor where its plan has it, with its budget less
     what its plan spent so far), both over the whole period (the profiles taken before
-    the loss count)."""
+    the loss count). The re-plan draws its scenarios from `scenario_file` (as
+    `plan_fleet`)."""
     from gliderplan.language.ir import Battery
-    from gliderplan.planner.fleet import plan_fleet
+    from gliderplan.planner.fleet import UnreachableGliders, plan_fleet
     from gliderplan.planner.fleet_mapping import combined, evaluation_grid, mapping_error
 
     name, at = lose
     spacing = sample_spacing(fleet)
     grid = evaluation_grid(fleet)
-    before, after_kept = [], []
+    before, after = [], {}  # each glider's samples up to the loss; the others' after it
     for glider in stored.gliders:
         t, x, y = glider.track.samples(spacing)
         early = t <= at
         before.append((t[early], x[early], y[early]))
         if glider.name != name:
-            after_kept.append((t[~early], x[~early], y[~early]))
-    untouched, _ = mapping_error(combined(before + after_kept), grid, fleet.field)
+            after[glider.name] = (t[~early], x[~early], y[~early])
+    untouched, _ = mapping_error(combined(before + list(after.values())), grid, fleet.field)
     survivors = []
     for glider in stored.gliders:
         if glider.name == name:
@@ -307,47 +308,55 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
         return result
     # every line swept before the loss: the survey is finished, and the others need only
     # keep mapping; else they must sweep what is left, at the fleet's confidence or at
-    # even odds (what they can promise is part of the answer)
+    # even odds (what they can promise is part of the answer). A survivor with no line it
+    # can reach in time keeps flying its own plan.
     finished = len(result["lines_swept_before"]) == len(visits)
     tries = [(None, False)] if finished else [(fleet.confidence, True), (0.5, True)]
-    again, reason, asked = None, None, None
+    again, reason, asked, kept = None, None, None, []
     for confidence, sweep in tries:
-        try:
-            again = plan_fleet(replace(fleet, gliders=tuple(survivors),
-                                       confidence=confidence or fleet.confidence),
-                               seed=0, require_sweep=sweep)
-            asked = confidence
+        joining = list(survivors)
+        while joining and again is None:
+            try:
+                again = plan_fleet(replace(fleet, gliders=tuple(joining),
+                                           confidence=confidence or fleet.confidence),
+                                   seed=0, scenario_file=scenario_file, require_sweep=sweep)
+                asked = confidence
+            except UnreachableGliders as err:
+                reason = err
+                joining = [g for g in joining if g.name not in err.names]
+            except GliderplanError as err:
+                reason = err
+                break
+        if again is not None:
+            kept = [g.name for g in survivors if g not in joining]
             break
-        except GliderplanError as err:
-            reason = err
+    swept = (f"it had swept {len(result['lines_swept_before'])} of its {len(visits)} "
+             "lines once")
     if again is None:
         result["replan"] = None
-        result["summary"] = (
-            f"it had swept {len(result['lines_swept_before'])} of its {len(visits)} lines "
-            f"once; they stay unswept after the loss (mapping error {untouched:.3f}), and the "
-            f"rest cannot take them over with the whole survey: {reason}")
+        result["summary"] = (f"{swept}; they stay unswept after the loss (mapping error "
+                             f"{untouched:.3f}), and the rest cannot take them over: {reason}")
         return result
-    later = []
-    for glider in again.gliders:
-        t, x, y = glider.track.samples(spacing)
-        later.append((t, x, y))
+    later = [glider.track.samples(spacing) for glider in again.gliders]
+    later += [after[k] for k in kept]
     replanned, _ = mapping_error(combined(before + later), grid, fleet.field)
     result["replan"] = {
         "mapping_error": replanned,
         "sweep_required": not finished,
         "confidence": asked,
         "confidence_lower_bound": again.validation.lower_bound,
-        "gliders": [{"name": g.name, "parts": list(g.parts)} for g in again.gliders]}
-    kept = ("it had swept all its lines once, so the survey is finished; "
-            if finished else f"it had swept {len(result['lines_swept_before'])} of its "
-            f"{len(visits)} lines once; ")
+        "gliders": [{"name": g.name, "parts": list(g.parts)} for g in again.gliders],
+        "keep_their_plan": kept}
     promise = ("keep mapping them" if finished else
                f"sweep every line again by the finish in at least "
                f"{100 * again.validation.lower_bound:.0f} % of scenarios")
-    result["summary"] = (f"{kept}left as planned, its lines go unswept from then on (mapping "
-                         f"error {untouched:.3f} over the period); planned again from then, "
-                         f"the {len(survivors)} others share all the lines and {promise} "
-                         f"(mapping error {replanned:.3f})")
+    aside = f" ({', '.join(kept)} cannot reach another line in time and keep their plan)" \
+        if kept else ""
+    result["summary"] = (f"{swept}{', so the survey is finished' if finished else ''}; left as "
+                         f"planned, its lines go unswept from then on (mapping error "
+                         f"{untouched:.3f} over the period); planned again from then, "
+                         f"{len(again.gliders)} others share all the lines and {promise} "
+                         f"(mapping error {replanned:.3f}){aside}")
     return result
 
 
@@ -423,7 +432,7 @@ def montecarlo_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, scenarios:
                    scheduler=scheduler or ("local pool" if workers > 1 else "none"),
                    scenario_file=spec.source, wall_s=time.perf_counter() - started)
     if lose is not None:
-        summary["lost"] = replan_after_loss(fleet, stored, lose)
+        summary["lost"] = replan_after_loss(fleet, stored, lose, scenario_file=scenario_file)
     _write_montecarlo(out, fleet, stored, summary, table)
     return summary
 

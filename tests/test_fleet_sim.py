@@ -94,16 +94,27 @@ def test_each_glider_has_its_netcdf_and_the_map_its_tracks(flown, fleet):
     assert sum(n.endswith(" lines") for n in names) == len(fleet.gliders)
 
 
-def test_a_lost_glider_leaves_its_lines_and_the_rest_are_planned_again(fleet, planned):
+def test_a_glider_lost_early_leaves_lines_the_rest_cannot_sweep_in_time(fleet, planned):
     _, stored = planned
-    lost = replan_after_loss(fleet, stored, ("alpha", 12 * 3600.0))
-    assert lost["glider"] == "alpha" and "alpha" not in lost["survivors"]
+    lost = replan_after_loss(fleet, stored, ("alpha", 12 * 3600.0), scenario_file=CALM)
+    assert lost["glider"] == "alpha" and lost["survivors"] == ["bravo", "charlie"]
+    assert lost["lines"] == [3, 4] and lost["lines_swept_before"] == [4]
     assert lost["mapping_error_without_replan"] > stored.report["mapping_error"]
-    if lost.get("replan"):
-        assert lost["replan"]["mapping_error"] <= lost["mapping_error_without_replan"] + 1e-9
-        parts = sorted(p for g in lost["replan"]["gliders"] for p in g["parts"])
-        assert parts == list(range(len(fleet.parts)))
-    assert lost["summary"]
+    assert lost["replan"] is None
+    assert "it had swept 1 of its 2 lines once" in lost["summary"]
+    assert "the rest cannot take them over" in lost["summary"]
+
+
+def test_a_glider_lost_after_sweeping_its_lines_leaves_them_to_the_rest(fleet, planned):
+    _, stored = planned
+    lost = replan_after_loss(fleet, stored, ("alpha", 36 * 3600.0), scenario_file=CALM)
+    assert lost["lines_swept_before"] == lost["lines"]
+    replan = lost["replan"]
+    assert replan["sweep_required"] is False
+    assert replan["mapping_error"] < lost["mapping_error_without_replan"]
+    parts = sorted(p for g in replan["gliders"] for p in g["parts"])
+    assert parts == list(range(len(fleet.parts)))
+    assert "so the survey is finished" in lost["summary"]
 
 
 def test_the_monte_carlo_on_dask_gives_what_the_local_run_gives(fleet, planned, tmp_path):
