@@ -1,6 +1,7 @@
 """Benchmark: fleet planning and flying (docs/fleet.md).
 
     .venv/bin/python bench/bench_fleet.py [--runs 3] [--scenarios 20] [--skip-montecarlo]
+                                          [--skip-plan]
 
 1. Whole process (bench/whole_process.py: medians after a warm-up, wall and CPU):
    `gliderplan fleet plan BIG --json` of a generated fleet of 10 gliders over 200 lines
@@ -129,12 +130,14 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--scenarios", type=int, default=20)
     parser.add_argument("--skip-montecarlo", action="store_true")
+    parser.add_argument("--skip-plan", action="store_true", help="only the Monte Carlo (3.)")
     args = parser.parse_args()
     np.seterr(all="ignore")
     with tempfile.TemporaryDirectory() as scratch:
         work = Path(scratch)
-        whole_process(work, args.runs)
-        assignment(work)
+        if not args.skip_plan:
+            whole_process(work, args.runs)
+            assignment(work)
         if not args.skip_montecarlo:
             montecarlo(work, args.scenarios)
 

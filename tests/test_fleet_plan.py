@@ -125,7 +125,7 @@ def test_each_glider_flies_a_checked_mission_within_its_budget(example):
         assert check_source(glider.mission_text, f"{glider.name}.mission").ok
         assert 0.0 < glider.energy_j <= glider.budget_j
         assert glider.budget_j == pytest.approx(glider.spec.usable_j, rel=1e-6)
-    # ru29, its pack 60 % spent, is the battery that limits the survey
+    # ru29's pack is 60 % spent: its battery limits the survey; ru30's does not
     prices = {g.name: g.shadow_price for g in example.gliders}
     assert prices["ru29"] > 0.0 and prices["ru30"] == 0.0
     assert report_json(example)["limiting_glider"] in ("ru28", "ru29")
