@@ -73,8 +73,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                               "processes, or a running scheduler")
         fly.add_argument("--json", action="store_true", help="print the summary as JSON")
         if name == "sim":
-            fly.add_argument("--ocean", default="bench",
-                             help="ocean preset, CSV or Slocum logs (as gliderplan sim)")
+            fly.add_argument("--ocean", default=None,
+                             help="ocean preset, CSV or Slocum logs, flown in its density (as "
+                                  "gliderplan sim; default: the bench temperatures in uniform "
+                                  "water, the water the plans assume)")
             fly.add_argument("--current", metavar="NORTH,EAST", default="0,0",
                              help="depth-averaged current of the whole ocean [m/s]")
             fly.add_argument("--runtime", choices=("python", "c"), default="python",

@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from gliderplan.contract import MAX_PLAN_ENERGY_J
 from gliderplan.language.fleet import Fleet, GliderSpec
 from gliderplan.language.fleet_geometry import Router
 from gliderplan.planner.fleet_missions import LAUNCH_S, Track, mission_text
@@ -81,9 +82,10 @@ def speed_curve(glider: GliderSpec, fleet: Fleet, band: tuple[float, float],
     from gliderplan.power_models.flight import FlightModelError
     from gliderplan.power_models.vehicle import figure_value, with_figures
 
-    # An ample battery: the probe asks what flying costs, not whether it fits.
-    probe = replace(glider, battery=Battery(1e12, 0.0), charge=1.0, start=(0.0, 0.0),
-                    start_offset_s=0.0)
+    # An ample battery (well within what the checker accepts): the probe asks what flying
+    # costs, not whether it fits.
+    probe = replace(glider, battery=Battery(MAX_PLAN_ENERGY_J / 10.0, 0.0), charge=1.0,
+                    start=(0.0, 0.0), start_offset_s=0.0)
     line = np.array([[0.0, 0.0], [PROBE_LEG_M, 0.0]])
     track = Track(line, np.array([0.0, PROBE_LEG_M]), (1,), 0.3, fleet.surface_every_s,
                   fleet.surface_stay_s, 0.0, PROBE_LEG_M, {})

@@ -129,13 +129,14 @@ def _fly_one(task: dict) -> dict:
 
 
 def fly_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, workers: int = 1,
-              scheduler: str | None = None, seed: int = 0, ocean: str = "bench",
+              scheduler: str | None = None, seed: int = 0, ocean: str | None = None,
               current: tuple[float, float] = (0.0, 0.0), runtime: str = "python",
               lose: tuple[str, float] | None = None,
               progress: Progress | None = None) -> dict:
     """Fly every glider of `stored` once (`gliderplan fleet sim`); write OUTPUT/GLIDER/ (its
     run files, trajectory.nc) and OUTPUT/fleet_sim.json, the map and the fleet page.
-    `current` (north, east) [m/s] is the whole ocean's; each glider's sensor noise is
+    `ocean` as `run_mission`'s (default: uniform water, as the plans assume); `current`
+    (north, east) [m/s] is the whole ocean's; each glider's sensor noise is
     seeded from `seed` and its place in the fleet. Returns fleet_sim.json's content."""
     from gliderplan.sim.backends import scenario_executor
 
