@@ -41,6 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     actions.required = True
     check = actions.add_parser("check", help="check a fleet file")
     check.add_argument("fleet", help="fleet file (.fleet by convention)")
+    check.add_argument("--json", action="store_true",
+                       help="print {file, ok, exit_code, diagnostics, fleet} as JSON")
     plan = actions.add_parser("plan", help="assign the survey's lines, choose speeds, "
                                            "plan each glider's mission")
     _common(plan)
@@ -134,17 +136,26 @@ def _check(args: argparse.Namespace) -> int:
     from gliderplan.language.fleet import check_fleet_file
 
     result = check_fleet_file(args.fleet)
+    fleet = result.fleet
+    code = ExitCode.OK if fleet is not None else ExitCode.BAD_INPUT
+    if args.json:
+        summary = None if fleet is None else {
+            "name": fleet.name, "gliders": [g.name for g in fleet.gliders],
+            "lines": len(fleet.parts), "length_m": sum(p.length_m for p in fleet.parts)}
+        print(json.dumps({"file": args.fleet, "ok": fleet is not None, "exit_code": int(code),
+                          "diagnostics": result.diagnostics_json(), "fleet": summary},
+                         indent=1))
     if result.diagnostics:
         print(result.render(), file=sys.stderr)
-    if result.fleet is None:
+    if fleet is None:
         errors = sum(d.is_error for d in result.diagnostics)
         print(f"gliderplan fleet: {args.fleet}: {errors} error{'s' if errors != 1 else ''}",
               file=sys.stderr)
-        return ExitCode.BAD_INPUT
-    fleet = result.fleet
-    print(f"{args.fleet}: ok: fleet {fleet.name}, {len(fleet.gliders)} gliders, "
-          f"{len(fleet.parts)} lines ({sum(p.length_m for p in fleet.parts) / 1000:.1f} km)")
-    return ExitCode.OK
+    elif not args.json:
+        print(f"{args.fleet}: ok: fleet {fleet.name}, {len(fleet.gliders)} gliders, "
+              f"{len(fleet.parts)} lines ({sum(p.length_m for p in fleet.parts) / 1000:.1f} "
+              "km)")
+    return code
 
 
 def _planned(args: argparse.Namespace, fleet, output: str | None):

@@ -149,7 +149,9 @@ class Fleet:
             else span_key
         found = [error(message, span, hint), *more]
         return FleetError(f"{self.filename}: {message}",
-                          details=render_all(found, self.filename, self.source))
+                          details=render_all(found, self.filename, self.source),
+                          diagnostics=[d.to_json(self.filename) for d in found],
+                          file=self.filename)
 
     def glider(self, name: str) -> GliderSpec:
         return next(g for g in self.gliders if g.name == name)
@@ -165,10 +167,15 @@ class FleetResult:
     def render(self) -> str:
         return render_all(self.diagnostics, self.filename, self.source)
 
+    def diagnostics_json(self) -> list[dict]:
+        """Every diagnostic as a JSON object (`Diagnostic.to_json`)."""
+        return [d.to_json(self.filename) for d in self.diagnostics]
+
     def checked(self) -> Fleet:
         """The checked fleet; FleetError (with the diagnostics) if it has errors."""
         if self.fleet is None:
-            raise FleetError(f"{self.filename}: fleet file has errors", details=self.render())
+            raise FleetError(f"{self.filename}: fleet file has errors", details=self.render(),
+                             diagnostics=self.diagnostics_json(), file=self.filename)
         return self.fleet
 
 

@@ -159,7 +159,8 @@ class UnreachableGliders(FleetError):
     """Gliders with no block of lines they can fly in time (`names`)."""
 
     def __init__(self, error: FleetError, names: tuple[str, ...]) -> None:
-        super().__init__(str(error), details=error.details)
+        super().__init__(str(error), details=error.details, diagnostics=error.diagnostics,
+                         file=error.file)
         self.names = names
 
 

@@ -3,6 +3,7 @@ of `gliderplan fleet check` (0 ok, 1 a bad fleet file, 2 bad usage)."""
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -202,3 +203,19 @@ def test_fleet_without_an_action_is_bad_usage(capsys):
     with pytest.raises(SystemExit) as raised:
         main(["fleet"])
     assert raised.value.code == ExitCode.USAGE
+
+
+def test_fleet_check_json_gives_each_diagnostic_at_its_line(tmp_path, capsys):
+    assert main(["fleet", "check", str(EXAMPLE), "--json"]) == ExitCode.OK
+    report = json.loads(capsys.readouterr().out)
+    assert report["ok"] and report["fleet"]["lines"] == 12 and report["diagnostics"] == []
+    bad = tmp_path / "bad.fleet"
+    bad.write_text(SMALL_TEXT.replace("sample temp,", "sample tmep,"))
+    assert main(["fleet", "check", str(bad), "--json"]) == ExitCode.BAD_INPUT
+    report = json.loads(capsys.readouterr().out)
+    assert report["ok"] is False and report["exit_code"] == 1 and report["fleet"] is None
+    (found,) = report["diagnostics"]
+    line = next(n for n, t in enumerate(SMALL_TEXT.splitlines(), 1)
+                if t.startswith("sample temp,"))
+    assert (found["file"], found["line"], found["severity"]) == (str(bad), line, "error")
+    assert "'tmep' is no sensor to sample" in found["message"]

@@ -206,3 +206,8 @@ def test_fleet_plan_exits_1_for_an_unplannable_fleet(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "cannot reach the survey" in err and err.rstrip().splitlines()[-1].startswith(
         "gliderplan fleet: error: ")
+    assert main(["fleet", "plan", str(path), "--scenario-file", CALM, "--json"]) == 1
+    (found,) = json.loads(capsys.readouterr().out)["diagnostics"]
+    line = path.read_text().splitlines().index("  start (3700.0, -7401.0)") + 1
+    assert (found["file"], found["line"], found["column"]) == (str(path), line, 9)
+    assert "glider 'alpha' cannot reach the survey" in found["message"]
