@@ -26,6 +26,7 @@ from gliderplan.language.semantics import MissionFault, Transition, start
 from gliderplan.power_models.flight import DensityProfile
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.runtime.protocol import Command
+from gliderplan.sim.currents import CurrentField
 from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
 from gliderplan.sim.ocean import Ocean, SeaFloor
 from gliderplan.sim.science import ScienceComputer, SensorNoise
@@ -48,7 +49,12 @@ class RunConfig:
     duration_s: float = DEFAULT_HORIZON_S  # the run ends here if the mission has not exited
     seed: int = 0
     noise: SensorNoise = SensorNoise()
-    current: Current = Current()
+    current: Current = Current()  # a constant current, or where `currents` gives none
+    # a current varying in space and time (sim.currents); None: `current` everywhere
+    currents: CurrentField | None = None
+    # the glider's current correction (`u_use_current_correction`): dead reckoning with
+    # the current measured at each fix, and heading upstream of its waypoint
+    current_correction: bool = True
     start_lat_deg: float | None = None  # None: 500 m south of the mission's first point
     start_lon_deg: float | None = None
     start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
@@ -306,6 +312,15 @@ def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
                  vehicle: Vehicle) -> ScienceComputer:
     """The science computer over a glider put in the water at the mission's start."""
     lat, lon = start_position(mission, config)
-    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current, water=config.water)
+    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current, water=config.water,
+                       correction_speed_mps=correction_speed_mps(vehicle)
+                       if config.current_correction else 0.0)
     return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s,
-                           config.start_epoch_s, config.floor)
+                           config.start_epoch_s, config.floor, config.currents)
+
+
+def correction_speed_mps(vehicle: Vehicle) -> float:
+    """[m s-1] the speed through the water a glider's current correction steers with: its
+    horizontal speed at its nominal pitch on a full pump stroke (a Slocum steers with its
+    own speed estimate, which a steady glide keeps near this)."""
+    return float(vehicle.max_speed_mps(vehicle.nominal_pitch_rad))
