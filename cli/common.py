@@ -88,3 +88,28 @@ def load_mission(args: argparse.Namespace) -> CheckedMission:
     if result.diagnostics:
         print(result.render(), file=sys.stderr)
     return mission
+
+
+START_HELP = ("where and when the glider is put in the water: LAT,LON [decimal degrees], "
+              "LAT,LON,UTC or UTC (ISO 8601)")
+
+
+def parse_start(text: str) -> tuple[float | None, float | None, str | None]:
+    """`--start LAT,LON[,UTC]` or `--start UTC` -> (lat, lon [deg] or None, UTC text or
+    None); UsageError naming what is wrong."""
+    from gliderplan.contract.errors import UsageError
+
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) == 1:
+        return None, None, parts[0]
+    if len(parts) > 3:
+        raise UsageError(f"--start {text!r}: expected LAT,LON[,UTC] or UTC")
+    try:
+        lat, lon = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise UsageError(f"--start {text!r}: LAT,LON must be decimal degrees "
+                         "(e.g. 54.75,15.10)") from None
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise UsageError(f"--start {text!r}: latitude must lie in [-90, 90] and longitude "
+                         "in [-180, 180] degrees")
+    return lat, lon, parts[2] if len(parts) == 3 else None

@@ -19,8 +19,10 @@ import re
 import sys
 
 from gliderplan.cli.common import (
+    START_HELP,
     add_mission_argument,
     load_mission,
+    parse_start,
     refuse_unpaired,
     replan_confidence,
     seed,
@@ -78,17 +80,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "fluctuations of the paper's first sea trial)")
     parser.add_argument("--tracker", choices=("robust", "naive"), default="robust",
                         help="thermocline detection (default robust; naive: the paper's first)")
-    parser.add_argument("--current", metavar="N,E", default="0,0",
-                        help="depth-averaged current toward north and east [m/s]")
+    parser.add_argument("--currents", "--current", metavar="N,E|FIELD.nc|LOGDIR",
+                        dest="currents",
+                        help="the current the glider flies through: N,E toward north and "
+                             "east [m/s]; a CF NetCDF current field (eastward/northward_"
+                             "sea_water_velocity, Copernicus uo/vo, HYCOM water_u/water_v); "
+                             "or Slocum flight logs (*.dbd) whose measured currents persist "
+                             "(default: none)")
     parser.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     parser.add_argument("--tick", type=float, default=TICK_S, metavar="S",
                         help=f"sensor-array period [s] (default {TICK_S:g})")
     parser.add_argument("--duration", metavar="T",
                         help="end the run here if the mission has not exited (3600s, 90min, "
                              "6h, 30d; default: the mission's horizon, else 30d)")
-    parser.add_argument("--start", metavar="UTC",
-                        help="UTC time the mission starts, ISO 8601 (default: the first "
-                             "sample of replayed logs, else 2000-01-01T00:00:00Z)")
+    parser.add_argument("--start", metavar="LAT,LON[,UTC]",
+                        help=START_HELP + " (default: 500 m south of the mission's first "
+                             "waypoint, at the first sample of replayed logs, else "
+                             "2000-01-01T00:00:00Z)")
     parser.add_argument("--netcdf", action="store_true",
                         help="also write RUNDIR/trajectory.nc (CF trajectory, IOOS Glider "
                              "DAC names, ACDD attributes); more formats: gliderplan export")
@@ -119,25 +127,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="directory for the run's files")
 
 
-def _current(text: str):
-    from gliderplan.sim.vehicle import MAX_CURRENT_MPS, Current
-
-    try:
-        north, east = (float(x) for x in text.split(","))
-    except ValueError:
-        raise UsageError(f"--current {text!r}: expected two numbers N,E [m/s]") from None
-    if not math.hypot(north, east) <= MAX_CURRENT_MPS:  # nan fails too
-        raise UsageError(f"--current {text!r}: the speed must be finite and at most "
-                         f"{MAX_CURRENT_MPS:g} m/s")
-    return Current(north, east)
-
-
 def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.run import run_mission
 
     refuse_unpaired(args, {"--confidence": ("--replan-every",),
                            "--scenario-file": ("--replan-every",)})
     mission = load_mission(args)
+    lat, lon, start_utc = parse_start(args.start) if args.start else (None, None, None)
     duration_s = parse_duration_s(args.duration) if args.duration else None
     ticks = (duration_s or mission.horizon_s or DEFAULT_HORIZON_S) / max(args.tick, 1e-9)
     from gliderplan.cli.progress import ProgressBar
@@ -147,8 +143,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = run_mission(
             mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
-            noise=args.noise, tracker=args.tracker, current=_current(args.current),
-            seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=args.start,
+            noise=args.noise, tracker=args.tracker, currents=args.currents,
+            seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=start_utc,
+            start_position=None if lat is None else (lat, lon),
             netcdf=args.netcdf, progress=progress, key_path=args.key,
             state_dir=args.state_dir, faults=args.faults, floor=args.floor,
             replan_every=args.replan_every, confidence=args.confidence,
@@ -171,6 +168,8 @@ def run(args: argparse.Namespace) -> int:
     if duration_s is None and mission.horizon_s is None and record.ended == "duration":
         print(f"  ran to the default horizon, {DEFAULT_HORIZON_S / 86400:g} d: the mission names "
               "none (--duration sets another)", file=sys.stderr)
+    for note in result.current_notes:
+        print(f"  {note}", file=sys.stderr)
     if args.replan_every:
         print(_replanning(result), file=sys.stderr)
     if check.causes:

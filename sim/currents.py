@@ -27,7 +27,7 @@ from gliderplan.contract.errors import GliderplanError
 
 # [m s-1] faster than any ocean current a glider meets: the Gulf Stream's core runs at
 # ~2.5 m/s; only tidal races between islands (Pentland Firth, ~5 m/s) pass it
-MAX_CURRENT_MPS = 3.0
+FASTEST_OCEAN_MPS = 3.0
 
 
 class CurrentError(GliderplanError):
@@ -162,23 +162,25 @@ def _brackets(axis: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def check_speeds(north_mps: np.ndarray, east_mps: np.ndarray, where: str) -> None:
-    """CurrentError if any current is faster than MAX_CURRENT_MPS (or not a number where
+    """CurrentError if any current is faster than FASTEST_OCEAN_MPS (or not a number where
     it is given): no ocean a glider flies holds it; `where` names the source."""
     speed = np.hypot(north_mps, east_mps)
-    bad = speed > MAX_CURRENT_MPS
+    bad = speed > FASTEST_OCEAN_MPS
     if np.any(bad):
         first = np.unravel_index(int(np.argmax(bad)), np.shape(speed))
+        at = f" (the first at index {tuple(int(i) for i in first)})" if first else ""
         raise CurrentError(
-            f"{where}: a current of {float(np.max(speed)):.3g} m/s (the first at index "
-            f"{tuple(int(i) for i in first)}): faster than any ocean current a glider meets "
-            f"(at most {MAX_CURRENT_MPS:g} m/s; the Gulf Stream's core runs at ~2.5 m/s); "
+            f"{where}: a current of {float(np.nanmax(speed)):.3g} m/s{at}: faster than any "
+            "ocean current a glider meets "
+            f"(at most {FASTEST_OCEAN_MPS:g} m/s; the Gulf Stream's core runs at ~2.5 m/s); "
             "are the units cm/s, or the components swapped with a speed?")
 
 
 def coverage_problem(field: CurrentField, lats_deg: list[float], lons_deg: list[float],
-                     period_s: tuple[float, float]) -> str | None:
+                     start_epoch_s: float) -> str | None:
     """What of the places [deg] a mission flies to (its start and waypoints) and of its
-    period [s since 1970] `field` does not cover, or None."""
+    start [s since 1970] `field` does not cover, or None (a run that outlasts the field
+    flies its last time: `ends_note`)."""
     from gliderplan.sim.export import utc_text
 
     b = field.bounds()
@@ -187,16 +189,24 @@ def coverage_problem(field: CurrentField, lats_deg: list[float], lons_deg: list[
                        and b.lon_deg[0] <= lon <= b.lon_deg[1])]
     if outside:
         lat, lon = outside[0]
-        return (f"{field.description} covers latitudes {b.lat_deg[0]:.4f} to "
-                f"{b.lat_deg[1]:.4f} and longitudes {b.lon_deg[0]:.4f} to {b.lon_deg[1]:.4f}; "
-                f"the route reaches {lat:.4f}, {lon:.4f} ({len(outside)} of its "
-                f"{len(lats_deg)} points outside)")
-    start, end = period_s
-    if start < b.epoch_s[0] or end > b.epoch_s[1]:
-        return (f"{field.description} covers {utc_text(b.epoch_s[0])} to "
-                f"{utc_text(b.epoch_s[1])}; the run flies from {utc_text(start)} to "
-                f"{utc_text(end)} (a shorter --duration, or a later --start, may fit it)")
+        return (f"the field covers latitudes {b.lat_deg[0]:.4f} to {b.lat_deg[1]:.4f} and "
+                f"longitudes {b.lon_deg[0]:.4f} to {b.lon_deg[1]:.4f}; the route reaches "
+                f"{lat:.4f}, {lon:.4f} ({len(outside)} of its {len(lats_deg)} points outside)")
+    if not b.epoch_s[0] <= start_epoch_s <= b.epoch_s[1]:
+        return (f"the field covers {utc_text(b.epoch_s[0])} to {utc_text(b.epoch_s[1])}; the "
+                f"run starts at {utc_text(start_epoch_s)} (give --start LAT,LON,UTC within it)")
     return None
+
+
+def ends_note(field: CurrentField, end_epoch_s: float) -> str | None:
+    """A note if the run may outlast the field [s since 1970]: its last time holds."""
+    from gliderplan.sim.export import utc_text
+
+    last = field.bounds().epoch_s[1]
+    if end_epoch_s <= last:
+        return None
+    return (f"the current field ends at {utc_text(last)}: a run flying longer flies its "
+            "last currents")
 
 
 def parse_uniform(text: str, option: str = "--currents") -> UniformCurrent | None:

@@ -110,14 +110,21 @@ def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float
     """Where the glider is put in the water [deg]."""
     if config.start_lat_deg is not None and config.start_lon_deg is not None:
         return config.start_lat_deg, config.start_lon_deg
+    points = route_points_deg(mission)
+    if points:
+        return move_degrees(*points[0], -500.0, 0.0)
+    return 0.0, 0.0
+
+
+def route_points_deg(mission: ir.CheckedMission) -> list[tuple[float, float]]:
+    """The mission's waypoints (lat, lon) [deg], state by state."""
+    points = []
     for state in mission.states:
         route = state.route
-        point = (route.params[0], route.params[1]) if route.kind == "nav" else \
-            (route.points[0] if route.points else None)
-        if point is not None:
-            return move_degrees(ddmm_to_degrees(point[0]), ddmm_to_degrees(point[1]), -500.0,
-                                0.0)
-    return 0.0, 0.0
+        ddmm = [(route.params[0], route.params[1])] if route.kind == "nav" else \
+            list(route.points or ())
+        points += [(ddmm_to_degrees(lat), ddmm_to_degrees(lon)) for lat, lon in ddmm]
+    return points
 
 
 # One row per tick: the glider before the tick's step, the COMMAND that answered it, the

@@ -1,0 +1,129 @@
+"""Currents in the sim as a user gives them (`--currents N,E|FIELD.nc|LOGDIR`) and where
+the glider starts (`--start LAT,LON[,UTC]`): fields read as their makers write them, and
+fields that cannot be flown refused with what is missing."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gliderplan.cli.main import main
+from gliderplan.sim.current_files import read_logged_currents, read_netcdf_currents
+
+REPO = Path(__file__).resolve().parents[1]
+FIG2 = REPO / "examples" / "fig2.mission"  # waypoints near 39.175 N, 73.83 W
+COMET = Path("/work/shared/data/slocum-logs-comet-2016")
+START = "39.17,-73.83,2016-06-23T12:00:00Z"
+
+
+def write_field(path: Path, names: tuple[str, str] = ("uo", "vo"), east: float = 0.2,
+                north: float = 0.0, lons: np.ndarray | None = None, land: bool = False,
+                standard: bool = False) -> Path:
+    """A Copernicus-style field (time, depth, latitude, longitude) over fig2's waters."""
+    import xarray as xr
+
+    times = pd.date_range("2016-06-23", periods=3, freq="1D")
+    depth = np.array([0.5, 50.0])
+    lat = np.linspace(39.0, 39.4, 5)
+    lon = np.linspace(-74.0, -73.6, 5) if lons is None else lons
+    shape = (len(times), len(depth), len(lat), len(lon))
+    u, v = np.full(shape, east), np.full(shape, north)
+    if land:
+        u[..., 2, 2] = v[..., 2, 2] = np.nan
+    dims = ("time", "depth", "latitude", "longitude")
+    attrs_u = {"standard_name": "eastward_sea_water_velocity"} if standard else {}
+    attrs_v = {"standard_name": "northward_sea_water_velocity"} if standard else {}
+    xr.Dataset({names[0]: (dims, u, attrs_u), names[1]: (dims, v, attrs_v)},
+               coords={"time": times, "depth": depth, "latitude": lat,
+                       "longitude": lon}).to_netcdf(path)
+    return path
+
+
+def final_position(run: Path) -> tuple[float, float]:
+    table = pd.read_parquet(run / "timeseries.parquet")
+    return float(table["lat_deg"].iloc[-1]), float(table["lon_deg"].iloc[-1])
+
+
+def test_a_netcdf_field_drifts_the_glider_as_a_uniform_current_does(tmp_path, capsys):
+    field = write_field(tmp_path / "field.nc")
+    ends = {}
+    for name, currents in (("field", str(field)), ("uniform", "0,0.2"), ("still", "0,0")):
+        out = tmp_path / name
+        assert main(["sim", str(FIG2), "--start", START, "--currents", currents,
+                     "-o", str(out)]) == 0
+        ends[name] = final_position(out)
+    err = capsys.readouterr().err
+    assert f"currents: {field}" in err and "the current field ends at 2016-06-25" in err
+    assert ends["field"] == pytest.approx(ends["uniform"], abs=1e-6)
+    east_m = (ends["field"][1] - ends["still"][1]) * 111_320 * math.cos(math.radians(39.17))
+    assert east_m == pytest.approx(0.2 * 2500, rel=0.02)
+
+
+def test_the_start_puts_the_glider_where_the_user_says(tmp_path):
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "--start", "39.2,-73.9", "-o", str(out)]) == 0
+    first = pd.read_parquet(out / "timeseries.parquet").iloc[0]
+    assert (first["lat_deg"], first["lon_deg"]) == pytest.approx((39.2, -73.9), abs=1e-4)
+
+
+def test_hycom_names_and_longitudes_0_to_360_are_read(tmp_path):
+    field = read_netcdf_currents(write_field(
+        tmp_path / "hycom.nc", ("water_u", "water_v"), east=0.1, north=-0.3,
+        lons=np.linspace(286.0, 286.4, 5)))
+    assert field.at(39.2, -73.8, field.time_s[0] + 3600.0, 10.0) == pytest.approx((-0.3, 0.1))
+    cf = read_netcdf_currents(write_field(tmp_path / "cf.nc", ("a", "b"), standard=True))
+    assert cf.at(39.2, -73.8, cf.time_s[1]) == pytest.approx((0.0, 0.2))
+
+
+@pytest.mark.parametrize("field_args, start, message", [
+    ({"names": ("temp", "salt")}, START,
+     "no current variables: expected the standard names eastward_sea_water_velocity"),
+    ({"lons": np.linspace(-74.0, -73.85, 5)}, "39.17,-73.9,2016-06-23T12:00:00Z",
+     "the route reaches 39.1750, -73.8301 (2 of its 3 points outside)"),
+    ({}, "39.17,-73.83,2016-07-30T00:00:00Z",
+     "the field covers 2016-06-23T00:00:00Z to 2016-06-25T00:00:00Z; the run starts at"),
+    ({"land": True}, "39.2,-73.8,2016-06-23T12:00:00Z", "is on land"),
+    ({"east": 4.0}, START, "a current of 4 m/s"),
+])
+def test_a_field_that_cannot_be_flown_is_refused_naming_what_is_missing(
+        tmp_path, capsys, field_args, start, message):
+    field = write_field(tmp_path / "field.nc", **field_args)
+    out = tmp_path / "run"
+    assert main(["sim", str(FIG2), "--start", start, "--currents", str(field),
+                 "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("start, message", [
+    ("39.2", "not an ISO 8601 time"),
+    ("north,west", "LAT,LON must be decimal degrees"),
+    ("39,-73,2016-06-23,1", "expected LAT,LON[,UTC] or UTC"),
+])
+def test_a_bad_start_is_a_usage_error(tmp_path, capsys, start, message):
+    assert main(["sim", str(FIG2), "--start", start, "-o", str(tmp_path / "r")]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_not_a_netcdf_file_is_a_message(tmp_path, capsys):
+    bad = tmp_path / "field.nc"
+    bad.write_text("not netcdf\n")
+    assert main(["sim", str(FIG2), "--currents", str(bad), "-o", str(tmp_path / "r")]) == 1
+    err = capsys.readouterr().err
+    assert f"{bad}: not a NetCDF file" in err and "Traceback" not in err
+
+
+@pytest.mark.skipif(not COMET.is_dir(), reason="the shared comet logs")
+def test_the_currents_a_glider_measured_persist_from_its_flight_logs():
+    import dbdreader
+
+    logged = read_logged_currents(COMET)
+    t, vx = dbdreader.MultiDBD(pattern=str(COMET / "*.dbd"), cacheDir=str(COMET / "cac")
+                               ).get("m_water_vx")
+    assert logged.at(0.0, 0.0, float(t[3]) + 1.0)[1] == pytest.approx(vx[3])
+    assert logged.at(10.0, 20.0, float(t[-1]) + 86400.0)[1] == pytest.approx(vx[-1])
