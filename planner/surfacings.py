@@ -1,0 +1,166 @@
+"""Where and when the glider will surface: each surfacing's time and position with its
+90 % ellipse, from draws of what is uncertain in a dive.
+
+A glider between fixes flies toward its waypoint at its speed through the water, its
+heading corrected for the current it measured (`sim.navigation`), and drifts with the
+current; at the surface it drifts for its fix and call. The draws (`DEFAULT_DRAWS`) vary
+what the last fix cannot tell: the current (a constant offset per draw on each
+component, `CURRENT_SIGMA_MPS`: the current changes between fixes with tides and
+eddies), the speed through the water (`SPEED_SIGMA`) and each dive's length
+(`DIVE_SIGMA`). The forecast position is the draws' mean; the ellipse holds 90 % of a
+two-dimensional normal of their covariance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gliderplan.sim.currents import CurrentField, UniformCurrent
+from gliderplan.sim.geo import EARTH_RADIUS_M
+
+DEFAULT_DRAWS = 200
+CHI2_2D_90 = -2.0 * math.log(0.1)  # a 2-D normal's squared radius holding 90 %
+STEP_S = 120.0  # [s] a dive is flown in steps this long: the current looked up, the
+# heading set toward the waypoint (a glider covers ~40 m, a capture radius or less)
+# [m s-1] per component: how far the depth-averaged current strays from the one last
+# measured over a few hours (tidal and inertial currents on a shelf run at 0.05-0.2 m/s)
+CURRENT_SIGMA_MPS = 0.05
+SPEED_SIGMA = 0.10  # [1] of the speed through the water: its flight model's fit
+DIVE_SIGMA = 0.05  # [1] of a dive's length: yos turned by the altimeter, not the depth
+_M_PER_DEG = EARTH_RADIUS_M * math.pi / 180.0
+
+
+@dataclass(frozen=True)
+class Voyage:
+    """What a surfacing forecast starts from."""
+
+    lat_deg: float  # the last fix (or the start)
+    lon_deg: float
+    epoch_s: float  # [s since 1970] when it dives
+    waypoints: tuple[tuple[float, float], ...]  # (lat, lon) [deg] in order; () : none
+    speed_mps: float  # through the water, horizontally
+    dive_s: float  # [s] from diving to the next fix
+    surface_s: float  # [s] at the surface, fix to the next dive
+    currents: CurrentField = UniformCurrent(0.0, 0.0)
+    current_sigma_mps: float = CURRENT_SIGMA_MPS
+    dive_sigma_s: float | None = None  # [s] of each dive's length (None: DIVE_SIGMA of it)
+    capture_m: float = 100.0  # a waypoint is reached within this [m]
+    heading_rad: float = 0.0  # flown without waypoints
+
+
+@dataclass(frozen=True)
+class Surfacing:
+    """One forecast surfacing."""
+
+    time_s: float  # [s] since the voyage's dive
+    lat_deg: float
+    lon_deg: float
+    ellipse_m: tuple[float, float]  # 90 % semi-axes, major and minor [m]
+    azimuth_deg: float  # of the major axis, clockwise from north [deg]
+    north_m: np.ndarray  # each draw's position [m] from the mean
+    east_m: np.ndarray
+
+    def to_json(self) -> dict:
+        return {"time_s": self.time_s, "lat": self.lat_deg, "lon": self.lon_deg,
+                "ellipse_m": list(self.ellipse_m), "ellipse_azimuth_deg": self.azimuth_deg}
+
+    def inside(self, lat_deg: float, lon_deg: float) -> bool:
+        """Whether a position [deg] lies inside the 90 % ellipse."""
+        cov = np.cov(np.vstack([self.north_m, self.east_m]))
+        d = np.array([(lat_deg - self.lat_deg) * _M_PER_DEG,
+                      (lon_deg - self.lon_deg) * _M_PER_DEG
+                      * math.cos(math.radians(self.lat_deg))])
+        return float(d @ np.linalg.pinv(cov) @ d) <= CHI2_2D_90
+
+    def distance_m(self, lat_deg: float, lon_deg: float) -> float:
+        """[m] from the forecast position to a position [deg]."""
+        return math.hypot((lat_deg - self.lat_deg) * _M_PER_DEG,
+                          (lon_deg - self.lon_deg) * _M_PER_DEG
+                          * math.cos(math.radians(self.lat_deg)))
+
+
+def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
+                        seed: int = 0) -> list[Surfacing]:
+    """The next `count` surfacings of `voyage`, from `draws` draws."""
+    rng = np.random.default_rng(seed)
+    bias_n, bias_e = rng.normal(0.0, voyage.current_sigma_mps, (2, draws))
+    speed = voyage.speed_mps * np.maximum(0.1, 1.0 + SPEED_SIGMA * rng.standard_normal(draws))
+    lat = np.full(draws, voyage.lat_deg)
+    lon = np.full(draws, voyage.lon_deg)
+    target = np.zeros(draws, int)
+    points = np.array(voyage.waypoints, float).reshape(-1, 2)
+    clock = np.zeros(draws)
+    out = []
+    for _ in range(count):
+        sigma = DIVE_SIGMA * voyage.dive_s if voyage.dive_sigma_s is None \
+            else voyage.dive_sigma_s
+        dive = np.maximum(0.2 * voyage.dive_s,
+                          voyage.dive_s + sigma * rng.standard_normal(draws))
+        flown = np.zeros(draws)
+        while np.any(flown < dive):
+            dt = np.minimum(STEP_S, dive - flown)
+            cn, ce = _current(voyage, lat, lon, voyage.epoch_s + float(np.mean(clock + flown)))
+            # it steers for the current it knows; the water carries it with the drawn one
+            heading = _headings(voyage, points, target, lat, lon, speed, cn, ce)
+            lat, lon = _move(lat, lon, (speed * np.cos(heading) + cn + bias_n) * dt,
+                             (speed * np.sin(heading) + ce + bias_e) * dt)
+            flown += dt
+            if len(points):
+                target = _advance(points, target, lat, lon, voyage.capture_m)
+        clock += dive
+        out.append(_surfacing(float(np.mean(clock)), lat, lon))
+        cn, ce = _current(voyage, lat, lon, voyage.epoch_s + float(np.mean(clock)))
+        lat, lon = _move(lat, lon, (cn + bias_n) * voyage.surface_s,
+                         (ce + bias_e) * voyage.surface_s)
+        clock += voyage.surface_s
+    return out
+
+
+def _current(voyage: Voyage, lat: np.ndarray, lon: np.ndarray, epoch_s: float
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """The field's current [m s-1] at each draw (none where it has no water)."""
+    north, east = voyage.currents.along(lat, lon, epoch_s)
+    return np.nan_to_num(north), np.nan_to_num(east)
+
+
+def _headings(voyage: Voyage, points: np.ndarray, target: np.ndarray, lat: np.ndarray,
+              lon: np.ndarray, speed: np.ndarray, cn: np.ndarray, ce: np.ndarray
+              ) -> np.ndarray:
+    """Each draw's heading [rad]: toward its waypoint, upstream of the current across
+    the course (sim.navigation.corrected_heading, for many draws at once)."""
+    if not len(points):
+        return np.full(len(lat), voyage.heading_rad)
+    north = (points[target, 0] - lat) * _M_PER_DEG
+    east = (points[target, 1] - lon) * _M_PER_DEG * np.cos(np.radians(lat))
+    course = np.arctan2(east, north)
+    across = ce * np.cos(course) - cn * np.sin(course)
+    return course + np.arcsin(np.clip(-across / speed, -1.0, 1.0))
+
+
+def _advance(points: np.ndarray, target: np.ndarray, lat: np.ndarray, lon: np.ndarray,
+             capture_m: float) -> np.ndarray:
+    """Each draw's waypoint after this step: the next once within `capture_m` of it; the
+    last is held (the glider circles it)."""
+    north = (points[target, 0] - lat) * _M_PER_DEG
+    east = (points[target, 1] - lon) * _M_PER_DEG * np.cos(np.radians(lat))
+    reached = np.hypot(north, east) <= capture_m
+    return np.where(reached, np.minimum(target + 1, len(points) - 1), target)
+
+
+def _move(lat: np.ndarray, lon: np.ndarray, north_m: np.ndarray, east_m: np.ndarray
+          ) -> tuple[np.ndarray, np.ndarray]:
+    return lat + north_m / _M_PER_DEG, lon + east_m / (_M_PER_DEG * np.cos(np.radians(lat)))
+
+
+def _surfacing(time_s: float, lat: np.ndarray, lon: np.ndarray) -> Surfacing:
+    """The draws' mean position and their 90 % ellipse."""
+    mean_lat, mean_lon = float(np.mean(lat)), float(np.mean(lon))
+    north = (lat - mean_lat) * _M_PER_DEG
+    east = (lon - mean_lon) * _M_PER_DEG * math.cos(math.radians(mean_lat))
+    values, vectors = np.linalg.eigh(np.cov(np.vstack([north, east])))
+    major, minor = (math.sqrt(CHI2_2D_90 * max(0.0, float(v))) for v in values[::-1])
+    azimuth = math.degrees(math.atan2(vectors[1, 1], vectors[0, 1])) % 180.0
+    return Surfacing(time_s, mean_lat, mean_lon, (major, minor), azimuth, north, east)
