@@ -15,11 +15,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gliderplan.sim.currents import CurrentField, UniformCurrent
 from gliderplan.sim.geo import EARTH_RADIUS_M
+
+if TYPE_CHECKING:
+    from gliderplan.language import ir
+    from gliderplan.power_models.vehicle import Vehicle
 
 DEFAULT_DRAWS = 200
 CHI2_2D_90 = -2.0 * math.log(0.1)  # a 2-D normal's squared radius holding 90 %
@@ -47,7 +52,8 @@ class Voyage:
     currents: CurrentField = UniformCurrent(0.0, 0.0)
     current_sigma_mps: float = CURRENT_SIGMA_MPS
     dive_sigma_s: float | None = None  # [s] of each dive's length (None: DIVE_SIGMA of it)
-    capture_m: float = 100.0  # a waypoint is reached within this [m]
+    capture_m: float = 10.0  # a waypoint is reached within this [m]
+    loops: bool = False  # after the last waypoint the first (a Slocum goto list), else held
     heading_rad: float = 0.0  # flown without waypoints
 
 
@@ -109,7 +115,7 @@ def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
                              (speed * np.sin(heading) + ce + bias_e) * dt)
             flown += dt
             if len(points):
-                target = _advance(points, target, lat, lon, voyage.capture_m)
+                target = _advance(points, target, lat, lon, voyage)
         clock += dive
         out.append(_surfacing(float(np.mean(clock)), lat, lon))
         cn, ce = _current(voyage, lat, lon, voyage.epoch_s + float(np.mean(clock)))
@@ -141,13 +147,15 @@ def _headings(voyage: Voyage, points: np.ndarray, target: np.ndarray, lat: np.nd
 
 
 def _advance(points: np.ndarray, target: np.ndarray, lat: np.ndarray, lon: np.ndarray,
-             capture_m: float) -> np.ndarray:
-    """Each draw's waypoint after this step: the next once within `capture_m` of it; the
-    last is held (the glider circles it)."""
+             voyage: Voyage) -> np.ndarray:
+    """Each draw's waypoint after this step: the next once within the capture radius of
+    it; after the last the first if the list loops, else the last held."""
     north = (points[target, 0] - lat) * _M_PER_DEG
     east = (points[target, 1] - lon) * _M_PER_DEG * np.cos(np.radians(lat))
-    reached = np.hypot(north, east) <= capture_m
-    return np.where(reached, np.minimum(target + 1, len(points) - 1), target)
+    reached = np.hypot(north, east) <= voyage.capture_m
+    after = (target + 1) % len(points) if voyage.loops else np.minimum(target + 1,
+                                                                       len(points) - 1)
+    return np.where(reached, after, target)
 
 
 def _move(lat: np.ndarray, lon: np.ndarray, north_m: np.ndarray, east_m: np.ndarray
@@ -164,3 +172,83 @@ def _surfacing(time_s: float, lat: np.ndarray, lon: np.ndarray) -> Surfacing:
     major, minor = (math.sqrt(CHI2_2D_90 * max(0.0, float(v))) for v in values[::-1])
     azimuth = math.degrees(math.atan2(vectors[1, 1], vectors[0, 1])) % 180.0
     return Surfacing(time_s, mean_lat, mean_lon, (major, minor), azimuth, north, east)
+
+
+def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s: float,
+                       count: int, start: tuple[float, float] | None, epoch_s: float,
+                       currents: CurrentField) -> list[Surfacing]:
+    """A mission's `count` surfacings over `duration_s` [s], spread evenly over it (the
+    forecast's own count), flown from `start` (lat, lon) [deg] (None: as the sim puts
+    it in the water) through its waypoints at the vehicle's speed, in `currents`; a
+    goto list as the Slocum flies it (sim.pilot.Waypoints: within its radius, looping)."""
+    from gliderplan.sim.loop import RunConfig, correction_speed_mps, route_points_deg
+    from gliderplan.sim.loop import start_position as sim_start
+
+    if count <= 0:
+        return []
+    from gliderplan.contract import WAYPOINT_RADIUS_M
+
+    lat, lon = start if start is not None else sim_start(mission, RunConfig())
+    surface_s = vehicle.surface_s + vehicle.iridium_s
+    interval = duration_s / (count + 1)
+    lists = [s.route for s in mission.states if s.route.kind == "goto_list"]
+    voyage = Voyage(lat, lon, epoch_s, tuple(route_points_deg(mission)),
+                    correction_speed_mps(vehicle), max(interval - surface_s, 1.0), surface_s,
+                    currents, capture_m=lists[0].params[0] if lists else WAYPOINT_RADIUS_M,
+                    loops=bool(lists))
+    return forecast_surfacings(voyage, count)
+
+
+def ellipse_ring(s: Surfacing, points: int = 36) -> list[tuple[float, float]]:
+    """The 90 % ellipse as a closed ring of (lon, lat) [deg]."""
+    a, b = s.ellipse_m
+    az = math.radians(s.azimuth_deg)
+    ring = []
+    for i in range(points + 1):
+        t = 2.0 * math.pi * i / points
+        major, minor = a * math.cos(t), b * math.sin(t)
+        north = major * math.cos(az) - minor * math.sin(az)
+        east = major * math.sin(az) + minor * math.cos(az)
+        ring.append((s.lon_deg + east / (_M_PER_DEG * math.cos(math.radians(s.lat_deg))),
+                     s.lat_deg + north / _M_PER_DEG))
+    return ring
+
+
+def geojson(surfacings: list[Surfacing], start_epoch_s: float) -> str:
+    """The surfacings as a GeoJSON FeatureCollection: a point and an ellipse polygon each."""
+    import json
+
+    from gliderplan.sim.export import utc_text
+
+    features = []
+    for i, s in enumerate(surfacings, start=1):
+        props = {"surfacing": i, "time_utc": utc_text(start_epoch_s + s.time_s),
+                 **s.to_json()}
+        features.append({"type": "Feature", "properties": props,
+                         "geometry": {"type": "Point", "coordinates": [s.lon_deg, s.lat_deg]}})
+        features.append({"type": "Feature", "properties": {**props, "ellipse": "90 %"},
+                         "geometry": {"type": "Polygon",
+                                      "coordinates": [[list(p) for p in ellipse_ring(s)]]}})
+    return json.dumps({"type": "FeatureCollection", "features": features}, indent=1) + "\n"
+
+
+def kml(surfacings: list[Surfacing], start_epoch_s: float, name: str) -> str:
+    """The surfacings as KML: a placemark and a 90 % ellipse each."""
+    from xml.sax.saxutils import escape
+
+    from gliderplan.sim.export import utc_text
+
+    marks = []
+    for i, s in enumerate(surfacings, start=1):
+        when = utc_text(start_epoch_s + s.time_s)
+        ring = " ".join(f"{lon:.6f},{lat:.6f},0" for lon, lat in ellipse_ring(s))
+        marks.append(
+            f"<Placemark><name>surfacing {i}</name><TimeStamp><when>{when}</when></TimeStamp>"
+            f"<MultiGeometry><Point><coordinates>{s.lon_deg:.6f},{s.lat_deg:.6f},0"
+            "</coordinates></Point><Polygon><outerBoundaryIs><LinearRing><coordinates>"
+            f"{ring}</coordinates></LinearRing></outerBoundaryIs></Polygon></MultiGeometry>"
+            f"<description>90 % ellipse {s.ellipse_m[0]:.0f} x {s.ellipse_m[1]:.0f} m"
+            "</description></Placemark>")
+    return ('<?xml version="1.0" encoding="UTF-8"?>\n<kml xmlns="http://www.opengis.net/kml/2.2">'
+            f"<Document><name>{escape(name)} surfacings</name>" + "".join(marks)
+            + "</Document></kml>\n")

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,8 +26,14 @@ from gliderplan.sim.currents import (
     CurrentField,
     GriddedCurrent,
     check_speeds,
+    coverage_problem,
+    ends_note,
     parse_uniform,
 )
+
+if TYPE_CHECKING:
+    from gliderplan.language.ir import CheckedMission
+    from gliderplan.power_models.vehicle import Vehicle
 
 _EAST = ("eastward_sea_water_velocity", "uo", "water_u", "u")
 _NORTH = ("northward_sea_water_velocity", "vo", "water_v", "v")
@@ -186,3 +193,27 @@ def faster_than_glider(field: CurrentField, speed_mps: float, lat_deg: float,
                 f"than the glider flies through the water ({speed_mps:.2f} m/s): it will be "
                 "carried off its route")
     return None
+
+
+def checked_field(spec: str, mission: CheckedMission, vehicle: Vehicle,
+                  start: tuple[float, float], epoch_s: float, duration_s: float
+                  ) -> tuple[CurrentField, list[str]]:
+    """The field of `--currents SPEC` for a run of `mission` from `start` (lat, lon)
+    [deg] at `epoch_s` [s since 1970] for `duration_s` [s], and notes for the user;
+    CurrentError where it does not cover the start, the waypoints or the start time, or
+    the start is on its land."""
+    from gliderplan.sim.loop import correction_speed_mps, route_points_deg
+
+    field = load_currents(spec)
+    points = [start, *route_points_deg(mission)]
+    problem = coverage_problem(field, [p[0] for p in points], [p[1] for p in points], epoch_s)
+    if problem is not None:
+        raise CurrentError(f"--currents {spec}: {problem}")
+    north, east = field.at(*start, epoch_s)
+    if not math.isfinite(north + east):
+        raise CurrentError(f"--currents {spec}: the start {start[0]:.4f}, {start[1]:.4f} is "
+                           "on land (the field has no water there): give --start LAT,LON at sea")
+    notes = [f"currents: {field.description}",
+             faster_than_glider(field, correction_speed_mps(vehicle), *start, epoch_s),
+             ends_note(field, epoch_s + duration_s)]
+    return field, [note for note in notes if note]

@@ -90,40 +90,21 @@ def flown_water(mission: CheckedMission, vehicle: Vehicle, given: Water, spec: s
 
 def with_currents(mission: CheckedMission, config: RunConfig, spec: str, vehicle: Vehicle
                   ) -> tuple[RunConfig, list[str]]:
-    """`config` flying the currents of `--currents SPEC` (sim.current_files), and notes
-    for the user; CurrentError where the field does not cover the start, the waypoints
-    or the period, or the start is on its land."""
+    """`config` flying the currents of `--currents SPEC` (sim.current_files.checked_field),
+    and notes for the user."""
     import dataclasses
 
-    from gliderplan.sim.current_files import faster_than_glider, load_currents
-    from gliderplan.sim.currents import (
-        CurrentError,
-        UniformCurrent,
-        coverage_problem,
-        ends_note,
-    )
-    from gliderplan.sim.loop import correction_speed_mps, route_points_deg, start_position
+    from gliderplan.sim.current_files import checked_field
+    from gliderplan.sim.currents import UniformCurrent
+    from gliderplan.sim.loop import start_position
     from gliderplan.sim.vehicle import Current
 
-    field = load_currents(spec)
-    lat, lon = start_position(mission, config)
-    start = config.start_epoch_s
+    field, notes = checked_field(spec, mission, vehicle, start_position(mission, config),
+                                 config.start_epoch_s, config.duration_s)
     if isinstance(field, UniformCurrent):
-        config = dataclasses.replace(config, current=Current(field.north_mps, field.east_mps))
-    else:
-        config = dataclasses.replace(config, currents=field)
-    points = [(lat, lon), *route_points_deg(mission)]
-    problem = coverage_problem(field, [p[0] for p in points], [p[1] for p in points], start)
-    if problem is not None:
-        raise CurrentError(f"--currents {spec}: {problem}")
-    north, east = field.at(lat, lon, start)
-    if not math.isfinite(north + east):
-        raise CurrentError(f"--currents {spec}: the start {lat:.4f}, {lon:.4f} is on land "
-                           "(the field has no water there): give --start LAT,LON at sea")
-    notes = [f"currents: {field.description}",
-             faster_than_glider(field, correction_speed_mps(vehicle), lat, lon, start),
-             ends_note(field, start + config.duration_s)]
-    return config, [note for note in notes if note]
+        return dataclasses.replace(config, current=Current(field.north_mps, field.east_mps)), \
+            notes
+    return dataclasses.replace(config, currents=field), notes
 
 
 def grounding(record: RunRecord) -> dict | None:
