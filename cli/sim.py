@@ -34,6 +34,7 @@ from gliderplan.contract.units import UNITS
 ORDER = 60
 _DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]+)\s*$")
 LONG_RUN_TICKS = 100_000  # progress on stderr for runs longer than this
+SHOWN_SURFACINGS = 50  # surfacings printed; summary.json holds them all
 
 
 def parse_duration_s(text: str, option: str = "--duration") -> float:
@@ -172,6 +173,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {note}", file=sys.stderr)
     if args.replan_every:
         print(_replanning(result), file=sys.stderr)
+    _print_surfacings(result.record)
     if check.causes:
         print("  states over their own prediction:" if check.verdict != "violation" or
               "planned" in check.causes[0] else "  where it went:", file=sys.stderr)
@@ -197,6 +199,22 @@ def run(args: argparse.Namespace) -> int:
         print_json({"ok": code == ExitCode.OK, "exit_code": int(code), **summary,
                     "files": [str(f) for f in result.files]})
     return code
+
+
+def _print_surfacings(record) -> None:
+    """Each surfacing's time and position (the first SHOWN_SURFACINGS; summary.json has
+    them all)."""
+    from gliderplan.sim.outputs import surfacing_fixes
+
+    fixes = surfacing_fixes(record)
+    if fixes:
+        print("  surfacings (GPS fix: time, position; one run, no ellipse: gliderplan "
+              "forecast gives them):", file=sys.stderr)
+    for i, fix in enumerate(fixes[:SHOWN_SURFACINGS], start=1):
+        print(f"    {i:4d}  {_time_text(fix['time_s']):>9s}  {fix['lat']:9.5f} {fix['lon']:10.5f}",
+              file=sys.stderr)
+    if len(fixes) > SHOWN_SURFACINGS:
+        print(f"    ... {len(fixes) - SHOWN_SURFACINGS} more in summary.json", file=sys.stderr)
 
 
 def _replayed(ocean: str | None) -> bool:

@@ -54,6 +54,7 @@ class Voyage:
     dive_sigma_s: float | None = None  # [s] of each dive's length (None: DIVE_SIGMA of it)
     capture_m: float = 10.0  # a waypoint is reached within this [m]
     loops: bool = False  # after the last waypoint the first (a Slocum goto list), else held
+    surfaced: bool = False  # it is at the surface: the first surfacing is the start's
     heading_rad: float = 0.0  # flown without waypoints
 
 
@@ -100,7 +101,12 @@ def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
     points = np.array(voyage.waypoints, float).reshape(-1, 2)
     clock = np.zeros(draws)
     out = []
-    for _ in range(count):
+    for i in range(count):
+        if i == 0 and voyage.surfaced:
+            out.append(_surfacing(0.0, lat, lon))
+            lat, lon = _surface_drift(voyage, lat, lon, 0.0, bias_n, bias_e)
+            clock += voyage.surface_s
+            continue
         sigma = DIVE_SIGMA * voyage.dive_s if voyage.dive_sigma_s is None \
             else voyage.dive_sigma_s
         dive = np.maximum(0.2 * voyage.dive_s,
@@ -118,11 +124,16 @@ def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
                 target = _advance(points, target, lat, lon, voyage)
         clock += dive
         out.append(_surfacing(float(np.mean(clock)), lat, lon))
-        cn, ce = _current(voyage, lat, lon, voyage.epoch_s + float(np.mean(clock)))
-        lat, lon = _move(lat, lon, (cn + bias_n) * voyage.surface_s,
-                         (ce + bias_e) * voyage.surface_s)
+        lat, lon = _surface_drift(voyage, lat, lon, float(np.mean(clock)), bias_n, bias_e)
         clock += voyage.surface_s
     return out
+
+
+def _surface_drift(voyage: Voyage, lat: np.ndarray, lon: np.ndarray, time_s: float,
+                   bias_n: np.ndarray, bias_e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the current carries each draw while it is at the surface."""
+    cn, ce = _current(voyage, lat, lon, voyage.epoch_s + time_s)
+    return _move(lat, lon, (cn + bias_n) * voyage.surface_s, (ce + bias_e) * voyage.surface_s)
 
 
 def _current(voyage: Voyage, lat: np.ndarray, lon: np.ndarray, epoch_s: float
@@ -190,12 +201,14 @@ def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s:
 
     lat, lon = start if start is not None else sim_start(mission, RunConfig())
     surface_s = vehicle.surface_s + vehicle.iridium_s
-    interval = duration_s / (count + 1)
+    # a mission that starts at the surface surfaces there first, then every interval
+    surfaced = mission.states[0].profiles[0].kind == "surface"
+    interval = duration_s / (count if surfaced else count + 1)
     lists = [s.route for s in mission.states if s.route.kind == "goto_list"]
     voyage = Voyage(lat, lon, epoch_s, tuple(route_points_deg(mission)),
                     correction_speed_mps(vehicle), max(interval - surface_s, 1.0), surface_s,
                     currents, capture_m=lists[0].params[0] if lists else WAYPOINT_RADIUS_M,
-                    loops=bool(lists))
+                    loops=bool(lists), surfaced=surfaced)
     return forecast_surfacings(voyage, count)
 
 

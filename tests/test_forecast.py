@@ -259,7 +259,9 @@ def test_forecast_gives_every_surfacing_s_time_position_and_ellipse(capsys, tmp_
     assert len(surfacings) == round(data["surfacing_count"]) == 4
     assert all(set(s) >= {"time_s", "lat", "lon", "ellipse_m"} for s in surfacings)
     lats = [s["lat"] for s in surfacings]
-    assert lats == sorted(lats) and lats[0] > 54.2  # toward 54 33.5 N, 7 13.0 E
+    # it starts at the surface (prepare_to_dive), then heads for 54 33.5 N, 7 13.0 E
+    assert surfacings[0]["lat"] == pytest.approx(54.2) and surfacings[0]["time_s"] == 0.0
+    assert lats == sorted(lats) and lats[1] > 54.21
     assert [s["time_s"] for s in surfacings] == sorted(s["time_s"] for s in surfacings)
     majors = [s["ellipse_m"][0] for s in surfacings]
     assert majors == sorted(majors) and all(len(s["ellipse_m"]) == 2 for s in surfacings)

@@ -4,6 +4,7 @@ fields that cannot be flown refused with what is missing."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -16,7 +17,8 @@ from gliderplan.sim.current_files import read_logged_currents, read_netcdf_curre
 
 REPO = Path(__file__).resolve().parents[1]
 FIG2 = REPO / "examples" / "fig2.mission"  # waypoints near 39.175 N, 73.83 W
-COMET = Path("/work/shared/data/slocum-logs-comet-2016")
+COMET = REPO.parent / "shared" / "data" / "slocum-logs-comet-2016"
+NSB3 = REPO.parent / "shared" / "data" / "slocum-missions" / "nsb3" / "nsb3.mi"
 START = "39.17,-73.83,2016-06-23T12:00:00Z"
 
 
@@ -127,3 +129,19 @@ def test_the_currents_a_glider_measured_persist_from_its_flight_logs():
                                ).get("m_water_vx")
     assert logged.at(0.0, 0.0, float(t[3]) + 1.0)[1] == pytest.approx(vx[3])
     assert logged.at(10.0, 20.0, float(t[-1]) + 86400.0)[1] == pytest.approx(vx[-1])
+
+
+@pytest.mark.skipif(not NSB3.is_file(), reason="the shared Slocum missions")
+def test_the_imported_nsb3_flies_toward_its_waypoints_from_the_start_and_prints_surfacings(
+        tmp_path, capsys):
+    mission = tmp_path / "nsb3.mission"
+    assert main(["import-slocum", str(NSB3), "-o", str(mission)]) == 0
+    out = tmp_path / "run"
+    assert main(["sim", str(mission), "--start", "54.2,7.0,2016-06-23T12:00Z", "--currents",
+                 "0.05,0", "--duration", "7h", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    fixes = json.loads((out / "summary.json").read_text())["surfacing_fixes"]
+    assert len(fixes) == 3 and "surfacings (GPS fix" in err
+    # its goto list's first waypoint is 54 33.5 N, 7 13.0 E: north-east
+    assert fixes[-1]["lat"] > fixes[0]["lat"] + 0.04 and fixes[-1]["lon"] > fixes[0]["lon"]
+    assert f"{fixes[1]['lat']:9.5f} {fixes[1]['lon']:10.5f}" in err

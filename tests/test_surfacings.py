@@ -15,7 +15,7 @@ from gliderplan.planner.surfacings import Voyage, forecast_surfacings
 from gliderplan.sim.currents import UniformCurrent
 from gliderplan.sim.geo import move_degrees
 
-COMET = Path("/work/shared/data/slocum-logs-comet-2016")
+COMET = Path(__file__).resolve().parents[2] / "shared" / "data" / "slocum-logs-comet-2016"
 
 
 def test_a_glider_surfaces_where_its_speed_and_the_current_carry_it():
