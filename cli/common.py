@@ -113,3 +113,15 @@ def parse_start(text: str) -> tuple[float | None, float | None, str | None]:
         raise UsageError(f"--start {text!r}: latitude must lie in [-90, 90] and longitude "
                          "in [-180, 180] degrees")
     return lat, lon, parts[2] if len(parts) == 3 else None
+
+
+def start_epoch_s(when: str | None) -> float:
+    """The UTC of `--start` [s since 1970] (None: the simulator's default start)."""
+    from gliderplan.contract.errors import UsageError
+    from gliderplan.sim.export import parse_utc
+    from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
+
+    try:
+        return parse_utc(when) if when else DEFAULT_START_EPOCH_S
+    except ValueError as err:
+        raise UsageError(f"--start: {err}") from None

@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gliderplan.cli.common import START_HELP, parse_start
+from gliderplan.cli.common import START_HELP, parse_start, start_epoch_s
 from gliderplan.cli.main import print_json
 from gliderplan.contract.errors import UsageError
 
@@ -113,19 +113,14 @@ def with_surfacings(result, mission, args: argparse.Namespace):
     from dataclasses import replace
     from pathlib import Path
 
-    from gliderplan.contract.errors import UsageError
     from gliderplan.planner.surfacings import CURRENT_SIGMA_MPS, mission_surfacings
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim.current_files import checked_field, read_logged_currents
     from gliderplan.sim.currents import UniformCurrent
-    from gliderplan.sim.export import parse_utc
-    from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig, start_position
+    from gliderplan.sim.loop import RunConfig, start_position
 
     lat, lon, when = parse_start(args.start) if args.start else (None, None, None)
-    try:
-        epoch = parse_utc(when) if when else DEFAULT_START_EPOCH_S
-    except ValueError as err:
-        raise UsageError(f"--start: {err}") from None
+    epoch = start_epoch_s(when)
     vehicle = load_vehicle(args.vehicle or mission.vehicle)
     start = (lat, lon) if lat is not None else start_position(mission, RunConfig())
     notes = []
