@@ -53,6 +53,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--surfacings-out", metavar="FILE",
                         help="also write the surfacings and their ellipses as GeoJSON "
                              "(*.geojson, *.json) or KML (*.kml)")
+    parser.add_argument("--map", metavar="FILE.png",
+                        help="also draw the surfacings with their 90 %% ellipses, the "
+                             "waypoints and the current field (PNG or SVG)")
     parser.add_argument("--json", action="store_true", help="print the forecast as JSON")
 
 
@@ -93,6 +96,14 @@ def run(args: argparse.Namespace) -> int:
         write_atomically(args.surfacings_out, geojson(positions, result.start_epoch_s)
                          if out == "geojson" else
                          kml(positions, result.start_epoch_s, mission.name))
+    if args.map is not None:
+        from gliderplan.sim.loop import route_points_deg
+        from gliderplan.sim.seamap import SeaMap, write_map
+
+        write_map(args.map, SeaMap(f"{mission.name}: forecast surfacings",
+                                   waypoints=tuple(route_points_deg(mission)),
+                                   surfacings=tuple(p.to_json() for p in result.positions),
+                                   currents=result.currents, epoch_s=result.start_epoch_s))
     return 0
 
 
@@ -139,7 +150,7 @@ def with_surfacings(result, mission, args: argparse.Namespace):
                  "speed through the water and each dive's length")
     positions = mission_surfacings(mission, vehicle, result.duration_s,
                                    round(result.surfacings), start, epoch, field)
-    return replace(result, positions=tuple(positions), start_epoch_s=epoch,
+    return replace(result, positions=tuple(positions), start_epoch_s=epoch, currents=field,
                    assumptions=result.assumptions + tuple(notes))
 
 

@@ -2,7 +2,7 @@
 waypoints, against the straight line, and both flown in the simulator.
 
   route MISSION --currents FIELD.nc|N,E [--start LAT,LON[,UTC]] [--speed M/S]
-        [--cells N] [--fly] [--json]
+        [--cells N] [--fly] [--map FILE.png] [--json]
 
 Prints each leg's time on the straight line and on the planned route, the time saved,
 and the planned route as a goto list to paste into a mission (planner/routing.py). With
@@ -36,6 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="grid points a side each leg is searched on (default 100)")
     parser.add_argument("--fly", action="store_true",
                         help="fly both routes in the simulator and compare their times")
+    parser.add_argument("--map", metavar="FILE.png",
+                        help="also draw both routes (and, with --fly, both flown tracks) over "
+                             "the current field (PNG or SVG)")
     parser.add_argument("--json", action="store_true", help="print the routes as JSON")
 
 
@@ -44,7 +47,8 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.planner.routing import (
         CAPTURE_M,
         NoRoute,
-        flown_time_s,
+        arrival_s,
+        flown_track,
         plan_route,
         transit_speed_mps,
     )
@@ -71,15 +75,30 @@ def run(args: argparse.Namespace) -> int:
     except NoRoute as err:
         raise UsageError(f"{args.mission}: {err}") from None
     result = plan.to_json() | {"speed_mps": speed}
+    tracks, flown = {}, {}
     if args.fly:
         limit = 3.0 * (plan.straight_s if math.isfinite(plan.straight_s) else plan.planned_s)
-        flown = {name: flown_time_s(points, field, start, epoch, limit)
-                 for name, points in (("straight", waypoints), ("planned", plan.waypoints()))}
+        tracks = {name: flown_track(points, field, start, epoch, limit)
+                  for name, points in (("straight", waypoints), ("planned", plan.waypoints()))}
+        flown = {name: arrival_s(track, waypoints[-1]) for name, track in tracks.items()}
         result["flown_s"] = {k: (v if math.isfinite(v) else None) for k, v in flown.items()}
         result["flown_gain"] = 1.0 - flown["planned"] / flown["straight"] \
             if math.isfinite(flown["straight"]) else 1.0
     for note in notes:
         print(note, file=sys.stderr)
+    if args.map is not None:
+        import numpy as np
+
+        from gliderplan.sim.seamap import SeaMap, write_map
+
+        lines = {f"{name} route": (np.array([start[0]] + [p[0] for p in points]),
+                                   np.array([start[1]] + [p[1] for p in points]))
+                 for name, points in (("straight", waypoints), ("planned", plan.waypoints()))}
+        for name, (time_s, lat, lon) in tracks.items():  # up to its arrival
+            shown = time_s <= min(flown[name], float(time_s[-1]))
+            lines[f"{name}, flown"] = (lat[shown], lon[shown])
+        write_map(args.map, SeaMap(f"{mission.name}: routes", lines, tuple(waypoints),
+                                   currents=field, epoch_s=epoch))
     if args.json:
         print(json.dumps(result, indent=2))
         return 0

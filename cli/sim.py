@@ -124,6 +124,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario-file", metavar="FILE",
                         help="with --replan-every: the spreads and battery share the replan's "
                              "prior takes (default: the shipped scenario file)")
+    parser.add_argument("--map", metavar="FILE.png",
+                        help="also draw the flown track, the surfacings, the waypoints and "
+                             "the current field (PNG or SVG)")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
                         help="directory for the run's files")
 
@@ -174,6 +177,8 @@ def run(args: argparse.Namespace) -> int:
     if args.replan_every:
         print(_replanning(result), file=sys.stderr)
     _print_surfacings(result.record)
+    if args.map is not None:
+        _draw_map(args.map, mission, result)
     if check.causes:
         print("  states over their own prediction:" if check.verdict != "violation" or
               "planned" in check.causes[0] else "  where it went:", file=sys.stderr)
@@ -215,6 +220,21 @@ def _print_surfacings(record) -> None:
               file=sys.stderr)
     if len(fixes) > SHOWN_SURFACINGS:
         print(f"    ... {len(fixes) - SHOWN_SURFACINGS} more in summary.json", file=sys.stderr)
+
+
+def _draw_map(path: str, mission, result) -> None:
+    """`--map`: the run's track, surfacings, waypoints and current field."""
+    import numpy as np
+
+    from gliderplan.sim.loop import route_points_deg
+    from gliderplan.sim.outputs import surfacing_fixes
+    from gliderplan.sim.seamap import SeaMap, write_map
+
+    c = result.record.columns
+    write_map(path, SeaMap(f"{mission.name}: flown track",
+                           {"flown": (np.asarray(c["lat_deg"]), np.asarray(c["lon_deg"]))},
+                           tuple(route_points_deg(mission)),
+                           tuple(surfacing_fixes(result.record)), result.currents))
 
 
 def _replayed(ocean: str | None) -> bool:

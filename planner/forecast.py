@@ -49,6 +49,7 @@ from gliderplan.power_models.vehicle import Vehicle, flying_yo
 
 if TYPE_CHECKING:
     from gliderplan.planner.surfacings import Surfacing
+    from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.ocean import SeaFloor
 
 WATER_DEPTHS_M = np.arange(0.0, 1001.0, 5.0)  # where a given ocean's density is taken [m]
@@ -80,6 +81,7 @@ class MissionForecast:
     # where and when it surfaces (planner.surfacings): given a start
     positions: tuple[Surfacing, ...] = ()
     start_epoch_s: float = 0.0  # [s since 1970] when it starts, for the surfacings' times
+    currents: CurrentField | None = None  # the field the surfacings were flown in
 
     @property
     def energy_j(self) -> float:

@@ -239,13 +239,12 @@ def _distance_m(lat: np.ndarray, lon: np.ndarray, to: tuple[float, float]) -> np
                     (lon - to[1]) * _M_PER_DEG * math.cos(math.radians(to[0])))
 
 
-def flown_time_s(points: list[tuple[float, float]], field: CurrentField,
-                 start: tuple[float, float], epoch_s: float, duration_s: float,
-                 reach_m: float = 1.5 * CAPTURE_M) -> float:
-    """[s] the simulated glider takes from `start` along `points` (lat, lon) [deg] to
-    within `reach_m` of the last, in `field` (inf: not within `duration_s`)."""
-    time_s, lat, lon = flown_track(points, field, start, epoch_s, duration_s)
-    near = np.flatnonzero(_distance_m(lat, lon, points[-1]) <= reach_m)
+def arrival_s(track: tuple[np.ndarray, np.ndarray, np.ndarray], end: tuple[float, float],
+              reach_m: float = 1.5 * CAPTURE_M) -> float:
+    """[s] when a `flown_track` first comes within `reach_m` of `end` (lat, lon) [deg]
+    (inf: never)."""
+    time_s, lat, lon = track
+    near = np.flatnonzero(_distance_m(lat, lon, end) <= reach_m)
     return float(time_s[near[0]]) if len(near) else math.inf
 
 

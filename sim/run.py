@@ -19,6 +19,7 @@ from gliderplan.planner.planfile import Plan, load_plan
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
     from gliderplan.power_models.flight import DensityProfile
     from gliderplan.power_models.vehicle import Vehicle
+    from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.energy import FlightCheck, RunEnergy
     from gliderplan.sim.loop import RunConfig, RunRecord
     from gliderplan.sim.ocean import Water
@@ -43,6 +44,7 @@ class RunResult:
     water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
     replanning: dict | None = None  # with replan_every: what crossed the link (summary.json's)
     current_notes: tuple[str, ...] = ()  # the currents flown, and warnings about them
+    currents: CurrentField | None = None  # the field flown (None: none, or a constant)
 
     @property
     def interrupted(self) -> bool:
@@ -311,7 +313,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                      f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
                      "the water: give it an altimeter stop, yo's fifth argument)")
     return RunResult(record, used, check, plan, tuple(out / name for name in written),
-                     tuple(notes), meta.get("replanning"), tuple(field_notes))
+                     tuple(notes), meta.get("replanning"), tuple(field_notes),
+                     config.currents)
 
 
 def _shore(mission: CheckedMission, every: str, plan_path: str | Path | None,

@@ -86,3 +86,18 @@ def test_bad_route_input_is_a_message(tmp_path, capsys, args, message):
     assert main(["route", str(mission), "--start", "39.1,-73.7", *args]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+def test_maps_are_drawn_for_sim_forecast_and_route(tmp_path):
+    mission = tmp_path / "hop.mission"
+    mission.write_text(MISSION)
+    field = str(write_jet(tmp_path / "jet.nc"))
+    start = "39.1,-73.8,2016-06-23T00:00Z"
+    for command in (["sim", str(mission), "--duration", "3h", "-o", str(tmp_path / "run")],
+                    ["forecast", str(mission), "--duration", "12h"],
+                    ["route", str(mission), "--speed", "0.23"]):
+        out = tmp_path / f"{command[0]}.png"
+        assert main([*command, "--start", start, "--currents", field, "--map", str(out)]) == 0
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["route", str(mission), "--start", start, "--currents", field,
+                 "--map", str(tmp_path / "m.gif")]) == 2
