@@ -90,8 +90,25 @@ def load_mission(args: argparse.Namespace) -> CheckedMission:
     return mission
 
 
-START_HELP = ("where and when the glider is put in the water: LAT,LON [decimal degrees], "
-              "LAT,LON,UTC or UTC (ISO 8601)")
+def add_start_argument(parser: argparse.ArgumentParser, default: str) -> None:
+    """`--start LAT,LON[,UTC]` (parse_start); `default`: what it is without one."""
+    parser.add_argument("--start", metavar="LAT,LON[,UTC]",
+                        help="where and when the glider is put in the water: LAT,LON "
+                             "[decimal degrees], LAT,LON,UTC or UTC (ISO 8601); default: "
+                             + default)
+
+
+def add_at_sea_arguments(parser: argparse.ArgumentParser, currents_default: str,
+                         map_shows: str) -> None:
+    """`--currents` (sim.current_files.load_currents) and `--map FILE` (sim.seamap)."""
+    parser.add_argument("--currents", metavar="N,E|FIELD.nc|LOGDIR",
+                        help="the current the glider flies through: N,E toward north and "
+                             "east [m/s]; a CF NetCDF current field (eastward/northward_"
+                             "sea_water_velocity, Copernicus uo/vo, HYCOM water_u/water_v); "
+                             "or Slocum flight logs (*.dbd) whose measured currents persist "
+                             f"(default: {currents_default})")
+    parser.add_argument("--map", metavar="FILE.png",
+                        help=f"also draw {map_shows} (PNG or SVG)")
 
 
 def parse_start(text: str) -> tuple[float | None, float | None, str | None]:

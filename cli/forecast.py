@@ -16,7 +16,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gliderplan.cli.common import START_HELP, parse_start, start_epoch_s
+from gliderplan.cli.common import (
+    add_at_sea_arguments,
+    add_start_argument,
+    parse_start,
+    start_epoch_s,
+)
 from gliderplan.cli.main import print_json
 from gliderplan.contract.errors import UsageError
 
@@ -42,20 +47,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "30d)")
     parser.add_argument("--mafiles", metavar="DIR",
                         help="with a .mi: the directory of its .ma files")
-    parser.add_argument("--start", metavar="LAT,LON[,UTC]",
-                        help=START_HELP + " (default: 500 m south of the mission's first "
-                             "waypoint, at the first sample of --ocean logs, else "
-                             "2000-01-01T00:00:00Z)")
-    parser.add_argument("--currents", metavar="N,E|FIELD.nc|LOGDIR",
-                        help="the current it flies through, as sim --currents takes it "
-                             "(default: the currents measured in --ocean LOGDIR's flight "
-                             "logs, else none, with its uncertainty)")
+    add_start_argument(parser, "500 m south of the mission's first waypoint, at "
+                               "2000-01-01T00:00:00Z")
+    add_at_sea_arguments(parser, "the currents measured in --ocean LOGDIR's flight logs, "
+                                 "else none, with its uncertainty",
+                         "the surfacings with their 90 %% ellipses, the waypoints and the "
+                         "current field")
     parser.add_argument("--surfacings-out", metavar="FILE",
                         help="also write the surfacings and their ellipses as GeoJSON "
                              "(*.geojson, *.json) or KML (*.kml)")
-    parser.add_argument("--map", metavar="FILE.png",
-                        help="also draw the surfacings with their 90 %% ellipses, the "
-                             "waypoints and the current field (PNG or SVG)")
     parser.add_argument("--json", action="store_true", help="print the forecast as JSON")
 
 

@@ -19,8 +19,8 @@ import os
 import sys
 
 from gliderplan.cli.common import (
-    START_HELP,
     add_mission_argument,
+    add_start_argument,
     load_mission,
     parse_start,
     refuse_unpaired,
@@ -66,9 +66,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--key", metavar="KEYFILE",
                         help="with --replan: the vehicle's key (the plan signed with it; "
                              "default: a key made for the run)")
-    parser.add_argument("--start", metavar="LAT,LON[,UTC]",
-                        help=START_HELP + " (default: 500 m south of the mission's first "
-                             "waypoint, 2000-01-01T00:00:00Z)")
+    add_start_argument(parser, "500 m south of the mission's first waypoint, at "
+                               "2000-01-01T00:00:00Z")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="directory for scenarios.parquet, summary.json and the plots")

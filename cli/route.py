@@ -17,7 +17,13 @@ import json
 import math
 import sys
 
-from gliderplan.cli.common import START_HELP, add_mission_argument, load_mission, parse_start
+from gliderplan.cli.common import (
+    add_at_sea_arguments,
+    add_mission_argument,
+    add_start_argument,
+    load_mission,
+    parse_start,
+)
 from gliderplan.cli.common import start_epoch_s as parse_epoch
 
 ORDER = 57
@@ -25,10 +31,9 @@ ORDER = 57
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_mission_argument(parser)
-    parser.add_argument("--currents", metavar="FIELD.nc|N,E", required=True,
-                        help="the current field, as sim --currents takes it")
-    parser.add_argument("--start", metavar="LAT,LON[,UTC]",
-                        help=START_HELP + " (default: as sim puts it in the water)")
+    add_start_argument(parser, "as sim puts it in the water")
+    add_at_sea_arguments(parser, "none: give one", "both routes (and, with --fly, both "
+                                                   "flown tracks) over the current field")
     parser.add_argument("--speed", type=float, metavar="M/S",
                         help="the glider's speed over the ground in still water, yos and "
                              "surfacings included (default: the simulated glider's)")
@@ -36,9 +41,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="grid points a side each leg is searched on (default 100)")
     parser.add_argument("--fly", action="store_true",
                         help="fly both routes in the simulator and compare their times")
-    parser.add_argument("--map", metavar="FILE.png",
-                        help="also draw both routes (and, with --fly, both flown tracks) over "
-                             "the current field (PNG or SVG)")
     parser.add_argument("--json", action="store_true", help="print the routes as JSON")
 
 
@@ -57,6 +59,8 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.loop import RunConfig, route_points_deg, start_position
 
     mission = load_mission(args)
+    if args.currents is None:
+        raise UsageError("--currents: route plans through a current field: give one")
     waypoints = route_points_deg(mission)
     if not waypoints:
         raise UsageError(f"{args.mission}: the mission has no waypoint to route to")

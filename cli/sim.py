@@ -19,8 +19,9 @@ import re
 import sys
 
 from gliderplan.cli.common import (
-    START_HELP,
+    add_at_sea_arguments,
     add_mission_argument,
+    add_start_argument,
     load_mission,
     parse_start,
     refuse_unpaired,
@@ -81,23 +82,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "fluctuations of the paper's first sea trial)")
     parser.add_argument("--tracker", choices=("robust", "naive"), default="robust",
                         help="thermocline detection (default robust; naive: the paper's first)")
-    parser.add_argument("--currents", "--current", metavar="N,E|FIELD.nc|LOGDIR",
-                        dest="currents",
-                        help="the current the glider flies through: N,E toward north and "
-                             "east [m/s]; a CF NetCDF current field (eastward/northward_"
-                             "sea_water_velocity, Copernicus uo/vo, HYCOM water_u/water_v); "
-                             "or Slocum flight logs (*.dbd) whose measured currents persist "
-                             "(default: none)")
+    add_at_sea_arguments(parser, "none", "the flown track, the surfacings, the waypoints "
+                                         "and the current field")
+    parser.add_argument("--current", dest="currents", help=argparse.SUPPRESS)  # its old name
     parser.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     parser.add_argument("--tick", type=float, default=TICK_S, metavar="S",
                         help=f"sensor-array period [s] (default {TICK_S:g})")
     parser.add_argument("--duration", metavar="T",
                         help="end the run here if the mission has not exited (3600s, 90min, "
                              "6h, 30d; default: the mission's horizon, else 30d)")
-    parser.add_argument("--start", metavar="LAT,LON[,UTC]",
-                        help=START_HELP + " (default: 500 m south of the mission's first "
-                             "waypoint, at the first sample of replayed logs, else "
-                             "2000-01-01T00:00:00Z)")
+    add_start_argument(parser, "500 m south of the mission's first waypoint, at the first "
+                               "sample of replayed logs, else 2000-01-01T00:00:00Z")
     parser.add_argument("--netcdf", action="store_true",
                         help="also write RUNDIR/trajectory.nc (CF trajectory, IOOS Glider "
                              "DAC names, ACDD attributes); more formats: gliderplan export")
@@ -124,9 +119,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario-file", metavar="FILE",
                         help="with --replan-every: the spreads and battery share the replan's "
                              "prior takes (default: the shipped scenario file)")
-    parser.add_argument("--map", metavar="FILE.png",
-                        help="also draw the flown track, the surfacings, the waypoints and "
-                             "the current field (PNG or SVG)")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
                         help="directory for the run's files")
 
