@@ -164,6 +164,12 @@ class HorizonDecl(Node):
     span: Span = NO_SPAN
 
 
+class StartDecl(Node):
+    lat: Number  # [decimal degrees]
+    lon: Number
+    span: Span = NO_SPAN
+
+
 class ObjectiveDecl(Node):
     sense: Ident  # maximize | minimize
     target: Ident  # quality | energy
@@ -202,6 +208,7 @@ Declaration = (
     | ComputerDecl
     | BatteryDecl
     | HorizonDecl
+    | StartDecl
     | ObjectiveDecl
     | SensorDecl
     | VarDecl

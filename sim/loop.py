@@ -110,6 +110,8 @@ def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float
     """Where the glider is put in the water [deg]."""
     if config.start_lat_deg is not None and config.start_lon_deg is not None:
         return config.start_lat_deg, config.start_lon_deg
+    if mission.start_deg is not None:
+        return mission.start_deg
     points = route_points_deg(mission)
     if points:
         return move_degrees(*points[0], -500.0, 0.0)

@@ -145,3 +145,36 @@ def test_the_imported_nsb3_flies_toward_its_waypoints_from_the_start_and_prints_
     # its goto list's first waypoint is 54 33.5 N, 7 13.0 E: north-east
     assert fixes[-1]["lat"] > fixes[0]["lat"] + 0.04 and fixes[-1]["lon"] > fixes[0]["lon"]
     assert f"{fixes[1]['lat']:9.5f} {fixes[1]['lon']:10.5f}" in err
+
+
+START_LINE = """mission m
+start 54.2, -7.5
+
+state s
+begin
+  flightroute nav(5433.5, -713)
+  flightprofile yo(3, 20, 0.454, 0.454)
+  sensors missiontime, depth
+  events
+    case missiontime >= 600 exit
+end
+"""
+
+
+def test_a_start_line_puts_the_glider_there_and_start_overrides_it(tmp_path, capsys):
+    from gliderplan.language import check_source
+    from gliderplan.language.formatter import format_source
+
+    assert check_source(START_LINE).checked().start_deg == (54.2, -7.5)
+    assert "start 54.2, -7.5\n" in format_source(START_LINE)
+    mission = tmp_path / "m.mission"
+    mission.write_text(START_LINE)
+    for args, where in (([], (54.2, -7.5)), (["--start", "54.0,-7.0"], (54.0, -7.0))):
+        out = tmp_path / f"run{len(args)}"
+        assert main(["sim", str(mission), *args, "-o", str(out)]) == 0
+        first = pd.read_parquet(out / "timeseries.parquet").iloc[0]
+        assert (first["lat_deg"], first["lon_deg"]) == pytest.approx(where)
+    mission.write_text(START_LINE.replace("start 54.2, -7.5", "start 95, 7"))
+    assert main(["check", str(mission)]) == 1
+    err = capsys.readouterr().err
+    assert f"{mission}:2:1: error: start: latitude must lie in [-90, 90]" in err
