@@ -170,6 +170,11 @@ class StartDecl(Node):
     span: Span = NO_SPAN
 
 
+class CorrectionDecl(Node):
+    setting: Ident  # on | off
+    span: Span = NO_SPAN
+
+
 class ObjectiveDecl(Node):
     sense: Ident  # maximize | minimize
     target: Ident  # quality | energy
@@ -209,6 +214,7 @@ Declaration = (
     | BatteryDecl
     | HorizonDecl
     | StartDecl
+    | CorrectionDecl
     | ObjectiveDecl
     | SensorDecl
     | VarDecl

@@ -174,6 +174,14 @@ class _Checker:
                         self.error("start: latitude must lie in [-90, 90] and longitude in "
                                    "[-180, 180] degrees", decl.span, "where the glider is put "
                                    "in the water, decimal degrees: e.g. 'start 54.2, 7.0'")
+                case ast.CorrectionDecl(setting):
+                    if setting.text in ("on", "off"):
+                        fields["current_correction"] = setting.text == "on"
+                    else:
+                        self.error(f"current_correction {setting.text}: expected on or off",
+                                   setting.span, "whether the glider heads upstream of its "
+                                   "waypoint for the current it measured (Slocum "
+                                   "u_use_current_correction)")
                 case ast.ObjectiveDecl():
                     fields["objective"] = self.objective(decl)
                 case ast.SensorDecl():

@@ -97,6 +97,9 @@ class _Build:
     def start_decl(self, where, children):
         return ast.StartDecl(children[0], children[1], ast.Span(*where))
 
+    def correction_decl(self, where, children):
+        return ast.CorrectionDecl(_ident(children[0]), ast.Span(*where))
+
     def objective_decl(self, where, children):
         sense, target, floor = children
         return ast.ObjectiveDecl(_ident(sense), _ident(target), floor, ast.Span(*where))

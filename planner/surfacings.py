@@ -55,6 +55,7 @@ class Voyage:
     capture_m: float = 10.0  # a waypoint is reached within this [m]
     loops: bool = False  # after the last waypoint the first (a Slocum goto list), else held
     surfaced: bool = False  # it is at the surface: the first surfacing is the start's
+    corrects: bool = True  # heads upstream for the current (u_use_current_correction)
     heading_rad: float = 0.0  # flown without waypoints
 
 
@@ -153,6 +154,8 @@ def _headings(voyage: Voyage, points: np.ndarray, target: np.ndarray, lat: np.nd
     north = (points[target, 0] - lat) * _M_PER_DEG
     east = (points[target, 1] - lon) * _M_PER_DEG * np.cos(np.radians(lat))
     course = np.arctan2(east, north)
+    if not voyage.corrects:
+        return course
     across = ce * np.cos(course) - cn * np.sin(course)
     return course + np.arcsin(np.clip(-across / speed, -1.0, 1.0))
 
@@ -208,7 +211,7 @@ def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s:
     voyage = Voyage(lat, lon, epoch_s, tuple(route_points_deg(mission)),
                     correction_speed_mps(vehicle), max(interval - surface_s, 1.0), surface_s,
                     currents, capture_m=lists[0].params[0] if lists else WAYPOINT_RADIUS_M,
-                    loops=bool(lists), surfaced=surfaced)
+                    loops=bool(lists), surfaced=surfaced, corrects=mission.current_correction)
     return forecast_surfacings(voyage, count)
 
 

@@ -323,7 +323,7 @@ def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
     lat, lon = start_position(mission, config)
     glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current, water=config.water,
                        correction_speed_mps=correction_speed_mps(vehicle)
-                       if config.current_correction else 0.0)
+                       if config.current_correction and mission.current_correction else 0.0)
     return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s,
                            config.start_epoch_s, config.floor, config.currents)
 

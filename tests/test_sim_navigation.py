@@ -70,3 +70,41 @@ def test_a_glider_with_current_correction_keeps_its_course_once_it_knows_the_cur
 def test_updated_current_adds_the_fix_s_error_over_the_time_since_the_last():
     assert updated_current(0.1, 0.0, 360.0, -720.0, 3600.0) == pytest.approx((0.2, -0.2))
     assert updated_current(0.1, 0.2, 50.0, 50.0, 0.0) == (0.1, 0.2)  # no fix before
+
+
+def test_current_correction_off_in_a_mission_lets_the_current_carry_the_glider(tmp_path):
+    """A transit north in a current toward the east, surfacing every hour: with the
+    correction the glider heads upstream after its first fix; `current_correction off`
+    (u_use_current_correction 0) flies the bearing to the waypoint and is carried east."""
+    import pandas as pd
+
+    from gliderplan.cli.main import main
+    from gliderplan.planner.routing import transit_mission
+
+    text = transit_mission([(39.5, -73.9)], 6 * 3600.0, surface_every_s=3600.0)
+    east_m = {}
+    for setting in ("on", "off"):
+        mission = tmp_path / f"{setting}.mission"
+        mission.write_text(text.replace("mission transit\n",
+                                        f"mission transit\ncurrent_correction {setting}\n"))
+        out = tmp_path / setting
+        assert main(["sim", str(mission), "--start", "39.1,-73.9", "--currents", "0,0.1",
+                     "-o", str(out)]) == 0
+        end = pd.read_parquet(out / "timeseries.parquet").iloc[-1]
+        east_m[setting] = offset_m(39.1, -73.9, end["lat_deg"], end["lon_deg"])[1]
+    assert east_m["on"] < 0.5 * east_m["off"]
+    assert east_m["off"] > 0.5 * 0.1 * 6 * 3600.0  # bearing to the waypoint: carried off
+
+
+def test_import_slocum_translates_current_correction(tmp_path):
+    from pathlib import Path
+
+    from gliderplan.cli.main import main
+
+    nsb3 = Path(__file__).resolve().parents[2] / "shared" / "data" / "slocum-missions" / \
+        "nsb3" / "nsb3.mi"
+    if not nsb3.is_file():
+        pytest.skip("the shared Slocum missions")
+    out = tmp_path / "nsb3.mission"
+    assert main(["import-slocum", str(nsb3), "-o", str(out)]) == 0
+    assert "\ncurrent_correction on\n" in out.read_text()  # nsb3.mi:10 sets it to 1
