@@ -72,8 +72,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "glider flies its in-situ density, ballasted for it as "
                              "forecast does (default: bench's temperatures in uniform water "
                              "of the vehicle's reference density)")
-    parser.add_argument("--floor", metavar="DEPTH_M",
-                        help="a flat sea floor at DEPTH_M metres: the altimeter reads the "
+    parser.add_argument("--floor", metavar="DEPTH_M|FILE.nc",
+                        help="a flat sea floor at DEPTH_M metres, or a bathymetry grid "
+                             "(NetCDF: GEBCO elevation, or a depth): the altimeter reads the "
                              "height above it and the glider stops there (default: none, "
                              "the altimeter out of range; with --ocean LOGS the floor the "
                              "glider's flight logs saw)")

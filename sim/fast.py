@@ -226,9 +226,11 @@ class FastForward:
         return flown
 
     def _flows(self) -> bool:
-        """A current moves the glider or its estimate (sim.navigation): flown by the
-        loop's own ticks, which carry the model of record of the position estimate."""
-        return self.science.currents is not None or self.glider.flows
+        """A current moves the glider or its estimate (sim.navigation), or the floor
+        depends on where it is (sim.bathymetry): flown by the loop's own ticks, which
+        carry the model of record of both."""
+        return self.science.currents is not None or self.glider.flows \
+            or self.science.floor_by_position
 
     # ---- one run ----------------------------------------------------------------------
 

@@ -9,7 +9,7 @@ import math
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -31,6 +31,9 @@ from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
 from gliderplan.sim.ocean import Ocean, SeaFloor
 from gliderplan.sim.science import ScienceComputer, SensorNoise
 from gliderplan.sim.vehicle import Current, GliderSim
+
+if TYPE_CHECKING:
+    from gliderplan.sim.bathymetry import Bathymetry
 
 _COMMAND_F32 = struct.Struct("<4f")
 PROGRESS_TICKS = 50_000  # report progress this often on long runs
@@ -58,7 +61,7 @@ class RunConfig:
     start_lat_deg: float | None = None  # None: 500 m south of the mission's first point
     start_lon_deg: float | None = None
     start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
-    floor: SeaFloor | None = None  # the sea floor (None: none)
+    floor: SeaFloor | Bathymetry | None = None  # the sea floor (None: none)
     # the in-situ density flown through (None: uniform water of the vehicle's reference)
     water: DensityProfile | None = None
 

@@ -225,6 +225,12 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
                        noise=NOISE_PRESETS[noise], start_epoch_s=start, floor=given.floor,
                        water=density, start_lat_deg=lat, start_lon_deg=lon)
+    if getattr(given.floor, "by_position", False):
+        from gliderplan.sim.loop import start_position
+
+        problem = given.floor.start_problem(*start_position(mission, config))
+        if problem is not None:
+            raise UsageError(f"--floor {floor}: {problem}")
     field_notes: list[str] = []
     if currents is not None:
         config, field_notes = with_currents(mission, config, currents, vehicle)

@@ -23,6 +23,7 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,6 +40,9 @@ from gliderplan.sim.currents import CurrentField
 from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean, SeaFloor
 from gliderplan.sim.vehicle import Current, GliderSim
+
+if TYPE_CHECKING:
+    from gliderplan.sim.bathymetry import Bathymetry
 
 # sent every tick: the glider's own flight sensors (not the runtime's readings)
 SENT_ALWAYS_MASK = FLIGHT_SENSORS_MASK & ~RUNTIME_READINGS_MASK
@@ -165,10 +169,13 @@ class ScienceComputer:
     """The sensor array over a simulated glider in a simulated ocean."""
 
     def __init__(self, glider: GliderSim, ocean: Ocean, noise: SensorNoise, seed: int,
-                 tick_s: float, start_epoch_s: float = 0.0, floor: SeaFloor | None = None,
+                 tick_s: float, start_epoch_s: float = 0.0,
+                 floor: SeaFloor | Bathymetry | None = None,
                  currents: CurrentField | None = None) -> None:
         self.glider, self.ocean, self.noise, self.tick_s = glider, ocean, noise, tick_s
         self.floor = floor  # the sea floor (None: none, the altimeter out of range)
+        # a bathymetry grid (sim.bathymetry): the floor under the glider where it is
+        self.floor_by_position = getattr(floor, "by_position", False)
         self.currents = currents  # the current where the glider is (None: the glider's own)
         self._next_current_s = 0.0  # missiontime [s] of the next look-up in `currents`
         self.dry_lookups = 0  # look-ups that found no water (the field's land)
@@ -199,7 +206,9 @@ class ScienceComputer:
         g, noise = self.glider, self.noise
         time_s = self._time_s = tick * self.tick_s
         if self.floor is not None:
-            g.floor_m = floor = self.floor.depth_at(time_s)
+            floor = self.floor.depth_under(g.lat_deg, g.lon_deg) if self.floor_by_position \
+                else self.floor.depth_at(time_s)
+            g.floor_m = floor if floor == floor else math.inf  # NaN: over the grid's land
             altitude = floor - g.depth_m
         else:
             altitude = math.nan

@@ -178,3 +178,38 @@ def test_a_start_line_puts_the_glider_there_and_start_overrides_it(tmp_path, cap
     assert main(["check", str(mission)]) == 1
     err = capsys.readouterr().err
     assert f"{mission}:2:1: error: start: latitude must lie in [-90, 90]" in err
+
+
+def write_bathymetry(path: Path) -> Path:
+    """GEBCO-style elevation over fig2's waters: 60 m deep in the west shoaling to 15 m in
+    the east, land north of 39.3 N."""
+    import xarray as xr
+
+    lat, lon = np.linspace(39.0, 39.4, 41), np.linspace(-74.0, -73.6, 41)
+    elevation = -np.interp(lon, [-74.0, -73.6], [60.0, 15.0])[None, :].repeat(41, 0)
+    elevation[lat > 39.3, :] = 12.0
+    xr.Dataset({"elevation": (("lat", "lon"), elevation)},
+               coords={"lat": lat, "lon": lon}).to_netcdf(path)
+    return path
+
+
+def test_a_bathymetry_grid_is_the_floor_under_the_glider(tmp_path, capsys):
+    floor = str(write_bathymetry(tmp_path / "gebco.nc"))
+    deep, shallow = tmp_path / "deep", tmp_path / "shallow"
+    # fig2 dives to 20 m: over 59 m of water it never reaches the floor, over 15.2 m it does
+    assert main(["sim", str(FIG2), "--start", "39.17,-73.99", "--floor", floor,
+                 "--duration", "1200s", "-o", str(deep)]) == 0
+    assert main(["sim", str(FIG2), "--start", "39.17,-73.605", "--floor", floor,
+                 "--duration", "1200s", "-o", str(shallow)]) == 0
+    summaries = {run.name: json.loads((run / "summary.json").read_text())
+                 for run in (deep, shallow)}
+    assert summaries["deep"]["grounded"] is None and summaries["shallow"]["grounded"]
+    assert "bathymetry" in summaries["deep"]["sea_floor"]
+    capsys.readouterr()
+    assert main(["sim", str(FIG2), "--start", "39.35,-73.8", "--floor", floor,
+                 "-o", str(tmp_path / "land")]) == 2
+    err = capsys.readouterr().err
+    assert "is on land in the bathymetry" in err and not (tmp_path / "land").exists()
+    bad = write_field(tmp_path / "currents.nc")
+    assert main(["sim", str(FIG2), "--floor", str(bad), "-o", str(tmp_path / "b")]) == 1
+    assert "no bathymetry: expected a variable named" in capsys.readouterr().err
