@@ -144,12 +144,11 @@ def with_surfacings(result, mission, args: argparse.Namespace):
     else:
         field = UniformCurrent(0.0, 0.0)
         notes = ["currents: none given (--currents): still water"]
-    notes.append(f"surfacings: spread evenly over the {result.duration_s / 3600:.3g} h, from "
+    notes.append(f"surfacings: when the mission's timeline surfaces, from "
                  f"{start[0]:.5f}, {start[1]:.5f} through the waypoints; ellipses of 90 % "
                  f"from 200 draws of a current straying {CURRENT_SIGMA_MPS:g} m/s, the "
                  "speed through the water and each dive's length")
-    positions = mission_surfacings(mission, vehicle, result.duration_s,
-                                   round(result.surfacings), start, epoch, field)
+    positions = mission_surfacings(mission, vehicle, result.duration_s, start, epoch, field)
     return replace(result, positions=tuple(positions), start_epoch_s=epoch, currents=field,
                    assumptions=result.assumptions + tuple(notes))
 

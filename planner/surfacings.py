@@ -54,7 +54,9 @@ class Voyage:
     dive_sigma_s: float | None = None  # [s] of each dive's length (None: DIVE_SIGMA of it)
     capture_m: float = 10.0  # a waypoint is reached within this [m]
     loops: bool = False  # after the last waypoint the first (a Slocum goto list), else held
-    surfaced: bool = False  # it is at the surface: the first surfacing is the start's
+    # (dive [s], time at the surface [s]) before and at each surfacing, in order (a dive
+    # of 0: it starts at the surface); after them, or without: dive_s and surface_s
+    schedule: tuple[tuple[float, float], ...] = ()
     corrects: bool = True  # heads upstream for the current (u_use_current_correction)
     heading_rad: float = 0.0  # flown without waypoints
 
@@ -103,15 +105,10 @@ def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
     clock = np.zeros(draws)
     out = []
     for i in range(count):
-        if i == 0 and voyage.surfaced:
-            out.append(_surfacing(0.0, lat, lon))
-            lat, lon = _surface_drift(voyage, lat, lon, 0.0, bias_n, bias_e)
-            clock += voyage.surface_s
-            continue
-        sigma = DIVE_SIGMA * voyage.dive_s if voyage.dive_sigma_s is None \
-            else voyage.dive_sigma_s
-        dive = np.maximum(0.2 * voyage.dive_s,
-                          voyage.dive_s + sigma * rng.standard_normal(draws))
+        dive_s, surface_s = voyage.schedule[i] if i < len(voyage.schedule) else \
+            (voyage.dive_s, voyage.surface_s)
+        sigma = DIVE_SIGMA * dive_s if voyage.dive_sigma_s is None else voyage.dive_sigma_s
+        dive = np.maximum(0.2 * dive_s, dive_s + sigma * rng.standard_normal(draws))
         flown = np.zeros(draws)
         while np.any(flown < dive):
             dt = np.minimum(STEP_S, dive - flown)
@@ -125,16 +122,18 @@ def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
                 target = _advance(points, target, lat, lon, voyage)
         clock += dive
         out.append(_surfacing(float(np.mean(clock)), lat, lon))
-        lat, lon = _surface_drift(voyage, lat, lon, float(np.mean(clock)), bias_n, bias_e)
-        clock += voyage.surface_s
+        lat, lon = _surface_drift(voyage, lat, lon, float(np.mean(clock)), surface_s,
+                                  bias_n, bias_e)
+        clock += surface_s
     return out
 
 
 def _surface_drift(voyage: Voyage, lat: np.ndarray, lon: np.ndarray, time_s: float,
-                   bias_n: np.ndarray, bias_e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Where the current carries each draw while it is at the surface."""
+                   surface_s: float, bias_n: np.ndarray, bias_e: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Where the current carries each draw in `surface_s` [s] at the surface."""
     cn, ce = _current(voyage, lat, lon, voyage.epoch_s + time_s)
-    return _move(lat, lon, (cn + bias_n) * voyage.surface_s, (ce + bias_e) * voyage.surface_s)
+    return _move(lat, lon, (cn + bias_n) * surface_s, (ce + bias_e) * surface_s)
 
 
 def _current(voyage: Voyage, lat: np.ndarray, lon: np.ndarray, epoch_s: float
@@ -189,30 +188,57 @@ def _surfacing(time_s: float, lat: np.ndarray, lon: np.ndarray) -> Surfacing:
 
 
 def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s: float,
-                       count: int, start: tuple[float, float] | None, epoch_s: float,
+                       start: tuple[float, float] | None, epoch_s: float,
                        currents: CurrentField) -> list[Surfacing]:
-    """A mission's `count` surfacings over `duration_s` [s], spread evenly over it (the
-    forecast's own count), flown from `start` (lat, lon) [deg] (None: as the sim puts
-    it in the water) through its waypoints at the vehicle's speed, in `currents`; a
-    goto list as the Slocum flies it (sim.pilot.Waypoints: within its radius, looping)."""
-    from gliderplan.sim.loop import RunConfig, correction_speed_mps, route_points_deg
+    """A mission's surfacings over `duration_s` [s], when its timeline enters a surface
+    state (`planner.occupancy`, as the energy forecast walks it), flown from `start`
+    (lat, lon) [deg] (None: as the sim puts it in the water) through its waypoints at
+    its yos' speed (`yo_speed_mps`) in `currents`; a goto list as the Slocum flies it
+    (sim.pilot.Waypoints: within its radius, looping)."""
+    from gliderplan.contract import WAYPOINT_RADIUS_M
+    from gliderplan.planner.occupancy import mission_occupancy
+    from gliderplan.sim.loop import RunConfig, route_points_deg
     from gliderplan.sim.loop import start_position as sim_start
 
-    if count <= 0:
+    kinds = {s.name: s.profiles[0].kind for s in mission.states}
+    schedule: list[tuple[float, float]] = []
+    left_s = 0.0  # when it last left the surface [s]
+    for visit in mission_occupancy(mission, duration_s).trace:
+        if kinds.get(visit.state) != "surface":
+            continue
+        if schedule and visit.entry_s <= left_s:  # one surface state after another
+            schedule[-1] = (schedule[-1][0], schedule[-1][1] + visit.duration_s)
+        else:
+            schedule.append((visit.entry_s - left_s, visit.duration_s))
+        left_s = visit.entry_s + visit.duration_s
+    if not schedule:
         return []
-    from gliderplan.contract import WAYPOINT_RADIUS_M
-
     lat, lon = start if start is not None else sim_start(mission, RunConfig())
-    surface_s = vehicle.surface_s + vehicle.iridium_s
-    # a mission that starts at the surface surfaces there first, then every interval
-    surfaced = mission.states[0].profiles[0].kind == "surface"
-    interval = duration_s / (count if surfaced else count + 1)
     lists = [s.route for s in mission.states if s.route.kind == "goto_list"]
     voyage = Voyage(lat, lon, epoch_s, tuple(route_points_deg(mission)),
-                    correction_speed_mps(vehicle), max(interval - surface_s, 1.0), surface_s,
+                    yo_speed_mps(mission, vehicle), schedule[-1][0], schedule[-1][1],
                     currents, capture_m=lists[0].params[0] if lists else WAYPOINT_RADIUS_M,
-                    loops=bool(lists), surfaced=surfaced, corrects=mission.current_correction)
-    return forecast_surfacings(voyage, count)
+                    loops=bool(lists), schedule=tuple(schedule),
+                    corrects=mission.current_correction)
+    return forecast_surfacings(voyage, len(schedule))
+
+
+def yo_speed_mps(mission: ir.CheckedMission, vehicle: Vehicle) -> float:
+    """[m s-1] the glider's speed through the water averaged over a yo of the first
+    state that yos on a route with constant arguments (its inflections covering no
+    distance: `Vehicle.yo_cycle`), flown on the full stroke as without a plan; else its
+    glide speed at its nominal pitch."""
+    from gliderplan.sim.loop import correction_speed_mps
+
+    for state in mission.states:
+        profile = state.profiles[0]
+        args = profile.constant_args()
+        if state.route.kind != "noheading" and profile.kind in ("yo", "thermotrackyo") \
+                and args is not None:
+            time_s, _, distance_m = vehicle.yo_cycle(args[0], args[1], args[2],
+                                                     vehicle.unplanned_ballast_cc)
+            return float(distance_m / time_s)
+    return correction_speed_mps(vehicle)
 
 
 def ellipse_ring(s: Surfacing, points: int = 36) -> list[tuple[float, float]]:

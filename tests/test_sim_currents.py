@@ -14,6 +14,7 @@ import pytest
 
 from gliderplan.cli.main import main
 from gliderplan.sim.current_files import read_logged_currents, read_netcdf_currents
+from gliderplan.sim.geo import offset_m
 
 REPO = Path(__file__).resolve().parents[1]
 FIG2 = REPO / "examples" / "fig2.mission"  # waypoints near 39.175 N, 73.83 W
@@ -145,6 +146,14 @@ def test_the_imported_nsb3_flies_toward_its_waypoints_from_the_start_and_prints_
     # its goto list's first waypoint is 54 33.5 N, 7 13.0 E: north-east
     assert fixes[-1]["lat"] > fixes[0]["lat"] + 0.04 and fixes[-1]["lon"] > fixes[0]["lon"]
     assert f"{fixes[1]['lat']:9.5f} {fixes[1]['lon']:10.5f}" in err
+    # the forecast's surfacings land where the simulated glider surfaced, in its ellipse
+    assert main(["forecast", str(mission), "--start", "54.2,7.0,2016-06-23T12:00Z",
+                 "--currents", "0.05,0", "--duration", "7h", "--json"]) == 0
+    forecast = json.loads(capsys.readouterr().out)["surfacings"]
+    for fix, surfacing in zip(fixes[1:], forecast[1:], strict=False):
+        north, east = offset_m(surfacing["lat"], surfacing["lon"], fix["lat"], fix["lon"])
+        assert math.hypot(north, east) < min(400.0, surfacing["ellipse_m"][1])
+        assert abs(surfacing["time_s"] - fix["time_s"]) < 900.0
 
 
 START_LINE = """mission m
