@@ -28,8 +28,10 @@ if TYPE_CHECKING:
 
 DEFAULT_DRAWS = 200
 CHI2_2D_90 = -2.0 * math.log(0.1)  # a 2-D normal's squared radius holding 90 %
-STEP_S = 120.0  # [s] a dive is flown in steps this long: the current looked up, the
-# heading set toward the waypoint (a glider covers ~40 m, a capture radius or less)
+# [s] a dive is flown in STEPS_PER_DIVE steps, at least STEP_S and at most MAX_STEP_S
+# long: the current looked up, the heading set toward the waypoint, which is reached
+# within its capture radius or a step's run of it (a glider covers 30-250 m a step)
+STEP_S, MAX_STEP_S, STEPS_PER_DIVE = 120.0, 900.0, 16
 # [m s-1] per component: how far the depth-averaged current strays from the one last
 # measured over a few hours (tidal and inertial currents on a shelf run at 0.05-0.2 m/s)
 CURRENT_SIGMA_MPS = 0.05
@@ -110,8 +112,9 @@ def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
         sigma = DIVE_SIGMA * dive_s if voyage.dive_sigma_s is None else voyage.dive_sigma_s
         dive = np.maximum(0.2 * dive_s, dive_s + sigma * rng.standard_normal(draws))
         flown = np.zeros(draws)
+        step_s = min(max(STEP_S, dive_s / STEPS_PER_DIVE), MAX_STEP_S)
         while np.any(flown < dive):
-            dt = np.minimum(STEP_S, dive - flown)
+            dt = np.minimum(step_s, dive - flown)
             cn, ce = _current(voyage, lat, lon, voyage.epoch_s + float(np.mean(clock + flown)))
             # it steers for the current it knows; the water carries it with the drawn one
             heading = _headings(voyage, points, target, lat, lon, speed, cn, ce)
@@ -119,7 +122,7 @@ def forecast_surfacings(voyage: Voyage, count: int, draws: int = DEFAULT_DRAWS,
                              (speed * np.sin(heading) + ce + bias_e) * dt)
             flown += dt
             if len(points):
-                target = _advance(points, target, lat, lon, voyage)
+                target = _advance(points, target, lat, lon, voyage, speed * step_s)
         clock += dive
         out.append(_surfacing(float(np.mean(clock)), lat, lon))
         lat, lon = _surface_drift(voyage, lat, lon, float(np.mean(clock)), surface_s,
@@ -160,12 +163,13 @@ def _headings(voyage: Voyage, points: np.ndarray, target: np.ndarray, lat: np.nd
 
 
 def _advance(points: np.ndarray, target: np.ndarray, lat: np.ndarray, lon: np.ndarray,
-             voyage: Voyage) -> np.ndarray:
-    """Each draw's waypoint after this step: the next once within the capture radius of
-    it; after the last the first if the list loops, else the last held."""
+             voyage: Voyage, step_m: np.ndarray) -> np.ndarray:
+    """Each draw's waypoint after this step: the next once within the capture radius, or
+    a step's run `step_m` [m], of it (a coarse step passes a small circle by); after the
+    last the first if the list loops, else the last held."""
     north = (points[target, 0] - lat) * _M_PER_DEG
     east = (points[target, 1] - lon) * _M_PER_DEG * np.cos(np.radians(lat))
-    reached = np.hypot(north, east) <= voyage.capture_m
+    reached = np.hypot(north, east) <= np.maximum(voyage.capture_m, step_m)
     after = (target + 1) % len(points) if voyage.loops else np.minimum(target + 1,
                                                                        len(points) - 1)
     return np.where(reached, after, target)
