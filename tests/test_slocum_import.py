@@ -769,3 +769,10 @@ def test_a_mission_with_no_behavior_says_it_only_waits_at_the_surface(tmp_path, 
     text, err = _import(tmp_path, capsys, "# an empty file\n")
     assert "m.mi:1: warning: no behavior" in err
     assert "only waits at the surface" in text
+
+
+def test_import_slocum_help_prints(capsys):
+    """Its --battery default holds a '%' that argparse read as a format (a traceback)."""
+    with pytest.raises(SystemExit) as done:
+        main(["import-slocum", "--help"])
+    assert done.value.code == 0 and "reserve 15 %" in capsys.readouterr().out
