@@ -167,6 +167,21 @@ class _Checker:
                                        decl.duration.span, "the time the mission is planned "
                                        "and simulated for, e.g. 'horizon 30 d'")
                         fields["horizon_s"] = horizon[0]
+                case ast.StartDecl(lat, lon):
+                    if -90.0 <= lat.value <= 90.0 and -180.0 <= lon.value <= 180.0:
+                        fields["start_deg"] = (lat.value, lon.value)
+                    else:
+                        self.error("start: latitude must lie in [-90, 90] and longitude in "
+                                   "[-180, 180] degrees", decl.span, "where the glider is put "
+                                   "in the water, decimal degrees: e.g. 'start 54.2, 7.0'")
+                case ast.CorrectionDecl(setting):
+                    if setting.text in ("on", "off"):
+                        fields["current_correction"] = setting.text == "on"
+                    else:
+                        self.error(f"current_correction {setting.text}: expected on or off",
+                                   setting.span, "whether the glider heads upstream of its "
+                                   "waypoint for the current it measured (Slocum "
+                                   "u_use_current_correction)")
                 case ast.ObjectiveDecl():
                     fields["objective"] = self.objective(decl)
                 case ast.SensorDecl():

@@ -351,6 +351,8 @@ class CheckedMission:
     computer: Computer = DEFAULT_COMPUTER
     battery: Battery = DEFAULT_BATTERY
     horizon_s: float | None = None
+    start_deg: tuple[float, float] | None = None  # (lat, lon): where it is put in the water
+    current_correction: bool = True  # heads upstream for the current it measured
     objective: Objective = field(default_factory=Objective)
     sensor_preferences: tuple[SensorPreference, ...] = ()
     stack_depth: int = DEFAULT_STACK_DEPTH
@@ -384,6 +386,11 @@ class CheckedMission:
         """SHA-256 (hex) of the canonical JSON, excluding `defaults_used` (not semantic)."""
         data = _encode(self)
         data.pop("defaults_used")
+        # missions without a start or with the default correction keep the hash they had
+        if data.get("start_deg") is None:
+            data.pop("start_deg", None)
+        if data.get("current_correction", True):
+            data.pop("current_correction", None)
         for name, text in data.pop("files_as_written", ()):  # where it was checked from
             if name == "computer":                               # does not change it
                 data["computer"]["board"] = text

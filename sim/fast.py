@@ -207,7 +207,7 @@ class FastForward:
         machine = ex.machine
         if machine is None or machine.state is None or tick < self._resume[ex.state_i] \
                 or self._reads_energy \
-                or ex.profile_k < 0 or not self._ocean \
+                or ex.profile_k < 0 or not self._ocean or self._flows() \
                 or not self._covered[ex.state_i][ex.profile_k] \
                 or not isinstance(ex.route, _ROUTES):
             return 0
@@ -224,6 +224,13 @@ class FastForward:
             min(MAX_BACKOFF_TICKS, 2 * self._backoff[i] + 1)
         self._resume[i] = tick + flown + self._backoff[i]
         return flown
+
+    def _flows(self) -> bool:
+        """A current moves the glider or its estimate (sim.navigation), or the floor
+        depends on where it is (sim.bathymetry): flown by the loop's own ticks, which
+        carry the model of record of both."""
+        return self.science.currents is not None or self.glider.flows \
+            or self.science.floor_by_position
 
     # ---- one run ----------------------------------------------------------------------
 
@@ -724,7 +731,7 @@ class FastForward:
         distance = flight.distance_m[:count]
         fix = flight.fix_at if flight.fix_at < count else -1
         if isinstance(route, pilot.NoHeading):
-            positions = g.drift_along(distance, np.full(count, g.heading_rad), fix)
+            positions = g.drift_along(distance, np.full(count, g.heading_rad))
             return _Route(count, None, *positions)
         c = g.current
         flown, heading, positions = native.route(
