@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gliderplan.contract import Component
+from gliderplan.contract import Component, Envelope, EnvelopeAction
 from gliderplan.contract.units import UNITS
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
@@ -104,8 +104,33 @@ class Vehicle:
     hotel_includes: tuple[str, ...] = ()  # devices ("ctd", "computer", ...) in the hotel load
     devices: tuple[Device, ...] = ()  # devices with figures of their own (the file's [devices])
     base_drift_w: float = 0.0  # sd [W] of the hotel load between deployments (another year)
+    # the file's [envelope]: the rating every command is held to (None: `envelope` derives it)
+    max_depth_m: float | None = None
+    max_pitch_rad: float | None = None
+    min_yo_band_m: float | None = None
+    envelope_action: EnvelopeAction = EnvelopeAction.SURFACE
     uncertainty: Uncertainty | None = field(default=None, compare=False)
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
+
+    @property
+    def envelope(self) -> Envelope:
+        """The rating the runtime holds every command to (docs/pilot.md, The envelope).
+        What the file's [envelope] leaves out comes from the vehicle's own figures: a
+        depth rating twice its nominal yo's bottom (the G3's 100 m yo of its 200 m), a
+        pitch twice its nominal (within a right angle), a band no thinner than its
+        nominal yo's top; inflections no closer than its pump's full stroke (from one
+        side of neutral to the other)."""
+        pitch = self.max_pitch_rad
+        if pitch is None:
+            pitch = min(2.0 * self.nominal_pitch_rad, FIGURES["nominal_pitch"][2]["maximum"])
+        return Envelope(
+            max_depth_m=2.0 * self.nominal_max_depth_m if self.max_depth_m is None
+            else self.max_depth_m,
+            max_pitch_rad=pitch,
+            min_yo_band_m=self.nominal_min_depth_m if self.min_yo_band_m is None
+            else self.min_yo_band_m,
+            min_inflection_s=float(self.pump_time_s(2.0 * self.max_ballast_cc)),
+            action=self.envelope_action)
 
     def device(self, name: str) -> Device | None:
         """The device table's entry for `name`, or None."""
@@ -486,6 +511,7 @@ def read_vehicle_file(path: Path) -> Vehicle:
     params = FlightParams(**{a: v for a, v in values.items() if a in flight_attrs})
     devices = _devices(top, spreads, bounds)
     vehicle = Vehicle(
+        **_envelope(top, values),
         name=top.text("name"),
         description=top.text("description", ""),
         flight=params,
@@ -498,6 +524,34 @@ def read_vehicle_file(path: Path) -> Vehicle:
     )
     top.finish()
     return vehicle
+
+
+def _envelope(top: Table, values: dict[str, float]) -> dict:
+    """The optional `[envelope]` table: `max_depth`, `max_pitch`, `min_yo_band` (each a
+    figure with its source) and `action` (fault | surface | clamp), as Vehicle's fields;
+    a figure left out is derived (`Vehicle.envelope`)."""
+    if not top.has("envelope"):
+        return {}
+    table = top.table("envelope")
+    fields: dict = {}
+    for key, attr, dimension, options in (
+            ("max_depth", "max_depth_m", "length", {"positive": True}),
+            ("max_pitch", "max_pitch_rad", "angle",
+             {"positive": True, "maximum": FIGURES["nominal_pitch"][2]["maximum"]}),
+            ("min_yo_band", "min_yo_band_m", "length", {})):
+        if table.has(key):
+            fields[attr] = table.quantity(key, dimension, **options)
+    action = table.text("action", "surface")
+    if action.upper() not in EnvelopeAction.__members__:
+        raise table.error("action", f"expected fault, surface or clamp, got {action!r}")
+    fields["envelope_action"] = EnvelopeAction[action.upper()]
+    table.finish()
+    depth = fields.get("max_depth_m")
+    if depth is not None and depth <= values["nominal_max_depth_m"]:
+        raise table.error("max_depth", "must be deeper than the vehicle's nominal_max_depth")
+    if depth is not None and fields.get("min_yo_band_m", 0.0) >= depth:
+        raise table.error("min_yo_band", "must be thinner than max_depth")
+    return fields
 
 
 def _devices(top: Table, spreads: dict[str, float], bounds: set[str]) -> tuple[Device, ...]:

@@ -295,6 +295,12 @@ class CRuntime:
             raise EmulatorError("it opened no serial line")
         return line
 
+    def envelope_notes(self) -> list[str]:
+        """What the runtime's envelope guard said it did (its stderr's `envelope:` lines),
+        once it has ended."""
+        return [line.split(": ", 1)[1] for line in self.stderr_text().splitlines()
+                if ": envelope: " in line]
+
     def stderr_text(self) -> str:
         """What the runtime said on stderr, once it has ended."""
         if self._stderr is None and self.process.poll() is not None:

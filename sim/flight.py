@@ -50,7 +50,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
         # without a plan: the same buoyancy volume the compiler gives the C runtime
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
-                                 vehicle.max_ballast_cc)
+                                 vehicle.max_ballast_cc, vehicle.envelope)
         hook = None
         if shore is not None:
             from gliderplan.sim.replanning import PythonVehicle
@@ -67,6 +67,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
             record = simulate(mission, executor, science, config, progress,
                               FastForward(mission, executor, science), gauge, hook)
         record.entry_variables = executor.entry_variables
+        record.envelope = executor.envelope_notes
         record.events_fired = executor.event_count
         return record
     if runtime != "c":
@@ -78,7 +79,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
     limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
-                          board.clocks_mhz)  # the vehicle flown: a scenario's may differ
+                          board.clocks_mhz, envelope=vehicle.envelope)  # a scenario's vehicle
     schedule = None
     if faults is not None:
         from gliderplan.sim.faults import FaultSchedule
@@ -95,6 +96,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended
+    record.envelope = c_runtime.envelope_notes()
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
     return record
@@ -114,7 +116,8 @@ def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  #
     from gliderplan.planner.planfile import plan_board_limits, read_plan_bytes
 
     board = plan_board_limits(mission, plan).clocks_mhz if plan is not None else (0.0,)
-    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board)
+    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board,
+                          envelope=vehicle.envelope)
     return lambda data: read_plan_bytes(data, mission, "", limits)
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -77,7 +77,7 @@ class RunRecord:
     columns: dict[str, np.ndarray]
     state_names: tuple[str, ...]
     tick_s: float
-    ended: str  # "exit", "reserve", "duration", "interrupted" or "fault: ..."
+    ended: str  # "exit", "reserve", "envelope", "duration", "interrupted" or "fault: ..."
     surfacings: int
     faults: dict | None = None  # with injected faults: what they did (CRuntime.report)
     events_log: str | None = None  # with faults: the C runtime's own event log
@@ -89,6 +89,13 @@ class RunRecord:
     events_fired: int | None = None
     grounded_ticks: int = 0  # ticks the glider ended at the sea floor
     first_grounded_s: float = math.nan  # missiontime [s] of the first of them
+    # what the envelope guard did, as the runtime said it ("envelope: missiontime ...")
+    envelope: list[str] = field(default_factory=list)
+
+    @property
+    def envelope_acted(self) -> bool:
+        """Whether the envelope guard held a command or ended the run on one."""
+        return bool(self.envelope) or self.ended == "envelope"
 
     def visits(self) -> dict[str, int]:
         """Stays in each state flown: every transition into it (the start, a goto, a call,
@@ -267,7 +274,8 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
             profile_c.append(cmd.profile)
             power_c.append(cmd.sensor_power)
             if cmd.state == NO_STATE:
-                ended = "reserve" if cmd.transition == TransitionKind.RESERVE else "exit"
+                ended = {TransitionKind.RESERVE: "reserve",
+                         TransitionKind.ENVELOPE: "envelope"}.get(cmd.transition, "exit")
                 phase_c.append(glider.phase)
                 out_c.append(0.0)
                 in_c.append(0.0)

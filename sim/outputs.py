@@ -136,6 +136,7 @@ def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan
         "simulated_s": float(record.columns["time_s"][-1]) if len(record.columns["time_s"])
         else 0.0,
         "transitions": len(record.trace),
+        "envelope": record.envelope,
         "surfacings": record.surfacings,
         "computer_suspends": record.suspends,
         "energy_j": energy.total_j,

@@ -525,7 +525,7 @@ long gp_read_file(const char *path, void *buf, size_t cap)
 const char *gp_transition_name(uint8_t kind)
 {
     static const char *const names[] = {"none",   "start", "goto",   "call",
-                                        "return", "exit",  "reserve"};
+                                        "return", "exit",  "reserve", "envelope"};
     return kind < sizeof names / sizeof names[0] ? names[kind] : "?";
 }
 
