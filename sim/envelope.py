@@ -16,7 +16,7 @@ _F32 = struct.Struct("<f")
 LIMIT_NAMES = {EnvelopeLimit.DEPTH: "depth", EnvelopeLimit.PITCH: "pitch",
                EnvelopeLimit.BALLAST: "pumped volume", EnvelopeLimit.BAND: "yo band",
                EnvelopeLimit.INFLECTION: "time between inflections"}
-UNITS = {EnvelopeLimit.DEPTH: "m", EnvelopeLimit.PITCH: "rad", EnvelopeLimit.BALLAST: "cc",
+LIMIT_UNITS = {EnvelopeLimit.DEPTH: "m", EnvelopeLimit.PITCH: "rad", EnvelopeLimit.BALLAST: "cc",
          EnvelopeLimit.BAND: "m", EnvelopeLimit.INFLECTION: "s"}
 
 
@@ -38,7 +38,7 @@ class Breach:
 
     def text(self) -> str:
         """`depth 3000 m beyond the vehicle's 100 m`, as the runtime says it."""
-        unit = UNITS[self.limit]
+        unit = LIMIT_UNITS[self.limit]
         return (f"{LIMIT_NAMES[self.limit]} {self.value:g} {unit} beyond the vehicle's "
                 f"{self.bound:g} {unit}")
 
