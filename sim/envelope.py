@@ -82,7 +82,8 @@ class EnvelopeGuard:
             self.turned = False
         elif yo_band is not None and climbing != self.climbing:  # the yo turned
             since = time_s - self.last_turn_s
-            if self.turned and not since >= env.min_inflection_s and found is None:
+            # thrashing ends the flight even where a held value let it go on
+            if self.turned and not since >= env.min_inflection_s and not self.ends(found):
                 found = Breach(EnvelopeLimit.INFLECTION, since, env.min_inflection_s)
             self.turned = True
             self.last_turn_s = time_s

@@ -70,7 +70,9 @@ gp_envelope_breach gp_envelope_hold(const gp_envelope *envelope, double max_ball
         memory->turned = 0;
     } else if (yo_band && climbing != memory->climbing) {  /* the yo turned */
         double since = time_s - memory->last_turn_s;
-        if (memory->turned && !(since >= envelope->min_inflection_s) && !found.limit) {
+        /* thrashing ends the flight even where a held value let it go on */
+        if (memory->turned && !(since >= envelope->min_inflection_s)
+            && !gp_envelope_ends(envelope, &found)) {
             found = breach(GP_LIMIT_INFLECTION, since, envelope->min_inflection_s);
         }
         memory->turned = 1;
