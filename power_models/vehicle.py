@@ -34,6 +34,7 @@ from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
 from gliderplan.power_models.flight import DensityProfile, FlightModelError, FlightParams
+from gliderplan.power_models.vehicle_figures import FIGURES, derive_envelope, envelope_fields
 
 Array = np.ndarray
 
@@ -114,23 +115,11 @@ class Vehicle:
 
     @property
     def envelope(self) -> Envelope:
-        """The rating the runtime holds every command to (docs/pilot.md, The envelope).
-        What the file's [envelope] leaves out comes from the vehicle's own figures: a
-        depth rating twice its nominal yo's bottom (the G3's 100 m yo of its 200 m), a
-        pitch twice its nominal (within a right angle), a band no thinner than its
-        nominal yo's top; inflections no closer than its pump's full stroke (from one
-        side of neutral to the other)."""
-        pitch = self.max_pitch_rad
-        if pitch is None:
-            pitch = min(2.0 * self.nominal_pitch_rad, FIGURES["nominal_pitch"][2]["maximum"])
-        return Envelope(
-            max_depth_m=2.0 * self.nominal_max_depth_m if self.max_depth_m is None
-            else self.max_depth_m,
-            max_pitch_rad=pitch,
-            min_yo_band_m=self.nominal_min_depth_m if self.min_yo_band_m is None
-            else self.min_yo_band_m,
-            min_inflection_s=float(self.pump_time_s(2.0 * self.max_ballast_cc)),
-            action=self.envelope_action)
+        """The rating the runtime holds every command to (`derive_envelope`)."""
+        return derive_envelope(self.nominal_max_depth_m, self.nominal_pitch_rad,
+                               self.nominal_min_depth_m, self.max_ballast_cc, self.pump_rate_cc_s,
+                               self.max_depth_m, self.max_pitch_rad, self.min_yo_band_m,
+                               self.envelope_action)
 
     def device(self, name: str) -> Device | None:
         """The device table's entry for `name`, or None."""
@@ -374,44 +363,6 @@ def load_vehicle(spec: str) -> Vehicle:
     return vehicle
 
 
-# file key -> (attribute, dimension, options); a flight key is "flight.<key>". Every figure
-# calibration may fit or draw is here, so that loading, writing and drawing agree.
-FIGURES: dict[str, tuple[str, str, dict]] = {
-    "hotel_power": ("hotel_w", "power", {}),
-    "pump_out_energy_per_volume": ("pump_out_j_per_cc", "pump_per_volume", {}),
-    "pump_out_energy_per_volume_depth": ("pump_out_j_per_cc_m", "pump_per_volume_depth", {}),
-    "pump_in_energy_per_volume": ("pump_in_j_per_cc", "pump_per_volume", {}),
-    "pump_in_energy_per_volume_depth": (
-        "pump_in_j_per_cc_m", "pump_per_volume_depth", {"default": 0.0, "minimum": -np.inf}
-    ),
-    "pump_rate": ("pump_rate_cc_s", "flow", {"positive": True}),
-    "max_ballast": ("max_ballast_cc", "volume", {"positive": True}),
-    "pitch_energy": ("pitch_energy_j", "energy", {}),
-    "surface_power": ("surface_w", "power", {}),
-    "surface_time": ("surface_s", "time", {}),
-    "iridium_power": ("iridium_w", "power", {}),
-    "iridium_time": ("iridium_s", "time", {}),
-    "surfacing_energy": ("surfacing_fixed_j", "energy", {}),
-    "top_turn_time": ("top_turn_s", "time", {"default": 0.0}),
-    "bottom_turn_time": ("bottom_turn_s", "time", {"default": 0.0}),
-    "dive_pitch_error": ("dive_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
-    "climb_pitch_error": ("climb_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
-    "nominal_pitch": (
-        "nominal_pitch_rad", "angle", {"positive": True, "maximum": np.pi / 2 * 0.999}
-    ),
-    "nominal_min_depth": ("nominal_min_depth_m", "length", {}),
-    "nominal_max_depth": ("nominal_max_depth_m", "length", {"positive": True}),
-    "flight.water_density": ("rho_kg_m3", "density", {"positive": True}),
-    "flight.gravity": ("g_m_s2", "acceleration", {"positive": True}),
-    "flight.wing_area": ("wing_area_m2", "area", {"positive": True}),
-    "flight.lift_slope_wing": ("lift_wing_per_rad", "per_angle", {"positive": True}),
-    "flight.lift_slope_hull": ("lift_hull_per_rad", "per_angle", {}),
-    "flight.drag_cd0": ("drag_cd0", "dimensionless", {"positive": True}),
-    "flight.drag_cd1": ("drag_cd1_per_rad2", "dimensionless", {}),
-    "flight.hull_volume": ("hull_volume_cc", "volume", {"default": 0.0}),
-    "flight.trim_volume": ("trim_cc", "volume", {"default": 0.0, "minimum": -np.inf}),
-    "flight.compressibility": ("compressibility_per_pa", "compressibility", {"default": 0.0}),
-}
 
 
 @contextmanager
@@ -511,7 +462,7 @@ def read_vehicle_file(path: Path) -> Vehicle:
     params = FlightParams(**{a: v for a, v in values.items() if a in flight_attrs})
     devices = _devices(top, spreads, bounds)
     vehicle = Vehicle(
-        **_envelope(top, values),
+        **envelope_fields(top, values["nominal_max_depth_m"]),
         name=top.text("name"),
         description=top.text("description", ""),
         flight=params,
@@ -524,34 +475,6 @@ def read_vehicle_file(path: Path) -> Vehicle:
     )
     top.finish()
     return vehicle
-
-
-def _envelope(top: Table, values: dict[str, float]) -> dict:
-    """The optional `[envelope]` table: `max_depth`, `max_pitch`, `min_yo_band` (each a
-    figure with its source) and `action` (fault | surface | clamp), as Vehicle's fields;
-    a figure left out is derived (`Vehicle.envelope`)."""
-    if not top.has("envelope"):
-        return {}
-    table = top.table("envelope")
-    fields: dict = {}
-    for key, attr, dimension, options in (
-            ("max_depth", "max_depth_m", "length", {"positive": True}),
-            ("max_pitch", "max_pitch_rad", "angle",
-             {"positive": True, "maximum": FIGURES["nominal_pitch"][2]["maximum"]}),
-            ("min_yo_band", "min_yo_band_m", "length", {})):
-        if table.has(key):
-            fields[attr] = table.quantity(key, dimension, **options)
-    action = table.text("action", "surface")
-    if action.upper() not in EnvelopeAction.__members__:
-        raise table.error("action", f"expected fault, surface or clamp, got {action!r}")
-    fields["envelope_action"] = EnvelopeAction[action.upper()]
-    table.finish()
-    depth = fields.get("max_depth_m")
-    if depth is not None and depth <= values["nominal_max_depth_m"]:
-        raise table.error("max_depth", "must be deeper than the vehicle's nominal_max_depth")
-    if depth is not None and fields.get("min_yo_band_m", 0.0) >= depth:
-        raise table.error("min_yo_band", "must be thinner than max_depth")
-    return fields
 
 
 def _devices(top: Table, spreads: dict[str, float], bounds: set[str]) -> tuple[Device, ...]:

@@ -108,3 +108,35 @@ def test_a_bad_envelope_table_is_refused_with_its_key(tmp_path, capsys, text, pr
     assert main(["sim", str(mission), "-o", str(tmp_path / "out")]) == ExitCode.BAD_INPUT
     err = capsys.readouterr().err
     assert "envelope" in err and problem in err
+
+
+@pytest.mark.parametrize(("profile", "where", "message"), [
+    ("yo(5, 1500, .454, .454)", "7:23", "max depth 1500 m is beyond the vehicle's rated 100 m"),
+    ("yo(5, 20, .454, 1.2)", "7:33", "climb pitch 1.2 rad is beyond the vehicle's 0.908 rad"),
+    ("yo(5, 6, .454, .454)", "7:17", "yo band 1 m is thinner than the vehicle's 3 m"),
+    ("hover(250)", "7:23", "depth 250 m is beyond the vehicle's rated 100 m"),
+])
+def test_check_refuses_a_profile_it_can_prove_out_of_range_with_its_place(
+        tmp_path, capsys, profile, where, message):
+    mission = tmp_path / "m.mission"
+    mission.write_text(f"""mission m
+vehicle slocum_g2_shallow
+
+state s1
+begin
+  flightroute noheading
+  flightprofile {profile}
+  sensors missiontime, depth
+  events
+    case missiontime >= 100 exit
+end
+""")
+    assert main(["check", str(mission)]) == ExitCode.BAD_INPUT
+    err = capsys.readouterr().err
+    assert f"m.mission:{where}: error: {message}" in err
+    assert "the rating of vehicle slocum_g2_shallow (its file's [envelope])" in err
+
+
+def test_check_passes_the_shipped_examples_within_their_vehicles_ratings(capsys):
+    missions = sorted(str(p) for p in (ROOT / "examples").glob("*.mission"))
+    assert main(["check", *missions]) == ExitCode.OK
