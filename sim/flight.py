@@ -7,7 +7,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import TRANSITION_NAMES
 from gliderplan.language import ir
+from gliderplan.language.semantics import Transition
 from gliderplan.power_models.vehicle import Vehicle, yo_flight_problem
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
@@ -99,6 +101,8 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     record.envelope = c_runtime.envelope_notes()
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
+        if record.events_log is not None:  # the transitions made, lost COMMANDs or not
+            record.trace = logged_trace(record.events_log, record.flown_s)
     return record
 
 
@@ -119,6 +123,18 @@ def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  #
     limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board,
                           envelope=vehicle.envelope)
     return lambda data: read_plan_bytes(data, mission, "", limits)
+
+
+def logged_trace(events_log: str, flown_s: float) -> list[Transition]:
+    """The transitions of a runtime's event log (docs/reliability.md) made before
+    `flown_s` [s], as trace rows; its fault and clamp records are no transitions."""
+    trace = []
+    for line in events_log.splitlines():
+        time_s, kind, from_state, to_state, depth = line.split()
+        if kind in TRANSITION_NAMES.values() and float(time_s) < flown_s:
+            trace.append(Transition(float(time_s), kind, from_state.strip("-"),
+                                    to_state.strip("-"), int(depth)))
+    return trace
 
 
 def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,

@@ -93,6 +93,11 @@ class RunRecord:
     envelope: list[str] = field(default_factory=list)
 
     @property
+    def flown_s(self) -> float:
+        """[s] mission time up to which the run flew: its ticks' end, less half a tick."""
+        return len(self.columns["time_s"]) * self.tick_s - self.tick_s / 2
+
+    @property
     def envelope_acted(self) -> bool:
         """Whether the envelope guard held a command or ended the run on one."""
         return bool(self.envelope) or self.ended == "envelope"
@@ -295,11 +300,12 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
         ended = "interrupted"
     arrays = columns.arrays()
     n = len(arrays["state"])
-    trace = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
-    return RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
-                     tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0),
-                     grounded_ticks=science.grounded_ticks,
-                     first_grounded_s=science.first_grounded_s)
+    record = RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
+                       tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0),
+                       grounded_ticks=science.grounded_ticks,
+                       first_grounded_s=science.first_grounded_s)
+    record.trace = [t for t in trace if t.time_s < record.flown_s]
+    return record
 
 
 def _close_row(cols: dict[str, list], state: int) -> None:

@@ -107,7 +107,7 @@ def test_recoverable_line_faults_leave_the_flight_and_the_log_as_without_them(
     detected = report["detected"]
     assert detected["damaged_at_science_computer"] > 0 and detected["damaged_at_runtime"] > 0
     assert report["recovered"] > 0
-    assert report["lost_ticks"] == report["releases"] == 0
+    assert report["lost_exchanges"] == report["releases"] == 0
     assert report["layered_control_s"] == 0
 
 
