@@ -19,7 +19,7 @@ from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import FlightLimits
+from gliderplan.contract import ExitCode, FlightLimits
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
@@ -28,9 +28,11 @@ if TYPE_CHECKING:
     import serial
 
     from gliderplan.runtime.protocol import Command
-    from gliderplan.sim.faults import FaultSchedule
+    from gliderplan.sim.faults import FaultSchedule, FaultyLine
 
 HELLO_TIMEOUT_S = 10.0
+# under line faults: a HELLO is a long frame, and a heavily noisy line damages most of them
+FAULT_HELLO_TIMEOUT_S = 60.0
 EXIT_TIMEOUT_S = 5.0
 FAULT_WATCHDOG_S = 2.0  # [s] the runtime's link timeout under faults (10 times the re-send)
 # exchanges of one tick (each of the link's retransmission budget) before the link is
@@ -42,6 +44,12 @@ LINK_COUNTS = ("dropped", "naks", "resends", "recovered", "resyncs")  # a Link's
 
 class EmulatorError(GliderplanError):
     """The C runtime could not be built or started, or broke the link."""
+
+
+class LinkFailure(EmulatorError):
+    """Under line faults, the runtime's HELLO never came through: the link has failed."""
+
+    exit_code = ExitCode.LINK_FAILED
 
 
 class CRuntime:
@@ -64,7 +72,9 @@ class CRuntime:
         self.faults = faults
         self.exited = False
         self.port: serial.Serial | None = None
+        self.line: FaultyLine | None = None
         self.process: subprocess.Popen | None = None
+        self._closed = False
         self._stderr: str | None = None
         self._last: Command | None = None  # the last COMMAND flown: layered control's
         self._cut = False  # the line is cut (a disconnect)
@@ -115,11 +125,14 @@ class CRuntime:
             port = FdPort(self.port.fileno())
             self.line = None if self.faults is None else FaultyLine(port, self.faults)
             self.link = Link(port if self.line is None else self.line)
-            hello = self.link.wait_hello(HELLO_TIMEOUT_S)
+            hello = self.link.wait_hello(HELLO_TIMEOUT_S if self.line is None
+                                         else FAULT_HELLO_TIMEOUT_S)
         except (EmulatorError, LinkError, serial.SerialException) as err:
             self.close()
-            raise EmulatorError(f"the runtime did not say HELLO ({err}): "
-                                f"{self.stderr_text()}") from None
+            failed = LinkFailure if self.line is not None and isinstance(err, LinkError) \
+                else EmulatorError
+            raise failed(f"the runtime did not say HELLO ({err}): "
+                         f"{self.stderr_text()}") from None
         if hello.mission_hash.hex() != self._mission.hash:
             self.close()
             raise EmulatorError("the runtime was compiled for another mission (hash differs)")
@@ -284,7 +297,10 @@ class CRuntime:
         self.process.wait()
         self._retire()
         began = time.monotonic()
-        self._start()
+        try:
+            self._start()
+        except LinkFailure as err:
+            raise MissionFault(f"tick {tick}: link failure: {err}") from None
         self._counts["restarts"] += 1
         self._downtime_s += time.monotonic() - began
 
@@ -346,7 +362,10 @@ class CRuntime:
         """Let an exited runtime finish (RELEASE, exit 0); stop one that is still flying.
         Our end of the line closes first: the runtime waits for that before it closes its
         own, which would discard what we had not read. With faults, the runtime's event
-        log is kept (`events_log`)."""
+        log is kept (`events_log`). Once: a failed restart has closed it already."""
+        if self._closed:
+            return
+        self._closed = True
         if self.port is not None:
             self.port.close()
         try:
