@@ -180,6 +180,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"    {cause}", file=sys.stderr)
     for note in record.envelope:
         print(f"  {note}", file=sys.stderr)
+    if record.faults is not None and record.faults["kills"] < record.faults["kills_asked"]:
+        print(f"  kill={record.faults['kills_asked']}: {record.faults['kills']} delivered; the "
+              "run ended before the others fell due (drawn over the mission's timeline; "
+              "kill=N@T draws them over T)", file=sys.stderr)
     if result.interrupted:
         print(f"  interrupted: the outputs in {args.output} cover the part flown",
               file=sys.stderr)

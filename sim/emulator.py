@@ -335,6 +335,7 @@ class CRuntime:
             "releases": count["releases"],
             "layered_control_s": count["layered_ticks"] * self.faults.tick_s,
             "kills": count["restarts"],
+            "kills_asked": self.faults.spec.kills,
             "restart_downtime_s": round(self._downtime_s, 3),
         }
 

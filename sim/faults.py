@@ -13,8 +13,9 @@ SPEC is a comma-separated list of `name=value`:
                     with the first read or write on the line once it is due
   disconnect=T@AT   the line is cut for T of mission time from mission time AT (repeatable)
   kill=N[@T]        the runtime is killed (SIGKILL) N times at random moments of the run's
-                    first T of mission time (default: the whole run, --duration) and
-                    restarted from its checkpoint
+                    first T of mission time (default: the whole run: up to the mission's
+                    end on its timeline, or --duration if sooner) and restarted from its
+                    checkpoint; a run that ends sooner says how many it delivered
 
 Frame faults hit both directions alike; every draw comes from one generator seeded from
 the run's seed, so a faulted run is as deterministic as the line's timing allows (a

@@ -84,9 +84,12 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                           board.clocks_mhz, envelope=vehicle.envelope)  # a scenario's vehicle
     schedule = None
     if faults is not None:
+        from gliderplan.planner.occupancy import mission_occupancy
         from gliderplan.sim.faults import FaultSchedule
 
-        schedule = FaultSchedule(faults, config.seed, int(config.duration_s / config.tick_s),
+        # kills fall within the run: up to the mission's end on its timeline, if sooner
+        span_s = min(config.duration_s, mission_occupancy(mission, config.duration_s).total_s)
+        schedule = FaultSchedule(faults, config.seed, int(span_s / config.tick_s),
                                  config.tick_s)
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)

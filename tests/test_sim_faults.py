@@ -218,3 +218,31 @@ def test_heavy_line_noise_flies_the_fault_free_flight_or_fails_the_link_cleanly(
             assert "link failure" in ended, (seed, ended)
             assert trace_rows(run) == trace_rows(clean)[:len(trace_rows(run))], seed
         assert faults(run)["injected"]["drop"] > 0
+
+
+@pytest.mark.parametrize(("asked", "delivered"), [(3, 3), (10, 5)])
+def test_kills_fall_within_the_run_or_the_sim_says_how_many_it_could(tmp_path, capsys, asked,
+                                                                     delivered):
+    """The 20 s mission's five ticks after its first hold at most five kills; drawn over
+    its timeline, not the hour of its horizon, every one that fits is delivered."""
+    run = tmp_path / "killed"
+    assert main(["sim", str(SHORT), "--runtime", "c", "--seed", "1", "--faults",
+                 f"kill={asked}", "-o", str(run)]) == 0
+    assert (faults(run)["kills"], faults(run)["kills_asked"]) == (delivered, asked)
+    said = capsys.readouterr().err
+    assert (f"kill={asked}: {delivered} delivered" in said) == (delivered < asked)
+    assert log_as_trace(run) == trace_rows(run)
+
+
+def test_writing_to_a_line_whose_runtime_has_gone_is_a_link_error_not_a_crash():
+    import os
+
+    from gliderplan.runtime.protocol import FdPort, LinkClosedError
+
+    runtime_end, our_end = os.openpty()
+    os.close(runtime_end)  # the runtime ended: its side of the pty is gone
+    try:
+        with pytest.raises(LinkClosedError, match="the line is closed"):
+            FdPort(our_end).write(b"\x02\x02\x00")
+    finally:
+        os.close(our_end)
