@@ -415,6 +415,7 @@ class _Checker:
             expect_s=expect,
             requirements=tuple(reqs),
             computer=computer,
+            profile_line=items[ast.ProfileItem].span.line,
         )
 
     def registered(self, ident: ast.Ident, table: Mapping[str, T], kind: str,

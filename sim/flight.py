@@ -3,6 +3,7 @@ ocean, flown by the Python executor or by the compiled C runtime over a pty."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -69,7 +70,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
             record = simulate(mission, executor, science, config, progress,
                               FastForward(mission, executor, science), gauge, hook)
         record.entry_variables = executor.entry_variables
-        record.envelope = executor.envelope_notes
+        record.envelope = located(executor.envelope_notes, mission)
         record.events_fired = executor.event_count
         return record
     if runtime != "c":
@@ -101,7 +102,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended
-    record.envelope = c_runtime.envelope_notes()
+    record.envelope = located(c_runtime.envelope_notes(), mission)
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
         if record.events_log is not None:  # the transitions made, lost COMMANDs or not
@@ -128,6 +129,13 @@ def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  #
     return lambda data: read_plan_bytes(data, mission, "", limits)
 
 
+def located(notes: list[str], mission: ir.CheckedMission) -> list[str]:
+    """The envelope guard's notes with each state's place (`state s1 (line 6):`)."""
+    places = {f"state {s.name}:": f"state {s.place}:" for s in mission.states}
+    return [re.sub(r"state \S+:", lambda m: places.get(m[0], m[0]), note, count=1)
+            for note in notes]
+
+
 def logged_trace(events_log: str, flown_s: float) -> list[Transition]:
     """The transitions of a runtime's event log (docs/reliability.md) made before
     `flown_s` [s], as trace rows; its fault and clamp records are no transitions."""
@@ -151,7 +159,7 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
         for k, profile in enumerate(state.profiles):
             flown = (None, None) if plan is None else (plan.states[i].profiles[k].pitch_rad,
                                                        plan.states[i].profiles[k].ballast_cc)
-            problem = yo_flight_problem(f"{state.name}: flightprofile {k}", vehicle,
+            problem = yo_flight_problem(f"{state.place}: flightprofile {k}", vehicle,
                                         profile.kind, profile.constant_args(), *flown)
             if problem is not None:
                 raise problem

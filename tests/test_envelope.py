@@ -51,14 +51,14 @@ def _sim(mission: Path, out: Path, runtime: str, capsys) -> tuple[int, str, dict
 @needs_cc
 @pytest.mark.parametrize(("action", "assignment", "ended", "says"), [
     ("surface", "set bottom = 3000", "envelope",
-     "missiontime 300 s, state s1: depth 3000 m beyond the vehicle's 100 m; "
+     "missiontime 300 s, state s1 (line 9): depth 3000 m beyond the vehicle's 100 m; "
      "the mission ends, surfacing"),
     ("clamp", "set bottom = 3000", "exit",
-     "missiontime 300 s, state s1: depth 3000 m beyond the vehicle's 100 m; held at the limit"),
+     "missiontime 300 s, state s1 (line 9): depth 3000 m beyond the vehicle's 100 m; held at the limit"),
     ("surface", "set bottom = 6", "envelope",
-     "missiontime 300 s, state s1: yo band 1 m beyond the vehicle's 3 m; "
+     "missiontime 300 s, state s1 (line 9): yo band 1 m beyond the vehicle's 3 m; "
      "the mission ends, surfacing"),
-    ("clamp", "set bottom = -1000", "envelope", "state s1: time between inflections"),
+    ("clamp", "set bottom = -1000", "envelope", "state s1 (line 9): time between inflections"),
 ])
 def test_both_runtimes_hold_a_variable_to_the_rating_alike(tmp_path, capsys, action,
                                                             assignment, ended, says):
@@ -81,7 +81,7 @@ def test_the_fault_action_releases_control_and_the_sim_exits_5(tmp_path, capsys)
         assert code == ExitCode.ENVELOPE, said
         assert summary["ended"].startswith("fault")
         assert trace.splitlines()[1:] == ["0,start,,s1,0"]
-        assert summary["envelope"] == ["envelope: missiontime 300 s, state s1: depth 3000 m "
+        assert summary["envelope"] == ["envelope: missiontime 300 s, state s1 (line 9): depth 3000 m "
                                        "beyond the vehicle's 100 m; releasing control"]
 
 
