@@ -249,9 +249,11 @@ class CRuntime:
                                f"line lost its answers: {self.stderr_text()}")
         last = self._last or ZERO_COMMAND
         self.exited = True
-        return last._replace(tick=tick, state=NO_STATE, stack_depth=0, transition=kind,
-                             from_state=last.state if last.state != NO_STATE else 0,
-                             to_state=NO_STATE, flags=FLAG_DONE)
+        # as the runtime's last COMMAND: no state, no flight, no sensor powered
+        return ZERO_COMMAND._replace(tick=tick, state=NO_STATE, transition=kind,
+                                     from_state=last.state if last.state != NO_STATE else 0,
+                                     to_state=NO_STATE, flags=FLAG_DONE,
+                                     event_count=last.event_count)
 
     def _layered(self, tick: int, cut: bool = False) -> Command:
         """A tick flown by the glider's layered control: the last COMMAND's flight goes on,
