@@ -123,7 +123,7 @@ def test_constants_are_decimal_only_when_the_decimal_is_exact():
 
 def test_the_vehicle_and_board_limits_are_inputs_not_files_read():
     mission = ir.CheckedMission(name="m", states=(_state("s"),), vehicle="no/such/glider.toml")
-    source = generate_c(mission, FlightLimits(123.5, 200.0, (133.0,), ENVELOPE))
+    source = generate_c(mission, FlightLimits(123.5, 200.0, (133.0,), envelope=ENVELOPE))
     assert "    .default_ballast_cc = 123.5,\n    .max_ballast_cc = 200.0,\n" in source
     assert "board_clocks_mhz[1] = {133.0};" in source and "    .n_clocks = 1,\n" in source
 

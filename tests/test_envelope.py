@@ -54,7 +54,8 @@ def _sim(mission: Path, out: Path, runtime: str, capsys) -> tuple[int, str, dict
      "missiontime 300 s, state s1 (line 9): depth 3000 m beyond the vehicle's 100 m; "
      "the mission ends, surfacing"),
     ("clamp", "set bottom = 3000", "exit",
-     "missiontime 300 s, state s1 (line 9): depth 3000 m beyond the vehicle's 100 m; held at the limit"),
+     "missiontime 300 s, state s1 (line 9): depth 3000 m beyond the vehicle's 100 m; "
+     "held at the limit"),
     ("surface", "set bottom = 6", "envelope",
      "missiontime 300 s, state s1 (line 9): yo band 1 m beyond the vehicle's 3 m; "
      "the mission ends, surfacing"),
@@ -81,8 +82,8 @@ def test_the_fault_action_releases_control_and_the_sim_exits_5(tmp_path, capsys)
         assert code == ExitCode.ENVELOPE, said
         assert summary["ended"].startswith("fault")
         assert trace.splitlines()[1:] == ["0,start,,s1,0"]
-        assert summary["envelope"] == ["envelope: missiontime 300 s, state s1 (line 9): depth 3000 m "
-                                       "beyond the vehicle's 100 m; releasing control"]
+        assert summary["envelope"] == ["envelope: missiontime 300 s, state s1 (line 9): depth "
+                                       "3000 m beyond the vehicle's 100 m; releasing control"]
 
 
 def test_a_flight_within_the_rating_is_untouched(tmp_path, capsys):

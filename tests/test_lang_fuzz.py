@@ -57,7 +57,8 @@ def _front_end_survives(source: str) -> None:
             assert f"fuzz.mission:{d.span.line}:{d.span.column}: error: " in rendered
     if result.ok:  # check accepts nothing the code generator refuses
         generate_c(result.mission, FlightLimits(200.0, 233.0, (300.0,),
-                                                  load_vehicle("slocum_g2_shallow").envelope))
+                                                  envelope=load_vehicle("slocum_g2_shallow")
+                                                  .envelope))
     try:
         format_source(source)
     except (MissionSyntaxError, FormatError):
