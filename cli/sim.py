@@ -177,10 +177,23 @@ def run(args: argparse.Namespace) -> int:
               "planned" in check.causes[0] else "  where it went:", file=sys.stderr)
     for cause in check.causes:
         print(f"    {cause}", file=sys.stderr)
+    for note in record.envelope:
+        print(f"  {note}", file=sys.stderr)
+    if record.faults is not None and record.faults["kills"] < record.faults["kills_asked"]:
+        print(f"  kill={record.faults['kills_asked']}: {record.faults['kills']} delivered; the "
+              "run ended before the others fell due (drawn over the mission's timeline; "
+              "kill=N@T draws them over T)", file=sys.stderr)
     if result.interrupted:
         print(f"  interrupted: the outputs in {args.output} cover the part flown",
               file=sys.stderr)
         code = ExitCode.INTERRUPTED
+    elif record.envelope_acted:
+        print("  the vehicle was commanded outside its rating (its vehicle file's "
+              "[envelope])", file=sys.stderr)
+        code = ExitCode.ENVELOPE
+    elif record.ended.startswith("fault"):
+        print(f"  the outputs in {args.output} cover the part flown", file=sys.stderr)
+        code = ExitCode.LINK_FAILED
     elif check.verdict == "violation":
         code = ExitCode.OVER_BUDGET
     elif check.verdict == "over prediction" and args.strict_prediction:

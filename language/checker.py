@@ -19,6 +19,7 @@ from gliderplan.contract import (
     NO_BOARD,
     RUNTIME_CYCLES_PER_TICK,
     TICK_S,
+    Envelope,
 )
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
@@ -51,6 +52,8 @@ class _Checker:
         self.computer = ir.DEFAULT_COMPUTER  # the mission's board, for its states' settings
         self._board: object | None = None  # the board, loaded once when a state needs it
         self._vehicle: object | None = None  # a vehicle file the mission names, loaded
+        self.vehicle = ir.DEFAULT_VEHICLE  # the mission's vehicle, for its envelope
+        self._envelope: object | None = None  # its envelope, loaded once a profile needs it
 
     # ---- reporting helpers
     def error(self, message: str, span: ast.Span, hint: str | None = None) -> None:
@@ -130,7 +133,8 @@ class _Checker:
             match decl:
                 case ast.VehicleDecl():
                     self.preset_known("vehicle", decl.preset, decl.is_file)
-                    fields["vehicle"] = self.beside("vehicle", decl.preset.text, decl.is_file)
+                    fields["vehicle"] = self.vehicle = self.beside("vehicle", decl.preset.text,
+                                                                   decl.is_file)
                     if decl.is_file and self.model_files:
                         self._vehicle = self.model_file("vehicle", fields["vehicle"],
                                                         decl.preset)
@@ -426,6 +430,7 @@ class _Checker:
             expect_s=expect,
             requirements=tuple(reqs),
             computer=computer,
+            profile_line=items[ast.ProfileItem].span.line,
         )
 
     def registered(self, ident: ast.Ident, table: Mapping[str, T], kind: str,
@@ -491,7 +496,48 @@ class _Checker:
                        f"{values['max_depth']:g} m", invocation.span,
                        f"{name}(min_depth, max_depth, ...): the glider turns at min_depth "
                        "on the way up and at max_depth on the way down")
+        elif values:
+            self.within_envelope(invocation, values)
         return ir.Profile(name, tuple(args))
+
+    def within_envelope(self, invocation: ast.Invocation, values: dict[str, float]) -> None:
+        """Errors for the constant arguments of a profile outside the vehicle's rating
+        (docs/pilot.md, The envelope): what the runtime would refuse in flight."""
+        envelope = self.envelope()
+        if envelope is None:
+            return
+        spans = {spec.name: node.span for spec, node in zip(
+            PROFILES[invocation.name.text].params, invocation.args, strict=False)}
+        hint = f"the rating of vehicle {self.vehicle} (its file's [envelope])"
+        for param in ("min_depth", "max_depth", "depth"):
+            if values.get(param, 0.0) > envelope.max_depth_m:
+                self.error(f"{param.replace('_', ' ')} {values[param]:g} m is beyond the "
+                           f"vehicle's rated {envelope.max_depth_m:g} m", spans[param], hint)
+        for param in ("dive_pitch", "climb_pitch"):
+            if values.get(param, 0.0) > envelope.max_pitch_rad:
+                self.error(f"{param.replace('_', ' ')} {values[param]:g} rad is beyond the "
+                           f"vehicle's {envelope.max_pitch_rad:.3g} rad", spans[param], hint)
+        if "min_depth" in values and "max_depth" in values and (
+                values["max_depth"] - values["min_depth"] < envelope.min_yo_band_m):
+            band = values["max_depth"] - values["min_depth"]
+            self.error(f"yo band {band:g} m is thinner than the "
+                       f"vehicle's {envelope.min_yo_band_m:g} m: it would turn all the time",
+                       invocation.span, hint)
+
+    def envelope(self) -> Envelope | None:
+        """The mission's vehicle's envelope, loaded once; None when its file cannot be read
+        (what is wrong with it is said, with its own exit code, where the vehicle is
+        loaded to be flown or planned)."""
+        if self._envelope is None:
+            from gliderplan.contract.files import InputFileError
+            from gliderplan.power_models.errors import ModelFileError
+            from gliderplan.power_models.vehicle_figures import load_envelope
+
+            try:
+                self._envelope = load_envelope(self.vehicle)
+            except (ModelFileError, InputFileError):
+                self._envelope = False
+        return self._envelope or None
 
     def sensor_uses(self, item: ast.SensorsItem) -> list[ir.SensorUse | None]:
         uses: list[ir.SensorUse | None] = []

@@ -282,6 +282,14 @@ class State:
     # Left out of the canonical JSON when a state says nothing (missions written before
     # power management keep their hash, and with it their plans and builds).
     computer: ComputerUse = field(default=NO_COMPUTER_USE, metadata={"omit_default": True})
+    # the line of its `flightprofile` in the mission file, for messages (0: not from one);
+    # where it was written does not change the mission: not in its hash
+    profile_line: int = field(default=0, metadata={"omit_default": True})
+
+    @property
+    def place(self) -> str:
+        """The state as a message names it: `s1 (line 6)`, the line of its flightprofile."""
+        return f"{self.name} (line {self.profile_line})" if self.profile_line else self.name
 
     @property
     def profile_variables(self) -> tuple[str, ...]:
@@ -391,6 +399,8 @@ class CheckedMission:
             data.pop("start_deg", None)
         if data.get("current_correction", True):
             data.pop("current_correction", None)
+        for state in data["states"]:
+            state.pop("profile_line", None)
         for name, text in data.pop("files_as_written", ()):  # where it was checked from
             if name == "computer":                               # does not change it
                 data["computer"]["board"] = text

@@ -141,7 +141,7 @@ def _yo(vehicle: Vehicle, state: ir.State, occupancy: Occupancy, time_s: float,
         low, high = vehicle.nominal_min_depth_m, vehicle.nominal_max_depth_m
     pitch = 0.5 * (args[2] + args[3]) if all(map(math.isfinite, args[2:4])) \
         else vehicle.nominal_pitch_rad
-    with flying_yo(state.name, vehicle, low, high):
+    with flying_yo(state.place, vehicle, low, high):
         cycle_s, actuators_j, _ = vehicle.yo_cycle(low, high, pitch,
                                                    vehicle.unplanned_ballast_cc, ocean)
     cycles = time_s / float(cycle_s)

@@ -59,4 +59,5 @@ def flight_limits(mission: CheckedMission, board: str | None = None) -> FlightLi
                   and use.duty is not None)
             for state in mission.states),
         min_ballast_cc=tuple(tuple(least_ballast_cc(p) for p in state.profiles)
-                             for state in mission.states))
+                             for state in mission.states),
+        envelope=vehicle.envelope)

@@ -208,6 +208,7 @@ class FastForward:
         if machine is None or machine.state is None or tick < self._resume[ex.state_i] \
                 or self._reads_energy \
                 or ex.profile_k < 0 or not self._ocean or self._flows() \
+                or (ex.guard is not None and ex.guard.held) \
                 or not self._covered[ex.state_i][ex.profile_k] \
                 or not isinstance(ex.route, _ROUTES):
             return 0
@@ -300,7 +301,7 @@ class FastForward:
                 ex.s[index] = values.sensor_at(index, last)
         for index in _RUNTIME_READINGS:  # as the executor set them for the last tick
             ex.s[index] = values.sensor_at(index, count - 1)
-        self._commit_glider(flight, nav, count)
+        self._commit_glider(flight, nav, tick, count)
         values.commit_held(count)
         return count
 
@@ -339,7 +340,7 @@ class FastForward:
         s = {index: values.held(index, count) for index in wanted}
         return _first(fires(s, values.variables(count), count), count)
 
-    def _commit_glider(self, flight: _Flight, nav: _Route, count: int) -> None:
+    def _commit_glider(self, flight: _Flight, nav: _Route, tick: int, count: int) -> None:
         g, ex = self.glider, self.ex
         g.actuators = flight.actuators_at(count, g.actuators)
         g.depth_m = float(flight.depth_m[count])
@@ -357,9 +358,16 @@ class FastForward:
         else:
             g.surface_time_s = -1.0
         if isinstance(ex.routine, pilot.Yo):
-            ex.routine.halfcycle = int(halfcycles(ex.routine, flight)[count])
+            counts = halfcycles(ex.routine, flight)
+            ex.routine.halfcycle = int(counts[count])
             ex.routine.leg = next(leg for first, _, _, leg in reversed(flight.legs)
                                   if first < count)
+            if ex.guard is not None:  # the guard saw each tick's command, as the runtime's
+                turns = np.flatnonzero(np.diff(counts[:count + 1]))
+                if len(turns):
+                    ex.guard.turned = True
+                    ex.guard.last_turn_s = _f32_scalar((tick + int(turns[-1])) * self.tick_s)
+                ex.guard.climbing = ex.routine.leg == _CLIMB
 
     # ---- the flight --------------------------------------------------------------------
 

@@ -3,11 +3,14 @@ ocean, flown by the Python executor or by the compiled C runtime over a pty."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import TRANSITION_NAMES
 from gliderplan.language import ir
+from gliderplan.language.semantics import Transition
 from gliderplan.power_models.vehicle import Vehicle, yo_flight_problem
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
@@ -50,7 +53,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
         # without a plan: the same buoyancy volume the compiler gives the C runtime
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
-                                 vehicle.max_ballast_cc)
+                                 vehicle.max_ballast_cc, vehicle.envelope)
         hook = None
         if shore is not None:
             from gliderplan.sim.replanning import PythonVehicle
@@ -67,6 +70,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
             record = simulate(mission, executor, science, config, progress,
                               FastForward(mission, executor, science), gauge, hook)
         record.entry_variables = executor.entry_variables
+        record.envelope = located(executor.envelope_notes, mission)
         record.events_fired = executor.event_count
         return record
     if runtime != "c":
@@ -78,12 +82,15 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
     limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
-                          board.clocks_mhz)  # the vehicle flown: a scenario's may differ
+                          board.clocks_mhz, envelope=vehicle.envelope)  # a scenario's vehicle
     schedule = None
     if faults is not None:
+        from gliderplan.planner.occupancy import mission_occupancy
         from gliderplan.sim.faults import FaultSchedule
 
-        schedule = FaultSchedule(faults, config.seed, int(config.duration_s / config.tick_s),
+        # kills fall within the run: up to the mission's end on its timeline, if sooner
+        span_s = min(config.duration_s, mission_occupancy(mission, config.duration_s).total_s)
+        schedule = FaultSchedule(faults, config.seed, int(span_s / config.tick_s),
                                  config.tick_s)
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)
@@ -95,8 +102,11 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended
+    record.envelope = located(c_runtime.envelope_notes(), mission)
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
+        if record.events_log is not None:  # the transitions made, lost COMMANDs or not
+            record.trace = logged_trace(record.events_log, record.flown_s)
     return record
 
 
@@ -114,8 +124,28 @@ def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  #
     from gliderplan.planner.planfile import plan_board_limits, read_plan_bytes
 
     board = plan_board_limits(mission, plan).clocks_mhz if plan is not None else (0.0,)
-    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board)
+    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board,
+                          envelope=vehicle.envelope)
     return lambda data: read_plan_bytes(data, mission, "", limits)
+
+
+def located(notes: list[str], mission: ir.CheckedMission) -> list[str]:
+    """The envelope guard's notes with each state's place (`state s1 (line 6):`)."""
+    places = {f"state {s.name}:": f"state {s.place}:" for s in mission.states}
+    return [re.sub(r"state \S+:", lambda m: places.get(m[0], m[0]), note, count=1)
+            for note in notes]
+
+
+def logged_trace(events_log: str, flown_s: float) -> list[Transition]:
+    """The transitions of a runtime's event log (docs/reliability.md) made before
+    `flown_s` [s], as trace rows; its fault and clamp records are no transitions."""
+    trace = []
+    for line in events_log.splitlines():
+        time_s, kind, from_state, to_state, depth = line.split()
+        if kind in TRANSITION_NAMES.values() and float(time_s) < flown_s:
+            trace.append(Transition(float(time_s), kind, from_state.strip("-"),
+                                    to_state.strip("-"), int(depth)))
+    return trace
 
 
 def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
@@ -129,7 +159,7 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
         for k, profile in enumerate(state.profiles):
             flown = (None, None) if plan is None else (plan.states[i].profiles[k].pitch_rad,
                                                        plan.states[i].profiles[k].ballast_cc)
-            problem = yo_flight_problem(f"{state.name}: flightprofile {k}", vehicle,
+            problem = yo_flight_problem(f"{state.place}: flightprofile {k}", vehicle,
                                         profile.kind, profile.constant_args(), *flown)
             if problem is not None:
                 raise problem

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
@@ -86,7 +86,7 @@ class RunRecord:
     columns: dict[str, np.ndarray]
     state_names: tuple[str, ...]
     tick_s: float
-    ended: str  # "exit", "reserve", "duration", "interrupted" or "fault: ..."
+    ended: str  # "exit", "reserve", "envelope", "duration", "interrupted" or "fault: ..."
     surfacings: int
     faults: dict | None = None  # with injected faults: what they did (CRuntime.report)
     events_log: str | None = None  # with faults: the C runtime's own event log
@@ -98,6 +98,18 @@ class RunRecord:
     events_fired: int | None = None
     grounded_ticks: int = 0  # ticks the glider ended at the sea floor
     first_grounded_s: float = math.nan  # missiontime [s] of the first of them
+    # what the envelope guard did, as the runtime said it ("envelope: missiontime ...")
+    envelope: list[str] = field(default_factory=list)
+
+    @property
+    def flown_s(self) -> float:
+        """[s] mission time up to which the run flew: its ticks' end, less half a tick."""
+        return len(self.columns["time_s"]) * self.tick_s - self.tick_s / 2
+
+    @property
+    def envelope_acted(self) -> bool:
+        """Whether the envelope guard held a command or ended the run on one."""
+        return bool(self.envelope) or self.ended == "envelope"
 
     def visits(self) -> dict[str, int]:
         """Stays in each state flown: every transition into it (the start, a goto, a call,
@@ -285,7 +297,8 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
             profile_c.append(cmd.profile)
             power_c.append(cmd.sensor_power)
             if cmd.state == NO_STATE:
-                ended = "reserve" if cmd.transition == TransitionKind.RESERVE else "exit"
+                ended = {TransitionKind.RESERVE: "reserve",
+                         TransitionKind.ENVELOPE: "envelope"}.get(cmd.transition, "exit")
                 phase_c.append(glider.phase)
                 out_c.append(0.0)
                 in_c.append(0.0)
@@ -305,11 +318,12 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
         ended = "interrupted"
     arrays = columns.arrays()
     n = len(arrays["state"])
-    trace = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
-    return RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
-                     tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0),
-                     grounded_ticks=science.grounded_ticks,
-                     first_grounded_s=science.first_grounded_s)
+    record = RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
+                       tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0),
+                       grounded_ticks=science.grounded_ticks,
+                       first_grounded_s=science.first_grounded_s)
+    record.trace = [t for t in trace if t.time_s < record.flown_s]
+    return record
 
 
 def _close_row(cols: dict[str, list], state: int) -> None:

@@ -148,6 +148,7 @@ def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan
         "simulated_s": float(record.columns["time_s"][-1]) if len(record.columns["time_s"])
         else 0.0,
         "transitions": len(record.trace),
+        "envelope": record.envelope,
         "surfacings": record.surfacings,
         "surfacing_fixes": surfacing_fixes(record),
         "computer_suspends": record.suspends,
