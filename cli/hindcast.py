@@ -12,7 +12,8 @@ inside the 90 % ellipse (planner/hindcast.py).
 from __future__ import annotations
 
 import argparse
-import json
+
+from gliderplan.cli.main import print_json
 
 ORDER = 56
 
@@ -39,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{args.logs}: no dive between two surfacings to check a forecast on")
     rows = summary(checks)
     if args.json:
-        print(json.dumps({"summary": rows, "checks": [asdict(c) for c in checks]}, indent=2))
+        print_json({"summary": rows, "checks": [asdict(c) for c in checks]})
         return 0
     print("ahead  forecasts  horizon (median)  error median  error 90th pct  fix in 90 % ellipse")
     for r in rows:

@@ -13,7 +13,6 @@ estimate and current correction) and their times compared.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 
@@ -25,6 +24,7 @@ from gliderplan.cli.common import (
     parse_start,
 )
 from gliderplan.cli.common import start_epoch_s as parse_epoch
+from gliderplan.cli.main import print_json
 
 ORDER = 57
 
@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
         write_map(args.map, SeaMap(f"{mission.name}: routes", lines, tuple(waypoints),
                                    currents=field, epoch_s=epoch))
     if args.json:
-        print(json.dumps(result, indent=2))
+        print_json(result)
         return 0
     print(_text(result, CAPTURE_M))
     return 0
