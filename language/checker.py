@@ -25,6 +25,7 @@ from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, war
 from gliderplan.language.flow import check_flow
 from gliderplan.language.limits import check_sizes
 from gliderplan.language.registry import (
+    AUTO_PARAMS,
     FUNCTIONS,
     PROFILES,
     ROUTES,
@@ -48,6 +49,8 @@ class _Checker:
         self.state_names = {s.name.text for s in mission.states}
         self.computer = ir.DEFAULT_COMPUTER  # the mission's board, for its states' settings
         self._board: object | None = None  # the board, loaded once when a state needs it
+        self.vehicle_spec = ir.DEFAULT_VEHICLE
+        self._vehicle: object | None = None  # the vehicle, loaded once when a profile needs it
 
     # ---- reporting helpers
     def error(self, message: str, span: ast.Span, hint: str | None = None) -> None:
@@ -109,8 +112,10 @@ class _Checker:
                 seen[type(decl)] = decl
             match decl:
                 case ast.VehicleDecl():
-                    self.preset_known("vehicle", decl.preset, decl.is_file)
+                    known = self.preset_known("vehicle", decl.preset, decl.is_file)
                     fields["vehicle"] = self.beside("vehicle", decl.preset.text, decl.is_file)
+                    if known:
+                        self.vehicle_spec = fields["vehicle"]
                 case ast.ComputerDecl() if decl.board.text == NO_BOARD:
                     fields["computer"] = self.computer = ir.Computer(NO_BOARD)
                     if decl.clock is not None:
@@ -440,11 +445,17 @@ class _Checker:
                        f"got {len(invocation.args)}", invocation.span,
                        f"{name}({', '.join(_parameter(p) for p in info.params)})")
             return None
-        args = [self.expression(a, allow_sensors=False) for a in invocation.args]
+        auto = self.auto_arguments(invocation, info.params)
+        thrust = self.thrust(invocation)
+        if auto is None:
+            return None
+        written = invocation.args[:len(invocation.args) - len(auto)]
+        args = [self.expression(a, allow_sensors=False) for a in written]
         if None in args:
             return None
-        values = {}
-        for arg, node, spec in zip(args, invocation.args, info.params, strict=False):
+        values, spans = {}, {}
+        for arg, node, spec in zip(args, written, info.params, strict=False):
+            spans[spec.name] = node.span
             if not ir.variables_read(arg):
                 value = ir.evaluate(arg, {}, {})
                 if self.in_range(value, spec, name, node.span):
@@ -455,7 +466,101 @@ class _Checker:
                        f"{values['max_depth']:g} m", invocation.span,
                        f"{name}(min_depth, max_depth, ...): the glider turns at min_depth "
                        "on the way up and at max_depth on the way down")
-        return ir.Profile(name, tuple(args))
+        profile = ir.Profile(name, tuple(args), auto, thrust)
+        if profile.propelled or self.vehicle_spec != ir.DEFAULT_VEHICLE:
+            # the default glider flies every buoyancy profile: no need to load it
+            self.flyable(profile, invocation, values.get("speed"), spans.get("speed"))
+        return profile
+
+    def auto_arguments(self, invocation: ast.Invocation, params: tuple[ParamSpec, ...]
+                       ) -> tuple[str, ...] | None:
+        """The names of the arguments written `auto` (a propelled profile's speed, its last
+        argument); None, with an error, for an `auto` the profile cannot take."""
+        auto = []
+        for node, spec in zip(invocation.args, params, strict=False):
+            if isinstance(node, ast.Ident):
+                if spec.name not in AUTO_PARAMS:
+                    self.error(f"'{spec.name}' of '{invocation.name.text}' cannot be 'auto'",
+                               node.span, "only a propelled profile's speed is the planner's "
+                               "to choose, e.g. 'cruise(10, auto)'")
+                    return None
+                auto.append(spec.name)
+        return tuple(auto)
+
+    def thrust(self, invocation: ast.Invocation) -> float | str | None:
+        """A yo's thruster setting: its commanded power [W], "auto" or None (none, or an
+        error)."""
+        setting = invocation.thrust
+        if setting is None:
+            return None
+        if invocation.name.text not in ("yo", "thermotrackyo"):
+            self.error(f"a thruster assists a yo, not '{invocation.name.text}'", setting.span,
+                       "a propelled profile sets its speed instead: e.g. 'cruise(10, auto)'")
+            return None
+        if isinstance(setting, ast.Ident):
+            return "auto"
+        power = self.quantity(setting, "power")
+        if power is None:
+            return None
+        if power[0] <= 0.0:
+            self.error(f"thrust must be positive, got {power[0]:g} W", setting.span,
+                       "leave 'thrust' out to glide on buoyancy alone")
+            return None
+        return power[0]
+
+    def vehicle(self, span: ast.Span) -> object | None:
+        """The mission's vehicle (power_models.vehicle.Vehicle), loaded once; None, with an
+        error at `span`, when its file cannot be read."""
+        if self._vehicle is None:
+            from gliderplan.contract.files import InputFileError
+            from gliderplan.power_models.errors import ModelFileError
+            from gliderplan.power_models.vehicle import load_vehicle
+
+            try:
+                self._vehicle = load_vehicle(self.vehicle_spec)
+            except (ModelFileError, InputFileError) as err:
+                self.error(f"the flight profile needs the vehicle's figures: {err}", span)
+                self._vehicle = False
+        return self._vehicle or None
+
+    def flyable(self, profile: ir.Profile, invocation: ast.Invocation, speed_mps: float | None,
+                speed_span: ast.Span | None) -> None:
+        """An error where the vehicle cannot fly the profile: a propelled profile on a
+        glider, a glide on an AUV, a thruster it lacks, a speed or thrust beyond its
+        propulsion model."""
+        vehicle = self.vehicle(invocation.span)
+        if vehicle is None:
+            return
+        from gliderplan.power_models.propulsion import SpeedOutOfRange
+
+        name, propulsion = invocation.name.text, vehicle.propulsion
+        if PROFILES[profile.kind].propelled and propulsion is None:
+            self.error(f"'{name}' flies on a propeller, and vehicle {vehicle.name} is a "
+                       f"{vehicle.kind} without one", invocation.name.span,
+                       "fly a yo, or declare a propelled vehicle, e.g. 'vehicle "
+                       "slocum_g3_hybrid' or 'vehicle lauv'")
+            return
+        if not PROFILES[profile.kind].propelled and profile.kind != "surface" and \
+                not vehicle.has_buoyancy_engine:
+            self.error(f"'{name}' flies on a buoyancy engine, and vehicle {vehicle.name} is "
+                       f"an {vehicle.kind} without one", invocation.name.span,
+                       "fly it level on the propeller, e.g. 'cruise(10, auto)'")
+            return
+        if profile.thrust is not None and (propulsion is None or not propulsion.is_thruster):
+            self.error(f"vehicle {vehicle.name} has no thruster to assist a yo",
+                       invocation.thrust.span, "leave 'thrust' out, or declare a hybrid, "
+                       "e.g. 'vehicle slocum_g3_hybrid'")
+            return
+        checks = [(propulsion.check_command, profile.thrust, invocation.thrust.span)] \
+            if isinstance(profile.thrust, float) else []
+        if speed_mps is not None and propulsion is not None:
+            checks.append((propulsion.check_speed, speed_mps, speed_span))
+        for check, value, span in checks:
+            try:
+                check(value)
+            except SpeedOutOfRange as err:
+                self.error(f"vehicle {vehicle.name}: {err}", span,
+                           "'auto' lets the planner choose")
 
     def sensor_uses(self, item: ast.SensorsItem) -> list[ir.SensorUse | None]:
         uses: list[ir.SensorUse | None] = []

@@ -40,6 +40,7 @@ class ProfileInfo:
     params: tuple[ParamSpec, ...]
     description: str
     tracks_thermocline: bool = False
+    propelled: bool = False  # flown on a propeller or a glider's thruster, not on buoyancy
 
     @property
     def required(self) -> int:
@@ -53,6 +54,9 @@ class ProfileInfo:
 
 _DEPTH = dict(unit="m", low=0.0)
 _PITCH = dict(unit="rad", low=0.0, high=math.pi / 2, low_open=True, high_open=True)
+# A propelled profile's speed through the water: a number, or `auto` (the planner's choice)
+_SPEED = ParamSpec("speed", unit="m/s", low=0.0, low_open=True)
+AUTO_PARAMS = frozenset({"speed"})  # the arguments a mission may write as `auto`
 # Slocum's d_target_altitude: a dive also turns when the altimeter reads at most this
 # height above the sea floor; left out or 0: no altimeter stop
 _ALTITUDE = ParamSpec("altitude", unit="m", low=0.0, optional=True)
@@ -91,6 +95,20 @@ PROFILES: dict[str, ProfileInfo] = {
             "hover",
             (ParamSpec("depth", **_DEPTH),),
             "hold a depth with small buoyancy corrections",
+        ),
+        ProfileInfo(
+            "cruise",
+            (ParamSpec("depth", **_DEPTH), _SPEED),
+            "fly level at a depth and a speed through the water on the propeller (or a "
+            "glider's thruster)",
+            propelled=True,
+        ),
+        ProfileInfo(
+            "altitude",
+            (ParamSpec("height", unit="m", low=0.0, low_open=True), _SPEED),
+            "fly level at a height above the sea floor (the altimeter's reading) and a "
+            "speed through the water on the propeller",
+            propelled=True,
         ),
     )
 }
