@@ -220,12 +220,14 @@ class Component:
     PITCH = "pitch"  # battery shifts at inflections
     SURFACE = "surface"  # the base load at the surface
     IRIDIUM = "iridium"  # satellite calls at the surface
+    PROPULSION = "propulsion"  # a propeller's or a glider's thruster's motor
     COMPUTER = "computer"  # the single-board computer running the mission
     SENSORS = "sensors"  # the sensor devices together, where they are not billed one by one
 
 
 VEHICLE_COMPONENTS: tuple[str, ...] = (Component.HOTEL, Component.PUMP, Component.PITCH,
-                                       Component.SURFACE, Component.IRIDIUM)
+                                       Component.SURFACE, Component.IRIDIUM,
+                                       Component.PROPULSION)
 
 
 # ---- the serial link (docs/protocol.md) ---------------------------------------------

@@ -31,6 +31,7 @@ from gliderplan.language.registry import (
     ROUTES,
     SENSOR_BY_NAME,
     ParamSpec,
+    cannot_fly,
 )
 from gliderplan.language.units import UnitProblem, normalise
 
@@ -374,7 +375,8 @@ class _Checker:
             return None
         route_item = items.get(ast.RouteItem)
         route = self.route(route_item.route) if route_item else ir.Route("noheading")
-        profiles = [self.profile(p) for p in items[ast.ProfileItem].alternatives]
+        written = items[ast.ProfileItem].alternatives
+        profiles = [self.profile(p, written) for p in written]
         sensors_item = items.get(ast.SensorsItem)
         sensors = self.sensor_uses(sensors_item) if sensors_item else []
         events_item = items.get(ast.EventsItem)
@@ -432,7 +434,8 @@ class _Checker:
             return None
         return ir.Route(name, tuple(params), tuple(coords))
 
-    def profile(self, invocation: ast.Invocation) -> ir.Profile | None:
+    def profile(self, invocation: ast.Invocation, alternatives: tuple[ast.Invocation, ...]
+                ) -> ir.Profile | None:
         name = invocation.name.text
         info = self.registered(invocation.name, PROFILES, "flight profile", "profiles")
         if info is None:
@@ -469,7 +472,8 @@ class _Checker:
         profile = ir.Profile(name, tuple(args), auto, thrust)
         if profile.propelled or self.vehicle_spec != ir.DEFAULT_VEHICLE:
             # the default glider flies every buoyancy profile: no need to load it
-            self.flyable(profile, invocation, values.get("speed"), spans.get("speed"))
+            self.flyable(profile, invocation, values.get("speed"), spans.get("speed"),
+                         alternatives)
         return profile
 
     def auto_arguments(self, invocation: ast.Invocation, params: tuple[ParamSpec, ...]
@@ -524,33 +528,25 @@ class _Checker:
         return self._vehicle or None
 
     def flyable(self, profile: ir.Profile, invocation: ast.Invocation, speed_mps: float | None,
-                speed_span: ast.Span | None) -> None:
-        """An error where the vehicle cannot fly the profile: a propelled profile on a
-        glider, a glide on an AUV, a thruster it lacks, a speed or thrust beyond its
-        propulsion model."""
+                speed_span: ast.Span | None, alternatives: tuple[ast.Invocation, ...]) -> None:
+        """An error where the vehicle cannot fly the profile (`cannot_fly`; a warning for one
+        of several `alternatives`, which the planner then skips), or a speed or thrust
+        beyond its propulsion model."""
         vehicle = self.vehicle(invocation.span)
         if vehicle is None:
             return
         from gliderplan.power_models.propulsion import SpeedOutOfRange
 
-        name, propulsion = invocation.name.text, vehicle.propulsion
-        if PROFILES[profile.kind].propelled and propulsion is None:
-            self.error(f"'{name}' flies on a propeller, and vehicle {vehicle.name} is a "
-                       f"{vehicle.kind} without one", invocation.name.span,
-                       "fly a yo, or declare a propelled vehicle, e.g. 'vehicle "
-                       "slocum_g3_hybrid' or 'vehicle lauv'")
+        if (problem := cannot_fly(profile.kind, profile.thrust, vehicle)) is not None:
+            why, hint, thrust = problem
+            span = invocation.thrust.span if thrust else invocation.name.span
+            if any(a.name.text in PROFILES and cannot_fly(a.name.text, a.thrust, vehicle)
+                   is None for a in alternatives):  # the planner flies those
+                self.warning(f"{why}: the planner gives it no time", span, hint)
+            else:
+                self.error(why, span, hint)
             return
-        if not PROFILES[profile.kind].propelled and profile.kind != "surface" and \
-                not vehicle.has_buoyancy_engine:
-            self.error(f"'{name}' flies on a buoyancy engine, and vehicle {vehicle.name} is "
-                       f"an {vehicle.kind} without one", invocation.name.span,
-                       "fly it level on the propeller, e.g. 'cruise(10, auto)'")
-            return
-        if profile.thrust is not None and (propulsion is None or not propulsion.is_thruster):
-            self.error(f"vehicle {vehicle.name} has no thruster to assist a yo",
-                       invocation.thrust.span, "leave 'thrust' out, or declare a hybrid, "
-                       "e.g. 'vehicle slocum_g3_hybrid'")
-            return
+        propulsion = vehicle.propulsion
         checks = [(propulsion.check_command, profile.thrust, invocation.thrust.span)] \
             if isinstance(profile.thrust, float) else []
         if speed_mps is not None and propulsion is not None:

@@ -160,6 +160,25 @@ ROUTES: dict[str, RouteInfo] = {
 }
 
 
+def cannot_fly(kind: str, thrust: object, vehicle: object) -> tuple[str, str, bool] | None:
+    """(why, hint, whether the thrust is to blame) when `vehicle` (power_models.vehicle.Vehicle) cannot fly profile `kind`
+    with a thruster setting `thrust` (None: none): a propelled profile without propulsion,
+    a buoyancy profile without a buoyancy engine, a thrust without a thruster."""
+    name, propulsion = vehicle.name, vehicle.propulsion
+    if PROFILES[kind].propelled and propulsion is None:
+        return (f"'{kind}' flies on a propeller, and vehicle {name} is a {vehicle.kind} "
+                "without one", "fly a yo, or declare a propelled vehicle, e.g. 'vehicle "
+                "slocum_g3_hybrid' or 'vehicle lauv'", False)
+    if not PROFILES[kind].propelled and kind != "surface" and \
+            not vehicle.has_buoyancy_engine:
+        return (f"'{kind}' flies on a buoyancy engine, and vehicle {name} is an "
+                f"{vehicle.kind} without one",
+                "fly it level on the propeller, e.g. 'cruise(10, auto)'", False)
+    if thrust is not None and (propulsion is None or not propulsion.is_thruster):
+        return (f"vehicle {name} has no thruster to assist a yo", "leave 'thrust' out, or "
+                "declare a hybrid, e.g. 'vehicle slocum_g3_hybrid'", True)
+    return None
+
 
 def altitude_stop_m(kind: str, args: tuple[float, ...]) -> float:
     """[m] the height above the sea floor at which a yo's dive turns (its `altitude`

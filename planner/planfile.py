@@ -478,8 +478,10 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
         line = ProfilePlan(i, cur.number(share, "share"), cur.number(pitch, "pitch"),
                            cur.number(ballast, "ballast"), cur.number(speed, "speed"))
         cur.check(0 <= line.share <= 1, "share must lie in [0, 1]")
-        cur.check(0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
-        cur.check(line.ballast_cc > 0 and line.speed_mps > 0, "ballast and speed must be > 0")
+        level = line.pitch_rad == 0.0 and line.ballast_cc == 0.0  # a propelled profile
+        cur.check(level or 0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
+        cur.check((level or line.ballast_cc > 0) and line.speed_mps > 0,
+                  "ballast and speed must be > 0")
         cur.check(line.speed_mps <= MAX_PLAN_SPEED_MPS,
                   f"speed {line.speed_mps:g} exceeds {MAX_PLAN_SPEED_MPS:g} m/s")
         if limits is not None:

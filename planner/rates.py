@@ -16,13 +16,17 @@ import numpy as np
 
 from gliderplan.contract import TICK_S, Component
 from gliderplan.language import ir
-from gliderplan.language.registry import altitude_stop_m
+from gliderplan.language.registry import PROFILES, altitude_stop_m, cannot_fly
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.devices import base_power_w
 from gliderplan.power_models.flight import DensityProfile
+from gliderplan.planner.speed import best_speed, choice_at
+from gliderplan.power_models.propulsion import thrust_assisted_speed
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
+
+LEVEL_PITCH_RAD = 0.0  # the plan's pitch of a propelled profile: level flight
 
 
 @dataclass(frozen=True)
@@ -36,6 +40,8 @@ class ProfileRates:
     speed_mps: float
     pitch_rad: float
     ballast_cc: float
+    thrust_w: float = 0.0  # a thruster's commanded power [W] (0: off)
+    flyable: bool = True  # False: an alternative the vehicle cannot fly, given no time
 
     @property
     def total_w(self) -> float:
@@ -125,6 +131,11 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
     """Component powers of one profile alternative. `fixed_load_w` [W] is the load the
     glide speed is optimised for (hotel + computer); `visit_s` the mean time per visit."""
     pitch0 = vehicle.nominal_pitch_rad
+    if (problem := cannot_fly(profile.kind, profile.thrust, vehicle)) is not None:
+        notes.append(f"{where}: {problem[0]}: given no time")
+        return _not_flown(vehicle, profile, index)
+    if PROFILES[profile.kind].propelled:
+        return _propelled_rates(vehicle, profile, index, variables, fixed_load_w)
     if profile.kind in ("yo", "thermotrackyo"):
         args = _profile_args(profile, variables)
         low, high = yo_band(profile, args)
@@ -148,8 +159,12 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
             actuators_w = float(vehicle.profile_power_w(low, high, pitch, ballast))
         pitch_w = vehicle.pitch_energy_j * per_hour / 3600.0
         power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: actuators_w - pitch_w,
-                 Component.PITCH: pitch_w, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
-        return ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch, ballast)
+                 Component.PITCH: pitch_w, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
+                 Component.PROPULSION: 0.0}
+        rates = ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch,
+                             ballast)
+        return rates if profile.thrust is None else _thrust_assisted(vehicle, profile, rates,
+                                                                     fixed_load_w)
     # surface and hover do not glide: the plan file still carries a glide command, the
     # vehicle's nominal pitch at full buoyancy (what it climbs with).
     ballast = vehicle.max_ballast_cc
@@ -160,11 +175,74 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
         fixed_w = vehicle.surfacing_fixed_j / visit_s if visit_s > 0.0 else 0.0
         power = {Component.HOTEL: 0.0, Component.PUMP: 0.0, Component.PITCH: 0.0,
                  Component.SURFACE: vehicle.surface_w * (1.0 - call_fraction) + fixed_w,
-                 Component.IRIDIUM: vehicle.iridium_w * call_fraction}
+                 Component.IRIDIUM: vehicle.iridium_w * call_fraction,
+                 Component.PROPULSION: 0.0}
     else:  # hover: holds a depth with small corrections, counted in the hotel load
         power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: 0.0,
-                 Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
+                 Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
+                 Component.PROPULSION: 0.0}
     return ProfileRates(index, profile.kind, power, 0.0, speed, pitch0, ballast)
+
+
+def _propelled_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
+                     variables: dict[str, float], fixed_load_w: float) -> ProfileRates:
+    """A level, propelled profile (`cruise`, `altitude`): at its written speed, or with
+    `auto` at the speed of least energy per metre for the load `fixed_load_w` [W] (hotel
+    and computer: a hungrier computer makes it faster). It holds its depth on the
+    propeller: no pump, no inflections; the plan carries a level pitch."""
+    propulsion = vehicle.propulsion
+    if "speed" in profile.auto:
+        choice = best_speed(propulsion, fixed_load_w)
+    else:
+        choice = choice_at(propulsion, fixed_load_w, _profile_args(profile, variables)[1])
+    power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: 0.0,
+             Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
+             Component.PROPULSION: choice.propulsion_w}
+    return ProfileRates(index, profile.kind, power, 0.0, choice.speed_mps, LEVEL_PITCH_RAD,
+                        0.0)
+
+
+def _not_flown(vehicle: Vehicle, profile: ir.Profile, index: int) -> ProfileRates:
+    """An alternative the vehicle cannot fly (the checker warned): no power, no time; the
+    plan file carries the vehicle's own command (a glide, or level on its propeller)."""
+    power = dict.fromkeys((Component.HOTEL, Component.PUMP, Component.PITCH,
+                           Component.SURFACE, Component.IRIDIUM, Component.PROPULSION), 0.0)
+    if vehicle.has_buoyancy_engine:
+        pitch, ballast = vehicle.nominal_pitch_rad, vehicle.max_ballast_cc
+        speed = float(vehicle.glide(pitch, ballast)[0])
+    else:
+        pitch, ballast, speed = LEVEL_PITCH_RAD, 0.0, vehicle.propulsion.min_speed_mps
+    return ProfileRates(index, profile.kind, power, 0.0, speed, pitch, ballast, flyable=False)
+
+
+THRUST_STEPS = 33  # commanded powers tried across a thruster's range for `thrust auto`
+
+
+def _thrust_assisted(vehicle: Vehicle, profile: ir.Profile, glide: ProfileRates,
+                     fixed_load_w: float) -> ProfileRates:
+    """A yo with the thruster on: thrust along the glide path speeds it up
+    (`thrust_assisted_speed`, on the hull's zero-lift drag); with the path's angle kept,
+    the yos come faster in proportion, and so do the pump and battery-shift powers. `auto`
+    tries off and commands across the thruster's range and keeps the least energy per
+    metre for the load `fixed_load_w` [W]."""
+    propulsion, fl = vehicle.propulsion, vehicle.flight
+    commands = np.array([0.0, *np.linspace(propulsion.min_command_w,
+                                            propulsion.max_command_w, THRUST_STEPS)]) \
+        if profile.thrust == "auto" else np.array([float(profile.thrust)])
+    speeds = thrust_assisted_speed(glide.speed_mps,
+                                   [propulsion.thrust_power_w(c) for c in commands],
+                                   fl.rho_kg_m3, fl.wing_area_m2, fl.drag_cd0)
+    actuators = glide.power_w[Component.PUMP] + glide.power_w[Component.PITCH]
+    draws = np.array([propulsion.assist_draw_w(c) for c in commands])
+    per_m = (fixed_load_w + actuators * speeds / glide.speed_mps + draws) / speeds
+    best = int(np.argmin(per_m))
+    faster = float(speeds[best] / glide.speed_mps)
+    power = {**glide.power_w, Component.PUMP: glide.power_w[Component.PUMP] * faster,
+             Component.PITCH: glide.power_w[Component.PITCH] * faster,
+             Component.PROPULSION: float(draws[best])}
+    return ProfileRates(glide.index, glide.kind, power, glide.inflections_per_s * faster,
+                        float(speeds[best]), glide.pitch_rad, glide.ballast_cc,
+                        float(commands[best]))
 
 
 def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,

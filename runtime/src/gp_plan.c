@@ -592,10 +592,12 @@ static int read_profile(reader *r, const gp_mission *mission, int expected_index
     if (out->share < 0 || out->share > 1) {
         return fail(r, "SHARE %g outside [0, 1]", out->share);
     }
-    if (!(out->pitch_rad > 0 && out->pitch_rad < HALF_PI)) {
+    /* pitch and ballast 0: a propelled profile, flown level on its propeller */
+    int level = out->pitch_rad == 0.0 && out->ballast_cc == 0.0;
+    if (!level && !(out->pitch_rad > 0 && out->pitch_rad < HALF_PI)) {
         return fail(r, "PITCH_RAD %g outside (0, pi/2)", out->pitch_rad);
     }
-    if (!(out->ballast_cc > 0) || !(out->speed_mps > 0)) {
+    if (!(level || out->ballast_cc > 0) || !(out->speed_mps > 0)) {
         return fail(r, "BALLAST_CC and SPEED_MPS must be > 0");
     }
     if (out->ballast_cc > mission->max_ballast_cc) {
