@@ -161,8 +161,9 @@ ROUTES: dict[str, RouteInfo] = {
 
 
 def cannot_fly(kind: str, thrust: object, vehicle: object) -> tuple[str, str, bool] | None:
-    """(why, hint, whether the thrust is to blame) when `vehicle` (power_models.vehicle.Vehicle) cannot fly profile `kind`
-    with a thruster setting `thrust` (None: none): a propelled profile without propulsion,
+    """(why, hint, whether the thrust is to blame) when `vehicle`
+    (power_models.vehicle.Vehicle) cannot fly profile `kind` with a thruster setting
+    `thrust` (None: none): a propelled profile without propulsion,
     a buoyancy profile without a buoyancy engine, a thrust without a thruster."""
     name, propulsion = vehicle.name, vehicle.propulsion
     if PROFILES[kind].propelled and propulsion is None:

@@ -19,10 +19,10 @@ from gliderplan.language import ir
 from gliderplan.language.registry import PROFILES, altitude_stop_m, cannot_fly
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy
+from gliderplan.planner.speed import best_speed, choice_at
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.devices import base_power_w
 from gliderplan.power_models.flight import DensityProfile
-from gliderplan.planner.speed import best_speed, choice_at
 from gliderplan.power_models.propulsion import thrust_assisted_speed
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 

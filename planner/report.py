@@ -14,12 +14,11 @@ REPORT_VERSION = 1
 
 def _state_json(result: PlanResult, s: int) -> dict:
     state, kinds = result.plan.states[s], result.mission.states[s].profiles
-    propelled = [p for p in state.profiles if kinds[p.index].propelled]
-    share = sum(p.share for p in propelled)
-    # the chosen speed through the water [m/s] where the vehicle is propelled: the shares'
-    # mean over its propelled profiles
-    speed = {"speed_m_s": sum(p.share * p.speed_mps for p in propelled) / share
-             if share > 0 else propelled[0].speed_mps} if propelled else {}
+    propelled = [p for p in state.profiles if kinds[p.index].propelled and p.share > 0]
+    # the chosen speed through the water [m/s] where the vehicle flies propelled: the
+    # shares' mean over its propelled profiles
+    speed = {"speed_m_s": sum(p.share * p.speed_mps for p in propelled)
+             / sum(p.share for p in propelled)} if propelled else {}
     return {
         "name": state.name,
         "time_s": state.time_s,

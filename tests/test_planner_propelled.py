@@ -1,0 +1,79 @@
+"""The planner on propelled vehicles: the chosen cruise speed, the propulsion's energy,
+alternatives a vehicle cannot fly, and `compare-vehicles` on the example mission flown
+by a glider, a hybrid and an AUV by changing only its vehicle line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gliderplan.language import check_source
+from gliderplan.planner.make import make_plan
+from gliderplan.planner.report import report_json
+from gliderplan.planner.speed import best_speed, choice_at
+from gliderplan.power_models.devices import base_power_w
+from gliderplan.power_models.vehicle import load_vehicle
+
+EXAMPLE = Path(__file__).parent.parent / "examples" / "propelled_transect.mission"
+VEHICLES = ("slocum_g2_shallow", "slocum_g3_hybrid", "lauv")
+
+
+def _example_on(vehicle: str):
+    source = EXAMPLE.read_text().replace("vehicle slocum_g3_hybrid", f"vehicle {vehicle}")
+    result = check_source(source, "propelled_transect.mission")
+    assert result.ok, [d.message for d in result.diagnostics]
+    return result
+
+
+@pytest.mark.parametrize("vehicle", VEHICLES)
+def test_the_example_flies_on_each_vehicle_by_its_vehicle_line(vehicle: str) -> None:
+    result = _example_on(vehicle)
+    report = report_json(make_plan(result.mission))
+    kinds = {p["kind"] for s in report["states"] for p in s["profiles"] if p["share"] > 0}
+    assert kinds == ({"cruise"} if vehicle == "lauv" else {"yo"})
+    warned = [d.message for d in result.diagnostics]
+    assert all("the planner gives it no time" in m for m in warned)
+    assert bool(warned) == (vehicle != "slocum_g3_hybrid")
+
+
+def test_auto_speed_is_the_least_energy_per_metre_and_beats_one_metre_per_second() -> None:
+    report = report_json(make_plan(_example_on("lauv").mission))
+    lauv = load_vehicle("lauv")
+    state = report["states"][0]
+    load = base_power_w(lauv) + state["energy_by_component_j"]["computer"] / state["time_s"]
+    chosen = best_speed(lauv.propulsion, load)
+    assert state["speed_m_s"] == pytest.approx(chosen.speed_mps, rel=1e-6)
+    assert state["energy_by_component_j"]["propulsion"] == pytest.approx(
+        chosen.propulsion_w * state["time_s"], rel=1e-6)
+    fixed = choice_at(lauv.propulsion, load, 1.0)
+    # the model's own prediction of the saving per km, and a real saving
+    assert fixed.energy_per_m_j - chosen.energy_per_m_j == pytest.approx(
+        (load + float(lauv.propulsion.power_w(1.0))) / 1.0
+        - (load + chosen.propulsion_w) / chosen.speed_mps)
+    assert chosen.energy_per_m_j < fixed.energy_per_m_j
+
+
+def test_compare_vehicles_json_and_crossover() -> None:
+    run = subprocess.run([sys.executable, "-m", "gliderplan.cli", "compare-vehicles",
+                          str(EXAMPLE), *[a for v in VEHICLES for a in ("--vehicle", v)],
+                          "--json"], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    rows = {v["vehicle"]: v for v in data["vehicles"]}
+    assert [rows[v]["kind"] for v in VEHICLES] == ["glider", "hybrid", "auv"]
+    assert all(r["energy_j"] > 0 and r["duration_s"] == 8 * 3600 for r in rows.values())
+    # still water: the glider is cheapest per km; a strong head current: the AUV
+    assert min(rows.values(), key=lambda r: r["energy_per_km_j"])["vehicle"] == VEHICLES[0]
+    assert data["crossovers"] and data["crossovers"][-1]["to"] == "lauv"
+
+
+def test_compare_vehicles_refuses_an_unknown_vehicle() -> None:
+    run = subprocess.run([sys.executable, "-m", "gliderplan.cli", "compare-vehicles",
+                          str(EXAMPLE), "--vehicle", "submarine"],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode in (1, 2) and "submarine" in run.stderr
+    assert "Traceback" not in run.stderr
