@@ -56,6 +56,8 @@ PLAN_FORMAT_VERSION = 3  # the plan file's `GPPLAN` line (docs/plan-format.md)
 # refuse a plan past any of them.
 MAX_PLAN_TIME_S = 315_360_000.0  # [s] a cycle, a sensor period, a state's predicted time (10 y)
 MAX_PLAN_SPEED_MPS = 2.0  # [m/s] a planned horizontal speed (a glider makes 0.2-0.5)
+# [W] a yo's thruster's commanded power (the Slocum G3 hybrid's commands 1-9 W)
+MAX_PLAN_THRUST_W = 100.0
 MAX_PLAN_ENERGY_J = 1e10  # [J] a budget or prediction (the largest Slocum pack is 12 MJ)
 MAX_PLAN_INFLECTIONS = 1e9  # a state's predicted inflections (as many as its visits may be)
 MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
@@ -82,11 +84,20 @@ class FlightLimits:
     default_ballast_cc: float  # [cc] flown where no plan sets one
     max_ballast_cc: float  # [cc] the pump's volume either side of neutral
     clocks_mhz: tuple[float, ...]  # [MHz] the board's clocks, slowest first
+    # [m/s] a propelled profile's `auto` speed where no plan sets one (0: no propulsion)
+    unplanned_speed_mps: float = 0.0
+    # per state, the alternative flown where no plan sets one: the first the vehicle can
+    # fly (a propeller AUV skips a yo); empty: the first of each state
+    unplanned_profiles: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if not 1 <= len(self.clocks_mhz) <= MAX_BOARD_CLOCKS:
             raise ValueError(f"a board has 1..{MAX_BOARD_CLOCKS} clocks, not "
                              f"{len(self.clocks_mhz)}")
+
+    def unplanned_profile(self, state: int) -> int:
+        """The alternative state `state` (its index) flies without a plan."""
+        return self.unplanned_profiles[state] if self.unplanned_profiles else 0
 
     def has_clock(self, clock_mhz: float) -> bool:
         """Whether the board has the clock `clock_mhz` [MHz] (`same_clock`)."""
@@ -232,7 +243,8 @@ VEHICLE_COMPONENTS: tuple[str, ...] = (Component.HOTEL, Component.PUMP, Componen
 
 # ---- the serial link (docs/protocol.md) ---------------------------------------------
 
-PROTOCOL_VERSION = 2  # 2: COMMANDs as changes against a base, SENSORS without a mask
+PROTOCOL_VERSION = 3  # 2: COMMANDs as changes against a base, SENSORS without a mask;
+# 3: COMMAND's speed and thrust (propelled flight)
 MAX_PAYLOAD = 240  # [bytes] of one frame's payload
 MAX_WIRE = 250  # [bytes] of COBS before the delimiter that a receiver accepts
 PLAN_PIECE = 200  # [bytes] of plan file per PLAN frame
@@ -240,7 +252,7 @@ MAX_LINK_PLAN = 65535  # [bytes] of a plan sent over the link (PLAN's `total` is
 # [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at
 # the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes)
 SBD_MT_MESSAGE_BYTES = 1890
-COMMAND_MAX_SIZE = 38  # [bytes] of a COMMAND payload that carries every field
+COMMAND_MAX_SIZE = 46  # [bytes] of a COMMAND payload that carries every field
 BAUD = 115200  # 8N1: 10 bits per byte on the line
 
 
@@ -307,10 +319,12 @@ class CommandField(IntEnum):
     HEADING_RAD = 10  # f32 [rad] true, clockwise from north (valid with FLAG_HEADING)
     SENSOR_POWER = 11  # u32 bit i: power sensor i's device
     EVENT_COUNT = 12  # u32 events fired so far
+    SPEED_MPS = 13  # f32 [m/s] through the water on the propeller; 0: none (a glide)
+    THRUST_W = 14  # f32 [W] a glider's thruster's commanded power assisting a yo; 0: off
 
 
 # struct format of each COMMAND field, in CommandField order
-COMMAND_FIELD_FORMATS = "BBBBBBBffffII"
+COMMAND_FIELD_FORMATS = "BBBBBBBffffIIff"
 
 
 class ReleaseReason(IntEnum):

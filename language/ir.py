@@ -215,6 +215,12 @@ class Profile:
         return PROFILES[self.kind].propelled or self.thrust is not None
 
     @property
+    def written_thrust_w(self) -> float:
+        """The thrust written [W], flown without a plan; 0 for none or `auto` (the planner's
+        choice: off without a plan)."""
+        return self.thrust if isinstance(self.thrust, float) else 0.0
+
+    @property
     def has_altimeter_stop(self) -> bool:
         """Whether it is given an altimeter stop (a yo's `altitude` argument): the runtime
         then reads the altitude."""

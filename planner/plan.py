@@ -361,7 +361,7 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
         shares = np.clip(sol.share[rows], 0.0, 1.0)
         shares = shares / shares.sum()
         profiles = tuple(
-            ProfilePlan(p.index, float(f), p.pitch_rad, p.ballast_cc, p.speed_mps)
+            ProfilePlan(p.index, float(f), p.pitch_rad, p.ballast_cc, p.speed_mps, p.thrust_w)
             for p, f in zip((inputs.profiles[r] for r in rows), shares, strict=True))
         inflections = float(sum(inputs.profiles[r].inflections_per_s * f * t
                                 for r, f in zip(rows, shares, strict=True)))
@@ -372,7 +372,8 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
             state.name, as_written(inputs.clocks[modes[s]].clock_mhz),
             as_written(cycle), as_written(t), visits, as_written(inflections), energy, sensors,
             tuple(ProfilePlan(p.index, as_written(p.share), as_written(p.pitch_rad),
-                              as_written(p.ballast_cc), as_written(p.speed_mps))
+                              as_written(p.ballast_cc), as_written(p.speed_mps),
+                              as_written(p.thrust_w))
                   for p in profiles),
             sleep=hardware.sleeps(state), cycles_per_tick=as_written(hardware.cycles(state))))
     notes = dict.fromkeys([*_describe_defaults(inputs), *inputs.notes])

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from gliderplan.language import ir
+from gliderplan.language.registry import cannot_fly
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
@@ -30,13 +31,15 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
     The Python executor flies runs of ticks at once where nothing can happen between them
     (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
-    the reference loop instead. The C runtime reads its plan from `plan_path` (the file
+    the reference loop instead, as does a vehicle with a propeller or a thruster (the fast
+    executor flies gliders only). The C runtime reads its plan from `plan_path` (the file
     `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
     uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
     given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
     when it refuses the plan. `faults` (C runtime only) are injected on the line and into
     the runtime's board; the record says what they did.
     """
+    from gliderplan.planner.limits import flight_limits, vehicle_limits
     from gliderplan.sim.energy import BatteryGauge
 
     science = make_science(mission, ocean, config, vehicle)
@@ -44,10 +47,11 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     if runtime == "python":
         from gliderplan.sim.executor import PythonRuntime
 
-        # without a plan: the same buoyancy volume the compiler gives the C runtime
+        # without a plan: the same buoyancy volume, alternatives and speed the compiler
+        # gives the C runtime (the board's clocks are not the executor's to set)
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
-                                 vehicle.max_ballast_cc)
-        if tick_by_tick:
+                                 vehicle.max_ballast_cc, vehicle_limits(mission, vehicle, (0.0,)))
+        if tick_by_tick or vehicle.propulsion is not None:  # sim/fast.py: gliders only
             record = simulate(mission, executor, science, config, progress, gauge=gauge)
         else:
             from gliderplan.sim.fast import FastForward
@@ -59,14 +63,12 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         return record
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
-    from gliderplan.contract import FlightLimits
-    from gliderplan.planner.limits import flight_limits
     from gliderplan.planner.planfile import plan_board_limits
     from gliderplan.sim.emulator import start_c_runtime
 
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
-    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
-                          board.clocks_mhz)  # the vehicle flown: a scenario's may differ
+    # the vehicle flown: a scenario's may differ
+    limits = vehicle_limits(mission, vehicle, board.clocks_mhz)
     schedule = None
     if faults is not None:
         from gliderplan.sim.faults import FaultSchedule
@@ -95,8 +97,9 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
     for i, state in enumerate(mission.states):
         for k, profile in enumerate(state.profiles):
             args = profile.constant_args()
-            if profile.kind not in ("yo", "thermotrackyo") or args is None:
-                continue
+            if profile.kind not in ("yo", "thermotrackyo") or args is None or \
+                    cannot_fly(profile.kind, profile.thrust, vehicle) is not None:
+                continue  # one the vehicle cannot fly is never flown (no plan time, check warns)
             planned = plan.states[i].profiles[k] if plan is not None else None
             pitch = planned.pitch_rad if planned else 0.5 * (args[2] + args[3])
             ballast = planned.ballast_cc if planned else vehicle.unplanned_ballast_cc

@@ -576,7 +576,8 @@ static int read_profile(reader *r, const gp_mission *mission, int expected_index
                         gp_plan_profile *out)
 {
     int index;
-    if (expect(r, "profile", 6) < 0
+    /* `profile INDEX SHARE PITCH_RAD BALLAST_CC SPEED_MPS [THRUST_W]` */
+    if (expect_fields(r, "profile", 6, 7, 0) < 0
         || count_field(r, 1, "profile INDEX", 0, GP_MAX_PROFILE_ALTERNATIVES - 1, &index) < 0) {
         return -1;
     }
@@ -588,6 +589,13 @@ static int read_profile(reader *r, const gp_mission *mission, int expected_index
         || number_field(r, 4, "BALLAST_CC", &out->ballast_cc) < 0
         || number_field(r, 5, "SPEED_MPS", &out->speed_mps) < 0) {
         return -1;
+    }
+    out->thrust_w = 0.0;  /* left out: the thruster is off */
+    if (r->n_fields == 7 && number_field(r, 6, "THRUST_W", &out->thrust_w) < 0) {
+        return -1;
+    }
+    if (!(out->thrust_w >= 0 && out->thrust_w <= GP_MAX_PLAN_THRUST_W)) {
+        return fail(r, "THRUST_W %g outside [0, %g]", out->thrust_w, GP_MAX_PLAN_THRUST_W);
     }
     if (out->share < 0 || out->share > 1) {
         return fail(r, "SHARE %g outside [0, 1]", out->share);
@@ -783,9 +791,11 @@ void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
                  double default_ballast_cc, gp_schedule_now *out)
 {
     out->sensor_power = state->sensor_mask;
-    out->profile = 0;
+    out->profile = state->unplanned_profile;
     out->pitch_rad = NAN;
     out->ballast_cc = default_ballast_cc;
+    out->speed_mps = NAN;
+    out->thrust_w = NAN;
     if (ps == NULL) {
         return;
     }
@@ -799,4 +809,6 @@ void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
     out->profile = (uint8_t)alternative_at(ps, t_in_s);
     out->pitch_rad = ps->profiles[out->profile].pitch_rad;
     out->ballast_cc = ps->profiles[out->profile].ballast_cc;
+    out->speed_mps = ps->profiles[out->profile].speed_mps;
+    out->thrust_w = ps->profiles[out->profile].thrust_w;
 }

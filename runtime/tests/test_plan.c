@@ -482,10 +482,11 @@ void test_signed_plan_should_have_a_well_formed_tail(void)
 
 /* ---- schedule ------------------------------------------------------------------ */
 
-static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL}, {GP_PROFILE_HOVER, 0, NULL}};
+static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL, 0.0},
+                                          {GP_PROFILE_HOVER, 0, NULL, 0.0}};
 static const uint8_t logged[] = {0, 1, 9, 12};  /* missiontime, depth, temp, oxygen */
 static const gp_state scheduled = {
-    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0, 0, 0, 0x1203,
+    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0, 0, 0, 0x1203, 0,
 };
 
 void test_schedule_without_a_plan_should_power_every_logged_sensor(void)
