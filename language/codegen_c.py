@@ -69,7 +69,7 @@ def _sensors_read(mission: ir.CheckedMission) -> int:
                 names |= ir.sensors_read(arg)
             if PROFILES[profile.kind].tracks_thermocline:
                 names.add("temp")
-            if profile.has_altimeter_stop:
+            if profile.has_altimeter_stop or profile.kind == "altitude":  # it follows the floor
                 names.add("altitude")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}

@@ -88,6 +88,20 @@ void test_plan_should_accept_a_good_plan(void)
     CHECK_NEAR(plan.states[1].profiles[0].pitch_rad, 0.4, 0);
 }
 
+void test_plan_should_read_a_yos_thrust_and_a_level_profile(void)
+{
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    size_t len = variant("profile 0 1 0.454 230 0.31\nend\nstate s2",
+                         "profile 0 1 0.454 230 0.31 4.5\nend\nstate s2");
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), 0);
+    CHECK_NEAR(plan.states[0].profiles[0].thrust_w, 4.5, 0);
+    CHECK_NEAR(plan.states[2].profiles[0].thrust_w, 0, 0);  /* left out: off */
+    len = variant("profile 0 1 0.4 200 0.3", "profile 0 1 0 0 1.2");  /* cruise, level */
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), 0);
+    CHECK_NEAR(plan.states[1].profiles[0].speed_mps, 1.2, 0);
+}
+
 void test_plan_should_reject_bad_files_naming_the_line(void)
 {
     static const struct {
@@ -155,6 +169,10 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 40",
          "line 15: SPEED_MPS 40 exceeds 2"},
         {"profile 0 1 0.454", "profile 0 1.5 0.454", "line 15: SHARE 1.5 outside [0, 1]"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 0.31 -3",
+         "line 15: THRUST_W -3 outside [0, 100]"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 0.31 3 4",
+         "line 15: 'profile' takes 5 to 6 fields, found 7"},
         {"state s2", "state s9", "line 17: state 's9' where the mission has 's2'"},
         {"sensor temp 60 15", "sensor oxygen 60 15", "line 21: sensor 'oxygen' is not logged"},
         {"sensor depth 60 0\nsensor temp", "sensor temp 60 15\nsensor depth",
