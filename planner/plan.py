@@ -26,11 +26,7 @@ from gliderplan.planner.inputs import (
     utility,
 )
 from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel, Solution, model_for
-from gliderplan.planner.occupancy import (
-    NOMINAL_SPEED_MPS,
-    measured_occupancy,
-    mission_occupancy,
-)
+from gliderplan.planner.occupancy import NOMINAL_SPEED_MPS, measured_occupancy
 from gliderplan.planner.planfile import (
     Assumption,
     Plan,
@@ -39,6 +35,7 @@ from gliderplan.planner.planfile import (
     StatePlan,
     as_written,
 )
+from gliderplan.planner.rates import hardware_occupancy
 from gliderplan.power_models.devices import base_power_w
 
 _ON_EDGE = 1e-6  # a duty this close to 0 or 1 does not cycle (no warm-ups)
@@ -93,7 +90,7 @@ def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
     """The inputs and the built model (parameters set) for a mission."""
     hardware = hardware or load_hardware(mission)
     try:
-        occupancy = (mission_occupancy(mission) if occupancy_s is None
+        occupancy = (hardware_occupancy(mission, hardware) if occupancy_s is None
                      else measured_occupancy(mission, occupancy_s))
     except MissionFault as fault:
         raise PlanningError(f"the mission's timeline fails at {fault}") from None

@@ -18,8 +18,8 @@ from gliderplan.contract import TICK_S, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import PROFILES, altitude_stop_m, cannot_fly
 from gliderplan.planner.hardware import Hardware
-from gliderplan.planner.occupancy import Occupancy
-from gliderplan.planner.speed import best_speed, choice_at
+from gliderplan.planner.occupancy import Occupancy, mission_occupancy
+from gliderplan.planner.speed import SpeedChoice, best_speed, choice_at
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.devices import base_power_w
 from gliderplan.power_models.flight import DensityProfile
@@ -190,16 +190,45 @@ def _propelled_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
     `auto` at the speed of least energy per metre for the load `fixed_load_w` [W] (hotel
     and computer: a hungrier computer makes it faster). It holds its depth on the
     propeller: no pump, no inflections; the plan carries a level pitch."""
-    propulsion = vehicle.propulsion
-    if "speed" in profile.auto:
-        choice = best_speed(propulsion, fixed_load_w)
-    else:
-        choice = choice_at(propulsion, fixed_load_w, _profile_args(profile, variables)[1])
+    choice = propelled_speed(vehicle, profile, variables, fixed_load_w)
     power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: 0.0,
              Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
              Component.PROPULSION: choice.propulsion_w}
     return ProfileRates(index, profile.kind, power, 0.0, choice.speed_mps, LEVEL_PITCH_RAD,
                         0.0)
+
+
+def propelled_speed(vehicle: Vehicle, profile: ir.Profile, variables: dict[str, float],
+                    fixed_load_w: float) -> SpeedChoice:
+    """The speed a propelled profile flies at: written, or for `auto` the least energy per
+    metre for the load `fixed_load_w` [W] besides the motor."""
+    if "speed" in profile.auto:
+        return best_speed(vehicle.propulsion, fixed_load_w)
+    return choice_at(vehicle.propulsion, fixed_load_w, _profile_args(profile, variables)[1])
+
+
+def transit_speeds(hardware: Hardware, mission: ir.CheckedMission) -> dict[str, float]:
+    """[m/s] the speed of each state whose alternatives the vehicle can fly are all
+    propelled (the first of them; its speed written as a number or `auto`, not read from a
+    variable): a transit leg through it is timed at that speed, not at a glider's nominal
+    (`occupancy.mission_occupancy`)."""
+    vehicle = hardware.vehicle
+    initial = {v.name: v.initial for v in mission.variables}
+    speeds = {}
+    for state in mission.states:
+        flown = [p for p in state.profiles if cannot_fly(p.kind, p.thrust, vehicle) is None]
+        if flown and all(PROFILES[p.kind].propelled for p in flown) and \
+                flown[0].constant_args() is not None:
+            speeds[state.name] = propelled_speed(vehicle, flown[0], initial,
+                                                 state_load_w(hardware, state)).speed_mps
+    return speeds
+
+
+def hardware_occupancy(mission: ir.CheckedMission, hardware: Hardware,
+                       horizon_s: float | None = None) -> Occupancy:
+    """The mission's timeline on `hardware`: its propelled transit legs at their speed
+    (`transit_speeds`), a glider's at the nominal speed."""
+    return mission_occupancy(mission, horizon_s, transit_speeds(hardware, mission))
 
 
 def _not_flown(vehicle: Vehicle, profile: ir.Profile, index: int) -> ProfileRates:
@@ -248,15 +277,21 @@ def _thrust_assisted(vehicle: Vehicle, profile: ir.Profile, glide: ProfileRates,
 def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
                    notes: list[str]) -> list[ProfileRates]:
     """Rates of every alternative of a state."""
-    powers = state_mode_powers(hardware, state)
-    load = hardware.vehicle.hotel_w + (float(np.nanmin(powers)) if np.isfinite(powers).any()
-                                       else 0.0)
+    load = state_load_w(hardware, state)
     visits = max(occupancy.visits[state.name], 1)
     visit_s = occupancy.time_s[state.name] / visits
     variables = occupancy.variables[state.name]
     return [profile_rates(hardware.vehicle, p, j, variables, load, visit_s, notes,
                           f"{state.name}: flightprofile {j}")
             for j, p in enumerate(state.profiles)]
+
+
+def state_load_w(hardware: Hardware, state: ir.State) -> float:
+    """[W] the load a state's flight speed is chosen for: the vehicle's hotel load and the
+    board at its least power in the state."""
+    powers = state_mode_powers(hardware, state)
+    return hardware.vehicle.hotel_w + (float(np.nanmin(powers)) if np.isfinite(powers).any()
+                                       else 0.0)
 
 
 def clock_columns(hardware: Hardware, mission: ir.CheckedMission) -> tuple[Board, ...]:

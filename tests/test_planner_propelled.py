@@ -77,3 +77,46 @@ def test_compare_vehicles_refuses_an_unknown_vehicle() -> None:
                          capture_output=True, text=True, timeout=300)
     assert run.returncode in (1, 2) and "submarine" in run.stderr
     assert "Traceback" not in run.stderr
+
+
+TRANSIT = """mission transit
+vehicle VEHICLE
+computer ts7800 @ 300 MHz
+battery 5 kWh reserve 10 %
+state start
+begin
+  flightroute nav(3910.5, -7349.8058)
+  flightprofile PROFILE
+  sensors missiontime, depth
+  events
+    case missiontime >= 600 goto out
+end
+state out
+begin
+  flightroute nav(3920.5, -7349.8058)
+  flightprofile PROFILE
+  sensors missiontime, depth, wptdist
+  events
+    case wptdist < 60 exit
+end
+"""
+
+
+@pytest.mark.parametrize(("vehicle", "profile"), [("lauv", "cruise(10, auto)"),
+                                                  ("lauv", "cruise(10, 1.2)"),
+                                                  ("slocum_g3_hybrid", "cruise(10, auto)")])
+def test_a_propelled_transit_leg_is_timed_at_its_speed(vehicle: str, profile: str) -> None:
+    source = TRANSIT.replace("VEHICLE", vehicle).replace("PROFILE", profile)
+    result = check_source(source, "transit.mission")
+    assert result.ok, [d.message for d in result.diagnostics]
+    plan = make_plan(result.mission)
+    state = plan.plan.states[1]
+    speed = state.profiles[0].speed_mps
+    if "1.2" in profile:
+        assert speed == 1.2
+    # the leg between the two points, 10' of latitude apart: 18.5 km
+    leg_m = speed * state.time_s
+    assert leg_m == pytest.approx(18532, abs=speed * 4.0 + 1.0)
+    assert state.time_s < leg_m / 0.35 / 1.4  # not the glider's nominal 0.35 m/s
+    assert any("propelled transit leg of 18.5 km" in a.text
+               for a in plan.plan.assumptions)
