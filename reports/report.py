@@ -28,7 +28,7 @@ SWEEP_POINTS = 20  # budgets on the Pareto curve
 QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
-SECTIONS = ("summary", "pareto", "energy", "plan-vs-simulation", "profile", "sbc",
+SECTIONS = ("summary", "pareto", "energy", "speed", "plan-vs-simulation", "profile", "sbc",
             "sensitivity", "montecarlo")
 
 
@@ -188,9 +188,11 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.planner.compare import compare_boards
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
+    from gliderplan.planner.planfile import load_plan
     from gliderplan.planner.sensitivity import sensitivity
     from gliderplan.planner.sweep import pareto
     from gliderplan.reports import sbc
+    from gliderplan.reports.speed import speed_frame
 
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
@@ -231,10 +233,14 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     }
     if carlo is not None:
         tables["montecarlo.csv"] = carlo[0]
+    speeds = speed_frame(mission, hardware, load_plan(plan_file, mission))
+    if len(speeds):
+        tables["speed.csv"] = speeds
     sections = [
         _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
         _pareto_section(frontier, report, _star(model, frontier, report), plan_file),
         _energy_section(tables["energy_by_state.csv"]),
+        *([_speed_section(speeds)] if len(speeds) else []),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
         _profile_section(tables["profile.csv"], len(series)),
         _sbc_section(comparison, tables),
@@ -403,6 +409,23 @@ def _energy_section(frame: pd.DataFrame) -> Section:
                    ("energy_by_state.csv",),
                    (Table(frame, {"state": "state", **headers},
                           dict.fromkeys(headers, ",.3g")),))
+
+
+def _speed_section(frame: pd.DataFrame) -> Section:
+    from gliderplan.reports.speed import REFERENCE_SPEED_MPS, speed_svg
+
+    chosen = frame[frame["chosen"]]
+    headers = {"state": "state", "speed_mps": "chosen speed [m/s]",
+               "energy_per_km_kj": "energy per km [kJ]"}
+    return Section("speed", "Energy per km against speed", (
+        "<p>Where the plan flies on the propeller: the energy each km takes at each speed "
+        "through the water (the vehicle's propulsion model with the state's hotel load and "
+        "board, in still water), and the speed the planner chose, the least energy per km "
+        "(or the one written). Too slow and the hotel load takes the battery, too fast "
+        f"and drag does; the dotted line is a fixed {REFERENCE_SPEED_MPS:g} m/s cruise.</p>",),
+        speed_svg(frame), "Energy per km [kJ] against speed [m/s]; stars: the chosen speeds.",
+        ("speed.csv",), (Table(chosen[list(headers)], headers,
+                               {"speed_mps": ".3g", "energy_per_km_kj": ",.4g"}),))
 
 
 def _plan_vs_sim_section(frame: pd.DataFrame, summary: dict, run_path: Path,

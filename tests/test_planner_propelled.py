@@ -120,3 +120,35 @@ def test_a_propelled_transit_leg_is_timed_at_its_speed(vehicle: str, profile: st
     assert state.time_s < leg_m / 0.35 / 1.4  # not the glider's nominal 0.35 m/s
     assert any("propelled transit leg of 18.5 km" in a.text
                for a in plan.plan.assumptions)
+
+
+def test_a_propelled_plan_draws_energy_per_km_against_speed_beside_it(tmp_path) -> None:
+    from gliderplan.cli.main import main
+
+    for vehicle in ("lauv", "slocum_g2_shallow"):
+        mission = tmp_path / f"{vehicle}.mission"
+        mission.write_text(EXAMPLE.read_text().replace("vehicle slocum_g3_hybrid",
+                                                       f"vehicle {vehicle}"))
+        assert main(["plan", str(mission), "-o", str(tmp_path / f"{vehicle}.plan")]) == 0
+    assert (tmp_path / "lauv.plan.speed.png").read_bytes().startswith(b"\x89PNG")
+    assert not (tmp_path / "slocum_g2_shallow.plan.speed.png").exists()  # nothing propelled
+
+
+def test_the_report_shows_energy_per_km_against_speed_with_the_chosen_point(tmp_path) -> None:
+    import pandas as pd
+
+    from gliderplan.reports.report import make_report
+
+    result = _example_on("lauv")
+    report = make_report(result.mission, tmp_path, sweep_points=3)
+    assert "speed" in report.sections
+    assert 'id="speed"' in (tmp_path / "report.html").read_text()
+    frame = pd.read_csv(tmp_path / "speed.csv")
+    plan = json.loads((tmp_path / "propelledTransect.plan.json").read_text())
+    for state in plan["states"]:
+        rows = frame[frame["state"] == state["name"]]
+        chosen = rows[rows["chosen"]]
+        assert chosen["speed_mps"].tolist() == [state["speed_m_s"]]
+        # auto: no speed of the curve takes less per km than the chosen one
+        curve = rows[~rows["chosen"]]["energy_per_km_kj"]
+        assert curve.min() >= chosen["energy_per_km_kj"].iloc[0] * (1 - 1e-9)
