@@ -512,9 +512,11 @@ class _Checker:
             return None
         return power[0]
 
-    def vehicle(self, span: ast.Span) -> object | None:
-        """The mission's vehicle (power_models.vehicle.Vehicle), loaded once; None, with an
-        error at `span`, when its file cannot be read."""
+    def vehicle(self) -> object | None:
+        """The mission's vehicle (power_models.vehicle.Vehicle), loaded once; None when its
+        file cannot be read or is bad: the stage that needs its figures (plan, sim,
+        compile) says so, with its own exit status (a file that cannot be opened is a usage
+        error, not the mission's)."""
         if self._vehicle is None:
             from gliderplan.contract.files import InputFileError
             from gliderplan.power_models.errors import ModelFileError
@@ -522,8 +524,7 @@ class _Checker:
 
             try:
                 self._vehicle = load_vehicle(self.vehicle_spec)
-            except (ModelFileError, InputFileError) as err:
-                self.error(f"the flight profile needs the vehicle's figures: {err}", span)
+            except (ModelFileError, InputFileError):
                 self._vehicle = False
         return self._vehicle or None
 
@@ -532,7 +533,7 @@ class _Checker:
         """An error where the vehicle cannot fly the profile (`cannot_fly`; a warning for one
         of several `alternatives`, which the planner then skips), or a speed or thrust
         beyond its propulsion model."""
-        vehicle = self.vehicle(invocation.span)
+        vehicle = self.vehicle()
         if vehicle is None:
             return
         from gliderplan.power_models.propulsion import SpeedOutOfRange
