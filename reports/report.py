@@ -28,8 +28,8 @@ SWEEP_POINTS = 20  # budgets on the Pareto curve
 QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
-SECTIONS = ("summary", "pareto", "energy", "speed", "plan-vs-simulation", "profile", "sbc",
-            "sensitivity", "montecarlo")
+SECTIONS = ("summary", "pareto", "energy", "speed", "vehicles", "plan-vs-simulation",
+            "profile", "sbc", "sensitivity", "montecarlo")
 
 
 @dataclass(frozen=True)
@@ -192,7 +192,7 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.planner.sensitivity import sensitivity
     from gliderplan.planner.sweep import pareto
     from gliderplan.reports import sbc
-    from gliderplan.reports.speed import speed_frame
+    from gliderplan.reports.speed import COMPARED_VEHICLES, speed_frame, vehicles_frame
 
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
@@ -234,13 +234,20 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     if carlo is not None:
         tables["montecarlo.csv"] = carlo[0]
     speeds = speed_frame(mission, hardware, load_plan(plan_file, mission))
+    vehicles = None
     if len(speeds):
+        from gliderplan.planner.vehicles import compare_vehicles, crossovers
+
         tables["speed.csv"] = speeds
+        compared = compare_vehicles(mission, list(dict.fromkeys(
+            [mission.vehicle, *COMPARED_VEHICLES])))
+        tables["vehicles.csv"] = vehicles_frame(compared)
+        vehicles = _vehicles_section(tables["vehicles.csv"], crossovers(compared))
     sections = [
         _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
         _pareto_section(frontier, report, _star(model, frontier, report), plan_file),
         _energy_section(tables["energy_by_state.csv"]),
-        *([_speed_section(speeds)] if len(speeds) else []),
+        *([_speed_section(speeds), vehicles] if vehicles is not None else []),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
         _profile_section(tables["profile.csv"], len(series)),
         _sbc_section(comparison, tables),
@@ -426,6 +433,24 @@ def _speed_section(frame: pd.DataFrame) -> Section:
         speed_svg(frame), "Energy per km [kJ] against speed [m/s]; stars: the chosen speeds.",
         ("speed.csv",), (Table(chosen[list(headers)], headers,
                                {"speed_mps": ".3g", "energy_per_km_kj": ",.4g"}),))
+
+
+def _vehicles_section(frame: pd.DataFrame, flips: list[dict]) -> Section:
+    from gliderplan.planner.vehicles import HEAD_CURRENTS_MPS
+    from gliderplan.reports.speed import vehicles_svg
+
+    said = "".join(f"<li>against a head current of {f['head_current_mps']:.3g} m/s and more, "
+                   f"{esc(f['to'])} needs the least energy per km</li>" for f in flips)
+    return Section("vehicles", "The mission on a glider, a hybrid and an AUV", (
+        "<p>The same mission planned on each vehicle (<code>gliderplan compare-vehicles"
+        "</code>): the least energy per km over ground against a head current, each at its "
+        "best speed (a glider that cannot outrun the current makes no way). Where the "
+        "cheapest vehicle "
+        "changes, the thruster or the propeller pays:</p>",
+        f"<ul>{said}</ul>" if flips else
+        f"<p>No crossover up to {HEAD_CURRENTS_MPS[-1]:g} m/s.</p>"),
+        vehicles_svg(frame, flips), "Energy per km [kJ] against the head current [m/s].",
+        ("vehicles.csv",))
 
 
 def _plan_vs_sim_section(frame: pd.DataFrame, summary: dict, run_path: Path,

@@ -74,3 +74,36 @@ def speed_svg(frame: pd.DataFrame) -> str:
 def speed_png(frame: pd.DataFrame) -> bytes:
     """The figure as a PNG file's bytes (beside a plan file)."""
     return render(_figure(frame), "png")
+
+
+# the vehicles a propelled mission is compared on in the report: a glider, a hybrid, an AUV
+COMPARED_VEHICLES = ("slocum_g2_shallow", "slocum_g3_hybrid", "lauv")
+
+
+def vehicles_frame(results: list) -> pd.DataFrame:
+    """Energy per km [kJ] against a head current [m/s] of each vehicle of `results`
+    (planner.vehicles.VehicleResult), one column per vehicle; empty where it makes no way."""
+    from gliderplan.planner.vehicles import HEAD_CURRENTS_MPS
+
+    return pd.DataFrame({"head_current_mps": HEAD_CURRENTS_MPS,
+                         **{r.vehicle: [j / 1e3 for j in r.per_km_against_current_j]
+                            for r in results}})
+
+
+def vehicles_svg(frame: pd.DataFrame, flips: list[dict]) -> str:
+    """Each vehicle's energy per km against the head current, the crossovers marked."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(8.4, 4.2))
+    for name in frame.columns[1:]:
+        ax.plot(frame["head_current_mps"], frame[name], label=name)
+    for flip in flips:
+        ax.axvline(flip["head_current_mps"], color="grey", ls=":", lw=1)
+        ax.annotate(f"{flip['to']} from {flip['head_current_mps']:.3g} m/s",
+                    (flip["head_current_mps"], ax.get_ylim()[1]), rotation=90, fontsize=7,
+                    va="top", ha="right")
+    ax.set_xlabel("head current [m/s]")
+    ax.set_ylabel("energy per km over ground [kJ]")
+    ax.set_yscale("log")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return render(fig, "svg").decode("utf-8")

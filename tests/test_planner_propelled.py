@@ -141,7 +141,11 @@ def test_the_report_shows_energy_per_km_against_speed_with_the_chosen_point(tmp_
 
     result = _example_on("lauv")
     report = make_report(result.mission, tmp_path, sweep_points=3)
-    assert "speed" in report.sections
+    assert report.sections[3:5] == ("speed", "vehicles")
+    vehicles = pd.read_csv(tmp_path / "vehicles.csv")
+    assert list(vehicles.columns) == ["head_current_mps", "lauv", *VEHICLES[:2]]  # its own first
+    page = (tmp_path / "report.html").read_text()
+    assert "against a head current of 0.65 m/s and more, lauv needs the least energy" in page
     assert 'id="speed"' in (tmp_path / "report.html").read_text()
     frame = pd.read_csv(tmp_path / "speed.csv")
     plan = json.loads((tmp_path / "propelledTransect.plan.json").read_text())
