@@ -71,6 +71,18 @@ def test_compare_vehicles_json_and_crossover() -> None:
     assert data["crossovers"] and data["crossovers"][-1]["to"] == "lauv"
 
 
+def test_compare_vehicles_plans_the_mission_on_each_vehicle_in_python() -> None:
+    from gliderplan.planner.vehicles import compare_vehicles, crossovers
+
+    results = compare_vehicles(_example_on("lauv").mission, list(VEHICLES))
+    assert [(r.vehicle, r.kind) for r in results] == [
+        ("slocum_g2_shallow", "glider"), ("slocum_g3_hybrid", "hybrid"), ("lauv", "auv")]
+    # still water: the glider goes furthest per joule, the AUV least far
+    assert results[0].energy_per_km_j < results[1].energy_per_km_j < results[2].energy_per_km_j
+    assert [(f["from"], f["to"]) for f in crossovers(results)] == [
+        ("slocum_g2_shallow", "slocum_g3_hybrid"), ("slocum_g3_hybrid", "lauv")]
+
+
 def test_compare_vehicles_refuses_an_unknown_vehicle() -> None:
     run = subprocess.run([sys.executable, "-m", "gliderplan.cli", "compare-vehicles",
                           str(EXAMPLE), "--vehicle", "submarine"],
