@@ -44,6 +44,17 @@ def seed(text: str) -> int:
     return value
 
 
+def replan_confidence(text: str) -> float:
+    """A replan's confidence: a probability in [0.5, 1)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.5 <= value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a probability in [0.5, 1), got {text!r}")
+    return value
+
+
 def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]]) -> None:
     """UsageError for an option given without one of the options it works with: `needs`
     maps an option ("--scenarios") to those ("--confidence", "--occupancy-from-sim"); an

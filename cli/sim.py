@@ -18,7 +18,13 @@ import math
 import re
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission, seed
+from gliderplan.cli.common import (
+    add_mission_argument,
+    load_mission,
+    refuse_unpaired,
+    replan_confidence,
+    seed,
+)
 from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
@@ -99,6 +105,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "than its tolerance (5 %%), although within its budget")
     parser.add_argument("--json", action="store_true",
                         help="print the run's summary (summary.json) and its files as JSON")
+    parser.add_argument("--replan-every", choices=("surfacing",), metavar="surfacing",
+                        help="put the shore in the loop: at each surfacing the glider reports, "
+                             "the rest of the mission is replanned and the plan update sent "
+                             "to the runtime (needs --plan; RUNDIR/replans.csv)")
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
+                        help="with --replan-every: the confidence the rest is replanned at "
+                             "(default: the plan's own, else 0.95)")
+    parser.add_argument("--scenario-file", metavar="FILE",
+                        help="with --replan-every: the spreads and battery share the replan's "
+                             "prior takes (default: the shipped scenario file)")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
                         help="directory for the run's files")
 
@@ -119,6 +135,8 @@ def _current(text: str):
 def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.run import run_mission
 
+    refuse_unpaired(args, {"--confidence": ("--replan-every",),
+                           "--scenario-file": ("--replan-every",)})
     mission = load_mission(args)
     duration_s = parse_duration_s(args.duration) if args.duration else None
     ticks = (duration_s or mission.horizon_s or DEFAULT_HORIZON_S) / max(args.tick, 1e-9)
@@ -132,7 +150,9 @@ def run(args: argparse.Namespace) -> int:
             noise=args.noise, tracker=args.tracker, current=_current(args.current),
             seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=args.start,
             netcdf=args.netcdf, progress=progress, key_path=args.key,
-            state_dir=args.state_dir, faults=args.faults, floor=args.floor)
+            state_dir=args.state_dir, faults=args.faults, floor=args.floor,
+            replan_every=args.replan_every, confidence=args.confidence,
+            scenario_file=args.scenario_file)
     finally:
         if progress is not None:
             progress.finish()
@@ -151,6 +171,8 @@ def run(args: argparse.Namespace) -> int:
     if duration_s is None and mission.horizon_s is None and record.ended == "duration":
         print(f"  ran to the default horizon, {DEFAULT_HORIZON_S / 86400:g} d: the mission names "
               "none (--duration sets another)", file=sys.stderr)
+    if args.replan_every:
+        print(_replanning(result), file=sys.stderr)
     if check.causes:
         print("  states over their own prediction:" if check.verdict != "violation" or
               "planned" in check.causes[0] else "  where it went:", file=sys.stderr)
@@ -195,3 +217,11 @@ def _time_text(seconds: float) -> str:
     if seconds >= 3 * 3600:
         return f"{seconds / 3600:.1f} h"
     return f"{seconds:g} s"
+
+
+def _replanning(result) -> str:  # noqa: ANN001
+    """What the shore did at the surfacings of a run with replanning."""
+    link = result.replanning
+    return (f"  replanned at {link['surfacings']} surfacings: {link['updates_applied']} updates "
+            f"applied, {link['updates_refused']} refused; link {link['up_bytes']:,} bytes up, "
+            f"{link['down_bytes']:,} down, the largest update {link['update_bytes_max']} bytes")

@@ -9,6 +9,7 @@ Change a fact here, regenerate the header, and every part follows.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -75,15 +76,32 @@ def same_clock(clock_mhz: float, board_clock_mhz: float) -> bool:
     return abs(clock_mhz - board_clock_mhz) <= CLOCK_TOLERANCE_MHZ
 
 
+# A plan's figures are written with 9 significant digits: two that should agree (a duty and
+# its bound, the prediction and its states' sum) agree within this relative tolerance.
+PLAN_ROUNDING = 1e-6
+
+
 @dataclass(frozen=True)
 class FlightLimits:
-    """The figures of one vehicle and board that bound a plan: the code generator writes
-    them into the compiled mission (`gp_mission.max_ballast_cc`, `clocks_mhz`), the
-    Python plan reader checks them (`planner.limits.flight_limits` loads them)."""
+    """The figures of one mission, vehicle and board that bound a plan: the code generator
+    writes them into the compiled mission (`gp_mission`: `max_ballast_cc`, `clocks_mhz`,
+    `bounds`), `contract.plan_check.plan_problem` holds a plan to them in Python and
+    `gp_plan_check` in C (`planner.limits.flight_limits` loads them). The fields after
+    `clocks_mhz` default to no bound beyond the contract's (a mission table made by hand)."""
 
     default_ballast_cc: float  # [cc] flown where no plan sets one
     max_ballast_cc: float  # [cc] the pump's volume either side of neutral
     clocks_mhz: tuple[float, ...]  # [MHz] the board's clocks, slowest first
+    board: str | None = None  # the board's name a plan names (or NO_BOARD); None: any
+    max_budget_j: float = MAX_PLAN_ENERGY_J  # [J] the battery less its reserve
+    pitch_range_rad: tuple[float, float] = (0.0, math.pi / 2)  # [rad] commanded, open
+    max_speed_mps: float = MAX_PLAN_SPEED_MPS  # [m/s] the vehicle's fastest glide
+    # [1] per state, per sensor it logs with a device and a duty (`auto` or fixed), in its
+    # order: (name, least, most duty the mission allows); (): no bounds
+    duty_bounds: tuple[tuple[tuple[str, float, float], ...], ...] = ()
+    # [cc] per state, per profile alternative: the volume a plan's ballast must exceed for
+    # the glider to leave its turning depth (its trim over the band); () : 0
+    min_ballast_cc: tuple[tuple[float, ...], ...] = ()
     # [m/s] a propelled profile's `auto` speed where no plan sets one (0: no propulsion)
     unplanned_speed_mps: float = 0.0
     # per state, the alternative flown where no plan sets one: the first the vehicle can
@@ -175,6 +193,9 @@ SENSORS: tuple[SensorInfo, ...] = (
                "microstructure velocity shear (microstructure logger)"),
 )
 N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
+# The sensor devices, each once, in the array's order: what a surfacing report counts the
+# on-time of, by its place here (docs/plan-update.md), and what the simulator bills.
+SENSOR_DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
 # Sensors without a device of their own: always powered while logged, in the hotel load.
 FLIGHT_SENSORS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
 # The runtime's own readings (never on the link).
@@ -252,6 +273,11 @@ MAX_LINK_PLAN = 65535  # [bytes] of a plan sent over the link (PLAN's `total` is
 # [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at
 # the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes)
 SBD_MT_MESSAGE_BYTES = 1890
+# The short Iridium SBD messages fleets use at each surfacing (Iridium SBD service: 340
+# bytes mobile-originated, 270 mobile-terminated): a surfacing report goes up in one, a
+# plan update comes down in one.
+SBD_MO_SHORT_BYTES = 340  # [bytes] of one short message up, glider to shore
+SBD_MT_SHORT_BYTES = 270  # [bytes] of one short message down, shore to glider
 COMMAND_MAX_SIZE = 46  # [bytes] of a COMMAND payload that carries every field
 BAUD = 115200  # 8N1: 10 bits per byte on the line
 
@@ -265,6 +291,8 @@ class MessageType(IntEnum):
     RELEASE = 0x04
     PLAN = 0x05
     PLAN_STATUS = 0x06
+    PLAN_UPDATE = 0x07  # pieces of a plan update (docs/plan-update.md), as PLAN carries plans
+    UPDATE_STATUS = 0x08  # what became of the update: applied, or why not
     NAK = 0x7F
 
 
@@ -344,6 +372,60 @@ class RuntimeExit(IntEnum):
     LINK_LOST = 3  # the watchdog: the link went silent
     INTERNAL = 4  # a mission fault, I/O that failed, a crash or a stop signal
     RESERVE = 5  # the energy guard ended the mission: the battery reached its reserve
+
+
+# ---- plan updates (docs/plan-update.md) ----------------------------------------------
+# A plan update is a signed binary delta against the plan the glider holds: it changes
+# what the glider flies (the fields of UpdateField) and fits one short Iridium message.
+UPDATE_FORMAT_VERSION = 1  # the update's version byte; a reader rejects any other
+MAX_UPDATE_BYTES = SBD_MT_SHORT_BYTES  # [bytes] of one update, its tag included
+UPDATE_HASH_BYTES = 8  # [bytes] of SHA-256 that name the plan an update is for, and its result
+UPDATE_HEADER_BYTES = 28  # [bytes] magic, version, seqs, hashes, the count of changes
+UPDATE_MAX_DIGITS = 15  # decimal digits of a value's mantissa: exact in a double
+UPDATE_MAX_EXPONENT = 20  # a value is mantissa x 10^exponent, |exponent| at most this
+
+
+class UpdateField(IntEnum):
+    """What a change of a plan update sets (a field of one plan-file line).
+
+    Each names the line's keyword and the field's place after it (docs/plan-format.md);
+    append only: it is a wire format."""
+
+    STATE_CLOCK = 1  # `state NAME CLOCK_MHZ ...`: field 2
+    STATE_CYCLE = 2  # `state ... CYCLE_S ...`: field 3
+    POWER_SLEEP = 3  # `power SLEEP CYCLES_PER_TICK`: field 1
+    POWER_CYCLES = 4  # field 2
+    SENSOR_PERIOD = 5  # `sensor NAME PERIOD_S ON_S`: field 2
+    SENSOR_ON = 6  # field 3
+    PROFILE_SHARE = 7  # `profile INDEX SHARE PITCH_RAD BALLAST_CC SPEED_MPS`: field 2
+    PROFILE_PITCH = 8  # field 3
+    PROFILE_BALLAST = 9  # field 4
+    PROFILE_SPEED = 10  # field 5
+
+
+# Each UpdateField's line keyword and the 1-based place of the field after it.
+UPDATE_FIELD_LINES: dict[UpdateField, tuple[str, int]] = {
+    UpdateField.STATE_CLOCK: ("state", 2), UpdateField.STATE_CYCLE: ("state", 3),
+    UpdateField.POWER_SLEEP: ("power", 1), UpdateField.POWER_CYCLES: ("power", 2),
+    UpdateField.SENSOR_PERIOD: ("sensor", 2), UpdateField.SENSOR_ON: ("sensor", 3),
+    UpdateField.PROFILE_SHARE: ("profile", 2), UpdateField.PROFILE_PITCH: ("profile", 3),
+    UpdateField.PROFILE_BALLAST: ("profile", 4), UpdateField.PROFILE_SPEED: ("profile", 5)}
+
+
+class UpdateStatus(IntEnum):
+    """UPDATE_STATUS's `status`: what became of a plan update (docs/plan-update.md)."""
+
+    APPLIED = 0  # the new plan is in force from the next tick
+    DUPLICATE = 1  # the update that made the plan in force, sent again: nothing to do
+    NO_KEY = 2  # no key is provisioned on the vehicle: no update is trusted
+    MALFORMED = 3  # not an update, another version, or a change that cannot be made
+    FORGED = 4  # the tag does not match: changed after signing, or another key
+    STALE = 5  # not newer than the plan in force: replayed or stale
+    NOT_HELD = 6  # made against a plan the vehicle does not hold
+    OUT_OF_ORDER = 7  # made against a plan newer than the one in force: one is missing
+    BAD_PLAN = 8  # the plan it makes breaks the format or the vehicle's limits
+    NOT_STORED = 9  # the new plan could not be stored: the plan in force stays
+
 
 
 # ---- the command line ---------------------------------------------------------------

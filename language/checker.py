@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Iterable, Mapping
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from gliderplan.contract import (
     MAX_PLAN_ENERGY_J,
@@ -40,8 +40,10 @@ T = TypeVar("T")
 
 
 class _Checker:
-    def __init__(self, mission: ast.Mission, stack_depth: int | None, base_dir: str = ""):
+    def __init__(self, mission: ast.Mission, stack_depth: int | None, base_dir: str = "",
+                 model_files: bool = False):
         self.mission = mission
+        self.model_files = model_files  # open the vehicle and board files it names
         self.stack_depth_override = stack_depth
         self.base_dir = base_dir  # the mission's folder: the files it names are beside it
         self.written: list[tuple[str, str]] = []  # (field, file as written) of each file
@@ -52,6 +54,8 @@ class _Checker:
         self._board: object | None = None  # the board, loaded once when a state needs it
         self.vehicle_spec = ir.DEFAULT_VEHICLE
         self._vehicle: object | None = None  # the vehicle, loaded once when a profile needs it
+        # a vehicle file the mission names, loaded and checked when model files are opened
+        self._vehicle_file: object | None = None
 
     # ---- reporting helpers
     def error(self, message: str, span: ast.Span, hint: str | None = None) -> None:
@@ -93,9 +97,30 @@ class _Checker:
         mission = ir.CheckedMission(name=self.mission.name.text, states=tuple(states), **fields)
         spans = {s.name.text: s for s in self.mission.states}
         self.diagnostics.extend(check_flow(mission, spans))
+        if self._vehicle_file is not None:
+            self.yos_flyable(mission)
         if self.error_count():
             return None
         return mission
+
+    def yos_flyable(self, mission: ir.CheckedMission) -> None:
+        """An error at each yo of constant depths the mission's vehicle file cannot fly at its
+        pitch and unplanned volume (`sim` would refuse it: `yo_flight_problem`); a yo the
+        vehicle cannot fly at all (an AUV's) is `flyable`'s to say."""
+        from gliderplan.power_models.vehicle import yo_flight_problem
+
+        vehicle = self._vehicle_file
+        for state, node in zip(mission.states, self.mission.states, strict=True):
+            written = next(i for i in node.items if isinstance(i, ast.ProfileItem))
+            for k, (profile, call) in enumerate(zip(state.profiles, written.alternatives,
+                                                    strict=True)):
+                if cannot_fly(profile.kind, profile.thrust, vehicle) is not None:
+                    continue
+                problem = yo_flight_problem(f"{state.name}: flightprofile {k}", vehicle,
+                                            profile.kind, profile.constant_args())
+                if problem is not None:
+                    self.error(f"{problem}", call.span, "a deeper pump (max_ballast), a "
+                               "lighter trim or a shallower yo")
 
     # ---- mission-level declarations
     def declarations(self) -> dict:
@@ -117,6 +142,9 @@ class _Checker:
                     fields["vehicle"] = self.beside("vehicle", decl.preset.text, decl.is_file)
                     if known:
                         self.vehicle_spec = fields["vehicle"]
+                    if decl.is_file and self.model_files:
+                        self._vehicle_file = self.model_file("vehicle", fields["vehicle"],
+                                                             decl.preset)
                 case ast.ComputerDecl() if decl.board.text == NO_BOARD:
                     fields["computer"] = self.computer = ir.Computer(NO_BOARD)
                     if decl.clock is not None:
@@ -133,6 +161,8 @@ class _Checker:
                             self.error("clock must be positive", decl.clock.span)
                     board = self.beside("computer", decl.board.text, decl.is_file)
                     fields["computer"] = self.computer = ir.Computer(board, clock_mhz)
+                    if decl.is_file and self.model_files:
+                        self._board = self.model_file("board", board, decl.board) or False
                     if known and clock_mhz is not None and clock_mhz > 0 and \
                             (board := self.board(decl.clock.span)) is not None:
                         self.clock_known(board, clock_mhz, decl.clock.span,
@@ -241,14 +271,10 @@ class _Checker:
         `plan --battery PRESET` reads it."""
         if not self.preset_known("battery", decl.preset, decl.is_file):
             return None
-        from gliderplan.contract.errors import GliderplanError
-        from gliderplan.power_models.battery import load_battery
 
-        spec = self.beside("battery", decl.preset.text, decl.is_file)
-        try:
-            pack = load_battery(spec)
-        except GliderplanError as err:
-            self.error(f"battery {decl.preset.text}: {err}", decl.preset.span)
+        pack = self.model_file("battery", self.beside("battery", decl.preset.text,
+                                                      decl.is_file), decl.preset)
+        if pack is None:
             return None
         return ir.Battery(pack.energy_j, 1.0 - pack.usable_fraction if reserve is None
                           else reserve)
@@ -517,6 +543,8 @@ class _Checker:
         file cannot be read or is bad: the stage that needs its figures (plan, sim,
         compile) says so, with its own exit status (a file that cannot be opened is a usage
         error, not the mission's)."""
+        if self._vehicle is None and self._vehicle_file is not None:
+            self._vehicle = self._vehicle_file  # loaded once
         if self._vehicle is None:
             from gliderplan.contract.files import InputFileError
             from gliderplan.power_models.errors import ModelFileError
@@ -594,6 +622,24 @@ class _Checker:
                        item.span)
             return None
         return low[0], high[0]
+
+    def model_file(self, kind: str, spec: str, written: ast.Ident) -> Any:
+        """The vehicle, board or battery in `spec` (a file the mission names, or a preset),
+        its figures checked against their physical ranges (`power_models.plausible`); None,
+        with an error at the name as `written`, when it cannot be loaded."""
+        from gliderplan.contract.errors import GliderplanError
+
+        if kind == "vehicle":  # each kind's loader only: a board's leaves numpy unimported
+            from gliderplan.power_models.vehicle import load_vehicle as load
+        elif kind == "board":
+            from gliderplan.power_models.board import load_board as load
+        else:
+            from gliderplan.power_models.battery import load_battery as load
+        try:
+            return load(spec)
+        except GliderplanError as err:
+            self.error(f"{kind} {written.text}: {err}", written.span)
+            return None
 
     # ---- power management
     def board(self, span: ast.Span) -> object | None:
@@ -873,13 +919,15 @@ def _signature(params: tuple[ParamSpec, ...], min_points: int, max_points: int) 
     return ", ".join(parts) if parts else "no arguments"
 
 
-def check(mission: ast.Mission, stack_depth: int | None = None, base_dir: str = ""
-          ) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
+def check(mission: ast.Mission, stack_depth: int | None = None, base_dir: str = "",
+          model_files: bool = False) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
     """Check a parsed mission; the IR is None when there are errors. `stack_depth`
     replaces the mission's own (1 to the runtime's MAX_STACK_DEPTH). `base_dir`: the
-    mission's folder, where the files it names are looked for ("": the working one)."""
+    mission's folder, where the files it names are looked for ("": the working one).
+    `model_files`: open the vehicle and board files it names, and fly its yos on the
+    vehicle file's figures (a battery file is read always: it is the mission's energy)."""
     if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
         raise ValueError(f"a stack depth of {stack_depth} is outside 1..{MAX_STACK_DEPTH}")
-    checker = _Checker(mission, stack_depth, base_dir)
+    checker = _Checker(mission, stack_depth, base_dir, model_files)
     checked = checker.run()
     return checked, sorted(checker.diagnostics, key=lambda d: (d.span.line, d.span.column))

@@ -337,6 +337,7 @@ class _MissionWriter:
         for index, state in enumerate(mission.states):
             lines += self.visit_state_entry(index, state)
         lines += ["};", ""]
+        lines += self.visit_plan_bounds()
         lines += [
             "const gp_mission gp_mission_table = {",
             f"    .name = {_c_string(mission.name)},",
@@ -355,9 +356,40 @@ class _MissionWriter:
             "    .clocks_mhz = board_clocks_mhz,",
             f"    .n_clocks = {len(self.limits.clocks_mhz)},",
             "    .sensor_names = sensor_names,",
+            "    .bounds = &plan_bounds,",
             "};",
         ]
         return lines
+
+    def visit_plan_bounds(self) -> list[str]:
+        """`plan_bounds`: the figures `gp_plan_check` holds a plan to (`FlightLimits`)."""
+        limits, lines = self.limits, []
+        if limits.duty_bounds:
+            for index, (duties, least) in enumerate(zip(limits.duty_bounds,
+                                                        limits.min_ballast_cc, strict=True)):
+                if duties:
+                    rows = ", ".join(f"{{{SENSOR_BY_NAME[name].index}, {c_double(low)}, "
+                                     f"{c_double(high)}}}" for name, low, high in duties)
+                    lines.append(f"static const gp_duty_bound state{index}_duties"
+                                 f"[{len(duties)}] = {{{rows}}};")
+                lines.append(f"static const double state{index}_min_ballast_cc[{len(least)}] "
+                             f"= {{{', '.join(c_double(x) for x in least)}}};")
+            lines += [f"static const gp_state_bounds state_bounds[{len(limits.duty_bounds)}] "
+                      "= {",
+                      *(f"    {{{f'state{i}_duties' if duties else 'NULL'}, {len(duties)}, "
+                        f"state{i}_min_ballast_cc}},"
+                        for i, duties in enumerate(limits.duty_bounds)), "};"]
+        low, high = limits.pitch_range_rad
+        board = "NULL" if limits.board is None else _c_string(limits.board)
+        return lines + [
+            "static const gp_plan_bounds plan_bounds = {",
+            f"    .board = {board},",
+            f"    .max_budget_j = {c_double(limits.max_budget_j)},",
+            f"    .min_pitch_rad = {c_double(low)},",
+            f"    .max_pitch_rad = {c_double(high)},",
+            f"    .max_speed_mps = {c_double(limits.max_speed_mps)},",
+            f"    .states = {'state_bounds' if limits.duty_bounds else 'NULL'},",
+            "};", ""]
 
     def visit_state_entry(self, index: int, state: ir.State) -> list[str]:
         prefix = f"state{index}"

@@ -42,6 +42,7 @@ from gliderplan.contract import (
 )
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import read_input
+from gliderplan.contract.plan_check import plan_problem
 from gliderplan.language import ir
 from gliderplan.language.ir import CheckedMission
 from gliderplan.language.registry import SENSOR_BY_NAME
@@ -345,14 +346,19 @@ def read_plan_bytes(data: bytes, mission: CheckedMission | None = None,
                     path: str = "", limits: FlightLimits | None = None) -> Plan:
     """Parse a plan file strictly; with `mission`, check that it is a plan for that
     mission as the C runtime does (name, hash, states, each state's profiles and logged
-    sensors); with `limits`, that it keeps to the vehicle's pump and the board's clocks.
-    A signed plan's `seq` and `hmac` lines are checked for their form only
+    sensors); with `limits` too, that it keeps to the board's clocks and does not
+    contradict the mission (`contract.plan_check.plan_problem`: battery, board, duties,
+    flight). A signed plan's `seq` and `hmac` lines are checked for their form only
     (`planner.signing` checks the tag). PlanFileError (`path:line: ...`) names the first
     line that breaks a rule."""
     try:
-        return _read(data, mission, limits)
+        plan = _read(data, mission, limits)
+        problem = None if mission is None or limits is None else plan_problem(plan, limits)
     except PlanFileError as err:
         raise PlanFileError(err.line, err.message, path) from None
+    if problem is not None:
+        raise PlanFileError(problem.line, problem.message, path)
+    return plan
 
 
 def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | None) -> Plan:
@@ -372,6 +378,8 @@ def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | No
     computer, clock = cur.next("computer", 2)
     computer = cur.name(computer)
     no_board = computer == NO_BOARD
+    if limits is not None and limits.board not in (None, computer):
+        limits = None  # its clocks are another board's: `plan_problem` says so
     clock_mhz = cur.clock(clock, limits, no_board)
     budget = cur.number(cur.next("budget_j", 1)[0], "budget_j", 0.0, MAX_PLAN_ENERGY_J)
     predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j", 0.0, MAX_PLAN_ENERGY_J)
@@ -491,10 +499,6 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
                   "ballast and speed must be > 0")
         cur.check(line.speed_mps <= MAX_PLAN_SPEED_MPS,
                   f"speed {line.speed_mps:g} exceeds {MAX_PLAN_SPEED_MPS:g} m/s")
-        if limits is not None:
-            cur.check(line.ballast_cc <= limits.max_ballast_cc,
-                      f"ballast {line.ballast_cc:g} cc exceeds the vehicle's pump "
-                      f"({limits.max_ballast_cc:g} cc)")
         profiles.append(line)
     cur.check(abs(sum(p.share for p in profiles) - 1.0) <= 1e-6,
               f"state {name}: profile shares sum to {sum(p.share for p in profiles):.9g}, not 1")
@@ -512,26 +516,22 @@ def load_plan(path: str | Path, mission: CheckedMission,
               limits: FlightLimits | None = None) -> Plan:
     """The plan in `path` for `mission`, to fly: InputFileError if there is no such file,
     PlanRejected (naming the file and line) if it is not a plan for `mission` or breaks
-    `limits` (default: those of the mission's vehicle on the board the plan names, if
-    that is a preset, else on the mission's computer)."""
-    data = read_plan_data(path)
+    `limits` (default: the mission's own, `planner.limits.flight_limits`)."""
+    from gliderplan.planner.limits import flight_limits
+
     try:
-        plan = read_plan_bytes(data, mission, str(path))
-        return read_plan_bytes(data, mission, str(path),
-                               limits or plan_board_limits(mission, plan))
+        return read_plan_bytes(read_plan_data(path), mission, str(path),
+                               limits or flight_limits(mission))
     except PlanFileError as err:
         raise PlanRejected(str(err)) from None
 
 
 def flown_board(mission: CheckedMission, plan: Plan | None) -> str:
-    """The board a simulated flight of `plan` runs on and is billed for: the one the plan
-    was made for when that is a preset or `none`, else the mission's computer (a user's
-    board file is known to the plan by its name only)."""
-    from gliderplan.power_models.catalog import preset_names
-
-    if plan is not None and (plan.computer == NO_BOARD
-                             or plan.computer in preset_names("board")):
-        return plan.computer
+    """The board a simulated flight of `plan` runs on and is billed for: none for a plan
+    made for `computer none`, else the mission's computer (the only board another plan
+    may name: `contract.plan_check`)."""
+    if plan is not None and plan.computer == NO_BOARD:
+        return NO_BOARD
     return mission.computer.board
 
 

@@ -23,6 +23,7 @@ from typing import Any
 from gliderplan.contract.files import DataFileError, read_data
 from gliderplan.contract.units import UNITS, accepted_units, to_model_unit
 from gliderplan.power_models.errors import ModelFileError
+from gliderplan.power_models.plausible import plausible
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,7 @@ class Table:
     prefix: str  # dotted key of this table in the file ("" for the top level)
     data: dict[str, Any]
     used: set[str] = field(default_factory=set, compare=False)
+    kind: str = ""  # the file's kind ("vehicle", "board", ...): its figures' plausible ranges
 
     def finish(self) -> None:
         """Refuse keys the model never read: most often a misspelt key."""
@@ -128,6 +130,11 @@ class Table:
         if converted > maximum:
             most = value_in(maximum, unit, dimension)
             raise self.error(name, f"must be <= {most:g} {unit}, got {value} {unit}")
+        if (bounds := plausible(self.kind, self.key(name))) is not None and \
+                not bounds.low <= converted <= bounds.high:
+            low, high = (value_in(x, unit, dimension) for x in (bounds.low, bounds.high))
+            raise self.error(name, f"{value} {unit} lies outside the plausible {low:g} to "
+                             f"{high:g} {unit} ({bounds.source})")
         return converted
 
     def quantities(self, name: str, dimension: str, *, positive: bool = False) -> list[float]:
@@ -223,7 +230,8 @@ class Table:
         items = self.data.get(name)
         if not isinstance(items, list) or not items or not all(isinstance(i, dict) for i in items):
             raise self.error(name, f"expected at least one [[{self.key(name)}]] table")
-        return [Table(self.path, f"{self.key(name)}[{i}]", item) for i, item in enumerate(items)]
+        return [Table(self.path, f"{self.key(name)}[{i}]", item, kind=self.kind)
+                for i, item in enumerate(items)]
 
     def table(self, name: str) -> Table:
         """A sub-table (`[name]`)."""
@@ -231,7 +239,7 @@ class Table:
         item = self.data.get(name)
         if not isinstance(item, dict):
             raise self.error(name, f"expected a [{self.key(name)}] table")
-        return Table(self.path, self.key(name), item)
+        return Table(self.path, self.key(name), item, kind=self.kind)
 
 
 def value_in(model_value: float, unit: str, dimension: str) -> float:
@@ -243,7 +251,7 @@ def read_model_file(path: Path, kind: str) -> Table:
     """Parse a model file and check that it describes a `kind` ("board", "vehicle", ...)."""
     shown = str(path)
     try:
-        top = Table(shown, "", read_data(path, f"{kind} file"))
+        top = Table(shown, "", read_data(path, f"{kind} file"), kind=kind)
     except DataFileError as err:  # the model's own error, naming the file and key
         raise ModelFileError(shown, err.key, err.problem) from None
     top.text("description", "")

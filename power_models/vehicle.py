@@ -418,6 +418,25 @@ def flying_yo(where: str, vehicle: Vehicle, min_depth_m: float, max_depth_m: flo
                                f"{vehicle.name}: {err}") from None
 
 
+def yo_flight_problem(where: str, vehicle: Vehicle, kind: str, args: tuple[float, ...] | None,
+                      pitch_rad: float | None = None, ballast_cc: float | None = None
+                      ) -> FlightModelError | None:
+    """Why the vehicle cannot fly a profile of `kind` with constant arguments `args` (None:
+    they read variables, left to the flight) at `pitch_rad` [rad] and `ballast_cc` [cc]
+    (default: the profile's mean pitch, the vehicle's unplanned volume), or None: a yo
+    deeper than its trim and pumped volume climb back from. `where` names the profile."""
+    if kind not in ("yo", "thermotrackyo") or args is None:
+        return None
+    pitch = 0.5 * (args[2] + args[3]) if pitch_rad is None else pitch_rad
+    ballast = vehicle.unplanned_ballast_cc if ballast_cc is None else ballast_cc
+    try:
+        with flying_yo(where, vehicle, args[0], args[1]):
+            vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)
+    except FlightModelError as err:
+        return err
+    return None
+
+
 def figure_spec(key: str) -> tuple[str, str, dict]:
     """(attribute, dimension, options) of a figure by its data-file key: a key of FIGURES, or
     a device's "devices.NAME.on_power" / "devices.NAME.duty". KeyError for any other."""

@@ -67,11 +67,11 @@ def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Pa
     """(the planner's JSON report of the plan, the plan file, files written): the plan
     given with its report beside it (PLAN.json), or the plan made now, written to `out`."""
     from gliderplan.planner.plan import solve_plan
-    from gliderplan.planner.planfile import read_plan_file, write_plan_bytes
+    from gliderplan.planner.planfile import load_plan, write_plan_bytes
     from gliderplan.planner.report import report_json
 
     if plan_path is not None:
-        read_plan_file(plan_path, mission)  # a plan for this mission, or a clear error
+        load_plan(plan_path, mission)  # a sane plan for this mission, or a clear error
         report = _json(Path(f"{plan_path}.json"), "the plan's report, written beside it by "
                        "`gliderplan plan -o PLAN`")
         if report.get("hash") != mission.hash or not isinstance(report.get("states"), list):

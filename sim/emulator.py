@@ -137,6 +137,19 @@ class CRuntime:
             self.close()
             raise PlanRejected(f"{plan_path} {status.message} (said the vehicle)")
 
+    def deliver_update(self, update: bytes) -> tuple[int, int, str]:
+        """Send a plan update over the link, as at a surfacing, between two ticks; the
+        runtime's verdict (contract.UpdateStatus, the plan in force after it, its words)."""
+        from gliderplan.contract import UpdateStatus
+        from gliderplan.runtime.protocol import LinkError
+
+        try:
+            status = self.link.send_update(update)
+        except LinkError as err:
+            raise EmulatorError(f"the runtime did not answer the plan update ({err}): "
+                                f"{self.stderr_text()}") from None
+        return UpdateStatus(status.status), status.seq, status.message
+
     def step(self, tick: int, mask: int, values: list[float]) -> Command:
         """Send one tick's SENSORS (those of `mask` the runtime reads: HELLO's read mask),
         return the runtime's COMMAND (with faults: layered control's, when the runtime

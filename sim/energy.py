@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, SENSOR_DEVICES, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
 from gliderplan.planner.planfile import Plan, flown_board
@@ -37,7 +37,7 @@ from gliderplan.sim.loop import RunRecord
 
 GAUGE_TICKS = 64  # the coulomb counter is read out every 64 ticks (256 s at the 4 s tick)
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
-DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
+DEVICES = SENSOR_DEVICES
 DEVICE_BITS = {d: sum(1 << s.index for s in SENSORS if s.device == d) for d in DEVICES}
 
 

@@ -71,7 +71,7 @@ class PythonRuntime:
         the pump's volume, is the surfacing of the energy guard (default: the former).
         `limits`: without a plan, the alternative of each state and the `auto` speed
         [m/s] flown (`FlightLimits.unplanned_*`; default: the first, none)."""
-        self.mission, self.plan = mission, plan
+        self.mission = mission
         self.unplanned_speed_mps = 0.0 if limits is None else limits.unplanned_speed_mps
         self.unplanned = [0 if limits is None else limits.unplanned_profile(i)
                           for i in range(len(mission.states))]
@@ -85,21 +85,27 @@ class PythonRuntime:
         # constant arguments (most profiles) are evaluated once, not every tick
         self.constant_args = [[_floats(p.constant_args()) for p in s.profiles]
                               for s in mission.states]
-        self.power_tables = [self._power_table(i, s) for i, s in enumerate(mission.states)]
-        # states whose sensors are all always on have one power mask
-        self.constant_power = [None if any(period for _, period, _ in table) else
-                               pilot.sensor_power_mask(table, 0.0) for table in self.power_tables]
+        self.adopt_plan(plan)
         self.s = [math.nan] * N_SENSORS
         self.machine: semantics.Machine | None = None
         self.event_count = 0
         # per call on the stack: the caller's waypoint and the waypoints it had reached
         self.route_resume: list[tuple[int, int]] = []
+        self.suspends = 0  # ticks after which the board was put to sleep
+        self.entry_variables: dict[str, dict[str, float]] = {}  # state -> on first entry
+
+    def adopt_plan(self, plan: Plan | None) -> None:
+        """Fly `plan`'s schedules from the next tick on (at start-up, and when a plan update
+        is accepted at a surfacing); the state, the stack and the routine flown go on."""
+        self.plan = plan
+        self.power_tables = [self._power_table(i, s) for i, s in enumerate(self.mission.states)]
+        # states whose sensors are all always on have one power mask
+        self.constant_power = [None if any(period for _, period, _ in table) else
+                               pilot.sensor_power_mask(table, 0.0) for table in self.power_tables]
         # where the runtime suspends the board after answering a tick: the plan's SLEEP,
         # without a plan the mission's `computer sleep between ticks`
         self.sleeps = [plan.states[i].sleep if plan is not None else s.computer.sleep
-                       for i, s in enumerate(mission.states)]
-        self.suspends = 0  # ticks after which the board was put to sleep
-        self.entry_variables: dict[str, dict[str, float]] = {}  # state -> on first entry
+                       for i, s in enumerate(self.mission.states)]
 
     def _power_table(self, i: int, state: ir.State) -> tuple[tuple[int, float, float], ...]:
         """(sensor index, period [s], on [s]) per logged sensor; period 0: always on."""

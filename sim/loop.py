@@ -181,13 +181,24 @@ class FastForward(Protocol):
         ...
 
 
+class SurfacingHook(Protocol):
+    def __call__(self, tick: int, columns: Columns) -> None:
+        """The glider has surfaced: `tick` is the next tick to fly, every tick before it
+        is in `columns` (the shore's turn: telemetry up, a plan update down)."""
+        ...
+
+
 def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceComputer,
              config: RunConfig, progress: Callable[[float, float], None] | None = None,
-             fast_forward: FastForward | None = None, gauge: Gauge | None = None) -> RunRecord:
+             fast_forward: FastForward | None = None, gauge: Gauge | None = None,
+             on_surfacing: SurfacingHook | None = None) -> RunRecord:
     """Run the loop until the mission exits (or its energy guard ends it), the runtime
     faults or the duration ends. With `fast_forward`, the ticks on which nothing can
     happen are flown in runs by it, the others one by one here. `gauge` gives the
-    science computer its `energy_left` reading (NaN without one)."""
+    science computer its `energy_left` reading (NaN without one). `on_surfacing` is
+    called once per surfacing, before the first tick flown after the loop sees the
+    glider at the surface (the next tick when flown one by one; after a run that holds
+    the surfacing, when flown in runs)."""
     names = tuple(s.name for s in mission.states)
     glider = science.glider
     tick_s = config.tick_s
@@ -207,8 +218,12 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     readings, runtime_step, apply = science.readings, runtime.step, science.apply
     tick = 0
     last_state = NO_STATE
+    surfaced = glider.surfacings
     try:
         while tick <= last_tick:
+            if on_surfacing is not None and glider.surfacings != surfaced:
+                surfaced = glider.surfacings
+                on_surfacing(tick, columns)
             energy_left = math.nan if gauge is None else gauge.reading(tick, columns)
             if fast_forward is not None and tick and (
                     gauge is None or energy_left > gauge.reserve_j):
@@ -225,6 +240,9 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                         break
                     if gauge is not None:
                         energy_left = gauge.reading(tick, columns)
+                    if on_surfacing is not None and glider.surfacings != surfaced:
+                        surfaced = glider.surfacings
+                        on_surfacing(tick, columns)
             science.energy_left_j = energy_left
             mask, values = readings(tick)
             depth_c.append(glider.depth_m)

@@ -27,6 +27,8 @@ if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
 RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png",
              "events.log")  # events.log: the C runtime's own, with --faults
 NETCDF_FILE = "trajectory.nc"  # with netcdf=True
+REPLANS_FILE = "replans.csv"  # with replan_every: what each surfacing did
+REPLAN_EVERY = ("surfacing",)
 TRACKERS = ("robust", "naive")
 
 
@@ -40,6 +42,7 @@ class RunResult:
     plan: Plan | None
     files: tuple[Path, ...]  # the run's files, written atomically
     water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
+    replanning: dict | None = None  # with replan_every: what crossed the link (summary.json's)
 
     @property
     def interrupted(self) -> bool:
@@ -103,7 +106,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 progress: Callable[[float, float], None] | None = None,
                 plots: bool = True, key_path: str | Path | None = None,
                 state_dir: str | Path | None = None, faults: str | None = None,
-                floor: float | str | None = None) -> RunResult:
+                floor: float | str | None = None,
+                replan_every: str | None = None, confidence: float | None = None,
+                scenario_file: str | Path | None = None) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
@@ -134,6 +139,13 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     floor under the whole run; default: none, or under replayed Slocum logs the floor they
     saw (sim.ocean.load_water). The glider stops at the floor; summary.json says where the
     floor came from and whether the glider reached it (`sea_floor`, `grounded`).
+    `replan_every`: "surfacing" puts the shore in the loop (sim/replanning.py): at each
+    surfacing the glider's report goes up, the rest of the mission is replanned at
+    `confidence` (default: the plan's own) with the prior of `scenario_file` (default: the
+    shipped one), and the plan update goes down to the runtime, which applies it (the C
+    runtime over its link). The vehicle holds `key_path`'s key, or without one a key made
+    for the run, with which the plan is signed; summary.json's `replanning` says what
+    crossed the link, and replans.csv what each surfacing did.
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -199,6 +211,10 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         key = read_key(key_path)
         if runtime == "python":  # the C runtime checks for itself
             check_signature(read_plan_data(plan_path), key, str(plan_path))
+    shore = None
+    if replan_every is not None:
+        shore, plan_path, key_path = _shore(mission, replan_every, plan_path, key_path, runtime,
+                                            tick_s, confidence, scenario_file)
     plotter: PlotProcess | None = None
 
     def progressed(done_s: float, total_s: float) -> None:
@@ -214,7 +230,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         record = fly(mission, water, config, vehicle, plan, None if plan_path is None
                      else str(plan_path), runtime, robust_tracker=tracker == "robust",
                      progress=progressed, key_path=None if key_path is None else str(key_path),
-                     state_dir=state_dir, faults=fault_spec)
+                     state_dir=state_dir, faults=fault_spec, shore=shore)
         if not len(record.columns["time_s"]):
             raise KeyboardInterrupt  # nothing flown, nothing to write
         used = accounting.account(record, mission, vehicle, plan)
@@ -235,6 +251,12 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 "sea_floor": given.floor_note, "grounded": grounding(record),
                 "current_mps": {"north": config.current.north_mps,
                                 "east": config.current.east_mps}}
+        if shore is not None:
+            flown_s = float(record.columns["time_s"][-1]) + tick_s
+            meta["replanning"] = {"every": replan_every,
+                                  "confidence": shore.replanner.confidence,
+                                  **shore.log.summary(flown_s)}
+            contents["replans.csv"] = _replans_csv(shore.log.events)
         columns = record.columns  # the water's salinity where the glider was: the CTD's
         salinity = water.water_along(columns["depth_m"], columns["time_s"])[1]
         table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
@@ -251,7 +273,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     finally:
         if plotter is not None:
             plotter.close()
-    written = [name for name in (*RUN_FILES, NETCDF_FILE) if name in contents]
+        if getattr(shore, "workdir", None) is not None:
+            shore.workdir.cleanup()
+    written = [name for name in (*RUN_FILES, REPLANS_FILE, NETCDF_FILE) if name in contents]
     for name in written:
         write_atomically(out / name, contents[name])
     notes = [density_note, given.floor_note]
@@ -260,5 +284,61 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                      f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
                      "the water: give it an altimeter stop, yo's fifth argument)")
     return RunResult(record, used, check, plan, tuple(out / name for name in written),
-                     tuple(notes))
+                     tuple(notes), meta.get("replanning"))
 
+
+def _shore(mission: CheckedMission, every: str, plan_path: str | Path | None,
+           key_path: str | Path | None, runtime: str, tick_s: float,
+           confidence: float | None, scenario_file: str | Path | None):  # noqa: ANN202
+    """The shore of a run with replanning, and the plan and key the vehicle holds (the plan
+    signed with a key made for the run when none is given; for the C runtime, which reads
+    both from files, they are kept in a temporary directory for the run)."""
+    import secrets
+
+    from gliderplan.planner.planfile import read_plan_data
+    from gliderplan.planner.signing import check_signature, read_key, sign_plan
+    from gliderplan.sim.replanning import ShoreLoop
+    from gliderplan.sim.scenarios import read_spec
+
+    if every not in REPLAN_EVERY:
+        raise UsageError(f"--replan-every {every}: expected one of {', '.join(REPLAN_EVERY)}")
+    if plan_path is None:
+        raise UsageError("--replan-every: replanning changes a plan: give --plan")
+    held = read_plan_data(plan_path)
+    if key_path is not None:
+        key = read_key(key_path)
+        check_signature(held, key, str(plan_path))
+    else:
+        key = secrets.token_bytes(32)
+        held = sign_plan(held, key, 1)
+    shore = ShoreLoop(mission, held, key, tick_s=tick_s, confidence=confidence,
+                      spec=read_spec(scenario_file))
+    if key_path is None and runtime == "c":  # files for the runtime, removed after the run
+        import tempfile
+
+        from gliderplan.contract.files import write_atomically
+
+        shore.workdir = tempfile.TemporaryDirectory(prefix="gliderplan-vehicle-")
+        vehicle = Path(shore.workdir.name)
+        key_path, plan_path = vehicle / "vehicle.key", vehicle / "signed.plan"
+        write_atomically(key_path, key.hex() + "\n", private=True)
+        write_atomically(plan_path, held)
+    return shore, plan_path, key_path
+
+
+def _replans_csv(events: list[dict]) -> str:
+    """One line per surfacing: what the shore heard and did."""
+    columns = ("time_s", "used_j", "voltage_v", "plan_seq", "status", "quality",
+               "budget_left_j", "energy_left_j", "update_bytes")
+    lines = [",".join(columns)]
+    for event in events:
+        cells = []
+        for column in columns:
+            value = event.get(column, "")
+            if isinstance(value, list):
+                value = "+".join(map(str, value))
+            elif isinstance(value, float):
+                value = f"{value:.6g}"
+            cells.append(str(value))
+        lines.append(",".join(cells))
+    return "\n".join(lines) + "\n"

@@ -34,6 +34,9 @@ CASES = [
         ["compile", "none.mission", "-o", "out"], ["sim", "none.mission", "-o", "out"],
         ["montecarlo", "none.mission", "--scenarios", "2", "-o", "out"],
         ["compare-sbc", "none.mission"], ["import-slocum", "none.mission", "-o", "out"],
+        ["fleet", "check", "none.mission"], ["fleet", "plan", "none.mission"],
+        ["fleet", "sim", "none.mission", "-o", "out"],
+        ["fleet", "montecarlo", "none.mission", "--scenarios", "2", "-o", "out"],
     ], ExitCode.USAGE, "none.mission: no such file"),
     ("a directory for a mission", [
         ["check", "."], ["fmt", "."], ["plan", "."], ["compile", ".", "-o", "out"],

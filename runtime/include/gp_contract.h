@@ -40,11 +40,25 @@
 #define GP_MAX_BOARD_CLOCKS 8  /**< clocks of one board the compiled mission lists */
 #define GP_CLOCK_TOLERANCE_MHZ 1e-06  /**< [MHz] a plan's clock is the board's within this */
 #define GP_NO_BOARD "none"  /**< `computer none`: no board to set; its plans' clocks are all 0 */
+/** A plan's figures are written with 9 significant digits: two that should agree (a duty and its bound, the prediction and its states' sum) agree within this relative tolerance. */
+#define GP_PLAN_ROUNDING 1e-06
 
 /* ---- signed plans */
 
 #define GP_PLAN_KEY_BYTES 32  /**< [bytes] of the HMAC-SHA256 key provisioned on the vehicle */
 #define GP_MAX_PLAN_SEQUENCE 4294967295  /**< a signed plan's `seq` (a u32); 1 is the first */
+
+/* ---- plan updates (docs/plan-update.md) */
+
+#define GP_UPDATE_FORMAT_VERSION 1  /**< the update's version byte; a reader rejects any other */
+#define GP_MAX_UPDATE_BYTES 270  /**< [bytes] of one update, its tag included */
+/** [bytes] of SHA-256 that name the plan an update is for, and its result */
+#define GP_UPDATE_HASH_BYTES 8
+/** [bytes] magic, version, seqs, hashes, the count of changes */
+#define GP_UPDATE_HEADER_BYTES 28
+#define GP_UPDATE_MAX_DIGITS 15  /**< decimal digits of a value's mantissa: exact in a double */
+/** a value is mantissa x 10^exponent, |exponent| at most this */
+#define GP_UPDATE_MAX_EXPONENT 20
 
 /* ---- the library routines (docs/pilot.md) */
 
@@ -65,6 +79,10 @@
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
 /** [bytes] of a plan sent over the link (PLAN's `total` is a u16) */
 #define GP_MAX_LINK_PLAN 65535
+/** [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes) */
+#define GP_SBD_MT_MESSAGE_BYTES 1890
+#define GP_SBD_MO_SHORT_BYTES 340  /**< [bytes] of one short message up, glider to shore */
+#define GP_SBD_MT_SHORT_BYTES 270  /**< [bytes] of one short message down, shore to glider */
 #define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
 
@@ -129,7 +147,11 @@ enum {
 /** The type byte of a frame's header. */
 typedef enum {
     GP_MSG_HELLO = 0x01, GP_MSG_SENSORS = 0x02, GP_MSG_COMMAND = 0x03, GP_MSG_RELEASE = 0x04,
-    GP_MSG_PLAN = 0x05, GP_MSG_PLAN_STATUS = 0x06, GP_MSG_NAK = 0x7F,
+    GP_MSG_PLAN = 0x05, GP_MSG_PLAN_STATUS = 0x06,
+    /** pieces of a plan update (docs/plan-update.md), as PLAN carries plans */
+    GP_MSG_PLAN_UPDATE = 0x07,
+    GP_MSG_UPDATE_STATUS = 0x08,  /**< what became of the update: applied, or why not */
+    GP_MSG_NAK = 0x7F,
 } gp_msg_type;
 
 /** COMMAND's `transition` field, the event log's `kind` and an event's action. */
@@ -177,5 +199,36 @@ typedef enum {
     /** the energy guard ended the mission: the battery reached its reserve */
     GP_EXIT_RESERVE = 5,
 } gp_exit_status;
+
+/** What a change of a plan update sets (a field of one plan-file line). */
+typedef enum {
+    GP_UF_STATE_CLOCK = 1,  /**< `state NAME CLOCK_MHZ ...`: field 2 */
+    GP_UF_STATE_CYCLE = 2,  /**< `state ... CYCLE_S ...`: field 3 */
+    GP_UF_POWER_SLEEP = 3,  /**< `power SLEEP CYCLES_PER_TICK`: field 1 */
+    GP_UF_POWER_CYCLES = 4,  /**< field 2 */
+    GP_UF_SENSOR_PERIOD = 5,  /**< `sensor NAME PERIOD_S ON_S`: field 2 */
+    GP_UF_SENSOR_ON = 6,  /**< field 3 */
+    GP_UF_PROFILE_SHARE = 7,  /**< `profile INDEX SHARE PITCH_RAD BALLAST_CC SPEED_MPS`: field 2 */
+    GP_UF_PROFILE_PITCH = 8,  /**< field 3 */
+    GP_UF_PROFILE_BALLAST = 9,  /**< field 4 */
+    GP_UF_PROFILE_SPEED = 10,  /**< field 5 */
+} gp_update_field;
+
+/** UPDATE_STATUS's `status`: what became of a plan update (docs/plan-update.md). */
+typedef enum {
+    GP_UPDATE_APPLIED = 0,  /**< the new plan is in force from the next tick */
+    /** the update that made the plan in force, sent again: nothing to do */
+    GP_UPDATE_DUPLICATE = 1,
+    GP_UPDATE_NO_KEY = 2,  /**< no key is provisioned on the vehicle: no update is trusted */
+    /** not an update, another version, or a change that cannot be made */
+    GP_UPDATE_MALFORMED = 3,
+    GP_UPDATE_FORGED = 4,  /**< the tag does not match: changed after signing, or another key */
+    GP_UPDATE_STALE = 5,  /**< not newer than the plan in force: replayed or stale */
+    GP_UPDATE_NOT_HELD = 6,  /**< made against a plan the vehicle does not hold */
+    /** made against a plan newer than the one in force: one is missing */
+    GP_UPDATE_OUT_OF_ORDER = 7,
+    GP_UPDATE_BAD_PLAN = 8,  /**< the plan it makes breaks the format or the vehicle's limits */
+    GP_UPDATE_NOT_STORED = 9,  /**< the new plan could not be stored: the plan in force stays */
+} gp_update_status;
 
 #endif /* GP_CONTRACT_H */

@@ -100,6 +100,29 @@ typedef struct {
     uint8_t unplanned_profile;   /**< flown without a plan: the first the vehicle can fly */
 } gp_state;
 
+/** A sensor's duty bounds in one state (`contract.FlightLimits.duty_bounds`). */
+typedef struct {
+    uint8_t sensor;               /**< registry index */
+    double low, high;             /**< [1] the least and the most duty the mission allows */
+} gp_duty_bound;
+
+/** What a plan may ask of one state beyond the contract's bounds. */
+typedef struct {
+    const gp_duty_bound *duties;  /**< the state's sensors with a device, in its order */
+    uint8_t n_duties;
+    const double *min_ballast_cc; /**< per profile alternative: a plan's ballast exceeds it [cc] */
+} gp_state_bounds;
+
+/** The figures of the mission, vehicle and board a plan is held to (`gp_plan_check`, the
+ *  mirror of contract/plan_check.py; `contract.FlightLimits`). */
+typedef struct {
+    const char *board;            /**< the board a plan names (or "none" for any) */
+    double max_budget_j;          /**< the battery less its reserve [J] */
+    double min_pitch_rad, max_pitch_rad;  /**< commanded pitch, open range [rad] */
+    double max_speed_mps;         /**< the vehicle's fastest glide [m/s] */
+    const gp_state_bounds *states;  /**< one per state */
+} gp_plan_bounds;
+
 typedef struct {
     const char *name;
     const char *hash;             /**< CheckedMission.hash, 64 lowercase hex digits */
@@ -121,6 +144,7 @@ typedef struct {
                                        no board (`computer none`), no clock to set */
     uint8_t n_clocks;             /**< 1..GP_MAX_BOARD_CLOCKS */
     const char *const *sensor_names;  /**< GP_N_SENSORS names, registry order */
+    const gp_plan_bounds *bounds; /**< NULL: a plan is held to the contract's bounds only */
 } gp_mission;
 
 /** The mission this binary was compiled for (defined by the generated file). */

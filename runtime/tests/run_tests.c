@@ -36,6 +36,7 @@
     X(test_plan_should_reject_bad_files_naming_the_line)                    \
     X(test_plan_should_read_a_states_power_line_where_its_mission_sleeps)   \
     X(test_plan_should_accept_computer_none_on_any_build)                   \
+    X(test_plan_should_be_held_to_its_missions_bounds)                      \
     X(test_plan_should_reject_clocks_on_computer_none_and_boards_on_its_build) \
     X(test_plan_should_reject_a_file_of_only_its_checksum_line)             \
     X(test_plan_should_reject_an_overlong_line)                             \
@@ -83,6 +84,12 @@
     X(test_hmac_sha256_should_match_rfc_4231)                               \
     X(test_tags_should_compare_every_byte)                                  \
     X(test_signed_plan_should_carry_the_tag_gliderplan_plan_sign_writes)    \
+    X(test_update_should_make_its_change_and_sign_the_result)               \
+    X(test_update_should_refuse_forged_stale_and_replayed_updates_and_other_plans) \
+    X(test_update_should_refuse_malformed_updates_naming_the_change)        \
+    X(test_update_should_refuse_a_plan_the_reader_refuses)                  \
+    X(test_update_decimal_text_should_write_plan_numbers)                   \
+    X(test_random_updates_should_never_crash_the_applier)                   \
     X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \
     X(test_signed_plan_should_have_a_well_formed_tail)                      \
     X(test_key_file_should_be_64_hex_digits_readable_by_its_owner_only)    \

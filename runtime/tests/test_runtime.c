@@ -107,7 +107,7 @@ void test_runtime_should_follow_the_plan_schedule(void)
     static const char body[] =
         "GPPLAN 3\nmission sampleMission\n"
         "hash 5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9\n"
-        "computer ts7800 300\nbudget_j 180000\npredicted_j 9876.5\ncomponents hotel\n"
+        "computer ts7800 300\nbudget_j 180000\npredicted_j 6025\ncomponents hotel\n"
         "assumptions 0\nstates 3\n"
         "state s1 300 600 0 1\npredict 1000 2 20\nenergy 2410\nprofile 0 1 0.3 150 0.31\nend\n"
         "state s2 300 600 1 1\npredict 1000 1 12\nenergy 2410\nsensor temp 60 20\n"

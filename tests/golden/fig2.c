@@ -179,6 +179,15 @@ static const gp_state states[3] = {
     },
 };
 
+static const gp_plan_bounds plan_bounds = {
+    .board = NULL,
+    .max_budget_j = 10000000000.0,
+    .min_pitch_rad = 0.0,
+    .max_pitch_rad = 0x1.921fb54442d18p+0 /* 1.5707963267948966 */,
+    .max_speed_mps = 2.0,
+    .states = NULL,
+};
+
 const gp_mission gp_mission_table = {
     .name = "sampleMission",
     .hash = "5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9",
@@ -196,4 +205,5 @@ const gp_mission gp_mission_table = {
     .clocks_mhz = board_clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,
+    .bounds = &plan_bounds,
 };
