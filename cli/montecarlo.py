@@ -20,10 +20,13 @@ import sys
 
 from gliderplan.cli.common import (
     add_mission_argument,
+    add_start_argument,
     load_mission,
+    parse_start,
     refuse_unpaired,
     replan_confidence,
     seed,
+    start_epoch_s,
 )
 from gliderplan.cli.main import print_json
 from gliderplan.contract import ExitCode
@@ -63,6 +66,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--key", metavar="KEYFILE",
                         help="with --replan: the vehicle's key (the plan signed with it; "
                              "default: a key made for the run)")
+    add_start_argument(parser, "500 m south of the mission's first waypoint, at "
+                               "2000-01-01T00:00:00Z")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="directory for scenarios.parquet, summary.json and the plots")
@@ -75,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
 
     refuse_unpaired(args, {"--confidence": ("--replan",), "--key": ("--replan",)})
     mission = load_mission(args)
+    lat, lon, when = parse_start(args.start) if args.start else (None, None, None)
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios")
     try:
         run_ = montecarlo_mission(
@@ -83,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
             scenario_file=args.scenario_file,
             duration_s=parse_duration_s(args.duration) if args.duration else None,
             tracker=args.tracker, progress=progress, replan=args.replan,
-            confidence=args.confidence, key_path=args.key)
+            confidence=args.confidence, key_path=args.key,
+            start=None if lat is None else (lat, lon), start_epoch_s=start_epoch_s(when))
     finally:
         progress.finish()
     summary = run_.summary

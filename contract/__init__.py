@@ -10,7 +10,7 @@ Change a fact here, regenerate the header, and every part follows.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import IntEnum
 
 # ---- limits of the runtime's tables and of the plan file ----------------------------
@@ -81,13 +81,54 @@ def same_clock(clock_mhz: float, board_clock_mhz: float) -> bool:
 PLAN_ROUNDING = 1e-6
 
 
+class EnvelopeAction(IntEnum):
+    """What the runtime does with a command outside the vehicle's envelope.
+
+    The vehicle file's `[envelope] action` chooses; every held command is logged."""
+
+    FAULT = 0  # release control to the glider's own layered control, as a mission fault
+    SURFACE = 1  # the mission's abort: it ends there, the glider surfaces and holds
+    CLAMP = 2  # hold the command at the envelope's edge, fly on (a band or rate: as SURFACE)
+
+
+class EnvelopeLimit(IntEnum):
+    """Which limit of the envelope a command broke (the event log's `envelope` record)."""
+
+    NONE = 0
+    DEPTH = 1  # a depth target, or a yo's end, outside 0..max_depth
+    PITCH = 2  # |pitch| above max_pitch
+    BALLAST = 3  # |pumped volume| above the pump's max_ballast
+    BAND = 4  # a yo band thinner than min_yo_band: it would turn all the time
+    INFLECTION = 5  # a yo turned again sooner than its pump can move a full stroke
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """The vehicle's rating that the runtime holds every command to, every tick, whatever
+    the events computed (docs/pilot.md, The envelope). From the vehicle file's
+    `[envelope]` table (`power_models.vehicle.Envelope` defaults), compiled into the
+    mission (`gp_mission.envelope`)."""
+
+    max_depth_m: float  # [m] deepest depth target or yo end
+    max_pitch_rad: float  # [rad] largest |pitch| commanded
+    min_yo_band_m: float  # [m] thinnest yo band (max - min depth)
+    min_inflection_s: float  # [s] shortest time between two turns of a yo
+    action: EnvelopeAction
+
+    def __post_init__(self) -> None:
+        if not (self.max_depth_m > 0 and 0 < self.max_pitch_rad < 1.5707963267948966
+                and 0 <= self.min_yo_band_m < self.max_depth_m and self.min_inflection_s >= 0):
+            raise ValueError(f"not an envelope: {self}")
+
+
 @dataclass(frozen=True)
 class FlightLimits:
     """The figures of one mission, vehicle and board that bound a plan: the code generator
     writes them into the compiled mission (`gp_mission`: `max_ballast_cc`, `clocks_mhz`,
     `bounds`), `contract.plan_check.plan_problem` holds a plan to them in Python and
     `gp_plan_check` in C (`planner.limits.flight_limits` loads them). The fields after
-    `clocks_mhz` default to no bound beyond the contract's (a mission table made by hand)."""
+    `clocks_mhz` default to no bound beyond the contract's (a mission table made by hand),
+    but for `envelope`."""
 
     default_ballast_cc: float  # [cc] flown where no plan sets one
     max_ballast_cc: float  # [cc] the pump's volume either side of neutral
@@ -103,10 +144,13 @@ class FlightLimits:
     # the glider to leave its turning depth (its trim over the band); () : 0
     min_ballast_cc: tuple[tuple[float, ...], ...] = ()
     # [m/s] a propelled profile's `auto` speed where no plan sets one (0: no propulsion)
-    unplanned_speed_mps: float = 0.0
+    unplanned_speed_mps: float = field(default=0.0, kw_only=True)
     # per state, the alternative flown where no plan sets one: the first the vehicle can
     # fly (a propeller AUV skips a yo); empty: the first of each state
-    unplanned_profiles: tuple[int, ...] = ()
+    unplanned_profiles: tuple[int, ...] = field(default=(), kw_only=True)
+    # the vehicle's rating every command is held to in flight (`gp_mission.envelope`):
+    # always given, by name
+    envelope: Envelope = field(kw_only=True)
 
     def __post_init__(self) -> None:
         if not 1 <= len(self.clocks_mhz) <= MAX_BOARD_CLOCKS:
@@ -306,6 +350,7 @@ class TransitionKind(IntEnum):
     RETURN = 4
     EXIT = 5
     RESERVE = 6  # the energy guard ended the mission: the battery reached its reserve
+    ENVELOPE = 7  # the envelope guard ended the mission: a command outside the vehicle's rating
 
 
 # The language's action words and the kinds they make.
@@ -315,7 +360,7 @@ TRANSITION_BY_ACTION: dict[str, TransitionKind] = {
 # Every kind's name in a trace and in the runtime's event log.
 TRANSITION_NAMES: dict[TransitionKind, str] = {
     TransitionKind.START: "start", **{k: a for a, k in TRANSITION_BY_ACTION.items()},
-    TransitionKind.RESERVE: "reserve"}
+    TransitionKind.RESERVE: "reserve", TransitionKind.ENVELOPE: "envelope"}
 
 NO_STATE = 0xFF  # COMMAND's `state` once exited; `from`/`to` of no state
 
@@ -324,6 +369,7 @@ FLAG_SURFACE = 1 << 0  # go to (or stay at) the surface
 FLAG_DONE = 1 << 1  # the mission exited
 FLAG_CLIMBING = 1 << 2  # else diving
 FLAG_HEADING = 1 << 3  # `heading_rad` is valid
+FLAG_ENVELOPE = 1 << 4  # the envelope guard held this command at the vehicle's rating
 
 # SENSORS's `flags`; the other bits are reserved (0), and a SENSORS with one set is dropped.
 SENSORS_MASK = 1 << 0  # a u32 mask follows; else the values are those of HELLO's read_mask
@@ -362,6 +408,7 @@ class ReleaseReason(IntEnum):
     INTERNAL_ERROR = 2  # a mission fault, I/O that failed, a crash or a stop signal
     MISSION_EXITED = 3
     ENERGY_RESERVE = 4  # the energy guard ended the mission: surface and hold
+    ENVELOPE = 5  # a command outside the vehicle's rating: the envelope guard acted
 
 
 class RuntimeExit(IntEnum):
@@ -372,6 +419,7 @@ class RuntimeExit(IntEnum):
     LINK_LOST = 3  # the watchdog: the link went silent
     INTERNAL = 4  # a mission fault, I/O that failed, a crash or a stop signal
     RESERVE = 5  # the energy guard ended the mission: the battery reached its reserve
+    ENVELOPE = 6  # a command outside the vehicle's rating: the envelope guard ended it
 
 
 # ---- plan updates (docs/plan-update.md) ----------------------------------------------
@@ -439,6 +487,8 @@ class ExitCode(IntEnum):
     USAGE = 2  # bad command-line usage: a missing file, a malformed option
     OVER_BUDGET = 3  # a simulated run broke its plan's energy budget
     OVER_PREDICTION = 4  # with --strict-prediction: a run spent more than its plan predicted
+    ENVELOPE = 5  # a simulated run commanded the vehicle outside its rating (the envelope guard)
+    LINK_FAILED = 6  # a simulated run ended on a link failure (all it flew is written)
     INTERNAL = 70  # a bug in gliderplan (EX_SOFTWARE of sysexits.h)
     INTERRUPTED = 130  # stopped by Ctrl-C (128 + SIGINT)
     TERMINATED = 143  # stopped by SIGTERM, as by Ctrl-C: outputs written, children stopped

@@ -46,7 +46,8 @@ LINE_LENGTH = 100
 HEX = frozenset({"NO_STATE"})  # byte values written in hex, as docs/protocol.md has them
 # Bits of a message's flags byte, as C enumerations.
 FLAGS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("COMMAND's flags", ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING")),
+    ("COMMAND's flags", ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING",
+                         "FLAG_ENVELOPE")),
     ("SENSORS's flags", ("SENSORS_MASK", "SENSORS_RESYNC")),
 )
 # Enumeration -> (C type name, prefix of its members).
@@ -58,6 +59,8 @@ ENUMS: tuple[tuple[type[IntEnum], str, str], ...] = (
     (contract.RuntimeExit, "gp_exit_status", "GP_EXIT_"),
     (contract.UpdateField, "gp_update_field", "GP_UF_"),
     (contract.UpdateStatus, "gp_update_status", "GP_UPDATE_"),
+    (contract.EnvelopeAction, "gp_envelope_action", "GP_ENVELOPE_"),
+    (contract.EnvelopeLimit, "gp_envelope_limit", "GP_LIMIT_"),
 )
 
 

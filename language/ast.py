@@ -164,6 +164,17 @@ class HorizonDecl(Node):
     span: Span = NO_SPAN
 
 
+class StartDecl(Node):
+    lat: Number  # [decimal degrees]
+    lon: Number
+    span: Span = NO_SPAN
+
+
+class CorrectionDecl(Node):
+    setting: Ident  # on | off
+    span: Span = NO_SPAN
+
+
 class ObjectiveDecl(Node):
     sense: Ident  # maximize | minimize
     target: Ident  # quality | energy
@@ -202,6 +213,8 @@ Declaration = (
     | ComputerDecl
     | BatteryDecl
     | HorizonDecl
+    | StartDecl
+    | CorrectionDecl
     | ObjectiveDecl
     | SensorDecl
     | VarDecl

@@ -19,6 +19,7 @@ from gliderplan.contract import (
     NO_BOARD,
     RUNTIME_CYCLES_PER_TICK,
     TICK_S,
+    Envelope,
 )
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
@@ -52,10 +53,11 @@ class _Checker:
         self.state_names = {s.name.text for s in mission.states}
         self.computer = ir.DEFAULT_COMPUTER  # the mission's board, for its states' settings
         self._board: object | None = None  # the board, loaded once when a state needs it
-        self.vehicle_spec = ir.DEFAULT_VEHICLE
+        self.vehicle_spec = ir.DEFAULT_VEHICLE  # the mission's vehicle, for its envelope
         self._vehicle: object | None = None  # the vehicle, loaded once when a profile needs it
         # a vehicle file the mission names, loaded and checked when model files are opened
         self._vehicle_file: object | None = None
+        self._envelope: object | None = None  # its envelope, loaded once a profile needs it
 
     # ---- reporting helpers
     def error(self, message: str, span: ast.Span, hint: str | None = None) -> None:
@@ -178,6 +180,21 @@ class _Checker:
                                        decl.duration.span, "the time the mission is planned "
                                        "and simulated for, e.g. 'horizon 30 d'")
                         fields["horizon_s"] = horizon[0]
+                case ast.StartDecl(lat, lon):
+                    if -90.0 <= lat.value <= 90.0 and -180.0 <= lon.value <= 180.0:
+                        fields["start_deg"] = (lat.value, lon.value)
+                    else:
+                        self.error("start: latitude must lie in [-90, 90] and longitude in "
+                                   "[-180, 180] degrees", decl.span, "where the glider is put "
+                                   "in the water, decimal degrees: e.g. 'start 54.2, 7.0'")
+                case ast.CorrectionDecl(setting):
+                    if setting.text in ("on", "off"):
+                        fields["current_correction"] = setting.text == "on"
+                    else:
+                        self.error(f"current_correction {setting.text}: expected on or off",
+                                   setting.span, "whether the glider heads upstream of its "
+                                   "waypoint for the current it measured (Slocum "
+                                   "u_use_current_correction)")
                 case ast.ObjectiveDecl():
                     fields["objective"] = self.objective(decl)
                 case ast.SensorDecl():
@@ -423,6 +440,7 @@ class _Checker:
             expect_s=expect,
             requirements=tuple(reqs),
             computer=computer,
+            profile_line=items[ast.ProfileItem].span.line,
         )
 
     def registered(self, ident: ast.Ident, table: Mapping[str, T], kind: str,
@@ -495,6 +513,8 @@ class _Checker:
                        f"{values['max_depth']:g} m", invocation.span,
                        f"{name}(min_depth, max_depth, ...): the glider turns at min_depth "
                        "on the way up and at max_depth on the way down")
+        elif values:
+            self.within_envelope(invocation, values)
         profile = ir.Profile(name, tuple(args), auto, thrust)
         if profile.propelled or self.vehicle_spec != ir.DEFAULT_VEHICLE:
             # the default glider flies every buoyancy profile: no need to load it
@@ -586,6 +606,45 @@ class _Checker:
             except SpeedOutOfRange as err:
                 self.error(f"vehicle {vehicle.name}: {err}", span,
                            "'auto' lets the planner choose")
+
+    def within_envelope(self, invocation: ast.Invocation, values: dict[str, float]) -> None:
+        """Errors for the constant arguments of a profile outside the vehicle's rating
+        (docs/pilot.md, The envelope): what the runtime would refuse in flight."""
+        envelope = self.envelope()
+        if envelope is None:
+            return
+        spans = {spec.name: node.span for spec, node in zip(
+            PROFILES[invocation.name.text].params, invocation.args, strict=False)}
+        hint = f"the rating of vehicle {self.vehicle_spec} (its file's [envelope])"
+        for param in ("min_depth", "max_depth", "depth"):
+            if values.get(param, 0.0) > envelope.max_depth_m:
+                self.error(f"{param.replace('_', ' ')} {values[param]:g} m is beyond the "
+                           f"vehicle's rated {envelope.max_depth_m:g} m", spans[param], hint)
+        for param in ("dive_pitch", "climb_pitch"):
+            if values.get(param, 0.0) > envelope.max_pitch_rad:
+                self.error(f"{param.replace('_', ' ')} {values[param]:g} rad is beyond the "
+                           f"vehicle's {envelope.max_pitch_rad:.3g} rad", spans[param], hint)
+        if "min_depth" in values and "max_depth" in values and (
+                values["max_depth"] - values["min_depth"] < envelope.min_yo_band_m):
+            band = values["max_depth"] - values["min_depth"]
+            self.error(f"yo band {band:g} m is thinner than the "
+                       f"vehicle's {envelope.min_yo_band_m:g} m: it would turn all the time",
+                       invocation.span, hint)
+
+    def envelope(self) -> Envelope | None:
+        """The mission's vehicle's envelope, loaded once; None when its file cannot be read
+        (what is wrong with it is said, with its own exit code, where the vehicle is
+        loaded to be flown or planned)."""
+        if self._envelope is None:
+            from gliderplan.contract.files import InputFileError
+            from gliderplan.power_models.errors import ModelFileError
+            from gliderplan.power_models.vehicle_figures import load_envelope
+
+            try:
+                self._envelope = load_envelope(self.vehicle_spec)
+            except (ModelFileError, InputFileError):
+                self._envelope = False
+        return self._envelope or None
 
     def sensor_uses(self, item: ast.SensorsItem) -> list[ir.SensorUse | None]:
         uses: list[ir.SensorUse | None] = []

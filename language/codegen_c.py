@@ -353,6 +353,7 @@ class _MissionWriter:
             f"    .max_ballast_cc = {c_double(self.limits.max_ballast_cc)},",
             f"    .unplanned_speed_mps = {c_double(self.limits.unplanned_speed_mps)},",
             f"    .reserve_j = {c_double(mission.battery.reserve_j)},",
+            *self.visit_envelope(),
             "    .clocks_mhz = board_clocks_mhz,",
             f"    .n_clocks = {len(self.limits.clocks_mhz)},",
             "    .sensor_names = sensor_names,",
@@ -390,6 +391,17 @@ class _MissionWriter:
             f"    .max_speed_mps = {c_double(limits.max_speed_mps)},",
             f"    .states = {'state_bounds' if limits.duty_bounds else 'NULL'},",
             "};", ""]
+
+    def visit_envelope(self) -> list[str]:
+        """The vehicle's rating (contract.Envelope) as `gp_mission.envelope`."""
+        env = self.limits.envelope
+        return ["    .envelope = {",
+                f"        .max_depth_m = {c_double(env.max_depth_m)},",
+                f"        .max_pitch_rad = {c_double(env.max_pitch_rad)},",
+                f"        .min_yo_band_m = {c_double(env.min_yo_band_m)},",
+                f"        .min_inflection_s = {c_double(env.min_inflection_s)},",
+                f"        .action = GP_ENVELOPE_{env.action.name},",
+                "    },"]
 
     def visit_state_entry(self, index: int, state: ir.State) -> list[str]:
         prefix = f"state{index}"

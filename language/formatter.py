@@ -180,6 +180,10 @@ def _declaration(decl: ast.Declaration) -> str:
             return text + (f" reserve {_quantity(reserve)}" if reserve else "")
         case ast.HorizonDecl(duration):
             return f"horizon {_quantity(duration)}"
+        case ast.StartDecl(lat, lon):
+            return f"start {lat.text}, {lon.text}"
+        case ast.CorrectionDecl(setting):
+            return f"current_correction {setting.text}"
         case ast.ObjectiveDecl(sense, target, floor):
             text = f"objective {sense.text} {target.text}"
             return text + (f" quality >= {floor.text}" if floor else "")

@@ -297,6 +297,14 @@ class State:
     # Left out of the canonical JSON when a state says nothing (missions written before
     # power management keep their hash, and with it their plans and builds).
     computer: ComputerUse = field(default=NO_COMPUTER_USE, metadata={"omit_default": True})
+    # the line of its `flightprofile` in the mission file, for messages (0: not from one);
+    # where it was written does not change the mission: not in its hash
+    profile_line: int = field(default=0, metadata={"omit_default": True})
+
+    @property
+    def place(self) -> str:
+        """The state as a message names it: `s1 (line 6)`, the line of its flightprofile."""
+        return f"{self.name} (line {self.profile_line})" if self.profile_line else self.name
 
     @property
     def profile_variables(self) -> tuple[str, ...]:
@@ -366,6 +374,8 @@ class CheckedMission:
     computer: Computer = DEFAULT_COMPUTER
     battery: Battery = DEFAULT_BATTERY
     horizon_s: float | None = None
+    start_deg: tuple[float, float] | None = None  # (lat, lon): where it is put in the water
+    current_correction: bool = True  # heads upstream for the current it measured
     objective: Objective = field(default_factory=Objective)
     sensor_preferences: tuple[SensorPreference, ...] = ()
     stack_depth: int = DEFAULT_STACK_DEPTH
@@ -399,6 +409,13 @@ class CheckedMission:
         """SHA-256 (hex) of the canonical JSON, excluding `defaults_used` (not semantic)."""
         data = _encode(self)
         data.pop("defaults_used")
+        # missions without a start or with the default correction keep the hash they had
+        if data.get("start_deg") is None:
+            data.pop("start_deg", None)
+        if data.get("current_correction", True):
+            data.pop("current_correction", None)
+        for state in data["states"]:
+            state.pop("profile_line", None)
         for name, text in data.pop("files_as_written", ()):  # where it was checked from
             if name == "computer":                               # does not change it
                 data["computer"]["board"] = text

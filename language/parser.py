@@ -94,6 +94,12 @@ class _Build:
     def horizon_decl(self, where, children):
         return ast.HorizonDecl(children[0], ast.Span(*where))
 
+    def start_decl(self, where, children):
+        return ast.StartDecl(children[0], children[1], ast.Span(*where))
+
+    def correction_decl(self, where, children):
+        return ast.CorrectionDecl(_ident(children[0]), ast.Span(*where))
+
     def objective_decl(self, where, children):
         sense, target, floor = children
         return ast.ObjectiveDecl(_ident(sense), _ident(target), floor, ast.Span(*where))

@@ -98,4 +98,4 @@ def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[
             for state in mission.states),
         min_ballast_cc=tuple(tuple(least_ballast_cc(p) for p in state.profiles)
                              for state in mission.states),
-        unplanned_speed_mps=speed, unplanned_profiles=flown)
+        unplanned_speed_mps=speed, unplanned_profiles=flown, envelope=vehicle.envelope)

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gliderplan.contract import Component
+from gliderplan.contract import Component, Envelope, EnvelopeAction
 from gliderplan.contract.units import UNITS
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
@@ -44,6 +44,7 @@ from gliderplan.power_models.propulsion import (
     Propulsion,
     read_propulsion,
 )
+from gliderplan.power_models.vehicle_figures import FIGURES, derive_envelope, envelope_fields
 
 Array = np.ndarray
 
@@ -116,8 +117,21 @@ class Vehicle:
     base_drift_w: float = 0.0  # sd [W] of the hotel load between deployments (another year)
     kind: str = GLIDER  # glider | hybrid (a glider with a thruster) | auv (propeller only)
     propulsion: Propulsion | None = None  # its propeller or thruster; None: a glider's none
+    # the file's [envelope]: the rating every command is held to (None: `envelope` derives it)
+    max_depth_m: float | None = None
+    max_pitch_rad: float | None = None
+    min_yo_band_m: float | None = None
+    envelope_action: EnvelopeAction = EnvelopeAction.SURFACE
     uncertainty: Uncertainty | None = field(default=None, compare=False)
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
+
+    @property
+    def envelope(self) -> Envelope:
+        """The rating the runtime holds every command to (`derive_envelope`)."""
+        return derive_envelope(self.nominal_max_depth_m, self.nominal_pitch_rad,
+                               self.nominal_min_depth_m, self.max_ballast_cc, self.pump_rate_cc_s,
+                               self.max_depth_m, self.max_pitch_rad, self.min_yo_band_m,
+                               self.envelope_action)
 
     @property
     def has_buoyancy_engine(self) -> bool:
@@ -366,44 +380,6 @@ def load_vehicle(spec: str) -> Vehicle:
     return vehicle
 
 
-# file key -> (attribute, dimension, options); a flight key is "flight.<key>". Every figure
-# calibration may fit or draw is here, so that loading, writing and drawing agree.
-FIGURES: dict[str, tuple[str, str, dict]] = {
-    "hotel_power": ("hotel_w", "power", {}),
-    "pump_out_energy_per_volume": ("pump_out_j_per_cc", "pump_per_volume", {}),
-    "pump_out_energy_per_volume_depth": ("pump_out_j_per_cc_m", "pump_per_volume_depth", {}),
-    "pump_in_energy_per_volume": ("pump_in_j_per_cc", "pump_per_volume", {}),
-    "pump_in_energy_per_volume_depth": (
-        "pump_in_j_per_cc_m", "pump_per_volume_depth", {"default": 0.0, "minimum": -np.inf}
-    ),
-    "pump_rate": ("pump_rate_cc_s", "flow", {"positive": True}),
-    "max_ballast": ("max_ballast_cc", "volume", {"positive": True}),
-    "pitch_energy": ("pitch_energy_j", "energy", {}),
-    "surface_power": ("surface_w", "power", {}),
-    "surface_time": ("surface_s", "time", {}),
-    "iridium_power": ("iridium_w", "power", {}),
-    "iridium_time": ("iridium_s", "time", {}),
-    "surfacing_energy": ("surfacing_fixed_j", "energy", {}),
-    "top_turn_time": ("top_turn_s", "time", {"default": 0.0}),
-    "bottom_turn_time": ("bottom_turn_s", "time", {"default": 0.0}),
-    "dive_pitch_error": ("dive_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
-    "climb_pitch_error": ("climb_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
-    "nominal_pitch": (
-        "nominal_pitch_rad", "angle", {"positive": True, "maximum": np.pi / 2 * 0.999}
-    ),
-    "nominal_min_depth": ("nominal_min_depth_m", "length", {}),
-    "nominal_max_depth": ("nominal_max_depth_m", "length", {"positive": True}),
-    "flight.water_density": ("rho_kg_m3", "density", {"positive": True}),
-    "flight.gravity": ("g_m_s2", "acceleration", {"positive": True}),
-    "flight.wing_area": ("wing_area_m2", "area", {"positive": True}),
-    "flight.lift_slope_wing": ("lift_wing_per_rad", "per_angle", {"positive": True}),
-    "flight.lift_slope_hull": ("lift_hull_per_rad", "per_angle", {}),
-    "flight.drag_cd0": ("drag_cd0", "dimensionless", {"positive": True}),
-    "flight.drag_cd1": ("drag_cd1_per_rad2", "dimensionless", {}),
-    "flight.hull_volume": ("hull_volume_cc", "volume", {"default": 0.0}),
-    "flight.trim_volume": ("trim_cc", "volume", {"default": 0.0, "minimum": -np.inf}),
-    "flight.compressibility": ("compressibility_per_pa", "compressibility", {"default": 0.0}),
-}
 
 
 @contextmanager
@@ -528,6 +504,7 @@ def read_vehicle_file(path: Path) -> Vehicle:
     devices = _devices(top, spreads, bounds)
     propulsion = _propulsion(top, kind, params)
     vehicle = Vehicle(
+        **envelope_fields(top, values["nominal_max_depth_m"]),
         name=top.text("name"),
         description=top.text("description", ""),
         flight=params,

@@ -29,7 +29,7 @@ QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on i
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
 SECTIONS = ("summary", "pareto", "energy", "speed", "vehicles", "plan-vs-simulation",
-            "profile", "sbc", "sensitivity", "montecarlo")
+            "profile", "track", "sbc", "sensitivity", "montecarlo")
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,8 @@ def _read_run(mission: CheckedMission, run_dir: Path) -> tuple[dict, pd.DataFram
     try:
         _regular(run_dir / "timeseries.parquet", "run's time series")
         series = pq.read_table(run_dir / "timeseries.parquet",
-                               columns=["time_s", "depth_m", "temperature_c", "state"]
+                               columns=["time_s", "depth_m", "temperature_c", "state",
+                                        "lat_deg", "lon_deg"]
                                ).to_pandas()
     except (OSError, KeyError, ValueError) as err:
         raise UsageError(f"{run_dir}/timeseries.parquet: cannot read the run's time "
@@ -142,6 +143,29 @@ def _profile_frame(series: pd.DataFrame) -> pd.DataFrame:
                          "depth_m": thin["depth_m"].to_numpy(),
                          "temperature_c": thin["temperature_c"].to_numpy(),
                          "state": thin["state"].astype(str).to_numpy()})
+
+
+def _track_frame(series: pd.DataFrame) -> pd.DataFrame:
+    """The flown track (track.csv): time and true position, every k-th tick."""
+    thin = series.iloc[::max(1, math.ceil(len(series) / PROFILE_ROWS))]
+    return pd.DataFrame({"time_h": thin["time_s"].to_numpy() / 3600.0,
+                         "lat_deg": thin["lat_deg"].to_numpy(),
+                         "lon_deg": thin["lon_deg"].to_numpy()})
+
+
+def _track_section(mission: CheckedMission, frame: pd.DataFrame, summary: dict) -> Section:
+    from gliderplan.sim.loop import route_points_deg
+    from gliderplan.sim.seamap import SeaMap, image
+
+    fixes = summary.get("surfacing_fixes", [])
+    figure = image(SeaMap("", {"flown": (frame["lat_deg"].to_numpy(),
+                                         frame["lon_deg"].to_numpy())},
+                          tuple(route_points_deg(mission)), tuple(fixes)), "svg")
+    return Section("track", "Track at sea", (
+        f"<p>The simulated glider's true track, its {len(fixes)} surfacings' GPS fixes and "
+        "the mission's waypoints (<code>gliderplan forecast --map</code> draws the forecast "
+        "surfacings with their 90 % ellipses and the current field).</p>",),
+        figure.decode("utf-8"), "Latitude against longitude [deg].", ("track.csv",))
 
 
 # ---- Monte Carlo ----------------------------------------------------------------------
@@ -226,6 +250,7 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
         "energy_by_state.csv": _energy_frame(report),
         "plan_vs_simulation.csv": _plan_vs_sim_frame(summary, report),
         "profile.csv": _profile_frame(series),
+        "track.csv": _track_frame(series),
         "sbc_boards.csv": sbc.boards_frame(comparison),
         "sbc_workload.csv": sbc.workload_frame(comparison),
         "sbc_crossovers.csv": sbc.crossovers_frame(comparison),
@@ -250,6 +275,7 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
         *([_speed_section(speeds), vehicles] if vehicles is not None else []),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
         _profile_section(tables["profile.csv"], len(series)),
+        _track_section(mission, tables["track.csv"], summary),
         _sbc_section(comparison, tables),
         _sensitivity_section(tornado, tables["sensitivity.csv"]),
     ]

@@ -84,6 +84,10 @@ class LinkTimeoutError(LinkError):
     """No valid answer after every retransmission."""
 
 
+class LinkClosedError(LinkError):
+    """The line is gone: the runtime closed its end (it ended, or was killed)."""
+
+
 class LinkReleasedError(LinkError):
     """The runtime sent RELEASE: it gave control back to the glider."""
 
@@ -593,6 +597,8 @@ class FdPort:
             return b""
 
     def write(self, data: bytes) -> int:
+        """Write all of `data`; LinkClosedError once the other end has closed the line (a
+        pty whose runtime has ended answers EIO)."""
         view = memoryview(data)
         while view:
             try:
@@ -600,6 +606,8 @@ class FdPort:
             except BlockingIOError:  # a non-blocking line that is full: wait for room
                 select.select([], [self.fd], [])
                 continue
+            except OSError as err:
+                raise LinkClosedError(f"the line is closed ({err.strerror})") from None
             view = view[written:]
         return len(data)
 

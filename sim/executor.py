@@ -18,12 +18,15 @@ from typing import TYPE_CHECKING
 from gliderplan.contract import (
     FLAG_CLIMBING,
     FLAG_DONE,
+    FLAG_ENVELOPE,
     FLAG_HEADING,
     FLAG_SURFACE,
     N_SENSORS,
     NO_STATE,
     SURFACE_PITCH_RAD,
     TRANSITION_NAMES,
+    Envelope,
+    EnvelopeAction,
     FlightLimits,
     TransitionKind,
 )
@@ -31,6 +34,7 @@ from gliderplan.language import ir, semantics
 from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim import compiled, pilot
+from gliderplan.sim.envelope import EnvelopeGuard
 
 if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
@@ -66,17 +70,23 @@ class PythonRuntime:
 
     def __init__(self, mission: ir.CheckedMission, plan: Plan | None, default_ballast_cc: float,
                  robust_tracker: bool = True, max_ballast_cc: float | None = None,
-                 limits: FlightLimits | None = None) -> None:
+                 envelope: Envelope | None = None, limits: FlightLimits | None = None) -> None:
         """`default_ballast_cc` [cc] is flown where no plan sets one; `max_ballast_cc` [cc],
-        the pump's volume, is the surfacing of the energy guard (default: the former).
-        `limits`: without a plan, the alternative of each state and the `auto` speed
-        [m/s] flown (`FlightLimits.unplanned_*`; default: the first, none)."""
+        the pump's volume, is the surfacing of the energy guard (default: the former);
+        `envelope`, the vehicle's rating every command is held to (None: none, for tests
+        of the semantics alone). `limits`: without a plan, the alternative of each state
+        and the `auto` speed [m/s] flown (`FlightLimits.unplanned_*`; default: the first,
+        none)."""
         self.mission = mission
         self.unplanned_speed_mps = 0.0 if limits is None else limits.unplanned_speed_mps
         self.unplanned = [0 if limits is None else limits.unplanned_profile(i)
                           for i in range(len(mission.states))]
         self.default_ballast_cc = default_ballast_cc
         self.max_ballast_cc = default_ballast_cc if max_ballast_cc is None else max_ballast_cc
+        self.guard = None if envelope is None else EnvelopeGuard(envelope, self.max_ballast_cc)
+        # what the guard did: "missiontime T s, state S: <limit>; <action>", as the C
+        # runtime says it
+        self.envelope_notes: list[str] = []
         self.reserve_j = mission.battery.reserve_j
         self.robust = robust_tracker
         self.index = mission.state_index
@@ -186,7 +196,7 @@ class PythonRuntime:
             src = self.index[transition.from_state] if transition.from_state else NO_STATE
             dst = self.index[transition.to_state] if transition.to_state else NO_STATE
         machine = self.machine
-        if kind == TransitionKind.RESERVE:  # surface and hold
+        if kind in (TransitionKind.RESERVE, TransitionKind.ENVELOPE):  # surface and hold
             return Command(tick, NO_STATE, 0, kind, src, dst, 0,
                            FLAG_DONE | FLAG_SURFACE | FLAG_CLIMBING, 0.0, _SURFACE_PITCH_F32,
                            float(self.max_ballast_cc), 0.0, 0, self.event_count)
@@ -200,7 +210,8 @@ class PythonRuntime:
         args = self.constant_args[i][k] or self.argument_fns[i][k](s, machine.variables)
         profile = self.state.profiles[k]
         depth = s[_DEPTH]
-        if k != self.profile_k:
+        entered = k != self.profile_k
+        if entered:
             self.profile_k = k
             routine = pilot.PROFILE_ROUTINES[profile.kind]
             self.routine = routine(depth, args, self.robust, s[_ALTITUDE]) \
@@ -220,9 +231,43 @@ class PythonRuntime:
         heading, valid = self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
                  | (FLAG_HEADING if valid else 0))
+        if self.guard is not None:
+            band = (args[0], args[1]) if profile.kind in ("yo", "thermotrackyo") else None
+            held = self._hold(tick, entered, band, target, pitch_cmd, ballast_cmd, flags)
+            if isinstance(held, Command):
+                return held
+            target, pitch_cmd, ballast_cmd, flags = held
         power = self.constant_power[i]
         if power is None:
             power = pilot.sensor_power_mask(self.power_tables[i], t_in)
         self.suspends += self.sleeps[i]
         return Command(tick, i, len(machine.stack), kind, src, dst, k, flags, target, pitch_cmd,
                        ballast_cmd, heading, power, self.event_count, speed, thrust)
+
+    def _hold(self, tick: int, entered: bool, band: tuple[float, float] | None, target: float,
+              pitch: float, ballast: float, flags: int
+              ) -> tuple[float, float, float, int] | Command:
+        """The envelope guard on this tick's command (runtime/src/gp_runtime.c): the
+        command to send, held with the clamp action; or the mission's end (the surface
+        action: a COMMAND) or a MissionFault (the fault action)."""
+        guard = self.guard
+        was_held = guard.held
+        breach, target, pitch, ballast = guard.hold(entered, band, self.s[0], target, pitch,
+                                                    ballast, bool(flags & FLAG_CLIMBING))
+        if breach is None:
+            return target, pitch, ballast, flags
+        ends = guard.ends(breach)
+        fault = ends and guard.envelope.action == EnvelopeAction.FAULT
+        if ends or not was_held:
+            what = ("releasing control" if fault else "the mission ends, surfacing" if ends
+                    else "held at the limit")
+            self.envelope_notes.append(f"envelope: missiontime {self.s[0]:g} s, state "
+                                       f"{self.state.name}: {breach.text()}; {what}")
+        if fault:
+            raise semantics.MissionFault(f"tick {tick}: {self.envelope_notes[-1]}")
+        if ends:
+            machine = self.machine
+            self.machine = semantics.Machine(None, (), machine.variables)
+            return self._command(tick, semantics.Transition(self.s[0], "envelope",
+                                                            machine.state, "", 0))
+        return target, pitch, ballast, flags | FLAG_ENVELOPE

@@ -101,7 +101,6 @@ def _fly_one(task: dict) -> dict:
     what the survey needs of the flight (a worker's task: plain data in and out)."""
     from gliderplan.language import check_source
     from gliderplan.sim import run_mission
-    from gliderplan.sim.vehicle import Current
 
     mission = check_source(task["mission_text"], task["mission_name"]).checked()
     with tempfile.TemporaryDirectory(prefix="gliderplan-fleet-") as scratch:
@@ -109,7 +108,8 @@ def _fly_one(task: dict) -> dict:
         plan_path.write_bytes(task["plan_bytes"])
         result = run_mission(mission, Path(scratch) / "run", plan_path=plan_path,
                              runtime=task["runtime"], ocean=task["ocean"],
-                             current=Current(*task["current"]), seed=task["seed"],
+                             currents="{!r},{!r}".format(*task["current"]),
+                             seed=task["seed"],
                              duration_s=task["duration_s"], start_utc=task["start_utc"],
                              netcdf=True)
         files = {p.name: p.read_bytes() for p in result.files}

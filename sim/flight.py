@@ -3,12 +3,15 @@ ocean, flown by the Python executor or by the compiled C runtime over a pty."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import TRANSITION_NAMES
 from gliderplan.language import ir
 from gliderplan.language.registry import cannot_fly
+from gliderplan.language.semantics import Transition
 from gliderplan.power_models.vehicle import Vehicle, yo_flight_problem
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
@@ -55,7 +58,8 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         # without a plan: the same buoyancy volume, alternatives and speed the compiler
         # gives the C runtime (the board's clocks are not the executor's to set)
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
-                                 vehicle.max_ballast_cc, flown_limits(mission, vehicle, (0.0,)))
+                                 vehicle.max_ballast_cc, vehicle.envelope,
+                                 flown_limits(mission, vehicle, (0.0,)))
         hook = None
         if shore is not None:
             from gliderplan.sim.replanning import PythonVehicle
@@ -72,6 +76,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
             record = simulate(mission, executor, science, config, progress,
                               FastForward(mission, executor, science), gauge, hook)
         record.entry_variables = executor.entry_variables
+        record.envelope = located(executor.envelope_notes, mission)
         record.events_fired = executor.event_count
         return record
     if runtime != "c":
@@ -84,9 +89,12 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     limits = flown_limits(mission, vehicle, board.clocks_mhz)
     schedule = None
     if faults is not None:
+        from gliderplan.planner.occupancy import mission_occupancy
         from gliderplan.sim.faults import FaultSchedule
 
-        schedule = FaultSchedule(faults, config.seed, int(config.duration_s / config.tick_s),
+        # kills fall within the run: up to the mission's end on its timeline, if sooner
+        span_s = min(config.duration_s, mission_occupancy(mission, config.duration_s).total_s)
+        schedule = FaultSchedule(faults, config.seed, int(span_s / config.tick_s),
                                  config.tick_s)
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)
@@ -98,8 +106,11 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended
+    record.envelope = located(c_runtime.envelope_notes(), mission)
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
+        if record.events_log is not None:  # the transitions made, lost COMMANDs or not
+            record.trace = logged_trace(record.events_log, record.flown_s)
     return record
 
 
@@ -114,7 +125,8 @@ def flown_limits(mission: ir.CheckedMission, vehicle: Vehicle,
 
     speed, flown = unplanned(mission, vehicle)
     return FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, clocks_mhz,
-                        unplanned_speed_mps=speed, unplanned_profiles=flown)
+                        unplanned_speed_mps=speed, unplanned_profiles=flown,
+                        envelope=vehicle.envelope)
 
 
 def _surfacing(shore: ShoreLoop, deliver, gauge, glider,  # noqa: ANN001, ANN202
@@ -134,6 +146,25 @@ def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  #
     return lambda data: read_plan_bytes(data, mission, "", limits)
 
 
+def located(notes: list[str], mission: ir.CheckedMission) -> list[str]:
+    """The envelope guard's notes with each state's place (`state s1 (line 6):`)."""
+    places = {f"state {s.name}:": f"state {s.place}:" for s in mission.states}
+    return [re.sub(r"state \S+:", lambda m: places.get(m[0], m[0]), note, count=1)
+            for note in notes]
+
+
+def logged_trace(events_log: str, flown_s: float) -> list[Transition]:
+    """The transitions of a runtime's event log (docs/reliability.md) made before
+    `flown_s` [s], as trace rows; its fault and clamp records are no transitions."""
+    trace = []
+    for line in events_log.splitlines():
+        time_s, kind, from_state, to_state, depth = line.split()
+        if kind in TRANSITION_NAMES.values() and float(time_s) < flown_s:
+            trace.append(Transition(float(time_s), kind, from_state.strip("-"),
+                                    to_state.strip("-"), int(depth)))
+    return trace
+
+
 def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
                          plan: Plan | None) -> None:
     """FlightModelError (bad input, exit 1, as `plan` says it) for a yo of constant depths
@@ -147,7 +178,7 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
                 continue  # one the vehicle cannot fly is never flown (no plan time, check warns)
             flown = (None, None) if plan is None else (plan.states[i].profiles[k].pitch_rad,
                                                        plan.states[i].profiles[k].ballast_cc)
-            problem = yo_flight_problem(f"{state.name}: flightprofile {k}", vehicle,
+            problem = yo_flight_problem(f"{state.place}: flightprofile {k}", vehicle,
                                         profile.kind, profile.constant_args(), *flown)
             if problem is not None:
                 raise problem

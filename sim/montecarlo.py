@@ -30,7 +30,7 @@ from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.energy import RunEnergy, account, check_flight
-from gliderplan.sim.loop import RunConfig, RunRecord
+from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig, RunRecord
 from gliderplan.sim.scenarios import ScenarioSpec, draw_scenario
 
 BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending it is cheap
@@ -57,6 +57,9 @@ class Job:
     held: bytes | None = None
     key: bytes | None = None
     confidence: float | None = None
+    # where the glider is put in the water (lat, lon) [deg] (None: as sim puts it)
+    start: tuple[float, float] | None = None
+    start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
 
     @property
     def replan(self) -> bool:
@@ -76,8 +79,10 @@ def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
     from gliderplan.sim.flight import fly
 
     scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
+    lat, lon = job.start or (None, None)
     config = RunConfig(tick_s=job.tick_s, duration_s=job.duration_s, seed=scenario.seed,
-                       noise=scenario.noise, current=scenario.current)
+                       noise=scenario.noise, current=scenario.current, start_lat_deg=lat,
+                       start_lon_deg=lon, start_epoch_s=job.start_epoch_s)
     record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
                  robust_tracker=job.robust_tracker, tick_by_tick=tick_by_tick)
     row = _row(job, scenario, record)
@@ -353,7 +358,8 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
                        tracker: str = "robust",
                        progress: Callable[[int, int], None] | None = None,
                        replan: bool = False, confidence: float | None = None,
-                       key_path=None) -> MonteCarloRun:
+                       key_path=None, start: tuple[float, float] | None = None,
+                       start_epoch_s: float = DEFAULT_START_EPOCH_S) -> MonteCarloRun:
     """Fly `mission` (and the plan in `plan_path`: its budget and prediction; without one
     every sensor a state logs is on and the budget is the mission's usable battery) in
     `scenarios` scenarios drawn from `scenario_file` (default: the shipped one) from
@@ -367,7 +373,8 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     then holds `hold_rate`, `hold_rate_static`, `quality`, `quality_static`,
     `update_bytes_max` and what the link carried (`replanning`).
     Raises KeyboardInterrupt only if no scenario finished: an interrupted run keeps and
-    writes those that did (`MonteCarloRun.result.interrupted`)."""
+    writes those that did (`MonteCarloRun.result.interrupted`). `start`: (lat, lon) [deg]
+    where each glider is put in the water (default: as sim puts it), at `start_epoch_s`."""
     import json
     from pathlib import Path
 
@@ -397,7 +404,8 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     if replan:
         held, key = _vehicle_plan(plan_path, key_path)
     job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
-              robust_tracker=tracker == "robust", held=held, key=key, confidence=confidence)
+              robust_tracker=tracker == "robust", held=held, key=key, confidence=confidence,
+              start=start, start_epoch_s=start_epoch_s)
     with scenario_executor(workers, scheduler) as executor:
         result = run_montecarlo(job, scenarios, executor, workers, progress)
     if not result.rows:

@@ -19,10 +19,10 @@ from gliderplan.planner.planfile import Plan, load_plan
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
     from gliderplan.power_models.flight import DensityProfile
     from gliderplan.power_models.vehicle import Vehicle
+    from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.energy import FlightCheck, RunEnergy
-    from gliderplan.sim.loop import RunRecord
+    from gliderplan.sim.loop import RunConfig, RunRecord
     from gliderplan.sim.ocean import Water
-    from gliderplan.sim.vehicle import Current
 
 RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png",
              "events.log")  # events.log: the C runtime's own, with --faults
@@ -43,6 +43,8 @@ class RunResult:
     files: tuple[Path, ...]  # the run's files, written atomically
     water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
     replanning: dict | None = None  # with replan_every: what crossed the link (summary.json's)
+    current_notes: tuple[str, ...] = ()  # the currents flown, and warnings about them
+    currents: CurrentField | None = None  # the field flown (None: none, or a constant)
 
     @property
     def interrupted(self) -> bool:
@@ -88,6 +90,25 @@ def flown_water(mission: CheckedMission, vehicle: Vehicle, given: Water, spec: s
     return vehicle.ballasted_for(rho), density, note
 
 
+def with_currents(mission: CheckedMission, config: RunConfig, spec: str, vehicle: Vehicle
+                  ) -> tuple[RunConfig, list[str]]:
+    """`config` flying the currents of `--currents SPEC` (sim.current_files.checked_field),
+    and notes for the user."""
+    import dataclasses
+
+    from gliderplan.sim.current_files import checked_field
+    from gliderplan.sim.currents import UniformCurrent
+    from gliderplan.sim.loop import start_position
+    from gliderplan.sim.vehicle import Current
+
+    field, notes = checked_field(spec, mission, vehicle, start_position(mission, config),
+                                 config.start_epoch_s, config.duration_s)
+    if isinstance(field, UniformCurrent):
+        return dataclasses.replace(config, current=Current(field.north_mps, field.east_mps)), \
+            notes
+    return dataclasses.replace(config, currents=field), notes
+
+
 def grounding(record: RunRecord) -> dict | None:
     """Whether the glider reached the sea floor: the first time [s] and the ticks it ended
     there (None: it never did)."""
@@ -100,8 +121,9 @@ def grounding(record: RunRecord) -> dict | None:
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, runtime: str = "python",
                 ocean: str | None = None, noise: str = "ctd", tracker: str = "robust",
-                current: Current | None = None, seed: int = 0, tick_s: float = TICK_S,
+                currents: str | None = None, seed: int = 0, tick_s: float = TICK_S,
                 duration_s: float | None = None, start_utc: str | None = None,
+                start_position: tuple[float, float] | None = None,
                 netcdf: bool = False,
                 progress: Callable[[float, float], None] | None = None,
                 plots: bool = True, key_path: str | Path | None = None,
@@ -121,11 +143,14 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     the bench preset's temperatures in uniform water of the vehicle's reference density.
     `noise`: a key of
     `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
-    `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
-    horizon, else 30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the
-    replayed logs' first sample, else 2000-01-01T00:00:00Z). `netcdf`: also write
-    trajectory.nc (sim.export). `progress(done_s, total_s)` is called on long runs, whose
-    plots a second process draws (sim/plotter.py).
+    `currents`: the text of `sim --currents` (N,E [m/s], a NetCDF field, flight logs:
+    sim.current_files), refused where it does not cover the run or the start is on its
+    land. `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's horizon, else
+    30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the replayed logs'
+    first sample, else 2000-01-01T00:00:00Z). `start_position`: (lat, lon) [deg] where the
+    glider is put in the water (default: 500 m south of the mission's first waypoint).
+    `netcdf`: also write trajectory.nc (sim.export). `progress(done_s, total_s)` is
+    called on long runs, whose plots a second process draws (sim/plotter.py).
     `plots`: False leaves out depth.png and energy.png (a caller that draws its own).
     `key_path`: the key provisioned on the simulated vehicle; the plan must be signed with
     it (the C runtime gets it uploaded over the link and checks it itself).
@@ -161,7 +186,6 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim.ocean import flat_floor, load_water, parse_floor
     from gliderplan.sim.plotter import PlotProcess
     from gliderplan.sim.science import NOISE_PRESETS
-    from gliderplan.sim.vehicle import Current
 
     if not (math.isfinite(tick_s) and 0.1 <= tick_s <= 60.0):
         raise UsageError(f"--tick {tick_s:g}: must lie between 0.1 and 60 s")
@@ -197,9 +221,19 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         vehicle, density, density_note = flown_water(mission, vehicle, given, ocean)
     if start is None:
         start = getattr(water, "start_epoch_s", None) or DEFAULT_START_EPOCH_S
+    lat, lon = start_position or (None, None)
     config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
-                       noise=NOISE_PRESETS[noise], current=current or Current(),
-                       start_epoch_s=start, floor=given.floor, water=density)
+                       noise=NOISE_PRESETS[noise], start_epoch_s=start, floor=given.floor,
+                       water=density, start_lat_deg=lat, start_lon_deg=lon)
+    if getattr(given.floor, "by_position", False):
+        from gliderplan.sim.loop import start_position
+
+        problem = given.floor.start_problem(*start_position(mission, config))
+        if problem is not None:
+            raise UsageError(f"--floor {floor}: {problem}")
+    field_notes: list[str] = []
+    if currents is not None:
+        config, field_notes = with_currents(mission, config, currents, vehicle)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     refuse_unflyable_yos(mission, vehicle, plan)
     if key_path is not None:
@@ -248,6 +282,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 "tracker": tracker, "seed": seed,
                 "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
                 "vehicle": mission.vehicle, "start_utc": utc_text(start),
+                "currents": currents or "none",
                 "sea_floor": given.floor_note, "grounded": grounding(record),
                 "current_mps": {"north": config.current.north_mps,
                                 "east": config.current.east_mps}}
@@ -284,7 +319,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                      f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
                      "the water: give it an altimeter stop, yo's fifth argument)")
     return RunResult(record, used, check, plan, tuple(out / name for name in written),
-                     tuple(notes), meta.get("replanning"))
+                     tuple(notes), meta.get("replanning"), tuple(field_notes),
+                     config.currents)
 
 
 def _shore(mission: CheckedMission, every: str, plan_path: str | Path | None,

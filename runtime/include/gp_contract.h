@@ -130,6 +130,7 @@ enum {
     GP_FLAG_DONE = 2u,  /**< the mission exited */
     GP_FLAG_CLIMBING = 4u,  /**< else diving */
     GP_FLAG_HEADING = 8u,  /**< `heading_rad` is valid */
+    GP_FLAG_ENVELOPE = 16u,  /**< the envelope guard held this command at the vehicle's rating */
 };
 
 /* ---- SENSORS's flags */
@@ -159,6 +160,8 @@ typedef enum {
     GP_TR_NONE = 0, GP_TR_START = 1, GP_TR_GOTO = 2, GP_TR_CALL = 3, GP_TR_RETURN = 4,
     GP_TR_EXIT = 5,
     GP_TR_RESERVE = 6,  /**< the energy guard ended the mission: the battery reached its reserve */
+    /** the envelope guard ended the mission: a command outside the vehicle's rating */
+    GP_TR_ENVELOPE = 7,
 } gp_transition_kind;
 
 /** A COMMAND's fields in wire order: bit i of its `fields` says that field i follows. */
@@ -188,6 +191,8 @@ typedef enum {
     GP_RELEASE_INTERNAL_ERROR = 2,
     GP_RELEASE_MISSION_EXITED = 3,
     GP_RELEASE_ENERGY_RESERVE = 4,  /**< the energy guard ended the mission: surface and hold */
+    /** a command outside the vehicle's rating: the envelope guard acted */
+    GP_RELEASE_ENVELOPE = 5,
 } gp_release_reason;
 
 /** Exit status of a mission binary (runtime/README.md). */
@@ -198,6 +203,8 @@ typedef enum {
     GP_EXIT_INTERNAL = 4,  /**< a mission fault, I/O that failed, a crash or a stop signal */
     /** the energy guard ended the mission: the battery reached its reserve */
     GP_EXIT_RESERVE = 5,
+    /** a command outside the vehicle's rating: the envelope guard ended it */
+    GP_EXIT_ENVELOPE = 6,
 } gp_exit_status;
 
 /** What a change of a plan update sets (a field of one plan-file line). */
@@ -230,5 +237,25 @@ typedef enum {
     GP_UPDATE_BAD_PLAN = 8,  /**< the plan it makes breaks the format or the vehicle's limits */
     GP_UPDATE_NOT_STORED = 9,  /**< the new plan could not be stored: the plan in force stays */
 } gp_update_status;
+
+/** What the runtime does with a command outside the vehicle's envelope. */
+typedef enum {
+    /** release control to the glider's own layered control, as a mission fault */
+    GP_ENVELOPE_FAULT = 0,
+    /** the mission's abort: it ends there, the glider surfaces and holds */
+    GP_ENVELOPE_SURFACE = 1,
+    /** hold the command at the envelope's edge, fly on (a band or rate: as SURFACE) */
+    GP_ENVELOPE_CLAMP = 2,
+} gp_envelope_action;
+
+/** Which limit of the envelope a command broke (the event log's `envelope` record). */
+typedef enum {
+    GP_LIMIT_NONE = 0,
+    GP_LIMIT_DEPTH = 1,  /**< a depth target, or a yo's end, outside 0..max_depth */
+    GP_LIMIT_PITCH = 2,  /**< |pitch| above max_pitch */
+    GP_LIMIT_BALLAST = 3,  /**< |pumped volume| above the pump's max_ballast */
+    GP_LIMIT_BAND = 4,  /**< a yo band thinner than min_yo_band: it would turn all the time */
+    GP_LIMIT_INFLECTION = 5,  /**< a yo turned again sooner than its pump can move a full stroke */
+} gp_envelope_limit;
 
 #endif /* GP_CONTRACT_H */

@@ -123,6 +123,15 @@ typedef struct {
     const gp_state_bounds *states;  /**< one per state */
 } gp_plan_bounds;
 
+/** The vehicle's rating every command is held to (contract.Envelope, gp_envelope.h). */
+typedef struct {
+    double max_depth_m;          /**< deepest depth target or yo end [m] */
+    double max_pitch_rad;        /**< largest |pitch| [rad] */
+    double min_yo_band_m;        /**< thinnest yo band [m] */
+    double min_inflection_s;     /**< shortest time between two turns of a yo [s] */
+    uint8_t action;              /**< gp_envelope_action */
+} gp_envelope;
+
 typedef struct {
     const char *name;
     const char *hash;             /**< CheckedMission.hash, 64 lowercase hex digits */
@@ -140,6 +149,7 @@ typedef struct {
     double unplanned_speed_mps;   /**< a propelled profile's `auto` speed without a plan
                                        [m/s]; 0: no propulsion */
     double reserve_j;             /**< energy left at which the guard ends the mission [J] */
+    gp_envelope envelope;         /**< the vehicle's rating, held every tick */
     const double *clocks_mhz;     /**< the clocks of the board it flies on [MHz]; {0}:
                                        no board (`computer none`), no clock to set */
     uint8_t n_clocks;             /**< 1..GP_MAX_BOARD_CLOCKS */

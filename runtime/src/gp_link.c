@@ -165,8 +165,8 @@ static int release(link_state *s, gp_release_reason reason, int status)
     }
     if (s->own_pty) {
         gp_serial_linger(s->fd, s->args->link_timeout_s,
-                         reason == GP_RELEASE_MISSION_EXITED
-                             || reason == GP_RELEASE_ENERGY_RESERVE ? answer_late : NULL, s);
+                         reason == GP_RELEASE_MISSION_EXITED || reason == GP_RELEASE_ENERGY_RESERVE
+                             || reason == GP_RELEASE_ENVELOPE ? answer_late : NULL, s);
     }
     crash_fd = -1;
     close(s->fd);
@@ -177,9 +177,42 @@ static int release(link_state *s, gp_release_reason reason, int status)
     return status;
 }
 
-/* The mission is over, by its exit or by the energy guard: hand over for good. */
+/* A command outside the envelope that hands control back (the fault action). */
+static int envelope_releases(const link_state *s, const gp_tick_report *report)
+{
+    return gp_envelope_ends(&s->mission->envelope, &report->envelope)
+           && s->mission->envelope.action == GP_ENVELOPE_FAULT;
+}
+
+/* A command held at the envelope's edge (the clamp action), flown on. */
+static int envelope_holds(const link_state *s, const gp_tick_report *report)
+{
+    return report->envelope.limit != GP_LIMIT_NONE
+           && !gp_envelope_ends(&s->mission->envelope, &report->envelope);
+}
+
+/* What the envelope guard did, on stderr: the state, the limit, the value and the bound. */
+static void say_envelope(link_state *s, const gp_tick_report *report)
+{
+    const gp_envelope_breach *b = &report->envelope;
+    const char *what = envelope_holds(s, report)      ? "held at the limit"
+                       : envelope_releases(s, report) ? "releasing control"
+                                                      : "the mission ends, surfacing";
+    char message[ERROR_LEN];
+    const char *unit = gp_envelope_limit_unit(b->limit);
+    snprintf(message, sizeof message, "envelope: missiontime %g s, state %.64s: %s %g %s beyond "
+             "the vehicle's %g %s; %s", runtime.sensors[GP_SENSOR_MISSIONTIME],
+             s->mission->states[report->envelope_state].name,
+             gp_envelope_limit_name(b->limit), b->value, unit, b->bound, unit, what);
+    say(s, message);
+}
+
+/* The mission is over, by its exit or by a guard: hand over for good. */
 static int end_mission(link_state *s)
 {
+    if (runtime.last_command.transition == GP_TR_ENVELOPE) {
+        return release(s, GP_RELEASE_ENVELOPE, GP_EXIT_ENVELOPE);
+    }
     if (runtime.last_command.transition == GP_TR_RESERVE) {
         say(s, "the battery reached its reserve: the mission ends, surfacing; releasing "
                "control");
@@ -208,6 +241,12 @@ static int log_transitions(link_state *s, const gp_tick_report *report)
         const gp_transition *t = &report->refused;
         gp_events_append(s->events_fd, s->mission, time_s, "fault", t->from, t->to, t->depth);
     }
+    if (envelope_releases(s, report) || envelope_holds(s, report)) {
+        /* a surfacing is the tick's `envelope` transition, logged above */
+        gp_events_append(s->events_fd, s->mission, time_s,
+                         envelope_releases(s, report) ? "fault" : "clamp", report->envelope_state,
+                         report->envelope_state, runtime.machine.depth);
+    }
     return 0;
 }
 
@@ -228,7 +267,8 @@ static int store_record(link_state *s)
  * tracker's window come back as they were. A full journal gives way to a record. */
 static int persist(link_state *s, const gp_frame *frame, const gp_tick_report *report)
 {
-    if (report->n_transitions == 0 && !report->fault) {  /* most ticks */
+    if (report->n_transitions == 0 && !report->fault
+        && report->envelope.limit == GP_LIMIT_NONE) {  /* most ticks */
         int journaled = s->args->state_dir
                             ? gp_journal_append(&checkpoint, frame->payload, frame->length)
                             : 0;
@@ -512,6 +552,12 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     if (persist(s, frame, &report) < 0) {
         say(s, "cannot write the checkpoint or event log; releasing control");
         return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
+    }
+    if (report.envelope.limit != GP_LIMIT_NONE) {
+        say_envelope(s, &report);
+    }
+    if (envelope_releases(s, &report)) {
+        return release(s, GP_RELEASE_ENVELOPE, GP_EXIT_ENVELOPE);
     }
     if (report.fault) {
         char message[ERROR_LEN];

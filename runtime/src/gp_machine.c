@@ -3,6 +3,8 @@
 
 #include <string.h>
 
+#include "gp_envelope.h"
+
 static int known_action(uint8_t action)
 {
     return action == GP_ACT_NONE || (action >= GP_ACT_GOTO && action <= GP_ACT_EXIT);
@@ -105,6 +107,10 @@ const char *gp_mission_check(const gp_mission *mission)
         || !(mission->unplanned_speed_mps >= 0) || mission->n_clocks < 1
         || mission->n_clocks > GP_MAX_BOARD_CLOCKS || !mission->clocks_mhz) {
         return "no pump volume or energy reserve, or a clock count outside 1..GP_MAX_BOARD_CLOCKS";
+    }
+    const char *envelope_problem = gp_envelope_check(&mission->envelope);
+    if (envelope_problem) {
+        return envelope_problem;
     }
     for (int s = 0; s < mission->n_states; s++) {
         const gp_state *state = &mission->states[s];

@@ -3,6 +3,12 @@
 
 #define TESTS(X)                                                            \
     X(test_machine_should_follow_fig2)                                      \
+    X(test_envelope_should_pass_a_command_within_the_rating)                \
+    X(test_envelope_should_name_each_limit_a_command_breaks)                \
+    X(test_envelope_should_stop_a_yo_turning_faster_than_its_pump)          \
+    X(test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates)  \
+    X(test_envelope_check_should_refuse_no_envelope)                        \
+    X(test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating) \
     X(test_machine_should_run_assignments_in_order)                         \
     X(test_machine_should_refuse_a_call_past_the_stack_depth)               \
     X(test_machine_should_refuse_return_with_an_empty_stack)                \

@@ -40,6 +40,9 @@ const gp_mission gp_mission_table = {
     .default_ballast_cc = 230.0,
     .max_ballast_cc = 233.0,
     .reserve_j = 1.17e6,  /* 15 % of the 7.8 MJ pack Fig. 2 flies without annotations */
+    /* the shallow Slocum's envelope (its vehicle file): 100 m, 2 x its 26 deg, its 3 m
+     * nominal top, a full stroke of 466 cc at 42.09 cc/s; surface on a breach */
+    .envelope = {100.0, 0.9075712110370514, 3.0, 11.07, GP_ENVELOPE_SURFACE},
     .clocks_mhz = clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,

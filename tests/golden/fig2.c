@@ -202,6 +202,13 @@ const gp_mission gp_mission_table = {
     .max_ballast_cc = 233.0,
     .unplanned_speed_mps = 0.0,
     .reserve_j = 1170000.0,
+    .envelope = {
+        .max_depth_m = 100.0,
+        .max_pitch_rad = 0x1.d0ad2c7c63f7dp-1 /* 0.9075712110370514 */,
+        .min_yo_band_m = 3.0,
+        .min_inflection_s = 0x1.623fb6166aefbp+3 /* 11.07027725580655 */,
+        .action = GP_ENVELOPE_SURFACE,
+    },
     .clocks_mhz = board_clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,
