@@ -57,6 +57,8 @@ PLAN_FORMAT_VERSION = 3  # the plan file's `GPPLAN` line (docs/plan-format.md)
 # refuse a plan past any of them.
 MAX_PLAN_TIME_S = 315_360_000.0  # [s] a cycle, a sensor period, a state's predicted time (10 y)
 MAX_PLAN_SPEED_MPS = 2.0  # [m/s] a planned horizontal speed (a glider makes 0.2-0.5)
+# [W] a yo's thruster's commanded power (the Slocum G3 hybrid's commands 1-9 W)
+MAX_PLAN_THRUST_W = 100.0
 MAX_PLAN_ENERGY_J = 1e10  # [J] a budget or prediction (the largest Slocum pack is 12 MJ)
 MAX_PLAN_INFLECTIONS = 1e9  # a state's predicted inflections (as many as its visits may be)
 MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
@@ -141,6 +143,11 @@ class FlightLimits:
     # [cc] per state, per profile alternative: the volume a plan's ballast must exceed for
     # the glider to leave its turning depth (its trim over the band); () : 0
     min_ballast_cc: tuple[tuple[float, ...], ...] = ()
+    # [m/s] a propelled profile's `auto` speed where no plan sets one (0: no propulsion)
+    unplanned_speed_mps: float = field(default=0.0, kw_only=True)
+    # per state, the alternative flown where no plan sets one: the first the vehicle can
+    # fly (a propeller AUV skips a yo); empty: the first of each state
+    unplanned_profiles: tuple[int, ...] = field(default=(), kw_only=True)
     # the vehicle's rating every command is held to in flight (`gp_mission.envelope`):
     # always given, by name
     envelope: Envelope = field(kw_only=True)
@@ -149,6 +156,10 @@ class FlightLimits:
         if not 1 <= len(self.clocks_mhz) <= MAX_BOARD_CLOCKS:
             raise ValueError(f"a board has 1..{MAX_BOARD_CLOCKS} clocks, not "
                              f"{len(self.clocks_mhz)}")
+
+    def unplanned_profile(self, state: int) -> int:
+        """The alternative state `state` (its index) flies without a plan."""
+        return self.unplanned_profiles[state] if self.unplanned_profiles else 0
 
     def has_clock(self, clock_mhz: float) -> bool:
         """Whether the board has the clock `clock_mhz` [MHz] (`same_clock`)."""
@@ -285,17 +296,20 @@ class Component:
     PITCH = "pitch"  # battery shifts at inflections
     SURFACE = "surface"  # the base load at the surface
     IRIDIUM = "iridium"  # satellite calls at the surface
+    PROPULSION = "propulsion"  # a propeller's or a glider's thruster's motor
     COMPUTER = "computer"  # the single-board computer running the mission
     SENSORS = "sensors"  # the sensor devices together, where they are not billed one by one
 
 
 VEHICLE_COMPONENTS: tuple[str, ...] = (Component.HOTEL, Component.PUMP, Component.PITCH,
-                                       Component.SURFACE, Component.IRIDIUM)
+                                       Component.SURFACE, Component.IRIDIUM,
+                                       Component.PROPULSION)
 
 
 # ---- the serial link (docs/protocol.md) ---------------------------------------------
 
-PROTOCOL_VERSION = 2  # 2: COMMANDs as changes against a base, SENSORS without a mask
+PROTOCOL_VERSION = 3  # 2: COMMANDs as changes against a base, SENSORS without a mask;
+# 3: COMMAND's speed and thrust (propelled flight)
 MAX_PAYLOAD = 240  # [bytes] of one frame's payload
 MAX_WIRE = 250  # [bytes] of COBS before the delimiter that a receiver accepts
 PLAN_PIECE = 200  # [bytes] of plan file per PLAN frame
@@ -308,7 +322,7 @@ SBD_MT_MESSAGE_BYTES = 1890
 # plan update comes down in one.
 SBD_MO_SHORT_BYTES = 340  # [bytes] of one short message up, glider to shore
 SBD_MT_SHORT_BYTES = 270  # [bytes] of one short message down, shore to glider
-COMMAND_MAX_SIZE = 38  # [bytes] of a COMMAND payload that carries every field
+COMMAND_MAX_SIZE = 46  # [bytes] of a COMMAND payload that carries every field
 BAUD = 115200  # 8N1: 10 bits per byte on the line
 
 
@@ -379,10 +393,12 @@ class CommandField(IntEnum):
     HEADING_RAD = 10  # f32 [rad] true, clockwise from north (valid with FLAG_HEADING)
     SENSOR_POWER = 11  # u32 bit i: power sensor i's device
     EVENT_COUNT = 12  # u32 events fired so far
+    SPEED_MPS = 13  # f32 [m/s] through the water on the propeller; 0: none (a glide)
+    THRUST_W = 14  # f32 [W] a glider's thruster's commanded power assisting a yo; 0: off
 
 
 # struct format of each COMMAND field, in CommandField order
-COMMAND_FIELD_FORMATS = "BBBBBBBffffII"
+COMMAND_FIELD_FORMATS = "BBBBBBBffffIIff"
 
 
 class ReleaseReason(IntEnum):

@@ -27,7 +27,8 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "MAX_PLAN_LINE_BYTES", "MAX_PLAN_COMPONENTS", "MAX_PLAN_ASSUMPTIONS",
         "PLAN_FORMAT_VERSION")),
     ("what a plan may ask for", (
-        "MAX_PLAN_TIME_S", "MAX_PLAN_SPEED_MPS", "MAX_PLAN_ENERGY_J", "MAX_PLAN_INFLECTIONS",
+        "MAX_PLAN_TIME_S", "MAX_PLAN_SPEED_MPS", "MAX_PLAN_THRUST_W", "MAX_PLAN_ENERGY_J",
+        "MAX_PLAN_INFLECTIONS",
         "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ", "NO_BOARD", "PLAN_ROUNDING")),
     ("signed plans", ("PLAN_KEY_BYTES", "MAX_PLAN_SEQUENCE")),
     ("plan updates (docs/plan-update.md)", (

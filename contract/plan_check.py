@@ -3,7 +3,8 @@ the board, the sensors' duty bounds and the vehicle's flight model.
 
 A plan file can be well formed, within the contract's bounds and signed, and still
 contradict its mission: a budget larger than the battery, a prediction of 0 J, a sensor off
-that a state requires, a board other than the mission's, a glide the vehicle cannot fly.
+that a state requires, a board other than the mission's, a glide the vehicle cannot fly,
+level flight (a propelled profile) or a thrust on a vehicle without propulsion.
 `plan_problem` finds the first such contradiction; the plan readers (Python's
 `planner.planfile.read_plan_bytes` and the runtime's `gp_plan_read`, through
 `gp_plan_check`, which mirrors this function rule for rule and message for message) refuse
@@ -67,6 +68,14 @@ def plan_problem(plan: Plan, limits: FlightLimits) -> PlanProblem | None:
                                    f"{flown:g} outside the mission's [{low:g}, {high:g}]")
         for k, profile in enumerate(state.profiles):
             where = f"state {state.name}: profile {k}:"
+            if profile.pitch_rad == 0.0 and profile.ballast_cc == 0.0:  # level: propelled
+                if not limits.unplanned_speed_mps > 0:
+                    return PlanProblem(state.line, f"{where} PITCH_RAD and BALLAST_CC 0 fly "
+                                       "it level on a propeller, and the vehicle has none")
+                continue  # no glide: its speed is the contract's to bound
+            if profile.thrust_w > 0 and not limits.unplanned_speed_mps > 0:
+                return PlanProblem(state.line, f"{where} THRUST_W {profile.thrust_w:g} on a "
+                                   "vehicle without a thruster")
             low, high = limits.pitch_range_rad
             least = limits.min_ballast_cc[s][k] if limits.min_ballast_cc else 0.0
             if not low < profile.pitch_rad < high:
@@ -78,7 +87,7 @@ def plan_problem(plan: Plan, limits: FlightLimits) -> PlanProblem | None:
             if profile.ballast_cc > limits.max_ballast_cc:
                 return PlanProblem(state.line, f"{where} BALLAST_CC {profile.ballast_cc:g} "
                                    f"exceeds the vehicle's pump ({limits.max_ballast_cc:g} cc)")
-            if _above(profile.speed_mps, limits.max_speed_mps):
+            if profile.thrust_w == 0 and _above(profile.speed_mps, limits.max_speed_mps):
                 return PlanProblem(state.line, f"{where} SPEED_MPS {profile.speed_mps:g} "
                                    f"exceeds the vehicle's fastest glide "
                                    f"({limits.max_speed_mps:g} m/s)")

@@ -26,11 +26,13 @@ from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, war
 from gliderplan.language.flow import check_flow
 from gliderplan.language.limits import check_sizes
 from gliderplan.language.registry import (
+    AUTO_PARAMS,
     FUNCTIONS,
     PROFILES,
     ROUTES,
     SENSOR_BY_NAME,
     ParamSpec,
+    cannot_fly,
 )
 from gliderplan.language.units import UnitProblem, normalise
 
@@ -51,8 +53,10 @@ class _Checker:
         self.state_names = {s.name.text for s in mission.states}
         self.computer = ir.DEFAULT_COMPUTER  # the mission's board, for its states' settings
         self._board: object | None = None  # the board, loaded once when a state needs it
-        self._vehicle: object | None = None  # a vehicle file the mission names, loaded
-        self.vehicle = ir.DEFAULT_VEHICLE  # the mission's vehicle, for its envelope
+        self.vehicle_spec = ir.DEFAULT_VEHICLE  # the mission's vehicle, for its envelope
+        self._vehicle: object | None = None  # the vehicle, loaded once when a profile needs it
+        # a vehicle file the mission names, loaded and checked when model files are opened
+        self._vehicle_file: object | None = None
         self._envelope: object | None = None  # its envelope, loaded once a profile needs it
 
     # ---- reporting helpers
@@ -95,22 +99,26 @@ class _Checker:
         mission = ir.CheckedMission(name=self.mission.name.text, states=tuple(states), **fields)
         spans = {s.name.text: s for s in self.mission.states}
         self.diagnostics.extend(check_flow(mission, spans))
-        if self._vehicle is not None:
-            self.flyable(mission)
+        if self._vehicle_file is not None:
+            self.yos_flyable(mission)
         if self.error_count():
             return None
         return mission
 
-    def flyable(self, mission: ir.CheckedMission) -> None:
+    def yos_flyable(self, mission: ir.CheckedMission) -> None:
         """An error at each yo of constant depths the mission's vehicle file cannot fly at its
-        pitch and unplanned volume (`sim` would refuse it: `yo_flight_problem`)."""
+        pitch and unplanned volume (`sim` would refuse it: `yo_flight_problem`); a yo the
+        vehicle cannot fly at all (an AUV's) is `flyable`'s to say."""
         from gliderplan.power_models.vehicle import yo_flight_problem
 
+        vehicle = self._vehicle_file
         for state, node in zip(mission.states, self.mission.states, strict=True):
             written = next(i for i in node.items if isinstance(i, ast.ProfileItem))
             for k, (profile, call) in enumerate(zip(state.profiles, written.alternatives,
                                                     strict=True)):
-                problem = yo_flight_problem(f"{state.name}: flightprofile {k}", self._vehicle,
+                if cannot_fly(profile.kind, profile.thrust, vehicle) is not None:
+                    continue
+                problem = yo_flight_problem(f"{state.name}: flightprofile {k}", vehicle,
                                             profile.kind, profile.constant_args())
                 if problem is not None:
                     self.error(f"{problem}", call.span, "a deeper pump (max_ballast), a "
@@ -132,12 +140,13 @@ class _Checker:
                 seen[type(decl)] = decl
             match decl:
                 case ast.VehicleDecl():
-                    self.preset_known("vehicle", decl.preset, decl.is_file)
-                    fields["vehicle"] = self.vehicle = self.beside("vehicle", decl.preset.text,
-                                                                   decl.is_file)
+                    known = self.preset_known("vehicle", decl.preset, decl.is_file)
+                    fields["vehicle"] = self.beside("vehicle", decl.preset.text, decl.is_file)
+                    if known:
+                        self.vehicle_spec = fields["vehicle"]
                     if decl.is_file and self.model_files:
-                        self._vehicle = self.model_file("vehicle", fields["vehicle"],
-                                                        decl.preset)
+                        self._vehicle_file = self.model_file("vehicle", fields["vehicle"],
+                                                             decl.preset)
                 case ast.ComputerDecl() if decl.board.text == NO_BOARD:
                     fields["computer"] = self.computer = ir.Computer(NO_BOARD)
                     if decl.clock is not None:
@@ -409,7 +418,8 @@ class _Checker:
             return None
         route_item = items.get(ast.RouteItem)
         route = self.route(route_item.route) if route_item else ir.Route("noheading")
-        profiles = [self.profile(p) for p in items[ast.ProfileItem].alternatives]
+        written = items[ast.ProfileItem].alternatives
+        profiles = [self.profile(p, written) for p in written]
         sensors_item = items.get(ast.SensorsItem)
         sensors = self.sensor_uses(sensors_item) if sensors_item else []
         events_item = items.get(ast.EventsItem)
@@ -468,7 +478,8 @@ class _Checker:
             return None
         return ir.Route(name, tuple(params), tuple(coords))
 
-    def profile(self, invocation: ast.Invocation) -> ir.Profile | None:
+    def profile(self, invocation: ast.Invocation, alternatives: tuple[ast.Invocation, ...]
+                ) -> ir.Profile | None:
         name = invocation.name.text
         info = self.registered(invocation.name, PROFILES, "flight profile", "profiles")
         if info is None:
@@ -481,11 +492,17 @@ class _Checker:
                        f"got {len(invocation.args)}", invocation.span,
                        f"{name}({', '.join(_parameter(p) for p in info.params)})")
             return None
-        args = [self.expression(a, allow_sensors=False) for a in invocation.args]
+        auto = self.auto_arguments(invocation, info.params)
+        thrust = self.thrust(invocation)
+        if auto is None:
+            return None
+        written = invocation.args[:len(invocation.args) - len(auto)]
+        args = [self.expression(a, allow_sensors=False) for a in written]
         if None in args:
             return None
-        values = {}
-        for arg, node, spec in zip(args, invocation.args, info.params, strict=False):
+        values, spans = {}, {}
+        for arg, node, spec in zip(args, written, info.params, strict=False):
+            spans[spec.name] = node.span
             if not ir.variables_read(arg):
                 value = ir.evaluate(arg, {}, {})
                 if self.in_range(value, spec, name, node.span):
@@ -498,7 +515,97 @@ class _Checker:
                        "on the way up and at max_depth on the way down")
         elif values:
             self.within_envelope(invocation, values)
-        return ir.Profile(name, tuple(args))
+        profile = ir.Profile(name, tuple(args), auto, thrust)
+        if profile.propelled or self.vehicle_spec != ir.DEFAULT_VEHICLE:
+            # the default glider flies every buoyancy profile: no need to load it
+            self.flyable(profile, invocation, values.get("speed"), spans.get("speed"),
+                         alternatives)
+        return profile
+
+    def auto_arguments(self, invocation: ast.Invocation, params: tuple[ParamSpec, ...]
+                       ) -> tuple[str, ...] | None:
+        """The names of the arguments written `auto` (a propelled profile's speed, its last
+        argument); None, with an error, for an `auto` the profile cannot take."""
+        auto = []
+        for node, spec in zip(invocation.args, params, strict=False):
+            if isinstance(node, ast.Ident):
+                if spec.name not in AUTO_PARAMS:
+                    self.error(f"'{spec.name}' of '{invocation.name.text}' cannot be 'auto'",
+                               node.span, "only a propelled profile's speed is the planner's "
+                               "to choose, e.g. 'cruise(10, auto)'")
+                    return None
+                auto.append(spec.name)
+        return tuple(auto)
+
+    def thrust(self, invocation: ast.Invocation) -> float | str | None:
+        """A yo's thruster setting: its commanded power [W], "auto" or None (none, or an
+        error)."""
+        setting = invocation.thrust
+        if setting is None:
+            return None
+        if invocation.name.text not in ("yo", "thermotrackyo"):
+            self.error(f"a thruster assists a yo, not '{invocation.name.text}'", setting.span,
+                       "a propelled profile sets its speed instead: e.g. 'cruise(10, auto)'")
+            return None
+        if isinstance(setting, ast.Ident):
+            return "auto"
+        power = self.quantity(setting, "power")
+        if power is None:
+            return None
+        if power[0] <= 0.0:
+            self.error(f"thrust must be positive, got {power[0]:g} W", setting.span,
+                       "leave 'thrust' out to glide on buoyancy alone")
+            return None
+        return power[0]
+
+    def vehicle(self) -> object | None:
+        """The mission's vehicle (power_models.vehicle.Vehicle), loaded once; None when its
+        file cannot be read or is bad: the stage that needs its figures (plan, sim,
+        compile) says so, with its own exit status (a file that cannot be opened is a usage
+        error, not the mission's)."""
+        if self._vehicle is None and self._vehicle_file is not None:
+            self._vehicle = self._vehicle_file  # loaded once
+        if self._vehicle is None:
+            from gliderplan.contract.files import InputFileError
+            from gliderplan.power_models.errors import ModelFileError
+            from gliderplan.power_models.vehicle import load_vehicle
+
+            try:
+                self._vehicle = load_vehicle(self.vehicle_spec)
+            except (ModelFileError, InputFileError):
+                self._vehicle = False
+        return self._vehicle or None
+
+    def flyable(self, profile: ir.Profile, invocation: ast.Invocation, speed_mps: float | None,
+                speed_span: ast.Span | None, alternatives: tuple[ast.Invocation, ...]) -> None:
+        """An error where the vehicle cannot fly the profile (`cannot_fly`; a warning for one
+        of several `alternatives`, which the planner then skips), or a speed or thrust
+        beyond its propulsion model."""
+        vehicle = self.vehicle()
+        if vehicle is None:
+            return
+        from gliderplan.power_models.propulsion import SpeedOutOfRange
+
+        if (problem := cannot_fly(profile.kind, profile.thrust, vehicle)) is not None:
+            why, hint, thrust = problem
+            span = invocation.thrust.span if thrust else invocation.name.span
+            if any(a.name.text in PROFILES and cannot_fly(a.name.text, a.thrust, vehicle)
+                   is None for a in alternatives):  # the planner flies those
+                self.warning(f"{why}: the planner gives it no time", span, hint)
+            else:
+                self.error(why, span, hint)
+            return
+        propulsion = vehicle.propulsion
+        checks = [(propulsion.check_command, profile.thrust, invocation.thrust.span)] \
+            if isinstance(profile.thrust, float) else []
+        if speed_mps is not None and propulsion is not None:
+            checks.append((propulsion.check_speed, speed_mps, speed_span))
+        for check, value, span in checks:
+            try:
+                check(value)
+            except SpeedOutOfRange as err:
+                self.error(f"vehicle {vehicle.name}: {err}", span,
+                           "'auto' lets the planner choose")
 
     def within_envelope(self, invocation: ast.Invocation, values: dict[str, float]) -> None:
         """Errors for the constant arguments of a profile outside the vehicle's rating
@@ -508,7 +615,7 @@ class _Checker:
             return
         spans = {spec.name: node.span for spec, node in zip(
             PROFILES[invocation.name.text].params, invocation.args, strict=False)}
-        hint = f"the rating of vehicle {self.vehicle} (its file's [envelope])"
+        hint = f"the rating of vehicle {self.vehicle_spec} (its file's [envelope])"
         for param in ("min_depth", "max_depth", "depth"):
             if values.get(param, 0.0) > envelope.max_depth_m:
                 self.error(f"{param.replace('_', ' ')} {values[param]:g} m is beyond the "
@@ -534,7 +641,7 @@ class _Checker:
             from gliderplan.power_models.vehicle_figures import load_envelope
 
             try:
-                self._envelope = load_envelope(self.vehicle)
+                self._envelope = load_envelope(self.vehicle_spec)
             except (ModelFileError, InputFileError):
                 self._envelope = False
         return self._envelope or None

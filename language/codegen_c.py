@@ -30,7 +30,8 @@ from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 _ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
             "return": "GP_ACT_RETURN", "exit": "GP_ACT_EXIT"}
 _PROFILE_KINDS = {"yo": "GP_PROFILE_YO", "thermotrackyo": "GP_PROFILE_THERMOTRACKYO",
-                  "surface": "GP_PROFILE_SURFACE", "hover": "GP_PROFILE_HOVER"}
+                  "surface": "GP_PROFILE_SURFACE", "hover": "GP_PROFILE_HOVER",
+                  "cruise": "GP_PROFILE_CRUISE", "altitude": "GP_PROFILE_ALTITUDE"}
 _ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
                 "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP",
                 "goto_list": "GP_ROUTE_GOTO_LIST"}
@@ -68,7 +69,7 @@ def _sensors_read(mission: ir.CheckedMission) -> int:
                 names |= ir.sensors_read(arg)
             if PROFILES[profile.kind].tracks_thermocline:
                 names.add("temp")
-            if profile.has_altimeter_stop:
+            if profile.has_altimeter_stop or profile.kind == "altitude":  # it follows the floor
                 names.add("altitude")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}
@@ -272,7 +273,8 @@ class _MissionWriter:
             lines += self.visit_profile_args(f"{prefix}_profile{number}_args", profile)
         lines += [f"static const gp_profile {prefix}_profiles[{len(state.profiles)}] = {{"]
         lines += [f"    {{{_PROFILE_KINDS[p.kind]}, {len(p.args)}, "
-                  f"{prefix}_profile{n}_args}}," for n, p in enumerate(state.profiles)]
+                  f"{prefix}_profile{n}_args, {c_double(p.written_thrust_w)}}},"
+                  for n, p in enumerate(state.profiles)]
         lines += ["};", ""]
         points = _route_points(state.route)
         if points:
@@ -349,6 +351,7 @@ class _MissionWriter:
             f"    .own_read_mask = 0x{own_read_mask(mission):08x}u,",
             f"    .default_ballast_cc = {c_double(self.limits.default_ballast_cc)},",
             f"    .max_ballast_cc = {c_double(self.limits.max_ballast_cc)},",
+            f"    .unplanned_speed_mps = {c_double(self.limits.unplanned_speed_mps)},",
             f"    .reserve_j = {c_double(mission.battery.reserve_j)},",
             *self.visit_envelope(),
             "    .clocks_mhz = board_clocks_mhz,",
@@ -413,6 +416,7 @@ class _MissionWriter:
             f"{f'{prefix}_route_points' if points else 'NULL'}}},",
             f"        .profiles = {prefix}_profiles,",
             f"        .n_profiles = {len(state.profiles)},",
+            f"        .unplanned_profile = {self.limits.unplanned_profile(index)},",
             f"        .sensors = {f'{prefix}_sensors' if state.sensors else 'NULL'},",
             f"        .n_sensors = {len(state.sensors)},",
             f"        .sensor_mask = 0x{sensor_mask:08x}u,",

@@ -202,8 +202,23 @@ class Route:
 class Profile:
     """A flight profile alternative; args may read variables, so they stay expressions."""
 
-    kind: str  # yo | thermotrackyo | surface | hover
-    args: tuple[Expr, ...]
+    kind: str  # yo | thermotrackyo | surface | hover | cruise | altitude
+    args: tuple[Expr, ...]  # without the arguments written `auto` (the last ones)
+    # Left out of the canonical JSON when unset: a glider's missions keep their hash.
+    auto: tuple[str, ...] = field(default=(), metadata={"omit_default": True})  # `speed`
+    # a glider's thruster assisting the profile: its commanded power [W], or "auto"
+    thrust: float | str | None = field(default=None, metadata={"omit_default": True})
+
+    @property
+    def propelled(self) -> bool:
+        """Whether it flies on a propeller (or thruster) rather than on buoyancy alone."""
+        return PROFILES[self.kind].propelled or self.thrust is not None
+
+    @property
+    def written_thrust_w(self) -> float:
+        """The thrust written [W], flown without a plan; 0 for none or `auto` (the planner's
+        choice: off without a plan)."""
+        return self.thrust if isinstance(self.thrust, float) else 0.0
 
     @property
     def has_altimeter_stop(self) -> bool:

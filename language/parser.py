@@ -188,6 +188,16 @@ class _Build:
         args = tuple(a for a in args if a is not None)
         return ast.Invocation(_ident(name), args, has_parens, ast.Span(*where))
 
+    def thrust(self, where, children):
+        invocation, setting = children
+        if isinstance(setting, tuple):  # the `auto` token
+            setting = _ident(setting)
+        return ast.Invocation(invocation.name, invocation.args, invocation.has_parens,
+                              ast.Span(*where), setting)
+
+    def auto_argument(self, where, children):
+        return _ident(children[0])
+
     def point(self, where, children):
         return ast.Point(children[0], children[1], ast.Span(*where))
 

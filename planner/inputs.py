@@ -79,6 +79,10 @@ def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occ
     vehicle = hardware.vehicle
     for name, length in occupancy.legs_m.items():
         state = mission.state(name)
+        if name in occupancy.transit_speeds:
+            notes.append(f"{name}: propelled transit leg of {length / 1000:.3g} km, timed at "
+                         f"its speed ({occupancy.transit_speeds[name]:.3g} m/s)")
+            continue
         if len(state.profiles) != 1 or state.profiles[0].kind not in ("yo", "thermotrackyo"):
             notes.append(f"{name}: a transit leg with alternative or non-gliding profiles; "
                          "planned at the nominal speed's time")

@@ -31,6 +31,7 @@ from gliderplan.contract import (
     MAX_PLAN_SENSORS,
     MAX_PLAN_SEQUENCE,
     MAX_PLAN_SPEED_MPS,
+    MAX_PLAN_THRUST_W,
     MAX_PLAN_TIME_S,
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
@@ -125,6 +126,7 @@ class ProfilePlan:
     pitch_rad: float
     ballast_cc: float  # pumped volume either side of neutral [cc]
     speed_mps: float  # planned horizontal speed [m/s]
+    thrust_w: float = 0.0  # a yo's thruster: its commanded power [W] (0: off, not written)
 
 
 @dataclass(frozen=True)
@@ -224,7 +226,8 @@ def write_plan_bytes(plan: Plan) -> bytes:
                                           for c in components))
         lines += [f"sensor {x.name} {number(x.period_s)} {number(x.on_s)}" for x in s.sensors]
         lines += [f"profile {p.index} {number(p.share)} {number(p.pitch_rad)} "
-                  f"{number(p.ballast_cc)} {number(p.speed_mps)}" for p in s.profiles]
+                  f"{number(p.ballast_cc)} {number(p.speed_mps)}"
+                  + (f" {number(p.thrust_w)}" if p.thrust_w else "") for p in s.profiles]
         lines.append("end")
     try:
         body = "".join(line + "\n" for line in lines).encode("ascii")
@@ -248,9 +251,9 @@ class _Cursor:
         self.lines = lines
         self.at = 0
 
-    def next(self, keyword: str, n_fields: int | None) -> list[str]:
+    def next(self, keyword: str, n_fields: int | None, optional: int = 0) -> list[str]:
         """The fields after `keyword` on the next line, which must have `n_fields` of them
-        (None: one or more)."""
+        and up to `optional` more (None: one or more)."""
         if self.at >= len(self.lines):
             raise PlanFileError(self.at + 1, f"expected a '{keyword}' line, the file ends")
         self.at += 1
@@ -259,8 +262,9 @@ class _Cursor:
             raise PlanFileError(self.at, f"expected '{keyword}', found '{fields[0]}'")
         if n_fields is None and len(fields) < 2:
             raise PlanFileError(self.at, f"'{keyword}' takes at least one field, found none")
-        if n_fields is not None and len(fields) != n_fields + 1:
-            raise PlanFileError(self.at, f"'{keyword}' takes {n_fields} fields, "
+        if n_fields is not None and not n_fields <= len(fields) - 1 <= n_fields + optional:
+            takes = f"{n_fields} to {n_fields + optional}" if optional else f"{n_fields}"
+            raise PlanFileError(self.at, f"'{keyword}' takes {takes} fields, "
                                 f"found {len(fields) - 1}")
         return fields[1:]
 
@@ -480,14 +484,19 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
         sensors.append(SensorPlan(sensor, period_s, on_s))
     profiles = []
     for i in range(n_profiles):
-        index, share, pitch, ballast, speed = cur.next("profile", 5)
+        index, share, pitch, ballast, speed, *thrust = cur.next("profile", 5, optional=1)
         cur.check(cur.count(index, "index", 0, MAX_PROFILE_ALTERNATIVES - 1) == i,
                   f"profile index {index} out of order (expected {i})")
         line = ProfilePlan(i, cur.number(share, "share"), cur.number(pitch, "pitch"),
-                           cur.number(ballast, "ballast"), cur.number(speed, "speed"))
+                           cur.number(ballast, "ballast"), cur.number(speed, "speed"),
+                           cur.number(thrust[0], "thrust") if thrust else 0.0)
+        cur.check(0 <= line.thrust_w <= MAX_PLAN_THRUST_W,
+                  f"thrust must lie in [0, {MAX_PLAN_THRUST_W:g}] W")
         cur.check(0 <= line.share <= 1, "share must lie in [0, 1]")
-        cur.check(0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
-        cur.check(line.ballast_cc > 0 and line.speed_mps > 0, "ballast and speed must be > 0")
+        level = line.pitch_rad == 0.0 and line.ballast_cc == 0.0  # a propelled profile
+        cur.check(level or 0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
+        cur.check((level or line.ballast_cc > 0) and line.speed_mps > 0,
+                  "ballast and speed must be > 0")
         cur.check(line.speed_mps <= MAX_PLAN_SPEED_MPS,
                   f"speed {line.speed_mps:g} exceeds {MAX_PLAN_SPEED_MPS:g} m/s")
         profiles.append(line)

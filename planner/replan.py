@@ -52,7 +52,6 @@ from gliderplan.planner.planfile import (
     Plan,
     PlanFileError,
     PlanRejected,
-    ProfilePlan,
     SensorPlan,
     read_plan_bytes,
 )
@@ -585,7 +584,7 @@ class Replanner:
             profiles = state.profiles
             if len(rows) > 1:
                 shares = _rounded_shares(share[rows])
-                profiles = tuple(ProfilePlan(p.index, f, p.pitch_rad, p.ballast_cc, p.speed_mps)
+                profiles = tuple(replace(p, share=f)  # pitch, ballast, speed, thrust kept
                                  for p, f in zip(state.profiles, shares, strict=True))
             states.append(replace(state, sensors=tuple(sensors), profiles=profiles))
         return replace(held, states=tuple(states)), tuple(changes)

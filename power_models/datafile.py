@@ -137,6 +137,26 @@ class Table:
                              f"{high:g} {unit} ({bounds.source})")
         return converted
 
+    def quantities(self, name: str, dimension: str, *, positive: bool = False) -> list[float]:
+        """A list of numbers in the model's unit of `dimension`, `{ values = [...], unit =
+        ..., source = ... }` (a table's column, e.g. power against speed); each checked as
+        `quantity` checks one (never negative; `positive` also refuses zero)."""
+        self.used.add(name)
+        entry = self.data.get(name)
+        shape = "{ values = [...], unit = ..., source = ... }"
+        if entry is None:
+            raise self.missing(name, f"expected {shape} with a unit of {dimension}: "
+                                     f"{accepted_units(dimension)}")
+        if not isinstance(entry, dict) or not isinstance(entry.get("values"), list) \
+                or not entry["values"]:
+            raise self.error(name, f"expected {shape} with at least one value, got {entry!r}")
+        unknown = set(entry) - {"values", "unit", "source", "note"}
+        if unknown:
+            raise self.error(name, f"unknown field(s) {sorted(unknown)}")
+        return [Table(self.path, self.prefix, {name: {"value": v, **{
+            k: entry.get(k) for k in ("unit", "source") if k in entry}}}).quantity(
+                name, dimension, positive=positive) for v in entry["values"]]
+
     def sd(self, name: str, dimension: str) -> float | None:
         """The standard deviation [model unit] written next to a figure's value (`sd`, in the
         figure's own unit: calibration's bootstrap uncertainty), or None. Call after
@@ -242,20 +262,22 @@ def read_model_file(path: Path, kind: str) -> Table:
     return top
 
 
-def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
-    """Every number of a model file as (dotted key, value, unit, source), as written.
+def file_entries(path: Path) -> list[tuple[str, float | list[float], str, str]]:
+    """Every number of a model file as (dotted key, value, unit, source), as written (a
+    table's column as its list of values).
 
     For display (`gliderplan power show`); call after the file has loaded, so its shape is
     known to be valid.
     """
     data = read_data(path, "model file")
-    rows: list[tuple[str, float, str, str]] = []
+    rows: list[tuple[str, float | list[float], str, str]] = []
 
     def walk(prefix: str, table: dict[str, Any]) -> None:
         for key, item in table.items():
             dotted = f"{prefix}.{key}" if prefix else key
-            if isinstance(item, dict) and "value" in item:
-                rows.append((dotted, item["value"], item["unit"], item["source"]))
+            if isinstance(item, dict) and ("value" in item or "values" in item):
+                rows.append((dotted, item.get("value", item.get("values")), item["unit"],
+                             item["source"]))
             elif isinstance(item, dict):
                 walk(dotted, item)
             elif isinstance(item, list):  # an array of tables (a list of names is no figure)

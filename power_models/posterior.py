@@ -220,6 +220,8 @@ def prior_belief(vehicle: Vehicle, devices: dict[str, float], usable: tuple[floa
                                                   default=DEFAULT_RELATIVE_SD)
     rel["iridium"], sources["iridium"] = combined("iridium_power", "iridium_time",
                                                   default=DEFAULT_RELATIVE_SD)
+    # a propeller's or a thruster's motor: no figure of the vehicle file to take it from
+    rel["propulsion"], sources["propulsion"] = DEFAULT_RELATIVE_SD, "assumed"
     rel["computer"], sources["computer"] = COMPUTER_RELATIVE_SD, "assumed"
     for device in devices:
         rel[device], sources[device] = combined(device_key(device), default=math.nan)
@@ -237,6 +239,7 @@ def prior_belief(vehicle: Vehicle, devices: dict[str, float], usable: tuple[floa
         if device in devices and base > 0:  # the base is low by as much
             i, j = names.index("hotel"), names.index(device)
             cov[i, j] = cov[j, i] = -(rel[device] * watts) ** 2 / (base * watts)
-    nominal = tuple([base, None, None, None, None, None, *devices.values()])
+    nominal = tuple([*(base if n == "hotel" else None for n in COMPONENT_GROUPS),
+                     *devices.values()])
     return Belief(tuple(names), np.ones(len(names)), cov, nominal, usable[0], usable[1],
                   usable, 0, tuple(f"{n}: {sources[n]}" for n in names))

@@ -88,14 +88,18 @@ def derive_envelope(nominal_max_depth_m: float, nominal_pitch_rad: float,
     comes from the vehicle's own figures: a depth rating twice its nominal yo's bottom
     (the G3's 100 m yo of its 200 m), a pitch twice its nominal (within a right angle), a
     band no thinner than its nominal yo's top; inflections no closer than its pump's full
-    stroke (from one side of neutral to the other)."""
+    stroke (from one side of neutral to the other). A vehicle without a buoyancy engine
+    (an AUV: no pitch of its own, NaN, and no pump, 0 cc) commands pitch and volume 0: its
+    pitch is bound only short of a right angle, and its inflections not at all."""
     right_angle = FIGURES["nominal_pitch"][2]["maximum"]
+    if max_pitch_rad is None:
+        max_pitch_rad = right_angle if math.isnan(nominal_pitch_rad) else \
+            min(2.0 * nominal_pitch_rad, right_angle)
     return Envelope(
         max_depth_m=2.0 * nominal_max_depth_m if max_depth_m is None else max_depth_m,
-        max_pitch_rad=min(2.0 * nominal_pitch_rad, right_angle) if max_pitch_rad is None
-        else max_pitch_rad,
+        max_pitch_rad=max_pitch_rad,
         min_yo_band_m=nominal_min_depth_m if min_yo_band_m is None else min_yo_band_m,
-        min_inflection_s=2.0 * max_ballast_cc / pump_rate_cc_s,
+        min_inflection_s=2.0 * max_ballast_cc / pump_rate_cc_s if max_ballast_cc > 0 else 0.0,
         action=action)
 
 
@@ -106,7 +110,11 @@ def load_envelope(spec: str) -> Envelope:
     top = read_model_file(resolve("vehicle", spec), "vehicle")
     names = ("nominal_max_depth", "nominal_pitch", "nominal_min_depth", "max_ballast",
              "pump_rate")
-    figures = [top.quantity(name, FIGURES[name][1], **FIGURES[name][2]) for name in names]
+    # an AUV's file gives no buoyancy engine (`vehicle.GLIDER_FIGURES`): no pitch, no pump
+    auv = {"nominal_pitch": math.nan, "max_ballast": 0.0, "pump_rate": math.nan} \
+        if top.text("vehicle_kind", "glider") == "auv" else {}  # propulsion.AUV: no numpy
+    figures = [auv[name] if name in auv else
+               top.quantity(name, FIGURES[name][1], **FIGURES[name][2]) for name in names]
     fields = envelope_fields(top, figures[0])
     return derive_envelope(*figures, fields.get("max_depth_m"), fields.get("max_pitch_rad"),
                            fields.get("min_yo_band_m"),

@@ -28,8 +28,8 @@ SWEEP_POINTS = 20  # budgets on the Pareto curve
 QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
-SECTIONS = ("summary", "pareto", "energy", "plan-vs-simulation", "profile", "track", "sbc",
-            "sensitivity", "montecarlo")
+SECTIONS = ("summary", "pareto", "energy", "speed", "vehicles", "plan-vs-simulation",
+            "profile", "track", "sbc", "sensitivity", "montecarlo")
 
 
 @dataclass(frozen=True)
@@ -212,9 +212,11 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.planner.compare import compare_boards
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
+    from gliderplan.planner.planfile import load_plan
     from gliderplan.planner.sensitivity import sensitivity
     from gliderplan.planner.sweep import pareto
     from gliderplan.reports import sbc
+    from gliderplan.reports.speed import COMPARED_VEHICLES, speed_frame, vehicles_frame
 
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
@@ -256,10 +258,21 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     }
     if carlo is not None:
         tables["montecarlo.csv"] = carlo[0]
+    speeds = speed_frame(mission, hardware, load_plan(plan_file, mission))
+    vehicles = None
+    if len(speeds):
+        from gliderplan.planner.vehicles import compare_vehicles, crossovers
+
+        tables["speed.csv"] = speeds
+        compared = compare_vehicles(mission, list(dict.fromkeys(
+            [mission.vehicle, *COMPARED_VEHICLES])))
+        tables["vehicles.csv"] = vehicles_frame(compared)
+        vehicles = _vehicles_section(tables["vehicles.csv"], crossovers(compared))
     sections = [
         _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
         _pareto_section(frontier, report, _star(model, frontier, report), plan_file),
         _energy_section(tables["energy_by_state.csv"]),
+        *([_speed_section(speeds), vehicles] if vehicles is not None else []),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
         _profile_section(tables["profile.csv"], len(series)),
         _track_section(mission, tables["track.csv"], summary),
@@ -429,6 +442,41 @@ def _energy_section(frame: pd.DataFrame) -> Section:
                    ("energy_by_state.csv",),
                    (Table(frame, {"state": "state", **headers},
                           dict.fromkeys(headers, ",.3g")),))
+
+
+def _speed_section(frame: pd.DataFrame) -> Section:
+    from gliderplan.reports.speed import REFERENCE_SPEED_MPS, speed_svg
+
+    chosen = frame[frame["chosen"]]
+    headers = {"state": "state", "speed_mps": "chosen speed [m/s]",
+               "energy_per_km_kj": "energy per km [kJ]"}
+    return Section("speed", "Energy per km against speed", (
+        "<p>Where the plan flies on the propeller: the energy each km takes at each speed "
+        "through the water (the vehicle's propulsion model with the state's hotel load and "
+        "board, in still water), and the speed the planner chose, the least energy per km "
+        "(or the one written). Too slow and the hotel load takes the battery, too fast "
+        f"and drag does; the dotted line is a fixed {REFERENCE_SPEED_MPS:g} m/s cruise.</p>",),
+        speed_svg(frame), "Energy per km [kJ] against speed [m/s]; stars: the chosen speeds.",
+        ("speed.csv",), (Table(chosen[list(headers)], headers,
+                               {"speed_mps": ".3g", "energy_per_km_kj": ",.4g"}),))
+
+
+def _vehicles_section(frame: pd.DataFrame, flips: list[dict]) -> Section:
+    from gliderplan.planner.vehicles import HEAD_CURRENTS_MPS
+    from gliderplan.reports.speed import vehicles_svg
+
+    said = "".join(f"<li>against a head current of {f['head_current_mps']:.3g} m/s and more, "
+                   f"{esc(f['to'])} needs the least energy per km</li>" for f in flips)
+    return Section("vehicles", "The mission on a glider, a hybrid and an AUV", (
+        "<p>The same mission planned on each vehicle (<code>gliderplan compare-vehicles"
+        "</code>): the least energy per km over ground against a head current, each at its "
+        "best speed (a glider that cannot outrun the current makes no way). Where the "
+        "cheapest vehicle "
+        "changes, the thruster or the propeller pays:</p>",
+        f"<ul>{said}</ul>" if flips else
+        f"<p>No crossover up to {HEAD_CURRENTS_MPS[-1]:g} m/s.</p>"),
+        vehicles_svg(frame, flips), "Energy per km [kJ] against the head current [m/s].",
+        ("vehicles.csv",))
 
 
 def _plan_vs_sim_section(frame: pd.DataFrame, summary: dict, run_path: Path,

@@ -340,6 +340,8 @@ class Command(NamedTuple):  # a tuple: the simulator builds one per tick
     heading_rad: float
     sensor_power: int
     event_count: int
+    speed_mps: float = 0.0  # through the water on the propeller; 0: a glide
+    thrust_w: float = 0.0  # a glider's thruster assisting a yo; 0: off
 
     TYPE = MessageType.COMMAND
 

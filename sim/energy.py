@@ -2,7 +2,8 @@
 
 Every component is integrated over the run's ticks with `power_models.timeline` (one
 vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
-pitch motor, the surface and Iridium phases, the computer at the clock of each state
+pitch motor, a propeller's or thruster's draw (its model's power at the speed or
+thrust flown), the surface and Iridium phases, the computer at the clock of each state
 from its workload per tick, and each sensor device from its on/off timeline (with a
 warm-up at every switch-on) at the vehicle's own figure (`power_models.devices`): the
 hotel load is billed less the instruments it holds, which are billed while they run.
@@ -129,6 +130,8 @@ class Billing:
         if boot:
             computer[:1] += self.boot_j
         parts[Component.COMPUTER] = computer * (Component.COMPUTER not in self.held)
+        if vehicle.propulsion is not None:  # its draw as the model gave it each tick
+            parts[Component.PROPULSION] = c["propulsion_w"] * dt
         power = c["sensor_power"].astype(np.int64)
         for device, sensor in self.sensors.items():
             on = (power & DEVICE_BITS[device]) != 0

@@ -27,10 +27,11 @@ from gliderplan.contract import (
     TRANSITION_NAMES,
     Envelope,
     EnvelopeAction,
+    FlightLimits,
     TransitionKind,
 )
 from gliderplan.language import ir, semantics
-from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
+from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim import compiled, pilot
 from gliderplan.sim.envelope import EnvelopeGuard
@@ -69,12 +70,17 @@ class PythonRuntime:
 
     def __init__(self, mission: ir.CheckedMission, plan: Plan | None, default_ballast_cc: float,
                  robust_tracker: bool = True, max_ballast_cc: float | None = None,
-                 envelope: Envelope | None = None) -> None:
+                 envelope: Envelope | None = None, limits: FlightLimits | None = None) -> None:
         """`default_ballast_cc` [cc] is flown where no plan sets one; `max_ballast_cc` [cc],
         the pump's volume, is the surfacing of the energy guard (default: the former);
         `envelope`, the vehicle's rating every command is held to (None: none, for tests
-        of the semantics alone)."""
+        of the semantics alone). `limits`: without a plan, the alternative of each state
+        and the `auto` speed [m/s] flown (`FlightLimits.unplanned_*`; default: the first,
+        none)."""
         self.mission = mission
+        self.unplanned_speed_mps = 0.0 if limits is None else limits.unplanned_speed_mps
+        self.unplanned = [0 if limits is None else limits.unplanned_profile(i)
+                          for i in range(len(mission.states))]
         self.default_ballast_cc = default_ballast_cc
         self.max_ballast_cc = default_ballast_cc if max_ballast_cc is None else max_ballast_cc
         self.guard = None if envelope is None else EnvelopeGuard(envelope, self.max_ballast_cc)
@@ -200,7 +206,7 @@ class PythonRuntime:
         s, i = self.s, self.state_i
         t_in = s[0] - self.entry_time_s
         state_plan = self.plan.states[i] if self.plan is not None else None
-        k = 0 if state_plan is None else pilot.profile_index(state_plan, t_in)
+        k = pilot.profile_index(state_plan, t_in, self.unplanned[i])
         args = self.constant_args[i][k] or self.argument_fns[i][k](s, machine.variables)
         profile = self.state.profiles[k]
         depth = s[_DEPTH]
@@ -213,10 +219,15 @@ class PythonRuntime:
         if state_plan is not None:
             planned = state_plan.profiles[k]
             pitch, ballast = planned.pitch_rad, planned.ballast_cc
+            speed, thrust = planned.speed_mps, planned.thrust_w
         else:
             pitch, ballast = None, self.default_ballast_cc
+            speed, thrust = None, profile.written_thrust_w
         target, pitch_cmd, ballast_cmd, surface = self.routine.command(
             depth, s[_TEMP], args, pitch, ballast, s[_ALTITUDE])
+        speed = pilot.propelled_speed(args, speed, self.unplanned_speed_mps) \
+            if PROFILES[profile.kind].propelled else 0.0
+        thrust = thrust if profile.kind in pilot.ASSISTED else 0.0
         heading, valid = self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
                  | (FLAG_HEADING if valid else 0))
@@ -231,7 +242,7 @@ class PythonRuntime:
             power = pilot.sensor_power_mask(self.power_tables[i], t_in)
         self.suspends += self.sleeps[i]
         return Command(tick, i, len(machine.stack), kind, src, dst, k, flags, target, pitch_cmd,
-                       ballast_cmd, heading, power, self.event_count)
+                       ballast_cmd, heading, power, self.event_count, speed, thrust)
 
     def _hold(self, tick: int, entered: bool, band: tuple[float, float] | None, target: float,
               pitch: float, ballast: float, flags: int

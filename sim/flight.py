@@ -10,12 +10,14 @@ from typing import TYPE_CHECKING
 
 from gliderplan.contract import TRANSITION_NAMES
 from gliderplan.language import ir
+from gliderplan.language.registry import cannot_fly
 from gliderplan.language.semantics import Transition
 from gliderplan.power_models.vehicle import Vehicle, yo_flight_problem
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
 
 if TYPE_CHECKING:
+    from gliderplan.contract import FlightLimits
     from gliderplan.planner.planfile import Plan
     from gliderplan.sim.faults import FaultSpec
     from gliderplan.sim.replanning import ShoreLoop
@@ -34,7 +36,8 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
     The Python executor flies runs of ticks at once where nothing can happen between them
     (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
-    the reference loop instead. The C runtime reads its plan from `plan_path` (the file
+    the reference loop instead, as does a vehicle with a propeller or a thruster (the fast
+    executor flies gliders only). The C runtime reads its plan from `plan_path` (the file
     `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
     uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
     given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
@@ -44,6 +47,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     updates it sends back are applied by the runtime (the C runtime's over its link; it
     must hold the key: `key_path`).
     """
+    from gliderplan.planner.limits import flight_limits
     from gliderplan.sim.energy import BatteryGauge
 
     science = make_science(mission, ocean, config, vehicle)
@@ -51,9 +55,11 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     if runtime == "python":
         from gliderplan.sim.executor import PythonRuntime
 
-        # without a plan: the same buoyancy volume the compiler gives the C runtime
+        # without a plan: the same buoyancy volume, alternatives and speed the compiler
+        # gives the C runtime (the board's clocks are not the executor's to set)
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
-                                 vehicle.max_ballast_cc, vehicle.envelope)
+                                 vehicle.max_ballast_cc, vehicle.envelope,
+                                 flown_limits(mission, vehicle, (0.0,)))
         hook = None
         if shore is not None:
             from gliderplan.sim.replanning import PythonVehicle
@@ -61,7 +67,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
             hook = _surfacing(shore, PythonVehicle(executor, shore.held, shore.key, mission,
                                                    _reader(mission, vehicle, plan)).deliver,
                               gauge, science.glider, mission)
-        if tick_by_tick:
+        if tick_by_tick or vehicle.propulsion is not None:  # sim/fast.py: gliders only
             record = simulate(mission, executor, science, config, progress, gauge=gauge,
                               on_surfacing=hook)
         else:
@@ -75,14 +81,12 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         return record
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
-    from gliderplan.contract import FlightLimits
-    from gliderplan.planner.limits import flight_limits
     from gliderplan.planner.planfile import plan_board_limits
     from gliderplan.sim.emulator import start_c_runtime
 
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
-    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
-                          board.clocks_mhz, envelope=vehicle.envelope)  # a scenario's vehicle
+    # the vehicle flown: a scenario's may differ
+    limits = flown_limits(mission, vehicle, board.clocks_mhz)
     schedule = None
     if faults is not None:
         from gliderplan.planner.occupancy import mission_occupancy
@@ -110,6 +114,21 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     return record
 
 
+def flown_limits(mission: ir.CheckedMission, vehicle: Vehicle,
+                 clocks_mhz: tuple[float, ...]) -> FlightLimits:
+    """The limits of `vehicle` (a scenario's may differ from the mission's) on a board of
+    `clocks_mhz` [MHz]: its pump, and what it flies without a plan (the alternatives and
+    the `auto` speed the compiler gives the C runtime); no other bound beyond the
+    contract's."""
+    from gliderplan.contract import FlightLimits
+    from gliderplan.planner.limits import unplanned
+
+    speed, flown = unplanned(mission, vehicle)
+    return FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, clocks_mhz,
+                        unplanned_speed_mps=speed, unplanned_profiles=flown,
+                        envelope=vehicle.envelope)
+
+
 def _surfacing(shore: ShoreLoop, deliver, gauge, glider,  # noqa: ANN001, ANN202
                mission: ir.CheckedMission):
     from gliderplan.sim.replanning import surfacing_hook
@@ -120,12 +139,10 @@ def _surfacing(shore: ShoreLoop, deliver, gauge, glider,  # noqa: ANN001, ANN202
 def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  # noqa: ANN202
     """How the Python executor's vehicle reads a plan an update makes: strictly, within
     the vehicle's pump and the board's clocks, as the C runtime does."""
-    from gliderplan.contract import FlightLimits
     from gliderplan.planner.planfile import plan_board_limits, read_plan_bytes
 
     board = plan_board_limits(mission, plan).clocks_mhz if plan is not None else (0.0,)
-    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board,
-                          envelope=vehicle.envelope)
+    limits = flown_limits(mission, vehicle, board)
     return lambda data: read_plan_bytes(data, mission, "", limits)
 
 
@@ -157,6 +174,8 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
     A yo whose band reads variables is left to the flight."""
     for i, state in enumerate(mission.states):
         for k, profile in enumerate(state.profiles):
+            if cannot_fly(profile.kind, profile.thrust, vehicle) is not None:
+                continue  # one the vehicle cannot fly is never flown (no plan time, check warns)
             flown = (None, None) if plan is None else (plan.states[i].profiles[k].pitch_rad,
                                                        plan.states[i].profiles[k].ballast_cc)
             problem = yo_flight_problem(f"{state.place}: flightprofile {k}", vehicle,

@@ -35,7 +35,7 @@ from gliderplan.sim.vehicle import Current, GliderSim
 if TYPE_CHECKING:
     from gliderplan.sim.bathymetry import Bathymetry
 
-_COMMAND_F32 = struct.Struct("<4f")
+_COMMAND_F32 = struct.Struct("<6f")
 PROGRESS_TICKS = 50_000  # report progress this often on long runs
 
 
@@ -153,6 +153,7 @@ COLUMN_TYPES: dict[str, type] = {
     "profile": np.int8, "sensor_power": np.int32, "phase": np.int8,
     "pumped_out_cc": np.float64, "pumped_in_cc": np.float64, "inflection": np.bool_,
     "lat_deg": np.float64, "lon_deg": np.float64,
+    "propulsion_w": np.float64,  # the propeller's or thruster's draw [W] (0: none)
 }
 
 
@@ -177,12 +178,13 @@ class Columns:
 
     def extend(self, ticks: int, run: dict[str, np.ndarray | float]) -> None:
         """Append a run of ticks: per column an array of `ticks` values, or one value
-        for them all."""
+        for them all; a column left out is 0 (the fast executor's runs have no
+        propulsion)."""
         if any(self.rows.values()):
             self._flush_rows()
         at = self._filled
         for key, array in self._arrays.items():
-            array[at:at + ticks] = run[key]
+            array[at:at + ticks] = run.get(key, 0)
         self._filled += ticks
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -239,6 +241,7 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     state_c, stack_c, profile_c = cols["state"], cols["stack_depth"], cols["profile"]
     power_c, phase_c = cols["sensor_power"], cols["phase"]
     out_c, in_c, infl_c = cols["pumped_out_cc"], cols["pumped_in_cc"], cols["inflection"]
+    motor_c = cols["propulsion_w"]
     lat_c, lon_c = cols["lat_deg"], cols["lon_deg"]
     ended = "duration"
     pack, unpack = _COMMAND_F32.pack, _COMMAND_F32.unpack
@@ -303,14 +306,17 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 out_c.append(0.0)
                 in_c.append(0.0)
                 infl_c.append(False)
+                motor_c.append(0.0)
                 break
-            target, pitch, ballast, heading = unpack(pack(
-                cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad))
-            apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power)
+            target, pitch, ballast, heading, speed, thrust = unpack(pack(
+                cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad,
+                cmd.speed_mps, cmd.thrust_w))
+            apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power, speed, thrust)
             phase_c.append(glider.phase)
             out_c.append(glider.pumped_out_cc)
             in_c.append(glider.pumped_in_cc)
             infl_c.append(glider.inflection)
+            motor_c.append(glider.propulsion_w)
             if progress is not None and tick % PROGRESS_TICKS == 0 and tick:
                 progress(time_s, last_tick * tick_s)
             tick += 1
@@ -330,7 +336,7 @@ def _close_row(cols: dict[str, list], state: int) -> None:
     """Complete the row of a tick whose runtime faulted (the glider's own control flies on)."""
     for key, value in (("state", state), ("stack_depth", 0), ("profile", 0),
                        ("sensor_power", 0), ("phase", 0), ("pumped_out_cc", 0.0),
-                       ("pumped_in_cc", 0.0), ("inflection", False)):
+                       ("pumped_in_cc", 0.0), ("inflection", False), ("propulsion_w", 0.0)):
         cols[key].append(value)
 
 
@@ -348,5 +354,12 @@ def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
 def correction_speed_mps(vehicle: Vehicle) -> float:
     """[m s-1] the speed through the water a glider's current correction steers with: its
     horizontal speed at its nominal pitch on a full pump stroke (a Slocum steers with its
-    own speed estimate, which a steady glide keeps near this)."""
+    own speed estimate, which a steady glide keeps near this). A vehicle without a buoyancy
+    engine (an AUV) steers with the speed it cruises at without a plan (`GliderSim.step`
+    steers a propelled tick with the speed commanded)."""
+    if not vehicle.has_buoyancy_engine:
+        from gliderplan.planner.speed import best_speed
+        from gliderplan.power_models.devices import base_power_w
+
+        return float(best_speed(vehicle.propulsion, base_power_w(vehicle)).speed_mps)
     return float(vehicle.max_speed_mps(vehicle.nominal_pitch_rad))

@@ -272,12 +272,13 @@ class ScienceComputer:
             self.spikes.skip(count)
 
     def apply(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
-              heading_rad: float, flags: int, sensor_power: int) -> None:
+              heading_rad: float, flags: int, sensor_power: int, speed_mps: float = 0.0,
+              thrust_w: float = 0.0) -> None:
         """Fly one tick under a COMMAND and switch the sensors it powers."""
         self.sensor_power = sensor_power
         g = self.glider
         g.step(depth_target_m, pitch_rad, ballast_cc, heading_rad,
-               bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE))
+               bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE), speed_mps, thrust_w)
         if g.grounded:
             if not self.grounded_ticks:
                 self.first_grounded_s = self._time_s

@@ -38,6 +38,7 @@ from gliderplan.power_models.flight import (
     glide_geometry,
     net_buoyancy_cc,
 )
+from gliderplan.power_models.propulsion import thrust_assisted_speed
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim import native
@@ -48,6 +49,9 @@ _RAD = math.pi / 180.0
 
 SURFACE_DEPTH_M = 0.3  # shallower than this the antenna is out of the water
 HOVER_RATE_M_S = 0.05  # assumption: small buoyancy corrections move a hovering glider slowly
+# assumption: a propelled vehicle changes depth along a path at most this steep (a glider's
+# nominal 26 deg; a LAUV's fins allow more, which only shortens the dive to its depth)
+PROPELLED_PATH_RAD = 0.454
 PITCH_RATE_RAD_S = 0.1  # assumption: the battery moves ~26 deg in under 5 s
 MAX_CURRENT_MPS = 10.0  # [m s-1] beyond any ocean current (the Gulf Stream's core: ~2.5)
 
@@ -203,6 +207,7 @@ class GliderSim:
         self._geometry: dict[float, tuple[float, float]] = {}
         self.floor_m = math.inf  # [m] the sea floor under the glider this tick (inf: none)
         self.grounded = False  # the last step stopped at the sea floor
+        self.propulsion_w = 0.0  # [W] the propeller's or thruster's draw in the last step
 
     def _per_root(self, pitch_rad: float) -> tuple[float, float]:
         """(u, w) [m s-1] per square root of the net buoyancy [cc] at a pitch [rad]
@@ -217,24 +222,66 @@ class GliderSim:
         return per_root
 
     def step(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
-             heading_rad: float, heading_valid: bool, surface: bool) -> None:
-        """Fly one tick under a command (COMMAND fields, docs/protocol.md)."""
+             heading_rad: float, heading_valid: bool, surface: bool, speed_mps: float = 0.0,
+             thrust_w: float = 0.0) -> None:
+        """Fly one tick under a command (COMMAND fields, docs/protocol.md): with a speed
+        [m/s] level on the propeller, else a glide (assisted by `thrust_w` [W] of a
+        thruster) or a hover."""
         self.pumped_out_cc = self.pumped_in_cc = 0.0
         self.inflection = self.grounded = False
+        self.propulsion_w = 0.0
+        propulsion = self.vehicle.propulsion
         if heading_valid:
-            self.heading_rad = heading_rad if not self.correction_speed_mps else \
-                corrected_heading(heading_rad, self.correction_speed_mps,
-                                  self.measured.north_mps, self.measured.east_mps)
+            through = self.correction_speed_mps
+            if through and speed_mps > 0.0 and propulsion is not None:  # on the propeller
+                through = min(max(speed_mps, propulsion.min_speed_mps), propulsion.max_speed_mps)
+            self.heading_rad = heading_rad if not through else corrected_heading(
+                heading_rad, through, self.measured.north_mps, self.measured.east_mps)
         if surface and self.depth_m <= SURFACE_DEPTH_M:
             self._at_surface(self.tick_s)
             return
         self.surface_time_s = -1.0
-        dz, distance, hovering = self.below_surface(depth_target_m, pitch_rad, ballast_cc)
+        if speed_mps > 0.0 and propulsion is not None:
+            dz, distance = self._propelled(depth_target_m, speed_mps)
+            hovering = False
+        else:
+            dz, distance, hovering = self.below_surface(depth_target_m, pitch_rad, ballast_cc)
+            if thrust_w > 0.0 and propulsion is not None and propulsion.is_thruster:
+                dz, distance = self._assisted(dz, distance, thrust_w)
         depth = self.depth_m + dz if hovering else max(0.0, self.depth_m + dz)
         if depth > self.floor_m:  # the sea floor stops it
             depth, self.grounded = self.floor_m, True
         self.depth_m = depth
         self._drift(distance, self.tick_s)
+
+    def _propelled(self, depth_target_m: float, speed_mps: float) -> tuple[float, float]:
+        """One tick on the propeller at `speed_mps` through the water (held to the
+        propulsion model's range), toward the target depth along a path no steeper than
+        PROPELLED_PATH_RAD; its draw from the model. Returns (depth change [m], horizontal
+        distance through the water [m])."""
+        propulsion = self.vehicle.propulsion
+        speed = min(max(speed_mps, propulsion.min_speed_mps), propulsion.max_speed_mps)
+        self.propulsion_w = float(propulsion.power_w(speed))
+        self.phase = GLIDE
+        path = speed * self.tick_s
+        most = path * math.sin(PROPELLED_PATH_RAD)
+        dz = min(max(depth_target_m - self.depth_m, -most), most)
+        self.pitch_rad = -math.asin(dz / path)  # nose down to dive
+        return dz, math.sqrt(path * path - dz * dz)
+
+    def _assisted(self, dz_m: float, distance_m: float, thrust_w: float
+                  ) -> tuple[float, float]:
+        """A glide tick with the thruster commanded to `thrust_w` [W]: faster along the same
+        path by `thrust_assisted_speed` (the planner's model), drawing its power. Returns
+        (depth change [m], distance [m])."""
+        propulsion, fl = self.vehicle.propulsion, self.vehicle.flight
+        self.propulsion_w = propulsion.assist_draw_w(thrust_w)
+        speed = distance_m / self.tick_s
+        if speed <= 0.0:  # pumping or turning in place: the thruster runs, nothing moves
+            return dz_m, distance_m
+        faster = float(thrust_assisted_speed(speed, propulsion.thrust_power_w(thrust_w),
+                                             fl.rho_kg_m3, fl.wing_area_m2, fl.drag_cd0)) / speed
+        return dz_m * faster, distance_m * faster
 
     @property
     def speed_depends_on_depth(self) -> bool:

@@ -93,6 +93,45 @@ def test_a_flight_within_the_rating_is_untouched(tmp_path, capsys):
     assert summary["envelope"] == [] and summary["ended"] == "exit"
 
 
+def _cruise(tmp_path: Path, assignment: str) -> Path:
+    """A cruise on the propeller AUV whose depth a variable sets at 300 s."""
+    mission = tmp_path / "cruise.mission"
+    mission.write_text(f"""mission level
+vehicle lauv
+horizon 20 min
+var level = 10
+
+state s1
+begin
+  flightroute noheading
+  flightprofile cruise(level, 1)
+  sensors missiontime, depth
+  events
+    case missiontime >= 300 && level == 10 {assignment}
+    case missiontime >= 1000 exit
+end
+""")
+    return mission
+
+
+@needs_cc
+@pytest.mark.parametrize(("assignment", "code", "ended", "envelope"), [
+    ("set level = 20", ExitCode.OK, "exit", []),  # pitch and volume 0: within the rating
+    ("set level = 3000", ExitCode.ENVELOPE, "envelope",
+     ["envelope: missiontime 300 s, state s1 (line 9): depth 3000 m beyond the vehicle's "
+      "100 m; the mission ends, surfacing"]),
+])
+def test_both_runtimes_hold_a_cruise_to_the_rating_alike(tmp_path, capsys, assignment, code,
+                                                         ended, envelope):
+    mission = _cruise(tmp_path, assignment)
+    python = _sim(mission, tmp_path / "py", "python", capsys)
+    c = _sim(mission, tmp_path / "c", "c", capsys)
+    assert python[0] == c[0] == code, (python[3], c[3])
+    assert python[1] == c[1]
+    assert python[2]["ended"] == c[2]["ended"] == ended
+    assert python[2]["envelope"] == c[2]["envelope"] == envelope
+
+
 @pytest.mark.parametrize(("text", "problem"), [
     ('action = "brake"', "expected fault, surface or clamp"),
     ("max_depth = { value = 20, unit = \"m\", source = \"x\" }",
@@ -141,3 +180,25 @@ end
 def test_check_passes_the_shipped_examples_within_their_vehicles_ratings(capsys):
     missions = sorted(str(p) for p in (ROOT / "examples").glob("*.mission"))
     assert main(["check", *missions]) == ExitCode.OK
+
+
+def test_check_refuses_a_cruise_beyond_the_auv_s_rating(tmp_path, capsys):
+    mission = tmp_path / "m.mission"
+    mission.write_text("""mission m
+vehicle lauv
+
+state s1
+begin
+  flightroute noheading
+  flightprofile cruise(150, auto)
+  sensors missiontime, depth
+  events
+    case missiontime >= 100 exit
+end
+""")
+    assert main(["check", str(mission)]) == ExitCode.BAD_INPUT
+    err = capsys.readouterr().err
+    assert "m.mission:7:24: error: depth 150 m is beyond the vehicle's rated 100 m" in err
+    assert "the rating of vehicle lauv (its file's [envelope])" in err
+    mission.write_text(mission.read_text().replace("cruise(150,", "cruise(50,"))
+    assert main(["check", str(mission)]) == ExitCode.OK, capsys.readouterr().err

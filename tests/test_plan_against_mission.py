@@ -85,6 +85,11 @@ CASES = [
     ("ballast 1e-6 cc", lambda p: with_profile(p, ballast="0.000001"), "state s1",
      r"state s1: profile 0: BALLAST_CC 1e-06 does not fly it: the vehicle needs more than "
      r"119.016 cc"),
+    ("level flight on a glider", lambda p: with_profile(p, pitch="0", ballast="0"), "state s1",
+     r"state s1: profile 0: PITCH_RAD and BALLAST_CC 0 fly it level on a propeller, and the "
+     r"vehicle has none"),
+    ("a thrust on a glider", lambda p: edited(p, s1_profile(p), s1_profile(p) + " 4.5"),
+     "state s1", r"state s1: profile 0: THRUST_W 4.5 on a vehicle without a thruster"),
 ]
 MADE_FOR_OTHER_HARDWARE = [
     ("TS-5500 plan on a TS-7800 mission", ["--computer", "ts5500"], "computer",

@@ -31,6 +31,8 @@
 /** [s] a cycle, a sensor period, a state's predicted time (10 y) */
 #define GP_MAX_PLAN_TIME_S 315360000.0
 #define GP_MAX_PLAN_SPEED_MPS 2.0  /**< [m/s] a planned horizontal speed (a glider makes 0.2-0.5) */
+/** [W] a yo's thruster's commanded power (the Slocum G3 hybrid's commands 1-9 W) */
+#define GP_MAX_PLAN_THRUST_W 100.0
 /** [J] a budget or prediction (the largest Slocum pack is 12 MJ) */
 #define GP_MAX_PLAN_ENERGY_J 10000000000.0
 /** a state's predicted inflections (as many as its visits may be) */
@@ -70,7 +72,8 @@
 
 /* ---- the serial link (docs/protocol.md) */
 
-#define GP_PROTOCOL_VERSION 2  /**< 2: COMMANDs as changes against a base, SENSORS without a mask */
+/** 2: COMMANDs as changes against a base, SENSORS without a mask; */
+#define GP_PROTOCOL_VERSION 3
 #define GP_MAX_PAYLOAD 240  /**< [bytes] of one frame's payload */
 #define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
@@ -80,7 +83,7 @@
 #define GP_SBD_MT_MESSAGE_BYTES 1890
 #define GP_SBD_MO_SHORT_BYTES 340  /**< [bytes] of one short message up, glider to shore */
 #define GP_SBD_MT_SHORT_BYTES 270  /**< [bytes] of one short message down, shore to glider */
-#define GP_COMMAND_MAX_SIZE 38  /**< [bytes] of a COMMAND payload that carries every field */
+#define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
@@ -139,8 +142,8 @@ enum {
 };
 
 /** Bytes of each COMMAND field on the wire, in gp_command_field order. */
-#define GP_COMMAND_FIELD_BYTES {1, 1, 1, 1, 1, 1, 1, 4, 4, 4, 4, 4, 4}
-#define GP_N_COMMAND_FIELDS 13
+#define GP_COMMAND_FIELD_BYTES {1, 1, 1, 1, 1, 1, 1, 4, 4, 4, 4, 4, 4, 4, 4}
+#define GP_N_COMMAND_FIELDS 15
 
 /** The type byte of a frame's header. */
 typedef enum {
@@ -176,6 +179,9 @@ typedef enum {
     GP_CMD_HEADING_RAD = 10,  /**< f32 [rad] true, clockwise from north (valid with FLAG_HEADING) */
     GP_CMD_SENSOR_POWER = 11,  /**< u32 bit i: power sensor i's device */
     GP_CMD_EVENT_COUNT = 12,  /**< u32 events fired so far */
+    GP_CMD_SPEED_MPS = 13,  /**< f32 [m/s] through the water on the propeller; 0: none (a glide) */
+    /** f32 [W] a glider's thruster's commanded power assisting a yo; 0: off */
+    GP_CMD_THRUST_W = 14,
 } gp_command_field;
 
 /** RELEASE's `reason`: why the runtime gave control back to the glider. */

@@ -45,6 +45,7 @@ typedef struct {
     float depth_target_m, pitch_rad, ballast_cc, heading_rad;
     uint32_t sensor_power;
     uint32_t event_count;
+    float speed_mps, thrust_w;   /**< propelled flight [m/s], a yo's thruster [W]; 0: none */
 } gp_command;
 
 /** Receiver state: bytes since the last delimiter, bounded by GP_MAX_WIRE. */

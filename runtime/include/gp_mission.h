@@ -36,6 +36,8 @@ typedef enum {
     GP_PROFILE_THERMOTRACKYO = 1,
     GP_PROFILE_SURFACE = 2,
     GP_PROFILE_HOVER = 3,
+    GP_PROFILE_CRUISE = 4,       /**< level at a depth on the propeller */
+    GP_PROFILE_ALTITUDE = 5,     /**< level at a height above the sea floor on the propeller */
 } gp_profile_kind;
 
 typedef enum {
@@ -70,7 +72,9 @@ typedef struct {
 typedef struct {
     uint8_t kind;          /**< gp_profile_kind */
     uint8_t n_args;
-    gp_args_fn args;       /**< fills n_args values [m, rad, degC as the registry says] */
+    gp_args_fn args;       /**< fills n_args values [m, rad, degC as the registry says];
+                                a propelled profile's speed written `auto` is left out */
+    double thrust_w;       /**< `thrust` on a yo: the commanded power [W]; 0: none or auto */
 } gp_profile;
 
 typedef struct {
@@ -93,6 +97,7 @@ typedef struct {
     uint8_t sleep;               /**< `computer sleep between ticks`: 1, else 0 */
     uint32_t sensor_mask;        /**< `sensors` as a mask (bit i: sensor i), which the
                                       schedule powers each tick */
+    uint8_t unplanned_profile;   /**< flown without a plan: the first the vehicle can fly */
 } gp_state;
 
 /** A sensor's duty bounds in one state (`contract.FlightLimits.duty_bounds`). */
@@ -139,7 +144,10 @@ typedef struct {
     uint32_t own_read_mask;       /**< the runtime's own readings it reads (halfcycle,
                                        wptdist, wptreached): it computes wptdist only then */
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
-    double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc] */
+    double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc]; 0:
+                                       none (a propeller AUV) */
+    double unplanned_speed_mps;   /**< a propelled profile's `auto` speed without a plan
+                                       [m/s]; 0: no propulsion */
     double reserve_j;             /**< energy left at which the guard ends the mission [J] */
     gp_envelope envelope;         /**< the vehicle's rating, held every tick */
     const double *clocks_mhz;     /**< the clocks of the board it flies on [MHz]; {0}:

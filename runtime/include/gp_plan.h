@@ -22,6 +22,7 @@ typedef struct {
 
 typedef struct {
     double share, pitch_rad, ballast_cc, speed_mps;
+    double thrust_w;                 /**< a yo's thruster [W]; 0: off (the field left out) */
 } gp_plan_profile;
 
 typedef struct {
@@ -89,6 +90,8 @@ typedef struct {
     uint32_t sensor_power;      /**< bit i: power sensor i */
     double pitch_rad;           /**< planned pitch, NaN: the profile's own */
     double ballast_cc;          /**< B */
+    double speed_mps;           /**< planned speed [m/s], NaN: no plan */
+    double thrust_w;            /**< planned thrust [W], NaN: no plan */
 } gp_schedule_now;
 
 /**

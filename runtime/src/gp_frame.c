@@ -267,7 +267,8 @@ size_t gp_sensors_pack(uint32_t tick, uint8_t flags, uint32_t mask, uint32_t rea
     X(GP_CMD_TO_STATE, to, u8) X(GP_CMD_PROFILE, profile, u8) X(GP_CMD_FLAGS, flags, u8) \
     X(GP_CMD_DEPTH_TARGET_M, depth_target_m, f32) X(GP_CMD_PITCH_RAD, pitch_rad, f32)   \
     X(GP_CMD_BALLAST_CC, ballast_cc, f32) X(GP_CMD_HEADING_RAD, heading_rad, f32)       \
-    X(GP_CMD_SENSOR_POWER, sensor_power, u32) X(GP_CMD_EVENT_COUNT, event_count, u32)
+    X(GP_CMD_SENSOR_POWER, sensor_power, u32) X(GP_CMD_EVENT_COUNT, event_count, u32)   \
+    X(GP_CMD_SPEED_MPS, speed_mps, f32) X(GP_CMD_THRUST_W, thrust_w, f32)
 
 /* A field's value as it travels: an f32 by its bits (-0 and NaNs are kept). */
 static uint32_t bits_u8(uint8_t v) { return v; }

@@ -103,7 +103,8 @@ const char *gp_mission_check(const gp_mission *mission)
     if (mission->stack_depth < 1 || mission->stack_depth > GP_MAX_STACK_DEPTH) {
         return "stack depth outside 1..GP_MAX_STACK_DEPTH";
     }
-    if (!(mission->reserve_j >= 0) || !(mission->max_ballast_cc > 0) || mission->n_clocks < 1
+    if (!(mission->reserve_j >= 0) || !(mission->max_ballast_cc >= 0)
+        || !(mission->unplanned_speed_mps >= 0) || mission->n_clocks < 1
         || mission->n_clocks > GP_MAX_BOARD_CLOCKS || !mission->clocks_mhz) {
         return "no pump volume or energy reserve, or a clock count outside 1..GP_MAX_BOARD_CLOCKS";
     }
@@ -116,6 +117,9 @@ const char *gp_mission_check(const gp_mission *mission)
         if (state->n_profiles < 1 || state->n_profiles > GP_MAX_PROFILE_ALTERNATIVES
             || !state->profiles) {
             return "profile count outside 1..GP_MAX_PROFILE_ALTERNATIVES";
+        }
+        if (state->unplanned_profile >= state->n_profiles) {
+            return "the profile flown without a plan is not one of the state's";
         }
         for (int p = 0; p < state->n_profiles; p++) {
             const gp_profile *profile = &state->profiles[p];

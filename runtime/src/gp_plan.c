@@ -589,7 +589,8 @@ static int read_sensor(reader *r, const gp_mission *mission, const gp_state *sta
 static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
 {
     int index;
-    if (expect(r, "profile", 6) < 0
+    /* `profile INDEX SHARE PITCH_RAD BALLAST_CC SPEED_MPS [THRUST_W]` */
+    if (expect_fields(r, "profile", 6, 7, 0) < 0
         || count_field(r, 1, "profile INDEX", 0, GP_MAX_PROFILE_ALTERNATIVES - 1, &index) < 0) {
         return -1;
     }
@@ -602,13 +603,22 @@ static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
         || number_field(r, 5, "SPEED_MPS", &out->speed_mps) < 0) {
         return -1;
     }
+    out->thrust_w = 0.0;  /* left out: the thruster is off */
+    if (r->n_fields == 7 && number_field(r, 6, "THRUST_W", &out->thrust_w) < 0) {
+        return -1;
+    }
+    if (!(out->thrust_w >= 0 && out->thrust_w <= GP_MAX_PLAN_THRUST_W)) {
+        return fail(r, "THRUST_W %g outside [0, %g]", out->thrust_w, GP_MAX_PLAN_THRUST_W);
+    }
     if (out->share < 0 || out->share > 1) {
         return fail(r, "SHARE %g outside [0, 1]", out->share);
     }
-    if (!(out->pitch_rad > 0 && out->pitch_rad < HALF_PI)) {
+    /* pitch and ballast 0: a propelled profile, flown level on its propeller */
+    int level = out->pitch_rad == 0.0 && out->ballast_cc == 0.0;
+    if (!level && !(out->pitch_rad > 0 && out->pitch_rad < HALF_PI)) {
         return fail(r, "PITCH_RAD %g outside (0, pi/2)", out->pitch_rad);
     }
-    if (!(out->ballast_cc > 0) || !(out->speed_mps > 0)) {
+    if (!(level || out->ballast_cc > 0) || !(out->speed_mps > 0)) {
         return fail(r, "BALLAST_CC and SPEED_MPS must be > 0");
     }
     if (out->speed_mps > GP_MAX_PLAN_SPEED_MPS) {
@@ -818,6 +828,18 @@ static int check_state(const gp_plan_state *ps, const gp_state *state,
     for (int k = 0; k < ps->n_profiles; k++) {
         const gp_plan_profile *p = &ps->profiles[k];
         double least = sb != NULL ? sb->min_ballast_cc[k] : 0;
+        if (p->pitch_rad == 0.0 && p->ballast_cc == 0.0) {  /* level: propelled */
+            if (!(mission->unplanned_speed_mps > 0)) {
+                return refuse(error, ps->line, "state %.32s: profile %d: PITCH_RAD and "
+                              "BALLAST_CC 0 fly it level on a propeller, and the vehicle has "
+                              "none", state->name, k);
+            }
+            continue;  /* no glide: its speed is the contract's to bound */
+        }
+        if (p->thrust_w > 0 && !(mission->unplanned_speed_mps > 0)) {
+            return refuse(error, ps->line, "state %.32s: profile %d: THRUST_W %g on a vehicle "
+                          "without a thruster", state->name, k, p->thrust_w);
+        }
         if (!(b->min_pitch_rad < p->pitch_rad && p->pitch_rad < b->max_pitch_rad)) {
             return refuse(error, ps->line, "state %.32s: profile %d: PITCH_RAD %g outside the "
                           "vehicle's (%g, %g) rad", state->name, k, p->pitch_rad,
@@ -833,7 +855,7 @@ static int check_state(const gp_plan_state *ps, const gp_state *state,
                           "the vehicle's pump (%g cc)", state->name, k, p->ballast_cc,
                           mission->max_ballast_cc);
         }
-        if (above(p->speed_mps, b->max_speed_mps)) {
+        if (p->thrust_w == 0 && above(p->speed_mps, b->max_speed_mps)) {
             return refuse(error, ps->line, "state %.32s: profile %d: SPEED_MPS %g exceeds the "
                           "vehicle's fastest glide (%g m/s)", state->name, k, p->speed_mps,
                           b->max_speed_mps);
@@ -914,9 +936,11 @@ void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
                  double default_ballast_cc, gp_schedule_now *out)
 {
     out->sensor_power = state->sensor_mask;
-    out->profile = 0;
+    out->profile = state->unplanned_profile;
     out->pitch_rad = NAN;
     out->ballast_cc = default_ballast_cc;
+    out->speed_mps = NAN;
+    out->thrust_w = NAN;
     if (ps == NULL) {
         return;
     }
@@ -930,4 +954,6 @@ void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
     out->profile = (uint8_t)alternative_at(ps, t_in_s);
     out->pitch_rad = ps->profiles[out->profile].pitch_rad;
     out->ballast_cc = ps->profiles[out->profile].ballast_cc;
+    out->speed_mps = ps->profiles[out->profile].speed_mps;
+    out->thrust_w = ps->profiles[out->profile].thrust_w;
 }

@@ -42,7 +42,10 @@ static gp_envelope_breach fly(gp_runtime *rt, const gp_mission *mission, const g
     }
     const gp_profile *profile = &state->profiles[now.profile];
     gp_profile_input in = {.kind = profile->kind, .plan_pitch_rad = now.pitch_rad,
-                           .ballast_cc = now.ballast_cc, .naive = options->naive_tracker};
+                           .ballast_cc = now.ballast_cc, .naive = options->naive_tracker,
+                           .plan_speed_mps = now.speed_mps,
+                           .unplanned_speed_mps = mission->unplanned_speed_mps,
+                           .thrust_w = isnan(now.thrust_w) ? profile->thrust_w : now.thrust_w};
     if (profile->args && profile->n_args > 0) {
         profile->args(rt->sensors, rt->machine.vars, in.args);
     }
@@ -64,6 +67,8 @@ static gp_envelope_breach fly(gp_runtime *rt, const gp_mission *mission, const g
     cmd->pitch_rad = (float)vertical.pitch_rad;
     cmd->ballast_cc = (float)vertical.ballast_cc;
     cmd->heading_rad = (float)heading;
+    cmd->speed_mps = (float)vertical.speed_mps;
+    cmd->thrust_w = (float)vertical.thrust_w;
     cmd->sensor_power = now.sensor_power;
     int yo = profile->kind == GP_PROFILE_YO || profile->kind == GP_PROFILE_THERMOTRACKYO;
     return gp_envelope_hold(&mission->envelope, mission->max_ballast_cc, &rt->envelope, entered,

@@ -20,6 +20,8 @@
     X(test_yo_should_turn_a_dive_at_its_altimeter_stop)                     \
     X(test_thermotrackyo_should_turn_a_dive_at_its_altimeter_stop)          \
     X(test_surface_and_hover_should_command_fixed_attitudes)                \
+    X(test_cruise_and_altitude_should_fly_level_at_their_speed)             \
+    X(test_a_yo_should_command_its_thrust)                                  \
     X(test_naive_tracker_should_detect_a_clean_cast)                        \
     X(test_naive_tracker_should_never_detect_a_noisy_cast)                  \
     X(test_robust_tracker_should_detect_clean_and_noisy_casts)              \
@@ -36,6 +38,7 @@
     X(test_sweep_should_clip_lines_to_a_triangle)                           \
     X(test_sweep_should_stop_at_256_waypoints)                              \
     X(test_plan_should_accept_a_good_plan)                                  \
+    X(test_plan_should_read_a_yos_thrust_and_a_level_profile)               \
     X(test_plan_should_reject_bad_files_naming_the_line)                    \
     X(test_plan_should_read_a_states_power_line_where_its_mission_sleeps)   \
     X(test_plan_should_accept_computer_none_on_any_build)                   \

@@ -132,13 +132,13 @@ static void yo_to_bottom(const double *s, const double *v, double *a)
     (void)s;
     a[0] = 5.0; a[1] = v[0]; a[2] = .454; a[3] = .454;
 }
-static const gp_profile deep_profiles[] = {{GP_PROFILE_YO, 4, yo_to_bottom}};
+static const gp_profile deep_profiles[] = {{GP_PROFILE_YO, 4, yo_to_bottom, 0.0}};
 static const uint8_t deep_sensors[] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH};
 static const gp_event deep_events[] = {{at_100_s, set_bottom, GP_ACT_NONE, 0},
                                        {never, NULL, GP_ACT_EXIT, 0}};
 static const gp_state deep_states[] = {
     {"deep", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, deep_profiles, 1, deep_sensors, 2, deep_events,
-     2, 0, 0, 0x3},
+     2, 0, 0, 0x3, 0},
 };
 static const double deep_initial[] = {10.0};
 

@@ -59,6 +59,36 @@ void test_plan_should_accept_a_good_plan(void)
     CHECK_NEAR(plan.states[1].profiles[0].pitch_rad, 0.4, 0);
 }
 
+/* Fig. 2 on a vehicle with propulsion (a hybrid's thruster: its `auto` speed > 0). */
+static const gp_mission *fig2_propelled(void)
+{
+    static gp_mission mission;
+    mission = gp_mission_table;
+    mission.unplanned_speed_mps = 0.45;
+    return &mission;
+}
+
+void test_plan_should_read_a_yos_thrust_and_a_level_profile(void)
+{
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    const gp_mission *hybrid = fig2_propelled();
+    size_t len = variant("profile 0 1 0.454 230 0.31\nend\nstate s2",
+                         "profile 0 1 0.454 230 0.31 4.5\nend\nstate s2");
+    CHECK_INT(gp_plan_read(text, len, hybrid, NULL, &plan, error), 0);
+    CHECK_NEAR(plan.states[0].profiles[0].thrust_w, 4.5, 0);
+    CHECK_NEAR(plan.states[2].profiles[0].thrust_w, 0, 0);  /* left out: off */
+    /* the glider has no thruster: the plan contradicts its vehicle (gp_plan_check) */
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), -1);
+    CHECK_CONTAINS(error, "state s1: profile 0: THRUST_W 4.5 on a vehicle without a thruster");
+    len = variant("profile 0 1 0.4 200 0.3", "profile 0 1 0 0 1.2");  /* cruise, level */
+    CHECK_INT(gp_plan_read(text, len, hybrid, NULL, &plan, error), 0);
+    CHECK_NEAR(plan.states[1].profiles[0].speed_mps, 1.2, 0);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), -1);
+    CHECK_CONTAINS(error, "state s2: profile 0: PITCH_RAD and BALLAST_CC 0 fly it level on a "
+                   "propeller, and the vehicle has none");
+}
+
 void test_plan_should_reject_bad_files_naming_the_line(void)
 {
     static const struct {
@@ -126,6 +156,10 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 40",
          "line 15: SPEED_MPS 40 exceeds 2"},
         {"profile 0 1 0.454", "profile 0 1.5 0.454", "line 15: SHARE 1.5 outside [0, 1]"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 0.31 -3",
+         "line 15: THRUST_W -3 outside [0, 100]"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 0.31 3 4",
+         "line 15: 'profile' takes 5 to 6 fields, found 7"},
         {"state s2", "state s9", "line 17: state 's9' where the mission has 's2'"},
         {"sensor temp 60 15", "sensor oxygen 60 15", "line 21: sensor 'oxygen' is not logged"},
         {"sensor depth 60 0\nsensor temp", "sensor temp 60 15\nsensor depth",
@@ -235,6 +269,16 @@ void test_plan_should_be_held_to_its_missions_bounds(void)
     }
     /* a plan for no board names no board to compare: it flies on this one */
     CHECK_INT(gp_plan_read(text, none_variant("", ""), mission, NULL, &plan, error), 0);
+    /* on a hybrid, a thruster-assisted yo outruns the fastest glide, and a level profile
+     * (propelled) has no pitch or volume to hold to the glide's */
+    static gp_mission hybrid;
+    hybrid = *mission;
+    hybrid.unplanned_speed_mps = 0.45;
+    CHECK_INT(gp_plan_read(text, variant("profile 0 1 0.454 230 0.31",
+                                         "profile 0 1 0.454 230 0.6 4.5"),
+                           &hybrid, NULL, &plan, error), 0);
+    CHECK_INT(gp_plan_read(text, variant("profile 0 1 0.454 230 0.31", "profile 0 1 0 0 1.2"),
+                           &hybrid, NULL, &plan, error), 0);
 }
 
 /* `body` with its first `from` replaced by `to`, in place (`from` must be there). */
@@ -510,10 +554,11 @@ void test_signed_plan_should_have_a_well_formed_tail(void)
 
 /* ---- schedule ------------------------------------------------------------------ */
 
-static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL}, {GP_PROFILE_HOVER, 0, NULL}};
+static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL, 0.0},
+                                          {GP_PROFILE_HOVER, 0, NULL, 0.0}};
 static const uint8_t logged[] = {0, 1, 9, 12};  /* missiontime, depth, temp, oxygen */
 static const gp_state scheduled = {
-    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0, 0, 0, 0x1203,
+    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0, 0, 0, 0x1203, 0,
 };
 
 void test_schedule_without_a_plan_should_power_every_logged_sensor(void)

@@ -160,10 +160,10 @@ void test_runtime_should_resume_from_a_checkpoint_with_the_same_trace(void)
 static int always(const double *s, const double *v) { (void)s; (void)v; return 1; }
 static const gp_event call_b[] = {{always, NULL, GP_ACT_CALL, 1}};
 static const gp_event call_a[] = {{always, NULL, GP_ACT_CALL, 0}};
-static const gp_profile hover[] = {{GP_PROFILE_HOVER, 0, NULL}};
+static const gp_profile hover[] = {{GP_PROFILE_HOVER, 0, NULL, 0.0}};
 static const gp_state stacker_states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_b, 1, 0, 0, 0},
-    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_a, 1, 0, 0, 0},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_b, 1, 0, 0, 0, 0},
+    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_a, 1, 0, 0, 0, 0},
 };
 static const gp_mission stacker = {.name = "stacker", .hash = "", .states = stacker_states,
                                    .n_states = 2, .stack_depth = 1};

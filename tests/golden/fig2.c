@@ -40,7 +40,7 @@ static void state0_profile0_args(const double *s, const double *v, double *args)
 }
 
 static const gp_profile state0_profiles[1] = {
-    {GP_PROFILE_YO, 4, state0_profile0_args},
+    {GP_PROFILE_YO, 4, state0_profile0_args, 0.0},
 };
 
 static const double state0_route_points[1][2] = {
@@ -74,7 +74,7 @@ static void state1_profile0_args(const double *s, const double *v, double *args)
 }
 
 static const gp_profile state1_profiles[1] = {
-    {GP_PROFILE_THERMOTRACKYO, 6, state1_profile0_args},
+    {GP_PROFILE_THERMOTRACKYO, 6, state1_profile0_args, 0.0},
 };
 
 static const uint8_t state1_sensors[4] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH, GP_SENSOR_TEMP};
@@ -102,7 +102,7 @@ static void state2_profile0_args(const double *s, const double *v, double *args)
 }
 
 static const gp_profile state2_profiles[1] = {
-    {GP_PROFILE_YO, 4, state2_profile0_args},
+    {GP_PROFILE_YO, 4, state2_profile0_args, 0.0},
 };
 
 static const double state2_route_points[1][2] = {
@@ -146,6 +146,7 @@ static const gp_state states[3] = {
         .route = {GP_ROUTE_NAV, 1, 0.0, state0_route_points},
         .profiles = state0_profiles,
         .n_profiles = 1,
+        .unplanned_profile = 0,
         .sensors = state0_sensors,
         .n_sensors = 3,
         .sensor_mask = 0x00000007u,
@@ -157,6 +158,7 @@ static const gp_state states[3] = {
         .route = {GP_ROUTE_NOHEADING, 0, 0.0, NULL},
         .profiles = state1_profiles,
         .n_profiles = 1,
+        .unplanned_profile = 0,
         .sensors = state1_sensors,
         .n_sensors = 4,
         .sensor_mask = 0x00000207u,
@@ -168,6 +170,7 @@ static const gp_state states[3] = {
         .route = {GP_ROUTE_NAV, 1, 0.0, state2_route_points},
         .profiles = state2_profiles,
         .n_profiles = 1,
+        .unplanned_profile = 0,
         .sensors = state2_sensors,
         .n_sensors = 3,
         .sensor_mask = 0x00000007u,
@@ -197,6 +200,7 @@ const gp_mission gp_mission_table = {
     .own_read_mask = 0x00000000u,
     .default_ballast_cc = 233.0,
     .max_ballast_cc = 233.0,
+    .unplanned_speed_mps = 0.0,
     .reserve_j = 1170000.0,
     .envelope = {
         .max_depth_m = 100.0,
