@@ -197,20 +197,11 @@ class Hover:
         return args[0], 0.0, 0.0, False
 
 
-class Cruise:
-    """cruise(depth, speed): level at `depth` on the propeller (`propelled_speed`)."""
+class Cruise(Hover):
+    """cruise(depth, speed): level at `depth` on the propeller (`propelled_speed`); its
+    command is a hover's, at zero pitch and ballast."""
 
-    halfcycle = 0
     propelled = True
-
-    def __init__(self, depth_m: float, args: tuple[float, ...],
-                 altitude_m: float = math.nan) -> None:
-        pass
-
-    def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
-                ballast: float, altitude: float = math.nan
-                ) -> tuple[float, float, float, bool]:
-        return args[0], 0.0, 0.0, False
 
 
 class Altitude(Cruise):
