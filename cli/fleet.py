@@ -3,6 +3,7 @@
   fleet check FLEET                      diagnostics of a fleet file (exit 1: bad file)
   fleet plan FLEET [-o DIR] [--json]     lines to gliders, speeds, each glider's mission
   fleet sim FLEET [--plan DIR] -o DIR [--lose GLIDER@TIME] [--current N,E] [--workers K]
+            [--scheduler local|tcp://HOST:PORT]
   fleet montecarlo FLEET [--plan DIR] --scenarios N -o DIR [--lose GLIDER@TIME]
                    [--workers K] [--scheduler local|tcp://HOST:PORT]
 
@@ -70,9 +71,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         fly.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
                          help="worker processes (default: one per core; 1 flies in this "
                               "process)")
-        fly.add_argument("--scheduler", metavar="local|tcp://HOST:PORT",
-                         help="run on Dask distributed: a LocalCluster of --workers "
-                              "processes, or a running scheduler")
+        fly.add_argument("--scheduler", metavar="local|tcp://HOST:PORT", default="local",
+                         help="where the flights run, on Dask distributed: a LocalCluster "
+                              "of --workers processes (default), or a running scheduler")
         fly.add_argument("--json", action="store_true", help="print the summary as JSON")
         if name == "sim":
             fly.add_argument("--ocean", default=None,
@@ -261,8 +262,10 @@ def _sim_text(s: dict) -> str:
 
 def _montecarlo_text(s: dict) -> str:
     low, high = s["finish_interval"]
+    flown = f"{s['scenarios']} scenarios" + (f" flown of {s['requested']} asked (interrupted)"
+                                             if s["interrupted"] else "")
     lines = [f"{s['fleet']}: the whole survey finished in {s['finished']} of "
-             f"{s['scenarios']} scenarios: {100 * s['finish_probability']:.1f} % (95 % "
+             f"{flown}: {100 * s['finish_probability']:.1f} % (95 % "
              f"interval {100 * low:.1f}-{100 * high:.1f} %), planned at "
              f"{100 * s['planned_confidence']:.0f} %",
              f"  realised mapping error {s['mapping_error']['p05']:.3f} / "

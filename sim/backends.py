@@ -8,10 +8,12 @@ All three are driven through one `concurrent.futures` interface (`submit`, futur
 from __future__ import annotations
 
 import concurrent.futures as cf
+import logging
 import multiprocessing
 import os
 import signal
-from collections.abc import Iterator
+import threading
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 
 from gliderplan.contract import MAX_SCENARIOS, MAX_WORKERS
@@ -40,6 +42,21 @@ def _ignore_interrupt() -> None:
     """Workers leave Ctrl-C to the parent, which stops handing out work and keeps what
     finished (a worker killed mid-batch would lose it)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextmanager
+def _workers_ignore_interrupt() -> Iterator[None]:
+    """Processes started inside ignore Ctrl-C, as the pool's workers do: an ignored
+    signal stays ignored across exec (Dask spawns its workers), where a handler would not;
+    the parent stops the cluster itself. A Ctrl-C while the workers start is not seen."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 @contextmanager
@@ -77,9 +94,13 @@ def scenario_executor(workers: int, scheduler: str | None = None
             environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ"))
             environ.pop("MALLOC_TRIM_THRESHOLD_", None)
             with dask.config.set({"distributed.worker.profile.enabled": False,
-                                  "distributed.nanny.pre-spawn-environ": environ}):
+                                  "distributed.nanny.pre-spawn-environ": environ}), \
+                    _workers_ignore_interrupt():
+                # its own warnings (a worker stopped by Ctrl-C, a heartbeat lost under
+                # load) are not the run's: errors only
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
-                                       processes=True, dashboard_address=None)
+                                       processes=True, dashboard_address=None,
+                                       silence_logs=logging.ERROR)
             client = Client(cluster)
         else:
             client = Client(scheduler, timeout=10)
@@ -95,3 +116,22 @@ def scenario_executor(workers: int, scheduler: str | None = None
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def completed(executor: cf.Executor | None, work: Callable, tasks: Sequence[tuple]
+              ) -> Iterator[tuple[int, object]]:
+    """(index of the task, `work(*task)`) for each of `tasks` as it finishes: in this
+    process and in order without an executor, else in the order the workers finish them.
+    However the caller stops reading (Ctrl-C, an error), the tasks not started are
+    cancelled, so an interrupted run keeps what finished and hands out nothing more."""
+    if executor is None:
+        for index, task in enumerate(tasks):
+            yield index, work(*task)
+        return
+    futures = {executor.submit(work, *task): index for index, task in enumerate(tasks)}
+    try:
+        for future in cf.as_completed(futures):
+            yield futures[future], future.result()
+    finally:
+        for future in futures:
+            future.cancel()

@@ -7,8 +7,10 @@ finish, what map do the profiles flown make. `montecarlo_fleet` flies every glid
 scenarios with `sim.montecarlo`'s own scenario flights: all gliders of scenario i share
 its seed, so they fly the same ocean and current and draw the same battery share (and
 gliders of one preset the same model error). Work goes out through
-`sim.backends.scenario_executor`: this process, a process pool, or Dask (a LocalCluster
-or a scheduler's address): results depend on the seed only, never on the workers.
+`sim.backends.scenario_executor`, as `gliderplan montecarlo`'s does: by default on Dask,
+a LocalCluster of `workers` processes, or a running scheduler given by its address
+(`scheduler=None`: this process, or a process pool); results depend on the seed only,
+never on the workers nor where they run.
 
 A glider can be lost (`lose=(name, time)`): it flies until then. What the rest of the
 fleet can still cover is the fleet planned again from that moment, the survivors where
@@ -17,7 +19,6 @@ their plans had them and with what their batteries still hold (`replan_after_los
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import json
 import math
 import tempfile
@@ -129,7 +130,7 @@ def _fly_one(task: dict) -> dict:
 
 
 def fly_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, workers: int = 1,
-              scheduler: str | None = None, seed: int = 0, ocean: str | None = None,
+              scheduler: str | None = "local", seed: int = 0, ocean: str | None = None,
               current: tuple[float, float] = (0.0, 0.0), runtime: str = "python",
               lose: tuple[str, float] | None = None,
               progress: Progress | None = None) -> dict:
@@ -138,7 +139,7 @@ def fly_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, workers: int = 1,
     `ocean` as `run_mission`'s (default: uniform water, as the plans assume); `current`
     (north, east) [m/s] is the whole ocean's; each glider's sensor noise is
     seeded from `seed` and its place in the fleet. Returns fleet_sim.json's content."""
-    from gliderplan.sim.backends import scenario_executor
+    from gliderplan.sim.backends import completed, scenario_executor
 
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
@@ -158,18 +159,10 @@ def fly_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, workers: int = 1,
             "start_utc": _utc(fleet.start_epoch_s + spec.start_offset_s)})
     flights: dict[str, dict] = {}
     with scenario_executor(min(workers, len(tasks)), scheduler) as executor:
-        if executor is None:
-            for task in tasks:
-                flights[task["name"]] = _fly_one(task)
-                if progress:
-                    progress(len(flights), len(tasks))
-        else:
-            futures = [executor.submit(_fly_one, task) for task in tasks]
-            for future in cf.as_completed(futures):
-                flight = future.result()
-                flights[flight["name"]] = flight
-                if progress:
-                    progress(len(flights), len(tasks))
+        for _, flight in completed(executor, _fly_one, [(task,) for task in tasks]):
+            flights[flight["name"]] = flight
+            if progress:
+                progress(len(flights), len(tasks))
     outcomes = []
     for glider in stored.gliders:
         flight = flights[glider.name]
@@ -263,10 +256,12 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     the loss count). The re-plan draws its scenarios from `scenario_file` (as
     `plan_fleet`)."""
     from gliderplan.language.ir import Battery
-    from gliderplan.planner.fleet import UnreachableGliders, plan_fleet
+    from gliderplan.planner.fleet import UnreachableGliders, coverage, plan_fleet
     from gliderplan.planner.fleet_mapping import combined, evaluation_grid, mapping_error
 
     name, at = lose
+    # until when each glider flies its own plan: the lost one until the loss
+    until = {g.name: at if g.name == name else fleet.period_s for g in stored.gliders}
     spacing = sample_spacing(fleet)
     grid = evaluation_grid(fleet)
     before, after = [], {}  # each glider's samples up to the loss; the others' after it
@@ -299,6 +294,8 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     visits = {part: [lost_track.start_offset_s + float(lost_track.time_at(d)) for d in seen]
               for part, seen in lost_track.line_visits.items()}
     result = {"glider": name, "at_s": at, "mapping_error_without_replan": untouched,
+              "coverage_without_replan": coverage(fleet, [(g.track, until[g.name])
+                                                          for g in stored.gliders]),
               "lines": sorted(visits),
               "lines_swept_before": sorted(p for p, t in visits.items() if t and t[0] <= at),
               "survivors": [s.name for s in survivors]}
@@ -335,14 +332,20 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
              "lines once")
     if again is None:
         result["replan"] = None
-        result["summary"] = (f"{swept}; they stay unswept after the loss (mapping error "
-                             f"{untouched:.3f}), and the rest cannot take them over: {reason}")
+        result["summary"] = (f"{swept}; they stay unswept after the loss (the rest flying "
+                             f"their plans cover {100 * result['coverage_without_replan']:.0f} "
+                             f"% of the lines' length, mapping error {untouched:.3f}), and "
+                             f"cannot take them over: {reason}")
         return result
     later = [glider.track.samples(spacing) for glider in again.gliders]
     later += [after[k] for k in kept]
     replanned, _ = mapping_error(combined(before + later), grid, fleet.field)
+    covered = coverage(fleet, [(g.track, at if g.name not in kept else until[g.name])
+                               for g in stored.gliders]
+                       + [(g.track, fleet.period_s) for g in again.gliders])
     result["replan"] = {
         "mapping_error": replanned,
+        "coverage": covered,
         "sweep_required": not finished,
         "confidence": asked,
         "confidence_lower_bound": again.validation.lower_bound,
@@ -354,17 +357,19 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     aside = f" ({', '.join(kept)} cannot reach another line in time and keep their plan)" \
         if kept else ""
     result["summary"] = (f"{swept}{', so the survey is finished' if finished else ''}; left as "
-                         f"planned, its lines go unswept from then on (mapping error "
-                         f"{untouched:.3f} over the period); planned again from then, "
-                         f"{len(again.gliders)} others share all the lines and {promise} "
-                         f"(mapping error {replanned:.3f}){aside}")
+                         f"planned, its lines go unswept from then on (the rest flying "
+                         f"their plans cover {100 * result['coverage_without_replan']:.0f} % "
+                         f"of the lines' length, mapping error {untouched:.3f} over the "
+                         f"period); planned again from then, {len(again.gliders)} others "
+                         f"share all the lines and {promise} (coverage {100 * covered:.0f} %, "
+                         f"mapping error {replanned:.3f}){aside}")
     return result
 
 
 # ---- Monte Carlo ---------------------------------------------------------------------------
 
 def montecarlo_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, scenarios: int,
-                     workers: int = 1, scheduler: str | None = None, seed: int = 0,
+                     workers: int = 1, scheduler: str | None = "local", seed: int = 0,
                      scenario_file=None, lose: tuple[str, float] | None = None,
                      progress: Progress | None = None) -> dict:
     """Fly every glider in `scenarios` scenarios (`gliderplan fleet montecarlo`); write
@@ -376,7 +381,7 @@ def montecarlo_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, scenarios:
     from gliderplan.planner.planfile import load_plan
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import montecarlo
-    from gliderplan.sim.backends import check_run_size, scenario_executor
+    from gliderplan.sim.backends import check_run_size, completed, scenario_executor
     from gliderplan.sim.scenarios import read_spec
 
     check_run_size(scenarios, workers)
@@ -404,25 +409,12 @@ def montecarlo_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, scenarios:
     total = len(jobs) * scenarios
     with scenario_executor(workers, scheduler) as executor:
         try:
-            if executor is None:
-                for name, batch in work:
-                    for row in montecarlo.run_batch(jobs[name], batch):
-                        rows[name][row["scenario"]] = row
-                    if progress:
-                        progress(sum(map(len, rows.values())), total)
-            else:
-                futures = {executor.submit(montecarlo.run_batch, jobs[name], batch): name
-                           for name, batch in work}
-                try:
-                    for future in cf.as_completed(futures):
-                        for row in future.result():
-                            rows[futures[future]][row["scenario"]] = row
-                        if progress:
-                            progress(sum(map(len, rows.values())), total)
-                except KeyboardInterrupt:
-                    for future in futures:
-                        future.cancel()
-                    raise
+            for index, flown in completed(executor, montecarlo.run_batch,
+                                          [(jobs[name], batch) for name, batch in work]):
+                for row in flown:
+                    rows[work[index][0]][row["scenario"]] = row
+                if progress:
+                    progress(sum(map(len, rows.values())), total)
         except KeyboardInterrupt:
             interrupted = True
     complete = sorted(set.intersection(*(set(r) for r in rows.values())))

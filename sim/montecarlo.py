@@ -29,6 +29,7 @@ from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.sim.backends import completed
 from gliderplan.sim.energy import RunEnergy, account, check_flight
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig, RunRecord
 from gliderplan.sim.scenarios import ScenarioSpec, draw_scenario
@@ -228,28 +229,18 @@ def run_montecarlo(job: Job, count: int, executor: cf.Executor | None = None, wo
     start = time.perf_counter()
     rows: dict[int, dict] = {}
     interrupted = False
-    futures: set[cf.Future] = set()
     try:
         t0 = time.perf_counter()
         rows[0] = fly_scenario(job, 0)
         if progress:
             progress(1, count)
         plan = batches(count, time.perf_counter() - t0, workers)
-        if executor is None:
-            for batch in plan:
-                rows.update((r["scenario"], r) for r in run_batch(job, batch))
-                if progress:
-                    progress(len(rows), count)
-        else:
-            futures = {executor.submit(run_batch, job, batch) for batch in plan}
-            for future in cf.as_completed(futures):
-                rows.update((r["scenario"], r) for r in future.result())
-                if progress:
-                    progress(len(rows), count)
+        for _, flown in completed(executor, run_batch, [(job, batch) for batch in plan]):
+            rows.update((r["scenario"], r) for r in flown)
+            if progress:
+                progress(len(rows), count)
     except KeyboardInterrupt:
         interrupted = True
-        for future in futures:
-            future.cancel()
     ordered = [rows[i] for i in sorted(rows)]
     return MonteCarloResult(ordered, count, interrupted, time.perf_counter() - start)
 
