@@ -69,8 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                          help="the glider is lost at TIME after the survey's start (e.g. "
                               "ru29@3d); the report says what the rest can still cover")
         fly.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
-                         help="worker processes (default: one per core; 1 flies in this "
-                              "process)")
+                         help="the LocalCluster's worker processes (default: one per core)")
         fly.add_argument("--scheduler", metavar="local|tcp://HOST:PORT", default="local",
                          help="where the flights run, on Dask distributed: a LocalCluster "
                               "of --workers processes (default), or a running scheduler")

@@ -13,6 +13,7 @@ import multiprocessing
 import os
 import signal
 import threading
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 
@@ -95,9 +96,11 @@ def scenario_executor(workers: int, scheduler: str | None = None
             environ.pop("MALLOC_TRIM_THRESHOLD_", None)
             with dask.config.set({"distributed.worker.profile.enabled": False,
                                   "distributed.nanny.pre-spawn-environ": environ}), \
-                    _workers_ignore_interrupt():
+                    _workers_ignore_interrupt(), warnings.catch_warnings():
                 # its own warnings (a worker stopped by Ctrl-C, a heartbeat lost under
-                # load) are not the run's: errors only
+                # load, another cluster's port taken: its HTTP server moves) are not the
+                # run's: errors only
+                warnings.filterwarnings("ignore", message="Port .* is already in use")
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                                        processes=True, dashboard_address=None,
                                        silence_logs=logging.ERROR)

@@ -260,6 +260,8 @@ def test_fleet_montecarlo_json_gives_the_keys_tools_read(planned, tmp_path, caps
     (["--lose", "zulu@1d"], "--lose zulu@1d: expected GLIDER@TIME"),
     (["--lose", "alpha@9d"], "--lose alpha@9d: alpha flies from 0 d to 2 d"),
     (["--current", "north"], "--current 'north': expected NORTH,EAST"),
+    (["--scheduler", "nowhere"], "--scheduler nowhere: expected local or tcp://HOST:PORT"),
+    (["--scheduler", "tcp://127.0.0.1:9"], "--scheduler tcp://127.0.0.1:9: cannot reach it"),
 ])
 def test_bad_options_are_bad_usage(planned, tmp_path, capsys, argv, message):
     _, stored = planned
