@@ -324,6 +324,10 @@ SBD_MO_SHORT_BYTES = 340  # [bytes] of one short message up, glider to shore
 SBD_MT_SHORT_BYTES = 270  # [bytes] of one short message down, shore to glider
 COMMAND_MAX_SIZE = 46  # [bytes] of a COMMAND payload that carries every field
 BAUD = 115200  # 8N1: 10 bits per byte on the line
+# [ms] a frame unanswered this long is sent again (science computer's frames, runtime's HELLO)
+RETRANSMIT_MS = 200
+# [s] the watchdog: the runtime releases the glider after this long without a valid frame
+LINK_TIMEOUT_S = 10.0
 
 
 class MessageType(IntEnum):

@@ -40,7 +40,7 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("the serial link (docs/protocol.md)", (
         "PROTOCOL_VERSION", "MAX_PAYLOAD", "MAX_WIRE", "PLAN_PIECE", "MAX_LINK_PLAN",
         "SBD_MT_MESSAGE_BYTES", "SBD_MO_SHORT_BYTES", "SBD_MT_SHORT_BYTES",
-        "COMMAND_MAX_SIZE", "NO_STATE")),
+        "COMMAND_MAX_SIZE", "NO_STATE", "BAUD", "RETRANSMIT_MS", "LINK_TIMEOUT_S")),
 )
 LINE_LENGTH = 100
 HEX = frozenset({"NO_STATE"})  # byte values written in hex, as docs/protocol.md has them

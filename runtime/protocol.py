@@ -32,6 +32,7 @@ from gliderplan.contract import (
     N_SENSORS,
     PLAN_PIECE,
     PROTOCOL_VERSION,
+    RETRANSMIT_MS,
     SENSORS_MASK,
     SENSORS_RESYNC,
     CommandField,
@@ -622,7 +623,8 @@ class Link:
     does not hold it sends the tick's SENSORS again asking for a whole COMMAND (resync).
     """
 
-    def __init__(self, port: Port, retransmit_s: float = 0.2, max_retries: int = 25) -> None:
+    def __init__(self, port: Port, retransmit_s: float = RETRANSMIT_MS / 1000,
+                 max_retries: int = 25) -> None:
         self.port = port
         self.retransmit_s = retransmit_s
         self.max_retries = max_retries

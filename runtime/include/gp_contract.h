@@ -85,6 +85,11 @@
 #define GP_SBD_MT_SHORT_BYTES 270  /**< [bytes] of one short message down, shore to glider */
 #define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
+#define GP_BAUD 115200  /**< 8N1: 10 bits per byte on the line */
+/** [ms] a frame unanswered this long is sent again (science computer's frames, runtime's HELLO) */
+#define GP_RETRANSMIT_MS 200
+/** [s] the watchdog: the runtime releases the glider after this long without a valid frame */
+#define GP_LINK_TIMEOUT_S 10.0
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
 
