@@ -43,7 +43,6 @@ from gliderplan.contract import (
 
 HEADER = struct.Struct("<BBBBH")  # version, type, seq, ack, length
 READ_CHUNK = 4096  # [bytes] taken from the port at once: whatever has arrived
-MAX_PACKET = HEADER.size + MAX_PAYLOAD + 2  # 248 bytes decoded
 
 
 # ---- errors ------------------------------------------------------------------------

@@ -77,12 +77,6 @@
 #define GP_MAX_PAYLOAD 240  /**< [bytes] of one frame's payload */
 #define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
-/** [bytes] of a plan sent over the link (PLAN's `total` is a u16) */
-#define GP_MAX_LINK_PLAN 65535
-/** [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes) */
-#define GP_SBD_MT_MESSAGE_BYTES 1890
-#define GP_SBD_MO_SHORT_BYTES 340  /**< [bytes] of one short message up, glider to shore */
-#define GP_SBD_MT_SHORT_BYTES 270  /**< [bytes] of one short message down, shore to glider */
 #define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
 #define GP_BAUD 115200  /**< 8N1: 10 bits per byte on the line */
