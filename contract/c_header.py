@@ -39,7 +39,8 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (
         "PROTOCOL_VERSION", "MAX_PAYLOAD", "MAX_WIRE", "PLAN_PIECE", "COMMAND_MAX_SIZE",
-        "NO_STATE", "BAUD", "RETRANSMIT_MS", "LINK_TIMEOUT_S")),
+        "MISSION_HASH_BYTES", "HELLO_FIXED_BYTES", "NO_STATE", "BAUD", "RETRANSMIT_MS",
+        "LINK_TIMEOUT_S")),
 )
 LINE_LENGTH = 100
 HEX = frozenset({"NO_STATE"})  # byte values written in hex, as docs/protocol.md has them

@@ -78,6 +78,10 @@
 #define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
 #define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
+/** [bytes] of HELLO's mission hash (raw SHA-256 of the mission) */
+#define GP_MISSION_HASH_BYTES 32
+/** [bytes] of HELLO before the mission's name: protocol, n_sensors, read_mask, hash, name_len */
+#define GP_HELLO_FIXED_BYTES 39
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
 #define GP_BAUD 115200  /**< 8N1: 10 bits per byte on the line */
 /** [ms] a frame unanswered this long is sent again (science computer's frames, runtime's HELLO) */
