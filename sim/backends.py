@@ -97,13 +97,13 @@ def scenario_executor(workers: int, scheduler: str | None = None
             with dask.config.set({"distributed.worker.profile.enabled": False,
                                   "distributed.nanny.pre-spawn-environ": environ}), \
                     _workers_ignore_interrupt(), warnings.catch_warnings():
-                # its own warnings (a worker stopped by Ctrl-C, a heartbeat lost under
-                # load, another cluster's port taken: its HTTP server moves) are not the
-                # run's: errors only
+                # What the cluster logs of itself (a heartbeat lost as it closes under
+                # load, another cluster's port taken: its HTTP server moves) is not the
+                # run's: a task's error reaches the caller through its future.
                 warnings.filterwarnings("ignore", message="Port .* is already in use")
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                                        processes=True, dashboard_address=None,
-                                       silence_logs=logging.ERROR)
+                                       silence_logs=logging.CRITICAL)
             client = Client(cluster)
         else:
             client = Client(scheduler, timeout=10)
