@@ -9,6 +9,9 @@ from the run's total: exit status 3, the run spent more than the plan's budget (
 violation); "over prediction", it spent more than the plan predicted by more than the 5 %
 tolerance but kept its budget (exit 0, or 4 with --strict-prediction); the states that
 overran their own prediction are listed below it, with the component responsible.
+RUNDIR is written whole, replacing a previous run there (a folder holding other files is
+refused without --force). Ctrl-C (or SIGTERM) in flight writes the part flown, marked
+partial (summary.json: complete false), and exits 130 (143).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import math
 import re
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission, seed
+from gliderplan.cli.common import add_force_argument, add_mission_argument, load_mission, seed
 from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
@@ -100,7 +103,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help="print the run's summary (summary.json) and its files as JSON")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
-                        help="directory for the run's files")
+                        help="directory for the run's files (written whole: it replaces "
+                             "a previous run there)")
+    add_force_argument(parser)
 
 
 def _current(text: str):
@@ -132,7 +137,8 @@ def run(args: argparse.Namespace) -> int:
             noise=args.noise, tracker=args.tracker, current=_current(args.current),
             seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=args.start,
             netcdf=args.netcdf, progress=progress, key_path=args.key,
-            state_dir=args.state_dir, faults=args.faults, floor=args.floor)
+            state_dir=args.state_dir, faults=args.faults, floor=args.floor, force=args.force,
+            mission_path=args.mission)
     finally:
         if progress is not None:
             progress.finish()
@@ -157,8 +163,13 @@ def run(args: argparse.Namespace) -> int:
     for cause in check.causes:
         print(f"    {cause}", file=sys.stderr)
     if result.interrupted:
-        print(f"  interrupted: the outputs in {args.output} cover the part flown",
+        print(f"  interrupted: the outputs in {args.output} cover the part flown, "
+              f"{_time_text(record.columns['time_s'][-1])} (summary.json: complete false)",
               file=sys.stderr)
+        code = ExitCode.INTERRUPTED
+    elif result.stopped:
+        print(f"  interrupted once the flight was over: the outputs in {args.output} hold "
+              "all of it", file=sys.stderr)
         code = ExitCode.INTERRUPTED
     elif check.verdict == "violation":
         code = ExitCode.OVER_BUDGET

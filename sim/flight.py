@@ -25,8 +25,9 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         progress: Callable[[float, float], None] | None = None,
         tick_by_tick: bool = False, key_path: str | None = None,
         state_dir: str | Path | None = None,
-        faults: FaultSpec | None = None) -> RunRecord:
-    """Fly the mission until it exits or `config.duration_s` ends.
+        faults: FaultSpec | None = None, keep_interrupted: bool = False) -> RunRecord:
+    """Fly the mission until it exits or `config.duration_s` ends; KeyboardInterrupt
+    goes through, but with `keep_interrupted` it ends the flight (sim.loop.simulate).
 
     The Python executor flies runs of ticks at once where nothing can happen between them
     (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
@@ -48,12 +49,14 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
                                  vehicle.max_ballast_cc)
         if tick_by_tick:
-            record = simulate(mission, executor, science, config, progress, gauge=gauge)
+            record = simulate(mission, executor, science, config, progress, gauge=gauge,
+                              keep_interrupted=keep_interrupted)
         else:
             from gliderplan.sim.fast import FastForward
 
             record = simulate(mission, executor, science, config, progress,
-                              FastForward(mission, executor, science), gauge)
+                              FastForward(mission, executor, science), gauge,
+                              keep_interrupted)
         record.entry_variables = executor.entry_variables
         record.events_fired = executor.event_count
         return record
@@ -76,7 +79,8 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)
     try:
-        record = simulate(mission, c_runtime, science, config, progress, gauge=gauge)
+        record = simulate(mission, c_runtime, science, config, progress, gauge=gauge,
+                          keep_interrupted=keep_interrupted)
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended

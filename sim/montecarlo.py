@@ -32,6 +32,7 @@ BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending i
 BATCHES_PER_WORKER = 4  # at least this many batches per worker, so the ends even out
 CONFIDENCE_Z = 1.959963984540054  # 95 % two-sided
 QUANTILES = (0.05, 0.5, 0.95)
+STOP_POLL_S = 0.2  # [s] how often a run on workers looks for a stop signal
 
 
 @dataclass(frozen=True)
@@ -177,32 +178,52 @@ def batches(count: int, first_s: float, workers: int) -> list[list[int]]:
 def run_montecarlo(job: Job, count: int, executor: cf.Executor | None = None, workers: int = 1,
                    progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
     """Fly `count` scenarios: in this process without an executor, else batches through
-    `executor` (with `workers` workers). Ctrl-C stops it and keeps what finished."""
+    `executor` (with `workers` workers). Ctrl-C or SIGTERM stops it at once (workers and
+    all: sim.backends.halt) and keeps the scenarios that finished, never one cut short;
+    the result says it was interrupted."""
+    from gliderplan.contract import interrupts
+    from gliderplan.sim.backends import halt
+
     start = time.perf_counter()
     rows: dict[int, dict] = {}
     interrupted = False
-    futures: set[cf.Future] = set()
     try:
         t0 = time.perf_counter()
         rows[0] = fly_scenario(job, 0)
         if progress:
             progress(1, count)
         plan = batches(count, time.perf_counter() - t0, workers)
-        if executor is None:
+        if executor is None:  # scenario by scenario: a stop keeps each one that finished
             for batch in plan:
-                rows.update((r["scenario"], r) for r in run_batch(job, batch))
+                for index in batch:
+                    interrupts.raise_if_stopped()
+                    rows[index] = fly_scenario(job, index)
                 if progress:
                     progress(len(rows), count)
         else:
-            futures = {executor.submit(run_batch, job, batch) for batch in plan}
-            for future in cf.as_completed(futures):
-                rows.update((r["scenario"], r) for r in future.result())
-                if progress:
+            # a stop while a pool forks its workers waits until they are forked (raised
+            # in an at-fork hook, it would be lost)
+            with interrupts.deferred(reraise=True):
+                pending = {executor.submit(run_batch, job, batch) for batch in plan}
+            while pending:
+                # looked at every STOP_POLL_S: a stop that a scheduler's code swallowed
+                # on the main thread still ends the run at once
+                done, pending = cf.wait(pending, STOP_POLL_S, cf.FIRST_COMPLETED)
+                interrupts.raise_if_stopped()
+                for future in done:
+                    rows.update((r["scenario"], r) for r in future.result())
+                if done and progress:
                     progress(len(rows), count)
+        interrupts.raise_if_stopped()
     except KeyboardInterrupt:
         interrupted = True
-        for future in futures:
-            future.cancel()
+        halt(executor)  # what was not handed out is cancelled, workers and all
+    # a stop that something on the way swallowed still stops the run; a scenario whose
+    # flight says it was interrupted is no scenario flown
+    cut = [i for i, row in rows.items() if row["ended"] == "interrupted"]
+    interrupted = interrupted or interrupts.stopped() or bool(cut)
+    for i in cut:
+        del rows[i]
     ordered = [rows[i] for i in sorted(rows)]
     return MonteCarloResult(ordered, count, interrupted, time.perf_counter() - start)
 
@@ -221,11 +242,15 @@ def wilson_interval(held: int, n: int, z: float = CONFIDENCE_Z) -> tuple[float, 
 
 def summary(result: MonteCarloResult, meta: dict) -> dict:
     """Probability that the budget holds with its 95 % interval, energy and duration
-    quantiles, how the runs ended."""
+    quantiles, how the runs ended. An interrupted run gives no probability (null): the
+    scenarios that finished before the stop are not the sample asked for (the moment of
+    a stop is chosen watching the run, and in a pool the short scenarios finish first);
+    `complete` false, `scenarios` of `requested` say how far it got."""
     table = result.table()
     n = len(table)
     held = int(table["held"].sum()) if n else 0
     low, high = wilson_interval(held, n)
+    complete = not result.interrupted
 
     def quantiles(column: str) -> dict[str, float]:
         if not n:
@@ -237,12 +262,13 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
     exhausted = table["exhausted_s"].dropna() if n else table
     return {
         **meta,
+        "complete": complete,
         "scenarios": n,
         "requested": result.requested,
         "interrupted": result.interrupted,
         "budget_held": held,
-        "probability_budget_holds": held / n if n else None,
-        "probability_interval_95": [low, high],
+        "probability_budget_holds": held / n if n and complete else None,
+        "probability_interval_95": [low, high] if complete else None,
         "energy_j": quantiles("energy_j"),
         "duration_s": quantiles("duration_s"),
         # scenarios whose energy passed the plan's budget times the usable share of the
@@ -269,26 +295,34 @@ class MonteCarloRun:
     result: MonteCarloResult
     summary: dict  # summary.json: the probability that the budget holds, quantiles, ...
     files: tuple  # of pathlib.Path: MONTECARLO_FILES in the output directory
+    # a stop signal arrived once every scenario had flown, while they were written: the
+    # files hold the whole run, and the command stops (exit 130 or 143) all the same
+    stopped: bool = False
 
 
 def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int,
                        plan_path=None, workers: int = 1, scheduler: str | None = None,
                        seed: int = 0, scenario_file=None, duration_s: float | None = None,
                        tracker: str = "robust",
-                       progress: Callable[[int, int], None] | None = None) -> MonteCarloRun:
+                       progress: Callable[[int, int], None] | None = None,
+                       force: bool = False, mission_path=None) -> MonteCarloRun:
     """Fly `mission` (and the plan in `plan_path`: its budget and prediction; without one
     every sensor a state logs is on and the budget is the mission's usable battery) in
     `scenarios` scenarios drawn from `scenario_file` (default: the shipped one) from
     `seed`, on `workers` processes or the Dask `scheduler` ("local" or "tcp://HOST:PORT"),
     each run ending at `duration_s` [s] (default: the mission's horizon, else 30 days);
-    write MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`).
-    Raises KeyboardInterrupt only if no scenario finished: an interrupted run keeps and
-    writes those that did (`MonteCarloRun.result.interrupted`)."""
+    write MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`), a
+    folder written whole (contract.files.output_folder: `force` replaces one holding other
+    files than a gliderplan run's; `mission_path`, the mission's file, is refused inside).
+    Raises KeyboardInterrupt if no scenario finished, or on a second stop while the files
+    are written: an interrupted run keeps and writes those that did, marked partial and
+    with no probability (`MonteCarloRun.result.interrupted`, summary.json's `complete`)."""
     import json
     from pathlib import Path
 
+    from gliderplan.contract import interrupts
     from gliderplan.contract.errors import UsageError
-    from gliderplan.contract.files import write_atomically
+    from gliderplan.contract.files import output_folder
     from gliderplan.planner.planfile import load_plan
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import plots
@@ -311,29 +345,39 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
         mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
     job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
               robust_tracker=tracker == "robust")
-    with scenario_executor(workers, scheduler) as executor:
-        result = run_montecarlo(job, scenarios, executor, workers, progress)
-    if not result.rows:
-        raise KeyboardInterrupt  # nothing finished, nothing to write
-    import pyarrow as pa
+    # Stopped while scenarios fly, the run keeps those that finished; once they are all
+    # flown a stop waits while they are written (a second one abandons the writing and
+    # leaves the folder's previous run).
+    with interrupts.deferred(armed=False) as writing, \
+            output_folder(out, command="montecarlo", force=force, recognised=MONTECARLO_FILES,
+                          inputs=(mission_path, plan_path, scenario_file)) as folder:
+        with scenario_executor(workers, scheduler) as executor:
+            result = run_montecarlo(job, scenarios, executor, workers, progress)
+            writing.arm()
+        if not result.rows:
+            raise KeyboardInterrupt  # nothing finished, nothing to write
+        import pyarrow as pa
 
-    table = result.table()
-    meta = {"mission": mission.name, "mission_hash": mission.hash,
-            "plan": None if plan_path is None else str(plan_path),
-            "scenario_file": spec.source, "seed": seed, "run_limit_s": duration,
-            "budget_j": budget_j, "workers": workers,
-            "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
-            "scheduler": scheduler or ("local pool" if workers > 1 else "none")}
-    stated = summary(result, meta)
-    contents = {
-        "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table, preserve_index=False)),
-        "summary.json": json.dumps(stated, indent=2) + "\n",
-        "energy.png": plots.energy_histogram_png(
-            table["energy_j"].to_numpy(float), table["budget_j"].to_numpy(float), budget_j,
-            stated["probability_budget_holds"]),
-        "exhaustion.png": plots.exhaustion_png(
-            table["exhausted_s"].to_numpy(float), table["duration_s"].to_numpy(float)),
-    }
-    for name in MONTECARLO_FILES:
-        write_atomically(out / name, contents[name])
-    return MonteCarloRun(result, stated, tuple(out / name for name in MONTECARLO_FILES))
+        table = result.table()
+        meta = {"mission": mission.name, "mission_hash": mission.hash,
+                "plan": None if plan_path is None else str(plan_path),
+                "scenario_file": spec.source, "seed": seed, "run_limit_s": duration,
+                "budget_j": budget_j, "workers": workers,
+                "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
+                "scheduler": scheduler or ("local pool" if workers > 1 else "none")}
+        stated = summary(result, meta)
+        contents = {
+            "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table,
+                                                                    preserve_index=False)),
+            "summary.json": json.dumps(stated, indent=2) + "\n",
+            "energy.png": plots.energy_histogram_png(
+                table["energy_j"].to_numpy(float), table["budget_j"].to_numpy(float),
+                budget_j, stated["probability_budget_holds"], requested=scenarios),
+            "exhaustion.png": plots.exhaustion_png(
+                table["exhausted_s"].to_numpy(float), table["duration_s"].to_numpy(float)),
+        }
+        for name in MONTECARLO_FILES:
+            folder.write(name, contents[name])
+        folder.complete = not result.interrupted
+    return MonteCarloRun(result, stated, tuple(folder.final(n) for n in MONTECARLO_FILES),
+                         stopped=writing.requested)
