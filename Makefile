@@ -34,7 +34,8 @@ lock:
 # The whole pipeline on the built-in examples: check, plan under the battery budget,
 # compile mission and plan to C, fly them on the simulated glider over a
 # pseudo-terminal, sweep the survey's quality against its budget, forecast a month's
-# survey by device, and write the tradeoff report of the annotated Fig. 2 mission.
+# survey by device, and write the tradeoff report of the annotated Fig. 2 mission; then
+# plan, fly and report the example fleet of five gliders.
 DEMO := out/demo
 GP := $(BIN)/gliderplan
 demo: $(STAMP)
@@ -50,6 +51,14 @@ demo: $(STAMP)
 	$(GP) report examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan --run $(DEMO)/run \
 		-o $(DEMO)/report
 	@echo "report of the annotated Fig. 2 mission (open it in a browser): $(DEMO)/report/report.html"
+	$(GP) fleet plan examples/shelf.fleet -o $(DEMO)/fleet/plan
+	$(GP) fleet sim examples/shelf.fleet --plan $(DEMO)/fleet/plan -o $(DEMO)/fleet/sim \
+		--lose ru28@4d
+	$(GP) fleet montecarlo examples/shelf.fleet --plan $(DEMO)/fleet/plan --scenarios 10 \
+		-o $(DEMO)/fleet/montecarlo
+	@echo "fleet of five gliders on the shelf: plan, missions and map in $(DEMO)/fleet/plan;"
+	@echo "      one flight per glider (and ru28 lost after 4 d) in $(DEMO)/fleet/sim;"
+	@echo "      10 scenarios in $(DEMO)/fleet/montecarlo; each has its fleet.html page"
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

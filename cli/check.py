@@ -30,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     checked = []
     for path in args.missions:
         try:
-            result = check_file(path, args.max_stack)
+            result = check_file(path, args.max_stack, model_files=True)
         except GliderplanError as err:  # an unreadable file: say so, check the others
             code = max(code, report("check", err))
             checked.append({"file": path, "ok": False, "exit_code": int(err.exit_code),

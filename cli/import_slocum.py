@@ -39,8 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"an extra board that runs the mission (default {defaults.computer}"
                              ": the glider's own computers)")
     parser.add_argument("--battery", metavar="SPEC",
-                        help=f"its battery as a mission writes it (default '{defaults.battery}',"
-                             " the Slocum alkaline pack)")
+                        help="its battery as a mission writes it (default "
+                             f"'{defaults.battery.replace('%', '%%')}', the Slocum alkaline "
+                             "pack)")  # argparse formats help with %
     parser.add_argument("--allow-missing-mafiles", action="store_true",
                         help="leave out a behavior whose .ma file is missing (a warning) "
                              "instead of stopping")

@@ -7,7 +7,9 @@
   plan MISSION --sweep N -o DIR     pareto.csv, computers.csv, batteries.csv, pareto.png
 
 With -o the plan file (docs/plan-format.md) is written to PLANFILE and its report to
-PLANFILE.json; with --sign KEYFILE the plan file is signed for the vehicle holding that key
+PLANFILE.json (and where it flies propelled, its energy per km against speed with the
+chosen speed to PLANFILE.speed.png); with --sign KEYFILE the plan file is signed for the
+vehicle holding that key
 (docs/plan-format.md, "Signed plans"). The report gives the plan's upload size in bytes. A
 budget below what the mission needs exits 1 with the minimum energy and the largest
 consumers.
@@ -130,7 +132,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(report_text(result), end="")
         if args.output:
-            print(f"wrote {args.output} and {args.output}.json")
+            written = [f"{args.output}.json", f"{args.output}.speed.png"]
+            print(f"wrote {args.output} and " + " and ".join(
+                w for w in written if os.path.exists(w)))
     return 0
 
 

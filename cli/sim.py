@@ -21,7 +21,17 @@ import math
 import re
 import sys
 
-from gliderplan.cli.common import add_force_argument, add_mission_argument, load_mission, seed
+from gliderplan.cli.common import (
+    add_at_sea_arguments,
+    add_force_argument,
+    add_mission_argument,
+    add_start_argument,
+    load_mission,
+    parse_start,
+    refuse_unpaired,
+    replan_confidence,
+    seed,
+)
 from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
 from gliderplan.contract.units import UNITS
@@ -29,6 +39,7 @@ from gliderplan.contract.units import UNITS
 ORDER = 60
 _DURATION = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]+)\s*$")
 LONG_RUN_TICKS = 100_000  # progress on stderr for runs longer than this
+SHOWN_SURFACINGS = 50  # surfacings printed; summary.json holds them all
 
 
 def parse_duration_s(text: str, option: str = "--duration") -> float:
@@ -65,8 +76,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "glider flies its in-situ density, ballasted for it as "
                              "forecast does (default: bench's temperatures in uniform water "
                              "of the vehicle's reference density)")
-    parser.add_argument("--floor", metavar="DEPTH_M",
-                        help="a flat sea floor at DEPTH_M metres: the altimeter reads the "
+    parser.add_argument("--floor", metavar="DEPTH_M|FILE.nc",
+                        help="a flat sea floor at DEPTH_M metres, or a bathymetry grid "
+                             "(NetCDF: GEBCO elevation, or a depth): the altimeter reads the "
                              "height above it and the glider stops there (default: none, "
                              "the altimeter out of range; with --ocean LOGS the floor the "
                              "glider's flight logs saw)")
@@ -75,17 +87,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "fluctuations of the paper's first sea trial)")
     parser.add_argument("--tracker", choices=("robust", "naive"), default="robust",
                         help="thermocline detection (default robust; naive: the paper's first)")
-    parser.add_argument("--current", metavar="N,E", default="0,0",
-                        help="depth-averaged current toward north and east [m/s]")
+    add_at_sea_arguments(parser, "none", "the flown track, the surfacings, the waypoints "
+                                         "and the current field")
+    parser.add_argument("--current", dest="currents", help=argparse.SUPPRESS)  # its old name
     parser.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     parser.add_argument("--tick", type=float, default=TICK_S, metavar="S",
                         help=f"sensor-array period [s] (default {TICK_S:g})")
     parser.add_argument("--duration", metavar="T",
                         help="end the run here if the mission has not exited (3600s, 90min, "
                              "6h, 30d; default: the mission's horizon, else 30d)")
-    parser.add_argument("--start", metavar="UTC",
-                        help="UTC time the mission starts, ISO 8601 (default: the first "
-                             "sample of replayed logs, else 2000-01-01T00:00:00Z)")
+    add_start_argument(parser, "500 m south of the mission's first waypoint, at the first "
+                               "sample of replayed logs, else 2000-01-01T00:00:00Z")
     parser.add_argument("--netcdf", action="store_true",
                         help="also write RUNDIR/trajectory.nc (CF trajectory, IOOS Glider "
                              "DAC names, ACDD attributes); more formats: gliderplan export")
@@ -102,29 +114,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "than its tolerance (5 %%), although within its budget")
     parser.add_argument("--json", action="store_true",
                         help="print the run's summary (summary.json) and its files as JSON")
+    parser.add_argument("--replan-every", choices=("surfacing",), metavar="surfacing",
+                        help="put the shore in the loop: at each surfacing the glider reports, "
+                             "the rest of the mission is replanned and the plan update sent "
+                             "to the runtime (needs --plan; RUNDIR/replans.csv)")
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
+                        help="with --replan-every: the confidence the rest is replanned at "
+                             "(default: the plan's own, else 0.95)")
+    parser.add_argument("--scenario-file", metavar="FILE",
+                        help="with --replan-every: the spreads and battery share the replan's "
+                             "prior takes (default: the shipped scenario file)")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
                         help="directory for the run's files (written whole: it replaces "
                              "a previous run there)")
     add_force_argument(parser)
 
 
-def _current(text: str):
-    from gliderplan.sim.vehicle import MAX_CURRENT_MPS, Current
-
-    try:
-        north, east = (float(x) for x in text.split(","))
-    except ValueError:
-        raise UsageError(f"--current {text!r}: expected two numbers N,E [m/s]") from None
-    if not math.hypot(north, east) <= MAX_CURRENT_MPS:  # nan fails too
-        raise UsageError(f"--current {text!r}: the speed must be finite and at most "
-                         f"{MAX_CURRENT_MPS:g} m/s")
-    return Current(north, east)
-
-
 def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.run import run_mission
 
+    refuse_unpaired(args, {"--confidence": ("--replan-every",),
+                           "--scenario-file": ("--replan-every",)})
     mission = load_mission(args)
+    lat, lon, start_utc = parse_start(args.start) if args.start else (None, None, None)
     duration_s = parse_duration_s(args.duration) if args.duration else None
     ticks = (duration_s or mission.horizon_s or DEFAULT_HORIZON_S) / max(args.tick, 1e-9)
     from gliderplan.cli.progress import ProgressBar
@@ -134,11 +146,14 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = run_mission(
             mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
-            noise=args.noise, tracker=args.tracker, current=_current(args.current),
-            seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=args.start,
+            noise=args.noise, tracker=args.tracker, currents=args.currents,
+            seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=start_utc,
+            start_position=None if lat is None else (lat, lon),
             netcdf=args.netcdf, progress=progress, key_path=args.key,
-            state_dir=args.state_dir, faults=args.faults, floor=args.floor, force=args.force,
-            mission_path=args.mission)
+            state_dir=args.state_dir, faults=args.faults, floor=args.floor,
+            replan_every=args.replan_every, confidence=args.confidence,
+            scenario_file=args.scenario_file,
+            force=args.force, mission_path=args.mission)
     finally:
         if progress is not None:
             progress.finish()
@@ -157,11 +172,24 @@ def run(args: argparse.Namespace) -> int:
     if duration_s is None and mission.horizon_s is None and record.ended == "duration":
         print(f"  ran to the default horizon, {DEFAULT_HORIZON_S / 86400:g} d: the mission names "
               "none (--duration sets another)", file=sys.stderr)
+    for note in result.current_notes:
+        print(f"  {note}", file=sys.stderr)
+    if args.replan_every:
+        print(_replanning(result), file=sys.stderr)
+    _print_surfacings(result.record)
+    if args.map is not None:
+        _draw_map(args.map, mission, result)
     if check.causes:
         print("  states over their own prediction:" if check.verdict != "violation" or
               "planned" in check.causes[0] else "  where it went:", file=sys.stderr)
     for cause in check.causes:
         print(f"    {cause}", file=sys.stderr)
+    for note in record.envelope:
+        print(f"  {note}", file=sys.stderr)
+    if record.faults is not None and record.faults["kills"] < record.faults["kills_asked"]:
+        print(f"  kill={record.faults['kills_asked']}: {record.faults['kills']} delivered; the "
+              "run ended before the others fell due (drawn over the mission's timeline; "
+              "kill=N@T draws them over T)", file=sys.stderr)
     if result.interrupted:
         print(f"  interrupted: the outputs in {args.output} cover the part flown, "
               f"{_time_text(record.columns['time_s'][-1])} (summary.json: complete false)",
@@ -171,6 +199,13 @@ def run(args: argparse.Namespace) -> int:
         print(f"  interrupted once the flight was over: the outputs in {args.output} hold "
               "all of it", file=sys.stderr)
         code = ExitCode.INTERRUPTED
+    elif record.envelope_acted:
+        print("  the vehicle was commanded outside its rating (its vehicle file's "
+              "[envelope])", file=sys.stderr)
+        code = ExitCode.ENVELOPE
+    elif record.ended.startswith("fault"):
+        print(f"  the outputs in {args.output} cover the part flown", file=sys.stderr)
+        code = ExitCode.LINK_FAILED
     elif check.verdict == "violation":
         code = ExitCode.OVER_BUDGET
     elif check.verdict == "over prediction" and args.strict_prediction:
@@ -187,6 +222,37 @@ def run(args: argparse.Namespace) -> int:
         print_json({"ok": code == ExitCode.OK, "exit_code": int(code), **summary,
                     "files": [str(f) for f in result.files]})
     return code
+
+
+def _print_surfacings(record) -> None:
+    """Each surfacing's time and position (the first SHOWN_SURFACINGS; summary.json has
+    them all)."""
+    from gliderplan.sim.outputs import surfacing_fixes
+
+    fixes = surfacing_fixes(record)
+    if fixes:
+        print("  surfacings (GPS fix: time, position; one run, no ellipse: gliderplan "
+              "forecast gives them):", file=sys.stderr)
+    for i, fix in enumerate(fixes[:SHOWN_SURFACINGS], start=1):
+        print(f"    {i:4d}  {_time_text(fix['time_s']):>9s}  {fix['lat']:9.5f} {fix['lon']:10.5f}",
+              file=sys.stderr)
+    if len(fixes) > SHOWN_SURFACINGS:
+        print(f"    ... {len(fixes) - SHOWN_SURFACINGS} more in summary.json", file=sys.stderr)
+
+
+def _draw_map(path: str, mission, result) -> None:
+    """`--map`: the run's track, surfacings, waypoints and current field."""
+    import numpy as np
+
+    from gliderplan.sim.loop import route_points_deg
+    from gliderplan.sim.outputs import surfacing_fixes
+    from gliderplan.sim.seamap import SeaMap, write_map
+
+    c = result.record.columns
+    write_map(path, SeaMap(f"{mission.name}: flown track",
+                           {"flown": (np.asarray(c["lat_deg"]), np.asarray(c["lon_deg"]))},
+                           tuple(route_points_deg(mission)),
+                           tuple(surfacing_fixes(result.record)), result.currents))
 
 
 def _replayed(ocean: str | None) -> bool:
@@ -206,3 +272,11 @@ def _time_text(seconds: float) -> str:
     if seconds >= 3 * 3600:
         return f"{seconds / 3600:.1f} h"
     return f"{seconds:g} s"
+
+
+def _replanning(result) -> str:  # noqa: ANN001
+    """What the shore did at the surfacings of a run with replanning."""
+    link = result.replanning
+    return (f"  replanned at {link['surfacings']} surfacings: {link['updates_applied']} updates "
+            f"applied, {link['updates_refused']} refused; link {link['up_bytes']:,} bytes up, "
+            f"{link['down_bytes']:,} down, the largest update {link['update_bytes_max']} bytes")

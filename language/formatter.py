@@ -180,6 +180,10 @@ def _declaration(decl: ast.Declaration) -> str:
             return text + (f" reserve {_quantity(reserve)}" if reserve else "")
         case ast.HorizonDecl(duration):
             return f"horizon {_quantity(duration)}"
+        case ast.StartDecl(lat, lon):
+            return f"start {lat.text}, {lon.text}"
+        case ast.CorrectionDecl(setting):
+            return f"current_correction {setting.text}"
         case ast.ObjectiveDecl(sense, target, floor):
             text = f"objective {sense.text} {target.text}"
             return text + (f" quality >= {floor.text}" if floor else "")
@@ -270,13 +274,16 @@ def _sensor_use(use: ast.SensorUse) -> str:
 
 
 def _invocation(invocation: ast.Invocation) -> str:
+    thrust = invocation.thrust
+    setting = "" if thrust is None else " thrust " + (
+        thrust.text if isinstance(thrust, ast.Ident) else _quantity(thrust))
     if not invocation.has_parens and not invocation.args:
-        return invocation.name.text
+        return invocation.name.text + setting
     args = ", ".join(
         f"({expression(a.lat)}, {expression(a.lon)})" if isinstance(a, ast.Point)
-        else expression(a)
+        else a.text if isinstance(a, ast.Ident) else expression(a)
         for a in invocation.args)
-    return f"{invocation.name.text}({args})"
+    return f"{invocation.name.text}({args}){setting}"
 
 
 # ---- expressions -----------------------------------------------------------------

@@ -94,6 +94,12 @@ class _Build:
     def horizon_decl(self, where, children):
         return ast.HorizonDecl(children[0], ast.Span(*where))
 
+    def start_decl(self, where, children):
+        return ast.StartDecl(children[0], children[1], ast.Span(*where))
+
+    def correction_decl(self, where, children):
+        return ast.CorrectionDecl(_ident(children[0]), ast.Span(*where))
+
     def objective_decl(self, where, children):
         sense, target, floor = children
         return ast.ObjectiveDecl(_ident(sense), _ident(target), floor, ast.Span(*where))
@@ -181,6 +187,16 @@ class _Build:
         has_parens = bool(args)  # maybe_placeholders gives [None] for "()"
         args = tuple(a for a in args if a is not None)
         return ast.Invocation(_ident(name), args, has_parens, ast.Span(*where))
+
+    def thrust(self, where, children):
+        invocation, setting = children
+        if isinstance(setting, tuple):  # the `auto` token
+            setting = _ident(setting)
+        return ast.Invocation(invocation.name, invocation.args, invocation.has_parens,
+                              ast.Span(*where), setting)
+
+    def auto_argument(self, where, children):
+        return _ident(children[0])
 
     def point(self, where, children):
         return ast.Point(children[0], children[1], ast.Span(*where))

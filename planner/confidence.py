@@ -221,9 +221,9 @@ def plan_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
                         achieved_confidence(count, dimension, risk), active, seed)
     result = assemble(inputs, choice)
     stated_note = Assumption(
-        MISSION_SUBJECT, f"plan at confidence {stated.achieved:.3g}: the budget holds in every "
-        f"one of {count} simulated scenarios ({stated.method}; risk {risk:g}, dimension "
-        f"{dimension}); the prediction is at the scenarios' mean times")
+        MISSION_SUBJECT, f"plan at confidence {stated.achieved:.3g} (asked {confidence:g}): the "
+        f"budget holds in every one of {count} simulated scenarios ({stated.method}; risk "
+        f"{risk:g}, dimension {dimension}); the prediction is at the scenarios' mean times")
     plan = replace(result.plan, assumptions=(*result.plan.assumptions, stated_note))
     return replace(result, plan=plan, confidence=stated)
 

@@ -48,6 +48,8 @@ from gliderplan.power_models.forecast import INTERVAL_LEVEL
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 
 if TYPE_CHECKING:
+    from gliderplan.planner.surfacings import Surfacing
+    from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.ocean import SeaFloor
 
 WATER_DEPTHS_M = np.arange(0.0, 1001.0, 5.0)  # where a given ocean's density is taken [m]
@@ -76,6 +78,10 @@ class MissionForecast:
     assumptions: tuple[str, ...]
     yos_interval: tuple[float, float] = (math.nan, math.nan)  # and of the yos flown
     defaults: tuple[str, ...] = ()  # what the forecast took by default: "horizon 30 d", ...
+    # where and when it surfaces (planner.surfacings): given a start
+    positions: tuple[Surfacing, ...] = ()
+    start_epoch_s: float = 0.0  # [s since 1970] when it starts, for the surfacings' times
+    currents: CurrentField | None = None  # the field the surfacings were flown in
 
     @property
     def energy_j(self) -> float:
@@ -104,7 +110,8 @@ class MissionForecast:
             "energy_j": self.energy_j, "energy_interval_j": list(self.interval_j),
             "interval_level": INTERVAL_LEVEL, "duration_s": self.duration_s,
             "yos": self.yos, "yos_interval": list(self.yos_interval),
-            "surfacings": self.surfacings, "devices": self.devices_j,
+            "surfacing_count": self.surfacings,
+            "surfacings": [p.to_json() for p in self.positions], "devices": self.devices_j,
             "states": {name: {"time_s": b.time_s, "visits": b.visits, "yos": b.yos,
                               "surfacings": b.surfacings, "energy_j": b.energy_j}
                        for name, b in self.states.items()},
@@ -134,7 +141,7 @@ def _yo(vehicle: Vehicle, state: ir.State, occupancy: Occupancy, time_s: float,
         low, high = vehicle.nominal_min_depth_m, vehicle.nominal_max_depth_m
     pitch = 0.5 * (args[2] + args[3]) if all(map(math.isfinite, args[2:4])) \
         else vehicle.nominal_pitch_rad
-    with flying_yo(state.name, vehicle, low, high):
+    with flying_yo(state.place, vehicle, low, high):
         cycle_s, actuators_j, _ = vehicle.yo_cycle(low, high, pitch,
                                                    vehicle.unplanned_ballast_cc, ocean)
     cycles = time_s / float(cycle_s)

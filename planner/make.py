@@ -45,8 +45,10 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     water from `seed`, or the mean of `scenarios` scenarios drawn as for `confidence`.
     With `output`, write the plan file there and its
     JSON report beside it (`output`.json), atomically and together (never one without the
-    other), unless a stop signal arrived (KeyboardInterrupt: an interrupted plan is no
-    plan, even where a library swallowed the signal); with `sign` (a key file) the plan
+    other), and where it flies propelled its energy per km against speed
+    (`output`.speed.png, reports/speed.py), unless a stop signal arrived
+    (KeyboardInterrupt: an interrupted plan is no plan, even where a library swallowed
+    the signal); with `sign` (a key file) the plan
     file is signed as plan number `seq` (default: `signing.default_sequence()`). The
     result holds the plan
     (`.plan`, what the file holds) and what its solve tells (quality, minimum energy,
@@ -95,9 +97,15 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     result = replace(result, upload_bytes=len(data))
     interrupts.raise_if_stopped()
     if output is not None:
-        write_files_atomically({output: data,
-                                f"{output}.json": json.dumps(report_json(result), indent=2)
-                                + "\n"})
+        files = {output: data,
+                 f"{output}.json": json.dumps(report_json(result), indent=2) + "\n"}
+        if hardware.vehicle.propulsion is not None:
+            from gliderplan.reports.speed import speed_frame, speed_png
+
+            frame = speed_frame(mission, hardware, result.plan)
+            if len(frame):
+                files[f"{output}.speed.png"] = speed_png(frame)
+        write_files_atomically(files)
     return result
 
 

@@ -14,6 +14,11 @@ REPORT_VERSION = 1
 
 def _state_json(result: PlanResult, s: int) -> dict:
     state, kinds = result.plan.states[s], result.mission.states[s].profiles
+    propelled = [p for p in state.profiles if kinds[p.index].propelled and p.share > 0]
+    # the chosen speed through the water [m/s] where the vehicle flies propelled: the
+    # shares' mean over its propelled profiles
+    speed = {"speed_m_s": sum(p.share * p.speed_mps for p in propelled)
+             / sum(p.share for p in propelled)} if propelled else {}
     return {
         "name": state.name,
         "time_s": state.time_s,
@@ -31,6 +36,7 @@ def _state_json(result: PlanResult, s: int) -> dict:
         "sensors": [{"name": x.name, "device": x.device, "duty": x.duty,
                      "period_s": x.period_s, "on_s": x.on_s} for x in state.sensors],
         "quality": result.state_quality[s],
+        **speed,
     }
 
 

@@ -72,6 +72,10 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
         raise UsageError(f"{output}: the output file must end in .toml")
     step = progress or (lambda _: None)
     vehicle = load_vehicle(base)
+    if not vehicle.has_buoyancy_engine:
+        raise UsageError(f"--base {base}: an {vehicle.kind} has no buoyancy engine; calibrate "
+                         "fits a glider's pump, glide and loads: give a glider's (or a "
+                         "hybrid's) file")
     deployments = split_deployments(expand_log_paths(logs))
     step(f"reading {sum(len(d.files) for d in deployments)} log file(s)")
     each = [read_flight_log(list(d.files), cache) for d in deployments]

@@ -59,7 +59,25 @@ def model_figures(kind: str, spec: str, clock_mhz: float | None = None) -> dict:
             {"key": k, "low": low, "high": high, "unit": u, "source": s}
             for k, low, high, u, s in file_spans(path)],
         "derived": _derived(kind, model),
+        **({"vehicle_kind": model.kind, "propulsion": _propulsion(model)}
+           if kind == "vehicle" else {}),
     }
+
+
+def _propulsion(vehicle: object) -> dict | None:
+    """A vehicle's propulsion model as numbers, with the speed that makes the most of a
+    joule on its own hotel load in still water and the energy per km there (None: a glider
+    without one)."""
+    from gliderplan.planner.speed import best_speed
+
+    propulsion = vehicle.propulsion
+    if propulsion is None:
+        return None
+    best = best_speed(propulsion, vehicle.hotel_w)
+    return {**propulsion.figures(), "hotel_w": vehicle.hotel_w,
+            "best_speed_mps": best.speed_mps, "closed_form_speed_mps":
+            propulsion.optimal_speed_mps(vehicle.hotel_w),
+            "energy_per_km_kj": best.energy_per_m_j, "propulsion_w": best.propulsion_w}
 
 
 def _derived(kind: str, model: object) -> list[dict]:
@@ -88,6 +106,8 @@ def _derived(kind: str, model: object) -> list[dict]:
             row("quality at 25 % duty", model.utility(0.25), "1"),
             row("mean power at 25 % duty", model.mean_power_w(0.25), "W"),
         ]
+    if not model.has_buoyancy_engine:  # an AUV: its propulsion says the rest
+        return [row("surfacing with Iridium", model.surfacing_with_iridium_j, "J")]
     pitch, low, high = model.nominal_pitch_rad, model.nominal_min_depth_m, model.nominal_max_depth_m
     u, w = model.glide(pitch, model.max_ballast_cc)
     best = model.optimal_speed_mps(model.hotel_w)

@@ -260,22 +260,6 @@ def refuse_missing_features(mission: CheckedMission, target: str) -> None:
                          "or build for its own board")
 
 
-def refuse_plan_for_another_board(mission: CheckedMission, plan: bytes, plan_path: str,
-                                  target: str) -> None:
-    """PlanRejected when the plan names a board other than the one the build is for (a
-    plan for the TS-7800's clock and power copied beside a TS-5500 binary); PlanFileError
-    when it is no plan file."""
-    from gliderplan.planner.planfile import PlanRejected, read_plan_bytes
-    from gliderplan.power_models import load_board
-
-    made_for = read_plan_bytes(plan, None, str(plan_path)).computer
-    board = load_board(target_board(mission, target))
-    if made_for not in (board.name, NO_BOARD):  # a plan for no board flies on any build
-        raise PlanRejected(f"{plan_path}: a plan for board {made_for}, but this build is for "
-                           f"{board.name} (target {target}): plan again with "
-                           f"--computer {board.name}")
-
-
 def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str | None = None,
                     plan_path: str | Path | None = None,
                     limits: FlightLimits | None = None,
@@ -284,9 +268,9 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str | 
     pipeline of `gliderplan compile`, for `target` (default: `build_target`, the host).
     With `plan_path`, the plan is first checked by the runtime's own reader
     (`runtime_accepts`; with `key_path`, the key provisioned on the vehicle, its signature
-    too, as the runtime checks it) and then copied beside the binary. A mission that asks
-    the target's board for a clock, a sleep or a workload it cannot give, and a plan made
-    for another board, are refused before anything is built.
+    too, as the runtime checks it, and `gp_plan_check`: a plan made for another board is
+    refused) and then copied beside the binary. A mission that asks the target's board for
+    a clock, a sleep or a workload it cannot give is refused before anything is built.
 
     `limits` (the default ballast, the pump's volume, the board's clocks) are by default
     those of the mission's vehicle on the target's board (the mission's computer for the
@@ -315,7 +299,6 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str | 
 
             read_key(key_path)  # a key the runtime would refuse: said here, in its words
         runtime_accepts(mission, plan_path, limits, key_path=key_path)
-        refuse_plan_for_another_board(mission, plan, str(plan_path), target)
     source = generate_c(mission, limits)
     out = output_directory(out_dir)
     c_path = out / f"{mission.name}.c"

@@ -2,7 +2,8 @@
 
 Every component is integrated over the run's ticks with `power_models.timeline` (one
 vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
-pitch motor, the surface and Iridium phases, the computer at the clock of each state
+pitch motor, a propeller's or thruster's draw (its model's power at the speed or
+thrust flown), the surface and Iridium phases, the computer at the clock of each state
 from its workload per tick, and each sensor device from its on/off timeline (with a
 warm-up at every switch-on) at the vehicle's own figure (`power_models.devices`): the
 hotel load is billed less the instruments it holds, which are billed while they run.
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, SENSOR_DEVICES, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
 from gliderplan.planner.planfile import Plan, flown_board
@@ -36,7 +37,7 @@ from gliderplan.sim.loop import RunRecord
 
 GAUGE_TICKS = 64  # the coulomb counter is read out every 64 ticks (256 s at the 4 s tick)
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
-DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
+DEVICES = SENSOR_DEVICES
 DEVICE_BITS = {d: sum(1 << s.index for s in SENSORS if s.device == d) for d in DEVICES}
 
 
@@ -129,6 +130,8 @@ class Billing:
         if boot:
             computer[:1] += self.boot_j
         parts[Component.COMPUTER] = computer * (Component.COMPUTER not in self.held)
+        if vehicle.propulsion is not None:  # its draw as the model gave it each tick
+            parts[Component.PROPULSION] = c["propulsion_w"] * dt
         power = c["sensor_power"].astype(np.int64)
         for device, sensor in self.sensors.items():
             on = (power & DEVICE_BITS[device]) != 0

@@ -207,7 +207,8 @@ class FastForward:
         machine = ex.machine
         if machine is None or machine.state is None or tick < self._resume[ex.state_i] \
                 or self._reads_energy \
-                or ex.profile_k < 0 or not self._ocean \
+                or ex.profile_k < 0 or not self._ocean or self._flows() \
+                or (ex.guard is not None and ex.guard.held) \
                 or not self._covered[ex.state_i][ex.profile_k] \
                 or not isinstance(ex.route, _ROUTES):
             return 0
@@ -224,6 +225,13 @@ class FastForward:
             min(MAX_BACKOFF_TICKS, 2 * self._backoff[i] + 1)
         self._resume[i] = tick + flown + self._backoff[i]
         return flown
+
+    def _flows(self) -> bool:
+        """A current moves the glider or its estimate (sim.navigation), or the floor
+        depends on where it is (sim.bathymetry): flown by the loop's own ticks, which
+        carry the model of record of both."""
+        return self.science.currents is not None or self.glider.flows \
+            or self.science.floor_by_position
 
     # ---- one run ----------------------------------------------------------------------
 
@@ -293,7 +301,7 @@ class FastForward:
                 ex.s[index] = values.sensor_at(index, last)
         for index in _RUNTIME_READINGS:  # as the executor set them for the last tick
             ex.s[index] = values.sensor_at(index, count - 1)
-        self._commit_glider(flight, nav, count)
+        self._commit_glider(flight, nav, tick, count)
         values.commit_held(count)
         return count
 
@@ -332,7 +340,7 @@ class FastForward:
         s = {index: values.held(index, count) for index in wanted}
         return _first(fires(s, values.variables(count), count), count)
 
-    def _commit_glider(self, flight: _Flight, nav: _Route, count: int) -> None:
+    def _commit_glider(self, flight: _Flight, nav: _Route, tick: int, count: int) -> None:
         g, ex = self.glider, self.ex
         g.actuators = flight.actuators_at(count, g.actuators)
         g.depth_m = float(flight.depth_m[count])
@@ -350,9 +358,16 @@ class FastForward:
         else:
             g.surface_time_s = -1.0
         if isinstance(ex.routine, pilot.Yo):
-            ex.routine.halfcycle = int(halfcycles(ex.routine, flight)[count])
+            counts = halfcycles(ex.routine, flight)
+            ex.routine.halfcycle = int(counts[count])
             ex.routine.leg = next(leg for first, _, _, leg in reversed(flight.legs)
                                   if first < count)
+            if ex.guard is not None:  # the guard saw each tick's command, as the runtime's
+                turns = np.flatnonzero(np.diff(counts[:count + 1]))
+                if len(turns):
+                    ex.guard.turned = True
+                    ex.guard.last_turn_s = _f32_scalar((tick + int(turns[-1])) * self.tick_s)
+                ex.guard.climbing = ex.routine.leg == _CLIMB
 
     # ---- the flight --------------------------------------------------------------------
 
@@ -724,7 +739,7 @@ class FastForward:
         distance = flight.distance_m[:count]
         fix = flight.fix_at if flight.fix_at < count else -1
         if isinstance(route, pilot.NoHeading):
-            positions = g.drift_along(distance, np.full(count, g.heading_rad), fix)
+            positions = g.drift_along(distance, np.full(count, g.heading_rad))
             return _Route(count, None, *positions)
         c = g.current
         flown, heading, positions = native.route(

@@ -3,18 +3,24 @@ ocean, flown by the Python executor or by the compiled C runtime over a pty."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import TRANSITION_NAMES
 from gliderplan.language import ir
-from gliderplan.power_models.vehicle import Vehicle, flying_yo
+from gliderplan.language.registry import cannot_fly
+from gliderplan.language.semantics import Transition
+from gliderplan.power_models.vehicle import Vehicle, yo_flight_problem
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
 from gliderplan.sim.ocean import Ocean
 
 if TYPE_CHECKING:
+    from gliderplan.contract import FlightLimits
     from gliderplan.planner.planfile import Plan
     from gliderplan.sim.faults import FaultSpec
+    from gliderplan.sim.replanning import ShoreLoop
 
 RUNTIMES = ("python", "c")
 
@@ -25,19 +31,25 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         progress: Callable[[float, float], None] | None = None,
         tick_by_tick: bool = False, key_path: str | None = None,
         state_dir: str | Path | None = None,
-        faults: FaultSpec | None = None, keep_interrupted: bool = False) -> RunRecord:
+        faults: FaultSpec | None = None, shore: ShoreLoop | None = None,
+        keep_interrupted: bool = False) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends; KeyboardInterrupt
     goes through, but with `keep_interrupted` it ends the flight (sim.loop.simulate).
 
     The Python executor flies runs of ticks at once where nothing can happen between them
     (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
-    the reference loop instead. The C runtime reads its plan from `plan_path` (the file
+    the reference loop instead, as does a vehicle with a propeller or a thruster (the fast
+    executor flies gliders only). The C runtime reads its plan from `plan_path` (the file
     `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
     uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
     given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
     when it refuses the plan. `faults` (C runtime only) are injected on the line and into
-    the runtime's board; the record says what they did.
+    the runtime's board; the record says what they did. `shore` (sim/replanning.py) is
+    the shore in the loop: at each surfacing the glider's report goes up, and the plan
+    updates it sends back are applied by the runtime (the C runtime's over its link; it
+    must hold the key: `key_path`).
     """
+    from gliderplan.planner.limits import flight_limits
     from gliderplan.sim.energy import BatteryGauge
 
     science = make_science(mission, ocean, config, vehicle)
@@ -45,48 +57,115 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     if runtime == "python":
         from gliderplan.sim.executor import PythonRuntime
 
-        # without a plan: the same buoyancy volume the compiler gives the C runtime
+        # without a plan: the same buoyancy volume, alternatives and speed the compiler
+        # gives the C runtime (the board's clocks are not the executor's to set)
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
-                                 vehicle.max_ballast_cc)
-        if tick_by_tick:
+                                 vehicle.max_ballast_cc, vehicle.envelope,
+                                 flown_limits(mission, vehicle, (0.0,)))
+        hook = None
+        if shore is not None:
+            from gliderplan.sim.replanning import PythonVehicle
+
+            hook = _surfacing(shore, PythonVehicle(executor, shore.held, shore.key, mission,
+                                                   _reader(mission, vehicle, plan)).deliver,
+                              gauge, science.glider, mission)
+        if tick_by_tick or vehicle.propulsion is not None:  # sim/fast.py: gliders only
             record = simulate(mission, executor, science, config, progress, gauge=gauge,
-                              keep_interrupted=keep_interrupted)
+                              on_surfacing=hook, keep_interrupted=keep_interrupted)
         else:
             from gliderplan.sim.fast import FastForward
 
             record = simulate(mission, executor, science, config, progress,
-                              FastForward(mission, executor, science), gauge,
+                              FastForward(mission, executor, science), gauge, hook,
                               keep_interrupted)
         record.entry_variables = executor.entry_variables
+        record.envelope = located(executor.envelope_notes, mission)
         record.events_fired = executor.event_count
         return record
     if runtime != "c":
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
-    from gliderplan.contract import FlightLimits
-    from gliderplan.planner.limits import flight_limits
     from gliderplan.planner.planfile import plan_board_limits
     from gliderplan.sim.emulator import start_c_runtime
 
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
-    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
-                          board.clocks_mhz)  # the vehicle flown: a scenario's may differ
+    # the vehicle flown: a scenario's may differ
+    limits = flown_limits(mission, vehicle, board.clocks_mhz)
     schedule = None
     if faults is not None:
+        from gliderplan.planner.occupancy import mission_occupancy
         from gliderplan.sim.faults import FaultSchedule
 
-        schedule = FaultSchedule(faults, config.seed, int(config.duration_s / config.tick_s),
+        # kills fall within the run: up to the mission's end on its timeline, if sooner
+        span_s = min(config.duration_s, mission_occupancy(mission, config.duration_s).total_s)
+        schedule = FaultSchedule(faults, config.seed, int(span_s / config.tick_s),
                                  config.tick_s)
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)
+    hook = None if shore is None else _surfacing(shore, c_runtime.deliver_update, gauge,
+                                                 science.glider, mission)
     try:
         record = simulate(mission, c_runtime, science, config, progress, gauge=gauge,
-                          keep_interrupted=keep_interrupted)
+                          on_surfacing=hook, keep_interrupted=keep_interrupted)
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended
+    record.envelope = located(c_runtime.envelope_notes(), mission)
     if schedule is not None:
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
+        if record.events_log is not None:  # the transitions made, lost COMMANDs or not
+            record.trace = logged_trace(record.events_log, record.flown_s)
     return record
+
+
+def flown_limits(mission: ir.CheckedMission, vehicle: Vehicle,
+                 clocks_mhz: tuple[float, ...]) -> FlightLimits:
+    """The limits of `vehicle` (a scenario's may differ from the mission's) on a board of
+    `clocks_mhz` [MHz]: its pump, and what it flies without a plan (the alternatives and
+    the `auto` speed the compiler gives the C runtime); no other bound beyond the
+    contract's."""
+    from gliderplan.contract import FlightLimits
+    from gliderplan.planner.limits import unplanned
+
+    speed, flown = unplanned(mission, vehicle)
+    return FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, clocks_mhz,
+                        unplanned_speed_mps=speed, unplanned_profiles=flown,
+                        envelope=vehicle.envelope)
+
+
+def _surfacing(shore: ShoreLoop, deliver, gauge, glider,  # noqa: ANN001, ANN202
+               mission: ir.CheckedMission):
+    from gliderplan.sim.replanning import surfacing_hook
+
+    return surfacing_hook(shore, deliver, gauge, glider, mission.battery.energy_j)
+
+
+def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  # noqa: ANN202
+    """How the Python executor's vehicle reads a plan an update makes: strictly, within
+    the vehicle's pump and the board's clocks, as the C runtime does."""
+    from gliderplan.planner.planfile import plan_board_limits, read_plan_bytes
+
+    board = plan_board_limits(mission, plan).clocks_mhz if plan is not None else (0.0,)
+    limits = flown_limits(mission, vehicle, board)
+    return lambda data: read_plan_bytes(data, mission, "", limits)
+
+
+def located(notes: list[str], mission: ir.CheckedMission) -> list[str]:
+    """The envelope guard's notes with each state's place (`state s1 (line 6):`)."""
+    places = {f"state {s.name}:": f"state {s.place}:" for s in mission.states}
+    return [re.sub(r"state \S+:", lambda m: places.get(m[0], m[0]), note, count=1)
+            for note in notes]
+
+
+def logged_trace(events_log: str, flown_s: float) -> list[Transition]:
+    """The transitions of a runtime's event log (docs/reliability.md) made before
+    `flown_s` [s], as trace rows; its fault and clamp records are no transitions."""
+    trace = []
+    for line in events_log.splitlines():
+        time_s, kind, from_state, to_state, depth = line.split()
+        if kind in TRANSITION_NAMES.values() and float(time_s) < flown_s:
+            trace.append(Transition(float(time_s), kind, from_state.strip("-"),
+                                    to_state.strip("-"), int(depth)))
+    return trace
 
 
 def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
@@ -98,11 +177,11 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
     A yo whose band reads variables is left to the flight."""
     for i, state in enumerate(mission.states):
         for k, profile in enumerate(state.profiles):
-            args = profile.constant_args()
-            if profile.kind not in ("yo", "thermotrackyo") or args is None:
-                continue
-            planned = plan.states[i].profiles[k] if plan is not None else None
-            pitch = planned.pitch_rad if planned else 0.5 * (args[2] + args[3])
-            ballast = planned.ballast_cc if planned else vehicle.unplanned_ballast_cc
-            with flying_yo(f"{state.name}: flightprofile {k}", vehicle, args[0], args[1]):
-                vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)
+            if cannot_fly(profile.kind, profile.thrust, vehicle) is not None:
+                continue  # one the vehicle cannot fly is never flown (no plan time, check warns)
+            flown = (None, None) if plan is None else (plan.states[i].profiles[k].pitch_rad,
+                                                       plan.states[i].profiles[k].ballast_cc)
+            problem = yo_flight_problem(f"{state.place}: flightprofile {k}", vehicle,
+                                        profile.kind, profile.constant_args(), *flown)
+            if problem is not None:
+                raise problem

@@ -19,13 +19,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
+from gliderplan.contract import (
+    DEFAULT_HORIZON_S,
+    SBD_MO_SHORT_BYTES,
+    SBD_MT_SHORT_BYTES,
+    TICK_S,
+)
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.energy import RunEnergy, account, check_flight
-from gliderplan.sim.loop import RunConfig, RunRecord
+from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig, RunRecord
 from gliderplan.sim.scenarios import ScenarioSpec, draw_scenario
 
 BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending it is cheap
@@ -48,6 +53,18 @@ class Job:
     duration_s: float  # a run ends here if the mission has not exited [s]
     tick_s: float = TICK_S
     robust_tracker: bool = True
+    # replanning (`montecarlo --replan`): the signed plan the vehicle holds, its key, the
+    # confidence the shore replans at (None: the plan's own)
+    held: bytes | None = None
+    key: bytes | None = None
+    confidence: float | None = None
+    # where the glider is put in the water (lat, lon) [deg] (None: as sim puts it)
+    start: tuple[float, float] | None = None
+    start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
+
+    @property
+    def replan(self) -> bool:
+        return self.held is not None
 
 
 def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
@@ -57,14 +74,44 @@ def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
 
 def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
     """Fly scenario `index`: one row of the results table (`tick_by_tick`: on the
-    reference executor alone, as sim.flight.fly)."""
+    reference executor alone, as sim.flight.fly). With replanning the row is the flight
+    with the shore in the loop, and the static plan's flight of the same scenario beside
+    it (`held_static`, `quality_static`, ...)."""
     from gliderplan.sim.flight import fly
 
     scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
+    lat, lon = job.start or (None, None)
     config = RunConfig(tick_s=job.tick_s, duration_s=job.duration_s, seed=scenario.seed,
-                       noise=scenario.noise, current=scenario.current)
+                       noise=scenario.noise, current=scenario.current, start_lat_deg=lat,
+                       start_lon_deg=lon, start_epoch_s=job.start_epoch_s)
     record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
                  robust_tracker=job.robust_tracker, tick_by_tick=tick_by_tick)
+    row = _row(job, scenario, record)
+    if not job.replan:
+        return row
+    from gliderplan.sim.replanning import ShoreLoop
+
+    shore = ShoreLoop(job.mission, job.held, job.key, tick_s=job.tick_s,
+                      usable_truth=scenario.usable_fraction, seed=scenario.seed,
+                      confidence=job.confidence, spec=job.spec.model())
+    replanned = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
+                    robust_tracker=job.robust_tracker, tick_by_tick=tick_by_tick, shore=shore)
+    link = shore.log.summary(max(float(replanned.columns["time_s"][-1]), job.tick_s))
+    return {**_row(job, scenario, replanned),
+            **{f"{k}_static": row[k] for k in STATIC_COLUMNS},
+            **{k: link[k] for k in LINK_COLUMNS}}
+
+
+# with replanning, the static plan's flight beside the replanned one: these columns
+STATIC_COLUMNS = ("energy_j", "held", "exhausted_s", "duration_s", "ended", "quality",
+                  "plan_check")
+LINK_COLUMNS = ("surfacings", "updates_applied", "updates_refused", "replans_least_energy",
+                "replans_not_sent", "replans_failed", "up_bytes", "down_bytes", "up_messages",
+                "down_messages", "update_bytes_max")
+
+
+def _row(job: Job, scenario, record: RunRecord) -> dict:  # noqa: ANN001
+    """The results table's row of one flight of a scenario."""
     energy = account(record, job.mission, scenario.vehicle, job.plan)
     check = check_flight(energy, job.plan)
     budget = job.budget_j * scenario.usable_fraction
@@ -73,7 +120,7 @@ def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
     component, excess = _most_overrun(energy, job.plan)
     names = record.state_names
     return {
-        "scenario": index,
+        "scenario": scenario.index,
         "seed": scenario.seed,
         "energy_j": energy.total_j,
         "budget_j": budget,
@@ -260,6 +307,7 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
                                                                    strict=True)}
 
     exhausted = table["exhausted_s"].dropna() if n else table
+    replanned = replanning(table, complete) if n and "held_static" in table else {}
     return {
         **meta,
         "complete": complete,
@@ -279,7 +327,49 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
         else 0,
         "ended": {str(k): int(v) for k, v in table["ended"].value_counts().items()} if n
         else {},
+        **replanned,
         "wall_s": result.wall_s,
+    }
+
+
+def replanning(table, complete: bool = True) -> dict:  # noqa: ANN001
+    """With replanning: the hold rate and the flown quality with and without it, side by
+    side (95 % intervals), and what the link carried: bytes each way per day and per
+    mission (means over the scenarios, and the most), the largest update. Not
+    `complete` (interrupted), the hold rates and their intervals are None: the scenarios
+    that finished are not the sample asked for (as `summary`'s probability)."""
+    n = len(table)
+    held, held_static = int(table["held"].sum()), int(table["held_static"].sum())
+    days = np.maximum(table["duration_s"].to_numpy(float), 1.0) / 86400.0
+    up, down = table["up_bytes"].to_numpy(float), table["down_bytes"].to_numpy(float)
+
+    def rate(count: int) -> float | None:
+        return count / n if complete else None
+
+    def interval(count: int) -> list[float] | None:
+        return list(wilson_interval(count, n)) if complete else None
+
+    return {
+        "hold_rate": rate(held), "hold_rate_interval_95": interval(held),
+        "hold_rate_static": rate(held_static),
+        "hold_rate_static_interval_95": interval(held_static),
+        "quality": float(table["quality"].mean()),
+        "quality_static": float(table["quality_static"].mean()),
+        "update_bytes_max": int(table["update_bytes_max"].max()),
+        "link": {
+            "surfacings_per_mission": float(table["surfacings"].mean()),
+            "up_bytes_per_day": float(np.mean(up / days)),
+            "down_bytes_per_day": float(np.mean(down / days)),
+            "up_bytes_per_mission": float(up.mean()), "down_bytes_per_mission": float(down.mean()),
+            "down_bytes_per_mission_max": int(down.max()),
+            "up_messages_per_mission": float(table["up_messages"].mean()),
+            "down_messages_per_mission": float(table["down_messages"].mean()),
+            "updates_refused": int(table["updates_refused"].sum()),
+            "replans_least_energy": int(table["replans_least_energy"].sum()),
+            "replans_not_sent": int(table["replans_not_sent"].sum()),
+            "replans_failed": int(table["replans_failed"].sum()),
+            "sbd_limits_bytes": {"up": SBD_MO_SHORT_BYTES, "down": SBD_MT_SHORT_BYTES},
+        },
     }
 
 
@@ -305,6 +395,9 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
                        seed: int = 0, scenario_file=None, duration_s: float | None = None,
                        tracker: str = "robust",
                        progress: Callable[[int, int], None] | None = None,
+                       replan: bool = False, confidence: float | None = None,
+                       key_path=None, start: tuple[float, float] | None = None,
+                       start_epoch_s: float = DEFAULT_START_EPOCH_S,
                        force: bool = False, mission_path=None) -> MonteCarloRun:
     """Fly `mission` (and the plan in `plan_path`: its budget and prediction; without one
     every sensor a state logs is on and the budget is the mission's usable battery) in
@@ -314,9 +407,18 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     write MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`), a
     folder written whole (contract.files.output_folder: `force` replaces one holding other
     files than a gliderplan run's; `mission_path`, the mission's file, is refused inside).
+    `replan`: each scenario is flown twice, with the plan alone and with the shore in the
+    loop replanning the rest at each surfacing at `confidence` (default: the plan's own),
+    its prior the scenario file without its drift (sim/replanning.py); the vehicle holds
+    `key_path`'s key (the plan signed with it) or one made for the run. The summary
+    then holds `hold_rate`, `hold_rate_static`, `quality`, `quality_static`,
+    `update_bytes_max` and what the link carried (`replanning`). `start`: (lat, lon)
+    [deg] where each glider is put in the water (default: as sim puts it), at
+    `start_epoch_s`.
     Raises KeyboardInterrupt if no scenario finished, or on a second stop while the files
     are written: an interrupted run keeps and writes those that did, marked partial and
-    with no probability (`MonteCarloRun.result.interrupted`, summary.json's `complete`)."""
+    with no probability nor hold rate (`MonteCarloRun.result.interrupted`, summary.json's
+    `complete`)."""
     import json
     from pathlib import Path
 
@@ -343,14 +445,18 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     refuse_unflyable_yos(mission, vehicle, plan)
     budget_j = plan.budget_j if plan is not None else \
         mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
+    held = key = None
+    if replan:
+        held, key = _vehicle_plan(plan_path, key_path)
     job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
-              robust_tracker=tracker == "robust")
+              robust_tracker=tracker == "robust", held=held, key=key, confidence=confidence,
+              start=start, start_epoch_s=start_epoch_s)
     # Stopped while scenarios fly, the run keeps those that finished; once they are all
     # flown a stop waits while they are written (a second one abandons the writing and
     # leaves the folder's previous run).
     with interrupts.deferred(armed=False) as writing, \
             output_folder(out, command="montecarlo", force=force, recognised=MONTECARLO_FILES,
-                          inputs=(mission_path, plan_path, scenario_file)) as folder:
+                          inputs=(mission_path, plan_path, scenario_file, key_path)) as folder:
         with scenario_executor(workers, scheduler) as executor:
             result = run_montecarlo(job, scenarios, executor, workers, progress)
             writing.arm()
@@ -364,7 +470,8 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
                 "scenario_file": spec.source, "seed": seed, "run_limit_s": duration,
                 "budget_j": budget_j, "workers": workers,
                 "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
-                "scheduler": scheduler or ("local pool" if workers > 1 else "none")}
+                "scheduler": scheduler or ("local pool" if workers > 1 else "none"),
+                "replan": replan}
         stated = summary(result, meta)
         contents = {
             "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table,
@@ -381,3 +488,23 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
         folder.complete = not result.interrupted
     return MonteCarloRun(result, stated, tuple(folder.final(n) for n in MONTECARLO_FILES),
                          stopped=writing.requested)
+
+
+def _vehicle_plan(plan_path, key_path) -> tuple[bytes, bytes]:  # noqa: ANN001
+    """The signed plan file the vehicle holds and its key: `key_path`'s (the plan must be
+    signed with it), or a key made for the run, which signs the plan."""
+    import secrets
+
+    from gliderplan.contract.errors import UsageError
+    from gliderplan.planner.planfile import read_plan_data
+    from gliderplan.planner.signing import check_signature, read_key, sign_plan
+
+    if plan_path is None:
+        raise UsageError("--replan: replanning changes a plan: give --plan")
+    held = read_plan_data(plan_path)
+    if key_path is not None:
+        key = read_key(key_path)
+        check_signature(held, key, str(plan_path))
+        return held, key
+    key = secrets.token_bytes(32)
+    return sign_plan(held, key, 1), key

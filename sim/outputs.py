@@ -112,6 +112,18 @@ def simulated_s(record: RunRecord) -> float:
     return float(record.columns["time_s"][-1]) if len(record.columns["time_s"]) else 0.0
 
 
+def surfacing_fixes(record: RunRecord) -> list[dict]:
+    """Each surfacing's GPS fix: time [s] and true position [deg], on the first tick of
+    its Iridium call (the fix comes just before it)."""
+    from gliderplan.power_models.segments import IRIDIUM
+
+    c = record.columns
+    calling = np.asarray(c["phase"]) == IRIDIUM
+    starts = np.flatnonzero(calling & ~np.r_[False, calling[:-1]])
+    return [{"time_s": float(c["time_s"][i]), "lat": float(c["lat_deg"][i]),
+             "lon": float(c["lon_deg"][i])} for i in starts]
+
+
 def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan | None,
             meta: dict) -> str:
     """Energy by component and by state, predicted against simulated, the verdict, and
@@ -142,7 +154,9 @@ def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan
         "complete": record.ended != "interrupted",
         "simulated_s": simulated_s(record),
         "transitions": len(record.trace),
+        "envelope": record.envelope,
         "surfacings": record.surfacings,
+        "surfacing_fixes": surfacing_fixes(record),
         "computer_suspends": record.suspends,
         "energy_j": energy.total_j,
         "energy_by_component_j": energy.by_component_j(),

@@ -105,7 +105,7 @@ def test_bad_durations_are_usage_errors(text):
     (["--duration", "soon"], 2, "--duration 'soon': expected a number with a unit"),
     (["--ocean", "atlantis"], 2, "no such ocean file or preset"),
     (["--plan", "missing.plan"], 2, "missing.plan: no such file"),
-    (["--current", "north"], 2, "--current 'north'"),
+    (["--current", "north"], 2, "--currents 'north': no such file or directory"),
     (["--tick", "0"], 2, "--tick 0"),
     (["--floor", "-3"], 2, "--floor -3.0: the sea floor's depth must be a finite number"),
     (["--floor", "0"], 2, "--floor 0.0: the sea floor's depth must be a finite number"),
