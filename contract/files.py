@@ -309,6 +309,12 @@ class OutputFolder:
     def final(self, name: str) -> Path:
         return self.target / name
 
+    def sub(self, name: str) -> OutputFolder:
+        """The folder `name` inside this one (a fleet's plan, a glider's run): written
+        with it, moved into place with it."""
+        return OutputFolder(output_directory(self.path / name), self.target / name,
+                            self.command)
+
 
 @contextmanager
 def output_folder(path: str | Path, *, command: str, force: bool = False,

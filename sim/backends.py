@@ -12,7 +12,7 @@ import logging
 import multiprocessing
 import os
 import signal
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 
 from gliderplan.contract import MAX_SCENARIOS, MAX_WORKERS, interrupts
@@ -20,6 +20,7 @@ from gliderplan.contract.errors import UsageError
 
 DASK_CLOSE_S = 20.0  # [s] a Dask client or local cluster is given this long to close
 DASK_STOP_CLOSE_S = 5.0  # [s] ... when a stop signal ends the run
+STOP_POLL_S = 0.2  # [s] how often a run on workers looks for a stop signal
 
 
 class BackendError(UsageError):
@@ -62,6 +63,39 @@ def halt(executor: cf.Executor | None) -> None:
             process.kill()
     for process in processes:
         process.join(5.0)
+
+
+def gather(executor: cf.Executor | None, work: Callable, tasks: Sequence[tuple],
+           collect: Callable[[tuple, object], None]) -> bool:
+    """Run `work(*task)` for each of `tasks`, in this process without an executor (one
+    after the other) or through `executor`, and hand each result to `collect(task,
+    result)` as it finishes. True if Ctrl-C or SIGTERM stopped it: at once, workers and
+    all (`halt`), with only what finished collected, never a task cut short (the one
+    definition of how scenarios and flights sent out stop: `montecarlo`, `plan
+    --confidence`, `fleet sim`, `fleet montecarlo`)."""
+    try:
+        if executor is None:
+            for task in tasks:
+                interrupts.raise_if_stopped()
+                collect(task, work(*task))
+        else:
+            # a stop while a pool forks its workers waits until they are forked (raised
+            # in an at-fork hook, it would be lost)
+            with interrupts.deferred(reraise=True):
+                pending = {executor.submit(work, *task): task for task in tasks}
+            waiting = set(pending)
+            while waiting:
+                # looked at every STOP_POLL_S: a stop that a scheduler's code swallowed
+                # on the main thread still ends the run at once
+                done, waiting = cf.wait(waiting, STOP_POLL_S, cf.FIRST_COMPLETED)
+                interrupts.raise_if_stopped()
+                for future in done:
+                    collect(pending[future], future.result())
+        interrupts.raise_if_stopped()
+    except KeyboardInterrupt:
+        halt(executor)  # what was not handed out is cancelled, workers and all
+        return True
+    return False
 
 
 @contextmanager

@@ -37,7 +37,6 @@ BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending i
 BATCHES_PER_WORKER = 4  # at least this many batches per worker, so the ends even out
 CONFIDENCE_Z = 1.959963984540054  # 95 % two-sided
 QUANTILES = (0.05, 0.5, 0.95)
-STOP_POLL_S = 0.2  # [s] how often a run on workers looks for a stop signal
 
 
 @dataclass(frozen=True)
@@ -229,11 +228,16 @@ def run_montecarlo(job: Job, count: int, executor: cf.Executor | None = None, wo
     all: sim.backends.halt) and keeps the scenarios that finished, never one cut short;
     the result says it was interrupted."""
     from gliderplan.contract import interrupts
-    from gliderplan.sim.backends import halt
+    from gliderplan.sim.backends import gather, halt
 
     start = time.perf_counter()
     rows: dict[int, dict] = {}
-    interrupted = False
+
+    def collect(task: tuple, flown: list[dict]) -> None:
+        rows.update((row["scenario"], row) for row in flown)
+        if progress:
+            progress(len(rows), count)
+
     try:
         t0 = time.perf_counter()
         rows[0] = fly_scenario(job, 0)
@@ -241,30 +245,11 @@ def run_montecarlo(job: Job, count: int, executor: cf.Executor | None = None, wo
             progress(1, count)
         plan = batches(count, time.perf_counter() - t0, workers)
         if executor is None:  # scenario by scenario: a stop keeps each one that finished
-            for batch in plan:
-                for index in batch:
-                    interrupts.raise_if_stopped()
-                    rows[index] = fly_scenario(job, index)
-                if progress:
-                    progress(len(rows), count)
-        else:
-            # a stop while a pool forks its workers waits until they are forked (raised
-            # in an at-fork hook, it would be lost)
-            with interrupts.deferred(reraise=True):
-                pending = {executor.submit(run_batch, job, batch) for batch in plan}
-            while pending:
-                # looked at every STOP_POLL_S: a stop that a scheduler's code swallowed
-                # on the main thread still ends the run at once
-                done, pending = cf.wait(pending, STOP_POLL_S, cf.FIRST_COMPLETED)
-                interrupts.raise_if_stopped()
-                for future in done:
-                    rows.update((r["scenario"], r) for r in future.result())
-                if done and progress:
-                    progress(len(rows), count)
-        interrupts.raise_if_stopped()
+            plan = [[index] for batch in plan for index in batch]
+        interrupted = gather(executor, run_batch, [(job, batch) for batch in plan], collect)
     except KeyboardInterrupt:
         interrupted = True
-        halt(executor)  # what was not handed out is cancelled, workers and all
+        halt(executor)
     # a stop that something on the way swallowed still stops the run; a scenario whose
     # flight says it was interrupted is no scenario flown
     cut = [i for i, row in rows.items() if row["ended"] == "interrupted"]

@@ -287,7 +287,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     # abandons it, leaving the folder's previous run): the run is written whole or not.
     with interrupts.deferred(armed=False) as writing, \
             output_folder(out, command="sim", force=force, recognised=RECOGNISED_FILES,
-                          inputs=read)) as folder:
+                          inputs=read) as folder:
         try:
             record = fly(mission, water, config, vehicle, plan, None if plan_path is None
                          else str(plan_path), runtime, robust_tracker=tracker == "robust",

@@ -33,6 +33,8 @@ REPO = Path(__file__).resolve().parents[1]
 FIG2 = REPO / "examples" / "fig2.mission"
 SURVEY = REPO / "examples" / "thermocline_survey.mission"
 MONTH = REPO / "examples" / "survey_month.mission"
+FLEET = REPO / "tests" / "fleets" / "small.fleet"
+CALM = str(REPO / "tests" / "fleets" / "calm.toml")
 STOPPED = {signal.SIGINT: ExitCode.INTERRUPTED, signal.SIGTERM: ExitCode.TERMINATED}
 PROMPT_S = 60.0  # a stopped command exits within this of the signal, whatever the load
 HUNG_S = 300.0  # a command still running this long after its start is killed: it hung
@@ -109,7 +111,20 @@ def _check_folder(out: Path, sent: bool, code: int) -> str:
                                              if p.name != RUN_MARKER)
     summary = json.loads((out / "summary.json").read_text())
     assert marker["complete"] is summary["complete"]
-    if "requested" in summary:  # Monte Carlo
+    if "finish_probability" in summary:  # a fleet's Monte Carlo: a row per glider
+        table = pd.read_parquet(out / "scenarios.parquet")
+        gliders = table.groupby("scenario")["glider"].nunique()
+        assert len(gliders) == summary["scenarios"]
+        assert (gliders == table["glider"].nunique()).all()  # each scenario flown by all
+        assert not (table["ended"] == "interrupted").any()
+        if summary["complete"]:
+            assert summary["scenarios"] == summary["requested"]
+            assert summary["finish_probability"] is not None
+        else:  # no finish probability as if complete
+            assert summary["interrupted"] and summary["scenarios"] < summary["requested"]
+            assert summary["finish_probability"] is None
+            assert summary["finish_interval"] is None
+    elif "requested" in summary:  # Monte Carlo
         table = pd.read_parquet(out / "scenarios.parquet")
         assert len(table) == summary["scenarios"] and table["scenario"].is_unique
         assert not (table["ended"] == "interrupted").any()  # no scenario cut short counted
@@ -131,12 +146,37 @@ def _check_folder(out: Path, sent: bool, code: int) -> str:
     return "complete" if summary["complete"] else "partial"
 
 
+@pytest.fixture(scope="module")
+def fleet_plan(tmp_path_factory) -> Path:
+    """A plan of the small fleet (`fleet plan -o`), for the fleet's runs to fly."""
+    out = tmp_path_factory.mktemp("fleet") / "plan"
+    assert main(["fleet", "plan", str(FLEET), "--scenario-file", CALM, "-o", str(out)]) == 0
+    return out
+
+
 @pytest.mark.parametrize("name", COMMANDS)
 def test_a_signal_at_any_moment_stops_the_command_and_nothing_passes_for_complete(
         name, tmp_path):
     if "Dask" in name:
         pytest.importorskip("distributed")
-    argv, writes = COMMANDS[name]
+    signals_at_random_moments(name, *COMMANDS[name], tmp_path)
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_a_signal_at_any_moment_stops_a_fleet_monte_carlo_with_no_finish_probability(
+        workers, fleet_plan, tmp_path):
+    """Longer than any moment drawn (1,000 scenarios of three gliders): a run that went on
+    past its stop, or gave a finish probability from the scenarios it had, would be seen."""
+    signals_at_random_moments(
+        f"fleet montecarlo, {workers} workers",
+        ["fleet", "montecarlo", str(FLEET), "--plan", str(fleet_plan), "--scenarios", "1000",
+         "--workers", workers], "folder", tmp_path)
+
+
+def signals_at_random_moments(name: str, argv: list[str], writes: str, tmp_path: Path) -> None:
+    """Run the command MOMENTS times, each stopped by a signal at a moment drawn for it;
+    every one must stop promptly with 130 or 143, its workers gone, and leave a whole
+    run, a partial one marked so, or nothing."""
     seen, stopped = [], 0
     for attempt, (lines, delay, signum, group) in enumerate(moments(name)):
         out = tmp_path / f"out{attempt}" / ("p.plan" if writes == "plan" else "run")
@@ -374,3 +414,63 @@ def test_a_deferred_stop_waits_for_the_writing_and_a_second_one_does_not():
             os.kill(os.getpid(), signal.SIGTERM)  # not armed yet: raises
             time.sleep(1.0)
     assert not later.requested
+
+
+def test_a_fleet_monte_carlo_stopped_keeps_whole_scenarios_and_gives_no_probability(
+        fleet_plan, tmp_path, monkeypatch, capsys):
+    """One worker flies alpha, bravo, charlie of scenario 0, then of 1...: stopped in
+    bravo's flight of scenario 1, only scenario 0 was flown by the whole fleet."""
+    interrupt_scenario(monkeypatch, 4)
+    out = tmp_path / "mc"
+    assert main(["fleet", "montecarlo", str(FLEET), "--plan", str(fleet_plan), "--scenarios",
+                 "3", "--workers", "1", "-o", str(out)]) == ExitCode.INTERRUPTED
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["complete"] is False and summary["interrupted"] is True
+    assert (summary["scenarios"], summary["requested"]) == (1, 3)
+    assert summary["finish_probability"] is None and summary["finish_interval"] is None
+    assert json.loads((out / RUN_MARKER).read_text())["complete"] is False
+    table = pd.read_parquet(out / "scenarios.parquet")
+    assert sorted(table["glider"]) == ["alpha", "bravo", "charlie"]
+    assert set(table["scenario"]) == {0}
+    said = capsys.readouterr()
+    assert "interrupted after 1 of 3 scenarios: no finish probability" in said.out
+    assert "1 of 3 scenarios finished" in said.err
+    assert "Interrupted after 1 of 3 scenarios" in (out / "fleet.html").read_text()
+
+
+def test_a_fleet_sim_stopped_writes_the_gliders_flown_and_no_verdict(fleet_plan, tmp_path,
+                                                                     monkeypatch, capsys):
+    """Stopped in bravo's flight, one worker: alpha's run is written, bravo's part flown
+    is not (a flight cut short is no flight), and the survey gets no verdict."""
+    interrupt_scenario(monkeypatch, 1)
+    out = tmp_path / "sim"
+    assert main(["fleet", "sim", str(FLEET), "--plan", str(fleet_plan), "--workers", "1",
+                 "-o", str(out)]) == ExitCode.INTERRUPTED
+    summary = json.loads((out / "fleet_sim.json").read_text())
+    assert summary["complete"] is False and summary["interrupted"] is True
+    assert (summary["flown"], summary["requested"]) == (1, 3)
+    assert summary["finished"] is None and summary["mapping_error"] is None
+    assert [g["name"] for g in summary["gliders"]] == ["alpha"]
+    assert sorted(p.name for p in out.iterdir()) == [RUN_MARKER, "alpha", "fleet_sim.json"]
+    assert json.loads((out / "alpha" / "summary.json").read_text())["complete"] is True
+    assert json.loads((out / RUN_MARKER).read_text())["complete"] is False
+    said = capsys.readouterr()
+    assert "no verdict on the survey" in said.out and "1 of 3 gliders flown" in said.err
+
+
+def test_an_interrupted_monte_carlo_with_replanning_gives_no_hold_rate(tmp_path, monkeypatch,
+                                                                        capsys):
+    """With --replan each scenario is flown twice (the plan alone, then replanned): stopped
+    in scenario 2's, two scenarios are kept and neither hold rate is given."""
+    plan = tmp_path / "p.plan"
+    assert main(["plan", str(FIG2), "-o", str(plan)]) == 0
+    interrupt_scenario(monkeypatch, 4)
+    out = tmp_path / "mc"
+    assert main(["montecarlo", str(FIG2), "--plan", str(plan), "--replan", "--scenarios", "5",
+                 "--workers", "1", "--json", "-o", str(out)]) == ExitCode.INTERRUPTED
+    summary = json.loads((out / "summary.json").read_text())
+    assert json.loads(capsys.readouterr().out) == summary
+    assert summary["complete"] is False and (summary["scenarios"], summary["requested"]) == (2, 5)
+    for key in ("probability_budget_holds", "probability_interval_95", "hold_rate",
+                "hold_rate_interval_95", "hold_rate_static", "hold_rate_static_interval_95"):
+        assert summary[key] is None, key

@@ -1,10 +1,12 @@
 """An output folder holds one run (issue 29, point 2).
 
 Every command that writes a folder (sim, montecarlo, plan --sweep, export -o, report,
-compare-sbc, compile) writes it through `contract.files.output_folder`: into a hidden
-folder beside the target, moved into place whole; a folder that holds anything but a
-gliderplan run is refused without --force; a second run into a folder being written is
-refused (a lock); a failed or full-disk run leaves the previous run as it was.
+compare-sbc, compile, fleet plan, fleet sim, fleet montecarlo) writes it through
+`contract.files.output_folder`: into a hidden folder beside the target, moved into place
+whole; a folder that holds anything but a gliderplan run is refused without --force; a
+second run into a folder being written is refused (a lock); a failed or full-disk run
+leaves the previous run as it was. Files that go together (a plan and its report, a plan
+update with the plan it makes) are written together or not at all.
 """
 
 from __future__ import annotations
@@ -29,6 +31,8 @@ from gliderplan.contract.files import RUN_MARKER
 REPO = Path(__file__).resolve().parents[1]
 FIG2 = REPO / "examples" / "fig2.mission"
 SURVEY = REPO / "examples" / "thermocline_survey.mission"
+FLEET = REPO / "tests" / "fleets" / "small.fleet"
+CALM = str(REPO / "tests" / "fleets" / "calm.toml")
 BUSY = "another gliderplan run is writing this folder"
 
 
@@ -43,6 +47,14 @@ def hidden_beside(folder: Path) -> list[str]:
 
 def sim(out: Path, mission: Path = FIG2, *options: str) -> int:
     return main(["sim", str(mission), *options, "-o", str(out)])
+
+
+@pytest.fixture(scope="module")
+def fleet_plan(tmp_path_factory) -> Path:
+    """A plan of the small fleet (`fleet plan -o`), for the fleet's runs to fly."""
+    out = tmp_path_factory.mktemp("fleet") / "plan"
+    assert main(["fleet", "plan", str(FLEET), "--scenario-file", CALM, "-o", str(out)]) == 0
+    return out
 
 
 def test_a_second_run_replaces_the_first_whole(tmp_path):
@@ -86,11 +98,15 @@ def test_a_run_written_before_folders_had_a_marker_is_replaced(tmp_path):
 
 
 @pytest.mark.parametrize("command", ["sim", "montecarlo", "plan --sweep", "export", "report",
-                                     "compare-sbc", "compile"])
-def test_every_command_that_writes_a_folder_refuses_another_s(command, tmp_path, capsys):
+                                     "compare-sbc", "compile", "fleet plan", "fleet sim",
+                                     "fleet montecarlo"])
+def test_every_command_that_writes_a_folder_refuses_another_s(command, tmp_path, capsys,
+                                                              request):
     run = tmp_path / "run"
     if command == "export":
         assert sim(run) == 0
+    plan = str(request.getfixturevalue("fleet_plan")) if command.startswith("fleet ") \
+        and command != "fleet plan" else ""
     out = tmp_path / "out"
     out.mkdir()
     (out / "notes.txt").write_text("mine\n")
@@ -100,7 +116,11 @@ def test_every_command_that_writes_a_folder_refuses_another_s(command, tmp_path,
             "export": ["export", str(run), "--geojson"],
             "report": ["report", str(FIG2)],
             "compare-sbc": ["compare-sbc", str(FIG2)],
-            "compile": ["compile", str(FIG2)]}[command]
+            "compile": ["compile", str(FIG2)],
+            "fleet plan": ["fleet", "plan", str(FLEET)],
+            "fleet sim": ["fleet", "sim", str(FLEET), "--plan", plan, "--workers", "1"],
+            "fleet montecarlo": ["fleet", "montecarlo", str(FLEET), "--plan", plan,
+                                 "--scenarios", "2", "--workers", "1"]}[command]
     capsys.readouterr()
     assert main([*argv, "-o", str(out)]) == ExitCode.USAGE
     assert "not a gliderplan run's folder (it holds notes.txt)" in capsys.readouterr().err
@@ -344,3 +364,47 @@ def test_a_build_without_a_plan_leaves_no_earlier_plan_beside_its_binary(tmp_pat
     assert main(["compile", str(annotated), "-o", str(build)]) == 0
     assert sorted(contents(build)) == [RUN_MARKER, "sampleMission", "sampleMission.c"]
     assert source.stat().st_mtime_ns == stamp  # the same C: make sees nothing to do
+
+
+def test_a_fleet_plan_is_a_folder_of_one_plan(fleet_plan, tmp_path, capsys):
+    marker = json.loads((fleet_plan / RUN_MARKER).read_text())
+    assert marker["command"] == "fleet plan" and marker["complete"] is True
+    assert sorted(marker["files"]) == sorted(set(contents(fleet_plan)) - {RUN_MARKER})
+    assert {"fleet.json", "alpha.plan", "bravo.mission", "charlie.plan.json",
+            "fleet.html"} <= set(marker["files"])
+    assert hidden_beside(fleet_plan) == []
+    # a fleet run never replaces the plan it flies
+    inside = fleet_plan.parent
+    capsys.readouterr()
+    assert main(["fleet", "montecarlo", str(FLEET), "--plan", str(fleet_plan), "--scenarios",
+                 "1", "--workers", "1", "--force", "-o", str(inside)]) == ExitCode.USAGE
+    assert f"{fleet_plan}: lies inside -o {inside}, which this run replaces whole" in \
+        capsys.readouterr().err
+    assert (fleet_plan / "fleet.json").is_file()
+
+
+def test_a_fleet_monte_carlo_replaces_the_previous_one_whole(fleet_plan, tmp_path, capsys):
+    out = tmp_path / "mc"
+    for scenarios in ("2", "1"):
+        assert main(["fleet", "montecarlo", str(FLEET), "--plan", str(fleet_plan),
+                     "--scenarios", scenarios, "--workers", "1", "-o", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["scenarios"], summary["requested"], summary["complete"]) == (1, 1, True)
+    import pandas as pd
+
+    assert set(pd.read_parquet(out / "scenarios.parquet")["scenario"]) == {0}
+    marker = json.loads((out / RUN_MARKER).read_text())
+    assert marker["command"] == "fleet montecarlo" and marker["complete"] is True
+    assert sorted(marker["files"]) == sorted(set(contents(out)) - {RUN_MARKER}) == [
+        "fleet.geojson", "fleet.html", "fleet.kml", "fleet.png", "mapping_error.png",
+        "scenarios.parquet", "summary.json"]
+    assert hidden_beside(out) == []
+    lock = tmp_path / ".mc.lock"  # a run writing it holds its lock: a second is refused
+    with open(lock, "w") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        capsys.readouterr()
+        assert main(["fleet", "montecarlo", str(FLEET), "--plan", str(fleet_plan),
+                     "--scenarios", "1", "--workers", "1", "-o", str(out)]) == ExitCode.USAGE
+        assert BUSY in capsys.readouterr().err
+    assert json.loads((out / "summary.json").read_text()) == summary
+
