@@ -144,8 +144,9 @@ def _fly_one(task: dict) -> dict:
 
 
 @contextmanager
-def _run_folder(output_dir, command: str, fleet: Fleet, plan: FleetPlan | StoredPlan,
-                force: bool, recognised: tuple[str, ...], inputs) -> Iterator:  # noqa: ANN001
+def _run_folder(output_dir: str | Path, command: str, fleet: Fleet,
+                plan: FleetPlan | StoredPlan, force: bool, recognised: tuple[str, ...],
+                inputs: Iterable) -> Iterator[tuple[OutputFolder, StoredPlan]]:
     """The run's folder (contract.files.output_folder) and the stored plan to fly: `plan`
     as stored (`fleet plan -o`), or made now and written into the folder's plan/."""
     names = (*recognised, *(g.name for g in fleet.gliders))
@@ -191,7 +192,7 @@ def fly_fleet(fleet: Fleet, plan: FleetPlan | StoredPlan, output_dir, *, workers
                 duration = lose[1] - spec.start_offset_s
             tasks.append(({
                 "name": glider.name, "mission_text": glider.mission_path.read_text(),
-                "mission_name": str(glider.mission_path),
+                "mission_name": str(stored.directory / glider.mission_path.name),
                 "plan_bytes": glider.plan_path.read_bytes(),
                 "runtime": runtime, "ocean": ocean, "current": current,
                 "seed": int(np.random.SeedSequence([seed, n]).generate_state(1)[0]),
@@ -458,12 +459,10 @@ def montecarlo_fleet(fleet: Fleet, plan: FleetPlan | StoredPlan, output_dir, *,
             jobs[glider.name] = montecarlo.Job(mission, flown_plan,
                                                load_vehicle(mission.vehicle), spec,
                                                flown_plan.budget_j, seed, duration)
-        # batches of a few scenarios per glider, so that every worker stays busy (one
-        # scenario each in this process: a stop keeps each one that finished)
-        per = 1 if workers <= 1 and scheduler is None else \
-            max(1, math.ceil(scenarios / (4 * max(workers, 1))))
-        work = [(name, list(range(i, min(i + per, scenarios))))
-                for i in range(0, scenarios, per) for name in jobs]
+        # one scenario of one glider per task: a flight of days takes far longer than
+        # sending it (montecarlo.BATCH_S), progress is seen, and a stop keeps each one
+        # that finished
+        work = [(name, [i]) for i in range(scenarios) for name in jobs]
         rows: dict[str, dict[int, dict]] = {name: {} for name in jobs}
         started = time.perf_counter()
         total = len(jobs) * scenarios
