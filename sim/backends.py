@@ -57,6 +57,9 @@ def halt(executor: cf.Executor | None) -> None:
     if not isinstance(executor, cf.ProcessPoolExecutor):
         return  # Dask: its tasks end when the client and the cluster close
     processes = list((getattr(executor, "_processes", None) or {}).values())
+    calls = getattr(executor, "_call_queue", None)
+    if calls is not None:  # its feeder may be blocked on a full pipe the killed workers no
+        calls.cancel_join_thread()  # longer read: not joined at exit (it would hang there)
     executor.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         if process.is_alive():
