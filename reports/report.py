@@ -39,8 +39,6 @@ REPORT_FILES = (HTML, "pareto.csv", "energy_by_state.csv", "speed.csv", "vehicle
                 "plan_vs_simulation.csv", "profile.csv", "track.csv", "sbc_boards.csv",
                 "sbc_workload.csv", "sbc_crossovers.csv", "sensitivity.csv",
                 "montecarlo.csv", "run")
-SECTIONS = ("summary", "pareto", "energy", "speed", "vehicles", "plan-vs-simulation",
-            "profile", "track", "sbc", "sensitivity", "montecarlo")
 
 
 @dataclass(frozen=True)
