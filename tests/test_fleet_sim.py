@@ -202,9 +202,9 @@ def test_the_monte_carlo_on_dask_gives_what_this_process_gives(fleet, planned, t
 
 
 def test_ctrl_c_on_dask_keeps_the_whole_scenarios_and_says_so(planned, tmp_path):
-    """Ctrl-C at a terminal (SIGINT to the whole process group, Dask's workers too): exit
-    130, and what is written is the scenarios every glider finished, marked interrupted,
-    never a finish probability over the scenarios asked."""
+    """Ctrl-C at a terminal (SIGINT to the whole process group, Dask's workers too) on
+    the default LocalCluster: exit 130, the scenarios every glider finished written and
+    marked incomplete, no finish probability, and no traceback from the cluster."""
     _, stored = planned
     out = tmp_path / "mc"
     run = subprocess.Popen(
@@ -220,12 +220,14 @@ def test_ctrl_c_on_dask_keeps_the_whole_scenarios_and_says_so(planned, tmp_path)
     said, err = run.communicate(timeout=120)
     assert run.returncode == 130
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["interrupted"] and summary["requested"] == 60
+    assert summary["scheduler"] == "local"
+    assert summary["interrupted"] and not summary["complete"] and summary["requested"] == 60
     assert 1 <= summary["scenarios"] < 60
+    assert summary["finish_probability"] is None and summary["finish_interval"] is None
     table = pd.read_parquet(out / "scenarios.parquet")
     assert (table.groupby("scenario")["glider"].nunique() == 3).all()
     assert table["scenario"].nunique() == summary["scenarios"]
-    assert f"of {summary['scenarios']} scenarios flown of 60 asked (interrupted)" in said
+    assert f"interrupted after {summary['scenarios']} of 60 scenarios" in said
     assert f"interrupted: {summary['scenarios']} of 60 scenarios finished" in err
     assert "Traceback" not in err
 
