@@ -73,10 +73,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                          help="the glider is lost at TIME after the survey's start (e.g. "
                               "ru29@3d); the report says what the rest can still cover")
         fly.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
-                         help="the LocalCluster's worker processes (default: one per core)")
-        fly.add_argument("--scheduler", metavar="local|tcp://HOST:PORT", default="local",
+                         help="worker processes (default: one per core; 1 flies in this "
+                              "process)")
+        fly.add_argument("--scheduler", metavar="local|tcp://HOST:PORT",
                          help="where the flights run, on Dask distributed: a LocalCluster "
-                              "of --workers processes (default), or a running scheduler")
+                              "of --workers processes (the default for more than one), or "
+                              "a running scheduler")
         fly.add_argument("--json", action="store_true", help="print the summary as JSON")
         if name == "sim":
             fly.add_argument("--ocean", default=None,
@@ -213,6 +215,8 @@ def _fly(args: argparse.Namespace) -> int:
     lose = parse_loss(args.lose, fleet)
     if args.workers < 1:
         raise UsageError(f"--workers {args.workers}: must be at least 1")
+    # on Dask by default: a LocalCluster of the workers (one worker: this process)
+    scheduler = args.scheduler or ("local" if args.workers > 1 else None)
     # without --plan, the fleet is planned now and the plan written into -o DIR/plan
     plan = _planned(args, fleet) if args.plan is None else load_plan_dir(args.plan, fleet)
     inputs = (args.fleet, args.scenario_file)
@@ -221,7 +225,7 @@ def _fly(args: argparse.Namespace) -> int:
         progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} gliders flown")
         try:
             summary = fly_fleet(fleet, plan, args.output, workers=args.workers,
-                                scheduler=args.scheduler, seed=args.seed, ocean=args.ocean,
+                                scheduler=scheduler, seed=args.seed, ocean=args.ocean,
                                 current=current, runtime=args.runtime, lose=lose,
                                 progress=progress, force=args.force, inputs=inputs)
         finally:
@@ -236,7 +240,7 @@ def _fly(args: argparse.Namespace) -> int:
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} flights")
     try:
         summary = montecarlo_fleet(fleet, plan, args.output, scenarios=args.scenarios,
-                                   workers=args.workers, scheduler=args.scheduler,
+                                   workers=args.workers, scheduler=scheduler,
                                    seed=args.seed, scenario_file=args.scenario_file,
                                    lose=lose, progress=progress, force=args.force,
                                    inputs=inputs)

@@ -12,6 +12,7 @@ import logging
 import multiprocessing
 import os
 import signal
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 
@@ -102,6 +103,21 @@ def gather(executor: cf.Executor | None, work: Callable, tasks: Sequence[tuple],
 
 
 @contextmanager
+def _spawned_ignoring_interrupt() -> Iterator[None]:
+    """Processes started inside ignore Ctrl-C, as the pool's workers do (`halt`): an
+    ignored signal stays ignored across exec, where Dask spawns its workers (a worker that
+    took the terminal's Ctrl-C died printing its traceback); the parent closes them."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+@contextmanager
 def scenario_executor(workers: int, scheduler: str | None = None
                       ) -> Iterator[cf.Executor | None]:
     """An executor for `workers` workers: None (this process) for one worker and no
@@ -139,7 +155,8 @@ def scenario_executor(workers: int, scheduler: str | None = None
                 environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ"))
                 environ.pop("MALLOC_TRIM_THRESHOLD_", None)
                 with dask.config.set({"distributed.worker.profile.enabled": False,
-                                      "distributed.nanny.pre-spawn-environ": environ}):
+                                      "distributed.nanny.pre-spawn-environ": environ}), \
+                        _spawned_ignoring_interrupt():
                     # its workers' own logs (a heartbeat that failed as the cluster
                     # closed on a stop) are not the user's concern: a task's error comes
                     # back to us with its future
