@@ -75,12 +75,9 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     hardware = load_hardware(mission, battery=battery, computer=computer,
                              cycles_per_tick=cycles_per_tick)
     if currents is not None:
-        from gliderplan.planner.water import plan_water
-        from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
+        from gliderplan.planner.water import in_water
 
-        legs, notes = plan_water(mission, currents, start, DEFAULT_START_EPOCH_S
-                                 if start_epoch_s is None else start_epoch_s)
-        hardware = replace(hardware, legs=legs, water_notes=notes)
+        hardware = in_water(hardware, mission, currents, start, start_epoch_s)
     if occupancy_from_sim:
         result = _plan_on_simulation(mission, hardware, scenarios, seed, scenario_file,
                                      workers, progress)

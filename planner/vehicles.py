@@ -45,6 +45,16 @@ def _yo_band(mission: ir.CheckedMission) -> tuple[float, float, float] | None:
     return None
 
 
+def flies_on(mission: ir.CheckedMission, spec: str) -> bool:
+    """Whether the vehicle `spec` (a preset or file) can fly an alternative of each state."""
+    from gliderplan.language.registry import cannot_fly
+    from gliderplan.power_models.vehicle import load_vehicle
+
+    vehicle = load_vehicle(spec)
+    return all(any(cannot_fly(p.kind, p.thrust, vehicle) is None for p in state.profiles)
+               for state in mission.states)
+
+
 def compare_vehicles(mission: ir.CheckedMission, specs: list[str],
                      battery: str | None = None) -> list[VehicleResult]:
     """Plan `mission` on each vehicle of `specs` (presets or files) in place of its own."""

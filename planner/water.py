@@ -14,6 +14,8 @@ length. The field is `--currents` as the simulator and the forecast read it
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,6 +23,9 @@ from gliderplan.language import ir
 from gliderplan.planner.legs import Position, distance_m, offset_m, route_targets
 from gliderplan.planner.speed import Leg
 from gliderplan.sim.currents import CurrentField
+
+if TYPE_CHECKING:
+    from gliderplan.planner.hardware import Hardware
 
 LEG_SAMPLES = 11  # points along a leg the current is averaged over
 MIN_LEG_M = 1.0  # [m] a leg shorter than this (the start on a waypoint) has no direction
@@ -92,3 +97,14 @@ def plan_water(mission: ir.CheckedMission, spec: str, start: Position | None,
     notes.append(f"currents: each propelled state's speed chosen for the least energy per "
                  f"km over ground on its route from {start[0]:.5f}, {start[1]:.5f}")
     return route_legs(mission, field, start, epoch_s), tuple(notes)
+
+
+def in_water(hardware: Hardware, mission: ir.CheckedMission, currents: str,
+             start: Position | None = None, epoch_s: float | None = None) -> Hardware:
+    """`hardware` planned in the current of `--currents` (`plan_water`; `epoch_s` None:
+    the simulator's default start)."""
+    from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
+
+    legs, notes = plan_water(mission, currents, start,
+                             DEFAULT_START_EPOCH_S if epoch_s is None else epoch_s)
+    return replace(hardware, legs=legs, water_notes=notes)

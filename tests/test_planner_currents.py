@@ -153,3 +153,24 @@ def test_the_speed_curve_is_drawn_in_the_current_with_the_chosen_point(tmp_path)
     assert curve.min() >= chosen["energy_per_km_kj"].iloc[0] * (1 - 1e-9)
     still = frame[(frame["water"] == STILL) & ~frame["chosen"]]["energy_per_km_kj"]
     assert still.min() < curve.min()  # the head current makes every km dearer
+
+
+def test_the_html_report_plans_draws_and_flies_the_mission_in_the_current(tmp_path):
+    import pandas as pd
+
+    from gliderplan.reports.report import make_report
+    from gliderplan.reports.speed import CURRENT, STILL
+
+    mission = check_source(MISSION, "cruise_north.mission").mission
+    make_report(mission, tmp_path, sweep_points=3, currents="-0.2,0")
+    frame = pd.read_csv(tmp_path / "speed.csv")
+    plan = json.loads((tmp_path / "cruiseNorth.plan.json").read_text())
+    chosen = frame[frame["chosen"]]
+    assert chosen["water"].tolist() == [CURRENT]
+    assert chosen["speed_mps"].iloc[0] == pytest.approx(plan["states"][0]["speed_m_s"])
+    assert plan["states"][0]["speed_m_s"] == pytest.approx(
+        _brute_force_mps(_load_w(plan["states"][0]), -0.2), rel=0.01)
+    assert set(frame["water"]) == {CURRENT, STILL}
+    assert "in the current" in (tmp_path / "report.html").read_text()
+    run = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert run["current_mps"] == {"north": -0.2, "east": 0.0}  # flown in it too
