@@ -99,7 +99,8 @@ NEEDS = {
     "--start": ("--currents",),
 }
 # what a sweep does not do: refused beside --sweep rather than ignored
-NOT_WITH_SWEEP = ("--confidence", "--occupancy-from-sim", "--sign", "--scenarios")
+NOT_WITH_SWEEP = ("--confidence", "--occupancy-from-sim", "--sign", "--scenarios",
+                  "--currents")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -119,9 +119,12 @@ def test_a_head_current_below_the_range_never_picks_a_speed_without_headway():
     assert speed > head and math.isfinite(cost)
 
 
-def test_start_goes_with_currents(capsys, mission_file):
+def test_start_goes_with_currents_and_a_sweep_does_not(capsys, mission_file, tmp_path):
     assert main(["plan", str(mission_file), "--start", "39.17,-73.83"]) != 0
     assert "--currents" in capsys.readouterr().err
+    assert main(["plan", str(mission_file), "--sweep", "3", "-o", str(tmp_path / "sweep"),
+                 "--currents=0,0.1"]) != 0
+    assert "--sweep plans at N budgets without --currents" in capsys.readouterr().err
 
 
 def test_route_legs_resolve_the_current_on_each_track():
