@@ -22,10 +22,10 @@ import argparse
 from gliderplan.cli.common import (
     add_currents_argument,
     add_mission_argument,
+    add_replan_confidence_argument,
     load_mission,
     parse_start,
     refuse_unpaired,
-    replan_confidence,
     start_epoch_s,
 )
 from gliderplan.contract import ExitCode
@@ -40,9 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--telemetry", required=True, nargs="+", metavar="T",
                         help="the glider's surfacing reports: a JSON file, or Slocum logs "
                              "(.sbd/.tbd, .dbd/.ebd) or directories of them")
-    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
-                        help="the probability the budget holds (default: the plan's own, "
-                             "else 0.95)")
+    add_replan_confidence_argument(parser)
     parser.add_argument("--key", metavar="KEYFILE",
                         help="the vehicle's key (gliderplan keygen): signs the update")
     parser.add_argument("--seq", type=int, metavar="N",
