@@ -389,6 +389,10 @@ class _MissionWriter:
             f"    .min_pitch_rad = {c_double(low)},",
             f"    .max_pitch_rad = {c_double(high)},",
             f"    .max_speed_mps = {c_double(limits.max_speed_mps)},",
+            f"    .min_propelled_mps = {c_double(limits.propelled_speed_mps[0])},",
+            f"    .max_propelled_mps = {c_double(limits.propelled_speed_mps[1])},",
+            f"    .min_thrust_w = {c_double(limits.thrust_range_w[0])},",
+            f"    .max_thrust_w = {c_double(limits.thrust_range_w[1])},",
             f"    .states = {'state_bounds' if limits.duty_bounds else 'NULL'},",
             "};", ""]
 

@@ -222,6 +222,8 @@ typedef enum {
     GP_UF_PROFILE_PITCH = 8,  /**< field 3 */
     GP_UF_PROFILE_BALLAST = 9,  /**< field 4 */
     GP_UF_PROFILE_SPEED = 10,  /**< field 5 */
+    /** `profile ... THRUST_W`: field 6, appended where the line has none */
+    GP_UF_PROFILE_THRUST = 11,
 } gp_update_field;
 
 /** UPDATE_STATUS's `status`: what became of a plan update (docs/plan-update.md). */

@@ -120,6 +120,8 @@ typedef struct {
     double max_budget_j;          /**< the battery less its reserve [J] */
     double min_pitch_rad, max_pitch_rad;  /**< commanded pitch, open range [rad] */
     double max_speed_mps;         /**< the vehicle's fastest glide [m/s] */
+    double min_propelled_mps, max_propelled_mps;  /**< a level profile's speeds [m/s] */
+    double min_thrust_w, max_thrust_w;  /**< a yo's thruster command, where on [W] */
     const gp_state_bounds *states;  /**< one per state */
 } gp_plan_bounds;
 

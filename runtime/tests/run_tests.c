@@ -95,6 +95,7 @@
     X(test_update_should_refuse_forged_stale_and_replayed_updates_and_other_plans) \
     X(test_update_should_refuse_malformed_updates_naming_the_change)        \
     X(test_update_should_refuse_a_plan_the_reader_refuses)                  \
+    X(test_update_should_set_a_thrusters_power_within_its_rating)           \
     X(test_update_decimal_text_should_write_plan_numbers)                   \
     X(test_random_updates_should_never_crash_the_applier)                   \
     X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \
