@@ -81,6 +81,13 @@ def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]])
                              f"{option} out")
 
 
+def add_force_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--force", action="store_true",
+                        help="write into an -o folder that holds files other than a "
+                             "gliderplan run's: they are deleted (without it such a folder "
+                             "is refused; a previous run's folder is always replaced whole)")
+
+
 def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cycles-per-tick", type=cycles_per_tick, metavar="N",
                         default=RUNTIME_CYCLES_PER_TICK,
