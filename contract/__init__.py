@@ -382,6 +382,7 @@ FLAG_DONE = 1 << 1  # the mission exited
 FLAG_CLIMBING = 1 << 2  # else diving
 FLAG_HEADING = 1 << 3  # `heading_rad` is valid
 FLAG_ENVELOPE = 1 << 4  # the envelope guard held this command at the vehicle's rating
+FLAG_HEADING_HOLD = 1 << 5  # `heading_rad` is held as it is, uncorrected for the current
 
 # SENSORS's `flags`; the other bits are reserved (0), and a SENSORS with one set is dropped.
 SENSORS_MASK = 1 << 0  # a u32 mask follows; else the values are those of HELLO's read_mask

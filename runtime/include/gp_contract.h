@@ -134,6 +134,7 @@ enum {
     GP_FLAG_CLIMBING = 4u,  /**< else diving */
     GP_FLAG_HEADING = 8u,  /**< `heading_rad` is valid */
     GP_FLAG_ENVELOPE = 16u,  /**< the envelope guard held this command at the vehicle's rating */
+    GP_FLAG_HEADING_HOLD = 32u,  /**< `heading_rad` is held as it is, uncorrected for the current */
 };
 
 /* ---- SENSORS's flags */

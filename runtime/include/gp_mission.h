@@ -46,6 +46,7 @@ typedef enum {
     GP_ROUTE_WAYPOINTS = 2,
     GP_ROUTE_SWEEP = 3,
     GP_ROUTE_GOTO_LIST = 4,
+    GP_ROUTE_HEADING = 5,        /**< a compass heading held, uncorrected for the current */
 } gp_route_kind;
 
 /**
@@ -80,7 +81,8 @@ typedef struct {
 typedef struct {
     uint8_t kind;          /**< gp_route_kind */
     uint8_t n_points;
-    double param;          /**< sweep: line spacing [m]; goto_list: radius [m]; else unused */
+    double param;          /**< sweep: line spacing [m]; goto_list: radius [m];
+                                heading: the heading held [rad]; else unused */
     const double (*points)[2];  /**< (lat, lon) DDMM.MMMM; nav has one point */
 } gp_route;
 
