@@ -7,6 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import FlightLimits
 from gliderplan.language import ir
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 from gliderplan.sim.loop import RunConfig, RunRecord, make_science, simulate
@@ -16,7 +17,7 @@ if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
     from gliderplan.sim.faults import FaultSpec
 
-RUNTIMES = ("python", "c")
+RUNTIMES = ("python", "c", "step")
 
 
 def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Vehicle,
@@ -57,16 +58,21 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         record.entry_variables = executor.entry_variables
         record.events_fired = executor.event_count
         return record
-    if runtime != "c":
+    if runtime not in ("c", "step"):
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
-    from gliderplan.contract import FlightLimits
-    from gliderplan.planner.limits import flight_limits
-    from gliderplan.planner.planfile import plan_board_limits
+    limits = flown_limits(mission, vehicle, plan)
+    if runtime == "step":
+        from gliderplan.planner.planfile import write_plan_bytes
+        from gliderplan.sim.cstep import CStep
+
+        step = CStep(mission, None if plan is None else write_plan_bytes(plan), limits,
+                     naive_tracker=not robust_tracker)
+        record = simulate(mission, step, science, config, progress, gauge=gauge)
+        record.entry_variables, record.events_fired = step.entry_variables, step.events_fired
+        record.suspends = step.suspends
+        return record
     from gliderplan.sim.emulator import start_c_runtime
 
-    board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
-    limits = FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc,
-                          board.clocks_mhz)  # the vehicle flown: a scenario's may differ
     schedule = None
     if faults is not None:
         from gliderplan.sim.faults import FaultSchedule
@@ -102,3 +108,14 @@ def refuse_unflyable_yos(mission: ir.CheckedMission, vehicle: Vehicle,
             ballast = planned.ballast_cc if planned else vehicle.unplanned_ballast_cc
             with flying_yo(f"{state.name}: flightprofile {k}", vehicle, args[0], args[1]):
                 vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)
+
+
+def flown_limits(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None
+                 ) -> FlightLimits:
+    """The limits the compiled runtime flies with: the vehicle flown (a scenario's may
+    differ from the mission's) on the board the plan flies on (else the mission's)."""
+    from gliderplan.planner.limits import flight_limits
+    from gliderplan.planner.planfile import plan_board_limits
+
+    board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
+    return FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, board.clocks_mhz)

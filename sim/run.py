@@ -107,15 +107,15 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
-    sensor a state logs is always on). `runtime`: "python" (the reference executor) or
-    "c" (the compiled runtime over a pseudo-terminal). `ocean`: a preset (bench,
-    sea-trial, uniform), a CSV file, or Slocum science logs to replay (FILE.ebd or a
-    directory): the glider flies its temperature, salinity and in-situ density (TEOS-10),
-    ballasted for the mean density over the depths the mission flies, as `gliderplan
-    forecast` flies it (`planner.rates.band_density`, `Vehicle.ballasted_for`); default:
-    the bench preset's temperatures in uniform water of the vehicle's reference density.
-    `noise`: a key of
-    `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
+    sensor a state logs is always on). `runtime`: "python" (the reference executor), "c"
+    (the compiled runtime over a pseudo-terminal) or "step" (its step in this process).
+    `ocean`: a preset (bench, sea-trial, uniform), a CSV file, or Slocum science logs to
+    replay (FILE.ebd or a directory): the glider flies its temperature, salinity and
+    in-situ density (TEOS-10), ballasted for the mean density over the depths the mission
+    flies, as `gliderplan forecast` flies it (`planner.rates.band_density`,
+    `Vehicle.ballasted_for`); default: the bench preset's temperatures in uniform water of
+    the vehicle's reference density. `noise`: a key of `science.NOISE_PRESETS`.
+    `tracker`: "robust" or "naive" (the paper's first).
     `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
     horizon, else 30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the
     replayed logs' first sample, else 2000-01-01T00:00:00Z). `netcdf`: also write
@@ -197,7 +197,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         from gliderplan.planner.signing import check_signature, read_key
 
         key = read_key(key_path)
-        if runtime == "python":  # the C runtime checks for itself
+        if runtime != "c":  # the C runtime over the link checks for itself
             check_signature(read_plan_data(plan_path), key, str(plan_path))
     plotter: PlotProcess | None = None
 

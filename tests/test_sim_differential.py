@@ -1,8 +1,9 @@
 """Differential tests.
 
-1. Every example mission and every simulator mission, flown once by the Python executor
-   and once by the compiled C runtime over a pty against the same simulated glider,
-   gives the same trace.csv (and, through the same glider, the same dive profile).
+1. Every example mission and every simulator mission, flown by the Python executor, by
+   the compiled C runtime over a pty and by its step in this process against the same
+   simulated glider, gives the same trace.csv (and, through the same glider, the same dive
+   profile).
 2. The fast executor (runs of ticks at once, sim/fast.py) and the tick-by-tick reference
    fly every example, every simulator mission and random missions alike: the same
    transition trace and every per-tick record, bit for bit.
@@ -50,7 +51,7 @@ needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler 
 def test_python_and_c_runtimes_give_identical_traces(path, tmp_path, capsys):
     options = RUN_OPTIONS.get(path.name, [])
     runs = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         code = main(["sim", str(path), "--runtime", runtime, "--seed", "7", *options,
                      "-o", str(out)])
@@ -58,23 +59,24 @@ def test_python_and_c_runtimes_give_identical_traces(path, tmp_path, capsys):
         runs[runtime] = out
     python_trace = (runs["python"] / "trace.csv").read_text()
     assert python_trace.count("\n") >= 2  # a start and at least one more transition
-    assert (runs["c"] / "trace.csv").read_text() == python_trace
     python_series = pd.read_parquet(runs["python"] / "timeseries.parquet")
-    c_series = pd.read_parquet(runs["c"] / "timeseries.parquet")
-    for column in ("depth_m", "pitch_rad", "state", "stack_depth", "profile", "temp_on"):
-        assert python_series[column].equals(c_series[column]), column
+    for runtime in ("c", "step"):
+        assert (runs[runtime] / "trace.csv").read_text() == python_trace, runtime
+        series = pd.read_parquet(runs[runtime] / "timeseries.parquet")
+        for column in ("depth_m", "pitch_rad", "state", "stack_depth", "profile", "temp_on"):
+            assert python_series[column].equals(series[column]), (runtime, column)
 
 
 @needs_cc
 def test_the_naive_tracker_is_the_same_in_both_runtimes(tmp_path):
     path = REPO / "tests" / "missions" / "sim_sea_trial.mission"
     depths = []
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         assert main(["sim", str(path), "--runtime", runtime, "--ocean", "sea-trial",
                      "--noise", "nonmonotonic", "--tracker", "naive", "-o", str(out)]) == 0
         depths.append(pd.read_parquet(out / "timeseries.parquet")["depth_m"])
-    assert depths[0].equals(depths[1])
+    assert depths[0].equals(depths[1]) and depths[0].equals(depths[2])
 
 
 def write_plan(path: Path, mission_path: Path) -> Path:
@@ -98,17 +100,20 @@ def test_a_plan_s_schedule_is_flown_the_same_by_both_runtimes(tmp_path):
     mission = REPO / "tests" / "missions" / "sim_alternating.mission"
     plan = write_plan(tmp_path / "alternating.plan", mission)
     series = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         assert main(["sim", str(mission), "--plan", str(plan), "--runtime", runtime,
                      "-o", str(out)]) == 0
         series[runtime] = (pd.read_parquet(out / "timeseries.parquet"),
                            (out / "trace.csv").read_text())
-    (python, python_trace), (c, c_trace) = series["python"], series["c"]
-    assert c_trace == python_trace and python_trace.count("call") == 2
-    for column in ("depth_m", "pitch_rad", "profile", "temp_on", "oxygen_on", "lat_deg",
-                   "lon_deg"):
-        assert python[column].equals(c[column]), column
+    python, python_trace = series["python"]
+    assert python_trace.count("call") == 2
+    for runtime in ("c", "step"):
+        c, c_trace = series[runtime]
+        assert c_trace == python_trace, runtime
+        for column in ("depth_m", "pitch_rad", "profile", "temp_on", "oxygen_on", "lat_deg",
+                       "lon_deg"):
+            assert python[column].equals(c[column]), (runtime, column)
     survey = python[python["state"] == "survey"]
     assert set(survey["profile"]) == {0, 1}  # both bands flown
     assert 0.25 < survey["temp_on"].mean() < 0.45  # 20 s of every 60 s
@@ -122,16 +127,18 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
     plan = tmp_path / "mission.plan"
     assert main(["plan", str(mission), "-o", str(plan)]) == 0
     outputs = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         assert main(["sim", str(mission), "--plan", str(plan), "--runtime", runtime,
                      "-o", str(out)]) == 0
         outputs[runtime] = ((out / "trace.csv").read_text(),
                             pd.read_parquet(out / "timeseries.parquet"))
-    (python_trace, python), (c_trace, c) = outputs["python"], outputs["c"]
-    assert c_trace == python_trace
-    for column in ("depth_m", "profile", "temp_on", "oxygen_on"):
-        assert python[column].equals(c[column]), column
+    python_trace, python = outputs["python"]
+    for runtime in ("c", "step"):
+        c_trace, c = outputs[runtime]
+        assert c_trace == python_trace, runtime
+        for column in ("depth_m", "profile", "temp_on", "oxygen_on"):
+            assert python[column].equals(c[column]), (runtime, column)
 
 
 # ---- the fast executor against the tick-by-tick reference ------------------------------

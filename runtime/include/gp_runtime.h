@@ -58,4 +58,12 @@ void gp_runtime_init(gp_runtime *rt);
 void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
                      uint32_t tick, gp_command *cmd, gp_tick_report *report);
 
+/**
+ * @brief Whether the board sleeps after answering the last tick: the state flown sleeps
+ *        between ticks (the plan's SLEEP, without a plan the mission's `computer sleep
+ *        between ticks`); never once the mission has ended.
+ */
+int gp_runtime_sleeps(const gp_runtime *rt, const gp_mission *mission,
+                      const gp_run_options *options);
+
 #endif /* GP_RUNTIME_H */

@@ -142,3 +142,13 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
     rt->last_command = *cmd;
     rt->has_command = 1;
 }
+
+int gp_runtime_sleeps(const gp_runtime *rt, const gp_mission *mission,
+                      const gp_run_options *options)
+{
+    uint8_t state = rt->machine.state;
+    if (state >= mission->n_states) {
+        return 0;
+    }
+    return options->plan ? options->plan->states[state].sleep : mission->states[state].sleep;
+}
