@@ -35,7 +35,7 @@ SHARED_FLAGS = ("-fPIC", "-shared", "-ffp-contract=off", "-fno-builtin-sin",
 # The runtime's sources the step needs: not its link, serial line, store or main.
 STEP_SOURCES = ("gp_crc.c", "gp_machine.c", "gp_pilot.c", "gp_plan.c", "gp_route.c",
                 "gp_runtime.c", "gp_sha256.c")
-SIM_SOURCES = ("step.c",)  # the simulator's side: the step's context
+SIM_SOURCES = ("step.c", "flight.c")  # the simulator's side: the step's context, the loop
 LIBRARY_NAME = "gpstep"
 FAULTS = {3: "overflow", 4: "underflow", 5: "bad table"}  # gp_step_result of a refusal
 

@@ -63,10 +63,14 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     limits = flown_limits(mission, vehicle, plan)
     if runtime == "step":
         from gliderplan.planner.planfile import write_plan_bytes
+        from gliderplan.sim.cflight import CFlight, flies_in_c, flight_context_bytes
         from gliderplan.sim.cstep import CStep
 
         step = CStep(mission, None if plan is None else write_plan_bytes(plan), limits,
-                     naive_tracker=not robust_tracker)
+                     naive_tracker=not robust_tracker, context_bytes=flight_context_bytes())
+        if flies_in_c(ocean):
+            return CFlight(mission, step, science, gauge.billing, mission.battery.energy_j,
+                           config).fly(progress)
         record = simulate(mission, step, science, config, progress, gauge=gauge)
         record.entry_variables, record.events_fired = step.entry_variables, step.events_fired
         record.suspends = step.suspends

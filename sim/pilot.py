@@ -202,6 +202,12 @@ PROFILE_ROUTINES = {"yo": Yo, "thermotrackyo": ThermoTrackYo, "surface": Surface
 
 # ---- routes ----------------------------------------------------------------------------
 
+def length_m(north_m: float, east_m: float) -> float:
+    """The length [m] of an offset: sqrt(north^2 + east^2), each operation rounded once
+    (not math.hypot, whose last bit differs from the C library's)."""
+    return math.sqrt(north_m * north_m + east_m * east_m)
+
+
 class NoHeading:
     k = 0  # no waypoint: nothing to resume
     reached = 0  # waypoints reached (the runtime's `wptreached`): never one
@@ -246,14 +252,14 @@ class Waypoints:
             return math.nan
         north, east = offset_m(ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm),
                                *self.points[self.k])
-        return math.hypot(north, east)
+        return length_m(north, east)
 
     def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
         if not (math.isfinite(lat_ddmm) and math.isfinite(lon_ddmm)):
             return 0.0, False
         lat, lon = ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm)
         north, east = offset_m(lat, lon, *self.points[self.k])
-        if math.hypot(north, east) <= self.radius_m and self.may_reach():
+        if length_m(north, east) <= self.radius_m and self.may_reach():
             self.reached += 1
             if self._advances():
                 self.k = (self.k + 1) % len(self.points)

@@ -119,6 +119,11 @@ class Draws:
             return self._rows[at]
         return self._blocks[0][at].tolist()  # a block entered by `skip`: row by row
 
+    def block(self) -> np.ndarray:
+        """The next block of rows as the generator draws it (for a caller that takes the
+        rows itself, sim/cflight.py, and no longer `next`)."""
+        return self._draw_block()
+
     def peek(self, count: int) -> np.ndarray:
         """The next `count` rows as an array, without taking them."""
         if self._at == _NOISE_BLOCK:
@@ -170,10 +175,12 @@ class ScienceComputer:
         self.start_epoch_s = start_epoch_s  # UTC of missiontime 0 [s since 1970]
         self.rng = np.random.default_rng(seed)
         self.sensor_power = 0  # from the last COMMAND; nothing is powered before the first
-        self._lag_keep = math.exp(-tick_s / noise.temperature_lag_s) \
+        self.lag_keep = math.exp(-tick_s / noise.temperature_lag_s) \
             if noise.temperature_lag_s > 0.0 else 0.0
         self._ctd_temp = math.nan
-        self._flicker_c = noise.flicker_c if self.rng.random() < 0.5 else -noise.flicker_c
+        self.flicker_c = noise.flicker_c if self.rng.random() < 0.5 else -noise.flicker_c
+        c = glider.current
+        self.current_reading = math.hypot(c.north_mps, c.east_mps)  # [m s-1]
         # (temperature, depth) standard normal draws, one row per tick
         self.normal = Draws(lambda: self.rng.standard_normal((_NOISE_BLOCK, 2)))
         # spikes come from a stream of their own: a run without them draws as before
@@ -200,19 +207,18 @@ class ScienceComputer:
         temp, salinity = self.ocean.water_at(g.depth_m, time_s)
         self.water_temperature_c = temp
         ctd = self._ctd_temp
-        ctd = temp if ctd != ctd else temp + (ctd - temp) * self._lag_keep
+        ctd = temp if ctd != ctd else temp + (ctd - temp) * self.lag_keep
         self._ctd_temp = ctd
-        self._flicker_c = -self._flicker_c
-        measured = ctd + noise.temperature_sigma_c * z_temp + self._flicker_c
+        self.flicker_c = -self.flicker_c
+        measured = ctd + noise.temperature_sigma_c * z_temp + self.flicker_c
         if self.spikes is not None:
             measured += self.noise.spike_c * self.spikes.next()
         depth = max(0.0, g.depth_m + noise.depth_sigma_m * z_depth)
-        c = self.glider.current
         values = [  # in _READINGS_ORDER; the runtime's own readings are never sent: NaN
             time_s, depth, g.pitch_rad, _ROLL, g.heading_rad, altitude,
             degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
             measured, conductivity_s_m(measured, salinity), salinity,
-            _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, math.hypot(c.north_mps, c.east_mps), _MODEM,
+            _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, self.current_reading, _MODEM,
             math.nan, math.nan,  # halfcycle, wptdist
             math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
             self.energy_left_j,
@@ -229,9 +235,9 @@ class ScienceComputer:
         noise = self.noise
         count = len(depth_m)
         water, salinity = self.ocean.water_along(depth_m, time_s)
-        lagged = native.first_order_lag(water, self._ctd_temp, self._lag_keep)
+        lagged = native.first_order_lag(water, self._ctd_temp, self.lag_keep)
         odd = np.arange(count) % 2 == 1
-        flicker = np.where(odd, self._flicker_c, -self._flicker_c)
+        flicker = np.where(odd, self.flicker_c, -self.flicker_c)
         z_temp = self.normal.peek(count)[:, 0]
         measured = lagged + noise.temperature_sigma_c * z_temp + flicker
         if self.spikes is not None:
@@ -241,7 +247,7 @@ class ScienceComputer:
     def commit_ctd(self, run: CtdRun, count: int, last_reading_c: float) -> None:
         """Advance past the first `count` ticks of `run` (their random numbers too)."""
         self._ctd_temp = float(run.lagged_c[count - 1])
-        self._flicker_c = float(run.flicker_c[count - 1])
+        self.flicker_c = float(run.flicker_c[count - 1])
         self.water_temperature_c = float(run.water_c[count - 1])
         self.ctd_temperature_c = last_reading_c
         self.normal.skip(count)

@@ -1,8 +1,8 @@
 /* The simulator's C side: the runtime's own step, in this process.
  *
  * A shared library of the runtime's step sources (runtime/src: the tick, the event
- * system, the pilot, the routes, the plan reader) and this file, built once and cached
- * (sim/cstep.py); a mission's tables
+ * system, the pilot, the routes, the plan reader), this file and the flight loop
+ * (flight.c), built once and cached (sim/cstep.py); a mission's tables
  * (language/codegen_c.py) come in another shared object, by the address of their
  * gp_mission. The context is allocated by the caller (gps_step_size bytes); nothing here
  * allocates, reads or writes a file. */

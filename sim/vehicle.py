@@ -195,7 +195,7 @@ class GliderSim:
         self.floor_m = math.inf  # [m] the sea floor under the glider this tick (inf: none)
         self.grounded = False  # the last step stopped at the sea floor
 
-    def _per_root(self, pitch_rad: float) -> tuple[float, float]:
+    def glide_speeds(self, pitch_rad: float) -> tuple[float, float]:
         """(u, w) [m s-1] per square root of the net buoyancy [cc] at a pitch [rad]
         magnitude; commands repeat, so the angle-of-attack solve runs once per pitch."""
         if pitch_rad <= 0.0 or pitch_rad >= math.pi / 2:
@@ -244,7 +244,7 @@ class GliderSim:
             # hovering: small buoyancy corrections toward the target depth
             step_m = min(abs(depth_target_m - self.depth_m), HOVER_RATE_M_S * self.tick_s)
             return math.copysign(step_m, depth_target_m - self.depth_m), 0.0, True
-        dz, distance = self.glide_rates(self._per_root(abs(pitch_rad)), self.ballast_cc,
+        dz, distance = self.glide_rates(self.glide_speeds(abs(pitch_rad)), self.ballast_cc,
                                         glide_s, self.depth_m)
         return dz, distance, False
 
@@ -316,7 +316,7 @@ class GliderSim:
             glide_s, servo_pitch = scratch._actuate(pitch_rad, ballast_cc)
             if ballast_cc == 0.0 and scratch.ballast_cc == 0.0:
                 return None  # hovering
-            per_root = scratch._per_root(abs(servo_pitch))
+            per_root = scratch.glide_speeds(abs(servo_pitch))
             dz, distance = scratch.glide_rates(per_root, scratch.ballast_cc, glide_s,
                                                scratch.depth_m)
             rows.append((dz, distance, scratch.phase, scratch.pumped_out_cc,

@@ -4,9 +4,10 @@
    the compiled C runtime over a pty and by its step in this process against the same
    simulated glider, gives the same trace.csv (and, through the same glider, the same dive
    profile).
-2. The fast executor (runs of ticks at once, sim/fast.py) and the tick-by-tick reference
-   fly every example, every simulator mission and random missions alike: the same
-   transition trace and every per-tick record, bit for bit.
+2. The fast executor (runs of ticks at once, sim/fast.py), the C flight (the runtime's step
+   with the glider, science and energy models in C, sim/flight.c) and the tick-by-tick
+   reference fly every example, every simulator mission and random missions alike: the
+   same transition trace and every per-tick record, bit for bit.
 """
 
 from __future__ import annotations
@@ -155,16 +156,19 @@ def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=No
         vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
     water = load_ocean(ocean) if isinstance(ocean, str) else ocean
     reference = fly(mission, water, config, vehicle, plan, tick_by_tick=True)
-    fast = fly(mission, water, config, vehicle, plan)
-    assert fast.trace == reference.trace
-    assert (fast.ended, fast.surfacings, fast.events_fired) == \
-        (reference.ended, reference.surfacings, reference.events_fired)
-    assert fast.columns.keys() == reference.columns.keys()
-    for name, column in reference.columns.items():
-        ours = fast.columns[name]
-        assert ours.dtype == column.dtype and ours.shape == column.shape, name
-        assert np.array_equal(ours.view(np.uint8), column.view(np.uint8)), name
-    return fast
+    for runtime in ("python", "step"):  # the fast executor, the C flight (sim/flight.c)
+        flown = fly(mission, water, config, vehicle, plan, runtime=runtime)
+        assert flown.trace == reference.trace, runtime
+        assert (flown.ended, flown.surfacings, flown.events_fired, flown.grounded_ticks) == \
+            (reference.ended, reference.surfacings, reference.events_fired,
+             reference.grounded_ticks), runtime
+        assert flown.entry_variables == reference.entry_variables, runtime
+        assert flown.columns.keys() == reference.columns.keys(), runtime
+        for name, column in reference.columns.items():
+            ours = flown.columns[name]
+            assert ours.dtype == column.dtype and ours.shape == column.shape, (runtime, name)
+            assert np.array_equal(ours.view(np.uint8), column.view(np.uint8)), (runtime, name)
+    return flown
 
 
 # (ocean, noise, current north/east [m/s], duration [s], rigid hull) each mission is

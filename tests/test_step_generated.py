@@ -1,0 +1,77 @@
+"""Differential tests by generation: the runtime's step against the Python reference.
+
+Missions drawn at random (tests/missiongen.py: states entered by goto and by call, calls
+nested up to the declared stack, every sensor, variables and `set`, every profile and
+route, sleep between ticks, a plan's duty cycles and profile shares) are stepped by the
+Python reference executor and by the compiled runtime's step, in this process, on the
+same readings: the COMMAND of every tick, the runtime's own readings, a refused event,
+the variables, the variables each state was entered with, the events fired and the
+board's sleeps must be identical. The missions are compiled a batch at a time, in one
+shared object.
+
+A case that fails is written to tests/step_regressions/unsaved-failure.json (hypothesis
+shrinks it first: the last one written is the smallest); give it a name and commit it:
+`test_regressions_still_agree` steps every case kept there.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from missiongen import Case, cases, checked, compare, limits_of
+
+REGRESSIONS = Path(__file__).with_name("step_regressions")
+MISSIONS_PER_BATCH = 20
+BATCHES = 100  # 2,000 missions
+
+needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc)")
+
+
+def compiled_tables(missions: list, directory: Path) -> list[int]:
+    """The addresses of the missions' tables, compiled together into one shared object."""
+    from gliderplan.language.codegen_c import generate_c
+    from gliderplan.sim.cstep import build_shared, tables_in
+
+    source = directory / "batch.c"
+    source.write_text("\n".join(generate_c(m, limits_of(m), prefix=f"m{i}_")
+                                for i, m in enumerate(missions)))
+    library = ctypes.CDLL(str(build_shared("batch", [source], directory)))
+    return [tables_in(library, f"m{i}_gp_mission_table") for i in range(len(missions))]
+
+
+def kept(case: Case) -> None:
+    """Write a failing case where it is kept (see the module's docstring)."""
+    REGRESSIONS.mkdir(exist_ok=True)
+    (REGRESSIONS / "unsaved-failure.json").write_text(json.dumps(case.to_json(), indent=1)
+                                                      + "\n")
+
+
+@needs_cc
+@settings(max_examples=BATCHES, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                 HealthCheck.large_base_example])
+@given(st.lists(cases(), min_size=MISSIONS_PER_BATCH, max_size=MISSIONS_PER_BATCH))
+def test_the_step_and_the_reference_agree_on_generated_missions(batch):
+    flown = [(case, *checked(case)) for case in batch]
+    with tempfile.TemporaryDirectory(prefix="gliderplan-generated-") as directory:
+        tables = compiled_tables([mission for _, mission, _ in flown], Path(directory))
+    for (case, mission, plan), address in zip(flown, tables, strict=True):
+        try:
+            compare(case, mission, plan, address)
+        except AssertionError:
+            kept(case)
+            raise
+
+
+@needs_cc
+@pytest.mark.parametrize("path", sorted(REGRESSIONS.glob("*.json")), ids=lambda p: p.stem)
+def test_regressions_still_agree(path):
+    case = Case(**json.loads(path.read_text()))
+    compare(case, *checked(case))
