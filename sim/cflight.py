@@ -247,9 +247,15 @@ class CFlight:
         names = tuple(s.name for s in self.mission.states)
         trace: list[Transition] = []
         ended = "duration"
+        report_at = PROGRESS_TICKS  # the tick past which progress is reported next
         try:
             while True:
                 status = library.gps_fly(context, PROGRESS_TICKS)
+                if progress is not None:  # the loop returns often (noise, pitches, trace)
+                    tick = int(self._status()[0])
+                    if tick > report_at:
+                        progress((tick - 1) * self.tick_s, self.last_tick * self.tick_s)
+                        report_at = tick - tick % PROGRESS_TICKS + PROGRESS_TICKS
                 if status == NEED_NOISE:
                     self._give_noise()
                 elif status == NEED_PITCH:
@@ -258,11 +264,7 @@ class CFlight:
                     library.gps_flight_speeds(context, pitch, u, w)
                 elif status == TRACE_FULL:
                     trace += self._take_trace(names)
-                elif status == RAN:
-                    if progress is not None:
-                        tick = int(self._status()[0])
-                        progress((tick - 1) * self.tick_s, self.last_tick * self.tick_s)
-                else:
+                elif status != RAN:
                     break
             report = Report()
             library.gps_flight_report(context, ctypes.byref(report))

@@ -1,8 +1,10 @@
 """One simulated flight of a checked mission: the glider and its science computer in an
-ocean, flown by the Python executor or by the compiled C runtime over a pty."""
+ocean, flown by the compiled runtime's step in this process (the default), by the
+Python reference executor or by the compiled C runtime over a pty."""
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -20,26 +22,36 @@ if TYPE_CHECKING:
 RUNTIMES = ("python", "c", "step")
 
 
+def default_runtime() -> str:
+    """"step" (the compiled runtime's step in this process), or "python" (the reference
+    executor) where no C compiler is installed to build it."""
+    from gliderplan.runtime.build import TARGETS
+
+    return "step" if shutil.which(TARGETS["host"].compiler) else "python"
+
+
 def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Vehicle,
-        plan: Plan | None = None, plan_path: str | None = None, runtime: str = "python",
+        plan: Plan | None = None, plan_path: str | None = None, runtime: str | None = None,
         robust_tracker: bool = True,
         progress: Callable[[float, float], None] | None = None,
-        tick_by_tick: bool = False, key_path: str | None = None,
+        key_path: str | None = None,
         state_dir: str | Path | None = None,
         faults: FaultSpec | None = None) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends.
 
-    The Python executor flies runs of ticks at once where nothing can happen between them
-    (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
-    the reference loop instead. The C runtime reads its plan from `plan_path` (the file
-    `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
-    uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
-    given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
-    when it refuses the plan. `faults` (C runtime only) are injected on the line and into
-    the runtime's board; the record says what they did.
+    `runtime`: "step" (the compiled runtime's step with the glider, science and energy
+    models in C, sim/flight.c, or in Python for water the C loop does not model), "python"
+    (the reference executor, tick by tick: the same flight bit for bit), "c" (the board
+    binary over a pty); default `default_runtime()`. The C runtime reads its plan from
+    `plan_path` (the file `plan` was read from), or with `key_path` (the key provisioned
+    on the vehicle) gets it uploaded over the link, and keeps its checkpoints and event
+    log in `state_dir` if given; raises emulator.EmulatorError when it cannot be built or
+    started, PlanRejected when it refuses the plan. `faults` (C runtime only) are injected
+    on the line and into the runtime's board; the record says what they did.
     """
     from gliderplan.sim.energy import BatteryGauge
 
+    runtime = runtime or default_runtime()
     science = make_science(mission, ocean, config, vehicle)
     gauge = BatteryGauge(mission, vehicle, plan, config.tick_s)
     if runtime == "python":
@@ -48,13 +60,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         # without a plan: the same buoyancy volume the compiler gives the C runtime
         executor = PythonRuntime(mission, plan, vehicle.unplanned_ballast_cc, robust_tracker,
                                  vehicle.max_ballast_cc)
-        if tick_by_tick:
-            record = simulate(mission, executor, science, config, progress, gauge=gauge)
-        else:
-            from gliderplan.sim.fast import FastForward
-
-            record = simulate(mission, executor, science, config, progress,
-                              FastForward(mission, executor, science), gauge)
+        record = simulate(mission, executor, science, config, progress, gauge=gauge)
         record.entry_variables = executor.entry_variables
         record.events_fired = executor.event_count
         return record

@@ -54,16 +54,16 @@ def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(job.seed, spawn_key=(index,))
 
 
-def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
-    """Fly scenario `index`: one row of the results table (`tick_by_tick`: on the
-    reference executor alone, as sim.flight.fly)."""
+def fly_scenario(job: Job, index: int, runtime: str | None = None) -> dict:
+    """Fly scenario `index`: one row of the results table (`runtime` as sim.flight.fly's:
+    by default the compiled runtime's step)."""
     from gliderplan.sim.flight import fly
 
     scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
     config = RunConfig(tick_s=job.tick_s, duration_s=job.duration_s, seed=scenario.seed,
                        noise=scenario.noise, current=scenario.current)
     record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
-                 robust_tracker=job.robust_tracker, tick_by_tick=tick_by_tick)
+                 robust_tracker=job.robust_tracker, runtime=runtime)
     energy = account(record, job.mission, scenario.vehicle, job.plan)
     check = check_flight(energy, job.plan)
     budget = job.budget_j * scenario.usable_fraction

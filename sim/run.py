@@ -95,7 +95,7 @@ def grounding(record: RunRecord) -> dict | None:
 
 
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
-                plan_path: str | Path | None = None, runtime: str = "python",
+                plan_path: str | Path | None = None, runtime: str | None = None,
                 ocean: str | None = None, noise: str = "ctd", tracker: str = "robust",
                 current: Current | None = None, seed: int = 0, tick_s: float = TICK_S,
                 duration_s: float | None = None, start_utc: str | None = None,
@@ -107,8 +107,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
-    sensor a state logs is always on). `runtime`: "python" (the reference executor), "c"
-    (the compiled runtime over a pseudo-terminal) or "step" (its step in this process).
+    sensor a state logs is always on). `runtime`: "step" (the compiled runtime's step in
+    this process; the default where a C compiler is installed), "python" (the reference
+    executor) or "c" (the compiled runtime over a pseudo-terminal).
     `ocean`: a preset (bench, sea-trial, uniform), a CSV file, or Slocum science logs to
     replay (FILE.ebd or a directory): the glider flies its temperature, salinity and
     in-situ density (TEOS-10), ballasted for the mean density over the depths the mission
@@ -144,7 +145,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim import export, outputs
     from gliderplan.sim import plots as drawing
     from gliderplan.sim.export import parse_utc, utc_text
-    from gliderplan.sim.flight import fly, refuse_unflyable_yos
+    from gliderplan.sim.flight import default_runtime, fly, refuse_unflyable_yos
     from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig
     from gliderplan.sim.ocean import flat_floor, load_water, parse_floor
     from gliderplan.sim.plotter import PlotProcess
@@ -156,6 +157,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     if noise not in NOISE_PRESETS or tracker not in TRACKERS:
         raise UsageError(f"noise {noise!r} or tracker {tracker!r}: expected one of "
                          f"{', '.join(NOISE_PRESETS)} and one of {', '.join(TRACKERS)}")
+    runtime = runtime or default_runtime()
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")

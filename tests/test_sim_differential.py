@@ -4,10 +4,11 @@
    the compiled C runtime over a pty and by its step in this process against the same
    simulated glider, gives the same trace.csv (and, through the same glider, the same dive
    profile).
-2. The fast executor (runs of ticks at once, sim/fast.py), the C flight (the runtime's step
-   with the glider, science and energy models in C, sim/flight.c) and the tick-by-tick
-   reference fly every example, every simulator mission and random missions alike: the
-   same transition trace and every per-tick record, bit for bit.
+2. The C flight (the runtime's step with the glider, science and energy models in C,
+   sim/flight.c: the simulator's default) and the Python reference (the reference
+   executor and the Python models, tick by tick) fly every example, every simulator
+   mission and random missions alike: the same transition trace, events, variables and
+   every per-tick record (the energy's too), bit for bit.
 """
 
 from __future__ import annotations
@@ -142,32 +143,30 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
             assert python[column].equals(c[column]), (runtime, column)
 
 
-# ---- the fast executor against the tick-by-tick reference ------------------------------
+# ---- the C flight against the Python reference ---------------------------------------
 
 def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=None,
                 rigid: bool = False):
-    """Fly `mission` tick by tick and in runs (in `ocean`, a preset name or an Ocean;
-    `vehicle`: default the mission's, whose calibrated hull is compressible: its speed
-    changes with depth; `rigid`: with the hull made incompressible, whose legs the fast
-    executor predicts and certifies instead); the two flights must be the same (the
-    flight is returned)."""
+    """Fly `mission` on the Python reference and in the C flight (in `ocean`, a preset name
+    or an Ocean; `vehicle`: default the mission's, whose calibrated hull is compressible:
+    its speed changes with depth; `rigid`: with the hull made incompressible); the two
+    flights must be the same (the flight is returned)."""
     vehicle = vehicle or load_vehicle(mission.vehicle)
     if rigid:
         vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
     water = load_ocean(ocean) if isinstance(ocean, str) else ocean
-    reference = fly(mission, water, config, vehicle, plan, tick_by_tick=True)
-    for runtime in ("python", "step"):  # the fast executor, the C flight (sim/flight.c)
-        flown = fly(mission, water, config, vehicle, plan, runtime=runtime)
-        assert flown.trace == reference.trace, runtime
-        assert (flown.ended, flown.surfacings, flown.events_fired, flown.grounded_ticks) == \
-            (reference.ended, reference.surfacings, reference.events_fired,
-             reference.grounded_ticks), runtime
-        assert flown.entry_variables == reference.entry_variables, runtime
-        assert flown.columns.keys() == reference.columns.keys(), runtime
-        for name, column in reference.columns.items():
-            ours = flown.columns[name]
-            assert ours.dtype == column.dtype and ours.shape == column.shape, (runtime, name)
-            assert np.array_equal(ours.view(np.uint8), column.view(np.uint8)), (runtime, name)
+    reference = fly(mission, water, config, vehicle, plan, runtime="python")
+    flown = fly(mission, water, config, vehicle, plan, runtime="step")
+    assert flown.trace == reference.trace
+    assert (flown.ended, flown.surfacings, flown.events_fired, flown.grounded_ticks) == \
+        (reference.ended, reference.surfacings, reference.events_fired,
+         reference.grounded_ticks)
+    assert flown.entry_variables == reference.entry_variables
+    assert flown.columns.keys() == reference.columns.keys()
+    for name, column in reference.columns.items():
+        ours = flown.columns[name]
+        assert ours.dtype == column.dtype and ours.shape == column.shape, name
+        assert np.array_equal(ours.view(np.uint8), column.view(np.uint8)), name
     return flown
 
 
@@ -179,7 +178,7 @@ FAST_CASES = [("bench", "ctd", (0.0, 0.0), 2 * 86400.0, False),
 
 @pytest.mark.parametrize("case", FAST_CASES, ids=["bench", "sea-trial-current-rigid"])
 @pytest.mark.parametrize("path", MISSIONS, ids=lambda p: p.name)
-def test_the_fast_executor_flies_every_mission_as_the_reference(path, case):
+def test_the_c_flight_flies_every_mission_as_the_reference(path, case):
     ocean, noise, (north, east), duration_s, rigid = case
     mission = check_file(str(path)).mission
     config = RunConfig(duration_s=min(duration_s, mission.horizon_s or duration_s), seed=11,
@@ -190,7 +189,7 @@ def test_the_fast_executor_flies_every_mission_as_the_reference(path, case):
 @pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
 @pytest.mark.parametrize("name", ["fig2_annotated.mission", "thermocline_survey.mission",
                                   "survey_month.mission"])
-def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, rigid, tmp_path):
+def test_the_c_flight_flies_the_planner_s_plans_as_the_reference(name, rigid, tmp_path):
     from gliderplan.planner.planfile import load_plan
 
     path = REPO / "examples" / name
@@ -202,7 +201,7 @@ def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, rigi
     flown_alike(mission, config, "sea-trial", load_plan(plan_path, mission), rigid=rigid)
 
 
-def test_the_fast_executor_flies_a_hand_written_schedule_as_the_reference(tmp_path):
+def test_the_c_flight_flies_a_hand_written_schedule_as_the_reference(tmp_path):
     from gliderplan.planner.planfile import load_plan
 
     path = REPO / "tests" / "missions" / "sim_alternating.mission"
@@ -219,7 +218,7 @@ FLOORS = [flat_floor(38.0), flat_floor(20.0),
 
 @pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
 @pytest.mark.parametrize("floor", FLOORS, ids=["38m", "20m", "along-time"])
-def test_the_fast_executor_flies_over_a_sea_floor_as_the_reference(floor, rigid):
+def test_the_c_flight_flies_over_a_sea_floor_as_the_reference(floor, rigid):
     mission = check_file(str(REPO / "tests" / "missions" / "sim_altimeter.mission")).mission
     config = RunConfig(duration_s=mission.horizon_s or 12600.0, seed=4,
                        noise=NOISE_PRESETS["ctd"], floor=floor)
@@ -238,10 +237,10 @@ def test_the_fast_executor_flies_over_a_sea_floor_as_the_reference(floor, rigid)
     ("examples/thermocline_survey.mission", "sea-trial", None),
     ("examples/fig2_annotated.mission", "bench", None),
     ("tests/missions/sim_altimeter.mission", "sea-trial", flat_floor(38.0))])
-def test_the_fast_executor_flies_the_water_s_density_as_the_reference(name, ocean, floor,
+def test_the_c_flight_flies_the_water_s_density_as_the_reference(name, ocean, floor,
                                                                        rigid):
     # the water's in-situ density at each depth (sim --ocean): a rigid hull's speed then
-    # changes with depth too, and its yos are flown as a compressible hull's are
+    # changes with depth too
     from gliderplan.sim.ocean import density_profile_of, load_water
     from gliderplan.sim.run import flown_water
 
@@ -333,7 +332,7 @@ def random_missions(draw) -> str:
             + "\n".join(states))
 
 
-_SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return ends a run on the tick the climb surfaces
+_SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return on the tick the climb surfaces
     "mission random\nstate s0\nbegin\n  flightroute noheading\n  flightprofile yo(0, 10, .3, .3)\n"
     "  sensors missiontime, depth\n  events\n    case missiontime >= 1800 exit\n"
     "    case depth > 10 call s1\nend\nstate s1\nbegin\n  flightroute noheading\n"
@@ -350,7 +349,7 @@ _SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return ends a run on the tick the clim
        floor=st.sampled_from([None, 12.0, 30.0, 55.0]))
 @example(source=_SURFACED_ON_THE_RUN_S_LAST_TICK, ocean="bench", noise="none",
          current=(0.0, 0.0), seed=0, tick_s=4.0, start_s=9e8, rigid=True, floor=None)
-def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean, noise,
+def test_the_c_flight_flies_random_missions_as_the_reference(source, ocean, noise,
                                                                   current, seed, tick_s,
                                                                   start_s, rigid, floor):
     result = check_source(source, "random.mission")
@@ -362,13 +361,13 @@ def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean,
 
 
 # (mission, scenario, days): the survey's whole flight; 10 days of the month's scenario 1
-# end a run of ticks on the last of a block of random numbers (the spikes' stream)
+# cross the end of a block of random numbers (the spikes' stream)
 MONTE_CARLO_CASES = [("thermocline_survey.mission", 0, 1.5), ("thermocline_survey.mission", 1, 1.5),
                      ("survey_month.mission", 1, 10.0)]
 
 
 @pytest.mark.parametrize(("name", "index", "days"), MONTE_CARLO_CASES)
-def test_the_fast_executor_flies_monte_carlo_scenarios_as_the_reference(name, index, days):
+def test_the_c_flight_flies_monte_carlo_scenarios_as_the_reference(name, index, days):
     # the scenarios' own water (an internal wave), noise (spikes), current and vehicle
     from gliderplan.sim.montecarlo import Job, scenario_seed
     from gliderplan.sim.scenarios import draw_scenario, read_spec
