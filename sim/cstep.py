@@ -74,19 +74,21 @@ def _key(parts: Sequence[tuple[str, bytes]]) -> str:
     return digest.hexdigest()
 
 
-def build_shared(name: str, sources: Sequence[Path], out: Path) -> Path:
+def build_shared(name: str, sources: Sequence[Path], out: Path, optimize: bool = True) -> Path:
     """Compile `sources` with the runtime's headers into the shared object `out`/lib`name`.so
-    (a temporary file renamed: a failed build leaves nothing). StepBuildError on failure."""
+    (a temporary file renamed: a failed build leaves nothing). StepBuildError on failure.
+    `optimize` False: -O0, for code compiled once and run briefly (the same doubles: no
+    contraction, no excess precision on the host)."""
     import subprocess
 
-    from gliderplan.runtime.build import C_FLAGS, LINK_FLAGS
+    from gliderplan.runtime.build import LINK_FLAGS
 
     command, _ = _compiler()
     out.mkdir(parents=True, exist_ok=True)
     target = out / f"lib{name}.so"
     fd, tmp = tempfile.mkstemp(prefix=f".{name}.", dir=out)
     os.close(fd)
-    args = [*command, *C_FLAGS, *SHARED_FLAGS, f"-I{_runtime_root() / 'include'}",
+    args = [*command, *_c_flags(optimize), *SHARED_FLAGS, f"-I{_runtime_root() / 'include'}",
             f"-I{_sim_root()}", *map(str, sources), "-o", tmp, *LINK_FLAGS]
     try:
         done = subprocess.run(args, capture_output=True, text=True, timeout=600)
@@ -99,6 +101,12 @@ def build_shared(name: str, sources: Sequence[Path], out: Path) -> Path:
     finally:
         Path(tmp).unlink(missing_ok=True)
     return target
+
+
+def _c_flags(optimize: bool) -> list[str]:
+    from gliderplan.runtime.build import C_FLAGS
+
+    return [flag if optimize or not flag.startswith("-O") else "-O0" for flag in C_FLAGS]
 
 
 def _cached(name: str, key: str, sources: Callable[[Path], Sequence[Path]]) -> Path:

@@ -354,6 +354,10 @@ def limits_of(mission):
 
 
 def _bits(x: float, f32: bool = False) -> bytes:
+    """The number's bits, every NaN alike: the language has one NaN, whose sign and
+    payload nothing reads (C's fmod(38, -0.0) is x86's negative NaN, Python's positive)."""
+    if x != x:
+        return b"NaN"
     return struct.pack("<f" if f32 else "<d", x)
 
 

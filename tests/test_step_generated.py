@@ -11,25 +11,33 @@ shared object.
 
 A case that fails is written to tests/step_regressions/unsaved-failure.json (hypothesis
 shrinks it first: the last one written is the smallest); give it a name and commit it:
-`test_regressions_still_agree` steps every case kept there.
+`test_regressions_still_agree` steps every case kept there. The missions' tables are
+compiled without optimisation (half the time; the same doubles), the step library as
+the simulator builds it.
+
+GLIDERPLAN_GENERATED_BATCHES sets the number of batches (default 250: 2,000 missions);
+GLIDERPLAN_MUTANT (tests/mutants.py) turns shrinking and the keeping of failures off.
 """
 
 from __future__ import annotations
 
 import ctypes
 import json
+import os
 import shutil
 import tempfile
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 from missiongen import Case, cases, checked, compare, limits_of
 
 REGRESSIONS = Path(__file__).with_name("step_regressions")
-MISSIONS_PER_BATCH = 20
-BATCHES = 100  # 2,000 missions
+# 8 missions an example: more overflow hypothesis's buffer, and drawing them is retried
+MISSIONS_PER_BATCH = 8
+BATCHES = int(os.environ.get("GLIDERPLAN_GENERATED_BATCHES", "250"))  # 2,000 missions
+MUTANT = bool(os.environ.get("GLIDERPLAN_MUTANT"))  # a fault is planted: find it, fast
 
 needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc)")
 
@@ -42,12 +50,14 @@ def compiled_tables(missions: list, directory: Path) -> list[int]:
     source = directory / "batch.c"
     source.write_text("\n".join(generate_c(m, limits_of(m), prefix=f"m{i}_")
                                 for i, m in enumerate(missions)))
-    library = ctypes.CDLL(str(build_shared("batch", [source], directory)))
+    library = ctypes.CDLL(str(build_shared("batch", [source], directory, optimize=False)))
     return [tables_in(library, f"m{i}_gp_mission_table") for i in range(len(missions))]
 
 
 def kept(case: Case) -> None:
     """Write a failing case where it is kept (see the module's docstring)."""
+    if MUTANT:
+        return
     REGRESSIONS.mkdir(exist_ok=True)
     (REGRESSIONS / "unsaved-failure.json").write_text(json.dumps(case.to_json(), indent=1)
                                                       + "\n")
@@ -55,6 +65,7 @@ def kept(case: Case) -> None:
 
 @needs_cc
 @settings(max_examples=BATCHES, deadline=None, database=None,
+          phases=[Phase.generate] if MUTANT else list(Phase),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
                                  HealthCheck.large_base_example])
 @given(st.lists(cases(), min_size=MISSIONS_PER_BATCH, max_size=MISSIONS_PER_BATCH))
