@@ -41,6 +41,11 @@ lint: $(STAMP)
 test: $(STAMP) lint sysdeps
 	$(BIN)/python -m pytest -q
 
+# Each listed fault planted in turn in the Python reference and in the C step: one line
+# per mutant, `caught` or `survived`; fails if any survived (tests/mutants.py).
+mutants: $(STAMP)
+	$(BIN)/python tests/mutants.py
+
 # Toolchains for the TS-7800 (ARMv5TE) and TS-5500 (i486) builds, qemu-user to run them
 # on the boards' CPU models, valgrind, libFuzzer, musl built for the i486. Under CI=true
 # a tool that cannot be installed fails the run, and so does any test that skips.
