@@ -8,18 +8,34 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint sysdeps mutants clean
+.PHONY: demo test lint sysdeps mutants clean lock
 
-$(STAMP): pyproject.toml
+# Installs are reproducible: every package at the version constraints.txt pins (`make
+# lock` updates it on purpose).
+$(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[test]'
+	$(BIN)/pip install --quiet -c constraints.txt -e '.[test]'
 	touch $@
+
+# A fresh resolve of pyproject.toml's ranges into constraints.txt, in a scratch venv;
+# then `make clean test` and commit both.
+LOCK_VENV := .venv-lock
+lock:
+	rm -rf $(LOCK_VENV)
+	$(PYTHON) -m venv $(LOCK_VENV)
+	$(LOCK_VENV)/bin/pip install --quiet --upgrade pip
+	$(LOCK_VENV)/bin/pip install --quiet -e '.[test]'
+	{ sed -n '/^#/p' constraints.txt; $(LOCK_VENV)/bin/pip freeze --exclude-editable; } \
+		> constraints.txt.new
+	mv constraints.txt.new constraints.txt
+	rm -rf $(LOCK_VENV)
 
 # The whole pipeline on the built-in examples: check, plan under the battery budget,
 # compile mission and plan to C, fly them on the simulated glider over a
-# pseudo-terminal, sweep the survey's quality against its budget, and write the
-# tradeoff report of the annotated Fig. 2 mission.
+# pseudo-terminal, sweep the survey's quality against its budget, forecast a month's
+# survey by device, and write the tradeoff report of the annotated Fig. 2 mission; then
+# plan, fly and report the example fleet of five gliders.
 DEMO := out/demo
 GP := $(BIN)/gliderplan
 demo: $(STAMP)
@@ -28,12 +44,21 @@ demo: $(STAMP)
 	$(GP) compile examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan -o $(DEMO)/build
 	$(GP) sim examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan --runtime c -o $(DEMO)/run
 	$(GP) plan examples/thermocline_survey.mission --sweep 20 -o $(DEMO)/sweep
+	$(GP) forecast examples/survey_month.mission --duration 30d
 	@echo "demo: plan and report in $(DEMO)/fig2.plan{,.json}; binary in $(DEMO)/build;"
 	@echo "      flight (trace.csv, summary.json, depth.png, energy.png) in $(DEMO)/run;"
 	@echo "      Pareto sweep (pareto.csv, pareto.png, computers.csv, batteries.csv) in $(DEMO)/sweep"
 	$(GP) report examples/fig2_annotated.mission --plan $(DEMO)/fig2.plan --run $(DEMO)/run \
 		-o $(DEMO)/report
 	@echo "report of the annotated Fig. 2 mission (open it in a browser): $(DEMO)/report/report.html"
+	$(GP) fleet plan examples/shelf.fleet -o $(DEMO)/fleet/plan
+	$(GP) fleet sim examples/shelf.fleet --plan $(DEMO)/fleet/plan -o $(DEMO)/fleet/sim \
+		--lose ru28@4d
+	$(GP) fleet montecarlo examples/shelf.fleet --plan $(DEMO)/fleet/plan --scenarios 10 \
+		-o $(DEMO)/fleet/montecarlo
+	@echo "fleet of five gliders on the shelf: plan, missions and map in $(DEMO)/fleet/plan;"
+	@echo "      one flight per glider (and ru28 lost after 4 d) in $(DEMO)/fleet/sim;"
+	@echo "      10 scenarios in $(DEMO)/fleet/montecarlo; each has its fleet.html page"
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -10,7 +10,6 @@ later ones from the fit alone, and replays the held-out half
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
 from gliderplan.contract.errors import GliderplanError, UsageError
@@ -67,13 +66,26 @@ def _fraction(text: str) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
+    from gliderplan.cli.common import refuse_unpaired
     from gliderplan.power_models import calibrate
 
     if args.max_error is not None and not args.validate:
         raise UsageError("--max-error needs --validate")
-    result = calibrate(args.logs, cache=args.cache, base=args.base, validate=args.validate,
-                       output=args.output, name=args.name)
-    print(json.dumps(result.report, indent=2) if args.json else _text(result.report))
+    refuse_unpaired(args, {"--name": ("--output",)})
+    from gliderplan.cli.progress import Steps
+
+    steps = Steps("calibrate")
+    try:
+        result = calibrate(args.logs, cache=args.cache, base=args.base, validate=args.validate,
+                           output=args.output, name=args.name, progress=steps)
+    finally:
+        steps.finish()
+    if args.json:
+        from gliderplan.cli.main import print_json
+
+        print_json(result.report)
+    else:
+        print(_text(result.report))
     if args.max_error is not None and abs(result.relative_error) > args.max_error:
         raise GliderplanError(f"forecast energy error {result.relative_error:+.1%} exceeds "
                               f"--max-error {args.max_error:.1%}")

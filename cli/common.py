@@ -44,6 +44,33 @@ def seed(text: str) -> int:
     return value
 
 
+def replan_confidence(text: str) -> float:
+    """A replan's confidence: a probability in [0.5, 1)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.5 <= value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a probability in [0.5, 1), got {text!r}")
+    return value
+
+
+def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]]) -> None:
+    """UsageError for an option given without one of the options it works with: `needs`
+    maps an option ("--scenarios") to those ("--confidence", "--occupancy-from-sim"); an
+    option is given when its value is neither None nor False."""
+    from gliderplan.contract.errors import UsageError
+
+    def given(option: str) -> bool:
+        return getattr(args, option.lstrip("-").replace("-", "_")) not in (None, False)
+
+    for option, partners in needs.items():
+        if given(option) and not any(given(p) for p in partners):
+            raise UsageError(f"{option} works only with {' or '.join(partners)}: give "
+                             f"{'one of them' if len(partners) > 1 else 'it'} too, or leave "
+                             f"{option} out")
+
+
 def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cycles-per-tick", type=cycles_per_tick, metavar="N",
                         default=RUNTIME_CYCLES_PER_TICK,
@@ -61,3 +88,57 @@ def load_mission(args: argparse.Namespace) -> CheckedMission:
     if result.diagnostics:
         print(result.render(), file=sys.stderr)
     return mission
+
+
+def add_start_argument(parser: argparse.ArgumentParser, default: str) -> None:
+    """`--start LAT,LON[,UTC]` (parse_start); `default`: what it is without one."""
+    parser.add_argument("--start", metavar="LAT,LON[,UTC]",
+                        help="where and when the glider is put in the water: LAT,LON "
+                             "[decimal degrees], LAT,LON,UTC or UTC (ISO 8601); default: "
+                             + default)
+
+
+def add_at_sea_arguments(parser: argparse.ArgumentParser, currents_default: str,
+                         map_shows: str) -> None:
+    """`--currents` (sim.current_files.load_currents) and `--map FILE` (sim.seamap)."""
+    parser.add_argument("--currents", metavar="N,E|FIELD.nc|LOGDIR",
+                        help="the current the glider flies through: N,E toward north and "
+                             "east [m/s]; a CF NetCDF current field (eastward/northward_"
+                             "sea_water_velocity, Copernicus uo/vo, HYCOM water_u/water_v); "
+                             "or Slocum flight logs (*.dbd) whose measured currents persist "
+                             f"(default: {currents_default})")
+    parser.add_argument("--map", metavar="FILE.png",
+                        help=f"also draw {map_shows} (PNG or SVG)")
+
+
+def parse_start(text: str) -> tuple[float | None, float | None, str | None]:
+    """`--start LAT,LON[,UTC]` or `--start UTC` -> (lat, lon [deg] or None, UTC text or
+    None); UsageError naming what is wrong."""
+    from gliderplan.contract.errors import UsageError
+
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) == 1:
+        return None, None, parts[0]
+    if len(parts) > 3:
+        raise UsageError(f"--start {text!r}: expected LAT,LON[,UTC] or UTC")
+    try:
+        lat, lon = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise UsageError(f"--start {text!r}: LAT,LON must be decimal degrees "
+                         "(e.g. 54.75,15.10)") from None
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise UsageError(f"--start {text!r}: latitude must lie in [-90, 90] and longitude "
+                         "in [-180, 180] degrees")
+    return lat, lon, parts[2] if len(parts) == 3 else None
+
+
+def start_epoch_s(when: str | None) -> float:
+    """The UTC of `--start` [s since 1970] (None: the simulator's default start)."""
+    from gliderplan.contract.errors import UsageError
+    from gliderplan.sim.export import parse_utc
+    from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
+
+    try:
+        return parse_utc(when) if when else DEFAULT_START_EPOCH_S
+    except ValueError as err:
+        raise UsageError(f"--start: {err}") from None

@@ -15,19 +15,38 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     add_mission_argument(parser)
     parser.add_argument("--plan", metavar="PLANFILE",
-                        help="plan file to check against the mission and copy beside the binary")
+                        help="plan file to check against the mission and the target's board, "
+                             "and copy beside the binary")
+    parser.add_argument("--key", metavar="KEYFILE",
+                        help="with --plan: the key provisioned on the vehicle (gliderplan "
+                             "keygen); the plan must be signed with it, as the runtime will "
+                             "check")
     parser.add_argument("--target", choices=tuple(TARGETS),
                         help="; ".join(f"{t.name}: {t.description}" for t in TARGETS.values())
                         + " (default host; a mission with 'computer none' must say)")
+    parser.add_argument("--json", action="store_true",
+                        help="print what was built as JSON (docs/json.md)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="directory for MISSION.c, the binary and the plan")
 
 
 def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from gliderplan.cli.common import refuse_unpaired
     from gliderplan.runtime.build import build_target, compile_mission
 
+    refuse_unpaired(args, {"--key": ("--plan",)})
     mission = load_mission(args)
     target = build_target(mission, args.target)
-    binary = compile_mission(mission, args.output, target, args.plan)
+    binary = compile_mission(mission, args.output, target, args.plan, key_path=args.key)
     print(f"{binary} ({target})", file=sys.stderr)
+    if args.json:
+        from gliderplan.cli.main import print_json
+
+        plan = None if args.plan is None else str(Path(args.output) / Path(args.plan).name)
+        print_json({"ok": True, "mission": mission.name, "mission_hash": mission.hash,
+                    "target": target, "binary": str(binary),
+                    "c_source": str(Path(args.output) / f"{mission.name}.c"), "plan": plan,
+                    "signature": None if args.key is None else "verified"})
     return 0

@@ -39,11 +39,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"an extra board that runs the mission (default {defaults.computer}"
                              ": the glider's own computers)")
     parser.add_argument("--battery", metavar="SPEC",
-                        help=f"its battery as a mission writes it (default '{defaults.battery}',"
-                             " the Slocum alkaline pack)")
+                        help="its battery as a mission writes it (default "
+                             f"'{defaults.battery.replace('%', '%%')}', the Slocum alkaline "
+                             "pack)")  # argparse formats help with %
     parser.add_argument("--allow-missing-mafiles", action="store_true",
                         help="leave out a behavior whose .ma file is missing (a warning) "
                              "instead of stopping")
+    parser.add_argument("--json", action="store_true",
+                        help="print what was written and the warnings as JSON (docs/json.md)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,4 +67,19 @@ def run(args: argparse.Namespace) -> int:
                      for k in ("vehicle", "computer", "battery"))
     print(f"wrote {imported.path}: {imported.states} states, {len(imported.warnings)} "
           f"warning(s); {said}", file=sys.stderr)
+    if args.json:
+        from gliderplan.cli.main import print_json
+
+        print_json({"ok": True, "output": str(imported.path), "states": imported.states,
+                    "hardware": {k: {"spec": getattr(hardware, k), "default": k not in given}
+                                 for k in ("vehicle", "computer", "battery")},
+                    "warnings": [_warning_json(w) for w in imported.warnings]})
     return 0
+
+
+def _warning_json(warning) -> dict:  # noqa: ANN001 (language.slocum.Warning_)
+    """An import warning as a diagnostic object (docs/json.md)."""
+    from gliderplan.contract.errors import diagnostic_json
+
+    return diagnostic_json(warning.message, severity="warning", file=str(warning.where.path),
+                           line=warning.where.line)

@@ -17,6 +17,8 @@ ORDER = 35
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", metavar="KEYFILE", required=True,
                         help="where to write the key (refused if the file exists)")
+    parser.add_argument("--json", action="store_true",
+                        help="print where the key was written as JSON (never the key)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -25,4 +27,8 @@ def run(args: argparse.Namespace) -> int:
     write_new_key(args.output)
     print(f"wrote {args.output} (mode 0600): provision it on the vehicle (runtime --key) "
           "and sign plans with gliderplan plan --sign", file=sys.stderr)
+    if args.json:
+        from gliderplan.cli.main import print_json
+
+        print_json({"ok": True, "key_file": args.output, "mode": "0600"})
     return 0

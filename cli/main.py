@@ -16,13 +16,16 @@ import importlib
 import os
 import pkgutil
 import select
+import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import ModuleType
+from typing import TextIO
 
 import gliderplan.cli
 from gliderplan.contract import ExitCode
 from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import OutputFileError
 
 
 def subcommands(only: str | None = None) -> dict[str, ModuleType]:
@@ -60,6 +63,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The argument parser; with `command`, only that subcommand's (if it is one)."""
     parser = _Parser(prog="gliderplan", description="Mission language, power-aware planner, "
                      "C runtime and simulator for Slocum-class underwater gliders.")
+    parser.add_argument("--version", action="version", version=f"gliderplan {version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, module in subcommands(command).items():
@@ -70,21 +74,55 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (a scheduler, `kill`, a shutting-down system): raised where Ctrl-C's
+    KeyboardInterrupt is, so that every command stops as it does on Ctrl-C: a simulation
+    writes what it flew, children (the C runtime, worker processes) are stopped and
+    temporary files removed on the way out; the exit status is then 143."""
+
+
+_terminated = False  # a SIGTERM arrived: an interrupted command exits 143, not 130
+
+
+def _on_sigterm(signum: int, frame: object) -> None:
+    global _terminated
+    _terminated = True
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one does not cut the clean-up
+    raise Terminated
+
+
+def _stop_code() -> ExitCode:
+    return ExitCode.TERMINATED if _terminated else ExitCode.INTERRUPTED
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit code (`contract.ExitCode`)."""
+    global _terminated
     argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["--version"]:
+        print(f"gliderplan {version()}")
+        return ExitCode.OK
     # The top-level parser has no option but --help, so a first word is the command.
     command = argv[0] if argv and not argv[0].startswith("-") else None
     args = build_parser(command).parse_args(argv)
+    _terminated = False
+    try:
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread (a test's, or an embedding program's)
+        previous = None
+    real_stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
         code = int(args._run(args))
         sys.stdout.flush()  # here, where a reader that went away is handled below
-        return code
+        return _stop_code() if code == ExitCode.INTERRUPTED else code
     except GliderplanError as err:
+        if getattr(args, "json", False):  # the error as JSON where the result would be
+            print_json(err.to_json(args.command))
         return report(args.command, err)
     except KeyboardInterrupt:
-        print(f"gliderplan {args.command}: interrupted", file=sys.stderr)
-        return ExitCode.INTERRUPTED
+        print(f"gliderplan {args.command}: {'terminated' if _terminated else 'interrupted'}",
+              file=sys.stderr)
+        return _stop_code()
     except Exception as err:  # a bug: say so plainly; the traceback only on request
         if isinstance(err, BrokenPipeError) and _stdout_reader_gone():
             # Like `cat | head`: no message, and nothing more to print. Python flushes
@@ -93,10 +131,77 @@ def main(argv: Sequence[str] | None = None) -> int:
             return ExitCode.BROKEN_PIPE
         if os.environ.get("GLIDERPLAN_DEBUG"):
             raise
-        print(f"gliderplan {args.command}: internal error: {type(err).__name__}: {err}\n"
+        said = f"internal error: {type(err).__name__}: {err}"
+        if getattr(args, "json", False):
+            print_json(GliderplanError(said).to_json(args.command) | {"exit_code": 70})
+        print(f"gliderplan {args.command}: {said}\n"
               "  (this is a bug in gliderplan; rerun with GLIDERPLAN_DEBUG=1 for details)",
               file=sys.stderr)
         return ExitCode.INTERNAL
+    finally:
+        sys.stdout = real_stdout
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def print_json(data: object) -> None:
+    """A command's --json result on stdout (docs/json.md): indented, no NaN (null)."""
+    import json
+
+    print(json.dumps(_no_nan(data), indent=2))
+
+
+def _no_nan(data: object) -> object:
+    """`data` with every float that is not finite as None: JSON has no NaN."""
+    import math
+
+    if isinstance(data, float) and not math.isfinite(data):
+        return None
+    if isinstance(data, dict):
+        return {k: _no_nan(v) for k, v in data.items()}
+    if isinstance(data, list | tuple):
+        return [_no_nan(v) for v in data]
+    return data
+
+
+def version() -> str:
+    """The installed gliderplan's version (its distribution's metadata)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as installed
+
+    try:
+        return installed("gliderplan")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "unknown (not installed)"
+
+
+class _Stdout:
+    """sys.stdout while a command runs: a write that fails for want of space or of a
+    device (stdout on a full disk, /dev/full) is a result that cannot be written where
+    asked, as for -o (OutputFileError, exit 2), and what is still buffered is dropped
+    rather than failing again at exit. A reader that went away stays a BrokenPipeError."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+
+    def _guarded(self, call: Callable[[], object]) -> object:
+        try:
+            return call()
+        except BrokenPipeError:
+            raise
+        except OSError as err:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+            raise OutputFileError(f"cannot write the output (stdout): "
+                                  f"{err.strerror or err}") from None
+
+    def write(self, text: str) -> object:
+        return self._guarded(lambda: self._stream.write(text))
+
+    def flush(self) -> object:
+        return self._guarded(self._stream.flush)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._stream, name)
 
 
 def _stdout_reader_gone() -> bool:

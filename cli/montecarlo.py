@@ -15,11 +15,20 @@ Ctrl-C keeps the scenarios that finished (exit 130).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 
-from gliderplan.cli.common import add_mission_argument, load_mission, seed
+from gliderplan.cli.common import (
+    add_mission_argument,
+    add_start_argument,
+    load_mission,
+    parse_start,
+    refuse_unpaired,
+    replan_confidence,
+    seed,
+    start_epoch_s,
+)
+from gliderplan.cli.main import print_json
 from gliderplan.contract import ExitCode
 
 ORDER = 65
@@ -47,6 +56,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "the mission's horizon, else 30d)")
     parser.add_argument("--tracker", choices=("robust", "naive"), default="robust",
                         help="thermocline detection (default robust)")
+    parser.add_argument("--replan", action="store_true",
+                        help="fly each scenario twice: the plan alone, and with the shore "
+                             "replanning the rest at each surfacing (plan updates); report "
+                             "both side by side")
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
+                        help="with --replan: the confidence the rest is replanned at "
+                             "(default: the plan's own, else 0.95)")
+    parser.add_argument("--key", metavar="KEYFILE",
+                        help="with --replan: the vehicle's key (the plan signed with it; "
+                             "default: a key made for the run)")
+    add_start_argument(parser, "500 m south of the mission's first waypoint, at "
+                               "2000-01-01T00:00:00Z")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="directory for scenarios.parquet, summary.json and the plots")
@@ -57,7 +78,9 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.cli.sim import parse_duration_s
     from gliderplan.sim.montecarlo import montecarlo_mission
 
+    refuse_unpaired(args, {"--confidence": ("--replan",), "--key": ("--replan",)})
     mission = load_mission(args)
+    lat, lon, when = parse_start(args.start) if args.start else (None, None, None)
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios")
     try:
         run_ = montecarlo_mission(
@@ -65,11 +88,16 @@ def run(args: argparse.Namespace) -> int:
             workers=args.workers, scheduler=args.scheduler, seed=args.seed,
             scenario_file=args.scenario_file,
             duration_s=parse_duration_s(args.duration) if args.duration else None,
-            tracker=args.tracker, progress=progress)
+            tracker=args.tracker, progress=progress, replan=args.replan,
+            confidence=args.confidence, key_path=args.key,
+            start=None if lat is None else (lat, lon), start_epoch_s=start_epoch_s(when))
     finally:
         progress.finish()
     summary = run_.summary
-    print(json.dumps(summary, indent=2) if args.json else _verdict(mission.name, summary))
+    if args.json:
+        print_json(summary)
+    else:
+        print(_verdict(mission.name, summary))
     if run_.result.interrupted:
         print(f"  interrupted: {len(run_.result.rows)} of {args.scenarios} scenarios "
               f"finished; the files in {args.output} hold them", file=sys.stderr)
@@ -78,11 +106,38 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _verdict(name: str, s: dict) -> str:
+    """What the scenarios did, as a pilot reads it: how often the budget held, the energy
+    drawn, how many passed the usable charge drawn for them, how the runs ended."""
+    if s.get("replan"):
+        return _replanned(name, s)
     low, high = s["probability_interval_95"]
     e = s["energy_j"]
+    ended = ", ".join(f"{count} by {how}" for how, count in s["ended"].items())
     return (f"{name}: the budget held in {s['budget_held']} of {s['scenarios']} scenarios: "
             f"{100 * s['probability_budget_holds']:.1f} % (95 % interval "
             f"{100 * low:.1f}-{100 * high:.1f} %)\n"
             f"  energy {e['p05'] / 1e3:,.0f} / {e['p50'] / 1e3:,.0f} / {e['p95'] / 1e3:,.0f} kJ "
-            f"(5 / 50 / 95 %) against a budget of {s['budget_j'] / 1e3:,.0f} kJ; "
-            f"{s['exhausted_before_end']} ran out before the end")
+            f"(5 / 50 / 95 %) against a budget of {s['budget_j'] / 1e3:,.0f} kJ\n"
+            f"  {s['exceeded_drawn_usable_charge']} exceeded the usable charge drawn for the "
+            f"scenario (the budget times a usable share drawn from "
+            f"{s['usable_share_drawn_from']}); the runs ended: {ended}")
+
+
+def _replanned(name: str, s: dict) -> str:
+    """The side-by-side verdict of a run with replanning."""
+    def rate(key: str) -> str:
+        low, high = s[f"{key}_interval_95"]
+        return f"{100 * s[key]:.1f} % ({100 * low:.1f}-{100 * high:.1f} %)"
+
+    link = s["link"]
+    return (f"{name}: the budget held in {rate('hold_rate')} of {s['scenarios']} scenarios "
+            f"with replanning at each surfacing, {rate('hold_rate_static')} with the plan "
+            f"alone\n"
+            f"  quality as flown {s['quality']:.4f} with replanning, {s['quality_static']:.4f} "
+            f"alone\n"
+            f"  link: {link['surfacings_per_mission']:.0f} surfacings a mission; up "
+            f"{link['up_bytes_per_day']:,.0f} B/day ({link['up_bytes_per_mission']:,.0f} a "
+            f"mission), down {link['down_bytes_per_day']:,.0f} B/day "
+            f"({link['down_bytes_per_mission']:,.0f} a mission); the largest update "
+            f"{s['update_bytes_max']} bytes (SBD: {link['sbd_limits_bytes']['up']} up, "
+            f"{link['sbd_limits_bytes']['down']} down)")

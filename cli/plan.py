@@ -7,7 +7,9 @@
   plan MISSION --sweep N -o DIR     pareto.csv, computers.csv, batteries.csv, pareto.png
 
 With -o the plan file (docs/plan-format.md) is written to PLANFILE and its report to
-PLANFILE.json; with --sign KEYFILE the plan file is signed for the vehicle holding that key
+PLANFILE.json (and where it flies propelled, its energy per km against speed with the
+chosen speed to PLANFILE.speed.png); with --sign KEYFILE the plan file is signed for the
+vehicle holding that key
 (docs/plan-format.md, "Signed plans"). The report gives the plan's upload size in bytes. A
 budget below what the mission needs exits 1 with the minimum energy and the largest
 consumers.
@@ -16,11 +18,16 @@ consumers.
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import sys
 
-from gliderplan.cli.common import add_cycles_argument, add_mission_argument, load_mission, seed
+from gliderplan.cli.common import (
+    add_cycles_argument,
+    add_mission_argument,
+    load_mission,
+    refuse_unpaired,
+    seed,
+)
+from gliderplan.cli.main import print_json
 from gliderplan.contract.errors import UsageError
 
 ORDER = 30
@@ -51,15 +58,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --confidence: scenarios to fly (default: as many as the "
                              "confidence needs at --risk); with --occupancy-from-sim: fly "
                              "N drawn scenarios each round instead of one flight")
-    parser.add_argument("--risk", type=float, default=1e-3, metavar="B",
+    parser.add_argument("--risk", type=float, metavar="B",
                         help="with --confidence: the chance that the scenarios drawn were "
                              "unrepresentative (default 0.001)")
-    parser.add_argument("--seed", type=seed, default=0,
-                        help="with --confidence or --occupancy-from-sim: seed")
+    parser.add_argument("--seed", type=seed,
+                        help="with --confidence or --occupancy-from-sim: seed (default 0)")
     parser.add_argument("--scenario-file", metavar="FILE",
                         help="with --confidence or --scenarios: the distributions to draw "
                              "from")
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="K",
+    parser.add_argument("--workers", type=int, metavar="K",
                         help="with --confidence or --scenarios: worker processes (default: "
                              "one per core)")
     parser.add_argument("--sign", metavar="KEYFILE",
@@ -70,9 +77,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_cycles_argument(parser)
 
 
+# an option -> the options it works with (refused alone: it would be silently ignored)
+NEEDS = {
+    "--scenarios": ("--confidence", "--occupancy-from-sim"),
+    "--risk": ("--confidence",),
+    "--seed": ("--confidence", "--occupancy-from-sim"),
+    "--scenario-file": ("--confidence", "--scenarios"),
+    "--workers": ("--confidence", "--scenarios"),
+    "--seq": ("--sign",),
+}
+# what a sweep does not do: refused beside --sweep rather than ignored
+NOT_WITH_SWEEP = ("--confidence", "--occupancy-from-sim", "--sign", "--scenarios")
+
+
 def run(args: argparse.Namespace) -> int:
-    if args.sweep is not None and not args.output:
-        raise UsageError("--sweep needs -o DIR for its CSV files and plot")
+    refuse_unpaired(args, NEEDS)
+    if args.sweep is not None:
+        if not args.output:
+            raise UsageError("--sweep needs -o DIR for its CSV files and plot")
+        clash = [o for o in NOT_WITH_SWEEP if getattr(args, o[2:].replace("-", "_"))]
+        if clash:
+            raise UsageError(f"--sweep plans at N budgets without {', '.join(clash)}: "
+                             "leave one or the other out")
+    args.risk = 1e-3 if args.risk is None else args.risk
+    args.seed = 0 if args.seed is None else args.seed
+    args.workers = (os.cpu_count() or 1) if args.workers is None else args.workers
     mission = load_mission(args)
     if args.sweep is not None:
         return _sweep(mission, args)
@@ -90,40 +119,47 @@ def run(args: argparse.Namespace) -> int:
                            scenario_file=args.scenario_file, workers=args.workers,
                            occupancy_from_sim=args.occupancy_from_sim, progress=progress,
                            sign=args.sign, seq=args.seq)
-    except InfeasibleBudget as short:  # the report says so too; the error is for main
-        if args.json:
-            print(json.dumps(infeasible_json(short), indent=2))
+    except InfeasibleBudget as short:  # --json prints the report beside the error (main)
+        short.report = infeasible_json(short)
         raise
     finally:
         progress.finish()
     if args.json:
-        print(json.dumps(report_json(result), indent=2))
+        print_json(report_json(result))
     else:
         print(report_text(result), end="")
         if args.output:
-            print(f"wrote {args.output} and {args.output}.json")
+            written = [f"{args.output}.json", f"{args.output}.speed.png"]
+            print(f"wrote {args.output} and " + " and ".join(
+                w for w in written if os.path.exists(w)))
     return 0
 
 
 def _sweep(mission, args: argparse.Namespace) -> int:  # noqa: ANN001
+    from gliderplan.cli.progress import ProgressBar
     from gliderplan.planner import sweep_mission
 
-    live = sys.stderr.isatty()  # a counter rewritten in place only reads on a terminal
+    bars: dict[str, ProgressBar] = {}
 
     def progress(label: str, done: int, total: int) -> None:
-        if live:
-            print(f"\r{label}: {done}/{total}", end="\n" if done == total else "",
-                  file=sys.stderr, flush=True)
-        elif done == total:
-            print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
+        if label not in bars:
+            for bar in bars.values():
+                bar.finish()
+            bars[label] = ProgressBar(lambda d, t: f"{label}: {d:.0f} of {t:.0f}")
+        bars[label](done, total)
 
-    sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
-                          computer=args.computer, progress=progress,
-                          cycles_per_tick=args.cycles_per_tick)
+    try:
+        sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
+                              computer=args.computer, progress=progress,
+                              cycles_per_tick=args.cycles_per_tick)
+    finally:
+        for bar in bars.values():
+            bar.finish()
     if args.json:
-        print(json.dumps({"pareto": sweep.pareto.to_dict("records"),
-                          "computers": sweep.computers.to_dict("records"),
-                          "batteries": sweep.batteries.to_dict("records")}, indent=2))
+        print_json({"pareto": sweep.pareto.to_dict("records"),
+                    "computers": sweep.computers.to_dict("records"),
+                    "batteries": sweep.batteries.to_dict("records"),
+                    "files": [str(p) for p in sweep.files]})
     else:
         table = sweep.pareto[["budget_wh", "quality", "shadow_price"]]
         print(table.round({"budget_wh": 1, "quality": 4, "shadow_price": 5}).to_string(index=False))

@@ -11,9 +11,9 @@ Every form takes --json. The tables come from `gliderplan.power_models.tables`.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
+from gliderplan.cli.main import print_json
 from gliderplan.power_models.tables import KINDS
 
 
@@ -114,7 +114,10 @@ def run(args: argparse.Namespace) -> int:
                                          min_depth_m=args.min_depth,
                                          max_depths_m=args.max_depth, pitch_deg=args.pitch_deg)
             text = _speed_text(data)
-    print(json.dumps(data, indent=2) if args.json else text)
+    if args.json:
+        print_json(data)
+    else:
+        print(text)
     return 0
 
 
@@ -124,7 +127,7 @@ def _show_text(data: dict) -> str:
         "",
         f"{'figure':34s} {'value':>10s} {'unit':9s} source",
     ]
-    lines += [f"{r['key']:34s} {r['value']:10.6g} {r['unit']:9s} {r['source']}"
+    lines += [f"{r['key']:34s} {_value(r['value']):>10s} {r['unit']:9s} {r['source']}"
               for r in data["figures"]]
     for r in data["ranges"]:  # a published span, low-high
         span = f"{r['low']:g}-{r['high']:g}"
@@ -132,7 +135,27 @@ def _show_text(data: dict) -> str:
     if data["derived"]:
         lines += ["", "derived:"]
         lines += [f"  {d['what']:50s} {d['value']:10.4g} {d['unit']}" for d in data["derived"]]
+    if data.get("propulsion"):
+        lines += ["", f"propulsion ({data['vehicle_kind']}): " + _propulsion_text(
+            data["propulsion"])]
     return "\n".join(lines)
+
+
+def _value(value: float | list[float]) -> str:
+    """A figure as the table shows it; a column of a table as its values."""
+    if isinstance(value, list):
+        return ", ".join(f"{v:g}" for v in value)
+    return f"{value:10.6g}"
+
+
+def _propulsion_text(p: dict) -> str:
+    text = (f"{p['model']}, {p['min_speed_mps']:.3g}-{p['max_speed_mps']:.3g} m/s; on its "
+            f"hotel load of {p['hotel_w']:.3g} W it spends the least per km at "
+            f"{p['best_speed_mps']:.3g} m/s ({p['propulsion_w']:.3g} W of propulsion, "
+            f"{p['energy_per_km_kj']:.3g} kJ/km)")
+    if p["closed_form_speed_mps"] is not None:
+        text += f"; closed form U* = {p['closed_form_speed_mps']:.3g} m/s"
+    return text
 
 
 def _energy_text(data: dict) -> str:

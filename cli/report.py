@@ -28,6 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="a `gliderplan sim` run of that plan; default: fly it now")
     parser.add_argument("--montecarlo", metavar="DIR",
                         help="a `gliderplan montecarlo` result to show")
+    parser.add_argument("--json", action="store_true",
+                        help="print the files written as JSON (docs/json.md)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="directory for report.html and its CSV files")
 
@@ -38,5 +40,11 @@ def run(args: argparse.Namespace) -> int:
 
     report = make_report(mission, args.output, plan_path=args.plan, run_dir=args.run,
                          montecarlo_dir=args.montecarlo, source=args.mission)
-    print(f"wrote {report.html} ({len(report.files) - 1} CSV and plan files beside it)")
+    if args.json:
+        from gliderplan.cli.main import print_json
+
+        print_json({"ok": True, "mission": mission.name, "html": str(report.html),
+                    "files": [str(f) for f in report.files], "sections": list(report.sections)})
+    else:
+        print(f"wrote {report.html} ({len(report.files) - 1} CSV and plan files beside it)")
     return 0

@@ -9,7 +9,8 @@ Change a fact here, regenerate the header, and every part follows.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from enum import IntEnum
 
 # ---- limits of the runtime's tables and of the plan file ----------------------------
@@ -30,6 +31,16 @@ MAX_SWEEP_WAYPOINTS = 256  # waypoints a `sweep` route expands to
 # stage that reads a mission walks its expressions (the mission's hash, the C code, the
 # simulator's compiled conditions): a bound keeps them all within Python's stack.
 MAX_EXPRESSION_DEPTH = 100
+# Entries the parser's stack may hold: brackets and operators open at once (an expression
+# MAX_EXPRESSION_DEPTH deep, bracketed at every level, needs fewer). Parsing stays linear
+# in the text and a 16 MiB file of brackets is refused at its first token past it.
+MAX_PARSE_DEPTH = 1000
+# Scenarios one Monte Carlo run or confidence plan may fly: a million month-long flights
+# is days of work on a workstation, and more than any stated confidence needs in practice
+MAX_SCENARIOS = 1_000_000
+# Years a simulated run may start in (inclusive): its dates, and a horizon on, are written
+# by every output (NetCDF's seconds since 1970, ISO 8601 text, OG1.0's YYYYmmddTHHMMss)
+START_YEARS = (1970, 2100)
 MAX_NAME_LENGTH = 32  # characters of a mission, state or computer name in a plan file
 MAX_PLAN_SENSORS = 16  # `sensor` lines of one state block of a plan file
 MAX_PLAN_BYTES = 65536  # size of a plan file [bytes]
@@ -46,9 +57,14 @@ PLAN_FORMAT_VERSION = 3  # the plan file's `GPPLAN` line (docs/plan-format.md)
 # refuse a plan past any of them.
 MAX_PLAN_TIME_S = 315_360_000.0  # [s] a cycle, a sensor period, a state's predicted time (10 y)
 MAX_PLAN_SPEED_MPS = 2.0  # [m/s] a planned horizontal speed (a glider makes 0.2-0.5)
+# [W] a yo's thruster's commanded power (the Slocum G3 hybrid's commands 1-9 W)
+MAX_PLAN_THRUST_W = 100.0
 MAX_PLAN_ENERGY_J = 1e10  # [J] a budget or prediction (the largest Slocum pack is 12 MJ)
 MAX_PLAN_INFLECTIONS = 1e9  # a state's predicted inflections (as many as its visits may be)
 MAX_BOARD_CLOCKS = 8  # clocks of one board the compiled mission lists
+# A sensor's weight in the quality objective is relative to the others': a ratio past this
+# is beyond what the solver resolves (its tolerance is ~1e-8), and 1e308 overflowed it.
+MAX_SENSOR_WEIGHT = 1e6
 CLOCK_TOLERANCE_MHZ = 1e-6  # [MHz] a plan's clock is the board's within this
 NO_BOARD = "none"  # `computer none`: no board to set; its plans' clocks are all 0
 
@@ -60,20 +76,90 @@ def same_clock(clock_mhz: float, board_clock_mhz: float) -> bool:
     return abs(clock_mhz - board_clock_mhz) <= CLOCK_TOLERANCE_MHZ
 
 
+# A plan's figures are written with 9 significant digits: two that should agree (a duty and
+# its bound, the prediction and its states' sum) agree within this relative tolerance.
+PLAN_ROUNDING = 1e-6
+
+
+class EnvelopeAction(IntEnum):
+    """What the runtime does with a command outside the vehicle's envelope.
+
+    The vehicle file's `[envelope] action` chooses; every held command is logged."""
+
+    FAULT = 0  # release control to the glider's own layered control, as a mission fault
+    SURFACE = 1  # the mission's abort: it ends there, the glider surfaces and holds
+    CLAMP = 2  # hold the command at the envelope's edge, fly on (a band or rate: as SURFACE)
+
+
+class EnvelopeLimit(IntEnum):
+    """Which limit of the envelope a command broke (the event log's `envelope` record)."""
+
+    NONE = 0
+    DEPTH = 1  # a depth target, or a yo's end, outside 0..max_depth
+    PITCH = 2  # |pitch| above max_pitch
+    BALLAST = 3  # |pumped volume| above the pump's max_ballast
+    BAND = 4  # a yo band thinner than min_yo_band: it would turn all the time
+    INFLECTION = 5  # a yo turned again sooner than its pump can move a full stroke
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """The vehicle's rating that the runtime holds every command to, every tick, whatever
+    the events computed (docs/pilot.md, The envelope). From the vehicle file's
+    `[envelope]` table (`power_models.vehicle.Envelope` defaults), compiled into the
+    mission (`gp_mission.envelope`)."""
+
+    max_depth_m: float  # [m] deepest depth target or yo end
+    max_pitch_rad: float  # [rad] largest |pitch| commanded
+    min_yo_band_m: float  # [m] thinnest yo band (max - min depth)
+    min_inflection_s: float  # [s] shortest time between two turns of a yo
+    action: EnvelopeAction
+
+    def __post_init__(self) -> None:
+        if not (self.max_depth_m > 0 and 0 < self.max_pitch_rad < 1.5707963267948966
+                and 0 <= self.min_yo_band_m < self.max_depth_m and self.min_inflection_s >= 0):
+            raise ValueError(f"not an envelope: {self}")
+
+
 @dataclass(frozen=True)
 class FlightLimits:
-    """The figures of one vehicle and board that bound a plan: the code generator writes
-    them into the compiled mission (`gp_mission.max_ballast_cc`, `clocks_mhz`), the
-    Python plan reader checks them (`planner.limits.flight_limits` loads them)."""
+    """The figures of one mission, vehicle and board that bound a plan: the code generator
+    writes them into the compiled mission (`gp_mission`: `max_ballast_cc`, `clocks_mhz`,
+    `bounds`), `contract.plan_check.plan_problem` holds a plan to them in Python and
+    `gp_plan_check` in C (`planner.limits.flight_limits` loads them). The fields after
+    `clocks_mhz` default to no bound beyond the contract's (a mission table made by hand),
+    but for `envelope`."""
 
     default_ballast_cc: float  # [cc] flown where no plan sets one
     max_ballast_cc: float  # [cc] the pump's volume either side of neutral
     clocks_mhz: tuple[float, ...]  # [MHz] the board's clocks, slowest first
+    board: str | None = None  # the board's name a plan names (or NO_BOARD); None: any
+    max_budget_j: float = MAX_PLAN_ENERGY_J  # [J] the battery less its reserve
+    pitch_range_rad: tuple[float, float] = (0.0, math.pi / 2)  # [rad] commanded, open
+    max_speed_mps: float = MAX_PLAN_SPEED_MPS  # [m/s] the vehicle's fastest glide
+    # [1] per state, per sensor it logs with a device and a duty (`auto` or fixed), in its
+    # order: (name, least, most duty the mission allows); (): no bounds
+    duty_bounds: tuple[tuple[tuple[str, float, float], ...], ...] = ()
+    # [cc] per state, per profile alternative: the volume a plan's ballast must exceed for
+    # the glider to leave its turning depth (its trim over the band); () : 0
+    min_ballast_cc: tuple[tuple[float, ...], ...] = ()
+    # [m/s] a propelled profile's `auto` speed where no plan sets one (0: no propulsion)
+    unplanned_speed_mps: float = field(default=0.0, kw_only=True)
+    # per state, the alternative flown where no plan sets one: the first the vehicle can
+    # fly (a propeller AUV skips a yo); empty: the first of each state
+    unplanned_profiles: tuple[int, ...] = field(default=(), kw_only=True)
+    # the vehicle's rating every command is held to in flight (`gp_mission.envelope`):
+    # always given, by name
+    envelope: Envelope = field(kw_only=True)
 
     def __post_init__(self) -> None:
         if not 1 <= len(self.clocks_mhz) <= MAX_BOARD_CLOCKS:
             raise ValueError(f"a board has 1..{MAX_BOARD_CLOCKS} clocks, not "
                              f"{len(self.clocks_mhz)}")
+
+    def unplanned_profile(self, state: int) -> int:
+        """The alternative state `state` (its index) flies without a plan."""
+        return self.unplanned_profiles[state] if self.unplanned_profiles else 0
 
     def has_clock(self, clock_mhz: float) -> bool:
         """Whether the board has the clock `clock_mhz` [MHz] (`same_clock`)."""
@@ -90,6 +176,10 @@ MAX_PLAN_SEQUENCE = 4_294_967_295  # a signed plan's `seq` (a u32); 1 is the fir
 # larger file and anything but a regular file (a device such as /dev/zero, a named pipe)
 # before reading a byte of it.
 MAX_INPUT_BYTES = 16 * 1024 * 1024  # [bytes] far beyond any real input; guards the readers
+# Data files (TOML model and scenario files, JSON reports and summaries) are parsed by
+# `contract.files.parse_data`: tables and arrays nested deeper than this, or a number that
+# is not finite (TOML and Python's JSON read `nan` and `inf`), are refused with the key.
+MAX_DATA_DEPTH = 32  # the shipped files nest 3 deep, the JSON reports 6
 
 # ---- the sensor array ----------------------------------------------------------------
 
@@ -147,6 +237,9 @@ SENSORS: tuple[SensorInfo, ...] = (
                "microstructure velocity shear (microstructure logger)"),
 )
 N_SENSORS = len(SENSORS)  # the array's length (HELLO's `n_sensors`); at most 32 (u32 masks)
+# The sensor devices, each once, in the array's order: what a surfacing report counts the
+# on-time of, by its place here (docs/plan-update.md), and what the simulator bills.
+SENSOR_DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
 # Sensors without a device of their own: always powered while logged, in the hotel load.
 FLIGHT_SENSORS_MASK = sum(1 << s.index for s in SENSORS if s.device is None)
 # The runtime's own readings (never on the link).
@@ -182,6 +275,13 @@ RUNTIME_CYCLES_PER_TICK = 200_000.0  # [cycles]
 # A mission without `horizon` is planned over this time, and a run of it (sim, montecarlo)
 # ends here if it has not exited: the plan's budget and the flight cover the same time.
 DEFAULT_HORIZON_S = 30 * 86400.0  # [s] 30 days
+# A simulated run keeps one row per tick in memory (about 400 bytes of columns, then the
+# tables written from them): a run of more ticks is refused before it starts, saying how
+# long it would be (`sim --tick 0.1` of a 30-day mission is 26 million ticks, ~10 GB).
+MAX_SIMULATED_TICKS = 3_000_000  # 139 days at the 4 s tick; ~1.3 GB
+# Worker processes of one Monte Carlo run or confidence plan on this machine: a local pool
+# starts them all at once (`--workers 100000` forked until the machine had no more).
+MAX_WORKERS = 256
 
 
 # ---- energy components --------------------------------------------------------------
@@ -196,17 +296,20 @@ class Component:
     PITCH = "pitch"  # battery shifts at inflections
     SURFACE = "surface"  # the base load at the surface
     IRIDIUM = "iridium"  # satellite calls at the surface
+    PROPULSION = "propulsion"  # a propeller's or a glider's thruster's motor
     COMPUTER = "computer"  # the single-board computer running the mission
     SENSORS = "sensors"  # the sensor devices together, where they are not billed one by one
 
 
 VEHICLE_COMPONENTS: tuple[str, ...] = (Component.HOTEL, Component.PUMP, Component.PITCH,
-                                       Component.SURFACE, Component.IRIDIUM)
+                                       Component.SURFACE, Component.IRIDIUM,
+                                       Component.PROPULSION)
 
 
 # ---- the serial link (docs/protocol.md) ---------------------------------------------
 
-PROTOCOL_VERSION = 2  # 2: COMMANDs as changes against a base, SENSORS without a mask
+PROTOCOL_VERSION = 3  # 2: COMMANDs as changes against a base, SENSORS without a mask;
+# 3: COMMAND's speed and thrust (propelled flight)
 MAX_PAYLOAD = 240  # [bytes] of one frame's payload
 MAX_WIRE = 250  # [bytes] of COBS before the delimiter that a receiver accepts
 PLAN_PIECE = 200  # [bytes] of plan file per PLAN frame
@@ -214,7 +317,12 @@ MAX_LINK_PLAN = 65535  # [bytes] of a plan sent over the link (PLAN's `total` is
 # [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at
 # the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes)
 SBD_MT_MESSAGE_BYTES = 1890
-COMMAND_MAX_SIZE = 38  # [bytes] of a COMMAND payload that carries every field
+# The short Iridium SBD messages fleets use at each surfacing (Iridium SBD service: 340
+# bytes mobile-originated, 270 mobile-terminated): a surfacing report goes up in one, a
+# plan update comes down in one.
+SBD_MO_SHORT_BYTES = 340  # [bytes] of one short message up, glider to shore
+SBD_MT_SHORT_BYTES = 270  # [bytes] of one short message down, shore to glider
+COMMAND_MAX_SIZE = 46  # [bytes] of a COMMAND payload that carries every field
 BAUD = 115200  # 8N1: 10 bits per byte on the line
 
 
@@ -227,6 +335,8 @@ class MessageType(IntEnum):
     RELEASE = 0x04
     PLAN = 0x05
     PLAN_STATUS = 0x06
+    PLAN_UPDATE = 0x07  # pieces of a plan update (docs/plan-update.md), as PLAN carries plans
+    UPDATE_STATUS = 0x08  # what became of the update: applied, or why not
     NAK = 0x7F
 
 
@@ -240,6 +350,7 @@ class TransitionKind(IntEnum):
     RETURN = 4
     EXIT = 5
     RESERVE = 6  # the energy guard ended the mission: the battery reached its reserve
+    ENVELOPE = 7  # the envelope guard ended the mission: a command outside the vehicle's rating
 
 
 # The language's action words and the kinds they make.
@@ -249,7 +360,7 @@ TRANSITION_BY_ACTION: dict[str, TransitionKind] = {
 # Every kind's name in a trace and in the runtime's event log.
 TRANSITION_NAMES: dict[TransitionKind, str] = {
     TransitionKind.START: "start", **{k: a for a, k in TRANSITION_BY_ACTION.items()},
-    TransitionKind.RESERVE: "reserve"}
+    TransitionKind.RESERVE: "reserve", TransitionKind.ENVELOPE: "envelope"}
 
 NO_STATE = 0xFF  # COMMAND's `state` once exited; `from`/`to` of no state
 
@@ -258,6 +369,7 @@ FLAG_SURFACE = 1 << 0  # go to (or stay at) the surface
 FLAG_DONE = 1 << 1  # the mission exited
 FLAG_CLIMBING = 1 << 2  # else diving
 FLAG_HEADING = 1 << 3  # `heading_rad` is valid
+FLAG_ENVELOPE = 1 << 4  # the envelope guard held this command at the vehicle's rating
 
 # SENSORS's `flags`; the other bits are reserved (0), and a SENSORS with one set is dropped.
 SENSORS_MASK = 1 << 0  # a u32 mask follows; else the values are those of HELLO's read_mask
@@ -281,10 +393,12 @@ class CommandField(IntEnum):
     HEADING_RAD = 10  # f32 [rad] true, clockwise from north (valid with FLAG_HEADING)
     SENSOR_POWER = 11  # u32 bit i: power sensor i's device
     EVENT_COUNT = 12  # u32 events fired so far
+    SPEED_MPS = 13  # f32 [m/s] through the water on the propeller; 0: none (a glide)
+    THRUST_W = 14  # f32 [W] a glider's thruster's commanded power assisting a yo; 0: off
 
 
 # struct format of each COMMAND field, in CommandField order
-COMMAND_FIELD_FORMATS = "BBBBBBBffffII"
+COMMAND_FIELD_FORMATS = "BBBBBBBffffIIff"
 
 
 class ReleaseReason(IntEnum):
@@ -294,6 +408,7 @@ class ReleaseReason(IntEnum):
     INTERNAL_ERROR = 2  # a mission fault, I/O that failed, a crash or a stop signal
     MISSION_EXITED = 3
     ENERGY_RESERVE = 4  # the energy guard ended the mission: surface and hold
+    ENVELOPE = 5  # a command outside the vehicle's rating: the envelope guard acted
 
 
 class RuntimeExit(IntEnum):
@@ -304,6 +419,61 @@ class RuntimeExit(IntEnum):
     LINK_LOST = 3  # the watchdog: the link went silent
     INTERNAL = 4  # a mission fault, I/O that failed, a crash or a stop signal
     RESERVE = 5  # the energy guard ended the mission: the battery reached its reserve
+    ENVELOPE = 6  # a command outside the vehicle's rating: the envelope guard ended it
+
+
+# ---- plan updates (docs/plan-update.md) ----------------------------------------------
+# A plan update is a signed binary delta against the plan the glider holds: it changes
+# what the glider flies (the fields of UpdateField) and fits one short Iridium message.
+UPDATE_FORMAT_VERSION = 1  # the update's version byte; a reader rejects any other
+MAX_UPDATE_BYTES = SBD_MT_SHORT_BYTES  # [bytes] of one update, its tag included
+UPDATE_HASH_BYTES = 8  # [bytes] of SHA-256 that name the plan an update is for, and its result
+UPDATE_HEADER_BYTES = 28  # [bytes] magic, version, seqs, hashes, the count of changes
+UPDATE_MAX_DIGITS = 15  # decimal digits of a value's mantissa: exact in a double
+UPDATE_MAX_EXPONENT = 20  # a value is mantissa x 10^exponent, |exponent| at most this
+
+
+class UpdateField(IntEnum):
+    """What a change of a plan update sets (a field of one plan-file line).
+
+    Each names the line's keyword and the field's place after it (docs/plan-format.md);
+    append only: it is a wire format."""
+
+    STATE_CLOCK = 1  # `state NAME CLOCK_MHZ ...`: field 2
+    STATE_CYCLE = 2  # `state ... CYCLE_S ...`: field 3
+    POWER_SLEEP = 3  # `power SLEEP CYCLES_PER_TICK`: field 1
+    POWER_CYCLES = 4  # field 2
+    SENSOR_PERIOD = 5  # `sensor NAME PERIOD_S ON_S`: field 2
+    SENSOR_ON = 6  # field 3
+    PROFILE_SHARE = 7  # `profile INDEX SHARE PITCH_RAD BALLAST_CC SPEED_MPS`: field 2
+    PROFILE_PITCH = 8  # field 3
+    PROFILE_BALLAST = 9  # field 4
+    PROFILE_SPEED = 10  # field 5
+
+
+# Each UpdateField's line keyword and the 1-based place of the field after it.
+UPDATE_FIELD_LINES: dict[UpdateField, tuple[str, int]] = {
+    UpdateField.STATE_CLOCK: ("state", 2), UpdateField.STATE_CYCLE: ("state", 3),
+    UpdateField.POWER_SLEEP: ("power", 1), UpdateField.POWER_CYCLES: ("power", 2),
+    UpdateField.SENSOR_PERIOD: ("sensor", 2), UpdateField.SENSOR_ON: ("sensor", 3),
+    UpdateField.PROFILE_SHARE: ("profile", 2), UpdateField.PROFILE_PITCH: ("profile", 3),
+    UpdateField.PROFILE_BALLAST: ("profile", 4), UpdateField.PROFILE_SPEED: ("profile", 5)}
+
+
+class UpdateStatus(IntEnum):
+    """UPDATE_STATUS's `status`: what became of a plan update (docs/plan-update.md)."""
+
+    APPLIED = 0  # the new plan is in force from the next tick
+    DUPLICATE = 1  # the update that made the plan in force, sent again: nothing to do
+    NO_KEY = 2  # no key is provisioned on the vehicle: no update is trusted
+    MALFORMED = 3  # not an update, another version, or a change that cannot be made
+    FORGED = 4  # the tag does not match: changed after signing, or another key
+    STALE = 5  # not newer than the plan in force: replayed or stale
+    NOT_HELD = 6  # made against a plan the vehicle does not hold
+    OUT_OF_ORDER = 7  # made against a plan newer than the one in force: one is missing
+    BAD_PLAN = 8  # the plan it makes breaks the format or the vehicle's limits
+    NOT_STORED = 9  # the new plan could not be stored: the plan in force stays
+
 
 
 # ---- the command line ---------------------------------------------------------------
@@ -316,6 +486,10 @@ class ExitCode(IntEnum):
     BAD_INPUT = 1  # a bad mission, an infeasible budget, a failed validation
     USAGE = 2  # bad command-line usage: a missing file, a malformed option
     OVER_BUDGET = 3  # a simulated run broke its plan's energy budget
+    OVER_PREDICTION = 4  # with --strict-prediction: a run spent more than its plan predicted
+    ENVELOPE = 5  # a simulated run commanded the vehicle outside its rating (the envelope guard)
+    LINK_FAILED = 6  # a simulated run ended on a link failure (all it flew is written)
     INTERNAL = 70  # a bug in gliderplan (EX_SOFTWARE of sysexits.h)
     INTERRUPTED = 130  # stopped by Ctrl-C (128 + SIGINT)
+    TERMINATED = 143  # stopped by SIGTERM, as by Ctrl-C: outputs written, children stopped
     BROKEN_PIPE = 141  # the reader of stdout went away (`| head`): stopped quietly (128 + SIGPIPE)

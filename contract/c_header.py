@@ -27,21 +27,27 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "MAX_PLAN_LINE_BYTES", "MAX_PLAN_COMPONENTS", "MAX_PLAN_ASSUMPTIONS",
         "PLAN_FORMAT_VERSION")),
     ("what a plan may ask for", (
-        "MAX_PLAN_TIME_S", "MAX_PLAN_SPEED_MPS", "MAX_PLAN_ENERGY_J", "MAX_PLAN_INFLECTIONS",
-        "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ", "NO_BOARD")),
+        "MAX_PLAN_TIME_S", "MAX_PLAN_SPEED_MPS", "MAX_PLAN_THRUST_W", "MAX_PLAN_ENERGY_J",
+        "MAX_PLAN_INFLECTIONS",
+        "MAX_BOARD_CLOCKS", "CLOCK_TOLERANCE_MHZ", "NO_BOARD", "PLAN_ROUNDING")),
     ("signed plans", ("PLAN_KEY_BYTES", "MAX_PLAN_SEQUENCE")),
+    ("plan updates (docs/plan-update.md)", (
+        "UPDATE_FORMAT_VERSION", "MAX_UPDATE_BYTES", "UPDATE_HASH_BYTES",
+        "UPDATE_HEADER_BYTES", "UPDATE_MAX_DIGITS", "UPDATE_MAX_EXPONENT")),
     ("the library routines (docs/pilot.md)", (
         "SURFACE_PITCH_RAD", "TRACK_WINDOW", "YO_ALTITUDE_ARG", "THERMOTRACKYO_ALTITUDE_ARG",
         "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (
         "PROTOCOL_VERSION", "MAX_PAYLOAD", "MAX_WIRE", "PLAN_PIECE", "MAX_LINK_PLAN",
+        "SBD_MT_MESSAGE_BYTES", "SBD_MO_SHORT_BYTES", "SBD_MT_SHORT_BYTES",
         "COMMAND_MAX_SIZE", "NO_STATE")),
 )
 LINE_LENGTH = 100
 HEX = frozenset({"NO_STATE"})  # byte values written in hex, as docs/protocol.md has them
 # Bits of a message's flags byte, as C enumerations.
 FLAGS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("COMMAND's flags", ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING")),
+    ("COMMAND's flags", ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING",
+                         "FLAG_ENVELOPE")),
     ("SENSORS's flags", ("SENSORS_MASK", "SENSORS_RESYNC")),
 )
 # Enumeration -> (C type name, prefix of its members).
@@ -51,6 +57,10 @@ ENUMS: tuple[tuple[type[IntEnum], str, str], ...] = (
     (contract.CommandField, "gp_command_field", "GP_CMD_"),
     (contract.ReleaseReason, "gp_release_reason", "GP_RELEASE_"),
     (contract.RuntimeExit, "gp_exit_status", "GP_EXIT_"),
+    (contract.UpdateField, "gp_update_field", "GP_UF_"),
+    (contract.UpdateStatus, "gp_update_status", "GP_UPDATE_"),
+    (contract.EnvelopeAction, "gp_envelope_action", "GP_ENVELOPE_"),
+    (contract.EnvelopeLimit, "gp_envelope_limit", "GP_LIMIT_"),
 )
 
 

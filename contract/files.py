@@ -2,7 +2,9 @@
 
 Reading: one function, `read_input`, so that every input (mission, plan, model, scenario,
 ocean and run files) is refused alike when it is missing, a directory, a device or a named
-pipe, or larger than `MAX_INPUT_BYTES`, with one line naming the file.
+pipe, or larger than `MAX_INPUT_BYTES`, with one line naming the file. Every data file
+(TOML or JSON) is then parsed by one function, `parse_data` (`read_data` does both), which
+bounds its nesting (`MAX_DATA_DEPTH`) and refuses a number that is not finite.
 
 Writing: atomically. A crash, a full disk or Ctrl-C leaves either the old file or the new
 one, never half of one (the promise README.md makes).
@@ -12,18 +14,35 @@ from __future__ import annotations
 
 import codecs
 import errno
+import json
+import math
 import os
 import stat
 import tempfile
 from pathlib import Path
 
-from gliderplan.contract import MAX_INPUT_BYTES
+from gliderplan.contract import MAX_DATA_DEPTH, MAX_INPUT_BYTES
 from gliderplan.contract.errors import GliderplanError, UsageError
 
 
 class InputFileError(GliderplanError):
     """A file that cannot be read as the input it should be; `usage` when the path names
-    no file that could be one (missing, a directory, a device or pipe, unreadable)."""
+    no file that could be one (missing, a directory, a device or pipe, unreadable). Its
+    message starts with the file's name."""
+
+    def __init__(self, message: str, *, usage: bool = False, details: str = "",
+                 file: str | None = None) -> None:
+        super().__init__(message, usage=usage, details=details, file=file)
+
+
+class DataFileError(InputFileError):
+    """A data file (TOML or JSON) that does not parse or breaks the bounds of `parse_data`:
+    the file `where`, the dotted `key` at fault (None: the whole file) and the `problem`."""
+
+    def __init__(self, where: str, key: str | None, problem: str) -> None:
+        self.where, self.key, self.problem = where, key, problem
+        super().__init__(f"{where}: {key}: {problem}" if key else f"{where}: {problem}",
+                         file=where)
 
 
 class OutputFileError(UsageError):
@@ -42,14 +61,15 @@ def read_input(path: str | Path, what: str, *, head: int | None = None) -> bytes
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
     except OSError as err:
-        raise InputFileError(f"{shown}: {_open_problem(err, what)}", usage=True) from None
+        raise InputFileError(f"{shown}: {_open_problem(err, what)}", usage=True,
+                             file=shown) from None
     try:
         info = os.fstat(fd)
         if stat.S_ISDIR(info.st_mode):
-            raise InputFileError(f"{shown}: is a directory, not a {what}", usage=True)
+            raise InputFileError(f"{shown}: is a directory, not a {what}", usage=True, file=shown)
         if not stat.S_ISREG(info.st_mode):
             raise InputFileError(f"{shown}: is not a regular file (a device, pipe or "
-                                 f"socket), not a {what}", usage=True)
+                                 f"socket), not a {what}", usage=True, file=shown)
         data = b""
         if head is not None or info.st_size <= MAX_INPUT_BYTES:
             chunk = b"-"
@@ -57,12 +77,13 @@ def read_input(path: str | Path, what: str, *, head: int | None = None) -> bytes
                 chunk = os.read(fd, wanted - len(data))
                 data += chunk
     except OSError as err:
-        raise InputFileError(f"{shown}: cannot read: {err.strerror}", usage=True) from None
+        raise InputFileError(f"{shown}: cannot read: {err.strerror}", usage=True,
+                             file=shown) from None
     finally:
         os.close(fd)
     if head is None and max(info.st_size, len(data)) > MAX_INPUT_BYTES:
         raise InputFileError(f"{shown}: more than {MAX_INPUT_BYTES} bytes is too large for a "
-                             f"{what} (the limit of every file gliderplan reads)")
+                             f"{what} (the limit of every file gliderplan reads)", file=shown)
     return data
 
 
@@ -70,7 +91,8 @@ def read_input_text(path: str | Path, what: str) -> str:
     """The text (UTF-8, a leading byte-order mark dropped) of the input file `path`."""
     data = read_input(path, what)
     if b"\0" in data:
-        raise InputFileError(f"{path}: binary file (contains NUL bytes), not a {what}")
+        raise InputFileError(f"{path}: binary file (contains NUL bytes), not a {what}",
+                             file=str(path))
     if data.startswith(codecs.BOM_UTF8):  # a spreadsheet or an editor on Windows adds one
         data = data[len(codecs.BOM_UTF8):]
     try:
@@ -78,7 +100,57 @@ def read_input_text(path: str | Path, what: str) -> str:
     except UnicodeDecodeError as err:
         line = data[: err.start].count(b"\n") + 1
         raise InputFileError(f"{path}:{line}: not UTF-8 text (byte 0x{data[err.start]:02x}), "
-                             f"not a {what}") from None
+                             f"not a {what}", file=str(path)) from None
+
+
+def read_data(path: str | Path, what: str, *, finite: bool = True) -> dict:
+    """The table a TOML (or, for a name ending in .json, JSON) data file `path` holds,
+    read by `read_input_text` and checked by `parse_data`; InputFileError naming the file."""
+    syntax = "json" if str(path).endswith(".json") else "toml"
+    return parse_data(read_input_text(path, what), str(path), syntax, finite=finite)
+
+
+def parse_data(text: str, where: str, syntax: str = "toml", *, finite: bool = True) -> dict:
+    """The top-level table of data `text` ("toml" or "json" `syntax`), refused with
+    InputFileError naming `where` (the file) and the key when it does not parse, is not a
+    table, nests tables or arrays more than MAX_DATA_DEPTH deep, or (`finite`) holds a
+    number that is not finite: the one parser of every data file gliderplan reads."""
+    import tomllib
+
+    try:
+        data = json.loads(text) if syntax == "json" else tomllib.loads(text)
+    except RecursionError:
+        raise DataFileError(where, None, f"tables or arrays nested more than "
+                            f"{MAX_DATA_DEPTH} deep") from None
+    except (tomllib.TOMLDecodeError, ValueError) as err:
+        raise DataFileError(where, None, f"not valid {syntax.upper()}: {err}") from None
+    if not isinstance(data, dict):
+        raise DataFileError(where, None, f"expected a {syntax.upper()} table (object), got "
+                            f"{type(data).__name__}")
+    _check_data(data, where, finite)
+    return data
+
+
+def _check_data(data: dict, where: str, finite: bool) -> None:
+    """Walk `data` without recursion: its depth, and (`finite`) its numbers."""
+    pending: list[tuple[str, object, int]] = [("", data, 0)]
+    while pending:
+        key, value, depth = pending.pop()
+        if isinstance(value, dict | list):
+            if depth > MAX_DATA_DEPTH:
+                shown = key if len(key) <= 60 else f"{key[:57]}..."
+                raise DataFileError(where, shown, f"tables or arrays nested more than "
+                                    f"{MAX_DATA_DEPTH} deep")
+            items = value.items() if isinstance(value, dict) else \
+                ((f"[{i}]", v) for i, v in enumerate(value))
+            for name, item in items:
+                inner = f"{key}{name}" if name.startswith("[") else \
+                    f"{key}.{name}" if key else str(name)
+                pending.append((inner, item, depth + 1))
+        elif finite and isinstance(value, float) and not math.isfinite(value):
+            parent, _, leaf = key.rpartition(".")
+            raise DataFileError(where, parent or None,
+                                f"{leaf} must be a finite number, got {value!r}")
 
 
 def _open_problem(err: OSError, what: str) -> str:
@@ -105,7 +177,9 @@ def write_atomically(path: str | Path, data: str | bytes, *, private: bool = Fal
     OutputFileError, naming the file, if it cannot be written there.
 
     A symbolic link stays a link: the file it points to is replaced. A file that exists
-    keeps its permissions; a new one gets the umask's (mkstemp alone would make it 0600).
+    keeps its permissions, and one that is read-only (no write permission for us, or no
+    write bit at all, which root would override) is refused, not replaced: a rename
+    would bypass its permissions. A new file gets the umask's (mkstemp alone: 0600).
     `private`: readable by its owner only (mode 0600: a key). `replace=False`: an existing
     file is left alone and FileExistsError raised (the new file appears whole or not at
     all; a hard link is how an atomic no-clobber create is done on POSIX)."""
@@ -117,6 +191,10 @@ def write_atomically(path: str | Path, data: str | bytes, *, private: bool = Fal
             permissions = stat.S_IMODE(path.stat().st_mode)
         except FileNotFoundError:
             permissions = 0o666 & ~_umask()
+        else:
+            if not (permissions & 0o222 and os.access(path, os.W_OK)):
+                raise OutputFileError(f"{shown}: read-only (mode {permissions:03o}): not "
+                                      "replaced; make it writable (chmod u+w) to replace it")
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:32]}.", dir=path.parent)
     except OSError as err:
         raise OutputFileError(f"{shown}: cannot write: {err.strerror}") from None

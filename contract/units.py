@@ -22,6 +22,8 @@ UNITS: dict[str, dict[str, float]] = {
     "volume": {"cc": 1.0, "ml": 1.0, "l": 1e3, "m3": 1e6},
     "flow": {"cc/s": 1.0, "ml/s": 1.0},
     "length": {"m": 1.0, "km": 1e3},
+    "speed": {"m/s": 1.0, "km/h": 1.0 / 3.6, "kn": 1852.0 / 3600.0},
+    "rotation": {"rpm": 1.0},  # propeller revolutions per minute
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
     "area": {"m2": 1.0},
     "mass": {"kg": 1.0, "g": 1e-3},

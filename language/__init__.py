@@ -9,6 +9,7 @@ MissionError for the commands that go on with the mission.
 from __future__ import annotations
 
 import gc
+import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -39,28 +40,36 @@ class CheckResult:
     def render(self) -> str:
         return render_all(self.diagnostics, self.filename, self.source)
 
+    def diagnostics_json(self) -> list[dict]:
+        """Every diagnostic as a JSON object (`Diagnostic.to_json`)."""
+        return [d.to_json(self.filename) for d in self.diagnostics]
+
     def checked(self) -> CheckedMission:
         """The checked mission; MissionError (with the diagnostics) if it has errors."""
         if self.mission is None:
-            raise MissionError(f"{self.filename}: mission has errors", details=self.render())
+            raise MissionError(f"{self.filename}: mission has errors", details=self.render(),
+                               diagnostics=self.diagnostics_json(), file=self.filename)
         return self.mission
 
 
-def check_file(path: str, stack_depth: int | None = None) -> CheckResult:
+def check_file(path: str, stack_depth: int | None = None, *, model_files: bool = False
+               ) -> CheckResult:
     """Read and check a mission file (`gliderplan check`). Raises InputFileError for a file
     that cannot be read as mission text, UsageError for a stack depth the runtime cannot
-    hold; a bad mission is not an error here but a result with diagnostics."""
+    hold; a bad mission is not an error here but a result with diagnostics. `model_files`:
+    open the vehicle and board files it names too, and check the yos their vehicle flies
+    (`gliderplan check`; the other commands load them when they need them)."""
     if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
         raise UsageError(f"--max-stack must be between 1 and {MAX_STACK_DEPTH}, the "
                          "runtime's limit")
-    return check_source(read_mission(path), path, stack_depth)
+    return check_source(read_mission(path), path, stack_depth, model_files=model_files)
 
 
 def check_source(source: str, filename: str = "<mission>",
-                 stack_depth: int | None = None) -> CheckResult:
-    """Parse and check mission text."""
+                 stack_depth: int | None = None, *, model_files: bool = False) -> CheckResult:
+    """Parse and check mission text (`model_files` as for `check_file`)."""
     with _cycle_collector_paused():
-        return _check_source(source, filename, stack_depth)
+        return _check_source(source, filename, stack_depth, model_files)
 
 
 @contextmanager
@@ -82,7 +91,8 @@ def _cycle_collector_paused() -> Iterator[None]:
             gc.enable()
 
 
-def _check_source(source: str, filename: str, stack_depth: int | None) -> CheckResult:
+def _check_source(source: str, filename: str, stack_depth: int | None,
+                  model_files: bool) -> CheckResult:
     from gliderplan.language.checker import check
     from gliderplan.language.parser import parse
 
@@ -91,7 +101,9 @@ def _check_source(source: str, filename: str, stack_depth: int | None) -> CheckR
     except MissionSyntaxError as err:
         return CheckResult(filename, source, None, err.diagnostics)
     try:
-        mission, diagnostics = check(syntax, stack_depth)
+        # the files a mission names are beside it (a text of no file: the working folder)
+        base_dir = "" if filename.startswith("<") else os.path.dirname(filename)
+        mission, diagnostics = check(syntax, stack_depth, base_dir, model_files)
     except RecursionError:
         from gliderplan.language.parser import TOO_DEEP
 

@@ -151,14 +151,27 @@ class ComputerDecl(Node):
 
 
 class BatteryDecl(Node):
-    capacity: Quantity
+    capacity: Quantity | None  # None for a preset or a file
     voltage: Quantity | None
     reserve: Quantity | None
     span: Span = NO_SPAN
+    preset: Ident | None = None  # `battery alkaline`, or a file path written as a string
+    is_file: bool = False
 
 
 class HorizonDecl(Node):
     duration: Quantity
+    span: Span = NO_SPAN
+
+
+class StartDecl(Node):
+    lat: Number  # [decimal degrees]
+    lon: Number
+    span: Span = NO_SPAN
+
+
+class CorrectionDecl(Node):
+    setting: Ident  # on | off
     span: Span = NO_SPAN
 
 
@@ -200,6 +213,8 @@ Declaration = (
     | ComputerDecl
     | BatteryDecl
     | HorizonDecl
+    | StartDecl
+    | CorrectionDecl
     | ObjectiveDecl
     | SensorDecl
     | VarDecl
@@ -210,14 +225,17 @@ Declaration = (
 
 
 class Invocation(Node):
-    """`nav(3910.5, -7349.8)`, `yo(5, 20, .454, .454)` or a bare `noheading`."""
+    """`nav(3910.5, -7349.8)`, `yo(5, 20, .454, .454)`, `cruise(10, auto)` (an `auto`
+    argument is an Ident) or a bare `noheading`; a profile may carry a thruster setting,
+    `yo(...) thrust 3 W` (a Quantity, or the Ident `auto`)."""
 
     _uncompared = frozenset({"has_parens"})
 
     name: Ident
-    args: tuple[Expr | Point, ...]
+    args: tuple[Expr | Point | Ident, ...]
     has_parens: bool = True
     span: Span = NO_SPAN
+    thrust: Quantity | Ident | None = None
 
 
 class RouteItem(Node):

@@ -7,20 +7,32 @@ needs them. Every pass reports all it finds, never just the first problem.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable, Mapping
-from typing import TypeVar
+from typing import Any, TypeVar
 
-from gliderplan.contract import MAX_STACK_DEPTH, NO_BOARD, RUNTIME_CYCLES_PER_TICK, TICK_S
+from gliderplan.contract import (
+    MAX_PLAN_ENERGY_J,
+    MAX_PLAN_TIME_S,
+    MAX_SENSOR_WEIGHT,
+    MAX_STACK_DEPTH,
+    NO_BOARD,
+    RUNTIME_CYCLES_PER_TICK,
+    TICK_S,
+    Envelope,
+)
 from gliderplan.language import ast, ir
 from gliderplan.language.diagnostics import Diagnostic, did_you_mean, error, warning
 from gliderplan.language.flow import check_flow
 from gliderplan.language.limits import check_sizes
 from gliderplan.language.registry import (
+    AUTO_PARAMS,
     FUNCTIONS,
     PROFILES,
     ROUTES,
     SENSOR_BY_NAME,
     ParamSpec,
+    cannot_fly,
 )
 from gliderplan.language.units import UnitProblem, normalise
 
@@ -29,14 +41,23 @@ T = TypeVar("T")
 
 
 class _Checker:
-    def __init__(self, mission: ast.Mission, stack_depth: int | None):
+    def __init__(self, mission: ast.Mission, stack_depth: int | None, base_dir: str = "",
+                 model_files: bool = False):
         self.mission = mission
+        self.model_files = model_files  # open the vehicle and board files it names
         self.stack_depth_override = stack_depth
+        self.base_dir = base_dir  # the mission's folder: the files it names are beside it
+        self.written: list[tuple[str, str]] = []  # (field, file as written) of each file
         self.diagnostics: list[Diagnostic] = []
         self.variables: dict[str, ast.VarDecl] = {}
         self.state_names = {s.name.text for s in mission.states}
         self.computer = ir.DEFAULT_COMPUTER  # the mission's board, for its states' settings
         self._board: object | None = None  # the board, loaded once when a state needs it
+        self.vehicle_spec = ir.DEFAULT_VEHICLE  # the mission's vehicle, for its envelope
+        self._vehicle: object | None = None  # the vehicle, loaded once when a profile needs it
+        # a vehicle file the mission names, loaded and checked when model files are opened
+        self._vehicle_file: object | None = None
+        self._envelope: object | None = None  # its envelope, loaded once a profile needs it
 
     # ---- reporting helpers
     def error(self, message: str, span: ast.Span, hint: str | None = None) -> None:
@@ -78,9 +99,30 @@ class _Checker:
         mission = ir.CheckedMission(name=self.mission.name.text, states=tuple(states), **fields)
         spans = {s.name.text: s for s in self.mission.states}
         self.diagnostics.extend(check_flow(mission, spans))
+        if self._vehicle_file is not None:
+            self.yos_flyable(mission)
         if self.error_count():
             return None
         return mission
+
+    def yos_flyable(self, mission: ir.CheckedMission) -> None:
+        """An error at each yo of constant depths the mission's vehicle file cannot fly at its
+        pitch and unplanned volume (`sim` would refuse it: `yo_flight_problem`); a yo the
+        vehicle cannot fly at all (an AUV's) is `flyable`'s to say."""
+        from gliderplan.power_models.vehicle import yo_flight_problem
+
+        vehicle = self._vehicle_file
+        for state, node in zip(mission.states, self.mission.states, strict=True):
+            written = next(i for i in node.items if isinstance(i, ast.ProfileItem))
+            for k, (profile, call) in enumerate(zip(state.profiles, written.alternatives,
+                                                    strict=True)):
+                if cannot_fly(profile.kind, profile.thrust, vehicle) is not None:
+                    continue
+                problem = yo_flight_problem(f"{state.name}: flightprofile {k}", vehicle,
+                                            profile.kind, profile.constant_args())
+                if problem is not None:
+                    self.error(f"{problem}", call.span, "a deeper pump (max_ballast), a "
+                               "lighter trim or a shallower yo")
 
     # ---- mission-level declarations
     def declarations(self) -> dict:
@@ -98,8 +140,13 @@ class _Checker:
                 seen[type(decl)] = decl
             match decl:
                 case ast.VehicleDecl():
-                    self.preset_known("vehicle", decl.preset, decl.is_file)
-                    fields["vehicle"] = decl.preset.text
+                    known = self.preset_known("vehicle", decl.preset, decl.is_file)
+                    fields["vehicle"] = self.beside("vehicle", decl.preset.text, decl.is_file)
+                    if known:
+                        self.vehicle_spec = fields["vehicle"]
+                    if decl.is_file and self.model_files:
+                        self._vehicle_file = self.model_file("vehicle", fields["vehicle"],
+                                                             decl.preset)
                 case ast.ComputerDecl() if decl.board.text == NO_BOARD:
                     fields["computer"] = self.computer = ir.Computer(NO_BOARD)
                     if decl.clock is not None:
@@ -114,7 +161,10 @@ class _Checker:
                         clock_mhz = mhz[0]
                         if clock_mhz <= 0:
                             self.error("clock must be positive", decl.clock.span)
-                    fields["computer"] = self.computer = ir.Computer(decl.board.text, clock_mhz)
+                    board = self.beside("computer", decl.board.text, decl.is_file)
+                    fields["computer"] = self.computer = ir.Computer(board, clock_mhz)
+                    if decl.is_file and self.model_files:
+                        self._board = self.model_file("board", board, decl.board) or False
                     if known and clock_mhz is not None and clock_mhz > 0 and \
                             (board := self.board(decl.clock.span)) is not None:
                         self.clock_known(board, clock_mhz, decl.clock.span,
@@ -124,9 +174,27 @@ class _Checker:
                         fields["battery"] = battery
                 case ast.HorizonDecl():
                     if (horizon := self.quantity(decl.duration, "time")) is not None:
-                        if horizon[0] <= 0:
-                            self.error("horizon must be positive", decl.duration.span)
+                        if not TICK_S <= horizon[0] <= MAX_PLAN_TIME_S:
+                            self.error(f"horizon must lie between one tick ({TICK_S:g} s) and "
+                                       f"{MAX_PLAN_TIME_S / 86400 / 365:g} years",
+                                       decl.duration.span, "the time the mission is planned "
+                                       "and simulated for, e.g. 'horizon 30 d'")
                         fields["horizon_s"] = horizon[0]
+                case ast.StartDecl(lat, lon):
+                    if -90.0 <= lat.value <= 90.0 and -180.0 <= lon.value <= 180.0:
+                        fields["start_deg"] = (lat.value, lon.value)
+                    else:
+                        self.error("start: latitude must lie in [-90, 90] and longitude in "
+                                   "[-180, 180] degrees", decl.span, "where the glider is put "
+                                   "in the water, decimal degrees: e.g. 'start 54.2, 7.0'")
+                case ast.CorrectionDecl(setting):
+                    if setting.text in ("on", "off"):
+                        fields["current_correction"] = setting.text == "on"
+                    else:
+                        self.error(f"current_correction {setting.text}: expected on or off",
+                                   setting.span, "whether the glider heads upstream of its "
+                                   "waypoint for the current it measured (Slocum "
+                                   "u_use_current_correction)")
                 case ast.ObjectiveDecl():
                     fields["objective"] = self.objective(decl)
                 case ast.SensorDecl():
@@ -146,6 +214,7 @@ class _Checker:
                         fields["stack_depth"] = int(depth)
         if self.stack_depth_override is not None:
             fields["stack_depth"] = self.stack_depth_override
+        fields["files_as_written"] = tuple(self.written)
         fields["sensor_preferences"] = tuple(prefs)
         fields["variables"] = tuple(variables)
         fields["defaults_used"] = tuple(
@@ -154,6 +223,15 @@ class _Checker:
             if kind not in seen
         )
         return fields
+
+    def beside(self, field: str, spec: str, is_file: bool) -> str:
+        """The file a mission names (`vehicle "my.toml"`), found beside the mission rather
+        than in the working directory: resolved here, once, for every later stage (the
+        IR holds the path, its hash the text as written); a preset name as it is."""
+        if not is_file or os.path.isabs(spec) or not self.base_dir:
+            return spec
+        self.written.append((field, spec))
+        return os.path.join(self.base_dir, spec)
 
     def preset_known(self, kind: str, name: ast.Ident, is_file: bool) -> bool:
         """False, with an error, for a preset name that is not shipped; a user's file is
@@ -171,13 +249,15 @@ class _Checker:
         return True
 
     def battery(self, decl: ast.BatteryDecl) -> ir.Battery | None:
-        capacity = self.quantity(decl.capacity, "energy", "charge")
         reserve = 0.0
         if decl.reserve is not None and (fraction := self.quantity(decl.reserve, "fraction")):
             reserve = fraction[0]
             if not 0 <= reserve < 1:
                 self.error("reserve must be at least 0 % and below 100 %", decl.reserve.span,
                            "the reserve is the part of the battery the plan must not use")
+        if decl.preset is not None:
+            return self.battery_pack(decl, reserve if decl.reserve is not None else None)
+        capacity = self.quantity(decl.capacity, "energy", "charge")
         if capacity is None:
             return None
         energy_j, dimension = capacity
@@ -195,7 +275,26 @@ class _Checker:
         if energy_j <= 0:
             self.error("battery capacity must be positive", decl.capacity.span)
             return None
+        if energy_j > MAX_PLAN_ENERGY_J:
+            self.error(f"a battery of {energy_j:.3g} J is larger than any plan can carry "
+                       f"({MAX_PLAN_ENERGY_J:g} J; the largest Slocum pack holds 12 MJ)",
+                       decl.capacity.span)
+            return None
         return ir.Battery(energy_j, reserve)
+
+    def battery_pack(self, decl: ast.BatteryDecl, reserve: float | None) -> ir.Battery | None:
+        """`battery alkaline` or `battery "pack.toml"`: the pack's energy, and its reserve
+        unless the line gives one (the part the pack's `usable_fraction` leaves), as
+        `plan --battery PRESET` reads it."""
+        if not self.preset_known("battery", decl.preset, decl.is_file):
+            return None
+
+        pack = self.model_file("battery", self.beside("battery", decl.preset.text,
+                                                      decl.is_file), decl.preset)
+        if pack is None:
+            return None
+        return ir.Battery(pack.energy_j, 1.0 - pack.usable_fraction if reserve is None
+                          else reserve)
 
     def objective(self, decl: ast.ObjectiveDecl) -> ir.Objective:
         wanted = {("maximize", "quality"), ("minimize", "energy")}
@@ -206,8 +305,9 @@ class _Checker:
                        "'objective minimize energy quality >= N'")
             return ir.Objective()
         floor = decl.quality_floor.value if decl.quality_floor else 0.0
-        if floor < 0:
-            self.error("a quality floor cannot be negative", decl.quality_floor.span)
+        if not 0 <= floor <= 1:
+            self.error("a quality floor must lie between 0 and 1", decl.quality_floor.span,
+                       "quality runs from 0 (no science) to 1 (every sensor always on)")
         if pair == ("maximize", "quality"):
             if decl.quality_floor is not None:
                 self.warning("a quality floor has no effect when maximizing quality",
@@ -226,8 +326,10 @@ class _Checker:
         for bound in decl.bounds:
             if bound.kind == "weight":
                 weight = bound.value.value
-                if not 0 <= weight < math.inf:
-                    self.error("a weight must be a finite number, 0 or more", bound.value.span)
+                if not 0 <= weight <= MAX_SENSOR_WEIGHT:
+                    self.error(f"a weight must lie between 0 and {MAX_SENSOR_WEIGHT:g}",
+                               bound.value.span, "weights are relative to each other: "
+                               "1 and 3 say the second sensor counts three times as much")
         duty_min, duty_max, quality_min = self.bounds(decl.bounds, decl.sensor.text)
         return ir.SensorPreference(decl.sensor.text, weight, duty_min, duty_max, quality_min)
 
@@ -316,7 +418,8 @@ class _Checker:
             return None
         route_item = items.get(ast.RouteItem)
         route = self.route(route_item.route) if route_item else ir.Route("noheading")
-        profiles = [self.profile(p) for p in items[ast.ProfileItem].alternatives]
+        written = items[ast.ProfileItem].alternatives
+        profiles = [self.profile(p, written) for p in written]
         sensors_item = items.get(ast.SensorsItem)
         sensors = self.sensor_uses(sensors_item) if sensors_item else []
         events_item = items.get(ast.EventsItem)
@@ -337,6 +440,7 @@ class _Checker:
             expect_s=expect,
             requirements=tuple(reqs),
             computer=computer,
+            profile_line=items[ast.ProfileItem].span.line,
         )
 
     def registered(self, ident: ast.Ident, table: Mapping[str, T], kind: str,
@@ -374,7 +478,8 @@ class _Checker:
             return None
         return ir.Route(name, tuple(params), tuple(coords))
 
-    def profile(self, invocation: ast.Invocation) -> ir.Profile | None:
+    def profile(self, invocation: ast.Invocation, alternatives: tuple[ast.Invocation, ...]
+                ) -> ir.Profile | None:
         name = invocation.name.text
         info = self.registered(invocation.name, PROFILES, "flight profile", "profiles")
         if info is None:
@@ -387,11 +492,17 @@ class _Checker:
                        f"got {len(invocation.args)}", invocation.span,
                        f"{name}({', '.join(_parameter(p) for p in info.params)})")
             return None
-        args = [self.expression(a, allow_sensors=False) for a in invocation.args]
+        auto = self.auto_arguments(invocation, info.params)
+        thrust = self.thrust(invocation)
+        if auto is None:
+            return None
+        written = invocation.args[:len(invocation.args) - len(auto)]
+        args = [self.expression(a, allow_sensors=False) for a in written]
         if None in args:
             return None
-        values = {}
-        for arg, node, spec in zip(args, invocation.args, info.params, strict=False):
+        values, spans = {}, {}
+        for arg, node, spec in zip(args, written, info.params, strict=False):
+            spans[spec.name] = node.span
             if not ir.variables_read(arg):
                 value = ir.evaluate(arg, {}, {})
                 if self.in_range(value, spec, name, node.span):
@@ -402,7 +513,138 @@ class _Checker:
                        f"{values['max_depth']:g} m", invocation.span,
                        f"{name}(min_depth, max_depth, ...): the glider turns at min_depth "
                        "on the way up and at max_depth on the way down")
-        return ir.Profile(name, tuple(args))
+        elif values:
+            self.within_envelope(invocation, values)
+        profile = ir.Profile(name, tuple(args), auto, thrust)
+        if profile.propelled or self.vehicle_spec != ir.DEFAULT_VEHICLE:
+            # the default glider flies every buoyancy profile: no need to load it
+            self.flyable(profile, invocation, values.get("speed"), spans.get("speed"),
+                         alternatives)
+        return profile
+
+    def auto_arguments(self, invocation: ast.Invocation, params: tuple[ParamSpec, ...]
+                       ) -> tuple[str, ...] | None:
+        """The names of the arguments written `auto` (a propelled profile's speed, its last
+        argument); None, with an error, for an `auto` the profile cannot take."""
+        auto = []
+        for node, spec in zip(invocation.args, params, strict=False):
+            if isinstance(node, ast.Ident):
+                if spec.name not in AUTO_PARAMS:
+                    self.error(f"'{spec.name}' of '{invocation.name.text}' cannot be 'auto'",
+                               node.span, "only a propelled profile's speed is the planner's "
+                               "to choose, e.g. 'cruise(10, auto)'")
+                    return None
+                auto.append(spec.name)
+        return tuple(auto)
+
+    def thrust(self, invocation: ast.Invocation) -> float | str | None:
+        """A yo's thruster setting: its commanded power [W], "auto" or None (none, or an
+        error)."""
+        setting = invocation.thrust
+        if setting is None:
+            return None
+        if invocation.name.text not in ("yo", "thermotrackyo"):
+            self.error(f"a thruster assists a yo, not '{invocation.name.text}'", setting.span,
+                       "a propelled profile sets its speed instead: e.g. 'cruise(10, auto)'")
+            return None
+        if isinstance(setting, ast.Ident):
+            return "auto"
+        power = self.quantity(setting, "power")
+        if power is None:
+            return None
+        if power[0] <= 0.0:
+            self.error(f"thrust must be positive, got {power[0]:g} W", setting.span,
+                       "leave 'thrust' out to glide on buoyancy alone")
+            return None
+        return power[0]
+
+    def vehicle(self) -> object | None:
+        """The mission's vehicle (power_models.vehicle.Vehicle), loaded once; None when its
+        file cannot be read or is bad: the stage that needs its figures (plan, sim,
+        compile) says so, with its own exit status (a file that cannot be opened is a usage
+        error, not the mission's)."""
+        if self._vehicle is None and self._vehicle_file is not None:
+            self._vehicle = self._vehicle_file  # loaded once
+        if self._vehicle is None:
+            from gliderplan.contract.files import InputFileError
+            from gliderplan.power_models.errors import ModelFileError
+            from gliderplan.power_models.vehicle import load_vehicle
+
+            try:
+                self._vehicle = load_vehicle(self.vehicle_spec)
+            except (ModelFileError, InputFileError):
+                self._vehicle = False
+        return self._vehicle or None
+
+    def flyable(self, profile: ir.Profile, invocation: ast.Invocation, speed_mps: float | None,
+                speed_span: ast.Span | None, alternatives: tuple[ast.Invocation, ...]) -> None:
+        """An error where the vehicle cannot fly the profile (`cannot_fly`; a warning for one
+        of several `alternatives`, which the planner then skips), or a speed or thrust
+        beyond its propulsion model."""
+        vehicle = self.vehicle()
+        if vehicle is None:
+            return
+        from gliderplan.power_models.propulsion import SpeedOutOfRange
+
+        if (problem := cannot_fly(profile.kind, profile.thrust, vehicle)) is not None:
+            why, hint, thrust = problem
+            span = invocation.thrust.span if thrust else invocation.name.span
+            if any(a.name.text in PROFILES and cannot_fly(a.name.text, a.thrust, vehicle)
+                   is None for a in alternatives):  # the planner flies those
+                self.warning(f"{why}: the planner gives it no time", span, hint)
+            else:
+                self.error(why, span, hint)
+            return
+        propulsion = vehicle.propulsion
+        checks = [(propulsion.check_command, profile.thrust, invocation.thrust.span)] \
+            if isinstance(profile.thrust, float) else []
+        if speed_mps is not None and propulsion is not None:
+            checks.append((propulsion.check_speed, speed_mps, speed_span))
+        for check, value, span in checks:
+            try:
+                check(value)
+            except SpeedOutOfRange as err:
+                self.error(f"vehicle {vehicle.name}: {err}", span,
+                           "'auto' lets the planner choose")
+
+    def within_envelope(self, invocation: ast.Invocation, values: dict[str, float]) -> None:
+        """Errors for the constant arguments of a profile outside the vehicle's rating
+        (docs/pilot.md, The envelope): what the runtime would refuse in flight."""
+        envelope = self.envelope()
+        if envelope is None:
+            return
+        spans = {spec.name: node.span for spec, node in zip(
+            PROFILES[invocation.name.text].params, invocation.args, strict=False)}
+        hint = f"the rating of vehicle {self.vehicle_spec} (its file's [envelope])"
+        for param in ("min_depth", "max_depth", "depth"):
+            if values.get(param, 0.0) > envelope.max_depth_m:
+                self.error(f"{param.replace('_', ' ')} {values[param]:g} m is beyond the "
+                           f"vehicle's rated {envelope.max_depth_m:g} m", spans[param], hint)
+        for param in ("dive_pitch", "climb_pitch"):
+            if values.get(param, 0.0) > envelope.max_pitch_rad:
+                self.error(f"{param.replace('_', ' ')} {values[param]:g} rad is beyond the "
+                           f"vehicle's {envelope.max_pitch_rad:.3g} rad", spans[param], hint)
+        if "min_depth" in values and "max_depth" in values and (
+                values["max_depth"] - values["min_depth"] < envelope.min_yo_band_m):
+            band = values["max_depth"] - values["min_depth"]
+            self.error(f"yo band {band:g} m is thinner than the "
+                       f"vehicle's {envelope.min_yo_band_m:g} m: it would turn all the time",
+                       invocation.span, hint)
+
+    def envelope(self) -> Envelope | None:
+        """The mission's vehicle's envelope, loaded once; None when its file cannot be read
+        (what is wrong with it is said, with its own exit code, where the vehicle is
+        loaded to be flown or planned)."""
+        if self._envelope is None:
+            from gliderplan.contract.files import InputFileError
+            from gliderplan.power_models.errors import ModelFileError
+            from gliderplan.power_models.vehicle_figures import load_envelope
+
+            try:
+                self._envelope = load_envelope(self.vehicle_spec)
+            except (ModelFileError, InputFileError):
+                self._envelope = False
+        return self._envelope or None
 
     def sensor_uses(self, item: ast.SensorsItem) -> list[ir.SensorUse | None]:
         uses: list[ir.SensorUse | None] = []
@@ -434,11 +676,29 @@ class _Checker:
         low, high = self.quantity(item.low, "time"), self.quantity(item.high, "time")
         if low is None or high is None:
             return None
-        if not 0 <= low[0] <= high[0]:
+        if not 0 <= low[0] <= high[0]:  # past the horizon (at most 10 y): runs to it
             self.error("expected time must be a range 'low .. high' with 0 <= low <= high",
                        item.span)
             return None
         return low[0], high[0]
+
+    def model_file(self, kind: str, spec: str, written: ast.Ident) -> Any:
+        """The vehicle, board or battery in `spec` (a file the mission names, or a preset),
+        its figures checked against their physical ranges (`power_models.plausible`); None,
+        with an error at the name as `written`, when it cannot be loaded."""
+        from gliderplan.contract.errors import GliderplanError
+
+        if kind == "vehicle":  # each kind's loader only: a board's leaves numpy unimported
+            from gliderplan.power_models.vehicle import load_vehicle as load
+        elif kind == "board":
+            from gliderplan.power_models.board import load_board as load
+        else:
+            from gliderplan.power_models.battery import load_battery as load
+        try:
+            return load(spec)
+        except GliderplanError as err:
+            self.error(f"{kind} {written.text}: {err}", written.span)
+            return None
 
     # ---- power management
     def board(self, span: ast.Span) -> object | None:
@@ -718,12 +978,15 @@ def _signature(params: tuple[ParamSpec, ...], min_points: int, max_points: int) 
     return ", ".join(parts) if parts else "no arguments"
 
 
-def check(mission: ast.Mission, stack_depth: int | None = None
-          ) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
+def check(mission: ast.Mission, stack_depth: int | None = None, base_dir: str = "",
+          model_files: bool = False) -> tuple[ir.CheckedMission | None, list[Diagnostic]]:
     """Check a parsed mission; the IR is None when there are errors. `stack_depth`
-    replaces the mission's own (1 to the runtime's MAX_STACK_DEPTH)."""
+    replaces the mission's own (1 to the runtime's MAX_STACK_DEPTH). `base_dir`: the
+    mission's folder, where the files it names are looked for ("": the working one).
+    `model_files`: open the vehicle and board files it names, and fly its yos on the
+    vehicle file's figures (a battery file is read always: it is the mission's energy)."""
     if stack_depth is not None and not 1 <= stack_depth <= MAX_STACK_DEPTH:
         raise ValueError(f"a stack depth of {stack_depth} is outside 1..{MAX_STACK_DEPTH}")
-    checker = _Checker(mission, stack_depth)
+    checker = _Checker(mission, stack_depth, base_dir, model_files)
     checked = checker.run()
     return checked, sorted(checker.diagnostics, key=lambda d: (d.span.line, d.span.column))

@@ -30,7 +30,8 @@ from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 _ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
             "return": "GP_ACT_RETURN", "exit": "GP_ACT_EXIT"}
 _PROFILE_KINDS = {"yo": "GP_PROFILE_YO", "thermotrackyo": "GP_PROFILE_THERMOTRACKYO",
-                  "surface": "GP_PROFILE_SURFACE", "hover": "GP_PROFILE_HOVER"}
+                  "surface": "GP_PROFILE_SURFACE", "hover": "GP_PROFILE_HOVER",
+                  "cruise": "GP_PROFILE_CRUISE", "altitude": "GP_PROFILE_ALTITUDE"}
 _ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
                 "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP",
                 "goto_list": "GP_ROUTE_GOTO_LIST"}
@@ -70,7 +71,7 @@ def _sensors_read(mission: ir.CheckedMission) -> int:
                 names |= ir.sensors_read(arg)
             if PROFILES[profile.kind].tracks_thermocline:
                 names.add("temp")
-            if profile.has_altimeter_stop:
+            if profile.has_altimeter_stop or profile.kind == "altitude":  # it follows the floor
                 names.add("altitude")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}
@@ -278,7 +279,8 @@ class _MissionWriter:
             lines += self.visit_profile_args(f"{prefix}_profile{number}_args", profile)
         lines += [f"static const gp_profile {prefix}_profiles[{len(state.profiles)}] = {{"]
         lines += [f"    {{{_PROFILE_KINDS[p.kind]}, {len(p.args)}, "
-                  f"{prefix}_profile{n}_args}}," for n, p in enumerate(state.profiles)]
+                  f"{prefix}_profile{n}_args, {c_double(p.written_thrust_w)}}},"
+                  for n, p in enumerate(state.profiles)]
         lines += ["};", ""]
         points = _route_points(state.route)
         if points:
@@ -341,6 +343,7 @@ class _MissionWriter:
         for index, state in enumerate(mission.states):
             lines += self.visit_state_entry(index, state)
         lines += ["};", ""]
+        lines += self.visit_plan_bounds()
         lines += [
             f"const gp_mission {self.p}gp_mission_table = {{",
             f"    .name = {_c_string(mission.name)},",
@@ -354,13 +357,57 @@ class _MissionWriter:
             f"    .own_read_mask = 0x{own_read_mask(mission):08x}u,",
             f"    .default_ballast_cc = {c_double(self.limits.default_ballast_cc)},",
             f"    .max_ballast_cc = {c_double(self.limits.max_ballast_cc)},",
+            f"    .unplanned_speed_mps = {c_double(self.limits.unplanned_speed_mps)},",
             f"    .reserve_j = {c_double(mission.battery.reserve_j)},",
+            *self.visit_envelope(),
             f"    .clocks_mhz = {self.p}board_clocks_mhz,",
             f"    .n_clocks = {len(self.limits.clocks_mhz)},",
             f"    .sensor_names = {self.p}sensor_names,",
+            f"    .bounds = &{self.p}mission_bounds,",
             "};",
         ]
         return lines
+
+    def visit_plan_bounds(self) -> list[str]:
+        """`mission_bounds`: the figures `gp_plan_check` holds a plan to (`FlightLimits`)."""
+        limits, lines, p = self.limits, [], self.p
+        if limits.duty_bounds:
+            for index, (duties, least) in enumerate(zip(limits.duty_bounds,
+                                                        limits.min_ballast_cc, strict=True)):
+                if duties:
+                    rows = ", ".join(f"{{{SENSOR_BY_NAME[name].index}, {c_double(low)}, "
+                                     f"{c_double(high)}}}" for name, low, high in duties)
+                    lines.append(f"static const gp_duty_bound {p}state{index}_duties"
+                                 f"[{len(duties)}] = {{{rows}}};")
+                lines.append(f"static const double {p}state{index}_min_ballast_cc[{len(least)}] "
+                             f"= {{{', '.join(c_double(x) for x in least)}}};")
+            lines += [f"static const gp_state_bounds {p}state_bounds[{len(limits.duty_bounds)}] "
+                      "= {",
+                      *(f"    {{{f'{p}state{i}_duties' if duties else 'NULL'}, {len(duties)}, "
+                        f"{p}state{i}_min_ballast_cc}},"
+                        for i, duties in enumerate(limits.duty_bounds)), "};"]
+        low, high = limits.pitch_range_rad
+        board = "NULL" if limits.board is None else _c_string(limits.board)
+        return lines + [
+            f"static const gp_plan_bounds {p}mission_bounds = {{",
+            f"    .board = {board},",
+            f"    .max_budget_j = {c_double(limits.max_budget_j)},",
+            f"    .min_pitch_rad = {c_double(low)},",
+            f"    .max_pitch_rad = {c_double(high)},",
+            f"    .max_speed_mps = {c_double(limits.max_speed_mps)},",
+            f"    .states = {f'{p}state_bounds' if limits.duty_bounds else 'NULL'},",
+            "};", ""]
+
+    def visit_envelope(self) -> list[str]:
+        """The vehicle's rating (contract.Envelope) as `gp_mission.envelope`."""
+        env = self.limits.envelope
+        return ["    .envelope = {",
+                f"        .max_depth_m = {c_double(env.max_depth_m)},",
+                f"        .max_pitch_rad = {c_double(env.max_pitch_rad)},",
+                f"        .min_yo_band_m = {c_double(env.min_yo_band_m)},",
+                f"        .min_inflection_s = {c_double(env.min_inflection_s)},",
+                f"        .action = GP_ENVELOPE_{env.action.name},",
+                "    },"]
 
     def visit_state_entry(self, index: int, state: ir.State) -> list[str]:
         prefix = f"{self.p}state{index}"
@@ -375,6 +422,7 @@ class _MissionWriter:
             f"{f'{prefix}_route_points' if points else 'NULL'}}},",
             f"        .profiles = {prefix}_profiles,",
             f"        .n_profiles = {len(state.profiles)},",
+            f"        .unplanned_profile = {self.limits.unplanned_profile(index)},",
             f"        .sensors = {f'{prefix}_sensors' if state.sensors else 'NULL'},",
             f"        .n_sensors = {len(state.sensors)},",
             f"        .sensor_mask = 0x{sensor_mask:08x}u,",

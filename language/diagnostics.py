@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.errors import GliderplanError, diagnostic_json
 from gliderplan.language.ast import NO_SPAN, Span
 
 
@@ -19,6 +19,13 @@ class Diagnostic:
     @property
     def is_error(self) -> bool:
         return self.severity == "error"
+
+    def to_json(self, filename: str) -> dict:
+        """As a JSON object (contract.errors.diagnostic_json; no place: line None)."""
+        line, column, end_line, end_column = self.span if self.span.line else (None,) * 4
+        return diagnostic_json(self.message, severity=self.severity, file=filename,
+                               line=line, column=column, end_line=end_line,
+                               end_column=end_column, hint=self.hint)
 
 
 def error(message: str, span: Span = NO_SPAN, hint: str | None = None) -> Diagnostic:

@@ -69,7 +69,9 @@ def format_file(path: str | Path) -> tuple[str, str]:
         return text, format_source(text)
     except MissionSyntaxError as err:
         raise MissionError(f"{path}: does not parse, left as it is",
-                           details=render_all(err.diagnostics, str(path), text)) from None
+                           details=render_all(err.diagnostics, str(path), text),
+                           diagnostics=[d.to_json(str(path)) for d in err.diagnostics],
+                           file=str(path)) from None
     except FormatError as err:
         raise FormatError(f"{path}: {err}") from None
 
@@ -169,12 +171,19 @@ def _declaration(decl: ast.Declaration) -> str:
         case ast.ComputerDecl(board, is_file, clock):
             at = f" @ {_quantity(clock)}" if clock else ""
             return f"computer {_preset(board, is_file)}{at}"
+        case ast.BatteryDecl(None, _, reserve, _, preset, is_file):
+            text = f"battery {_preset(preset, is_file)}"
+            return text + (f" reserve {_quantity(reserve)}" if reserve else "")
         case ast.BatteryDecl(capacity, voltage, reserve):
             text = f"battery {_quantity(capacity)}"
             text += f" at {_quantity(voltage)}" if voltage else ""
             return text + (f" reserve {_quantity(reserve)}" if reserve else "")
         case ast.HorizonDecl(duration):
             return f"horizon {_quantity(duration)}"
+        case ast.StartDecl(lat, lon):
+            return f"start {lat.text}, {lon.text}"
+        case ast.CorrectionDecl(setting):
+            return f"current_correction {setting.text}"
         case ast.ObjectiveDecl(sense, target, floor):
             text = f"objective {sense.text} {target.text}"
             return text + (f" quality >= {floor.text}" if floor else "")
@@ -265,13 +274,16 @@ def _sensor_use(use: ast.SensorUse) -> str:
 
 
 def _invocation(invocation: ast.Invocation) -> str:
+    thrust = invocation.thrust
+    setting = "" if thrust is None else " thrust " + (
+        thrust.text if isinstance(thrust, ast.Ident) else _quantity(thrust))
     if not invocation.has_parens and not invocation.args:
-        return invocation.name.text
+        return invocation.name.text + setting
     args = ", ".join(
         f"({expression(a.lat)}, {expression(a.lon)})" if isinstance(a, ast.Point)
-        else expression(a)
+        else a.text if isinstance(a, ast.Ident) else expression(a)
         for a in invocation.args)
-    return f"{invocation.name.text}({args})"
+    return f"{invocation.name.text}({args}){setting}"
 
 
 # ---- expressions -----------------------------------------------------------------

@@ -202,8 +202,23 @@ class Route:
 class Profile:
     """A flight profile alternative; args may read variables, so they stay expressions."""
 
-    kind: str  # yo | thermotrackyo | surface | hover
-    args: tuple[Expr, ...]
+    kind: str  # yo | thermotrackyo | surface | hover | cruise | altitude
+    args: tuple[Expr, ...]  # without the arguments written `auto` (the last ones)
+    # Left out of the canonical JSON when unset: a glider's missions keep their hash.
+    auto: tuple[str, ...] = field(default=(), metadata={"omit_default": True})  # `speed`
+    # a glider's thruster assisting the profile: its commanded power [W], or "auto"
+    thrust: float | str | None = field(default=None, metadata={"omit_default": True})
+
+    @property
+    def propelled(self) -> bool:
+        """Whether it flies on a propeller (or thruster) rather than on buoyancy alone."""
+        return PROFILES[self.kind].propelled or self.thrust is not None
+
+    @property
+    def written_thrust_w(self) -> float:
+        """The thrust written [W], flown without a plan; 0 for none or `auto` (the planner's
+        choice: off without a plan)."""
+        return self.thrust if isinstance(self.thrust, float) else 0.0
 
     @property
     def has_altimeter_stop(self) -> bool:
@@ -282,6 +297,14 @@ class State:
     # Left out of the canonical JSON when a state says nothing (missions written before
     # power management keep their hash, and with it their plans and builds).
     computer: ComputerUse = field(default=NO_COMPUTER_USE, metadata={"omit_default": True})
+    # the line of its `flightprofile` in the mission file, for messages (0: not from one);
+    # where it was written does not change the mission: not in its hash
+    profile_line: int = field(default=0, metadata={"omit_default": True})
+
+    @property
+    def place(self) -> str:
+        """The state as a message names it: `s1 (line 6)`, the line of its flightprofile."""
+        return f"{self.name} (line {self.profile_line})" if self.profile_line else self.name
 
     @property
     def profile_variables(self) -> tuple[str, ...]:
@@ -351,10 +374,16 @@ class CheckedMission:
     computer: Computer = DEFAULT_COMPUTER
     battery: Battery = DEFAULT_BATTERY
     horizon_s: float | None = None
+    start_deg: tuple[float, float] | None = None  # (lat, lon): where it is put in the water
+    current_correction: bool = True  # heads upstream for the current it measured
     objective: Objective = field(default_factory=Objective)
     sensor_preferences: tuple[SensorPreference, ...] = ()
     stack_depth: int = DEFAULT_STACK_DEPTH
     defaults_used: tuple[str, ...] = ()  # which annotations were defaulted, for reports
+    # (field, text as written) of each file the mission names relative to its folder:
+    # `vehicle` and `computer.board` hold the path found there; the hash, the text
+    files_as_written: tuple[tuple[str, str], ...] = field(default=(),
+                                                          metadata={"omit_default": True})
 
     def state(self, name: str) -> State:
         return self.states[self.state_index[name]]
@@ -380,6 +409,18 @@ class CheckedMission:
         """SHA-256 (hex) of the canonical JSON, excluding `defaults_used` (not semantic)."""
         data = _encode(self)
         data.pop("defaults_used")
+        # missions without a start or with the default correction keep the hash they had
+        if data.get("start_deg") is None:
+            data.pop("start_deg", None)
+        if data.get("current_correction", True):
+            data.pop("current_correction", None)
+        for state in data["states"]:
+            state.pop("profile_line", None)
+        for name, text in data.pop("files_as_written", ()):  # where it was checked from
+            if name == "computer":                               # does not change it
+                data["computer"]["board"] = text
+            elif name == "vehicle":
+                data["vehicle"] = text
         canonical = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
         import hashlib  # here, not at the top: `gliderplan check` starts faster without it
 

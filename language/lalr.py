@@ -39,6 +39,14 @@ _NO_POSITION = (0, 0, 0, 0)
 Entry = tuple  # (value or token text, line, column, end_line, end_column)
 
 
+class TooDeep(Exception):
+    """The text nests deeper than the parser's stack may grow, at `token` (its entry)."""
+
+    def __init__(self, token: Entry, depth: int) -> None:
+        super().__init__(f"nested more than {depth} deep")
+        self.token, self.depth = token, depth
+
+
 class _Rule:
     """One grammar rule: its length, the symbol it makes, and a function that takes its
     symbols off the stack and returns its entry (lark's parse_tree_builder, compiled)."""
@@ -244,10 +252,12 @@ class Parser:
         self._units[below, top, lookahead] = state
         return state
 
-    def parse(self, text: str, start: str) -> object:
-        """The builder's value for the whole text; lark's UnexpectedInput on a syntax error."""
+    def parse(self, text: str, start: str, max_depth: int | None = None) -> object:
+        """The builder's value for the whole text; lark's UnexpectedInput on a syntax error,
+        TooDeep at the token that would make the stack deeper than `max_depth` entries."""
         actions, reductions, units, lexers = (self._actions, self._reductions, self._units,
                                               self._lexers)
+        rules = self._rules
         end_state = self._end_states[start]
         state = self._start_states[start]
         states = [state]
@@ -283,19 +293,28 @@ class Parser:
             else:
                 type_, token, token_start = "$END", None, pos
             # ---- the reductions it causes, then its shift
-            before = None
+            # lark must see the states this token was lexed in if it fails: the states the
+            # reductions replace are kept, in chunks from the top down, only those, so that
+            # a deep stack is not copied at every token (states[:kept_from] and the chunks
+            # reversed are that stack)
+            kept_from, kept = len(states), []
             while True:
                 code = actions[state].get(type_)
                 if code is None:
-                    self._fail(text, start, before or states, token_start, last_token)
+                    lexed = states[:kept_from] + [s for chunk in reversed(kept) for s in chunk]
+                    self._fail(text, start, lexed, token_start, last_token)
                 if code >= 0:
+                    if max_depth is not None and len(stack) >= max_depth and token:
+                        raise TooDeep(token, max_depth)
                     states.append(code)
                     stack.append(token)
                     state = code
                     break
-                if before is None:
-                    before = states[:]  # lark must see the states this token was lexed in
                 reduce = reductions[~code]
+                reach = len(states) - (1 if reduce is None else rules[~code].size)
+                if reach < kept_from:
+                    kept.append(states[reach:kept_from])
+                    kept_from = reach
                 if reduce is None:  # a unit rule, and the unit rules after it
                     key = (states[-2], state, type_)
                     state = units.get(key)

@@ -8,9 +8,10 @@ from pathlib import Path
 
 from lark import Lark, UnexpectedInput
 
+from gliderplan.contract import MAX_PARSE_DEPTH
 from gliderplan.language import ast
 from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError, error
-from gliderplan.language.lalr import Parser
+from gliderplan.language.lalr import Parser, TooDeep
 
 GRAMMAR = Path(__file__).with_name("mission.lark")
 
@@ -80,6 +81,11 @@ class _Build:
         capacity, voltage, reserve = children
         return ast.BatteryDecl(capacity, voltage, reserve, ast.Span(*where))
 
+    def battery_preset(self, where, children):
+        preset, reserve = children
+        name, is_file = _preset(preset)
+        return ast.BatteryDecl(None, None, reserve, ast.Span(*where), name, is_file)
+
     def voltage(self, where, children):
         return children[0]
 
@@ -87,6 +93,12 @@ class _Build:
 
     def horizon_decl(self, where, children):
         return ast.HorizonDecl(children[0], ast.Span(*where))
+
+    def start_decl(self, where, children):
+        return ast.StartDecl(children[0], children[1], ast.Span(*where))
+
+    def correction_decl(self, where, children):
+        return ast.CorrectionDecl(_ident(children[0]), ast.Span(*where))
 
     def objective_decl(self, where, children):
         sense, target, floor = children
@@ -175,6 +187,16 @@ class _Build:
         has_parens = bool(args)  # maybe_placeholders gives [None] for "()"
         args = tuple(a for a in args if a is not None)
         return ast.Invocation(_ident(name), args, has_parens, ast.Span(*where))
+
+    def thrust(self, where, children):
+        invocation, setting = children
+        if isinstance(setting, tuple):  # the `auto` token
+            setting = _ident(setting)
+        return ast.Invocation(invocation.name, invocation.args, invocation.has_parens,
+                              ast.Span(*where), setting)
+
+    def auto_argument(self, where, children):
+        return _ident(children[0])
 
     def point(self, where, children):
         return ast.Point(children[0], children[1], ast.Span(*where))
@@ -294,11 +316,18 @@ def _blank_before(text: str, offset: int) -> str:
 
 
 def parse(text: str) -> ast.Mission:
-    """Parse mission source; raise MissionSyntaxError with every syntax error found."""
+    """Parse mission source; raise MissionSyntaxError with every syntax error found (one
+    at the first token nested deeper than MAX_PARSE_DEPTH: parsing stays linear)."""
     try:
-        return _parser().parse(text, "start")
+        return _parser().parse(text, "start", MAX_PARSE_DEPTH)
     except UnexpectedInput as err:
         raise MissionSyntaxError(_all_syntax_errors(err, text)) from None
+    except TooDeep as err:
+        _, line, column, end_line, end_column = err.token
+        raise MissionSyntaxError([error(
+            f"nested more than {MAX_PARSE_DEPTH} deep (brackets and operators together)",
+            ast.Span(line, column, end_line, end_column),
+            "split the expression with a variable ('set v = ...')")]) from None
 
 
 def _all_syntax_errors(first: UnexpectedInput, text: str) -> list[Diagnostic]:

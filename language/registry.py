@@ -40,6 +40,7 @@ class ProfileInfo:
     params: tuple[ParamSpec, ...]
     description: str
     tracks_thermocline: bool = False
+    propelled: bool = False  # flown on a propeller or a glider's thruster, not on buoyancy
 
     @property
     def required(self) -> int:
@@ -53,6 +54,9 @@ class ProfileInfo:
 
 _DEPTH = dict(unit="m", low=0.0)
 _PITCH = dict(unit="rad", low=0.0, high=math.pi / 2, low_open=True, high_open=True)
+# A propelled profile's speed through the water: a number, or `auto` (the planner's choice)
+_SPEED = ParamSpec("speed", unit="m/s", low=0.0, low_open=True)
+AUTO_PARAMS = frozenset({"speed"})  # the arguments a mission may write as `auto`
 # Slocum's d_target_altitude: a dive also turns when the altimeter reads at most this
 # height above the sea floor; left out or 0: no altimeter stop
 _ALTITUDE = ParamSpec("altitude", unit="m", low=0.0, optional=True)
@@ -91,6 +95,20 @@ PROFILES: dict[str, ProfileInfo] = {
             "hover",
             (ParamSpec("depth", **_DEPTH),),
             "hold a depth with small buoyancy corrections",
+        ),
+        ProfileInfo(
+            "cruise",
+            (ParamSpec("depth", **_DEPTH), _SPEED),
+            "fly level at a depth and a speed through the water on the propeller (or a "
+            "glider's thruster)",
+            propelled=True,
+        ),
+        ProfileInfo(
+            "altitude",
+            (ParamSpec("height", unit="m", low=0.0, low_open=True), _SPEED),
+            "fly level at a height above the sea floor (the altimeter's reading) and a "
+            "speed through the water on the propeller",
+            propelled=True,
         ),
     )
 }
@@ -141,6 +159,26 @@ ROUTES: dict[str, RouteInfo] = {
     )
 }
 
+
+def cannot_fly(kind: str, thrust: object, vehicle: object) -> tuple[str, str, bool] | None:
+    """(why, hint, whether the thrust is to blame) when `vehicle`
+    (power_models.vehicle.Vehicle) cannot fly profile `kind` with a thruster setting
+    `thrust` (None: none): a propelled profile without propulsion,
+    a buoyancy profile without a buoyancy engine, a thrust without a thruster."""
+    name, propulsion = vehicle.name, vehicle.propulsion
+    if PROFILES[kind].propelled and propulsion is None:
+        return (f"'{kind}' flies on a propeller, and vehicle {name} is a {vehicle.kind} "
+                "without one", "fly a yo, or declare a propelled vehicle, e.g. 'vehicle "
+                "slocum_g3_hybrid' or 'vehicle lauv'", False)
+    if not PROFILES[kind].propelled and kind != "surface" and \
+            not vehicle.has_buoyancy_engine:
+        return (f"'{kind}' flies on a buoyancy engine, and vehicle {name} is an "
+                f"{vehicle.kind} without one",
+                "fly it level on the propeller, e.g. 'cruise(10, auto)'", False)
+    if thrust is not None and (propulsion is None or not propulsion.is_thruster):
+        return (f"vehicle {name} has no thruster to assist a yo", "leave 'thrust' out, or "
+                "declare a hybrid, e.g. 'vehicle slocum_g3_hybrid'", True)
+    return None
 
 
 def altitude_stop_m(kind: str, args: tuple[float, ...]) -> float:

@@ -132,6 +132,7 @@ class _Translator:
     def __init__(self, mission: SlocumMission, horizon_s: float, hardware: Hardware) -> None:
         self.mission = mission
         self.horizon_s = horizon_s
+        self.current_correction = True  # u_use_current_correction, the Slocum's default 1
         self.hardware = hardware
         self.warnings: list[Warning_] = []
         self.header: list[str] = []
@@ -172,6 +173,10 @@ class _Translator:
 
     # ---- the whole mission
     def run(self) -> str:
+        if not self.mission.behaviors:
+            self.warn(Where(self.mission.path, 1), "no behavior: the translated mission only "
+                      "waits at the surface (is this a Slocum mission file?)")
+            self.header.append("no behavior in the Slocum mission: it only waits at the surface")
         by_name: dict[str, list[Behavior]] = {}
         for behavior in self.mission.behaviors:
             if behavior.name not in TRANSLATED + NOT_TRANSLATED:
@@ -252,6 +257,10 @@ class _Translator:
                 verb = "controls" if enabled else "does not control"
                 self.header.append(f"sensor {arg.name} {arg.text} ({_at(arg)}): "
                                    f"c_science_all_on {verb} the science sensors")
+            elif arg.name == "u_use_current_correction":
+                self.current_correction = arg.value != 0
+                self.header.append(f"sensor {arg.name} {arg.text} ({_at(arg)}): "
+                                   f"current_correction {'on' if arg.value else 'off'}")
             elif arg.name.lower() in SWITCHES or arg.name.lower() == ALL_ON_SWITCH:
                 self.header.append(f"sensor {arg.name} {arg.text} ({_at(arg)}): read with "
                                    "sensors_in")
@@ -723,7 +732,8 @@ class _Translator:
         lines += [f"# {c}" for c in self.header]
         lines += [f"mission {name}", *self.hardware.lines(),
                   f"horizon {_number(self.horizon_s)} s    # planned and simulated for this "
-                  "long (the Slocum mission runs until its pilot ends it)", ""]
+                  "long (the Slocum mission runs until its pilot ends it)",
+                  f"current_correction {'on' if self.current_correction else 'off'}", ""]
         for var, (initial, why) in self.variables.items():
             lines.append(f"var {var} = {_number(initial)}    # {why}")
         for state in states:

@@ -13,7 +13,8 @@ _SPELLABLE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|%")  # what the grammar reads a
 # dimensions annotations use and the units a mission can spell
 ANNOTATION_UNITS: dict[str, dict[str, float]] = {
     dimension: {u: f for u, f in _TABLE[dimension].items() if _SPELLABLE.fullmatch(u)}
-    for dimension in ("energy", "charge", "time", "clock", "fraction", "voltage")
+    for dimension in ("energy", "charge", "time", "clock", "fraction", "voltage", "power",
+                      "length", "angle")  # length and angle: the fleet file's (language/fleet.py)
 }
 
 

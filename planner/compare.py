@@ -27,7 +27,6 @@ from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware, HardwareError, load_hardware
 from gliderplan.planner.inputs import build_inputs
 from gliderplan.planner.model import model_for
-from gliderplan.planner.occupancy import mission_occupancy
 from gliderplan.planner.plan import (
     InfeasibleBudget,
     PlanningError,
@@ -37,6 +36,7 @@ from gliderplan.planner.plan import (
     least_energy_plan,
 )
 from gliderplan.planner.planfile import Plan
+from gliderplan.planner.rates import hardware_occupancy
 from gliderplan.power_models.board import Board, board_spec
 from gliderplan.power_models.computation import equivalents
 from gliderplan.power_models.datafile import file_entries, is_assumption
@@ -262,8 +262,8 @@ def compare_boards(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
     which draws nothing beside the boards and so takes no part in their ranking. Raises
     HardwareError/ModelFileError for a bad spec, PlanningError when the mission cannot be
     planned at all."""
-    occupancy = mission_occupancy(mission)
     reference_hw = load_hardware(mission, battery=battery, cycles_per_tick=cycles_per_tick)
+    occupancy = hardware_occupancy(mission, reference_hw)
     model = model_for(build_inputs(mission, reference_hw, occupancy))
     reference = _plan(model, reference_hw.budget_j).plan
     flown_s = sum(s.time_s for s in reference.states)

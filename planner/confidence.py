@@ -29,7 +29,8 @@ from dataclasses import dataclass, replace
 import cvxpy as cp
 import numpy as np
 
-from gliderplan.contract import DEFAULT_HORIZON_S
+from gliderplan.contract import DEFAULT_HORIZON_S, MAX_SCENARIOS
+from gliderplan.contract.errors import UsageError
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.inputs import ENERGY_UNIT_J, Coefficients, PlanInputs, build_inputs
@@ -220,9 +221,9 @@ def plan_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
                         achieved_confidence(count, dimension, risk), active, seed)
     result = assemble(inputs, choice)
     stated_note = Assumption(
-        MISSION_SUBJECT, f"plan at confidence {stated.achieved:.3g}: the budget holds in every "
-        f"one of {count} simulated scenarios ({stated.method}; risk {risk:g}, dimension "
-        f"{dimension}); the prediction is at the scenarios' mean times")
+        MISSION_SUBJECT, f"plan at confidence {stated.achieved:.3g} (asked {confidence:g}): the "
+        f"budget holds in every one of {count} simulated scenarios ({stated.method}; risk "
+        f"{risk:g}, dimension {dimension}); the prediction is at the scenarios' mean times")
     plan = replace(result.plan, assumptions=(*result.plan.assumptions, stated_note))
     return replace(result, plan=plan, confidence=stated)
 
@@ -245,6 +246,11 @@ def plan_mission_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
     times = {s.name: s.time_s for s in nominal.states}
     dimension = decision_dimension(prepare(mission, hardware, times)[0])
     count = scenarios or scenarios_needed(confidence, dimension, risk)
+    if count > MAX_SCENARIOS:
+        raise UsageError(f"--confidence {confidence:g}: {count:,} scenarios are needed "
+                         f"(Campi & Garatti, risk {risk:g}, {dimension} decisions), more than "
+                         f"the {MAX_SCENARIOS:,} a run may fly: ask for less confidence, or "
+                         "give --scenarios and read the confidence it reaches")
     spec = spec or read_spec()
     job = montecarlo.Job(mission, nominal, hardware.vehicle, spec, hardware.budget_j, seed,
                          mission.horizon_s or DEFAULT_HORIZON_S)

@@ -37,7 +37,7 @@ import numpy as np
 from gliderplan.contract import DEFAULT_HORIZON_S, RUNTIME_CYCLES_PER_TICK, TICK_S, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
-from gliderplan.planner.occupancy import Occupancy, mission_occupancy
+from gliderplan.planner.occupancy import DEFAULT_HORIZON_NOTE, Occupancy, mission_occupancy
 from gliderplan.planner.rates import altimeter_note, band_density, floored_args, yo_band
 from gliderplan.power_models import load_board, load_vehicle
 from gliderplan.power_models.deployments import DEFAULT_DRIFT_W, DRIFT_SOURCE
@@ -48,6 +48,8 @@ from gliderplan.power_models.forecast import INTERVAL_LEVEL
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
 
 if TYPE_CHECKING:
+    from gliderplan.planner.surfacings import Surfacing
+    from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.ocean import SeaFloor
 
 WATER_DEPTHS_M = np.arange(0.0, 1001.0, 5.0)  # where a given ocean's density is taken [m]
@@ -75,6 +77,11 @@ class MissionForecast:
     interval_j: tuple[float, float]  # central INTERVAL_LEVEL of the energy [J]
     assumptions: tuple[str, ...]
     yos_interval: tuple[float, float] = (math.nan, math.nan)  # and of the yos flown
+    defaults: tuple[str, ...] = ()  # what the forecast took by default: "horizon 30 d", ...
+    # where and when it surfaces (planner.surfacings): given a start
+    positions: tuple[Surfacing, ...] = ()
+    start_epoch_s: float = 0.0  # [s since 1970] when it starts, for the surfacings' times
+    currents: CurrentField | None = None  # the field the surfacings were flown in
 
     @property
     def energy_j(self) -> float:
@@ -103,11 +110,12 @@ class MissionForecast:
             "energy_j": self.energy_j, "energy_interval_j": list(self.interval_j),
             "interval_level": INTERVAL_LEVEL, "duration_s": self.duration_s,
             "yos": self.yos, "yos_interval": list(self.yos_interval),
-            "surfacings": self.surfacings, "devices": self.devices_j,
+            "surfacing_count": self.surfacings,
+            "surfacings": [p.to_json() for p in self.positions], "devices": self.devices_j,
             "states": {name: {"time_s": b.time_s, "visits": b.visits, "yos": b.yos,
                               "surfacings": b.surfacings, "energy_j": b.energy_j}
                        for name, b in self.states.items()},
-            "assumptions": list(self.assumptions),
+            "assumptions": list(self.assumptions), "defaults": list(self.defaults),
         }
 
 
@@ -133,7 +141,7 @@ def _yo(vehicle: Vehicle, state: ir.State, occupancy: Occupancy, time_s: float,
         low, high = vehicle.nominal_min_depth_m, vehicle.nominal_max_depth_m
     pitch = 0.5 * (args[2] + args[3]) if all(map(math.isfinite, args[2:4])) \
         else vehicle.nominal_pitch_rad
-    with flying_yo(state.name, vehicle, low, high):
+    with flying_yo(state.place, vehicle, low, high):
         cycle_s, actuators_j, _ = vehicle.yo_cycle(low, high, pitch,
                                                    vehicle.unplanned_ballast_cc, ocean)
     cycles = time_s / float(cycle_s)
@@ -291,7 +299,14 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
     notes = _assumptions(mission, glider, spec, occupancy, result, drift_w, draws,
                          ocean_source)
     notes += _floor_notes(mission, occupancy, result, floor_m, floor_note)
-    return replace(result, assumptions=tuple(notes) + said)
+    defaults = []  # what neither the mission nor the caller named
+    if vehicle is None and "vehicle" in mission.defaults_used:
+        defaults.append(f"vehicle {spec}")
+    if "computer" in mission.defaults_used:
+        defaults.append(f"computer {result.computer}")
+    if DEFAULT_HORIZON_NOTE in occupancy.notes:
+        defaults.append(f"horizon {DEFAULT_HORIZON_S / 86400:g} d")
+    return replace(result, assumptions=tuple(notes) + said, defaults=tuple(defaults))
 
 
 def _floor_notes(mission: ir.CheckedMission, occupancy: Occupancy, result: MissionForecast,

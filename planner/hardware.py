@@ -8,7 +8,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, ExitCode, same_clock
+from gliderplan.contract import MAX_PLAN_ENERGY_J, RUNTIME_CYCLES_PER_TICK, ExitCode, same_clock
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
@@ -87,6 +87,9 @@ def parse_battery(spec: str) -> tuple[float, float | None]:
         raise HardwareError(f"--battery {spec!r}: {err}") from None
     if not 0.0 < energy < math.inf:
         raise HardwareError(f"--battery {spec!r}: the energy must be positive and finite")
+    if energy > MAX_PLAN_ENERGY_J:
+        raise HardwareError(f"--battery {spec!r}: larger than any plan can carry "
+                            f"({MAX_PLAN_ENERGY_J:g} J; the largest Slocum pack holds 12 MJ)")
     return energy, None
 
 

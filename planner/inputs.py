@@ -79,6 +79,10 @@ def _transit_legs(mission: ir.CheckedMission, hardware: Hardware, occupancy: Occ
     vehicle = hardware.vehicle
     for name, length in occupancy.legs_m.items():
         state = mission.state(name)
+        if name in occupancy.transit_speeds:
+            notes.append(f"{name}: propelled transit leg of {length / 1000:.3g} km, timed at "
+                         f"its speed ({occupancy.transit_speeds[name]:.3g} m/s)")
+            continue
         if len(state.profiles) != 1 or state.profiles[0].kind not in ("yo", "thermotrackyo"):
             notes.append(f"{name}: a transit leg with alternative or non-gliding profiles; "
                          "planned at the nominal speed's time")
@@ -165,6 +169,17 @@ class PlanInputs:
         return np.ceil(t / SENSOR_PERIOD_S) + visits
 
 
+def duty_bounds(mission: ir.CheckedMission, state: ir.State, use: ir.SensorUse, alpha: float
+                ) -> tuple[float, float]:
+    """The (least, most) duty [1] a plan may give sensor `use` in `state`: a fixed duty is
+    itself, a sensor without one always on, `duty auto` within the mission's and the
+    state's bounds (`alpha`: the device's quality curve, for a `require ... quality`)."""
+    if use.duty != "auto":
+        value = 1.0 if use.duty is None else float(use.duty)
+        return value, value
+    return _bounds(mission, state, use.name, alpha)
+
+
 def _bounds(mission: ir.CheckedMission, state: ir.State, sensor: str, alpha: float
             ) -> tuple[float, float]:
     pref = mission.preference(sensor)
@@ -227,12 +242,12 @@ def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
                 dev_auto.append(False)
             model = hardware.devices[device]
             weight = mission.preference(use.name).weight
+            lo, hi = duty_bounds(mission, state, use, model.quality_alpha)
             if use.duty == "auto":
-                lo, hi = _bounds(mission, state, use.name, model.quality_alpha)
                 duty.append((s, use.name, q, model.quality_alpha, weight, lo, hi))
                 dev_auto[q] = True
             else:
-                value = 1.0 if use.duty is None else float(use.duty)
+                value = lo
                 fixed.append((s, use.name, value, model.quality_alpha, weight))
                 dev_lo[q] = max(dev_lo[q], value)
         for rates in state_profiles(hardware, state, occupancy, notes):

@@ -44,7 +44,9 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     again until it settles (planner/simulated.py): one flight in the simulator's default
     water from `seed`, or the mean of `scenarios` scenarios drawn as for `confidence`.
     With `output`, write the plan file there and its
-    JSON report beside it (`output`.json), atomically; with `sign` (a key file) the plan
+    JSON report beside it (`output`.json), atomically, and where it flies propelled its
+    energy per km against speed (`output`.speed.png, reports/speed.py); with `sign` (a
+    key file) the plan
     file is signed as plan number `seq` (default: `signing.default_sequence()`). The
     result holds the plan
     (`.plan`, what the file holds) and what its solve tells (quality, minimum energy,
@@ -94,6 +96,12 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     if output is not None:
         write_atomically(output, data)
         write_atomically(f"{output}.json", json.dumps(report_json(result), indent=2) + "\n")
+        if hardware.vehicle.propulsion is not None:
+            from gliderplan.reports.speed import speed_frame, speed_png
+
+            frame = speed_frame(mission, hardware, result.plan)
+            if len(frame):
+                write_atomically(f"{output}.speed.png", speed_png(frame))
     return result
 
 

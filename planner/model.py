@@ -119,6 +119,9 @@ class PlanModel:
         unusable = ~np.isfinite(inputs.mode_power_w)
         if unusable.any():
             common.append(self.mode[np.flatnonzero(unusable)] == 0)
+        unflyable = [j for j, p in enumerate(inputs.profiles) if not p.flyable]
+        if unflyable:  # alternatives the vehicle cannot fly
+            common.append(self.share[unflyable] == 0)
         if n_q:
             energy = energy + self.p_dev @ self.device
             common += [self.device[steady_dev] >= inputs.dev_lo[steady_dev],

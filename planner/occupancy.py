@@ -20,7 +20,8 @@ stepping every tick: a 35 h mission takes a few hundred evaluations, not 30,000 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 
 from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
 from gliderplan.language import ir
@@ -53,6 +54,8 @@ class Occupancy:
     source: str = "timeline"  # "timeline" | "simulation"
     notes: tuple[str, ...] = field(default=())  # defaults and bounds used, for the report
     legs_m: dict[str, float] = field(default_factory=dict)  # transit state -> route length
+    # propelled transit state -> the speed its legs are timed at [m/s]
+    transit_speeds: dict[str, float] = field(default_factory=dict)
 
     @property
     def total_s(self) -> float:
@@ -148,8 +151,17 @@ def _assign(event: ir.Event, time_s: float, variables: dict[str, float]) -> dict
     return {k: v if math.isfinite(v) else variables[k] for k, v in after.items()}
 
 
-def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None) -> Occupancy:
-    """Walk the mission's timeline; `horizon_s` defaults to the mission's `horizon`."""
+# what the walk notes when a mission without `horizon` runs to the default one
+DEFAULT_HORIZON_NOTE = (f"horizon {DEFAULT_HORIZON_S / 86400:g} d (default): the mission names "
+                        "none and does not exit before it")
+
+
+def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None,
+                      transit_speeds: Mapping[str, float] | None = None) -> Occupancy:
+    """Walk the mission's timeline; `horizon_s` defaults to the mission's `horizon`. A
+    transit leg through a state of `transit_speeds` [m/s] (a propelled one,
+    `rates.transit_speeds`) is timed at its speed, any other at NOMINAL_SPEED_MPS."""
+    speeds = transit_speeds or {}
     notes: list[str] = []
     horizon = horizon_s if horizon_s is not None else mission.horizon_s
     if horizon is None:
@@ -186,8 +198,10 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
                 notes.append(f"{state}: its exits on readings ({_reads(here)}) are assumed "
                              "not to fire before its missiontime guard")
         elif limit == horizon and leg is not None:
-            # A transit leg: the walk assumes the nominal speed; the planner chooses it.
-            fire_s = entry + math.ceil(leg / NOMINAL_SPEED_MPS / TICK_S) * TICK_S
+            # A transit leg: a glide at the nominal speed, the planner chooses its own; a
+            # propelled leg at its speed.
+            speed = speeds.get(state, NOMINAL_SPEED_MPS)
+            fire_s = entry + math.ceil(leg / speed / TICK_S) * TICK_S
             event, ended_by = sensor_exit, "transit"
             legs[state] = legs.get(state, 0.0) + leg
         elif limit < horizon:
@@ -209,8 +223,9 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
         machine, _ = act(mission, Machine(state, machine.stack, _assign(event, fire_s, variables)),
                          event, fire_s)
     if horizon_defaulted and trace and trace[-1].ended_by == "horizon":
-        notes.append(f"horizon: {DEFAULT_HORIZON_S:g} s (default)")
-    return _summarise(mission, trace, notes, legs)
+        notes.append(DEFAULT_HORIZON_NOTE)
+    return replace(_summarise(mission, trace, notes, legs),
+                   transit_speeds={s: v for s, v in speeds.items() if s in legs})
 
 
 def _reads(state: ir.State) -> str:

@@ -26,11 +26,7 @@ from gliderplan.planner.inputs import (
     utility,
 )
 from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel, Solution, model_for
-from gliderplan.planner.occupancy import (
-    NOMINAL_SPEED_MPS,
-    measured_occupancy,
-    mission_occupancy,
-)
+from gliderplan.planner.occupancy import NOMINAL_SPEED_MPS, measured_occupancy
 from gliderplan.planner.planfile import (
     Assumption,
     Plan,
@@ -39,6 +35,7 @@ from gliderplan.planner.planfile import (
     StatePlan,
     as_written,
 )
+from gliderplan.planner.rates import hardware_occupancy
 from gliderplan.power_models.devices import base_power_w
 
 _ON_EDGE = 1e-6  # a duty this close to 0 or 1 does not cycle (no warm-ups)
@@ -84,6 +81,8 @@ class PlanResult:
     confidence: object | None = None  # planner.confidence.Confidence of a plan at a confidence
     status: str = "optimal"  # "infeasible": `least_energy_plan`, beyond the budget
     upload_bytes: int = 0  # [bytes] of the plan file as sent to the glider (0: not written)
+    battery_j: float = 0.0  # [J] the battery the plan was made for (0: not known)
+    reserve_fraction: float = 0.0  # [1] and its reserve
 
 
 def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
@@ -91,7 +90,7 @@ def prepare(mission: ir.CheckedMission, hardware: Hardware | None = None,
     """The inputs and the built model (parameters set) for a mission."""
     hardware = hardware or load_hardware(mission)
     try:
-        occupancy = (mission_occupancy(mission) if occupancy_s is None
+        occupancy = (hardware_occupancy(mission, hardware) if occupancy_s is None
                      else measured_occupancy(mission, occupancy_s))
     except MissionFault as fault:
         raise PlanningError(f"the mission's timeline fails at {fault}") from None
@@ -359,7 +358,7 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
         shares = np.clip(sol.share[rows], 0.0, 1.0)
         shares = shares / shares.sum()
         profiles = tuple(
-            ProfilePlan(p.index, float(f), p.pitch_rad, p.ballast_cc, p.speed_mps)
+            ProfilePlan(p.index, float(f), p.pitch_rad, p.ballast_cc, p.speed_mps, p.thrust_w)
             for p, f in zip((inputs.profiles[r] for r in rows), shares, strict=True))
         inflections = float(sum(inputs.profiles[r].inflections_per_s * f * t
                                 for r, f in zip(rows, shares, strict=True)))
@@ -370,7 +369,8 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
             state.name, as_written(inputs.clocks[modes[s]].clock_mhz),
             as_written(cycle), as_written(t), visits, as_written(inflections), energy, sensors,
             tuple(ProfilePlan(p.index, as_written(p.share), as_written(p.pitch_rad),
-                              as_written(p.ballast_cc), as_written(p.speed_mps))
+                              as_written(p.ballast_cc), as_written(p.speed_mps),
+                              as_written(p.thrust_w))
                   for p in profiles),
             sleep=hardware.sleeps(state), cycles_per_tick=as_written(hardware.cycles(state))))
     notes = dict.fromkeys([*_describe_defaults(inputs), *inputs.notes])
@@ -385,7 +385,8 @@ def assemble(inputs: PlanInputs, choice: Choice) -> PlanResult:
         budgeted_energy_j=sol.model_energy_j, solver_status=sol.status, solve_s=sol.solve_s,
         solver_iterations=sol.iterations,
         state_quality=tuple(_state_quality(inputs, sol, s)
-                            for s in range(len(inputs.mission.states))))
+                            for s in range(len(inputs.mission.states))),
+        battery_j=hardware.battery_j, reserve_fraction=hardware.reserve_fraction)
 
 
 def _transit_profile(inputs: PlanInputs, sol: Solution, i: int,

@@ -31,6 +31,7 @@ from gliderplan.contract import (
     MAX_PLAN_SENSORS,
     MAX_PLAN_SEQUENCE,
     MAX_PLAN_SPEED_MPS,
+    MAX_PLAN_THRUST_W,
     MAX_PLAN_TIME_S,
     MAX_PROFILE_ALTERNATIVES,
     MAX_STATES,
@@ -41,6 +42,7 @@ from gliderplan.contract import (
 )
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import read_input
+from gliderplan.contract.plan_check import plan_problem
 from gliderplan.language import ir
 from gliderplan.language.ir import CheckedMission
 from gliderplan.language.registry import SENSOR_BY_NAME
@@ -124,6 +126,7 @@ class ProfilePlan:
     pitch_rad: float
     ballast_cc: float  # pumped volume either side of neutral [cc]
     speed_mps: float  # planned horizontal speed [m/s]
+    thrust_w: float = 0.0  # a yo's thruster: its commanded power [W] (0: off, not written)
 
 
 @dataclass(frozen=True)
@@ -223,7 +226,8 @@ def write_plan_bytes(plan: Plan) -> bytes:
                                           for c in components))
         lines += [f"sensor {x.name} {number(x.period_s)} {number(x.on_s)}" for x in s.sensors]
         lines += [f"profile {p.index} {number(p.share)} {number(p.pitch_rad)} "
-                  f"{number(p.ballast_cc)} {number(p.speed_mps)}" for p in s.profiles]
+                  f"{number(p.ballast_cc)} {number(p.speed_mps)}"
+                  + (f" {number(p.thrust_w)}" if p.thrust_w else "") for p in s.profiles]
         lines.append("end")
     try:
         body = "".join(line + "\n" for line in lines).encode("ascii")
@@ -247,9 +251,9 @@ class _Cursor:
         self.lines = lines
         self.at = 0
 
-    def next(self, keyword: str, n_fields: int | None) -> list[str]:
+    def next(self, keyword: str, n_fields: int | None, optional: int = 0) -> list[str]:
         """The fields after `keyword` on the next line, which must have `n_fields` of them
-        (None: one or more)."""
+        and up to `optional` more (None: one or more)."""
         if self.at >= len(self.lines):
             raise PlanFileError(self.at + 1, f"expected a '{keyword}' line, the file ends")
         self.at += 1
@@ -258,8 +262,9 @@ class _Cursor:
             raise PlanFileError(self.at, f"expected '{keyword}', found '{fields[0]}'")
         if n_fields is None and len(fields) < 2:
             raise PlanFileError(self.at, f"'{keyword}' takes at least one field, found none")
-        if n_fields is not None and len(fields) != n_fields + 1:
-            raise PlanFileError(self.at, f"'{keyword}' takes {n_fields} fields, "
+        if n_fields is not None and not n_fields <= len(fields) - 1 <= n_fields + optional:
+            takes = f"{n_fields} to {n_fields + optional}" if optional else f"{n_fields}"
+            raise PlanFileError(self.at, f"'{keyword}' takes {takes} fields, "
                                 f"found {len(fields) - 1}")
         return fields[1:]
 
@@ -341,14 +346,19 @@ def read_plan_bytes(data: bytes, mission: CheckedMission | None = None,
                     path: str = "", limits: FlightLimits | None = None) -> Plan:
     """Parse a plan file strictly; with `mission`, check that it is a plan for that
     mission as the C runtime does (name, hash, states, each state's profiles and logged
-    sensors); with `limits`, that it keeps to the vehicle's pump and the board's clocks.
-    A signed plan's `seq` and `hmac` lines are checked for their form only
+    sensors); with `limits` too, that it keeps to the board's clocks and does not
+    contradict the mission (`contract.plan_check.plan_problem`: battery, board, duties,
+    flight). A signed plan's `seq` and `hmac` lines are checked for their form only
     (`planner.signing` checks the tag). PlanFileError (`path:line: ...`) names the first
     line that breaks a rule."""
     try:
-        return _read(data, mission, limits)
+        plan = _read(data, mission, limits)
+        problem = None if mission is None or limits is None else plan_problem(plan, limits)
     except PlanFileError as err:
         raise PlanFileError(err.line, err.message, path) from None
+    if problem is not None:
+        raise PlanFileError(problem.line, problem.message, path)
+    return plan
 
 
 def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | None) -> Plan:
@@ -368,6 +378,8 @@ def _read(data: bytes, mission: CheckedMission | None, limits: FlightLimits | No
     computer, clock = cur.next("computer", 2)
     computer = cur.name(computer)
     no_board = computer == NO_BOARD
+    if limits is not None and limits.board not in (None, computer):
+        limits = None  # its clocks are another board's: `plan_problem` says so
     clock_mhz = cur.clock(clock, limits, no_board)
     budget = cur.number(cur.next("budget_j", 1)[0], "budget_j", 0.0, MAX_PLAN_ENERGY_J)
     predicted = cur.number(cur.next("predicted_j", 1)[0], "predicted_j", 0.0, MAX_PLAN_ENERGY_J)
@@ -472,20 +484,21 @@ def _state_block(cur: _Cursor, components: list[str], state: ir.State | None,
         sensors.append(SensorPlan(sensor, period_s, on_s))
     profiles = []
     for i in range(n_profiles):
-        index, share, pitch, ballast, speed = cur.next("profile", 5)
+        index, share, pitch, ballast, speed, *thrust = cur.next("profile", 5, optional=1)
         cur.check(cur.count(index, "index", 0, MAX_PROFILE_ALTERNATIVES - 1) == i,
                   f"profile index {index} out of order (expected {i})")
         line = ProfilePlan(i, cur.number(share, "share"), cur.number(pitch, "pitch"),
-                           cur.number(ballast, "ballast"), cur.number(speed, "speed"))
+                           cur.number(ballast, "ballast"), cur.number(speed, "speed"),
+                           cur.number(thrust[0], "thrust") if thrust else 0.0)
+        cur.check(0 <= line.thrust_w <= MAX_PLAN_THRUST_W,
+                  f"thrust must lie in [0, {MAX_PLAN_THRUST_W:g}] W")
         cur.check(0 <= line.share <= 1, "share must lie in [0, 1]")
-        cur.check(0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
-        cur.check(line.ballast_cc > 0 and line.speed_mps > 0, "ballast and speed must be > 0")
+        level = line.pitch_rad == 0.0 and line.ballast_cc == 0.0  # a propelled profile
+        cur.check(level or 0 < line.pitch_rad < math.pi / 2, "pitch must lie in (0, pi/2) rad")
+        cur.check((level or line.ballast_cc > 0) and line.speed_mps > 0,
+                  "ballast and speed must be > 0")
         cur.check(line.speed_mps <= MAX_PLAN_SPEED_MPS,
                   f"speed {line.speed_mps:g} exceeds {MAX_PLAN_SPEED_MPS:g} m/s")
-        if limits is not None:
-            cur.check(line.ballast_cc <= limits.max_ballast_cc,
-                      f"ballast {line.ballast_cc:g} cc exceeds the vehicle's pump "
-                      f"({limits.max_ballast_cc:g} cc)")
         profiles.append(line)
     cur.check(abs(sum(p.share for p in profiles) - 1.0) <= 1e-6,
               f"state {name}: profile shares sum to {sum(p.share for p in profiles):.9g}, not 1")
@@ -503,26 +516,22 @@ def load_plan(path: str | Path, mission: CheckedMission,
               limits: FlightLimits | None = None) -> Plan:
     """The plan in `path` for `mission`, to fly: InputFileError if there is no such file,
     PlanRejected (naming the file and line) if it is not a plan for `mission` or breaks
-    `limits` (default: those of the mission's vehicle on the board the plan names, if
-    that is a preset, else on the mission's computer)."""
-    data = read_plan_data(path)
+    `limits` (default: the mission's own, `planner.limits.flight_limits`)."""
+    from gliderplan.planner.limits import flight_limits
+
     try:
-        plan = read_plan_bytes(data, mission, str(path))
-        return read_plan_bytes(data, mission, str(path),
-                               limits or plan_board_limits(mission, plan))
+        return read_plan_bytes(read_plan_data(path), mission, str(path),
+                               limits or flight_limits(mission))
     except PlanFileError as err:
         raise PlanRejected(str(err)) from None
 
 
 def flown_board(mission: CheckedMission, plan: Plan | None) -> str:
-    """The board a simulated flight of `plan` runs on and is billed for: the one the plan
-    was made for when that is a preset or `none`, else the mission's computer (a user's
-    board file is known to the plan by its name only)."""
-    from gliderplan.power_models.catalog import preset_names
-
-    if plan is not None and (plan.computer == NO_BOARD
-                             or plan.computer in preset_names("board")):
-        return plan.computer
+    """The board a simulated flight of `plan` runs on and is billed for: none for a plan
+    made for `computer none`, else the mission's computer (the only board another plan
+    may name: `contract.plan_check`)."""
+    if plan is not None and plan.computer == NO_BOARD:
+        return NO_BOARD
     return mission.computer.board
 
 

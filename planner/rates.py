@@ -16,13 +16,17 @@ import numpy as np
 
 from gliderplan.contract import TICK_S, Component
 from gliderplan.language import ir
-from gliderplan.language.registry import altitude_stop_m
+from gliderplan.language.registry import PROFILES, altitude_stop_m, cannot_fly
 from gliderplan.planner.hardware import Hardware
-from gliderplan.planner.occupancy import Occupancy
+from gliderplan.planner.occupancy import Occupancy, mission_occupancy
+from gliderplan.planner.speed import SpeedChoice, best_speed, choice_at
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.devices import base_power_w
 from gliderplan.power_models.flight import DensityProfile
+from gliderplan.power_models.propulsion import thrust_assisted_speed
 from gliderplan.power_models.vehicle import Vehicle, flying_yo
+
+LEVEL_PITCH_RAD = 0.0  # the plan's pitch of a propelled profile: level flight
 
 
 @dataclass(frozen=True)
@@ -36,6 +40,8 @@ class ProfileRates:
     speed_mps: float
     pitch_rad: float
     ballast_cc: float
+    thrust_w: float = 0.0  # a thruster's commanded power [W] (0: off)
+    flyable: bool = True  # False: an alternative the vehicle cannot fly, given no time
 
     @property
     def total_w(self) -> float:
@@ -125,6 +131,11 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
     """Component powers of one profile alternative. `fixed_load_w` [W] is the load the
     glide speed is optimised for (hotel + computer); `visit_s` the mean time per visit."""
     pitch0 = vehicle.nominal_pitch_rad
+    if (problem := cannot_fly(profile.kind, profile.thrust, vehicle)) is not None:
+        notes.append(f"{where}: {problem[0]}: given no time")
+        return _not_flown(vehicle, profile, index)
+    if PROFILES[profile.kind].propelled:
+        return _propelled_rates(vehicle, profile, index, variables, fixed_load_w)
     if profile.kind in ("yo", "thermotrackyo"):
         args = _profile_args(profile, variables)
         low, high = yo_band(profile, args)
@@ -148,8 +159,12 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
             actuators_w = float(vehicle.profile_power_w(low, high, pitch, ballast))
         pitch_w = vehicle.pitch_energy_j * per_hour / 3600.0
         power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: actuators_w - pitch_w,
-                 Component.PITCH: pitch_w, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
-        return ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch, ballast)
+                 Component.PITCH: pitch_w, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
+                 Component.PROPULSION: 0.0}
+        rates = ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch,
+                             ballast)
+        return rates if profile.thrust is None else _thrust_assisted(vehicle, profile, rates,
+                                                                     fixed_load_w)
     # surface and hover do not glide: the plan file still carries a glide command, the
     # vehicle's nominal pitch at full buoyancy (what it climbs with).
     ballast = vehicle.max_ballast_cc
@@ -160,25 +175,123 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
         fixed_w = vehicle.surfacing_fixed_j / visit_s if visit_s > 0.0 else 0.0
         power = {Component.HOTEL: 0.0, Component.PUMP: 0.0, Component.PITCH: 0.0,
                  Component.SURFACE: vehicle.surface_w * (1.0 - call_fraction) + fixed_w,
-                 Component.IRIDIUM: vehicle.iridium_w * call_fraction}
+                 Component.IRIDIUM: vehicle.iridium_w * call_fraction,
+                 Component.PROPULSION: 0.0}
     else:  # hover: holds a depth with small corrections, counted in the hotel load
         power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: 0.0,
-                 Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0}
+                 Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
+                 Component.PROPULSION: 0.0}
     return ProfileRates(index, profile.kind, power, 0.0, speed, pitch0, ballast)
+
+
+def _propelled_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
+                     variables: dict[str, float], fixed_load_w: float) -> ProfileRates:
+    """A level, propelled profile (`cruise`, `altitude`): at its written speed, or with
+    `auto` at the speed of least energy per metre for the load `fixed_load_w` [W] (hotel
+    and computer: a hungrier computer makes it faster). It holds its depth on the
+    propeller: no pump, no inflections; the plan carries a level pitch."""
+    choice = propelled_speed(vehicle, profile, variables, fixed_load_w)
+    power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: 0.0,
+             Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
+             Component.PROPULSION: choice.propulsion_w}
+    return ProfileRates(index, profile.kind, power, 0.0, choice.speed_mps, LEVEL_PITCH_RAD,
+                        0.0)
+
+
+def propelled_speed(vehicle: Vehicle, profile: ir.Profile, variables: dict[str, float],
+                    fixed_load_w: float) -> SpeedChoice:
+    """The speed a propelled profile flies at: written, or for `auto` the least energy per
+    metre for the load `fixed_load_w` [W] besides the motor."""
+    if "speed" in profile.auto:
+        return best_speed(vehicle.propulsion, fixed_load_w)
+    return choice_at(vehicle.propulsion, fixed_load_w, _profile_args(profile, variables)[1])
+
+
+def transit_speeds(hardware: Hardware, mission: ir.CheckedMission) -> dict[str, float]:
+    """[m/s] the speed of each state whose alternatives the vehicle can fly are all
+    propelled (the first of them; its speed written as a number or `auto`, not read from a
+    variable): a transit leg through it is timed at that speed, not at a glider's nominal
+    (`occupancy.mission_occupancy`)."""
+    vehicle = hardware.vehicle
+    initial = {v.name: v.initial for v in mission.variables}
+    speeds = {}
+    for state in mission.states:
+        flown = [p for p in state.profiles if cannot_fly(p.kind, p.thrust, vehicle) is None]
+        if flown and all(PROFILES[p.kind].propelled for p in flown) and \
+                flown[0].constant_args() is not None:
+            speeds[state.name] = propelled_speed(vehicle, flown[0], initial,
+                                                 state_load_w(hardware, state)).speed_mps
+    return speeds
+
+
+def hardware_occupancy(mission: ir.CheckedMission, hardware: Hardware,
+                       horizon_s: float | None = None) -> Occupancy:
+    """The mission's timeline on `hardware`: its propelled transit legs at their speed
+    (`transit_speeds`), a glider's at the nominal speed."""
+    return mission_occupancy(mission, horizon_s, transit_speeds(hardware, mission))
+
+
+def _not_flown(vehicle: Vehicle, profile: ir.Profile, index: int) -> ProfileRates:
+    """An alternative the vehicle cannot fly (the checker warned): no power, no time; the
+    plan file carries the vehicle's own command (a glide, or level on its propeller)."""
+    power = dict.fromkeys((Component.HOTEL, Component.PUMP, Component.PITCH,
+                           Component.SURFACE, Component.IRIDIUM, Component.PROPULSION), 0.0)
+    if vehicle.has_buoyancy_engine:
+        pitch, ballast = vehicle.nominal_pitch_rad, vehicle.max_ballast_cc
+        speed = float(vehicle.glide(pitch, ballast)[0])
+    else:
+        pitch, ballast, speed = LEVEL_PITCH_RAD, 0.0, vehicle.propulsion.min_speed_mps
+    return ProfileRates(index, profile.kind, power, 0.0, speed, pitch, ballast, flyable=False)
+
+
+THRUST_STEPS = 33  # commanded powers tried across a thruster's range for `thrust auto`
+
+
+def _thrust_assisted(vehicle: Vehicle, profile: ir.Profile, glide: ProfileRates,
+                     fixed_load_w: float) -> ProfileRates:
+    """A yo with the thruster on: thrust along the glide path speeds it up
+    (`thrust_assisted_speed`, on the hull's zero-lift drag); with the path's angle kept,
+    the yos come faster in proportion, and so do the pump and battery-shift powers. `auto`
+    tries off and commands across the thruster's range and keeps the least energy per
+    metre for the load `fixed_load_w` [W]."""
+    propulsion, fl = vehicle.propulsion, vehicle.flight
+    commands = np.array([0.0, *np.linspace(propulsion.min_command_w,
+                                            propulsion.max_command_w, THRUST_STEPS)]) \
+        if profile.thrust == "auto" else np.array([float(profile.thrust)])
+    speeds = thrust_assisted_speed(glide.speed_mps,
+                                   [propulsion.thrust_power_w(c) for c in commands],
+                                   fl.rho_kg_m3, fl.wing_area_m2, fl.drag_cd0)
+    actuators = glide.power_w[Component.PUMP] + glide.power_w[Component.PITCH]
+    draws = np.array([propulsion.assist_draw_w(c) for c in commands])
+    per_m = (fixed_load_w + actuators * speeds / glide.speed_mps + draws) / speeds
+    best = int(np.argmin(per_m))
+    faster = float(speeds[best] / glide.speed_mps)
+    power = {**glide.power_w, Component.PUMP: glide.power_w[Component.PUMP] * faster,
+             Component.PITCH: glide.power_w[Component.PITCH] * faster,
+             Component.PROPULSION: float(draws[best])}
+    return ProfileRates(glide.index, glide.kind, power, glide.inflections_per_s * faster,
+                        float(speeds[best]), glide.pitch_rad, glide.ballast_cc,
+                        float(commands[best]))
 
 
 def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
                    notes: list[str]) -> list[ProfileRates]:
     """Rates of every alternative of a state."""
-    powers = state_mode_powers(hardware, state)
-    load = hardware.vehicle.hotel_w + (float(np.nanmin(powers)) if np.isfinite(powers).any()
-                                       else 0.0)
+    load = state_load_w(hardware, state)
     visits = max(occupancy.visits[state.name], 1)
     visit_s = occupancy.time_s[state.name] / visits
     variables = occupancy.variables[state.name]
     return [profile_rates(hardware.vehicle, p, j, variables, load, visit_s, notes,
                           f"{state.name}: flightprofile {j}")
             for j, p in enumerate(state.profiles)]
+
+
+def state_load_w(hardware: Hardware, state: ir.State) -> float:
+    """[W] the load a state's flight speed is chosen for: the vehicle's hotel load and the
+    board at its least power in the state."""
+    powers = state_mode_powers(hardware, state)
+    return hardware.vehicle.hotel_w + (float(np.nanmin(powers)) if np.isfinite(powers).any()
+                                       else 0.0)
 
 
 def clock_columns(hardware: Hardware, mission: ir.CheckedMission) -> tuple[Board, ...]:

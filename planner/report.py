@@ -14,6 +14,11 @@ REPORT_VERSION = 1
 
 def _state_json(result: PlanResult, s: int) -> dict:
     state, kinds = result.plan.states[s], result.mission.states[s].profiles
+    propelled = [p for p in state.profiles if kinds[p.index].propelled and p.share > 0]
+    # the chosen speed through the water [m/s] where the vehicle flies propelled: the
+    # shares' mean over its propelled profiles
+    speed = {"speed_m_s": sum(p.share * p.speed_mps for p in propelled)
+             / sum(p.share for p in propelled)} if propelled else {}
     return {
         "name": state.name,
         "time_s": state.time_s,
@@ -31,6 +36,7 @@ def _state_json(result: PlanResult, s: int) -> dict:
         "sensors": [{"name": x.name, "device": x.device, "duty": x.duty,
                      "period_s": x.period_s, "on_s": x.on_s} for x in state.sensors],
         "quality": result.state_quality[s],
+        **speed,
     }
 
 
@@ -51,6 +57,7 @@ def report_json(result: PlanResult) -> dict:
         "quality": result.quality,
         "energy_j": plan.predicted_j,
         "budget_j": plan.budget_j,
+        "battery": {"energy_j": result.battery_j, "reserve_fraction": result.reserve_fraction},
         "budgeted_energy_j": result.budgeted_energy_j,
         "minimum_energy_j": result.minimum_energy_j,
         "shadow_price": result.shadow_price,
@@ -107,6 +114,10 @@ def report_text(result: PlanResult) -> str:
              f"shadow price {result.shadow_price:.4g} quality per extra Wh"
              + ("  (the budget is not the limit)" if result.shadow_price < 1e-9 else ""),
              "", "what each state does:"]
+    defaults = [a.text.split(" (default)")[0] for a in plan.assumptions
+                if " (default)" in a.text]
+    if defaults:  # beside the prediction, which rests on them
+        lines.insert(3, f"defaults: {', '.join(defaults)} (not named by the mission)")
     if result.confidence is not None:
         c = result.confidence
         lines.insert(3, f"confidence {c.achieved:.3g} (asked {c.requested:g}): the budget "

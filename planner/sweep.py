@@ -17,8 +17,8 @@ from gliderplan.planner.compare import COMPUTERS, compared_specs
 from gliderplan.planner.hardware import load_hardware
 from gliderplan.planner.inputs import build_inputs
 from gliderplan.planner.model import SATURATION_TOLERANCE, PlanModel, model_for
-from gliderplan.planner.occupancy import mission_occupancy
 from gliderplan.planner.plan import J_PER_WH, InfeasibleBudget, choose_plan, state_energy_j
+from gliderplan.planner.rates import hardware_occupancy
 
 BATTERIES = ("alkaline", "lithium_primary", "rechargeable")
 Progress = Callable[[int, int], None]
@@ -78,13 +78,14 @@ def computers(mission: ir.CheckedMission, specs: Sequence[str] = COMPUTERS,
     at the mission's budget or `budget_j`. The model is re-used while its structure stays
     (a fixed clock), rebuilt when it changes (a board whose clocks the planner chooses
     among)."""
-    occupancy = mission_occupancy(mission)
     model = None
     rows = []
     specs = compared_specs(mission, specs)
     for i, spec in enumerate(specs):
         hardware = load_hardware(mission, computer=spec, cycles_per_tick=cycles_per_tick)
-        model = model_for(build_inputs(mission, hardware, occupancy), model)
+        # a propelled leg's speed, and so its time, follows the board's load
+        model = model_for(build_inputs(mission, hardware, hardware_occupancy(mission, hardware)),
+                          model)
         budget = hardware.budget_j if budget_j is None else budget_j
         board = hardware.board
         rows.append({"computer": board.name if board.is_none
@@ -104,7 +105,8 @@ def batteries(mission: ir.CheckedMission, specs: Sequence[str] = BATTERIES,
         hardware = load_hardware(mission, battery=spec, computer=computer,
                                  cycles_per_tick=cycles_per_tick)
         if model is None:
-            model = model_for(build_inputs(mission, hardware, mission_occupancy(mission)))
+            model = model_for(build_inputs(mission, hardware,
+                                           hardware_occupancy(mission, hardware)))
         rows.append({"battery": spec, "battery_j": hardware.battery_j,
                      "reserve_fraction": hardware.reserve_fraction,
                      **_row(model, hardware.budget_j)})

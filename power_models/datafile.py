@@ -16,14 +16,14 @@ from __future__ import annotations
 import difflib
 import math
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from gliderplan.contract.files import read_input_text
+from gliderplan.contract.files import DataFileError, read_data
 from gliderplan.contract.units import UNITS, accepted_units, to_model_unit
 from gliderplan.power_models.errors import ModelFileError
+from gliderplan.power_models.plausible import plausible
 
 
 @dataclass(frozen=True)
@@ -34,6 +34,7 @@ class Table:
     prefix: str  # dotted key of this table in the file ("" for the top level)
     data: dict[str, Any]
     used: set[str] = field(default_factory=set, compare=False)
+    kind: str = ""  # the file's kind ("vehicle", "board", ...): its figures' plausible ranges
 
     def finish(self) -> None:
         """Refuse keys the model never read: most often a misspelt key."""
@@ -129,7 +130,32 @@ class Table:
         if converted > maximum:
             most = value_in(maximum, unit, dimension)
             raise self.error(name, f"must be <= {most:g} {unit}, got {value} {unit}")
+        if (bounds := plausible(self.kind, self.key(name))) is not None and \
+                not bounds.low <= converted <= bounds.high:
+            low, high = (value_in(x, unit, dimension) for x in (bounds.low, bounds.high))
+            raise self.error(name, f"{value} {unit} lies outside the plausible {low:g} to "
+                             f"{high:g} {unit} ({bounds.source})")
         return converted
+
+    def quantities(self, name: str, dimension: str, *, positive: bool = False) -> list[float]:
+        """A list of numbers in the model's unit of `dimension`, `{ values = [...], unit =
+        ..., source = ... }` (a table's column, e.g. power against speed); each checked as
+        `quantity` checks one (never negative; `positive` also refuses zero)."""
+        self.used.add(name)
+        entry = self.data.get(name)
+        shape = "{ values = [...], unit = ..., source = ... }"
+        if entry is None:
+            raise self.missing(name, f"expected {shape} with a unit of {dimension}: "
+                                     f"{accepted_units(dimension)}")
+        if not isinstance(entry, dict) or not isinstance(entry.get("values"), list) \
+                or not entry["values"]:
+            raise self.error(name, f"expected {shape} with at least one value, got {entry!r}")
+        unknown = set(entry) - {"values", "unit", "source", "note"}
+        if unknown:
+            raise self.error(name, f"unknown field(s) {sorted(unknown)}")
+        return [Table(self.path, self.prefix, {name: {"value": v, **{
+            k: entry.get(k) for k in ("unit", "source") if k in entry}}}).quantity(
+                name, dimension, positive=positive) for v in entry["values"]]
 
     def sd(self, name: str, dimension: str) -> float | None:
         """The standard deviation [model unit] written next to a figure's value (`sd`, in the
@@ -204,7 +230,8 @@ class Table:
         items = self.data.get(name)
         if not isinstance(items, list) or not items or not all(isinstance(i, dict) for i in items):
             raise self.error(name, f"expected at least one [[{self.key(name)}]] table")
-        return [Table(self.path, f"{self.key(name)}[{i}]", item) for i, item in enumerate(items)]
+        return [Table(self.path, f"{self.key(name)}[{i}]", item, kind=self.kind)
+                for i, item in enumerate(items)]
 
     def table(self, name: str) -> Table:
         """A sub-table (`[name]`)."""
@@ -212,7 +239,7 @@ class Table:
         item = self.data.get(name)
         if not isinstance(item, dict):
             raise self.error(name, f"expected a [{self.key(name)}] table")
-        return Table(self.path, self.key(name), item)
+        return Table(self.path, self.key(name), item, kind=self.kind)
 
 
 def value_in(model_value: float, unit: str, dimension: str) -> float:
@@ -224,10 +251,9 @@ def read_model_file(path: Path, kind: str) -> Table:
     """Parse a model file and check that it describes a `kind` ("board", "vehicle", ...)."""
     shown = str(path)
     try:
-        data = tomllib.loads(read_input_text(path, f"{kind} file"))
-    except tomllib.TOMLDecodeError as err:
-        raise ModelFileError(shown, None, f"not valid TOML: {err}") from None
-    top = Table(shown, "", data)
+        top = Table(shown, "", read_data(path, f"{kind} file"), kind=kind)
+    except DataFileError as err:  # the model's own error, naming the file and key
+        raise ModelFileError(shown, err.key, err.problem) from None
     top.text("description", "")
     found = top.text("kind")
     if found != kind:
@@ -236,20 +262,22 @@ def read_model_file(path: Path, kind: str) -> Table:
     return top
 
 
-def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
-    """Every number of a model file as (dotted key, value, unit, source), as written.
+def file_entries(path: Path) -> list[tuple[str, float | list[float], str, str]]:
+    """Every number of a model file as (dotted key, value, unit, source), as written (a
+    table's column as its list of values).
 
     For display (`gliderplan power show`); call after the file has loaded, so its shape is
     known to be valid.
     """
-    data = tomllib.loads(read_input_text(path, "model file"))
-    rows: list[tuple[str, float, str, str]] = []
+    data = read_data(path, "model file")
+    rows: list[tuple[str, float | list[float], str, str]] = []
 
     def walk(prefix: str, table: dict[str, Any]) -> None:
         for key, item in table.items():
             dotted = f"{prefix}.{key}" if prefix else key
-            if isinstance(item, dict) and "value" in item:
-                rows.append((dotted, item["value"], item["unit"], item["source"]))
+            if isinstance(item, dict) and ("value" in item or "values" in item):
+                rows.append((dotted, item.get("value", item.get("values")), item["unit"],
+                             item["source"]))
             elif isinstance(item, dict):
                 walk(dotted, item)
             elif isinstance(item, list):  # an array of tables (a list of names is no figure)
@@ -264,7 +292,7 @@ def file_entries(path: Path) -> list[tuple[str, float, str, str]]:
 def file_spans(path: Path) -> list[tuple[str, float, float, str, str]]:
     """Every top-level range of a model file (`Table.span`) as (key, low, high, unit,
     source), as written; call after the file has loaded."""
-    data = tomllib.loads(read_input_text(path, "model file"))
+    data = read_data(path, "model file")
     return [(key, item["low"], item["high"], item["unit"], item["source"])
             for key, item in data.items()
             if isinstance(item, dict) and "low" in item and "high" in item]

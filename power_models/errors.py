@@ -14,4 +14,4 @@ class ModelFileError(GliderplanError, ValueError):
         self.key = key
         self.message = message
         where = f"{path}: {key}" if key else path
-        super().__init__(f"{where}: {message}", usage=usage)
+        super().__init__(f"{where}: {message}", usage=usage, file=path)

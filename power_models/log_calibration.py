@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import re
 import tempfile
-import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import read_input_text, write_atomically
+from gliderplan.contract.files import read_data, write_atomically
 from gliderplan.power_models import calibration
 from gliderplan.power_models import segments as seg
 from gliderplan.power_models.catalog import resolve
@@ -59,19 +59,29 @@ class Calibration:
 
 def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_g2_shallow",
               validate: bool = False, output: str | Path | None = None,
-              name: str | None = None) -> Calibration:
+              name: str | None = None,
+              progress: Callable[[str], None] | None = None) -> Calibration:
     """Fit `base` (a preset or a .toml file) to the logs (files or directories; `cache`:
     dbdreader's .cac directory, default the logs' cac/). With `validate`, fit the earlier
     whole dives and forecast the later ones, and replay the held-out half. With `output`
     (a .toml path), write the calibrated vehicle, named `name` (default: the file's stem).
+    `progress(step)` is told each step as it starts (a fit takes tens of seconds).
     Raises LogError, ModelFileError, CalibrationError, or UsageError for an output that is
     not a .toml."""
     if output is not None and not str(output).endswith(".toml"):
         raise UsageError(f"{output}: the output file must end in .toml")
+    step = progress or (lambda _: None)
     vehicle = load_vehicle(base)
+    if not vehicle.has_buoyancy_engine:
+        raise UsageError(f"--base {base}: an {vehicle.kind} has no buoyancy engine; calibrate "
+                         "fits a glider's pump, glide and loads: give a glider's (or a "
+                         "hybrid's) file")
     deployments = split_deployments(expand_log_paths(logs))
+    step(f"reading {sum(len(d.files) for d in deployments)} log file(s)")
     each = [read_flight_log(list(d.files), cache) for d in deployments]
     log = each[-1]  # the latest: the glider as it flies now
+    step("fitting the figures, each with its bootstrap over dives" +
+         (f" ({len(each)} deployments)" if len(each) > 1 else ""))
     if len(each) == 1:
         fit = fit_vehicle(log, vehicle)
         fit = replace(fit, vehicle=replace(fit.vehicle, base_drift_w=DEFAULT_DRIFT_W))
@@ -105,7 +115,9 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
     }
     relative_error = None
     if validate:
+        step("validating: the held-out dives replayed")
         replay = calibration.validate(log, vehicle)
+        step("validating: the later dives forecast from the earlier")
         forward = check_forward(log, vehicle)
         relative_error = forward.energy_relative_error
         report["relative_error"] = replay.relative_error
@@ -120,6 +132,7 @@ def calibrate(logs: list[str], *, cache: str | None = None, base: str = "slocum_
             "relative_error": replay.relative_error,
         }
         report["forecast"] = _forecast_json(forward)
+        step("validating: each set of instruments forecast from another")
         report["configurations"] = _configurations_json(check_configurations(log, vehicle))
     if output is not None:
         report["output"] = str(_write_vehicle(Path(output), name, base, fit, log,
@@ -216,7 +229,7 @@ def _write_vehicle(output: Path, name: str | None, base: str, fit: VehicleFit,
     """Write the base vehicle's file with every fitted figure replaced (value, sd, what it
     was fitted from), every other figure saying it is the base's and why, the fit's
     correlation and the devices the hotel load holds."""
-    data = tomllib.loads(read_input_text(resolve("vehicle", base), "vehicle file"))
+    data = read_data(resolve("vehicle", base), "vehicle file")
     name = name or re.sub(r"[^A-Za-z0-9_]", "_", output.stem)
     if not _NAME.fullmatch(name):
         raise UsageError(f"vehicle name {name!r} must match [A-Za-z_][A-Za-z0-9_]{{0,31}}")

@@ -15,6 +15,10 @@ KINDS = ("board", "sensor", "vehicle", "battery")
 DEFAULT_VEHICLE = "slocum_g2_shallow"
 YO_BOTTOMS_M = (10.0, 20.0, 40.0, 100.0)  # rows of the energy table by default
 SPEEDS_MPS = (0.15, 0.2, 0.25, 0.3, 0.35, 0.4)  # columns of the energy table by default
+# Inputs checked against what exists: no ocean is deeper (Challenger Deep, ~10,935 m), and
+# a hotel load past 1 kW is no glider's (an AUV's is ~50 W: DESIGN.md section 11).
+DEEPEST_OCEAN_M = 11_000.0  # [m]
+MAX_HOTEL_W = 1000.0  # [W]
 
 
 def presets(kind: str | None = None) -> dict[str, list[str]]:
@@ -55,7 +59,25 @@ def model_figures(kind: str, spec: str, clock_mhz: float | None = None) -> dict:
             {"key": k, "low": low, "high": high, "unit": u, "source": s}
             for k, low, high, u, s in file_spans(path)],
         "derived": _derived(kind, model),
+        **({"vehicle_kind": model.kind, "propulsion": _propulsion(model)}
+           if kind == "vehicle" else {}),
     }
+
+
+def _propulsion(vehicle: object) -> dict | None:
+    """A vehicle's propulsion model as numbers, with the speed that makes the most of a
+    joule on its own hotel load in still water and the energy per km there (None: a glider
+    without one)."""
+    from gliderplan.planner.speed import best_speed
+
+    propulsion = vehicle.propulsion
+    if propulsion is None:
+        return None
+    best = best_speed(propulsion, vehicle.hotel_w)
+    return {**propulsion.figures(), "hotel_w": vehicle.hotel_w,
+            "best_speed_mps": best.speed_mps, "closed_form_speed_mps":
+            propulsion.optimal_speed_mps(vehicle.hotel_w),
+            "energy_per_km_kj": best.energy_per_m_j, "propulsion_w": best.propulsion_w}
 
 
 def _derived(kind: str, model: object) -> list[dict]:
@@ -84,6 +106,8 @@ def _derived(kind: str, model: object) -> list[dict]:
             row("quality at 25 % duty", model.utility(0.25), "1"),
             row("mean power at 25 % duty", model.mean_power_w(0.25), "W"),
         ]
+    if not model.has_buoyancy_engine:  # an AUV: its propulsion says the rest
+        return [row("surfacing with Iridium", model.surfacing_with_iridium_j, "J")]
     pitch, low, high = model.nominal_pitch_rad, model.nominal_min_depth_m, model.nominal_max_depth_m
     u, w = model.glide(pitch, model.max_ballast_cc)
     best = model.optimal_speed_mps(model.hotel_w)
@@ -117,11 +141,14 @@ def _profile(vehicle_spec: str, min_depth_m: float | None, max_depths_m: list[fl
     pitch = vehicle.nominal_pitch_rad if pitch_deg is None else math.radians(pitch_deg)
     if not 0.0 < pitch < math.pi / 2:
         raise UsageError("--pitch-deg must lie strictly between 0 and 90")
-    if low < 0.0 or any(h <= low for h in highs):
+    if not 0.0 <= low < DEEPEST_OCEAN_M or any(h <= low for h in highs):
         raise UsageError(
             f"every --max-depth must be deeper than --min-depth ({low:g} m), "
             "and --min-depth must be >= 0"
         )
+    if any(h > DEEPEST_OCEAN_M for h in highs):
+        raise UsageError(f"--max-depth must be at most {DEEPEST_OCEAN_M:,.0f} m, the deepest "
+                         "ocean")
     return vehicle, low, highs, pitch
 
 
@@ -140,6 +167,8 @@ def energy_per_km(vehicle: str = DEFAULT_VEHICLE, *, min_depth_m: float | None =
     if any(u <= 0.0 for u in speeds):
         raise UsageError("--speed values must be > 0 m/s")
     hotel = model.hotel_w if hotel_w is None else hotel_w
+    if not hotel <= MAX_HOTEL_W:
+        raise UsageError(f"--hotel-w must be at most {MAX_HOTEL_W:g} W")
     if hotel < 0.0:
         raise UsageError("--hotel-w must be >= 0 W")
     # the neutral volume for each speed plus the trim offset of each band (yo_ballast_cc)
@@ -172,6 +201,8 @@ def optimal_speeds(hotel_w: list[float], vehicle: str = DEFAULT_VEHICLE, *,
     model, low, highs, pitch = _profile(vehicle, min_depth_m, max_depths_m, pitch_deg, ())
     if any(h < 0.0 for h in hotel_w):
         raise UsageError("--hotel-w values must be >= 0 W")
+    if any(not h <= MAX_HOTEL_W for h in hotel_w):
+        raise UsageError(f"--hotel-w values must be at most {MAX_HOTEL_W:g} W")
     rows = []
     for high in highs:
         for hotel in hotel_w:

@@ -28,12 +28,23 @@ from pathlib import Path
 
 import numpy as np
 
-from gliderplan.contract import Component
+from gliderplan.contract import Component, Envelope, EnvelopeAction
 from gliderplan.contract.units import UNITS
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
 from gliderplan.power_models.datafile import Table, read_model_file
 from gliderplan.power_models.flight import DensityProfile, FlightModelError, FlightParams
+from gliderplan.power_models.propulsion import (
+    AUV,
+    GLIDER,
+    POWER_LAW,
+    TABLE,
+    THRUSTER,
+    VEHICLE_KINDS,
+    Propulsion,
+    read_propulsion,
+)
+from gliderplan.power_models.vehicle_figures import FIGURES, derive_envelope, envelope_fields
 
 Array = np.ndarray
 
@@ -104,8 +115,28 @@ class Vehicle:
     hotel_includes: tuple[str, ...] = ()  # devices ("ctd", "computer", ...) in the hotel load
     devices: tuple[Device, ...] = ()  # devices with figures of their own (the file's [devices])
     base_drift_w: float = 0.0  # sd [W] of the hotel load between deployments (another year)
+    kind: str = GLIDER  # glider | hybrid (a glider with a thruster) | auv (propeller only)
+    propulsion: Propulsion | None = None  # its propeller or thruster; None: a glider's none
+    # the file's [envelope]: the rating every command is held to (None: `envelope` derives it)
+    max_depth_m: float | None = None
+    max_pitch_rad: float | None = None
+    min_yo_band_m: float | None = None
+    envelope_action: EnvelopeAction = EnvelopeAction.SURFACE
     uncertainty: Uncertainty | None = field(default=None, compare=False)
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
+
+    @property
+    def envelope(self) -> Envelope:
+        """The rating the runtime holds every command to (`derive_envelope`)."""
+        return derive_envelope(self.nominal_max_depth_m, self.nominal_pitch_rad,
+                               self.nominal_min_depth_m, self.max_ballast_cc, self.pump_rate_cc_s,
+                               self.max_depth_m, self.max_pitch_rad, self.min_yo_band_m,
+                               self.envelope_action)
+
+    @property
+    def has_buoyancy_engine(self) -> bool:
+        """Whether it pumps to glide (a glider, a hybrid); an AUV has no pump."""
+        return self.kind != AUV
 
     def device(self, name: str) -> Device | None:
         """The device table's entry for `name`, or None."""
@@ -349,44 +380,6 @@ def load_vehicle(spec: str) -> Vehicle:
     return vehicle
 
 
-# file key -> (attribute, dimension, options); a flight key is "flight.<key>". Every figure
-# calibration may fit or draw is here, so that loading, writing and drawing agree.
-FIGURES: dict[str, tuple[str, str, dict]] = {
-    "hotel_power": ("hotel_w", "power", {}),
-    "pump_out_energy_per_volume": ("pump_out_j_per_cc", "pump_per_volume", {}),
-    "pump_out_energy_per_volume_depth": ("pump_out_j_per_cc_m", "pump_per_volume_depth", {}),
-    "pump_in_energy_per_volume": ("pump_in_j_per_cc", "pump_per_volume", {}),
-    "pump_in_energy_per_volume_depth": (
-        "pump_in_j_per_cc_m", "pump_per_volume_depth", {"default": 0.0, "minimum": -np.inf}
-    ),
-    "pump_rate": ("pump_rate_cc_s", "flow", {"positive": True}),
-    "max_ballast": ("max_ballast_cc", "volume", {"positive": True}),
-    "pitch_energy": ("pitch_energy_j", "energy", {}),
-    "surface_power": ("surface_w", "power", {}),
-    "surface_time": ("surface_s", "time", {}),
-    "iridium_power": ("iridium_w", "power", {}),
-    "iridium_time": ("iridium_s", "time", {}),
-    "surfacing_energy": ("surfacing_fixed_j", "energy", {}),
-    "top_turn_time": ("top_turn_s", "time", {"default": 0.0}),
-    "bottom_turn_time": ("bottom_turn_s", "time", {"default": 0.0}),
-    "dive_pitch_error": ("dive_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
-    "climb_pitch_error": ("climb_pitch_error_rad", "angle", {"default": 0.0, "minimum": -np.inf}),
-    "nominal_pitch": (
-        "nominal_pitch_rad", "angle", {"positive": True, "maximum": np.pi / 2 * 0.999}
-    ),
-    "nominal_min_depth": ("nominal_min_depth_m", "length", {}),
-    "nominal_max_depth": ("nominal_max_depth_m", "length", {"positive": True}),
-    "flight.water_density": ("rho_kg_m3", "density", {"positive": True}),
-    "flight.gravity": ("g_m_s2", "acceleration", {"positive": True}),
-    "flight.wing_area": ("wing_area_m2", "area", {"positive": True}),
-    "flight.lift_slope_wing": ("lift_wing_per_rad", "per_angle", {"positive": True}),
-    "flight.lift_slope_hull": ("lift_hull_per_rad", "per_angle", {}),
-    "flight.drag_cd0": ("drag_cd0", "dimensionless", {"positive": True}),
-    "flight.drag_cd1": ("drag_cd1_per_rad2", "dimensionless", {}),
-    "flight.hull_volume": ("hull_volume_cc", "volume", {"default": 0.0}),
-    "flight.trim_volume": ("trim_cc", "volume", {"default": 0.0, "minimum": -np.inf}),
-    "flight.compressibility": ("compressibility_per_pa", "compressibility", {"default": 0.0}),
-}
 
 
 @contextmanager
@@ -399,6 +392,25 @@ def flying_yo(where: str, vehicle: Vehicle, min_depth_m: float, max_depth_m: flo
     except FlightModelError as err:
         raise FlightModelError(f"{where}: a yo {min_depth_m:g}-{max_depth_m:g} m on vehicle "
                                f"{vehicle.name}: {err}") from None
+
+
+def yo_flight_problem(where: str, vehicle: Vehicle, kind: str, args: tuple[float, ...] | None,
+                      pitch_rad: float | None = None, ballast_cc: float | None = None
+                      ) -> FlightModelError | None:
+    """Why the vehicle cannot fly a profile of `kind` with constant arguments `args` (None:
+    they read variables, left to the flight) at `pitch_rad` [rad] and `ballast_cc` [cc]
+    (default: the profile's mean pitch, the vehicle's unplanned volume), or None: a yo
+    deeper than its trim and pumped volume climb back from. `where` names the profile."""
+    if kind not in ("yo", "thermotrackyo") or args is None:
+        return None
+    pitch = 0.5 * (args[2] + args[3]) if pitch_rad is None else pitch_rad
+    ballast = vehicle.unplanned_ballast_cc if ballast_cc is None else ballast_cc
+    try:
+        with flying_yo(where, vehicle, args[0], args[1]):
+            vehicle.inflections_per_hour(args[0], args[1], pitch, ballast)
+    except FlightModelError as err:
+        return err
+    return None
 
 
 def figure_spec(key: str) -> tuple[str, str, dict]:
@@ -445,15 +457,39 @@ def figure_value(vehicle: Vehicle, key: str) -> float:
     return float(getattr(owner, FIGURES[key][0]))
 
 
+# Figures of the buoyancy engine and the glide: an AUV has none, and its file gives none.
+# The model holds NaN for the glide's (nothing flies them) and 0 for the pump's volume and
+# energies, so that its plans and compiled missions command no ballast.
+GLIDER_FIGURES = frozenset(
+    k for k in FIGURES if k.startswith(("pump_", "flight.")) and k not in (
+        "flight.water_density", "flight.gravity")) | {
+    "max_ballast", "pitch_energy", "top_turn_time", "bottom_turn_time", "dive_pitch_error",
+    "climb_pitch_error", "nominal_pitch"}
+_WITHOUT_BUOYANCY_ENGINE = {"max_ballast_cc": 0.0, "pitch_energy_j": 0.0, "trim_cc": 0.0,
+                            "hull_volume_cc": 0.0, "compressibility_per_pa": 0.0,
+                            **{FIGURES[k][0]: 0.0 for k in FIGURES if k.startswith("pump_")
+                               and k != "pump_rate"}}
+
+
 def read_vehicle_file(path: Path) -> Vehicle:
     """Parse and validate a vehicle data file."""
     top = read_model_file(path, "vehicle")
+    kind = top.text("vehicle_kind", GLIDER)
+    if kind not in VEHICLE_KINDS:
+        raise top.error("vehicle_kind", f"expected one of {', '.join(VEHICLE_KINDS)}, "
+                        f"got {kind!r}")
     fl = top.table("flight")
     values: dict[str, float] = {}
     spreads: dict[str, float] = {}
     bounds: set[str] = set()
     for key, (attr, dimension, options) in FIGURES.items():
         table, name = (fl, key[7:]) if key.startswith("flight.") else (top, key)
+        if kind == AUV and key in GLIDER_FIGURES:
+            if name in table.data:
+                raise table.error(name, "an AUV has no buoyancy engine and does not glide: "
+                                  "remove the figure, or make the vehicle_kind hybrid")
+            values[attr] = _WITHOUT_BUOYANCY_ENGINE.get(attr, np.nan)
+            continue
         values[attr] = table.quantity(name, dimension, **options)
         spread = table.sd(name, dimension)
         if spread is not None:
@@ -466,19 +502,41 @@ def read_vehicle_file(path: Path) -> Vehicle:
     flight_attrs = {FIGURES[k][0] for k in FIGURES if k.startswith("flight.")}
     params = FlightParams(**{a: v for a, v in values.items() if a in flight_attrs})
     devices = _devices(top, spreads, bounds)
+    propulsion = _propulsion(top, kind, params)
     vehicle = Vehicle(
+        **envelope_fields(top, values["nominal_max_depth_m"]),
         name=top.text("name"),
         description=top.text("description", ""),
         flight=params,
         hotel_includes=_hotel_includes(top, devices),
         devices=devices,
         base_drift_w=top.quantity("base_drift", "power", 0.0),
+        kind=kind,
+        propulsion=propulsion,
         uncertainty=_uncertainty(top, spreads, bounds),
         path=path,
         **{a: v for a, v in values.items() if a not in flight_attrs},
     )
     top.finish()
     return vehicle
+
+
+def _propulsion(top: Table, kind: str, flight_params: FlightParams) -> Propulsion | None:
+    """The `[propulsion]` table: required of a hybrid and an AUV, refused on a glider, its
+    model one the kind may carry (an AUV's propeller is no glider's thruster)."""
+    if not top.has("propulsion"):
+        if kind != GLIDER:
+            raise top.missing("propulsion", f"a {kind} needs a [propulsion] table")
+        return None
+    table = top.table("propulsion")
+    if kind == GLIDER:
+        raise top.error("propulsion", "a glider has no propulsion: make the vehicle_kind "
+                        "hybrid (a glider with a thruster) or auv")
+    if kind == AUV and table.data.get("model") == THRUSTER:
+        raise table.error("model", "an auv has no hull drag figures to fly a glider's "
+                          f"thruster at; use one of {POWER_LAW}, {TABLE}")
+    return read_propulsion(table, flight_params.wing_area_m2, flight_params.rho_kg_m3,
+                           flight_params.drag_cd0)
 
 
 def _devices(top: Table, spreads: dict[str, float], bounds: set[str]) -> tuple[Device, ...]:

@@ -16,14 +16,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gliderplan.contract import TICK_S
+from gliderplan.contract import TICK_S, ExitCode
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import (
-    InputFileError,
-    read_input,
-    read_input_text,
-    write_atomically,
-)
+from gliderplan.contract.files import InputFileError, read_data, read_input, write_atomically
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
@@ -33,8 +28,8 @@ SWEEP_POINTS = 20  # budgets on the Pareto curve
 QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
-SECTIONS = ("summary", "pareto", "energy", "plan-vs-simulation", "profile", "sbc",
-            "sensitivity", "montecarlo")
+SECTIONS = ("summary", "pareto", "energy", "speed", "vehicles", "plan-vs-simulation",
+            "profile", "track", "sbc", "sensitivity", "montecarlo")
 
 
 @dataclass(frozen=True)
@@ -50,14 +45,10 @@ def _wh(joules: float) -> float:
 
 def _json(path: Path, what: str) -> dict:
     try:
-        data = json.loads(read_input_text(path, "JSON file"))
+        return read_data(path, "JSON file", finite=False)  # a summary may hold NaN
     except InputFileError as err:  # say what the file should have been
-        raise UsageError(f"{err} ({what})") from None
-    except json.JSONDecodeError as err:
-        raise UsageError(f"{path}: cannot read {what}: {err}") from None
-    if not isinstance(data, dict):
-        raise UsageError(f"{path}: {what}: expected a JSON object")
-    return data
+        raise InputFileError(f"{err} ({what})", usage=err.exit_code == ExitCode.USAGE) \
+            from None
 
 
 def _regular(path: Path, what: str) -> None:
@@ -76,11 +67,11 @@ def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Pa
     """(the planner's JSON report of the plan, the plan file, files written): the plan
     given with its report beside it (PLAN.json), or the plan made now, written to `out`."""
     from gliderplan.planner.plan import solve_plan
-    from gliderplan.planner.planfile import read_plan_file, write_plan_bytes
+    from gliderplan.planner.planfile import load_plan, write_plan_bytes
     from gliderplan.planner.report import report_json
 
     if plan_path is not None:
-        read_plan_file(plan_path, mission)  # a plan for this mission, or a clear error
+        load_plan(plan_path, mission)  # a sane plan for this mission, or a clear error
         report = _json(Path(f"{plan_path}.json"), "the plan's report, written beside it by "
                        "`gliderplan plan -o PLAN`")
         if report.get("hash") != mission.hash or not isinstance(report.get("states"), list):
@@ -119,7 +110,8 @@ def _read_run(mission: CheckedMission, run_dir: Path) -> tuple[dict, pd.DataFram
     try:
         _regular(run_dir / "timeseries.parquet", "run's time series")
         series = pq.read_table(run_dir / "timeseries.parquet",
-                               columns=["time_s", "depth_m", "temperature_c", "state"]
+                               columns=["time_s", "depth_m", "temperature_c", "state",
+                                        "lat_deg", "lon_deg"]
                                ).to_pandas()
     except (OSError, KeyError, ValueError) as err:
         raise UsageError(f"{run_dir}/timeseries.parquet: cannot read the run's time "
@@ -151,6 +143,29 @@ def _profile_frame(series: pd.DataFrame) -> pd.DataFrame:
                          "depth_m": thin["depth_m"].to_numpy(),
                          "temperature_c": thin["temperature_c"].to_numpy(),
                          "state": thin["state"].astype(str).to_numpy()})
+
+
+def _track_frame(series: pd.DataFrame) -> pd.DataFrame:
+    """The flown track (track.csv): time and true position, every k-th tick."""
+    thin = series.iloc[::max(1, math.ceil(len(series) / PROFILE_ROWS))]
+    return pd.DataFrame({"time_h": thin["time_s"].to_numpy() / 3600.0,
+                         "lat_deg": thin["lat_deg"].to_numpy(),
+                         "lon_deg": thin["lon_deg"].to_numpy()})
+
+
+def _track_section(mission: CheckedMission, frame: pd.DataFrame, summary: dict) -> Section:
+    from gliderplan.sim.loop import route_points_deg
+    from gliderplan.sim.seamap import SeaMap, image
+
+    fixes = summary.get("surfacing_fixes", [])
+    figure = image(SeaMap("", {"flown": (frame["lat_deg"].to_numpy(),
+                                         frame["lon_deg"].to_numpy())},
+                          tuple(route_points_deg(mission)), tuple(fixes)), "svg")
+    return Section("track", "Track at sea", (
+        f"<p>The simulated glider's true track, its {len(fixes)} surfacings' GPS fixes and "
+        "the mission's waypoints (<code>gliderplan forecast --map</code> draws the forecast "
+        "surfacings with their 90 % ellipses and the current field).</p>",),
+        figure.decode("utf-8"), "Latitude against longitude [deg].", ("track.csv",))
 
 
 # ---- Monte Carlo ----------------------------------------------------------------------
@@ -197,9 +212,11 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.planner.compare import compare_boards
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
+    from gliderplan.planner.planfile import load_plan
     from gliderplan.planner.sensitivity import sensitivity
     from gliderplan.planner.sweep import pareto
     from gliderplan.reports import sbc
+    from gliderplan.reports.speed import COMPARED_VEHICLES, speed_frame, vehicles_frame
 
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
@@ -233,6 +250,7 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
         "energy_by_state.csv": _energy_frame(report),
         "plan_vs_simulation.csv": _plan_vs_sim_frame(summary, report),
         "profile.csv": _profile_frame(series),
+        "track.csv": _track_frame(series),
         "sbc_boards.csv": sbc.boards_frame(comparison),
         "sbc_workload.csv": sbc.workload_frame(comparison),
         "sbc_crossovers.csv": sbc.crossovers_frame(comparison),
@@ -240,12 +258,24 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     }
     if carlo is not None:
         tables["montecarlo.csv"] = carlo[0]
+    speeds = speed_frame(mission, hardware, load_plan(plan_file, mission))
+    vehicles = None
+    if len(speeds):
+        from gliderplan.planner.vehicles import compare_vehicles, crossovers
+
+        tables["speed.csv"] = speeds
+        compared = compare_vehicles(mission, list(dict.fromkeys(
+            [mission.vehicle, *COMPARED_VEHICLES])))
+        tables["vehicles.csv"] = vehicles_frame(compared)
+        vehicles = _vehicles_section(tables["vehicles.csv"], crossovers(compared))
     sections = [
         _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
         _pareto_section(frontier, report, _star(model, frontier, report), plan_file),
         _energy_section(tables["energy_by_state.csv"]),
+        *([_speed_section(speeds), vehicles] if vehicles is not None else []),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
         _profile_section(tables["profile.csv"], len(series)),
+        _track_section(mission, tables["track.csv"], summary),
         _sbc_section(comparison, tables),
         _sensitivity_section(tornado, tables["sensitivity.csv"]),
     ]
@@ -285,9 +315,19 @@ def _verdict(summary: dict) -> str:
     if simulated is not None and budget:
         text += f" and a budget of {_wh(budget):,.4g} Wh ({100 * simulated / budget:.1f} % used)"
     causes = check.get("causes") or []
-    if causes:
-        text += "; " + esc("; ".join(causes))
+    if causes:  # below the run's one verdict: the states that overran their own prediction
+        text += "<br>states over their own prediction: " + esc("; ".join(causes))
     return text
+
+
+def _battery_text(report: dict, hardware) -> str:
+    """The battery the plan was made for (`plan --battery` may have replaced the
+    mission's; its report says which), else the mission's."""
+    battery = report.get("battery") or {}
+    if not battery.get("energy_j"):  # a report of an older gliderplan
+        battery = {"energy_j": hardware.battery_j, "reserve_fraction": hardware.reserve_fraction}
+    energy_j, reserve = battery["energy_j"], battery["reserve_fraction"]
+    return f"{_wh(energy_j):,.4g} Wh, reserve {100 * reserve:.3g} %"
 
 
 def _summary_section(mission: CheckedMission, source: str, hardware, report: dict,
@@ -298,8 +338,7 @@ def _summary_section(mission: CheckedMission, source: str, hardware, report: dic
         ("states", esc(", ".join(s.name for s in mission.states))),
         ("vehicle", esc(hardware.vehicle.name)),
         ("computer", esc(_computer(report))),
-        ("battery", esc(f"{_wh(hardware.battery_j):,.4g} Wh, reserve "
-                        f"{100 * hardware.reserve_fraction:.3g} %")),
+        ("battery", esc(_battery_text(report, hardware))),
         ("budget", esc(f"{_wh(budget):,.4g} Wh usable")),
         ("objective", esc(report["objective"].replace("_", " "))),
         ("predicted energy", esc(f"{_wh(report['energy_j']):,.4g} Wh "
@@ -403,6 +442,41 @@ def _energy_section(frame: pd.DataFrame) -> Section:
                    ("energy_by_state.csv",),
                    (Table(frame, {"state": "state", **headers},
                           dict.fromkeys(headers, ",.3g")),))
+
+
+def _speed_section(frame: pd.DataFrame) -> Section:
+    from gliderplan.reports.speed import REFERENCE_SPEED_MPS, speed_svg
+
+    chosen = frame[frame["chosen"]]
+    headers = {"state": "state", "speed_mps": "chosen speed [m/s]",
+               "energy_per_km_kj": "energy per km [kJ]"}
+    return Section("speed", "Energy per km against speed", (
+        "<p>Where the plan flies on the propeller: the energy each km takes at each speed "
+        "through the water (the vehicle's propulsion model with the state's hotel load and "
+        "board, in still water), and the speed the planner chose, the least energy per km "
+        "(or the one written). Too slow and the hotel load takes the battery, too fast "
+        f"and drag does; the dotted line is a fixed {REFERENCE_SPEED_MPS:g} m/s cruise.</p>",),
+        speed_svg(frame), "Energy per km [kJ] against speed [m/s]; stars: the chosen speeds.",
+        ("speed.csv",), (Table(chosen[list(headers)], headers,
+                               {"speed_mps": ".3g", "energy_per_km_kj": ",.4g"}),))
+
+
+def _vehicles_section(frame: pd.DataFrame, flips: list[dict]) -> Section:
+    from gliderplan.planner.vehicles import HEAD_CURRENTS_MPS
+    from gliderplan.reports.speed import vehicles_svg
+
+    said = "".join(f"<li>against a head current of {f['head_current_mps']:.3g} m/s and more, "
+                   f"{esc(f['to'])} needs the least energy per km</li>" for f in flips)
+    return Section("vehicles", "The mission on a glider, a hybrid and an AUV", (
+        "<p>The same mission planned on each vehicle (<code>gliderplan compare-vehicles"
+        "</code>): the least energy per km over ground against a head current, each at its "
+        "best speed (a glider that cannot outrun the current makes no way). Where the "
+        "cheapest vehicle "
+        "changes, the thruster or the propeller pays:</p>",
+        f"<ul>{said}</ul>" if flips else
+        f"<p>No crossover up to {HEAD_CURRENTS_MPS[-1]:g} m/s.</p>"),
+        vehicles_svg(frame, flips), "Energy per km [kJ] against the head current [m/s].",
+        ("vehicles.csv",))
 
 
 def _plan_vs_sim_section(frame: pd.DataFrame, summary: dict, run_path: Path,
@@ -525,8 +599,9 @@ def _montecarlo_section(frame: pd.DataFrame, summary: dict, directory: Path) -> 
                              f"(95 % interval {100 * low:.1f} to {100 * high:.1f} %)")),
         ("energy", esc(spread(energy, J_PER_WH, "Wh"))),
         ("duration", esc(spread(duration, 3600.0, "h"))),
-        ("battery exhausted before the end", esc(f"{summary.get('exhausted_before_end', 0)} "
-                                                 "scenarios")),
+        ("exceeded the usable charge drawn", esc(
+            f"{summary.get('exceeded_drawn_usable_charge', 0)} scenarios (usable share drawn "
+            f"from {summary.get('usable_share_drawn_from', 'the scenario file')})")),
         ("plan flown", esc(summary.get("plan") or "none: every sensor always on")),
     ]
     budget = summary.get("budget_j")

@@ -217,13 +217,60 @@ def build_target(mission: CheckedMission, target: str | None) -> str:
     return "host"
 
 
+def target_board(mission: CheckedMission, target: str) -> str:
+    """The board spec a build for `target` runs on: the board of that name, or for the
+    host the mission's own computer (the host stands in for it)."""
+    return mission.computer.board if target == "host" else target
+
+
+def refuse_missing_features(mission: CheckedMission, target: str) -> None:
+    """BuildError naming the state when one of the mission's states asks the board it is
+    built for for something that board's data file says it cannot do: a clock it lacks
+    (`computer clock`), a sleep between ticks it cannot wake from on the serial line, a
+    workload none of its clocks runs within the tick. `check` holds a
+    mission to its own computer; a build for another board (`--target`) is held here."""
+    if mission.computer.is_none:  # no board to set: the per-state settings are refused
+        return                    # by check, the clocks are all 0
+    from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
+    from gliderplan.power_models import load_board
+
+    spec = target_board(mission, target)
+    board = load_board(spec)
+    if board.is_none:
+        return
+    clocks = [m.clock_mhz for m in board.clock_modes]
+    problems = []  # (the mission's `computer NAME @ MHZ` is the board it is planned on:
+    for state in mission.states:  # building for another, to compare, is no error)
+        use = state.computer
+        if use.clock_mhz is not None and not board.has_clock(use.clock_mhz):
+            problems.append(f"state {state.name} asks for 'computer clock "
+                            f"{use.clock_mhz:g} MHz'")
+        if use.sleep and (board.sleep is None or "serial" not in board.sleep.wakes_on):
+            problems.append(f"state {state.name} asks to 'sleep between ticks', which the "
+                            "board cannot (no sleep it wakes from on the serial line)")
+        fastest = max([use.clock_mhz] if use.clock_mhz else clocks)
+        capacity = fastest * 1e6 * board.cycles_per_clock * TICK_S
+        if (use.cycles_per_tick or RUNTIME_CYCLES_PER_TICK) > capacity:
+            problems.append(f"state {state.name}'s workload of {use.cycles_per_tick:,.0f} "
+                            f"cycles is more than {capacity:,.0f} in a {TICK_S:g} s tick")
+    if problems:
+        raise BuildError(f"mission {mission.name} cannot run on board {board.name} (target "
+                         f"{target}; clocks {board.clocks_text()} MHz): "
+                         + "; ".join(problems) + ": change the mission's computer settings "
+                         "or build for its own board")
+
+
 def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str | None = None,
                     plan_path: str | Path | None = None,
-                    limits: FlightLimits | None = None) -> Path:
+                    limits: FlightLimits | None = None,
+                    key_path: str | Path | None = None) -> Path:
     """Generate the mission's C into `out_dir`/<name>.c and build `out_dir`/<name>: the
     pipeline of `gliderplan compile`, for `target` (default: `build_target`, the host).
     With `plan_path`, the plan is first checked by the runtime's own reader
-    (`runtime_accepts`) and then copied beside the binary.
+    (`runtime_accepts`; with `key_path`, the key provisioned on the vehicle, its signature
+    too, as the runtime checks it, and `gp_plan_check`: a plan made for another board is
+    refused) and then copied beside the binary. A mission that asks the target's board for
+    a clock, a sleep or a workload it cannot give is refused before anything is built.
 
     `limits` (the default ballast, the pump's volume, the board's clocks) are by default
     those of the mission's vehicle on the target's board (the mission's computer for the
@@ -236,6 +283,9 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str | 
         raise UsageError(f"-o {out_dir}: not a directory")
     target = build_target(mission, target)
     board = find_target(target)
+    if key_path is not None and plan_path is None:
+        raise UsageError("--key: the key checks a plan's signature; give --plan too")
+    refuse_missing_features(mission, target)
     if limits is None:
         from gliderplan.planner.limits import flight_limits
 
@@ -244,7 +294,11 @@ def compile_mission(mission: CheckedMission, out_dir: str | Path, target: str | 
         from gliderplan.planner.planfile import read_plan_data
 
         plan = read_plan_data(plan_path)
-        runtime_accepts(mission, plan_path, limits)
+        if key_path is not None:
+            from gliderplan.planner.signing import read_key
+
+            read_key(key_path)  # a key the runtime would refuse: said here, in its words
+        runtime_accepts(mission, plan_path, limits, key_path=key_path)
     source = generate_c(mission, limits)
     out = output_directory(out_dir)
     c_path = out / f"{mission.name}.c"
@@ -297,9 +351,10 @@ def _copy_atomically(source: Path, destination: Path) -> None:
 
 
 def runtime_accepts(mission: CheckedMission, plan_path: str | Path, limits: FlightLimits,
-                    timeout_s: float = 10.0) -> None:
-    """Start the mission's host binary (`limits` as for `compile_mission`) on the plan over
-    a pty; it must get as far as HELLO, else PlanRejected with the runtime's own message.
+                    timeout_s: float = 10.0, key_path: str | Path | None = None) -> None:
+    """Start the mission's host binary (`limits` as for `compile_mission`; with
+    `key_path`, holding that key, so that it flies signed plans only) on the plan over a
+    pty; it must get as far as HELLO, else PlanRejected with the runtime's own message.
 
     The runtime reads its plan before it talks to the science computer, so the same
     strict reader that will run on the board decides, not a second implementation, and
@@ -315,9 +370,10 @@ def runtime_accepts(mission: CheckedMission, plan_path: str | Path, limits: Flig
         binary = compile_mission(mission, work, "host", limits=limits)
         master, slave = os.openpty()
         try:
+            key = [] if key_path is None else ["--key", str(Path(key_path).resolve())]
             process = subprocess.Popen(
                 [str(binary), "--device", os.ttyname(slave), "--plan", str(plan_path),
-                 "--state-dir", str(work / "state")],
+                 "--state-dir", str(work / "state"), *key],
                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
             link = Link(FdPort(master))
             deadline = time.monotonic() + timeout_s

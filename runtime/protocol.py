@@ -1,6 +1,6 @@
 """The science-computer side of the runtime link (docs/protocol.md), byte for byte.
 
-Framing (COBS + CRC-16/CCITT-FALSE), the seven messages, and `Link`: a small driver
+Framing (COBS + CRC-16/CCITT-FALSE), the nine messages, and `Link`: a small driver
 that plays the science computer over a serial port (pyserial's, or `FdPort` over a pty
 master) for the simulator's emulator and the end-to-end tests. A COMMAND travels as the
 changes against a COMMAND the science computer holds (`CommandUpdate`); `Link` keeps
@@ -27,6 +27,7 @@ from gliderplan.contract import (
     FLAG_DONE,
     MAX_LINK_PLAN,
     MAX_PAYLOAD,
+    MAX_UPDATE_BYTES,
     MAX_WIRE,
     N_SENSORS,
     PLAN_PIECE,
@@ -36,6 +37,7 @@ from gliderplan.contract import (
     CommandField,
     MessageType,
     ReleaseReason,
+    UpdateStatus,
 )
 
 HEADER = struct.Struct("<BBBBH")  # version, type, seq, ack, length
@@ -80,6 +82,10 @@ class LinkError(Exception):
 
 class LinkTimeoutError(LinkError):
     """No valid answer after every retransmission."""
+
+
+class LinkClosedError(LinkError):
+    """The line is gone: the runtime closed its end (it ended, or was killed)."""
 
 
 class LinkReleasedError(LinkError):
@@ -334,6 +340,8 @@ class Command(NamedTuple):  # a tuple: the simulator builds one per tick
     heading_rad: float
     sensor_power: int
     event_count: int
+    speed_mps: float = 0.0  # through the water on the propeller; 0: a glide
+    thrust_w: float = 0.0  # a glider's thruster assisting a yo; 0: off
 
     TYPE = MessageType.COMMAND
 
@@ -476,6 +484,42 @@ class PlanStatus:
 
 
 @dataclass(frozen=True)
+class UpdatePiece(PlanPiece):
+    """A PLAN_UPDATE frame: a piece of a plan update (docs/plan-update.md), laid out as a
+    PLAN piece."""
+
+    TYPE = MessageType.PLAN_UPDATE
+
+
+@dataclass(frozen=True)
+class UpdateStatusMessage:
+    """UPDATE_STATUS: what became of a plan update (`contract.UpdateStatus`), the sequence
+    number of the plan in force after it (0: none), and the runtime's words."""
+
+    status: int
+    seq: int
+    message: str
+
+    TYPE = MessageType.UPDATE_STATUS
+
+    @property
+    def accepted(self) -> bool:
+        return self.status in (UpdateStatus.APPLIED, UpdateStatus.DUPLICATE)
+
+    def pack(self) -> bytes:
+        text = self.message.encode("ascii")[:MAX_PAYLOAD - 6]
+        return struct.pack("<BIB", self.status, self.seq, len(text)) + text
+
+    @classmethod
+    def unpack(cls, payload: bytes) -> UpdateStatusMessage:
+        if len(payload) < 6:
+            raise LengthError("UPDATE_STATUS payload is too short")
+        _expect_size("UPDATE_STATUS", payload, 6 + payload[5])
+        status, seq, _ = struct.unpack_from("<BIB", payload)
+        return cls(status, seq, payload[6:].decode("ascii", errors="replace"))
+
+
+@dataclass(frozen=True)
 class Nak:
     TYPE = MessageType.NAK
 
@@ -488,9 +532,11 @@ class Nak:
         return cls()
 
 
-Message = Hello | Sensors | CommandUpdate | Release | PlanPiece | PlanStatus | Nak
+Message = (Hello | Sensors | CommandUpdate | Release | PlanPiece | PlanStatus | UpdatePiece
+           | UpdateStatusMessage | Nak)
 MESSAGES: dict[int, type] = {m.TYPE: m for m in (Hello, Sensors, CommandUpdate, Release, PlanPiece,
-                                                 PlanStatus, Nak)}
+                                                 PlanStatus, UpdatePiece, UpdateStatusMessage,
+                                                 Nak)}
 
 
 def unpack_message(frame: Frame) -> Message:
@@ -498,11 +544,12 @@ def unpack_message(frame: Frame) -> Message:
     return MESSAGES[frame.type].unpack(frame.payload)
 
 
-def plan_pieces(plan: bytes) -> list[PlanPiece]:
-    """A plan file cut into PLAN messages of at most PLAN_PIECE bytes, in order."""
+def plan_pieces(plan: bytes, kind: type[PlanPiece] = PlanPiece) -> list[PlanPiece]:
+    """A plan file (or with `kind` UpdatePiece, a plan update) cut into PLAN (PLAN_UPDATE)
+    messages of at most PLAN_PIECE bytes, in order."""
     if not 0 < len(plan) <= MAX_LINK_PLAN:
         raise ValueError(f"a plan file has 1..{MAX_LINK_PLAN} bytes, not {len(plan)}")
-    return [PlanPiece(offset, len(plan), plan[offset:offset + PLAN_PIECE])
+    return [kind(offset, len(plan), plan[offset:offset + PLAN_PIECE])
             for offset in range(0, len(plan), PLAN_PIECE)]
 
 
@@ -550,6 +597,8 @@ class FdPort:
             return b""
 
     def write(self, data: bytes) -> int:
+        """Write all of `data`; LinkClosedError once the other end has closed the line (a
+        pty whose runtime has ended answers EIO)."""
         view = memoryview(data)
         while view:
             try:
@@ -557,6 +606,8 @@ class FdPort:
             except BlockingIOError:  # a non-blocking line that is full: wait for room
                 select.select([], [self.fd], [])
                 continue
+            except OSError as err:
+                raise LinkClosedError(f"the line is closed ({err.strerror})") from None
             view = view[written:]
         return len(data)
 
@@ -585,6 +636,7 @@ class Link:
         self.hello: Hello | None = None
         self.release: Release | None = None
         self.plan_status: PlanStatus | None = None
+        self.update_status: UpdateStatusMessage | None = None  # the last one received
         self.command: Command | None = None  # the newest COMMAND received
         self._recent: dict[int, Command] = {}  # tick -> COMMAND: the bases updates may name
         self._reader = FrameReader()
@@ -650,6 +702,8 @@ class Link:
             self.release = message
         elif isinstance(message, PlanStatus):
             self.plan_status = message
+        elif isinstance(message, UpdateStatusMessage):
+            self.update_status = message
         return message
 
     def _apply(self, update: CommandUpdate) -> Command | Unresolved | None:
@@ -750,6 +804,21 @@ class Link:
             pieces.append(build_frame(Frame(MessageType.PLAN, self.seq, self.ack, piece.pack())))
         status = self._exchange(b"".join(pieces), PlanStatus)
         return cast(PlanStatus, status)
+
+    def send_update(self, update: bytes) -> UpdateStatusMessage:
+        """Send a plan update in PLAN_UPDATE pieces; return the runtime's UPDATE_STATUS.
+        A re-send repeats every piece from offset 0, as for plans. An update longer than
+        one may be (MAX_UPDATE_BYTES) goes too: the runtime refuses it at its first piece."""
+        if len(update) > 2 * MAX_UPDATE_BYTES:
+            raise ValueError(f"an update of {len(update)} bytes: the runtime reads its first "
+                             "piece only")
+        pieces = []
+        for piece in plan_pieces(update, UpdatePiece):
+            self.seq = (self.seq + 1) & 0xFF
+            pieces.append(build_frame(Frame(MessageType.PLAN_UPDATE, self.seq, self.ack,
+                                            piece.pack())))
+        status = self._exchange(b"".join(pieces), UpdateStatusMessage)
+        return cast(UpdateStatusMessage, status)
 
     def wait_release(self, timeout_s: float = 5.0) -> int:
         """Wait for the runtime's RELEASE and return its reason."""

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import multiprocessing
+import os
 import signal
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+from gliderplan.contract import MAX_SCENARIOS, MAX_WORKERS
 from gliderplan.contract.errors import UsageError
-
-MAX_SCENARIOS = 1_000_000
 
 
 class BackendError(UsageError):
@@ -24,12 +24,16 @@ class BackendError(UsageError):
 
 def check_run_size(scenarios: int | None, workers: int) -> None:
     """UsageError unless `scenarios` (None: as many as the caller works out) lies in
-    1..MAX_SCENARIOS and `workers` is at least 1: the one test of `gliderplan montecarlo`
+    1..MAX_SCENARIOS and `workers` 1..MAX_WORKERS: the one test of `gliderplan montecarlo`
     and `gliderplan plan --confidence` / `--occupancy-from-sim`."""
     if scenarios is not None and not 1 <= scenarios <= MAX_SCENARIOS:
         raise UsageError(f"--scenarios {scenarios}: must be between 1 and {MAX_SCENARIOS:,}")
     if workers < 1:
         raise UsageError(f"--workers {workers}: must be at least 1")
+    if workers > MAX_WORKERS:
+        raise UsageError(f"--workers {workers}: at most {MAX_WORKERS} worker processes "
+                         "(a local pool starts them all; this machine has "
+                         f"{os.cpu_count() or 1} cores)")
 
 
 def _ignore_interrupt() -> None:

@@ -45,7 +45,7 @@ from gliderplan.sim.science import (
 WAVES = 8  # GPS_WAVES
 DEVICES = 8  # GPS_DEVICES
 TRACE = 1024  # GPS_TRACE
-RAN, ENDED, FAULT, NEED_NOISE, NEED_PITCH, TRACE_FULL, DONE = range(7)
+RAN, ENDED, FAULT, NEED_NOISE, NEED_PITCH, TRACE_FULL, DONE, ENVELOPE = range(8)
 
 _double, _int, _uint, _pointer = ctypes.c_double, ctypes.c_int32, ctypes.c_uint32, \
     ctypes.c_void_p
@@ -61,7 +61,7 @@ class _Physics(ctypes.Structure):
             "bottom_turn_s", "top_turn_s", "surface_s", "iridium_s", "rho_kg_m3", "g_m_s2",
             "hull_volume_cc", "compressibility_per_pa", "trim_cc", "surface_depth_m",
             "hover_rate_m_s", "pitch_rate_rad_s", "min_pumped_cc", "earth_radius_m",
-            "current_north_mps", "current_east_mps")),
+            "current_north_mps", "current_east_mps", "correction_speed_mps")),
         ("lift_cc", _pointer), ("n_lift", _int), ("lift_step_m", _double),
         ("floor_times_s", _pointer), ("floor_depths_m", _pointer), ("n_floor", _int),
         *((name, _double) for name in ("surface_c", "deep_c", "thermocline_m", "thickness_m",
@@ -116,8 +116,15 @@ def flight_context_bytes() -> int:
     return _declare(step_library()).gps_flight_size()
 
 
-def flies_in_c(ocean: object) -> bool:
-    """Whether the loop in C models this water (else the Python loop flies the step)."""
+def flies_in_c(science: ScienceComputer) -> bool:
+    """Whether the loop in C models this flight (else the Python loop flies the same step):
+    a glider without a propeller or thruster (their models are Python's), in a constant
+    current (a current field is looked up where the glider is), over a floor that varies in
+    time only (a bathymetry grid is looked up where it is), in water it models."""
+    if science.glider.vehicle.propulsion is not None or science.currents is not None \
+            or science.floor_by_position:
+        return False
+    ocean = science.ocean
     if isinstance(ocean, Thermocline):
         return len(ocean.waves) <= WAVES
     return isinstance(ocean, MeasuredProfile)
@@ -157,9 +164,10 @@ class CFlight:
     def _set_glider(self, glider: glider_model.GliderSim) -> None:
         """The glider and the science computer as the Python models start them."""
         science = self.science
-        values = (_double * 9)(glider.depth_m, glider.pitch_rad, glider.ballast_cc,
-                               glider.heading_rad, glider.lat_deg, glider.lon_deg,
-                               glider.dr_lat_deg, glider.dr_lon_deg, science.flicker_c)
+        values = (_double * 11)(glider.depth_m, glider.pitch_rad, glider.ballast_cc,
+                                glider.heading_rad, glider.lat_deg, glider.lon_deg,
+                                glider.dr_lat_deg, glider.dr_lon_deg, science.flicker_c,
+                                glider.measured.north_mps, glider.measured.east_mps)
         self.library.gps_flight_set(self.step.context, values)
 
     def _keep_array(self, values) -> int:
@@ -185,6 +193,7 @@ class CFlight:
                      min_pumped_cc=MIN_PUMPED_CC, earth_radius_m=EARTH_RADIUS_M,
                      current_north_mps=glider.current.north_mps,
                      current_east_mps=glider.current.east_mps,
+                     correction_speed_mps=glider.correction_speed_mps,
                      temperature_sigma_c=noise.temperature_sigma_c,
                      depth_sigma_m=noise.depth_sigma_m, spike_c=noise.spike_c,
                      lag_keep=science.lag_keep, start_epoch_s=science.start_epoch_s,
@@ -264,13 +273,20 @@ class CFlight:
                     library.gps_flight_speeds(context, pitch, u, w)
                 elif status == TRACE_FULL:
                     trace += self._take_trace(names)
+                elif status == ENVELOPE:
+                    self.step.note_envelope(self._report())
                 elif status != RAN:
                     break
-            report = Report()
-            library.gps_flight_report(context, ctypes.byref(report))
+            report = self._report()
+            if status in (ENDED, FAULT) and report.envelope.limit:
+                self.step.note_envelope(report)
             if status == ENDED:
                 last = report.transitions[report.n_transitions - 1]
-                ended = "reserve" if last.kind == TransitionKind.RESERVE else "exit"
+                ended = {TransitionKind.RESERVE: "reserve",
+                         TransitionKind.ENVELOPE: "envelope"}.get(last.kind, "exit")
+            elif status == FAULT and not report.fault:  # the envelope's fault action
+                ended = f"fault: tick {int(self._status()[0]) - 1}: " \
+                        f"{self.step.envelope_notes[-1]}"
             elif status == FAULT:
                 time_s = float(np.float32((self._status()[0] - 1) * self.tick_s))
                 ended = f"fault: {fault_message(self.mission, report, time_s)}"
@@ -287,6 +303,12 @@ class CFlight:
                          first_grounded_s=first_grounded,
                          entry_variables=self.step.entry_variables,
                          events_fired=self.step.events_fired)
+
+    def _report(self) -> Report:
+        """The report of the last tick flown."""
+        report = Report()
+        self.library.gps_flight_report(self.step.context, ctypes.byref(report))
+        return report
 
     def _give_noise(self) -> None:
         """The next blocks of the science computer's random numbers the loop has used up:

@@ -30,11 +30,14 @@ from gliderplan.language.semantics import MissionFault
 from gliderplan.runtime.protocol import Command
 
 PLAN_ERROR_LEN = 160  # GP_PLAN_ERROR_LEN
+NOTE_LEN = 256  # GPS_NOTE_LEN
+UPDATE_MESSAGE_LEN = 224  # GP_UPDATE_MESSAGE_LEN
 SHARED_FLAGS = ("-fPIC", "-shared", "-ffp-contract=off", "-fno-builtin-sin",
                 "-fno-builtin-cos")
-# The runtime's sources the step needs: not its link, serial line, store or main.
-STEP_SOURCES = ("gp_crc.c", "gp_machine.c", "gp_pilot.c", "gp_plan.c", "gp_route.c",
-                "gp_runtime.c", "gp_sha256.c")
+# The runtime's sources the step needs (the tick, its envelope, the plan and its updates):
+# not its link, serial line, store or main.
+STEP_SOURCES = ("gp_crc.c", "gp_envelope.c", "gp_machine.c", "gp_pilot.c", "gp_plan.c",
+                "gp_route.c", "gp_runtime.c", "gp_sha256.c", "gp_update.c")
 SIM_SOURCES = ("step.c", "flight.c")  # the simulator's side: the step's context, the loop
 LIBRARY_NAME = "gpstep"
 FAULTS = {3: "overflow", 4: "underflow", 5: "bad table"}  # gp_step_result of a refusal
@@ -160,7 +163,7 @@ def _declare(library: ctypes.CDLL) -> ctypes.CDLL:
     library.gps_step_tick.restype = None
     library.gps_step_tick.argtypes = [pointer, ctypes.c_uint32, ctypes.c_uint32, pointer,
                                       pointer, pointer]
-    for name in ("gps_step_events", "gps_step_suspends"):
+    for name in ("gps_step_events", "gps_step_suspends", "gps_step_plan_seq"):
         getattr(library, name).restype = ctypes.c_uint32
         getattr(library, name).argtypes = [pointer]
     for name in ("gps_step_variables", "gps_step_own_readings"):
@@ -168,6 +171,14 @@ def _declare(library: ctypes.CDLL) -> ctypes.CDLL:
         getattr(library, name).argtypes = [pointer, pointer]
     library.gps_step_entered.restype = ctypes.c_int
     library.gps_step_entered.argtypes = [pointer, ctypes.c_int, pointer]
+    library.gps_step_releases.restype = ctypes.c_int
+    library.gps_step_releases.argtypes = [pointer, pointer]
+    library.gps_step_envelope_note.restype = None
+    library.gps_step_envelope_note.argtypes = [pointer, ctypes.c_char_p]
+    library.gps_step_update.restype = ctypes.c_int
+    library.gps_step_update.argtypes = [pointer, ctypes.c_char_p, size, ctypes.c_char_p, size,
+                                        ctypes.c_char_p, ctypes.c_char_p,
+                                        ctypes.POINTER(size), ctypes.c_char_p]
     return library
 
 
@@ -208,7 +219,8 @@ class _Command(ctypes.Structure):
                 ("profile", ctypes.c_uint8), ("flags", ctypes.c_uint8),
                 ("depth_target_m", ctypes.c_float), ("pitch_rad", ctypes.c_float),
                 ("ballast_cc", ctypes.c_float), ("heading_rad", ctypes.c_float),
-                ("sensor_power", ctypes.c_uint32), ("event_count", ctypes.c_uint32)]
+                ("sensor_power", ctypes.c_uint32), ("event_count", ctypes.c_uint32),
+                ("speed_mps", ctypes.c_float), ("thrust_w", ctypes.c_float)]
 
 
 class _Transition(ctypes.Structure):
@@ -216,11 +228,18 @@ class _Transition(ctypes.Structure):
                 ("to_state", ctypes.c_uint8), ("depth", ctypes.c_uint8)]
 
 
+class _Breach(ctypes.Structure):
+    _fields_ = [("limit", ctypes.c_uint8), ("value", ctypes.c_double),
+                ("bound", ctypes.c_double)]
+
+
 class Report(ctypes.Structure):
-    """gp_tick_report: a tick's transitions, a refused event."""
+    """gp_tick_report: a tick's transitions, a refused event, a command outside the
+    envelope."""
 
     _fields_ = [("transitions", _Transition * 2), ("n_transitions", ctypes.c_uint8),
-                ("fault", ctypes.c_uint8), ("refused", _Transition)]
+                ("fault", ctypes.c_uint8), ("refused", _Transition),
+                ("envelope", _Breach), ("envelope_state", ctypes.c_uint8)]
 
 
 _VALUES = struct.Struct(f"<{N_SENSORS}f")
@@ -252,11 +271,13 @@ class CStep:
             from gliderplan.planner.planfile import PlanRejected
 
             raise PlanRejected(f"the runtime refused the plan: {error.value.decode()}")
+        self._held = plan_bytes  # the plan file in force
         self._values = ctypes.create_string_buffer(_VALUES.size)
         self._command = _Command()
         self._report = Report()
         self._tick = library.gps_step_tick
         self._fields = [name for name, _ in _Command._fields_]
+        self.envelope_notes: list[str] = []  # what the envelope guard did, in its words
 
     def step(self, tick: int, mask: int, values: list[float]) -> Command:
         """Answer one SENSORS frame: `values` holds all sensors [registry units], of which
@@ -267,10 +288,43 @@ class CStep:
                    ctypes.byref(self._report))
         if self._report.fault:
             raise self._fault()
+        if self._report.envelope.limit and self.note_envelope(self._report):
+            raise MissionFault(f"tick {tick}: {self.envelope_notes[-1]}")
         c = self._command
         return Command(c.tick, c.state, c.stack_depth, c.transition, c.from_state, c.to_state,
                        c.profile, c.flags, c.depth_target_m, c.pitch_rad, c.ballast_cc,
-                       c.heading_rad, c.sensor_power, c.event_count)
+                       c.heading_rad, c.sensor_power, c.event_count, c.speed_mps, c.thrust_w)
+
+    def note_envelope(self, report: Report) -> bool:
+        """Keep the guard's words on a tick's breach; whether it hands control back (the
+        fault action: the run ends there)."""
+        note = ctypes.create_string_buffer(NOTE_LEN)
+        self.library.gps_step_envelope_note(self.context, note)
+        self.envelope_notes.append(note.value.decode())
+        return bool(self.library.gps_step_releases(self.context, ctypes.byref(report)))
+
+    def update_plan(self, key: bytes) -> Callable[[bytes], tuple[int, int, str]]:
+        """The vehicle's side of the shore's link (sim/replanning.py): a plan update applied
+        by the runtime's own `gp_update_apply` with the vehicle's `key` to the plan file in
+        force, flown from the next tick; returns the verdict (contract.UpdateStatus, the
+        plan in force after it, its words)."""
+        from gliderplan.contract import MAX_PLAN_BYTES, UpdateStatus
+
+        out = ctypes.create_string_buffer(MAX_PLAN_BYTES)
+        message = ctypes.create_string_buffer(UPDATE_MESSAGE_LEN)
+        size = ctypes.c_size_t()
+
+        def deliver(update: bytes) -> tuple[int, int, str]:
+            held = self._held or b""
+            status = UpdateStatus(self.library.gps_step_update(
+                self.context, update, len(update), held, len(held), key, out,
+                ctypes.byref(size), message))
+            if status == UpdateStatus.APPLIED:
+                self._held = out.raw[:size.value]
+            return status, self.library.gps_step_plan_seq(self.context), \
+                message.value.decode()
+
+        return deliver
 
     def _fault(self) -> MissionFault:
         return MissionFault(fault_message(self.mission, self._report,

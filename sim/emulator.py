@@ -19,7 +19,7 @@ from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import FlightLimits
+from gliderplan.contract import ExitCode, FlightLimits
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
@@ -28,12 +28,16 @@ if TYPE_CHECKING:
     import serial
 
     from gliderplan.runtime.protocol import Command
-    from gliderplan.sim.faults import FaultSchedule
+    from gliderplan.sim.faults import FaultSchedule, FaultyLine
 
 HELLO_TIMEOUT_S = 10.0
+# under line faults: a HELLO is a long frame, and a heavily noisy line damages most of them
+FAULT_HELLO_TIMEOUT_S = 60.0
 EXIT_TIMEOUT_S = 5.0
 FAULT_WATCHDOG_S = 2.0  # [s] the runtime's link timeout under faults (10 times the re-send)
-RELEASED_RETRIES = 3  # a tick's SENSORS sent again after a watchdog release, at most
+# exchanges of one tick (each of the link's retransmission budget) before the link is
+# declared failed: a tick is never skipped, so a run flies the fault-free flight or ends
+LINK_FAILURE_EXCHANGES = 3
 KILL_DELAY_S = 0.0003  # [s] mean wait before a kill that lands while the runtime works
 LINK_COUNTS = ("dropped", "naks", "resends", "recovered", "resyncs")  # a Link's counters
 
@@ -42,14 +46,22 @@ class EmulatorError(GliderplanError):
     """The C runtime could not be built or started, or broke the link."""
 
 
+class LinkFailure(EmulatorError):
+    """Under line faults, the runtime's HELLO never came through: the link has failed."""
+
+    exit_code = ExitCode.LINK_FAILED
+
+
 class CRuntime:
     """The compiled runtime over a pty, answering one SENSORS frame per `step`.
 
     With `faults` (sim/faults.py) the line runs through the fault layer, the runtime keeps
     a state directory (its checkpoint and event log) and a short watchdog, is killed and
     restarted at the ticks the faults draw, and the glider flies under its own layered
-    control whenever the runtime cannot command it: while the line is cut, and for a
-    tick whose exchange never completed. `report()` counts all of it."""
+    control while the line is cut. A tick is exchanged until it completes (the mission
+    clock waits) or the link is declared failed (a MissionFault: the run ends there);
+    a runtime that ended while its last COMMAND was lost ends the run as it ended.
+    `report()` counts all of it."""
 
     def __init__(self, binary: Path, mission: ir.CheckedMission, plan_path: str | None,
                  naive_tracker: bool, work_dir: Path, key_path: str | None = None,
@@ -60,7 +72,9 @@ class CRuntime:
         self.faults = faults
         self.exited = False
         self.port: serial.Serial | None = None
+        self.line: FaultyLine | None = None
         self.process: subprocess.Popen | None = None
+        self._closed = False
         self._stderr: str | None = None
         self._last: Command | None = None  # the last COMMAND flown: layered control's
         self._cut = False  # the line is cut (a disconnect)
@@ -111,11 +125,14 @@ class CRuntime:
             port = FdPort(self.port.fileno())
             self.line = None if self.faults is None else FaultyLine(port, self.faults)
             self.link = Link(port if self.line is None else self.line)
-            hello = self.link.wait_hello(HELLO_TIMEOUT_S)
+            hello = self.link.wait_hello(HELLO_TIMEOUT_S if self.line is None
+                                         else FAULT_HELLO_TIMEOUT_S)
         except (EmulatorError, LinkError, serial.SerialException) as err:
             self.close()
-            raise EmulatorError(f"the runtime did not say HELLO ({err}): "
-                                f"{self.stderr_text()}") from None
+            failed = LinkFailure if self.line is not None and isinstance(err, LinkError) \
+                else EmulatorError
+            raise failed(f"the runtime did not say HELLO ({err}): "
+                         f"{self.stderr_text()}") from None
         if hello.mission_hash.hex() != self._mission.hash:
             self.close()
             raise EmulatorError("the runtime was compiled for another mission (hash differs)")
@@ -137,10 +154,23 @@ class CRuntime:
             self.close()
             raise PlanRejected(f"{plan_path} {status.message} (said the vehicle)")
 
+    def deliver_update(self, update: bytes) -> tuple[int, int, str]:
+        """Send a plan update over the link, as at a surfacing, between two ticks; the
+        runtime's verdict (contract.UpdateStatus, the plan in force after it, its words)."""
+        from gliderplan.contract import UpdateStatus
+        from gliderplan.runtime.protocol import LinkError
+
+        try:
+            status = self.link.send_update(update)
+        except LinkError as err:
+            raise EmulatorError(f"the runtime did not answer the plan update ({err}): "
+                                f"{self.stderr_text()}") from None
+        return UpdateStatus(status.status), status.seq, status.message
+
     def step(self, tick: int, mask: int, values: list[float]) -> Command:
         """Send one tick's SENSORS (those of `mask` the runtime reads: HELLO's read mask),
-        return the runtime's COMMAND (with faults: layered control's, when the runtime
-        cannot command this tick)."""
+        return the runtime's COMMAND (with faults: layered control's while the line is
+        cut)."""
         from gliderplan.contract import NO_STATE
 
         carried = {i: values[i] for i in _indices(mask & self._read_mask)}
@@ -166,7 +196,11 @@ class CRuntime:
 
     def _faulted_step(self, tick: int, carried: dict[int, float], time_s: float) -> Command:
         from gliderplan.contract import ReleaseReason
-        from gliderplan.runtime.protocol import LinkReleasedError, LinkTimeoutError
+        from gliderplan.runtime.protocol import (
+            LinkClosedError,
+            LinkReleasedError,
+            LinkTimeoutError,
+        )
 
         faults = self.faults
         if faults.kill_due(tick):
@@ -176,7 +210,7 @@ class CRuntime:
         if self._cut:  # the line is back: what the runtime said into it is lost
             self._cut = self.line.down = False
             self.line.discard_input()
-        for _ in range(RELEASED_RETRIES):
+        for _ in range(LINK_FAILURE_EXCHANGES):
             try:
                 return self.link.step(tick, carried)
             except LinkReleasedError as err:
@@ -187,10 +221,39 @@ class CRuntime:
                 # soon as it hears this tick's SENSORS again
                 self._counts["releases"] += 1
                 self.link.release = None
+            except LinkClosedError:
+                return self._ended(tick)
             except LinkTimeoutError:
-                break
-        self._counts["lost_ticks"] += 1
-        return self._layered(tick)
+                if self.process.poll() is not None or self.link.release is not None:
+                    return self._ended(tick)
+                self._counts["lost_exchanges"] += 1
+        raise MissionFault(f"tick {tick}: link failure: no COMMAND in {LINK_FAILURE_EXCHANGES} "
+                           "exchanges of every retransmission; the glider flies on under its "
+                           "layered control")
+
+    def _ended(self, tick: int) -> Command:
+        """The runtime ended while this tick's COMMAND was lost on the line: the mission's
+        end (its exit, or a guard's: the runtime's exit status says which) as a COMMAND,
+        or a MissionFault for any other end. Its event log holds the transition."""
+        from gliderplan.contract import FLAG_DONE, NO_STATE, RuntimeExit, TransitionKind
+        from gliderplan.runtime.protocol import ZERO_COMMAND
+
+        try:
+            status = self.process.wait(timeout=EXIT_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            status = None
+        kind = {RuntimeExit.DONE: TransitionKind.EXIT, RuntimeExit.RESERVE: TransitionKind.RESERVE,
+                }.get(status)
+        if kind is None:
+            raise MissionFault(f"tick {tick}: the runtime ended (exit {status}) while the "
+                               f"line lost its answers: {self.stderr_text()}")
+        last = self._last or ZERO_COMMAND
+        self.exited = True
+        # as the runtime's last COMMAND: no state, no flight, no sensor powered
+        return ZERO_COMMAND._replace(tick=tick, state=NO_STATE, transition=kind,
+                                     from_state=last.state if last.state != NO_STATE else 0,
+                                     to_state=NO_STATE, flags=FLAG_DONE,
+                                     event_count=last.event_count)
 
     def _layered(self, tick: int, cut: bool = False) -> Command:
         """A tick flown by the glider's layered control: the last COMMAND's flight goes on,
@@ -236,7 +299,10 @@ class CRuntime:
         self.process.wait()
         self._retire()
         began = time.monotonic()
-        self._start()
+        try:
+            self._start()
+        except LinkFailure as err:
+            raise MissionFault(f"tick {tick}: link failure: {err}") from None
         self._counts["restarts"] += 1
         self._downtime_s += time.monotonic() - began
 
@@ -266,11 +332,12 @@ class CRuntime:
                          "damaged_at_runtime": count["naks"],
                          "timeouts": count["resends"], "resyncs": count["resyncs"]},
             "recovered": count["recovered"],
-            "lost_ticks": count["lost_ticks"],
+            "lost_exchanges": count["lost_exchanges"],
             "disconnects": count["disconnects"],
             "releases": count["releases"],
             "layered_control_s": count["layered_ticks"] * self.faults.tick_s,
             "kills": count["restarts"],
+            "kills_asked": self.faults.spec.kills,
             "restart_downtime_s": round(self._downtime_s, 3),
         }
 
@@ -282,6 +349,12 @@ class CRuntime:
             raise EmulatorError("it opened no serial line")
         return line
 
+    def envelope_notes(self) -> list[str]:
+        """What the runtime's envelope guard said it did (its stderr's `envelope:` lines),
+        once it has ended."""
+        return [line.split(": ", 1)[1] for line in self.stderr_text().splitlines()
+                if ": envelope: " in line]
+
     def stderr_text(self) -> str:
         """What the runtime said on stderr, once it has ended."""
         if self._stderr is None and self.process.poll() is not None:
@@ -292,7 +365,10 @@ class CRuntime:
         """Let an exited runtime finish (RELEASE, exit 0); stop one that is still flying.
         Our end of the line closes first: the runtime waits for that before it closes its
         own, which would discard what we had not read. With faults, the runtime's event
-        log is kept (`events_log`)."""
+        log is kept (`events_log`). Once: a failed restart has closed it already."""
+        if self._closed:
+            return
+        self._closed = True
         if self.port is not None:
             self.port.close()
         try:

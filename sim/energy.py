@@ -2,18 +2,20 @@
 
 Every component is integrated over the run's ticks with `power_models.timeline` (one
 vectorised pass): the vehicle's hotel load, the pump per inflection against depth, the
-pitch motor, the surface and Iridium phases, the computer at the clock of each state
+pitch motor, a propeller's or thruster's draw (its model's power at the speed or
+thrust flown), the surface and Iridium phases, the computer at the clock of each state
 from its workload per tick, and each sensor device from its on/off timeline (with a
 warm-up at every switch-on) at the vehicle's own figure (`power_models.devices`): the
 hotel load is billed less the instruments it holds, which are billed while they run.
 `check_flight` compares the run with the plan's prediction per state, which the plan file
 carries.
 
-A run that spends more than the plan's budget by more than `PLAN_TOLERANCE` violates the
-plan; the states that overran their prediction are named as the cause. A run within its
-budget in which a state overran its own prediction by more than the tolerance is "over
-prediction", with the state and the component responsible: the budget held, but the
-plan's prediction was wrong.
+One verdict per run, from its total: a run that spends more than the plan's budget by
+more than `PLAN_TOLERANCE` violates the plan; one within its budget that spends more than
+the plan's prediction by more than the tolerance is "over prediction" (the budget held,
+but the prediction was wrong); else it passes. The states that overran their own
+prediction are listed below the verdict, each with the component responsible, whatever
+the verdict (a state over its prediction in a run under it does not make the run's).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, Component
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, SENSOR_DEVICES, Component
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSORS
 from gliderplan.planner.planfile import Plan, flown_board
@@ -35,7 +37,7 @@ from gliderplan.sim.loop import RunRecord
 
 GAUGE_TICKS = 64  # the coulomb counter is read out every 64 ticks (256 s at the 4 s tick)
 PLAN_TOLERANCE = 0.05  # simulated energy may exceed budget or prediction by 5 % before it counts
-DEVICES: tuple[str, ...] = tuple(dict.fromkeys(s.device for s in SENSORS if s.device))
+DEVICES = SENSOR_DEVICES
 DEVICE_BITS = {d: sum(1 << s.index for s in SENSORS if s.device == d) for d in DEVICES}
 
 
@@ -128,6 +130,8 @@ class Billing:
         if boot:
             computer[:1] += self.boot_j
         parts[Component.COMPUTER] = computer * (Component.COMPUTER not in self.held)
+        if vehicle.propulsion is not None:  # its draw as the model gave it each tick
+            parts[Component.PROPULSION] = c["propulsion_w"] * dt
         power = c["sensor_power"].astype(np.int64)
         for device, sensor in self.sensors.items():
             on = (power & DEVICE_BITS[device]) != 0
@@ -174,17 +178,35 @@ class BatteryGauge:
 class FlightCheck:
     """The verdict on a flight against its plan's budget and per-state prediction."""
 
-    verdict: str  # "pass", "over prediction", "violation" or "no plan"
+    verdict: str  # "pass", "over prediction", "violation" or "no plan": from the total
     budget_j: float | None
     predicted_j: float | None
     simulated_j: float
     tolerance: float
-    causes: tuple[str, ...]  # why it overran (or what overran the prediction)
+    causes: tuple[str, ...]  # the states that overran their prediction (or the spenders)
+
+    @property
+    def over_prediction(self) -> float | None:
+        """[1] the run's energy against the plan's prediction, less 1 (None: no plan)."""
+        if not self.predicted_j:
+            return None
+        return self.simulated_j / self.predicted_j - 1.0
+
+    @property
+    def headline(self) -> str:
+        """The run's one verdict line: the total against the prediction and the budget."""
+        if self.budget_j is None or not self.predicted_j:
+            return f"no plan: {self.simulated_j / 1e3:.1f} kJ spent, nothing to check against"
+        return (f"{self.verdict}: {self.simulated_j / 1e3:.1f} kJ spent, "
+                f"{self.predicted_j / 1e3:.1f} kJ predicted ({100 * self.over_prediction:+.1f} "
+                f"%, tolerance {100 * self.tolerance:g} %), budget {self.budget_j / 1e3:.1f} kJ "
+                f"({100 * self.simulated_j / self.budget_j:.1f} % used)")
 
     def to_json(self) -> dict:
-        return {"verdict": self.verdict, "budget_j": self.budget_j,
+        return {"verdict": self.verdict, "headline": self.headline, "budget_j": self.budget_j,
                 "predicted_j": self.predicted_j, "simulated_j": self.simulated_j,
-                "tolerance": self.tolerance, "causes": list(self.causes)}
+                "over_prediction": self.over_prediction, "tolerance": self.tolerance,
+                "causes": list(self.causes)}
 
 
 def check_flight(energy: RunEnergy, plan: Plan | None,
@@ -223,6 +245,7 @@ def check_flight(energy: RunEnergy, plan: Plan | None,
         causes = [(0.0, f"{simulated / 1e3:.1f} kJ spent against a budget of "
                         f"{plan.budget_j / 1e3:.1f} kJ; most in " + ", ".join(
                             f"{name} ({joules / 1e3:.1f} kJ)" for joules, name in spent[:3]))]
-    verdict = "violation" if over_budget else "over prediction" if causes else "pass"
+    over_prediction = simulated > plan.predicted_j * (1.0 + tolerance)
+    verdict = "violation" if over_budget else "over prediction" if over_prediction else "pass"
     return FlightCheck(verdict, plan.budget_j, plan.predicted_j, simulated, tolerance,
                        tuple(text for _, text in causes))

@@ -18,18 +18,23 @@ from typing import TYPE_CHECKING
 from gliderplan.contract import (
     FLAG_CLIMBING,
     FLAG_DONE,
+    FLAG_ENVELOPE,
     FLAG_HEADING,
     FLAG_SURFACE,
     N_SENSORS,
     NO_STATE,
     SURFACE_PITCH_RAD,
     TRANSITION_NAMES,
+    Envelope,
+    EnvelopeAction,
+    FlightLimits,
     TransitionKind,
 )
 from gliderplan.language import ir, semantics
-from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
+from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim import compiled, pilot
+from gliderplan.sim.envelope import EnvelopeGuard
 
 if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
@@ -64,12 +69,24 @@ class PythonRuntime:
     """A mission (and optional plan) executing tick by tick, like the compiled runtime."""
 
     def __init__(self, mission: ir.CheckedMission, plan: Plan | None, default_ballast_cc: float,
-                 robust_tracker: bool = True, max_ballast_cc: float | None = None) -> None:
+                 robust_tracker: bool = True, max_ballast_cc: float | None = None,
+                 envelope: Envelope | None = None, limits: FlightLimits | None = None) -> None:
         """`default_ballast_cc` [cc] is flown where no plan sets one; `max_ballast_cc` [cc],
-        the pump's volume, is the surfacing of the energy guard (default: the former)."""
-        self.mission, self.plan = mission, plan
+        the pump's volume, is the surfacing of the energy guard (default: the former);
+        `envelope`, the vehicle's rating every command is held to (None: none, for tests
+        of the semantics alone). `limits`: without a plan, the alternative of each state
+        and the `auto` speed [m/s] flown (`FlightLimits.unplanned_*`; default: the first,
+        none)."""
+        self.mission = mission
+        self.unplanned_speed_mps = 0.0 if limits is None else limits.unplanned_speed_mps
+        self.unplanned = [0 if limits is None else limits.unplanned_profile(i)
+                          for i in range(len(mission.states))]
         self.default_ballast_cc = default_ballast_cc
         self.max_ballast_cc = default_ballast_cc if max_ballast_cc is None else max_ballast_cc
+        self.guard = None if envelope is None else EnvelopeGuard(envelope, self.max_ballast_cc)
+        # what the guard did: "missiontime T s, state S: <limit>; <action>", as the C
+        # runtime says it
+        self.envelope_notes: list[str] = []
         self.reserve_j = mission.battery.reserve_j
         self.robust = robust_tracker
         self.index = mission.state_index
@@ -78,21 +95,27 @@ class PythonRuntime:
         # constant arguments (most profiles) are evaluated once, not every tick
         self.constant_args = [[_floats(p.constant_args()) for p in s.profiles]
                               for s in mission.states]
-        self.power_tables = [self._power_table(i, s) for i, s in enumerate(mission.states)]
-        # states whose sensors are all always on have one power mask
-        self.constant_power = [None if any(period for _, period, _ in table) else
-                               pilot.sensor_power_mask(table, 0.0) for table in self.power_tables]
+        self.adopt_plan(plan)
         self.s = [math.nan] * N_SENSORS
         self.machine: semantics.Machine | None = None
         self.event_count = 0
         # per call on the stack: the caller's waypoint and the waypoints it had reached
         self.route_resume: list[tuple[int, int]] = []
+        self.suspends = 0  # ticks after which the board was put to sleep
+        self.entry_variables: dict[str, dict[str, float]] = {}  # state -> on first entry
+
+    def adopt_plan(self, plan: Plan | None) -> None:
+        """Fly `plan`'s schedules from the next tick on (at start-up, and when a plan update
+        is accepted at a surfacing); the state, the stack and the routine flown go on."""
+        self.plan = plan
+        self.power_tables = [self._power_table(i, s) for i, s in enumerate(self.mission.states)]
+        # states whose sensors are all always on have one power mask
+        self.constant_power = [None if any(period for _, period, _ in table) else
+                               pilot.sensor_power_mask(table, 0.0) for table in self.power_tables]
         # where the runtime suspends the board after answering a tick: the plan's SLEEP,
         # without a plan the mission's `computer sleep between ticks`
         self.sleeps = [plan.states[i].sleep if plan is not None else s.computer.sleep
-                       for i, s in enumerate(mission.states)]
-        self.suspends = 0  # ticks after which the board was put to sleep
-        self.entry_variables: dict[str, dict[str, float]] = {}  # state -> on first entry
+                       for i, s in enumerate(self.mission.states)]
 
     def _power_table(self, i: int, state: ir.State) -> tuple[tuple[int, float, float], ...]:
         """(sensor index, period [s], on [s]) per logged sensor; period 0: always on."""
@@ -173,7 +196,7 @@ class PythonRuntime:
             src = self.index[transition.from_state] if transition.from_state else NO_STATE
             dst = self.index[transition.to_state] if transition.to_state else NO_STATE
         machine = self.machine
-        if kind == TransitionKind.RESERVE:  # surface and hold
+        if kind in (TransitionKind.RESERVE, TransitionKind.ENVELOPE):  # surface and hold
             return Command(tick, NO_STATE, 0, kind, src, dst, 0,
                            FLAG_DONE | FLAG_SURFACE | FLAG_CLIMBING, 0.0, _SURFACE_PITCH_F32,
                            float(self.max_ballast_cc), 0.0, 0, self.event_count)
@@ -183,11 +206,12 @@ class PythonRuntime:
         s, i = self.s, self.state_i
         t_in = s[0] - self.entry_time_s
         state_plan = self.plan.states[i] if self.plan is not None else None
-        k = 0 if state_plan is None else pilot.profile_index(state_plan, t_in)
+        k = pilot.profile_index(state_plan, t_in, self.unplanned[i])
         args = self.constant_args[i][k] or self.argument_fns[i][k](s, machine.variables)
         profile = self.state.profiles[k]
         depth = s[_DEPTH]
-        if k != self.profile_k:
+        entered = k != self.profile_k
+        if entered:
             self.profile_k = k
             routine = pilot.PROFILE_ROUTINES[profile.kind]
             self.routine = routine(depth, args, self.robust, s[_ALTITUDE]) \
@@ -195,16 +219,55 @@ class PythonRuntime:
         if state_plan is not None:
             planned = state_plan.profiles[k]
             pitch, ballast = planned.pitch_rad, planned.ballast_cc
+            speed, thrust = planned.speed_mps, planned.thrust_w
         else:
             pitch, ballast = None, self.default_ballast_cc
+            speed, thrust = None, profile.written_thrust_w
         target, pitch_cmd, ballast_cmd, surface = self.routine.command(
             depth, s[_TEMP], args, pitch, ballast, s[_ALTITUDE])
+        speed = pilot.propelled_speed(args, speed, self.unplanned_speed_mps) \
+            if PROFILES[profile.kind].propelled else 0.0
+        thrust = thrust if profile.kind in pilot.ASSISTED else 0.0
         heading, valid = self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
                  | (FLAG_HEADING if valid else 0))
+        if self.guard is not None:
+            band = (args[0], args[1]) if profile.kind in ("yo", "thermotrackyo") else None
+            held = self._hold(tick, entered, band, target, pitch_cmd, ballast_cmd, flags)
+            if isinstance(held, Command):
+                return held
+            target, pitch_cmd, ballast_cmd, flags = held
         power = self.constant_power[i]
         if power is None:
             power = pilot.sensor_power_mask(self.power_tables[i], t_in)
         self.suspends += self.sleeps[i]
         return Command(tick, i, len(machine.stack), kind, src, dst, k, flags, target, pitch_cmd,
-                       ballast_cmd, heading, power, self.event_count)
+                       ballast_cmd, heading, power, self.event_count, speed, thrust)
+
+    def _hold(self, tick: int, entered: bool, band: tuple[float, float] | None, target: float,
+              pitch: float, ballast: float, flags: int
+              ) -> tuple[float, float, float, int] | Command:
+        """The envelope guard on this tick's command (runtime/src/gp_runtime.c): the
+        command to send, held with the clamp action; or the mission's end (the surface
+        action: a COMMAND) or a MissionFault (the fault action)."""
+        guard = self.guard
+        was_held = guard.held
+        breach, target, pitch, ballast = guard.hold(entered, band, self.s[0], target, pitch,
+                                                    ballast, bool(flags & FLAG_CLIMBING))
+        if breach is None:
+            return target, pitch, ballast, flags
+        ends = guard.ends(breach)
+        fault = ends and guard.envelope.action == EnvelopeAction.FAULT
+        if ends or not was_held:
+            what = ("releasing control" if fault else "the mission ends, surfacing" if ends
+                    else "held at the limit")
+            self.envelope_notes.append(f"envelope: missiontime {self.s[0]:g} s, state "
+                                       f"{self.state.name}: {breach.text()}; {what}")
+        if fault:
+            raise semantics.MissionFault(f"tick {tick}: {self.envelope_notes[-1]}")
+        if ends:
+            machine = self.machine
+            self.machine = semantics.Machine(None, (), machine.variables)
+            return self._command(tick, semantics.Transition(self.s[0], "envelope",
+                                                            machine.state, "", 0))
+        return target, pitch, ballast, flags | FLAG_ENVELOPE

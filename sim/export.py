@@ -1,6 +1,7 @@
-"""A simulated run in the formats glider data pipelines read: NetCDF after the CF
-trajectory conventions with the IOOS Glider DAC's variable names and ACDD global
-attributes (read with xarray and netCDF4), and the track as GeoJSON and KML for a map.
+"""A simulated run in the formats glider data pipelines read: NetCDF as the IOOS Glider
+DAC, the OceanGliders OG 1.0 format or plain CF reads it (sim.netcdf_formats: TEOS-10
+salinity, conductivity and density, ACDD attributes), and the track as GeoJSON and KML
+for a map.
 
 Inputs are the run's own files (timeseries.parquet and summary.json), so a run can be
 exported again later (`gliderplan export RUNDIR`). Each format is produced as bytes or
@@ -22,9 +23,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gliderplan.contract import TICK_S, ExitCode
+from gliderplan.contract import START_YEARS, ExitCode
 from gliderplan.contract.errors import GliderplanError, UsageError
-from gliderplan.contract.files import InputFileError, read_input_text, write_atomically
+from gliderplan.contract.files import InputFileError, read_data, write_atomically
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
 from gliderplan.sim.slocum_ocean import leg_starts
 from gliderplan.sim.vehicle import SURFACE_DEPTH_M
@@ -34,10 +35,7 @@ if TYPE_CHECKING:  # pandas: imported by the functions that read a run (`gliderp
 
 MIN_PROFILE_M = 3.0  # a dive or climb spanning less depth is no profile [m]
 TRACK_POINTS = 5000  # at most this many points on a map track
-FILL = -999.0  # the Glider DAC's fill value
 NO_PROFILE = -999
-TIME_UNITS = "seconds since 1970-01-01T00:00:00Z"
-STANDARD_NAME_TABLE = 93  # the CF standard name table the names were checked against
 
 
 class ExportError(GliderplanError):
@@ -50,7 +48,9 @@ def start_epoch_s(meta: dict) -> float:
 
 
 def parse_utc(text: str) -> float:
-    """ISO 8601 UTC ('2014-07-24T12:00:00Z', '2014-07-24') to seconds since 1970."""
+    """ISO 8601 UTC ('2014-07-24T12:00:00Z', '2014-07-24') to seconds since 1970, within
+    the years a run may start in (`contract.START_YEARS`: a run's dates, a month or a
+    year on, must still be dates every format writes)."""
     try:
         moment = datetime.fromisoformat(text.strip().replace("Z", "+00:00"))
     except ValueError:
@@ -58,6 +58,9 @@ def parse_utc(text: str) -> float:
             from None
     if moment.tzinfo is None:
         moment = moment.replace(tzinfo=UTC)
+    first, last = START_YEARS
+    if not first <= moment.astimezone(UTC).year <= last:
+        raise ValueError(f"{text!r}: a run starts between {first} and {last}")
     return moment.timestamp()
 
 
@@ -83,183 +86,17 @@ def profile_ids(depth_m: np.ndarray) -> np.ndarray:
     return ids
 
 
-def _pressure_dbar(depth_m: np.ndarray, lat_deg: np.ndarray) -> np.ndarray:
-    import gsw
+def netcdf_bytes(table: pd.DataFrame, meta: dict, fmt: str = "ioos",
+                 metadata: dict[str, str] | None = None) -> bytes:
+    """The run as a NetCDF-4 file in `fmt` ("ioos", "og1" or "cf": sim.netcdf_formats),
+    with the deployment's `metadata` (a metadata file's entries) over the defaults."""
+    from gliderplan.sim.netcdf_formats import FORMATS as NETCDF
+    from gliderplan.sim.netcdf_formats import Series
 
-    return np.asarray(gsw.p_from_z(-depth_m, lat_deg), float)
-
-
-def trajectory_dataset(table: pd.DataFrame, meta: dict):
-    """The run as an xarray Dataset: one trajectory, one observation per tick."""
-    import xarray as xr
-
-    start = start_epoch_s(meta)
-    time = start + table["time_s"].to_numpy(float)
-    lat, lon = table["lat_deg"].to_numpy(float), table["lon_deg"].to_numpy(float)
-    depth = table["depth_m"].to_numpy(float)
-    reading = table["temp_reading_c"].to_numpy(float)  # NaN while the CTD is off
-    ids = profile_ids(depth)
-    numbers = np.unique(ids[ids != NO_PROFILE])
-    masks = [ids == k for k in numbers]
-    name = meta.get("mission", "mission")
-    trajectory = f"{name}-{utc_text(start)[:16].replace(':', '')}"
-    obs = ("time",)
-    coordinates = "time lat lon depth"
-    data = {
-        "trajectory": ((), trajectory, {
-            "cf_role": "trajectory_id", "long_name": "Trajectory/Deployment Name",
-            "comment": "mission name and start time of the simulated deployment"}),
-        "lat": (obs, lat, {
-            "standard_name": "latitude", "long_name": "Latitude", "units": "degrees_north",
-            "axis": "Y", "valid_min": -90.0, "valid_max": 90.0, "reference": "WGS84",
-            "coordinate_reference_frame": "urn:ogc:crs:EPSG::4326",
-            "comment": "simulated true position"}),
-        "lon": (obs, lon, {
-            "standard_name": "longitude", "long_name": "Longitude", "units": "degrees_east",
-            "axis": "X", "valid_min": -180.0, "valid_max": 180.0, "reference": "WGS84",
-            "coordinate_reference_frame": "urn:ogc:crs:EPSG::4326",
-            "comment": "simulated true position"}),
-        "depth": (obs, depth, {
-            "standard_name": "depth", "long_name": "Depth", "units": "m", "positive": "down",
-            "axis": "Z", "valid_min": 0.0, "valid_max": 2000.0,
-            "reference_datum": "sea-surface", "instrument": "instrument_ctd"}),
-        "pressure": (obs, _pressure_dbar(depth, lat), {
-            "standard_name": "sea_water_pressure", "long_name": "Pressure", "units": "dbar",
-            "positive": "down", "valid_min": 0.0, "valid_max": 2000.0,
-            "reference_datum": "sea-surface", "instrument": "instrument_ctd",
-            "comment": "from depth by TEOS-10 (gsw.p_from_z)", "coordinates": coordinates,
-            "coverage_content_type": "physicalMeasurement"}),
-        "temperature": (obs, reading, {
-            "standard_name": "sea_water_temperature", "long_name": "Temperature",
-            "units": "degree_Celsius", "valid_min": -5.0, "valid_max": 40.0,
-            "instrument": "instrument_ctd", "coordinates": coordinates,
-            "coverage_content_type": "physicalMeasurement",
-            "comment": "the simulated CTD's reading as sent to the runtime; "
-                       "fill while the CTD is off"}),
-        "profile_id": (obs, ids, {
-            "long_name": "Profile ID", "units": "1", "valid_min": np.int32(1),
-            "coordinates": coordinates, "coverage_content_type": "referenceInformation",
-            "comment": "number of the dive or climb the observation belongs to; "
-                       "fill at the surface and in turns"}),
-        "profile_time": (("profile",), [float(time[m].mean()) for m in masks], {
-            "standard_name": "time", "long_name": "Profile Center Time", "units": TIME_UNITS,
-            "calendar": "standard",
-            "comment": "mean time of the profile's observations"}),
-        "profile_lat": (("profile",), [float(lat[m].mean()) for m in masks], {
-            "standard_name": "latitude", "long_name": "Profile Center Latitude",
-            "units": "degrees_north", "valid_min": -90.0, "valid_max": 90.0}),
-        "profile_lon": (("profile",), [float(lon[m].mean()) for m in masks], {
-            "standard_name": "longitude", "long_name": "Profile Center Longitude",
-            "units": "degrees_east", "valid_min": -180.0, "valid_max": 180.0}),
-        "platform": ((), np.int32(0), {
-            "type": "platform", "long_name": "Slocum Glider", "id": name,
-            "instrument": "instrument_ctd", "wmo_id": "",
-            "comment": f"simulated glider, vehicle model {meta.get('vehicle', 'default')}"}),
-        "instrument_ctd": ((), np.int32(0), {
-            "type": "instrument", "long_name": "Conductivity, Temperature, Depth (CTD) "
-            "Sensor", "make_model": "simulated pumped CTD", "serial_number": "",
-            "platform": "platform", "calibration_date": "", "factory_calibrated": "",
-            "comment": f"sensor noise model {meta.get('noise', '')}"}),
-    }
-    variables = {k: xr.Variable(dims, np.asarray(v), attrs) for k, (dims, v, attrs) in
-                 data.items()}
-    variables["time"] = xr.Variable(obs, time, {
-        "standard_name": "time", "long_name": "Time", "axis": "T", "calendar": "standard",
-        "units": TIME_UNITS, "observation_type": "simulated"})
-    variables["profile"] = xr.Variable(("profile",), numbers.astype(np.int32),
-                                       {"long_name": "Profile ID"})
-    ds = xr.Dataset(variables, attrs=_global_attributes(meta, time, lat, lon, depth))
-    for key in ("lat", "lon", "depth", "pressure", "temperature", "profile_lat",
-                "profile_lon"):
-        ds[key].encoding.update(_FillValue=FILL, dtype="float64")
-    ds["profile_id"].encoding.update(_FillValue=NO_PROFILE)
-    for key in ("time", "profile_time"):
-        ds[key].encoding.update(_FillValue=None, dtype="float64")
-    return ds
-
-
-def _global_attributes(meta: dict, time: np.ndarray, lat: np.ndarray, lon: np.ndarray,
-                       depth: np.ndarray) -> dict:
-    name = meta.get("mission", "mission")
-    now = utc_text(datetime.now(UTC).timestamp())
-    first, last = (float(time[0]), float(time[-1])) if time.size else (0.0, 0.0)
-    return {
-        "Conventions": "CF-1.6, ACDD-1.3",
-        "Metadata_Conventions": "CF-1.6, Unidata Dataset Discovery v1.0",
-        "featureType": "trajectory",
-        "cdm_data_type": "Trajectory",
-        "format_version": "IOOS_Glider_NetCDF_v2.0.nc",
-        "title": f"{name}: simulated Slocum glider deployment",
-        "summary": (f"Simulated flight of mission {name} by gliderplan's glider simulator "
-                    f"(runtime {meta.get('runtime', 'python')}, ocean "
-                    f"{meta.get('ocean', 'bench')}, seed {meta.get('seed', 0)}): positions, "
-                    "depth, pressure and the CTD's temperature at every tick of the "
-                    "science computer, with one profile per dive or climb."),
-        "keywords": "Oceans > Ocean Temperature > Water Temperature, "
-                    "Oceans > Ocean Pressure > Water Pressure, glider, simulation",
-        "keywords_vocabulary": "GCMD Science Keywords",
-        "id": f"{name}-{utc_text(first)[:16].replace(':', '')}",
-        "naming_authority": "gliderplan",
-        "source": "gliderplan glider simulator (not observations)",
-        "processing_level": "simulated; not quality controlled",
-        "history": f"{now} created by gliderplan from a simulated run",
-        "comment": f"mission hash {meta.get('mission_hash', '')}",
-        "platform_type": "Slocum Glider",
-        "platform": "platform",
-        "instrument": "instrument_ctd",
-        "institution": "gliderplan (simulation)",
-        "project": name,
-        "creator_name": "gliderplan",
-        "creator_email": "",
-        "creator_url": "",
-        "creator_type": "institution",
-        "publisher_name": "gliderplan",
-        "publisher_email": "",
-        "publisher_url": "",
-        "license": "This data may be redistributed and used without restriction.",
-        "acknowledgement": "",
-        "contributor_name": "gliderplan",
-        "contributor_role": "simulator",
-        "references": "Woithe and Kremer, A programming architecture for smart autonomous "
-                      "underwater vehicles",
-        "standard_name_vocabulary": f"CF Standard Name Table v{STANDARD_NAME_TABLE}",
-        "date_created": now,
-        "date_modified": now,
-        "date_issued": now,
-        "product_version": "1.0",
-        "geospatial_lat_min": float(np.nanmin(lat)) if lat.size else 0.0,
-        "geospatial_lat_max": float(np.nanmax(lat)) if lat.size else 0.0,
-        "geospatial_lat_units": "degrees_north",
-        "geospatial_lon_min": float(np.nanmin(lon)) if lon.size else 0.0,
-        "geospatial_lon_max": float(np.nanmax(lon)) if lon.size else 0.0,
-        "geospatial_lon_units": "degrees_east",
-        "geospatial_vertical_min": float(np.nanmin(depth)) if depth.size else 0.0,
-        "geospatial_vertical_max": float(np.nanmax(depth)) if depth.size else 0.0,
-        "geospatial_vertical_units": "m",
-        "geospatial_vertical_positive": "down",
-        "geospatial_bounds": _bounds_wkt(lat, lon),
-        "geospatial_bounds_crs": "EPSG:4326",
-        "geospatial_bounds_vertical_crs": "EPSG:5831",  # depth below mean sea level
-        "time_coverage_start": utc_text(first),
-        "time_coverage_end": utc_text(last),
-        "time_coverage_duration": f"PT{max(last - first, 0.0):.0f}S",
-        "time_coverage_resolution": f"PT{meta.get('tick_s', TICK_S):g}S",
-    }
-
-
-def _bounds_wkt(lat: np.ndarray, lon: np.ndarray) -> str:
-    """The track's bounding box as WKT, latitude first (ACDD with EPSG:4326)."""
-    if not lat.size:
-        return ""
-    s, n, w, e = (float(np.nanmin(lat)), float(np.nanmax(lat)), float(np.nanmin(lon)),
-                  float(np.nanmax(lon)))
-    corners = [(s, w), (n, w), (n, e), (s, e), (s, w)]
-    return "POLYGON ((" + ", ".join(f"{a:.6f} {b:.6f}" for a, b in corners) + "))"
-
-
-def netcdf_bytes(table: pd.DataFrame, meta: dict) -> bytes:
-    """The run as a NetCDF-4 file (xarray's netCDF4 engine)."""
-    return bytes(trajectory_dataset(table, meta).to_netcdf(engine="netcdf4"))
+    series = Series(table, meta, start_epoch_s(meta), profile_ids(table["depth_m"].to_numpy(
+        float)))
+    dataset = NETCDF[fmt](series, metadata or {})
+    return bytes(dataset.to_netcdf(engine="netcdf4"))
 
 
 def _track(table: pd.DataFrame, max_points: int = TRACK_POINTS) -> np.ndarray:
@@ -338,20 +175,40 @@ def track_kml(table: pd.DataFrame, meta: dict) -> str:
         "</kml>\n")
 
 
-FORMATS = {"netcdf": ("trajectory.nc", netcdf_bytes), "geojson": ("track.geojson", track_geojson),
-           "kml": ("track.kml", track_kml)}
+# format -> (file name, what writes it); "netcdf" is the IOOS file's older name
+FORMATS = {"ioos": ("trajectory.nc", lambda t, m, d: netcdf_bytes(t, m, "ioos", d)),
+           "og1": ("trajectory_og1.nc", lambda t, m, d: netcdf_bytes(t, m, "og1", d)),
+           "cf": ("trajectory_cf.nc", lambda t, m, d: netcdf_bytes(t, m, "cf", d)),
+           "geojson": ("track.geojson", lambda t, m, d: track_geojson(t, m)),
+           "kml": ("track.kml", lambda t, m, d: track_kml(t, m))}
+ALIASES = {"netcdf": "ioos"}
 
 
 def export_run(run_dir: str | Path, formats: list[str],
-               output_dir: str | Path | None = None) -> list[Path]:
-    """Write the run in `run_dir` in each of `formats` (keys of FORMATS) into
-    `output_dir` (default `run_dir`), atomically; the files written (`gliderplan export`).
+               output_dir: str | Path | None = None,
+               metadata_path: str | Path | None = None) -> list[Path]:
+    """Write the run in `run_dir` in each of `formats` (keys of FORMATS, or "netcdf" for
+    "ioos") into `output_dir` (default `run_dir`), atomically; the files written
+    (`gliderplan export`). `metadata_path`: a TOML file of the deployment's people and
+    names (sim.netcdf_formats.METADATA_KEYS) for the NetCDF files.
 
-    Raises UsageError (exit 2) for no format, a run directory that does not exist or
-    lacks the run's files, an output that cannot be written; ExportError (exit 1) for a
-    run's file that cannot be read as one."""
+    Raises UsageError (exit 2) for no format or an unknown one, a run directory that does
+    not exist or lacks the run's files, a bad metadata file, an output that cannot be
+    written; ExportError (exit 1) for a run's file that cannot be read as one."""
     if not formats:
-        raise UsageError("say what to write: --netcdf, --geojson and/or --kml")
+        raise UsageError("say what to write: --format og1|ioos|cf (NetCDF), --geojson "
+                         "and/or --kml")
+    formats = list(dict.fromkeys(ALIASES.get(f, f) for f in formats))
+    unknown = [f for f in formats if f not in FORMATS]
+    if unknown:
+        raise UsageError(f"--format {unknown[0]}: expected one of og1, ioos, cf")
+    metadata = {}
+    if metadata_path is not None:
+        from gliderplan.contract.files import read_data
+        from gliderplan.sim.netcdf_formats import check_metadata
+
+        metadata = check_metadata(read_data(metadata_path, "metadata file"),
+                                  str(metadata_path))
     if not Path(run_dir).exists():
         raise UsageError(f"{run_dir}: no such directory (a run of gliderplan sim)")
     if not Path(run_dir).is_dir():
@@ -363,7 +220,7 @@ def export_run(run_dir: str | Path, formats: list[str],
     written = []
     for name in formats:
         filename, produce = FORMATS[name]
-        write_atomically(out / filename, produce(table, meta))
+        write_atomically(out / filename, produce(table, meta, metadata))
         written.append(out / filename)
     return written
 
@@ -373,12 +230,10 @@ def read_run(run_dir: str | Path) -> tuple[pd.DataFrame, dict]:
     run_dir = Path(run_dir)
     series, summary = run_dir / "timeseries.parquet", run_dir / "summary.json"
     try:
-        meta = json.loads(read_input_text(summary, "run summary"))
+        meta = read_data(summary, "run summary")
     except InputFileError as err:
         raise ExportError(f"{err}; is {run_dir} a run of gliderplan sim?",
                           usage=err.exit_code == ExitCode.USAGE) from None
-    except ValueError as err:
-        raise ExportError(f"{summary}: cannot read: {err}") from None
     if not series.is_file():  # read whole by pyarrow: a month's run is larger than one input
         raise ExportError(f"{series}: no such file; is {run_dir} a run of gliderplan sim?",
                           usage=True)
@@ -391,6 +246,4 @@ def read_run(run_dir: str | Path) -> tuple[pd.DataFrame, dict]:
     missing = {"time_s", "depth_m", "lat_deg", "lon_deg", "temp_reading_c"} - set(table.columns)
     if missing:
         raise ExportError(f"{series}: no column {', '.join(sorted(missing))}")
-    if not isinstance(meta, dict):
-        raise ExportError(f"{summary}: not a run summary")
     return table, meta

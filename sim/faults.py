@@ -9,11 +9,13 @@ SPEC is a comma-separated list of `name=value`:
   reorder=P         a frame is held back and arrives after the next one
   truncate=P        a frame loses its tail (it still ends in its delimiter)
   burst=N@P         N consecutive bytes of a frame turn to noise, with probability P per frame
-  delay=T@P         a frame arrives T late (wall time; 0.2 s is the retransmission timeout)
+  delay=T@P         a frame arrives T late (wall time; 0.2 s is the retransmission timeout):
+                    with the first read or write on the line once it is due
   disconnect=T@AT   the line is cut for T of mission time from mission time AT (repeatable)
   kill=N[@T]        the runtime is killed (SIGKILL) N times at random moments of the run's
-                    first T of mission time (default: the whole run, --duration) and
-                    restarted from its checkpoint
+                    first T of mission time (default: the whole run: up to the mission's
+                    end on its timeline, or --duration if sooner) and restarted from its
+                    checkpoint; a run that ends sooner says how many it delivered
 
 Frame faults hit both directions alike; every draw comes from one generator seeded from
 the run's seed, so a faulted run is as deterministic as the line's timing allows (a
@@ -169,6 +171,14 @@ class _Direction:
     flip: _Countdown
     held: bytes | None = None  # a frame reordered behind the next one
     partial: bytearray = field(default_factory=bytearray)  # bytes of a frame not yet ended
+    late: list[tuple[float, bytes]] = field(default_factory=list)  # (due [s], frames) delayed
+
+    def due(self) -> bytes:
+        """The delayed frames whose time has come, in the order they were sent."""
+        now = time.monotonic()
+        ready = b"".join(frames for due, frames in self.late if due <= now)
+        self.late = [(due, frames) for due, frames in self.late if due > now]
+        return ready
 
 
 class FaultSchedule:
@@ -210,12 +220,16 @@ class FaultyLine:
 
     def write(self, data: bytes) -> int:
         if not self.down:
-            self.port.write(self._pass(self._out, data))
+            self.port.write(self._pass(self._out, data) + self._out.due())
         return len(data)
 
     def read(self, size: int = 1) -> bytes:
         data = self.port.read(size)
-        return b"" if self.down else self._pass(self._in, data)
+        if self.down:
+            return b""
+        if late := self._out.due():  # delayed frames go out while we wait for answers
+            self.port.write(late)
+        return self._pass(self._in, data) + self._in.due()
 
     def discard_input(self) -> None:
         """Forget what arrived while the line was cut (and any frame half received)."""
@@ -227,6 +241,7 @@ class FaultyLine:
             pass
         self._in.partial.clear()
         self._in.held = None
+        self._in.late.clear()
 
     def _pass(self, way: _Direction, data: bytes) -> bytes:
         """What reaches the other side of `data`: whole frames, damaged as drawn."""
@@ -242,9 +257,9 @@ class FaultyLine:
     def _frame(self, way: _Direction, frame: bytes) -> list[bytes]:
         """One frame (with its delimiter) through the frame and byte faults."""
         spec, rng, count = self.spec, self.rng, self.injected
-        if spec.delay and rng.random() < spec.delay:
+        late = spec.delay and rng.random() < spec.delay
+        if late:
             count["delay"] += 1
-            time.sleep(spec.delay_s)
         if spec.truncate and len(frame) > 2 and rng.random() < spec.truncate:
             count["truncate"] += 1
             frame = frame[:rng.randrange(1, len(frame) - 1)] + b"\x00"
@@ -270,4 +285,7 @@ class FaultyLine:
         elif spec.reorder and rng.random() < spec.reorder:
             count["reorder"] += 1
             way.held, frames = frames[0], frames[1:]
+        if late:  # on the line, late: the sender goes on meanwhile
+            way.late.append((time.monotonic() + spec.delay_s, b"".join(frames)))
+            return []
         return frames

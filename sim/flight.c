@@ -36,6 +36,7 @@ enum {
     GPS_NEED_PITCH = 4,   /**< no glide speeds for `need_pitch_rad`: give them */
     GPS_TRACE_FULL = 5,   /**< take the transitions */
     GPS_DONE = 6,         /**< the run's last tick is flown */
+    GPS_ENVELOPE = 7,     /**< the envelope guard held a command: take its words */
 };
 
 /** The vehicle, the water and the battery: constant over a run (sim/vehicle.py,
@@ -48,6 +49,7 @@ typedef struct {
     double rho_kg_m3, g_m_s2, hull_volume_cc, compressibility_per_pa, trim_cc;
     double surface_depth_m, hover_rate_m_s, pitch_rate_rad_s, min_pumped_cc, earth_radius_m;
     double current_north_mps, current_east_mps;
+    double correction_speed_mps;  /* the current correction's speed through the water, 0: off */
     const double *lift_cc;    /* the water's buoyancy every lift_step_m from the surface */
     int32_t n_lift;           /* 0: uniform water */
     double lift_step_m;
@@ -88,6 +90,7 @@ typedef struct {
     double *pumped_out_cc, *pumped_in_cc;
     uint8_t *inflection;
     double *lat_deg, *lon_deg;
+    double *propulsion_w;     /* 0: the C loop flies gliders without a thruster */
 } gps_columns;
 
 typedef struct {
@@ -105,6 +108,8 @@ typedef struct {
     /* the glider */
     double depth_m, pitch_rad, ballast_cc, heading_rad, lat_deg, lon_deg, dr_lat_deg,
         dr_lon_deg, surface_time_s, turning_to, turn_left_s, floor_m;
+    double measured_north_mps, measured_east_mps;  /* the current dead reckoning flies with */
+    int32_t ticks_since_fix;
     int32_t surfacings, grounded_ticks;
     double first_grounded_s;
     int8_t phase;
@@ -256,16 +261,56 @@ static double degrees_to_ddmm(double x)
     return copysign(whole * 100.0 + (a - whole) * 60.0, x);
 }
 
-/* GliderSim._drift */
+/* geo.offset_m: (north, east) [m] from point 1 to point 2, the operations in its order */
+static void offset_m(const gps_physics *p, double lat1, double lon1, double lat2, double lon2,
+                     double *north_m, double *east_m)
+{
+    double scale = p->earth_radius_m * GPS_PI / 180.0;
+    *north_m = (lat2 - lat1) * scale;
+    *east_m = (lon2 - lon1) * scale * cos(lat1 * GPS_PI / 180.0);
+}
+
+/* navigation.corrected_heading */
+static double corrected_heading(double course_rad, double speed_mps, double north_mps,
+                                double east_mps)
+{
+    if (!(speed_mps > 0.0)) {
+        return course_rad;
+    }
+    double across = east_mps * cos(course_rad) - north_mps * sin(course_rad);
+    double ratio = -across / speed_mps;
+    ratio = ratio > 1.0 ? 1.0 : ratio < -1.0 ? -1.0 : ratio;
+    double heading = course_rad + asin(ratio);
+    if (heading < 0.0) {
+        heading += 2.0 * GPS_PI;
+    } else if (heading >= 2.0 * GPS_PI) {
+        heading -= 2.0 * GPS_PI;
+    }
+    return heading;
+}
+
+/* GliderSim.flows */
+static int flows(const gps_flight *f)
+{
+    const gps_physics *p = f->p;
+    return p->current_north_mps != 0.0 || p->current_east_mps != 0.0
+           || f->measured_north_mps != 0.0 || f->measured_east_mps != 0.0;
+}
+
+/* GliderSim._drift: the estimate with the current measured, the true position with the
+ * water's */
 static void drift(gps_flight *f, double distance_m, double dt)
 {
     const gps_physics *p = f->p;
     double north = distance_m * cos(f->heading_rad);
     double east = distance_m * sin(f->heading_rad);
-    if (north != 0.0 || east != 0.0) {
-        move_degrees(p, &f->dr_lat_deg, &f->dr_lon_deg, north, east);
+    double dr_north = north + f->measured_north_mps * dt;
+    double dr_east = east + f->measured_east_mps * dt;
+    if (dr_north != 0.0 || dr_east != 0.0) {
+        move_degrees(p, &f->dr_lat_deg, &f->dr_lon_deg, dr_north, dr_east);
     }
-    if (p->current_north_mps == 0.0 && p->current_east_mps == 0.0) {
+    f->ticks_since_fix++;
+    if (!flows(f)) {
         f->lat_deg = f->dr_lat_deg;
         f->lon_deg = f->dr_lon_deg;
         return;
@@ -273,6 +318,22 @@ static void drift(gps_flight *f, double distance_m, double dt)
     north += p->current_north_mps * dt;
     east += p->current_east_mps * dt;
     move_degrees(p, &f->lat_deg, &f->lon_deg, north, east);
+}
+
+/* GliderSim._fix: the measured current corrected by the fix (navigation.updated_current),
+ * the estimate set to it */
+static void fix(gps_flight *f)
+{
+    double north, east;
+    offset_m(f->p, f->dr_lat_deg, f->dr_lon_deg, f->lat_deg, f->lon_deg, &north, &east);
+    double since_s = (double)f->ticks_since_fix * f->p->tick_s;
+    if (since_s > 0.0) {
+        f->measured_north_mps = f->measured_north_mps + north / since_s;
+        f->measured_east_mps = f->measured_east_mps + east / since_s;
+    }
+    f->ticks_since_fix = 0;
+    f->dr_lat_deg = f->lat_deg;
+    f->dr_lon_deg = f->lon_deg;
 }
 
 /* GliderSim._at_surface */
@@ -287,8 +348,7 @@ static void at_surface(gps_flight *f, double dt)
     double elapsed = f->surface_time_s;
     f->surface_time_s += dt;
     if (elapsed < p->surface_s && p->surface_s <= f->surface_time_s) {
-        f->dr_lat_deg = f->lat_deg;  /* the GPS fix */
-        f->dr_lon_deg = f->lon_deg;
+        fix(f);  /* the GPS fix */
     }
     int in_call = p->surface_s <= elapsed && elapsed < p->surface_s + p->iridium_s;
     f->phase = in_call ? GPS_IRIDIUM : GPS_SURFACE;
@@ -403,8 +463,11 @@ static void glider_step(gps_flight *f, double target_m, double pitch_rad, double
     const gps_physics *p = f->p;
     f->pumped_out_cc = f->pumped_in_cc = 0.0;
     f->inflection = f->grounded = 0;
-    if (heading_valid) {
-        f->heading_rad = heading_rad;
+    if (heading_valid) {  /* upstream of it with current correction */
+        f->heading_rad = p->correction_speed_mps == 0.0
+                             ? heading_rad
+                             : corrected_heading(heading_rad, p->correction_speed_mps,
+                                                 f->measured_north_mps, f->measured_east_mps);
     }
     if (surface && f->depth_m <= p->surface_depth_m) {
         at_surface(f, p->tick_s);
@@ -443,8 +506,9 @@ static void sense(gps_flight *f, int32_t tick, double *values, uint32_t *mask, d
     double time_s = (double)tick * p->tick_s;
     double altitude = NAN;
     if (p->n_floor > 0) {
-        f->floor_m = interp(p->floor_times_s, p->floor_depths_m, p->n_floor, time_s);
-        altitude = f->floor_m - f->depth_m;
+        double floor = interp(p->floor_times_s, p->floor_depths_m, p->n_floor, time_s);
+        f->floor_m = floor == floor ? floor : INFINITY;  /* NaN: no floor there */
+        altitude = floor - f->depth_m;
     }
     const double *z = f->normal + 2 * f->normal_at++;
     double temp, salinity;
@@ -617,6 +681,7 @@ static void record_flight(gps_flight *f, int32_t row, int8_t phase, double out_c
     c->pumped_out_cc[row] = out_cc;
     c->pumped_in_cc[row] = in_cc;
     c->inflection[row] = inflection;
+    c->propulsion_w[row] = 0.0;
     f->block_j[row % GPS_GAUGE_TICKS] = bill(f, row);
 }
 
@@ -667,7 +732,9 @@ int gps_fly(gps_flight *f, int32_t ticks)
             uint8_t last_state = f->step.runtime.machine.state;
             gp_tick_report *report = &f->report;
             gps_step_tick(&f->step, (uint32_t)tick, mask, sent, cmd, report);
-            if (report->fault) {  /* the glider's own control flies on: the run ends */
+            /* a refused event, or the envelope's fault action: the glider's own control
+             * flies on, the run ends */
+            if (report->fault || gps_step_releases(&f->step, report)) {
                 gp_command refused = none;
                 refused.state = last_state;
                 record_command(f, tick, &refused);
@@ -687,6 +754,9 @@ int gps_fly(gps_flight *f, int32_t ticks)
                 return GPS_ENDED;
             }
             f->pending = 1;
+            if (report->envelope.limit != GP_LIMIT_NONE) {  /* held at the limit */
+                return GPS_ENVELOPE;
+            }
         }
         int surface = (cmd->flags & GP_FLAG_SURFACE) != 0;
         if (speeds_missing(f, (double)cmd->pitch_rad, (double)cmd->ballast_cc, surface)) {
@@ -713,7 +783,8 @@ int gps_fly(gps_flight *f, int32_t ticks)
 
 /** @brief The glider and the science computer as the Python models start them:
  *         depth [m], pitch [rad], pumped volume [cc], heading [rad], true lat, lon,
- *         dead-reckoned lat, lon [deg], the CTD's flicker [degC] before the first tick. */
+ *         dead-reckoned lat, lon [deg], the CTD's flicker [degC] before the first tick,
+ *         the current the glider measured, north and east [m/s]. */
 void gps_flight_set(gps_flight *f, const double *v)
 {
     f->depth_m = v[0];
@@ -725,6 +796,9 @@ void gps_flight_set(gps_flight *f, const double *v)
     f->dr_lat_deg = v[6];
     f->dr_lon_deg = v[7];
     f->flicker_c = v[8];
+    f->measured_north_mps = v[9];
+    f->measured_east_mps = v[10];
+    f->ticks_since_fix = 0;
     f->ctd_c = NAN;
     f->surface_time_s = -1.0;
     f->turning_to = f->turn_left_s = 0.0;

@@ -8,13 +8,14 @@ from __future__ import annotations
 import math
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Protocol
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from gliderplan.contract import (
     DEFAULT_HORIZON_S,
+    MAX_SIMULATED_TICKS,
     NO_STATE,
     TICK_S,
     TRANSITION_NAMES,
@@ -25,12 +26,16 @@ from gliderplan.language.semantics import MissionFault, Transition, start
 from gliderplan.power_models.flight import DensityProfile
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.runtime.protocol import Command
+from gliderplan.sim.currents import CurrentField
 from gliderplan.sim.geo import ddmm_to_degrees, move_degrees
 from gliderplan.sim.ocean import Ocean, SeaFloor
 from gliderplan.sim.science import ScienceComputer, SensorNoise
 from gliderplan.sim.vehicle import Current, GliderSim
 
-_COMMAND_F32 = struct.Struct("<4f")
+if TYPE_CHECKING:
+    from gliderplan.sim.bathymetry import Bathymetry
+
+_COMMAND_F32 = struct.Struct("<6f")
 PROGRESS_TICKS = 50_000  # report progress this often on long runs
 
 
@@ -47,13 +52,30 @@ class RunConfig:
     duration_s: float = DEFAULT_HORIZON_S  # the run ends here if the mission has not exited
     seed: int = 0
     noise: SensorNoise = SensorNoise()
-    current: Current = Current()
+    current: Current = Current()  # a constant current, or where `currents` gives none
+    # a current varying in space and time (sim.currents); None: `current` everywhere
+    currents: CurrentField | None = None
+    # the glider's current correction (`u_use_current_correction`): dead reckoning with
+    # the current measured at each fix, and heading upstream of its waypoint
+    current_correction: bool = True
     start_lat_deg: float | None = None  # None: 500 m south of the mission's first point
     start_lon_deg: float | None = None
     start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
-    floor: SeaFloor | None = None  # the sea floor (None: none)
+    floor: SeaFloor | Bathymetry | None = None  # the sea floor (None: none)
     # the in-situ density flown through (None: uniform water of the vehicle's reference)
     water: DensityProfile | None = None
+
+    def __post_init__(self) -> None:
+        """A run too long to hold is refused before it starts (MAX_SIMULATED_TICKS)."""
+        ticks = self.duration_s / self.tick_s
+        if ticks > MAX_SIMULATED_TICKS:
+            from gliderplan.contract.errors import UsageError
+
+            raise UsageError(
+                f"a run of {self.duration_s / 86400:.4g} d at a {self.tick_s:g} s tick is "
+                f"{ticks:,.0f} ticks, more than the {MAX_SIMULATED_TICKS:,} one run holds in "
+                "memory (one row a tick): fly a shorter time (--duration, the mission's horizon) "
+                "or a longer tick (--tick)")
 
 
 @dataclass
@@ -64,7 +86,7 @@ class RunRecord:
     columns: dict[str, np.ndarray]
     state_names: tuple[str, ...]
     tick_s: float
-    ended: str  # "exit", "reserve", "duration", "interrupted" or "fault: ..."
+    ended: str  # "exit", "reserve", "envelope", "duration", "interrupted" or "fault: ..."
     surfacings: int
     faults: dict | None = None  # with injected faults: what they did (CRuntime.report)
     events_log: str | None = None  # with faults: the C runtime's own event log
@@ -76,6 +98,18 @@ class RunRecord:
     events_fired: int | None = None
     grounded_ticks: int = 0  # ticks the glider ended at the sea floor
     first_grounded_s: float = math.nan  # missiontime [s] of the first of them
+    # what the envelope guard did, as the runtime said it ("envelope: missiontime ...")
+    envelope: list[str] = field(default_factory=list)
+
+    @property
+    def flown_s(self) -> float:
+        """[s] mission time up to which the run flew: its ticks' end, less half a tick."""
+        return len(self.columns["time_s"]) * self.tick_s - self.tick_s / 2
+
+    @property
+    def envelope_acted(self) -> bool:
+        """Whether the envelope guard held a command or ended the run on one."""
+        return bool(self.envelope) or self.ended == "envelope"
 
     def visits(self) -> dict[str, int]:
         """Stays in each state flown: every transition into it (the start, a goto, a call,
@@ -91,14 +125,23 @@ def start_position(mission: ir.CheckedMission, config: RunConfig) -> tuple[float
     """Where the glider is put in the water [deg]."""
     if config.start_lat_deg is not None and config.start_lon_deg is not None:
         return config.start_lat_deg, config.start_lon_deg
+    if mission.start_deg is not None:
+        return mission.start_deg
+    points = route_points_deg(mission)
+    if points:
+        return move_degrees(*points[0], -500.0, 0.0)
+    return 0.0, 0.0
+
+
+def route_points_deg(mission: ir.CheckedMission) -> list[tuple[float, float]]:
+    """The mission's waypoints (lat, lon) [deg], state by state."""
+    points = []
     for state in mission.states:
         route = state.route
-        point = (route.params[0], route.params[1]) if route.kind == "nav" else \
-            (route.points[0] if route.points else None)
-        if point is not None:
-            return move_degrees(ddmm_to_degrees(point[0]), ddmm_to_degrees(point[1]), -500.0,
-                                0.0)
-    return 0.0, 0.0
+        ddmm = [(route.params[0], route.params[1])] if route.kind == "nav" else \
+            list(route.points or ())
+        points += [(ddmm_to_degrees(lat), ddmm_to_degrees(lon)) for lat, lon in ddmm]
+    return points
 
 
 # One row per tick: the glider before the tick's step, the COMMAND that answered it, the
@@ -110,6 +153,7 @@ COLUMN_TYPES: dict[str, type] = {
     "profile": np.int8, "sensor_power": np.int32, "phase": np.int8,
     "pumped_out_cc": np.float64, "pumped_in_cc": np.float64, "inflection": np.bool_,
     "lat_deg": np.float64, "lon_deg": np.float64,
+    "propulsion_w": np.float64,  # the propeller's or thruster's draw [W] (0: none)
 }
 
 
@@ -146,12 +190,21 @@ class Gauge(Protocol):
     def reading(self, tick: int, columns: Columns) -> float: ...
 
 
+class SurfacingHook(Protocol):
+    def __call__(self, tick: int, columns: Columns) -> None:
+        """The glider has surfaced: `tick` is the next tick to fly, every tick before it
+        is in `columns` (the shore's turn: telemetry up, a plan update down)."""
+        ...
+
+
 def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceComputer,
              config: RunConfig, progress: Callable[[float, float], None] | None = None,
-             gauge: Gauge | None = None) -> RunRecord:
+             gauge: Gauge | None = None, on_surfacing: SurfacingHook | None = None
+             ) -> RunRecord:
     """Run the loop until the mission exits (or its energy guard ends it), the runtime
     faults or the duration ends. `gauge` gives the science computer its `energy_left`
-    reading (NaN without one)."""
+    reading (NaN without one). `on_surfacing` is called once per surfacing, before the
+    first tick flown after the loop sees the glider at the surface."""
     names = tuple(s.name for s in mission.states)
     glider = science.glider
     tick_s = config.tick_s
@@ -164,14 +217,19 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     state_c, stack_c, profile_c = cols["state"], cols["stack_depth"], cols["profile"]
     power_c, phase_c = cols["sensor_power"], cols["phase"]
     out_c, in_c, infl_c = cols["pumped_out_cc"], cols["pumped_in_cc"], cols["inflection"]
+    motor_c = cols["propulsion_w"]
     lat_c, lon_c = cols["lat_deg"], cols["lon_deg"]
     ended = "duration"
     pack, unpack = _COMMAND_F32.pack, _COMMAND_F32.unpack
     readings, runtime_step, apply = science.readings, runtime.step, science.apply
     tick = 0
     last_state = NO_STATE
+    surfaced = glider.surfacings
     try:
         while tick <= last_tick:
+            if on_surfacing is not None and glider.surfacings != surfaced:
+                surfaced = glider.surfacings
+                on_surfacing(tick, columns)
             energy_left = math.nan if gauge is None else gauge.reading(tick, columns)
             science.energy_left_j = energy_left
             mask, values = readings(tick)
@@ -200,19 +258,23 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
             profile_c.append(cmd.profile)
             power_c.append(cmd.sensor_power)
             if cmd.state == NO_STATE:
-                ended = "reserve" if cmd.transition == TransitionKind.RESERVE else "exit"
+                ended = {TransitionKind.RESERVE: "reserve",
+                         TransitionKind.ENVELOPE: "envelope"}.get(cmd.transition, "exit")
                 phase_c.append(glider.phase)
                 out_c.append(0.0)
                 in_c.append(0.0)
                 infl_c.append(False)
+                motor_c.append(0.0)
                 break
-            target, pitch, ballast, heading = unpack(pack(
-                cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad))
-            apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power)
+            target, pitch, ballast, heading, speed, thrust = unpack(pack(
+                cmd.depth_target_m, cmd.pitch_rad, cmd.ballast_cc, cmd.heading_rad,
+                cmd.speed_mps, cmd.thrust_w))
+            apply(target, pitch, ballast, heading, cmd.flags, cmd.sensor_power, speed, thrust)
             phase_c.append(glider.phase)
             out_c.append(glider.pumped_out_cc)
             in_c.append(glider.pumped_in_cc)
             infl_c.append(glider.inflection)
+            motor_c.append(glider.propulsion_w)
             if progress is not None and tick % PROGRESS_TICKS == 0 and tick:
                 progress(time_s, last_tick * tick_s)
             tick += 1
@@ -220,18 +282,19 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
         ended = "interrupted"
     arrays = columns.arrays()
     n = len(arrays["state"])
-    trace = [t for t in trace if t.time_s < n * tick_s - tick_s / 2]
-    return RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
-                     tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0),
-                     grounded_ticks=science.grounded_ticks,
-                     first_grounded_s=science.first_grounded_s)
+    record = RunRecord(trace, {"time_s": np.arange(n, dtype=float) * tick_s, **arrays}, names,
+                       tick_s, ended, glider.surfacings, suspends=getattr(runtime, "suspends", 0),
+                       grounded_ticks=science.grounded_ticks,
+                       first_grounded_s=science.first_grounded_s)
+    record.trace = [t for t in trace if t.time_s < record.flown_s]
+    return record
 
 
 def _close_row(cols: dict[str, list], state: int) -> None:
     """Complete the row of a tick whose runtime faulted (the glider's own control flies on)."""
     for key, value in (("state", state), ("stack_depth", 0), ("profile", 0),
                        ("sensor_power", 0), ("phase", 0), ("pumped_out_cc", 0.0),
-                       ("pumped_in_cc", 0.0), ("inflection", False)):
+                       ("pumped_in_cc", 0.0), ("inflection", False), ("propulsion_w", 0.0)):
         cols[key].append(value)
 
 
@@ -239,6 +302,22 @@ def make_science(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig,
                  vehicle: Vehicle) -> ScienceComputer:
     """The science computer over a glider put in the water at the mission's start."""
     lat, lon = start_position(mission, config)
-    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current, water=config.water)
+    glider = GliderSim(vehicle, config.tick_s, lat, lon, config.current, water=config.water,
+                       correction_speed_mps=correction_speed_mps(vehicle)
+                       if config.current_correction and mission.current_correction else 0.0)
     return ScienceComputer(glider, ocean, config.noise, config.seed, config.tick_s,
-                           config.start_epoch_s, config.floor)
+                           config.start_epoch_s, config.floor, config.currents)
+
+
+def correction_speed_mps(vehicle: Vehicle) -> float:
+    """[m s-1] the speed through the water a glider's current correction steers with: its
+    horizontal speed at its nominal pitch on a full pump stroke (a Slocum steers with its
+    own speed estimate, which a steady glide keeps near this). A vehicle without a buoyancy
+    engine (an AUV) steers with the speed it cruises at without a plan (`GliderSim.step`
+    steers a propelled tick with the speed commanded)."""
+    if not vehicle.has_buoyancy_engine:
+        from gliderplan.planner.speed import best_speed
+        from gliderplan.power_models.devices import base_power_w
+
+        return float(best_speed(vehicle.propulsion, base_power_w(vehicle)).speed_mps)
+    return float(vehicle.max_speed_mps(vehicle.nominal_pitch_rad))

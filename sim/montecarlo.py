@@ -19,13 +19,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
+from gliderplan.contract import (
+    DEFAULT_HORIZON_S,
+    SBD_MO_SHORT_BYTES,
+    SBD_MT_SHORT_BYTES,
+    TICK_S,
+)
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.energy import RunEnergy, account, check_flight
-from gliderplan.sim.loop import RunConfig, RunRecord
+from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig, RunRecord
 from gliderplan.sim.scenarios import ScenarioSpec, draw_scenario
 
 BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending it is cheap
@@ -47,6 +52,18 @@ class Job:
     duration_s: float  # a run ends here if the mission has not exited [s]
     tick_s: float = TICK_S
     robust_tracker: bool = True
+    # replanning (`montecarlo --replan`): the signed plan the vehicle holds, its key, the
+    # confidence the shore replans at (None: the plan's own)
+    held: bytes | None = None
+    key: bytes | None = None
+    confidence: float | None = None
+    # where the glider is put in the water (lat, lon) [deg] (None: as sim puts it)
+    start: tuple[float, float] | None = None
+    start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
+
+    @property
+    def replan(self) -> bool:
+        return self.held is not None
 
 
 def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
@@ -56,14 +73,44 @@ def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
 
 def fly_scenario(job: Job, index: int, runtime: str | None = None) -> dict:
     """Fly scenario `index`: one row of the results table (`runtime` as sim.flight.fly's:
-    by default the compiled runtime's step)."""
+    by default the compiled runtime's step). With replanning the row is the flight with
+    the shore in the loop, and the static plan's flight of the same scenario beside it
+    (`held_static`, `quality_static`, ...)."""
     from gliderplan.sim.flight import fly
 
     scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
+    lat, lon = job.start or (None, None)
     config = RunConfig(tick_s=job.tick_s, duration_s=job.duration_s, seed=scenario.seed,
-                       noise=scenario.noise, current=scenario.current)
+                       noise=scenario.noise, current=scenario.current, start_lat_deg=lat,
+                       start_lon_deg=lon, start_epoch_s=job.start_epoch_s)
     record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
                  robust_tracker=job.robust_tracker, runtime=runtime)
+    row = _row(job, scenario, record)
+    if not job.replan:
+        return row
+    from gliderplan.sim.replanning import ShoreLoop
+
+    shore = ShoreLoop(job.mission, job.held, job.key, tick_s=job.tick_s,
+                      usable_truth=scenario.usable_fraction, seed=scenario.seed,
+                      confidence=job.confidence, spec=job.spec.model())
+    replanned = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
+                    robust_tracker=job.robust_tracker, runtime=runtime, shore=shore)
+    link = shore.log.summary(max(float(replanned.columns["time_s"][-1]), job.tick_s))
+    return {**_row(job, scenario, replanned),
+            **{f"{k}_static": row[k] for k in STATIC_COLUMNS},
+            **{k: link[k] for k in LINK_COLUMNS}}
+
+
+# with replanning, the static plan's flight beside the replanned one: these columns
+STATIC_COLUMNS = ("energy_j", "held", "exhausted_s", "duration_s", "ended", "quality",
+                  "plan_check")
+LINK_COLUMNS = ("surfacings", "updates_applied", "updates_refused", "replans_least_energy",
+                "replans_not_sent", "replans_failed", "up_bytes", "down_bytes", "up_messages",
+                "down_messages", "update_bytes_max")
+
+
+def _row(job: Job, scenario, record: RunRecord) -> dict:  # noqa: ANN001
+    """The results table's row of one flight of a scenario."""
     energy = account(record, job.mission, scenario.vehicle, job.plan)
     check = check_flight(energy, job.plan)
     budget = job.budget_j * scenario.usable_fraction
@@ -72,7 +119,7 @@ def fly_scenario(job: Job, index: int, runtime: str | None = None) -> dict:
     component, excess = _most_overrun(energy, job.plan)
     names = record.state_names
     return {
-        "scenario": index,
+        "scenario": scenario.index,
         "seed": scenario.seed,
         "energy_j": energy.total_j,
         "budget_j": budget,
@@ -235,6 +282,7 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
                                                                    strict=True)}
 
     exhausted = table["exhausted_s"].dropna() if n else table
+    replanned = replanning(table) if n and "held_static" in table else {}
     return {
         **meta,
         "scenarios": n,
@@ -245,12 +293,48 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
         "probability_interval_95": [low, high],
         "energy_j": quantiles("energy_j"),
         "duration_s": quantiles("duration_s"),
-        "exhausted_before_end": int(len(exhausted)),
+        # scenarios whose energy passed the plan's budget times the usable share of the
+        # battery drawn for them, at some time of the run (the run itself goes on: the
+        # energy guard reads the mission's battery, not the drawn share)
+        "exceeded_drawn_usable_charge": int(len(exhausted)),
         "over_budget_by_tolerance": int((table["plan_check"] == "violation").sum()) if n
         else 0,
         "ended": {str(k): int(v) for k, v in table["ended"].value_counts().items()} if n
         else {},
+        **replanned,
         "wall_s": result.wall_s,
+    }
+
+
+def replanning(table) -> dict:  # noqa: ANN001
+    """With replanning: the hold rate and the flown quality with and without it, side by
+    side (95 % intervals), and what the link carried: bytes each way per day and per
+    mission (means over the scenarios, and the most), the largest update."""
+    n = len(table)
+    held, held_static = int(table["held"].sum()), int(table["held_static"].sum())
+    days = np.maximum(table["duration_s"].to_numpy(float), 1.0) / 86400.0
+    up, down = table["up_bytes"].to_numpy(float), table["down_bytes"].to_numpy(float)
+    return {
+        "hold_rate": held / n, "hold_rate_interval_95": list(wilson_interval(held, n)),
+        "hold_rate_static": held_static / n,
+        "hold_rate_static_interval_95": list(wilson_interval(held_static, n)),
+        "quality": float(table["quality"].mean()),
+        "quality_static": float(table["quality_static"].mean()),
+        "update_bytes_max": int(table["update_bytes_max"].max()),
+        "link": {
+            "surfacings_per_mission": float(table["surfacings"].mean()),
+            "up_bytes_per_day": float(np.mean(up / days)),
+            "down_bytes_per_day": float(np.mean(down / days)),
+            "up_bytes_per_mission": float(up.mean()), "down_bytes_per_mission": float(down.mean()),
+            "down_bytes_per_mission_max": int(down.max()),
+            "up_messages_per_mission": float(table["up_messages"].mean()),
+            "down_messages_per_mission": float(table["down_messages"].mean()),
+            "updates_refused": int(table["updates_refused"].sum()),
+            "replans_least_energy": int(table["replans_least_energy"].sum()),
+            "replans_not_sent": int(table["replans_not_sent"].sum()),
+            "replans_failed": int(table["replans_failed"].sum()),
+            "sbd_limits_bytes": {"up": SBD_MO_SHORT_BYTES, "down": SBD_MT_SHORT_BYTES},
+        },
     }
 
 
@@ -272,15 +356,25 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
                        plan_path=None, workers: int = 1, scheduler: str | None = None,
                        seed: int = 0, scenario_file=None, duration_s: float | None = None,
                        tracker: str = "robust",
-                       progress: Callable[[int, int], None] | None = None) -> MonteCarloRun:
+                       progress: Callable[[int, int], None] | None = None,
+                       replan: bool = False, confidence: float | None = None,
+                       key_path=None, start: tuple[float, float] | None = None,
+                       start_epoch_s: float = DEFAULT_START_EPOCH_S) -> MonteCarloRun:
     """Fly `mission` (and the plan in `plan_path`: its budget and prediction; without one
     every sensor a state logs is on and the budget is the mission's usable battery) in
     `scenarios` scenarios drawn from `scenario_file` (default: the shipped one) from
     `seed`, on `workers` processes or the Dask `scheduler` ("local" or "tcp://HOST:PORT"),
     each run ending at `duration_s` [s] (default: the mission's horizon, else 30 days);
     write MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`).
+    `replan`: each scenario is flown twice, with the plan alone and with the shore in the
+    loop replanning the rest at each surfacing at `confidence` (default: the plan's own),
+    its prior the scenario file without its drift (sim/replanning.py); the vehicle holds
+    `key_path`'s key (the plan signed with it) or one made for the run. The summary
+    then holds `hold_rate`, `hold_rate_static`, `quality`, `quality_static`,
+    `update_bytes_max` and what the link carried (`replanning`).
     Raises KeyboardInterrupt only if no scenario finished: an interrupted run keeps and
-    writes those that did (`MonteCarloRun.result.interrupted`)."""
+    writes those that did (`MonteCarloRun.result.interrupted`). `start`: (lat, lon) [deg]
+    where each glider is put in the water (default: as sim puts it), at `start_epoch_s`."""
     import json
     from pathlib import Path
 
@@ -299,14 +393,19 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
     duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_HORIZON_S
+    RunConfig(duration_s=duration)  # a run too long to hold: refused here, not in a worker
     spec = read_spec(scenario_file)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     vehicle = load_vehicle(mission.vehicle)
     refuse_unflyable_yos(mission, vehicle, plan)
     budget_j = plan.budget_j if plan is not None else \
         mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
+    held = key = None
+    if replan:
+        held, key = _vehicle_plan(plan_path, key_path)
     job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
-              robust_tracker=tracker == "robust")
+              robust_tracker=tracker == "robust", held=held, key=key, confidence=confidence,
+              start=start, start_epoch_s=start_epoch_s)
     with scenario_executor(workers, scheduler) as executor:
         result = run_montecarlo(job, scenarios, executor, workers, progress)
     if not result.rows:
@@ -318,7 +417,9 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
             "plan": None if plan_path is None else str(plan_path),
             "scenario_file": spec.source, "seed": seed, "run_limit_s": duration,
             "budget_j": budget_j, "workers": workers,
-            "scheduler": scheduler or ("local pool" if workers > 1 else "none")}
+            "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
+            "scheduler": scheduler or ("local pool" if workers > 1 else "none"),
+            "replan": replan}
     stated = summary(result, meta)
     contents = {
         "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table, preserve_index=False)),
@@ -332,3 +433,23 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     for name in MONTECARLO_FILES:
         write_atomically(out / name, contents[name])
     return MonteCarloRun(result, stated, tuple(out / name for name in MONTECARLO_FILES))
+
+
+def _vehicle_plan(plan_path, key_path) -> tuple[bytes, bytes]:  # noqa: ANN001
+    """The signed plan file the vehicle holds and its key: `key_path`'s (the plan must be
+    signed with it), or a key made for the run, which signs the plan."""
+    import secrets
+
+    from gliderplan.contract.errors import UsageError
+    from gliderplan.planner.planfile import read_plan_data
+    from gliderplan.planner.signing import check_signature, read_key, sign_plan
+
+    if plan_path is None:
+        raise UsageError("--replan: replanning changes a plan: give --plan")
+    held = read_plan_data(plan_path)
+    if key_path is not None:
+        key = read_key(key_path)
+        check_signature(held, key, str(plan_path))
+        return held, key
+    key = secrets.token_bytes(32)
+    return sign_plan(held, key, 1), key

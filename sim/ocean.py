@@ -31,12 +31,16 @@ import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import read_input_text
 from gliderplan.power_models.flight import DensityProfile
+
+if TYPE_CHECKING:
+    from gliderplan.sim.bathymetry import Bathymetry
 
 Number = float | np.ndarray
 
@@ -315,9 +319,13 @@ def flat_floor(depth_m: float, option: str = "--floor") -> SeaFloor:
     return SeaFloor((0.0,), (float(depth_m),), f"{option} {depth_m:g}")
 
 
-def parse_floor(text: str, option: str = "--floor") -> SeaFloor:
-    """`flat_floor` of a command line's text; UsageError naming `option` for one that is
-    not a number."""
+def parse_floor(text: str, option: str = "--floor") -> SeaFloor | Bathymetry:
+    """`flat_floor` of a command line's text, or the bathymetry grid of a NetCDF file
+    (*.nc: sim.bathymetry); UsageError naming `option` for one that is neither."""
+    if text.lower().endswith(".nc"):
+        from gliderplan.sim.bathymetry import read_bathymetry
+
+        return read_bathymetry(text)
     try:
         depth = float(text)
     except ValueError:
@@ -333,7 +341,7 @@ class Water:
     assumptions)."""
 
     ocean: Ocean
-    floor: SeaFloor | None
+    floor: SeaFloor | Bathymetry | None
     floor_note: str
 
 
@@ -341,7 +349,7 @@ NO_FLOOR_NOTE = ("no sea floor: the altimeter reads NaN (out of range) and no di
                  "stopped (sim --floor DEPTH_M sets one)")
 
 
-def load_water(spec: str, floor: SeaFloor | None = None) -> Water:
+def load_water(spec: str, floor: SeaFloor | Bathymetry | None = None) -> Water:
     """The ocean of `spec` (`load_ocean`) and its sea floor: `floor` if given, else for
     replayed Slocum logs the floor their flight logs saw (none, and the note says why,
     where they hold no floor reading), else none."""

@@ -26,10 +26,12 @@ def trace_csv(trace: list[Transition]) -> str:
     return "\n".join(rows) + "\n"
 
 
-def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
+def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float,
+                     salinity_psu: np.ndarray | None = None):
     """One row per tick: time, depth, pitch, water temperature and the CTD's reading (NaN
-    while it is off), state, stack depth, each sensor's power, power per component [W],
-    battery remaining [J]."""
+    while it is off), the water's practical salinity [PSU] (`salinity_psu`, as the
+    simulated CTD reads it when it is on), state, stack depth, each sensor's power, power
+    per component [W], battery remaining [J]."""
     import pyarrow as pa
 
     c = record.columns
@@ -41,6 +43,8 @@ def timeseries_table(record: RunRecord, energy: RunEnergy, battery_j: float):
         "pitch_rad": c["pitch_rad"],
         "temperature_c": c["temperature_c"],
         "temp_reading_c": c["temp_reading_c"],
+        **({} if salinity_psu is None else {"salinity_psu": np.broadcast_to(
+            np.asarray(salinity_psu, np.float64), c["time_s"].shape).copy()}),
         "state": _strings(names + [""], np.where(state == NO_STATE, len(names), state)),
         "stack_depth": c["stack_depth"].astype(np.int16),
         "profile": c["profile"].astype(np.int16),
@@ -103,6 +107,18 @@ def parquet_bytes(table, dictionary: tuple[str, ...] = ()) -> bytes:
     return sink.getvalue()
 
 
+def surfacing_fixes(record: RunRecord) -> list[dict]:
+    """Each surfacing's GPS fix: time [s] and true position [deg], on the first tick of
+    its Iridium call (the fix comes just before it)."""
+    from gliderplan.power_models.segments import IRIDIUM
+
+    c = record.columns
+    calling = np.asarray(c["phase"]) == IRIDIUM
+    starts = np.flatnonzero(calling & ~np.r_[False, calling[:-1]])
+    return [{"time_s": float(c["time_s"][i]), "lat": float(c["lat_deg"][i]),
+             "lon": float(c["lon_deg"][i])} for i in starts]
+
+
 def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan | None,
             meta: dict) -> str:
     """Energy by component and by state, predicted against simulated, the verdict, and
@@ -132,7 +148,9 @@ def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan
         "simulated_s": float(record.columns["time_s"][-1]) if len(record.columns["time_s"])
         else 0.0,
         "transitions": len(record.trace),
+        "envelope": record.envelope,
         "surfacings": record.surfacings,
+        "surfacing_fixes": surfacing_fixes(record),
         "computer_suspends": record.suspends,
         "energy_j": energy.total_j,
         "energy_by_component_j": energy.by_component_j(),

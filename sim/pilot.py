@@ -1,6 +1,7 @@
 """The runtime's library routines in Python, exactly as docs/pilot.md specifies them:
-flight profiles (yo, thermotrackyo, surface, hover), routes (nav, noheading,
-waypoints, sweep, goto_list) and the plan's schedule (sensor power windows, profile alternation).
+flight profiles (yo, thermotrackyo, surface, hover; on a propeller cruise, altitude),
+routes (nav, noheading, waypoints, sweep, goto_list) and the plan's schedule (sensor
+power windows, profile alternation).
 
 Each routine is a small object with the pilot's memory (leg, tracked band, waypoint
 index) that is re-created on entry, and a per-tick method on plain floats: the
@@ -194,8 +195,37 @@ class Hover:
         return args[0], 0.0, 0.0, False
 
 
+class Cruise(Hover):
+    """cruise(depth, speed): level at `depth` on the propeller (`propelled_speed`); its
+    command is a hover's, at zero pitch and ballast."""
+
+    propelled = True
+
+
+class Altitude(Cruise):
+    """altitude(height, speed): level where the altimeter reads `height`; with no floor in
+    its range (a NaN reading) the floor lies deeper: down by `height`."""
+
+    def command(self, d: float, temp: float, args: tuple[float, ...], pitch: float | None,
+                ballast: float, altitude: float = math.nan
+                ) -> tuple[float, float, float, bool]:
+        target = d + args[0] if math.isnan(altitude) else d + altitude - args[0]
+        return target if target > 0.0 else 0.0, 0.0, 0.0, False  # a NaN depth: the surface
+
+
+def propelled_speed(args: tuple[float, ...], planned_mps: float | None,
+                    unplanned_mps: float) -> float:
+    """[m/s] a propelled profile's speed: the plan's; without a plan its speed argument, or
+    `unplanned_mps` where it is written `auto` (left out of `args`) or is not positive."""
+    if planned_mps is not None:
+        return planned_mps
+    return args[1] if len(args) > 1 and args[1] > 0.0 else unplanned_mps
+
+
+# Flown with a thruster's assist (`yo(...) thrust`): the yos.
+ASSISTED = frozenset({"yo", "thermotrackyo"})
 PROFILE_ROUTINES = {"yo": Yo, "thermotrackyo": ThermoTrackYo, "surface": Surface,
-                    "hover": Hover}
+                    "hover": Hover, "cruise": Cruise, "altitude": Altitude}
 
 
 # ---- routes ----------------------------------------------------------------------------
@@ -361,11 +391,12 @@ ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "waypoints": Waypoints, "s
 
 # ---- the plan's schedule ---------------------------------------------------------------
 
-def profile_index(state_plan: StatePlan | None, t_in_s: float) -> int:
+def profile_index(state_plan: StatePlan | None, t_in_s: float, unplanned: int = 0) -> int:
     """Alternative flown `t_in_s` [s] after entry: shares of the cycle in index order;
-    the last alternative with a non-zero share takes any rounding remainder."""
+    the last alternative with a non-zero share takes any rounding remainder. Without a
+    plan, `unplanned`."""
     if state_plan is None:
-        return 0
+        return unplanned
     cycle = state_plan.cycle_s
     c = math.fmod(t_in_s, cycle)
     start = 0.0

@@ -219,8 +219,9 @@ def energy_histogram_png(energy_j: np.ndarray, budget_j: np.ndarray, nominal_bud
 
 
 def exhaustion_png(exhausted_s: np.ndarray, duration_s: np.ndarray) -> bytes:
-    """Share of scenarios whose budget still holds against mission time (a scenario whose
-    budget ran out at t drops out at t; one that never ran out stays to its end)."""
+    """Share of scenarios still within the usable charge drawn for them against mission
+    time (a scenario that passed it at t drops out at t; one that never did stays to its
+    end; the runs themselves go on)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     n = len(exhausted_s)
@@ -233,6 +234,6 @@ def exhaustion_png(exhausted_s: np.ndarray, duration_s: np.ndarray) -> bytes:
     ax.step(times / scale, 100 * holding, where="post", color="tab:green")
     ax.set_ylim(0, 102)
     ax.set_xlabel(f"mission time [{unit}]")
-    ax.set_ylabel("scenarios with budget left [%]")
-    ax.set_title(f"time to exhaustion: {len(out)} of {n} scenarios ran out of budget")
+    ax.set_ylabel("scenarios within their drawn usable charge [%]")
+    ax.set_title(f"{len(out)} of {n} scenarios exceeded the usable charge drawn for them")
     return _png(fig, plt)

@@ -19,14 +19,16 @@ from gliderplan.planner.planfile import Plan, load_plan
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
     from gliderplan.power_models.flight import DensityProfile
     from gliderplan.power_models.vehicle import Vehicle
+    from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.energy import FlightCheck, RunEnergy
-    from gliderplan.sim.loop import RunRecord
+    from gliderplan.sim.loop import RunConfig, RunRecord
     from gliderplan.sim.ocean import Water
-    from gliderplan.sim.vehicle import Current
 
 RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png",
              "events.log")  # events.log: the C runtime's own, with --faults
 NETCDF_FILE = "trajectory.nc"  # with netcdf=True
+REPLANS_FILE = "replans.csv"  # with replan_every: what each surfacing did
+REPLAN_EVERY = ("surfacing",)
 TRACKERS = ("robust", "naive")
 
 
@@ -40,6 +42,9 @@ class RunResult:
     plan: Plan | None
     files: tuple[Path, ...]  # the run's files, written atomically
     water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
+    replanning: dict | None = None  # with replan_every: what crossed the link (summary.json's)
+    current_notes: tuple[str, ...] = ()  # the currents flown, and warnings about them
+    currents: CurrentField | None = None  # the field flown (None: none, or a constant)
 
     @property
     def interrupted(self) -> bool:
@@ -85,6 +90,25 @@ def flown_water(mission: CheckedMission, vehicle: Vehicle, given: Water, spec: s
     return vehicle.ballasted_for(rho), density, note
 
 
+def with_currents(mission: CheckedMission, config: RunConfig, spec: str, vehicle: Vehicle
+                  ) -> tuple[RunConfig, list[str]]:
+    """`config` flying the currents of `--currents SPEC` (sim.current_files.checked_field),
+    and notes for the user."""
+    import dataclasses
+
+    from gliderplan.sim.current_files import checked_field
+    from gliderplan.sim.currents import UniformCurrent
+    from gliderplan.sim.loop import start_position
+    from gliderplan.sim.vehicle import Current
+
+    field, notes = checked_field(spec, mission, vehicle, start_position(mission, config),
+                                 config.start_epoch_s, config.duration_s)
+    if isinstance(field, UniformCurrent):
+        return dataclasses.replace(config, current=Current(field.north_mps, field.east_mps)), \
+            notes
+    return dataclasses.replace(config, currents=field), notes
+
+
 def grounding(record: RunRecord) -> dict | None:
     """Whether the glider reached the sea floor: the first time [s] and the ticks it ended
     there (None: it never did)."""
@@ -97,13 +121,16 @@ def grounding(record: RunRecord) -> dict | None:
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, runtime: str | None = None,
                 ocean: str | None = None, noise: str = "ctd", tracker: str = "robust",
-                current: Current | None = None, seed: int = 0, tick_s: float = TICK_S,
+                currents: str | None = None, seed: int = 0, tick_s: float = TICK_S,
                 duration_s: float | None = None, start_utc: str | None = None,
+                start_position: tuple[float, float] | None = None,
                 netcdf: bool = False,
                 progress: Callable[[float, float], None] | None = None,
                 plots: bool = True, key_path: str | Path | None = None,
                 state_dir: str | Path | None = None, faults: str | None = None,
-                floor: float | str | None = None) -> RunResult:
+                floor: float | str | None = None,
+                replan_every: str | None = None, confidence: float | None = None,
+                scenario_file: str | Path | None = None) -> RunResult:
     """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
 
     `plan_path`: the plan to fly and to check the flight against (without one every
@@ -117,11 +144,14 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     `Vehicle.ballasted_for`); default: the bench preset's temperatures in uniform water of
     the vehicle's reference density. `noise`: a key of `science.NOISE_PRESETS`.
     `tracker`: "robust" or "naive" (the paper's first).
-    `current` [m/s], `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's
-    horizon, else 30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the
-    replayed logs' first sample, else 2000-01-01T00:00:00Z). `netcdf`: also write
-    trajectory.nc (sim.export). `progress(done_s, total_s)` is called on long runs, whose
-    plots a second process draws (sim/plotter.py).
+    `currents`: the text of `sim --currents` (N,E [m/s], a NetCDF field, flight logs:
+    sim.current_files), refused where it does not cover the run or the start is on its
+    land. `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's horizon, else
+    30 days). `start_utc`: ISO 8601 time of missiontime 0 (default: the replayed logs'
+    first sample, else 2000-01-01T00:00:00Z). `start_position`: (lat, lon) [deg] where the
+    glider is put in the water (default: 500 m south of the mission's first waypoint).
+    `netcdf`: also write trajectory.nc (sim.export). `progress(done_s, total_s)` is
+    called on long runs, whose plots a second process draws (sim/plotter.py).
     `plots`: False leaves out depth.png and energy.png (a caller that draws its own).
     `key_path`: the key provisioned on the simulated vehicle; the plan must be signed with
     it (the C runtime gets it uploaded over the link and checks it itself).
@@ -135,6 +165,13 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     floor under the whole run; default: none, or under replayed Slocum logs the floor they
     saw (sim.ocean.load_water). The glider stops at the floor; summary.json says where the
     floor came from and whether the glider reached it (`sea_floor`, `grounded`).
+    `replan_every`: "surfacing" puts the shore in the loop (sim/replanning.py): at each
+    surfacing the glider's report goes up, the rest of the mission is replanned at
+    `confidence` (default: the plan's own) with the prior of `scenario_file` (default: the
+    shipped one), and the plan update goes down to the runtime, which applies it (the C
+    runtime over its link). The vehicle holds `key_path`'s key, or without one a key made
+    for the run, with which the plan is signed; summary.json's `replanning` says what
+    crossed the link, and replans.csv what each surfacing did.
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
@@ -150,7 +187,6 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim.ocean import flat_floor, load_water, parse_floor
     from gliderplan.sim.plotter import PlotProcess
     from gliderplan.sim.science import NOISE_PRESETS
-    from gliderplan.sim.vehicle import Current
 
     if not (math.isfinite(tick_s) and 0.1 <= tick_s <= 60.0):
         raise UsageError(f"--tick {tick_s:g}: must lie between 0.1 and 60 s")
@@ -187,9 +223,19 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         vehicle, density, density_note = flown_water(mission, vehicle, given, ocean)
     if start is None:
         start = getattr(water, "start_epoch_s", None) or DEFAULT_START_EPOCH_S
+    lat, lon = start_position or (None, None)
     config = RunConfig(tick_s=tick_s, duration_s=duration, seed=seed,
-                       noise=NOISE_PRESETS[noise], current=current or Current(),
-                       start_epoch_s=start, floor=given.floor, water=density)
+                       noise=NOISE_PRESETS[noise], start_epoch_s=start, floor=given.floor,
+                       water=density, start_lat_deg=lat, start_lon_deg=lon)
+    if getattr(given.floor, "by_position", False):
+        from gliderplan.sim.loop import start_position
+
+        problem = given.floor.start_problem(*start_position(mission, config))
+        if problem is not None:
+            raise UsageError(f"--floor {floor}: {problem}")
+    field_notes: list[str] = []
+    if currents is not None:
+        config, field_notes = with_currents(mission, config, currents, vehicle)
     plan = None if plan_path is None else load_plan(plan_path, mission)
     refuse_unflyable_yos(mission, vehicle, plan)
     if key_path is not None:
@@ -201,6 +247,10 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         key = read_key(key_path)
         if runtime != "c":  # the C runtime over the link checks for itself
             check_signature(read_plan_data(plan_path), key, str(plan_path))
+    shore = None
+    if replan_every is not None:
+        shore, plan_path, key_path = _shore(mission, replan_every, plan_path, key_path, runtime,
+                                            tick_s, confidence, scenario_file)
     plotter: PlotProcess | None = None
 
     def progressed(done_s: float, total_s: float) -> None:
@@ -216,7 +266,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         record = fly(mission, water, config, vehicle, plan, None if plan_path is None
                      else str(plan_path), runtime, robust_tracker=tracker == "robust",
                      progress=progressed, key_path=None if key_path is None else str(key_path),
-                     state_dir=state_dir, faults=fault_spec)
+                     state_dir=state_dir, faults=fault_spec, shore=shore)
         if not len(record.columns["time_s"]):
             raise KeyboardInterrupt  # nothing flown, nothing to write
         used = accounting.account(record, mission, vehicle, plan)
@@ -234,8 +284,19 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 "tracker": tracker, "seed": seed,
                 "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
                 "vehicle": mission.vehicle, "start_utc": utc_text(start),
-                "sea_floor": given.floor_note, "grounded": grounding(record)}
-        table = outputs.timeseries_table(record, used, mission.battery.energy_j)
+                "currents": currents or "none",
+                "sea_floor": given.floor_note, "grounded": grounding(record),
+                "current_mps": {"north": config.current.north_mps,
+                                "east": config.current.east_mps}}
+        if shore is not None:
+            flown_s = float(record.columns["time_s"][-1]) + tick_s
+            meta["replanning"] = {"every": replan_every,
+                                  "confidence": shore.replanner.confidence,
+                                  **shore.log.summary(flown_s)}
+            contents["replans.csv"] = _replans_csv(shore.log.events)
+        columns = record.columns  # the water's salinity where the glider was: the CTD's
+        salinity = water.salinity_psu(columns["depth_m"], columns["time_s"])
+        table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
         contents["trace.csv"] = outputs.trace_csv(record.trace)
         contents["timeseries.parquet"] = outputs.parquet_bytes(
             table, dictionary=outputs.TIMESERIES_DICTIONARY)
@@ -249,7 +310,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     finally:
         if plotter is not None:
             plotter.close()
-    written = [name for name in (*RUN_FILES, NETCDF_FILE) if name in contents]
+        if getattr(shore, "workdir", None) is not None:
+            shore.workdir.cleanup()
+    written = [name for name in (*RUN_FILES, REPLANS_FILE, NETCDF_FILE) if name in contents]
     for name in written:
         write_atomically(out / name, contents[name])
     notes = [density_note, given.floor_note]
@@ -258,5 +321,62 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                      f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
                      "the water: give it an altimeter stop, yo's fifth argument)")
     return RunResult(record, used, check, plan, tuple(out / name for name in written),
-                     tuple(notes))
+                     tuple(notes), meta.get("replanning"), tuple(field_notes),
+                     config.currents)
 
+
+def _shore(mission: CheckedMission, every: str, plan_path: str | Path | None,
+           key_path: str | Path | None, runtime: str, tick_s: float,
+           confidence: float | None, scenario_file: str | Path | None):  # noqa: ANN202
+    """The shore of a run with replanning, and the plan and key the vehicle holds (the plan
+    signed with a key made for the run when none is given; for the C runtime, which reads
+    both from files, they are kept in a temporary directory for the run)."""
+    import secrets
+
+    from gliderplan.planner.planfile import read_plan_data
+    from gliderplan.planner.signing import check_signature, read_key, sign_plan
+    from gliderplan.sim.replanning import ShoreLoop
+    from gliderplan.sim.scenarios import read_spec
+
+    if every not in REPLAN_EVERY:
+        raise UsageError(f"--replan-every {every}: expected one of {', '.join(REPLAN_EVERY)}")
+    if plan_path is None:
+        raise UsageError("--replan-every: replanning changes a plan: give --plan")
+    held = read_plan_data(plan_path)
+    if key_path is not None:
+        key = read_key(key_path)
+        check_signature(held, key, str(plan_path))
+    else:
+        key = secrets.token_bytes(32)
+        held = sign_plan(held, key, 1)
+    shore = ShoreLoop(mission, held, key, tick_s=tick_s, confidence=confidence,
+                      spec=read_spec(scenario_file))
+    if key_path is None and runtime == "c":  # files for the runtime, removed after the run
+        import tempfile
+
+        from gliderplan.contract.files import write_atomically
+
+        shore.workdir = tempfile.TemporaryDirectory(prefix="gliderplan-vehicle-")
+        vehicle = Path(shore.workdir.name)
+        key_path, plan_path = vehicle / "vehicle.key", vehicle / "signed.plan"
+        write_atomically(key_path, key.hex() + "\n", private=True)
+        write_atomically(plan_path, held)
+    return shore, plan_path, key_path
+
+
+def _replans_csv(events: list[dict]) -> str:
+    """One line per surfacing: what the shore heard and did."""
+    columns = ("time_s", "used_j", "voltage_v", "plan_seq", "status", "quality",
+               "budget_left_j", "energy_left_j", "update_bytes")
+    lines = [",".join(columns)]
+    for event in events:
+        cells = []
+        for column in columns:
+            value = event.get(column, "")
+            if isinstance(value, list):
+                value = "+".join(map(str, value))
+            elif isinstance(value, float):
+                value = f"{value:.6g}"
+            cells.append(str(value))
+        lines.append(",".join(cells))
+    return "\n".join(lines) + "\n"

@@ -13,7 +13,17 @@ the unit its key names (`_m`, `_c`, `_s`, `_mps`, `_deg`, `_1`).
   off by `spike_c` with probability `spike_probability`);
 - `[vehicle]`: the relative spread of a figure the vehicle file gives no `sd` for
   (a calibrated file's own standard deviations and correlations come first);
-- `[battery]`: the share of the battery's rated energy that it really holds.
+- `[battery]`: the share of the battery's rated energy that it really holds;
+- `[drift]` (optional): where the truth departs from the model the plan rests on, the same
+  draws changed: `current_speed_factor` (stronger or weaker currents),
+  `usable_fraction_factor` (a weaker or stronger battery), and a vehicle figure's key with
+  the factor it is off by, e.g. `"devices.dvl.on_power" = 1.3` (a device 30 % hungrier;
+  one the hotel load holds leaves the rest of the glider's load as it was). `ScenarioSpec.
+  model()` is the file without it: what a plan or a replan believes.
+
+A file may start from a shipped one (`base = "default"`, or another's name: the file
+`scenarios_NAME.toml` of sim/data) and set only what differs, section by section; a shipped
+file is named by its NAME alone wherever a scenario file is asked for.
 
 Draws depend only on the scenario's seed, never on the worker that flies it: the run's
 seeds are children of one `numpy.random.SeedSequence`, one per scenario index.
@@ -22,8 +32,7 @@ seeds are children of one `numpy.random.SeedSequence`, one per scenario index.
 from __future__ import annotations
 
 import math
-import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from statistics import NormalDist
@@ -31,14 +40,20 @@ from statistics import NormalDist
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError
-from gliderplan.contract.files import read_input_text
+from gliderplan.contract.files import DataFileError, parse_data, read_input_text
 from gliderplan.power_models.draws import correlation_root
-from gliderplan.power_models.vehicle import FIGURES, Vehicle, figure_value, with_figures
+from gliderplan.power_models.vehicle import (
+    FIGURES,
+    Device,
+    Vehicle,
+    device_key,
+    figure_spec,
+    figure_value,
+    with_figures,
+)
 from gliderplan.sim.ocean import InternalWave, Thermocline
 from gliderplan.sim.science import SensorNoise
 from gliderplan.sim.vehicle import MAX_CURRENT_MPS, Current
-
-DEFAULT_FILE = "scenarios_default.toml"
 
 # Every quantity a scenario draws, in the order it draws them (the order fixes which
 # random number goes where, so that a seed means the same scenario in every run).
@@ -78,6 +93,17 @@ class Distribution:
     low: float = -math.inf  # bounds a normal is clipped to
     high: float = math.inf
 
+    def text(self) -> str:
+        """The distribution as written, for a reader: 'normal (mean 0.97, sd 0.03, within
+        0.8-1.02)', 'uniform 0.9-1', 'fixed 0.95'."""
+        if self.kind == "fixed":
+            return f"fixed {self.a:g}"
+        if self.kind == "uniform":
+            return f"uniform {self.a:g}-{self.b:g}"
+        bounds = f", within {self.low:g}-{self.high:g}" if math.isfinite(self.low) or \
+            math.isfinite(self.high) else ""
+        return f"normal (mean {self.a:g}, sd {self.b:g}{bounds})"
+
     def draw(self, rng: np.random.Generator) -> float:
         """One value; every kind takes exactly one number from `rng`, so that changing
         one distribution never shifts the draws of the others."""
@@ -105,6 +131,11 @@ class ScenarioSpec:
     sensors: dict[str, Distribution]
     vehicle_relative_sd: dict[str, float]  # vehicle figure key -> sd / value, by default
     battery: dict[str, Distribution]
+    drift: dict[str, float] = field(default_factory=dict)  # the truth off the model (factors)
+
+    def model(self) -> ScenarioSpec:
+        """What a plan believes: the file without its drift."""
+        return replace(self, drift={})
 
 
 @dataclass(frozen=True)
@@ -121,28 +152,88 @@ class Scenario:
     drawn: dict[str, float]  # every drawn number by key, for the results table
 
 
-def read_spec(path: str | Path | None = None) -> ScenarioSpec:
-    """A scenario file; None: the default that ships with gliderplan."""
-    if path is None:
-        text = resources.files("gliderplan.sim").joinpath("data", DEFAULT_FILE).read_text()
-        where = DEFAULT_FILE
+DEFAULT_NAME = "default"  # the shipped file read without one
+
+
+def shipped_names() -> tuple[str, ...]:
+    """The scenario files that ship with gliderplan, by name (`scenarios_NAME.toml`)."""
+    files = resources.files("gliderplan.sim").joinpath("data").iterdir()
+    return tuple(sorted(f.name[len("scenarios_"):-len(".toml")] for f in files
+                        if f.name.startswith("scenarios_") and f.name.endswith(".toml")))
+
+
+def _load(path: str | Path | None, depth: int = 0) -> tuple[str, dict]:
+    """(where, TOML tables) of a scenario file, a shipped one by name, with its base's
+    sections under its own."""
+    name = None if path is None else str(path)
+    if name is None or (name in shipped_names() and not Path(name).exists()):
+        where = f"scenarios_{name or DEFAULT_NAME}.toml"
+        text = resources.files("gliderplan.sim").joinpath("data", where).read_text()
     else:
-        where = str(path)
-        text = read_input_text(path, "scenario file")
+        where = name
+        text = read_input_text(name, "scenario file")
     try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ScenarioFileError(f"{where}: not valid TOML: {err}") from None
+        data = parse_data(text, where)
+    except DataFileError as err:
+        raise ScenarioFileError(str(err)) from None
+    base = data.pop("base", None)
+    if base is None:
+        return where, data
+    if not isinstance(base, str) or base not in shipped_names() or depth > 4:
+        raise ScenarioFileError(f"{where}: base: expected the name of a shipped scenario file "
+                                f"({', '.join(shipped_names())}), got {base!r}")
+    merged = _load(base, depth + 1)[1]
+    for key, value in data.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = {**merged[key], **value}
+        else:
+            merged[key] = value
+    return where, merged
+
+
+def read_spec(path: str | Path | None = None) -> ScenarioSpec:
+    """A scenario file (or a shipped one's name); None: the default that ships with
+    gliderplan."""
+    where, data = _load(path)
     if data.get("kind") != "scenarios":
         raise ScenarioFileError(f"{where}: kind: expected \"scenarios\", got "
                                 f"{data.get('kind')!r}")
-    unknown = set(data) - {"kind", "description", "ocean", "sensors", "vehicle", "battery"}
+    unknown = set(data) - {"kind", "description", "ocean", "sensors", "vehicle", "battery",
+                           "drift"}
     if unknown:
         raise ScenarioFileError(f"{where}: {sorted(unknown)[0]}: unknown section")
     spreads = _vehicle_spreads(where, data.get("vehicle", {}))
     return ScenarioSpec(where, _section(where, data, "ocean", OCEAN_KEYS),
                         _section(where, data, "sensors", SENSOR_KEYS), spreads,
-                        _section(where, data, "battery", BATTERY_KEYS))
+                        _section(where, data, "battery", BATTERY_KEYS),
+                        _drift(where, data.get("drift", {})))
+
+
+DRIFT_FACTORS = ("current_speed_factor", "usable_fraction_factor")
+
+
+def _drift(where: str, table: object) -> dict[str, float]:
+    """The [drift] section: factors by key, each finite and > 0."""
+    if not isinstance(table, dict):
+        raise ScenarioFileError(f"{where}: drift: expected a table")
+    drift = {}
+    for key, value in table.items():
+        if key == "source":
+            continue
+        if key not in DRIFT_FACTORS:
+            try:
+                figure_spec(key)
+            except KeyError:
+                raise ScenarioFileError(
+                    f"{where}: drift.{key}: neither {' nor '.join(DRIFT_FACTORS)} nor a "
+                    f"vehicle figure (one of {', '.join(FIGURES)}, or "
+                    "devices.NAME.on_power)") from None
+        if isinstance(value, bool) or not isinstance(value, int | float) \
+                or not (math.isfinite(value) and value > 0.0):
+            raise ScenarioFileError(f"{where}: drift.{key}: expected a factor > 0, got "
+                                    f"{value!r}")
+        drift[key] = float(value)
+    return drift
 
 
 def _section(where: str, data: dict, name: str, keys: tuple[str, ...]) -> dict[str, Distribution]:
@@ -166,9 +257,9 @@ def _within(where: str, dist: Distribution, low: float, high: float) -> Distribu
     """`dist`, if the values it is written with lie in [low, high]."""
     written = {"fixed": {"value": dist.a}, "uniform": {"low": dist.a, "high": dist.b},
                "normal": {"mean": dist.a, "low": dist.low, "high": dist.high}}[dist.kind]
-    for field, value in written.items():
+    for name, value in written.items():
         if math.isfinite(value) and not low <= value <= high:
-            raise ScenarioFileError(f"{where}: {field} {value:g} is outside [{low:g}, "
+            raise ScenarioFileError(f"{where}: {name} {value:g} is outside [{low:g}, "
                                     f"{high:g}]")
     return dist
 
@@ -261,8 +352,40 @@ def draw_scenario(spec: ScenarioSpec, vehicle: Vehicle, index: int,
                         depth_sigma_m=max(drawn["depth_sigma_m"], 0.0),
                         spike_probability=min(max(drawn["spike_probability_1"], 0.0), 1.0),
                         spike_c=drawn["spike_c"])
-    return Scenario(index, sim_seed, ocean, current, noise, with_figures(vehicle, figures),
-                    max(drawn["usable_fraction_1"], 0.0), drawn)
+    truth, usable = with_figures(vehicle, figures), max(drawn["usable_fraction_1"], 0.0)
+    if spec.drift:
+        truth, current, usable = _drifted(spec.drift, truth, current, usable)
+        drawn |= {f"drift.{k}": v for k, v in spec.drift.items()}
+    return Scenario(index, sim_seed, ocean, current, noise, truth, usable, drawn)
+
+
+def _drifted(drift: dict[str, float], vehicle: Vehicle, current: Current, usable: float
+             ) -> tuple[Vehicle, Current, float]:
+    """The drawn world with the truth's drift: the current's speed and the battery's usable
+    share scaled, each vehicle figure named multiplied; a device the hotel load holds
+    raises (or lowers) the hotel load by what it changes, so the rest of the glider's load
+    stays, and a device the vehicle file has no figure for gets its preset's, changed."""
+    from gliderplan.power_models.devices import sensor_on
+
+    speed = drift.get("current_speed_factor", 1.0)
+    scale = min(speed, MAX_CURRENT_MPS / max(math.hypot(current.north_mps, current.east_mps),
+                                             1e-12))
+    current = Current(current.north_mps * scale, current.east_mps * scale)
+    usable *= drift.get("usable_fraction_factor", 1.0)
+    figures = {}
+    for key, factor in drift.items():
+        if key in DRIFT_FACTORS:
+            continue
+        name = key[len("devices."):].rsplit(".", 1)[0] if key.startswith("devices.") else None
+        if name is not None and vehicle.device(name) is None:
+            on = sensor_on(vehicle, name).on_power_w
+            vehicle = replace(vehicle, devices=(*vehicle.devices, Device(name, "sensor", on)))
+        value = figure_value(vehicle, key)
+        figures[key] = value * factor
+        if name is not None and key == device_key(name) and name in vehicle.hotel_includes:
+            figures["hotel_power"] = figures.get("hotel_power", vehicle.hotel_w) \
+                + value * (factor - 1.0)
+    return with_figures(vehicle, figures), current, usable
 
 
 def draw_figures(vehicle: Vehicle, relative_sd: dict[str, float],

@@ -23,6 +23,7 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -34,9 +35,13 @@ from gliderplan.contract import (
     RUNTIME_READINGS_MASK,
 )
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
+from gliderplan.sim.currents import CurrentField
 from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean, SeaFloor
-from gliderplan.sim.vehicle import GliderSim
+from gliderplan.sim.vehicle import Current, GliderSim
+
+if TYPE_CHECKING:
+    from gliderplan.sim.bathymetry import Bathymetry
 
 # sent every tick: the glider's own flight sensors (not the runtime's readings)
 SENT_ALWAYS_MASK = FLIGHT_SENSORS_MASK & ~RUNTIME_READINGS_MASK
@@ -69,6 +74,9 @@ if _READINGS_ORDER != tuple(s.name for s in SENSORS) or len(SENSORS) != N_SENSOR
                       "order than the registry: update _READINGS_ORDER and the list")
 _NOISE_BLOCK = 4096  # random numbers drawn per numpy call
 SECONDS_PER_DAY = 86400.0
+# [s] between look-ups of a current field: a glider covers ~20 m in a minute, and a
+# field's grid is kilometres and hours apart
+CURRENT_LOOKUP_S = 60.0
 
 
 @dataclass(frozen=True)
@@ -137,10 +145,16 @@ class ScienceComputer:
     """The sensor array over a simulated glider in a simulated ocean."""
 
     def __init__(self, glider: GliderSim, ocean: Ocean, noise: SensorNoise, seed: int,
-                 tick_s: float, start_epoch_s: float = 0.0, floor: SeaFloor | None = None
-                 ) -> None:
+                 tick_s: float, start_epoch_s: float = 0.0,
+                 floor: SeaFloor | Bathymetry | None = None,
+                 currents: CurrentField | None = None) -> None:
         self.glider, self.ocean, self.noise, self.tick_s = glider, ocean, noise, tick_s
         self.floor = floor  # the sea floor (None: none, the altimeter out of range)
+        # a bathymetry grid (sim.bathymetry): the floor under the glider where it is
+        self.floor_by_position = getattr(floor, "by_position", False)
+        self.currents = currents  # the current where the glider is (None: the glider's own)
+        self._next_current_s = 0.0  # missiontime [s] of the next look-up in `currents`
+        self.dry_lookups = 0  # look-ups that found no water (the field's land)
         self.grounded_ticks = 0  # ticks the glider ended at the floor
         self.first_grounded_s = math.nan  # missiontime [s] of the first
         self.start_epoch_s = start_epoch_s  # UTC of missiontime 0 [s since 1970]
@@ -170,10 +184,19 @@ class ScienceComputer:
         g, noise = self.glider, self.noise
         time_s = self._time_s = tick * self.tick_s
         if self.floor is not None:
-            g.floor_m = floor = self.floor.depth_at(time_s)
+            floor = self.floor.depth_under(g.lat_deg, g.lon_deg) if self.floor_by_position \
+                else self.floor.depth_at(time_s)
+            g.floor_m = floor if floor == floor else math.inf  # NaN: over the grid's land
             altitude = floor - g.depth_m
         else:
             altitude = math.nan
+        if self.currents is not None and time_s >= self._next_current_s:
+            g.current = Current(*self.currents.at(g.lat_deg, g.lon_deg,
+                                                  self.start_epoch_s + time_s, g.depth_m))
+            if not math.isfinite(g.current.north_mps + g.current.east_mps):
+                g.current = Current()  # no water in the field here (its land mask): still
+                self.dry_lookups += 1
+            self._next_current_s = time_s + CURRENT_LOOKUP_S
         z_temp, z_depth = self.normal.next()
         temp, salinity = self.ocean.water_at(g.depth_m, time_s)
         self.water_temperature_c = temp
@@ -201,12 +224,13 @@ class ScienceComputer:
         return mask, values
 
     def apply(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
-              heading_rad: float, flags: int, sensor_power: int) -> None:
+              heading_rad: float, flags: int, sensor_power: int, speed_mps: float = 0.0,
+              thrust_w: float = 0.0) -> None:
         """Fly one tick under a COMMAND and switch the sensors it powers."""
         self.sensor_power = sensor_power
         g = self.glider
         g.step(depth_target_m, pitch_rad, ballast_cc, heading_rad,
-               bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE))
+               bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE), speed_mps, thrust_w)
         if g.grounded:
             if not self.grounded_ticks:
                 self.first_grounded_s = self._time_s

@@ -47,14 +47,20 @@ class LoggedOcean:
 
 def science_logs(path: str | Path) -> list[Path]:
     """The science logs a path names: one *.ebd file, or every *.ebd in a directory."""
+    return logs_in(path, "*.ebd", "science log")
+
+
+def logs_in(path: str | Path, pattern: str, what: str) -> list[Path]:
+    """The Slocum logs (`what`: 'science log', 'flight log') a path names: one file
+    matching `pattern` ('*.ebd'), or every one in a directory."""
     path = Path(path)
     if path.is_dir():
-        files = sorted(path.glob("*.ebd"))
+        files = sorted(path.glob(pattern))
         if not files:
-            raise OceanFileError(f"{path}: no Slocum science logs (*.ebd) in this directory")
+            raise OceanFileError(f"{path}: no Slocum {what}s ({pattern}) in this directory")
         return files
-    if path.suffix.lower() != ".ebd":
-        raise OceanFileError(f"{path}: not a Slocum science log (*.ebd) or a directory of them")
+    if path.suffix.lower() != pattern[1:]:
+        raise OceanFileError(f"{path}: not a Slocum {what} ({pattern}) or a directory of them")
     if not path.is_file():
         raise OceanFileError(f"{path}: no such file")
     return [path]

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "gp_machine.h"
+#include "gp_update.h"
 
 size_t gps_step_size(void)
 {
@@ -70,9 +71,55 @@ void gps_step_tick(gps_step *s, uint32_t tick, uint32_t mask, const float *value
     }
     gp_runtime_tick(&s->runtime, s->mission, &s->options, tick, cmd, report);
     note_entries(s, report);
-    if (!report->fault) {  /* a refused event ends the run: the board never sleeps on */
+    if (report->envelope.limit != GP_LIMIT_NONE) {
+        gp_envelope_say(&s->mission->envelope, &report->envelope,
+                        s->runtime.sensors[GP_SENSOR_MISSIONTIME],
+                        s->mission->states[report->envelope_state].name, s->envelope_note,
+                        sizeof s->envelope_note);
+    }
+    if (!report->fault && !gps_step_releases(s, report)) {  /* a refused event ends the run: the board never sleeps on */
         s->suspends += (uint32_t)gp_runtime_sleeps(&s->runtime, s->mission, &s->options);
     }
+}
+
+int gps_step_releases(const gps_step *s, const gp_tick_report *report)
+{
+    return gp_envelope_ends(&s->mission->envelope, &report->envelope)
+           && s->mission->envelope.action == GP_ENVELOPE_FAULT;
+}
+
+/**
+ * @brief A plan update received at the surface (docs/plan-update.md), applied by the
+ *        runtime's own gp_update_apply against the plan file in force `held` (`held_len`
+ *        bytes) with the vehicle's `key`, as the board binary applies one from its link:
+ *        on GP_UPDATE_APPLIED the new plan is flown from the next tick and its file is in
+ *        `out` (GP_MAX_PLAN_BYTES bytes, `*out_len`).
+ * @param message what became of it (GP_UPDATE_MESSAGE_LEN bytes)
+ * @return a gp_update_status
+ */
+int gps_step_update(gps_step *s, const uint8_t *update, size_t len, const char *held,
+                    size_t held_len, const uint8_t *key, char *out, size_t *out_len,
+                    char *message)
+{
+    gp_plan_auth auth = {.last_seq = s->options.plan ? s->plan.seq : 0};
+    memcpy(auth.key, key, sizeof auth.key);
+    if (s->options.plan) {
+        memcpy(auth.last_tag, s->plan.tag, sizeof auth.last_tag);
+    }
+    gp_plan plan;
+    gp_update_status status = gp_update_apply(update, len, held_len ? held : NULL, held_len,
+                                              &auth, s->mission, out, out_len, &plan, message);
+    if (status == GP_UPDATE_APPLIED) {
+        s->plan = plan;
+        s->options.plan = &s->plan;
+    }
+    return (int)status;
+}
+
+/** @brief The envelope guard's words on its last breach, into `out` (GPS_NOTE_LEN). */
+void gps_step_envelope_note(const gps_step *s, char *out)
+{
+    memcpy(out, s->envelope_note, sizeof s->envelope_note);
 }
 
 /* ---- what the runtime holds ------------------------------------------------------ */
@@ -81,6 +128,12 @@ void gps_step_tick(gps_step *s, uint32_t tick, uint32_t mask, const float *value
 uint32_t gps_step_events(const gps_step *s)
 {
     return s->runtime.machine.event_count;
+}
+
+/** @brief The sequence number of the plan in force (0: none, or unsigned). */
+uint32_t gps_step_plan_seq(const gps_step *s)
+{
+    return s->options.plan ? s->plan.seq : 0;
 }
 
 /** @brief Ticks after which the board slept until the next frame. */

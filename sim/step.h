@@ -13,6 +13,8 @@
 #include "gp_plan.h"
 #include "gp_runtime.h"
 
+#define GPS_NOTE_LEN 256  /**< bytes of the envelope guard's words, NUL included */
+
 /** The runtime in-process: what the board binary keeps between SENSORS frames, plus what
  *  the simulator reports (the variables each state was first entered with). */
 typedef struct {
@@ -23,6 +25,7 @@ typedef struct {
     uint32_t suspends;                      /**< ticks after which the board slept */
     uint8_t entered[GP_MAX_STATES];         /**< the state was entered */
     double entry_vars[GP_MAX_STATES][GP_MAX_VARIABLES];  /**< its variables then */
+    char envelope_note[GPS_NOTE_LEN];       /**< the guard's words on its last breach */
 } gps_step;
 
 /**
@@ -32,5 +35,9 @@ typedef struct {
  */
 void gps_step_tick(gps_step *s, uint32_t tick, uint32_t mask, const float *values,
                    gp_command *cmd, gp_tick_report *report);
+
+/** @brief Whether a tick's breach of the envelope hands control back (the fault action):
+ *         the board binary releases the glider, the run ends. */
+int gps_step_releases(const gps_step *s, const gp_tick_report *report);
 
 #endif /* GPS_STEP_H */

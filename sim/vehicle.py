@@ -9,8 +9,10 @@ Commanded to the surface it climbs, takes a GPS fix (`surface_s`) that resets it
 reckoning, makes its Iridium call (`iridium_s`) and waits there. It cannot go below the
 sea floor (`floor_m`, which the science computer sets each tick): a glide or a hover
 that would take it deeper stops at the floor, and the tick counts as grounded. Horizontally it flies
-the commanded heading; a depth-averaged current drifts the true position but not the
-dead-reckoned one, which is what the glider reports (Slocum DDMM.MMMM) until the next fix.
+the commanded heading (upstream of it, with current correction: `sim.navigation`); the
+current drifts the true position, and the glider's estimate, which it reports (Slocum
+DDMM.MMMM), moves with the current it measured at its last GPS fix (`measured`), the
+fix correcting both.
 
 Through a stratified ocean (`Stratification`: `sim --ocean`) the net buoyancy carries the
 water's in-situ density at the glider's depth, (Vg - trim)(1 - rho0 / rho(z)) (flight.py's
@@ -34,12 +36,17 @@ from gliderplan.power_models.flight import (
     glide_geometry,
     net_buoyancy_cc,
 )
+from gliderplan.power_models.propulsion import thrust_assisted_speed
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
-from gliderplan.sim.geo import move_degrees
+from gliderplan.sim.geo import move_degrees, offset_m
+from gliderplan.sim.navigation import corrected_heading, updated_current
 
 SURFACE_DEPTH_M = 0.3  # shallower than this the antenna is out of the water
 HOVER_RATE_M_S = 0.05  # assumption: small buoyancy corrections move a hovering glider slowly
+# assumption: a propelled vehicle changes depth along a path at most this steep (a glider's
+# nominal 26 deg; a LAUV's fins allow more, which only shortens the dive to its depth)
+PROPELLED_PATH_RAD = 0.454
 PITCH_RATE_RAD_S = 0.1  # assumption: the battery moves ~26 deg in under 5 s
 MAX_CURRENT_MPS = 10.0  # [m s-1] beyond any ocean current (the Gulf Stream's core: ~2.5)
 
@@ -97,9 +104,12 @@ class GliderSim:
 
     def __init__(self, vehicle: Vehicle, tick_s: float, lat_deg: float, lon_deg: float,
                  current: Current = Current(), depth_m: float = 0.0,
-                 water: DensityProfile | None = None) -> None:
+                 water: DensityProfile | None = None, correction_speed_mps: float = 0.0,
+                 measured: Current = Current()) -> None:
         """`water`: the in-situ density the glider flies through (None: uniform water of
-        its reference density)."""
+        its reference density). `correction_speed_mps` [m s-1]: the speed through the
+        water its current correction steers with (0: no current correction);
+        `measured`: the depth-averaged current it knows at the start (`m_water_vx/vy`)."""
         self.vehicle = vehicle
         self.stratification = None if water is None else Stratification.of(vehicle.flight,
                                                                            water)
@@ -111,6 +121,9 @@ class GliderSim:
         self.heading_rad = 0.0
         self.lat_deg, self.lon_deg = lat_deg, lon_deg  # true position
         self.dr_lat_deg, self.dr_lon_deg = lat_deg, lon_deg  # dead reckoning
+        self.measured = measured  # the current its dead reckoning flies with
+        self.ticks_since_fix = 0  # ticks dead reckoned since the last GPS fix
+        self.correction_speed_mps = correction_speed_mps
         self.surface_time_s = -1.0  # time at the surface in this surfacing; < 0: not surfaced
         self.surfacings = 0
         self.phase = GLIDE
@@ -122,6 +135,7 @@ class GliderSim:
         self._geometry: dict[float, tuple[float, float]] = {}
         self.floor_m = math.inf  # [m] the sea floor under the glider this tick (inf: none)
         self.grounded = False  # the last step stopped at the sea floor
+        self.propulsion_w = 0.0  # [W] the propeller's or thruster's draw in the last step
 
     def glide_speeds(self, pitch_rad: float) -> tuple[float, float]:
         """(u, w) [m s-1] per square root of the net buoyancy [cc] at a pitch [rad]
@@ -136,22 +150,66 @@ class GliderSim:
         return per_root
 
     def step(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
-             heading_rad: float, heading_valid: bool, surface: bool) -> None:
-        """Fly one tick under a command (COMMAND fields, docs/protocol.md)."""
+             heading_rad: float, heading_valid: bool, surface: bool, speed_mps: float = 0.0,
+             thrust_w: float = 0.0) -> None:
+        """Fly one tick under a command (COMMAND fields, docs/protocol.md): with a speed
+        [m/s] level on the propeller, else a glide (assisted by `thrust_w` [W] of a
+        thruster) or a hover."""
         self.pumped_out_cc = self.pumped_in_cc = 0.0
         self.inflection = self.grounded = False
+        self.propulsion_w = 0.0
+        propulsion = self.vehicle.propulsion
         if heading_valid:
-            self.heading_rad = heading_rad
+            through = self.correction_speed_mps
+            if through and speed_mps > 0.0 and propulsion is not None:  # on the propeller
+                through = min(max(speed_mps, propulsion.min_speed_mps), propulsion.max_speed_mps)
+            self.heading_rad = heading_rad if not through else corrected_heading(
+                heading_rad, through, self.measured.north_mps, self.measured.east_mps)
         if surface and self.depth_m <= SURFACE_DEPTH_M:
             self._at_surface(self.tick_s)
             return
         self.surface_time_s = -1.0
-        dz, distance, hovering = self.below_surface(depth_target_m, pitch_rad, ballast_cc)
+        if speed_mps > 0.0 and propulsion is not None:
+            dz, distance = self._propelled(depth_target_m, speed_mps)
+            hovering = False
+        else:
+            dz, distance, hovering = self.below_surface(depth_target_m, pitch_rad, ballast_cc)
+            if thrust_w > 0.0 and propulsion is not None and propulsion.is_thruster:
+                dz, distance = self._assisted(dz, distance, thrust_w)
         depth = self.depth_m + dz if hovering else max(0.0, self.depth_m + dz)
         if depth > self.floor_m:  # the sea floor stops it
             depth, self.grounded = self.floor_m, True
         self.depth_m = depth
         self._drift(distance, self.tick_s)
+
+    def _propelled(self, depth_target_m: float, speed_mps: float) -> tuple[float, float]:
+        """One tick on the propeller at `speed_mps` through the water (held to the
+        propulsion model's range), toward the target depth along a path no steeper than
+        PROPELLED_PATH_RAD; its draw from the model. Returns (depth change [m], horizontal
+        distance through the water [m])."""
+        propulsion = self.vehicle.propulsion
+        speed = min(max(speed_mps, propulsion.min_speed_mps), propulsion.max_speed_mps)
+        self.propulsion_w = float(propulsion.power_w(speed))
+        self.phase = GLIDE
+        path = speed * self.tick_s
+        most = path * math.sin(PROPELLED_PATH_RAD)
+        dz = min(max(depth_target_m - self.depth_m, -most), most)
+        self.pitch_rad = -math.asin(dz / path)  # nose down to dive
+        return dz, math.sqrt(path * path - dz * dz)
+
+    def _assisted(self, dz_m: float, distance_m: float, thrust_w: float
+                  ) -> tuple[float, float]:
+        """A glide tick with the thruster commanded to `thrust_w` [W]: faster along the same
+        path by `thrust_assisted_speed` (the planner's model), drawing its power. Returns
+        (depth change [m], distance [m])."""
+        propulsion, fl = self.vehicle.propulsion, self.vehicle.flight
+        self.propulsion_w = propulsion.assist_draw_w(thrust_w)
+        speed = distance_m / self.tick_s
+        if speed <= 0.0:  # pumping or turning in place: the thruster runs, nothing moves
+            return dz_m, distance_m
+        faster = float(thrust_assisted_speed(speed, propulsion.thrust_power_w(thrust_w),
+                                             fl.rho_kg_m3, fl.wing_area_m2, fl.drag_cd0)) / speed
+        return dz_m * faster, distance_m * faster
 
     def below_surface(self, depth_target_m: float, pitch_rad: float, ballast_cc: float
                       ) -> tuple[float, float, bool]:
@@ -220,6 +278,23 @@ class GliderSim:
         u, w = per_root[0] * root, per_root[1] * root
         return (-w if ballast_cc > 0.0 else w) * glide_s, u * glide_s
 
+    @property
+    def flows(self) -> bool:
+        """Whether a current moves the glider or its estimate."""
+        c, m = self.current, self.measured
+        return c.north_mps != 0.0 or c.east_mps != 0.0 or m.north_mps != 0.0 \
+            or m.east_mps != 0.0
+
+    def _fix(self) -> None:
+        """A GPS fix: the measured current corrected by the fix's distance from the
+        estimate over the time since the previous fix, the estimate set to the fix."""
+        north, east = offset_m(self.dr_lat_deg, self.dr_lon_deg, self.lat_deg, self.lon_deg)
+        self.measured = Current(*updated_current(
+            self.measured.north_mps, self.measured.east_mps, north, east,
+            self.ticks_since_fix * self.tick_s))
+        self.ticks_since_fix = 0
+        self.dr_lat_deg, self.dr_lon_deg = self.lat_deg, self.lon_deg
+
     def _at_surface(self, dt: float) -> None:
         """GPS fix, then the Iridium call, then wait (antenna up)."""
         v = self.vehicle
@@ -230,22 +305,26 @@ class GliderSim:
         elapsed = self.surface_time_s
         self.surface_time_s += dt
         if elapsed < v.surface_s <= self.surface_time_s:
-            self.dr_lat_deg, self.dr_lon_deg = self.lat_deg, self.lon_deg  # GPS fix
+            self._fix()
         in_call = v.surface_s <= elapsed < v.surface_s + v.iridium_s
         self.phase = IRIDIUM if in_call else SURFACE
         self._drift(0.0, dt)
 
     def _drift(self, distance_m: float, dt: float) -> None:
-        """Move `distance_m` [m] along the heading through the water, plus the current."""
+        """Move `distance_m` [m] along the heading through the water, plus the current;
+        the estimate with the current measured."""
         north = distance_m * math.cos(self.heading_rad)
         east = distance_m * math.sin(self.heading_rad)
-        if north or east:
+        m = self.measured
+        dr_north, dr_east = north + m.north_mps * dt, east + m.east_mps * dt
+        if dr_north or dr_east:
             self.dr_lat_deg, self.dr_lon_deg = move_degrees(self.dr_lat_deg, self.dr_lon_deg,
-                                                            north, east)
-        c = self.current
-        if c.north_mps == 0.0 and c.east_mps == 0.0:
+                                                            dr_north, dr_east)
+        self.ticks_since_fix += 1
+        if not self.flows:
             self.lat_deg, self.lon_deg = self.dr_lat_deg, self.dr_lon_deg
             return
+        c = self.current
         north += c.north_mps * dt
         east += c.east_mps * dt
         self.lat_deg, self.lon_deg = move_degrees(self.lat_deg, self.lon_deg, north, east)

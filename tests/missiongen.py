@@ -272,26 +272,35 @@ def plans(draw, info: list[dict]) -> list[tuple]:
     return schedule
 
 
-def plan_text(mission, schedule: list[tuple], clock_mhz: float) -> bytes:
-    """The plan file of a drawn schedule for a checked mission."""
+def plan_text(mission, schedule: list[tuple], clock_mhz: float, limits) -> bytes:
+    """The plan file of a drawn schedule for a checked mission, held to the mission's
+    `limits` as every plan is (contract.plan_check): its budget the battery less its
+    reserve, its prediction its states' sum, each glide's pitch and volume within the
+    vehicle's."""
     computer = "none 0" if mission.computer.is_none else f"{mission.computer.board} " \
                                                          f"{clock_mhz:g}"
+    state_j = min(1000.0, limits.max_budget_j / (2 * len(mission.states)))
+    low, high = limits.pitch_range_rad
     lines = ["GPPLAN 3", f"mission {mission.name}", f"hash {mission.hash}",
-             f"computer {computer}", "budget_j 100000", "predicted_j 50000",
+             f"computer {computer}", f"budget_j {limits.max_budget_j:.9g}",
+             f"predicted_j {state_j * len(mission.states):.9g}",
              "components hotel", "assumptions 0", f"states {len(mission.states)}"]
-    for state, (cycle, sleep, sensors, alternatives) in zip(mission.states, schedule,
-                                                            strict=True):
+    for s, (state, (cycle, sleep, sensors, alternatives)) in enumerate(
+            zip(mission.states, schedule, strict=True)):
         clock = 0 if mission.computer.is_none else clock_mhz
         lines.append(f"state {state.name} {clock:g} {cycle} {len(sensors)} "
                      f"{len(alternatives)}")
         if sleep:
             lines.append("power 1 200000")
-        lines += ["predict 1000 1 10", "energy 1000"]
+        lines += [f"predict {state_j:.9g} 1 10", f"energy {state_j:.9g}"]
         lines += [f"sensor {name} {period} {on}" for name, period, on in sensors]
         shares = [format(share, ".9g") for share, _, _ in alternatives]
-        lines += [f"profile {i} {share} {pitch} {ballast:g} 0.3"
-                  for i, (share, (_, pitch, ballast)) in enumerate(zip(shares, alternatives,
-                                                                       strict=True))]
+        for k, (share, (_, pitch, ballast)) in enumerate(zip(shares, alternatives,
+                                                             strict=True)):
+            least = limits.min_ballast_cc[s][k] if limits.min_ballast_cc else 0.0
+            pitch = min(max(pitch, low + 0.01), high - 0.01)
+            ballast = min(max(ballast, math.floor(least) + 1.0), limits.max_ballast_cc)
+            lines.append(f"profile {k} {share} {pitch:g} {ballast:g} 0.3")
         lines.append("end")
     body = "".join(line + "\n" for line in lines).encode()
     return body + f"crc32 {zlib.crc32(body):08x}\n".encode()
@@ -344,7 +353,8 @@ def checked(case: Case):
     mission = result.mission
     if case.plan is None:
         return mission, None
-    return mission, plan_text(mission, case.plan, mission.computer.clock_mhz or 0.0)
+    return mission, plan_text(mission, case.plan, mission.computer.clock_mhz or 0.0,
+                              limits_of(mission))
 
 
 def limits_of(mission):
@@ -365,8 +375,9 @@ def compare(case: Case, mission, plan_bytes: bytes | None, tables: int | None = 
     """Step `mission` (and its plan) on the case's readings under the Python reference
     executor and the compiled runtime's step (`tables`: the address of its compiled
     tables, else built here): AssertionError at the first tick on which they differ, in
-    the COMMAND, the runtime's own readings or a refused event; then in the variables, the
-    variables each state was entered with, the events fired and the board's sleeps."""
+    the COMMAND, the runtime's own readings or a refused event; then in the envelope
+    guard's words, the variables, the variables each state was entered with, the events
+    fired and the board's sleeps."""
     from gliderplan.contract import NO_STATE, TransitionKind
     from gliderplan.language.codegen_c import own_read_mask
     from gliderplan.language.semantics import MissionFault
@@ -377,7 +388,7 @@ def compare(case: Case, mission, plan_bytes: bytes | None, tables: int | None = 
     limits = limits_of(mission)
     plan = None if plan_bytes is None else read_plan_bytes(plan_bytes, mission)
     reference = PythonRuntime(mission, plan, limits.default_ballast_cc, not case.naive,
-                              limits.max_ballast_cc)
+                              limits.max_ballast_cc, limits.envelope, limits)
     step = CStep(mission, plan_bytes, limits, case.naive, tables)
     reads_distance = own_read_mask(mission) >> SENSOR_BY_NAME["wptdist"].index & 1
     own = [SENSOR_BY_NAME[n].index for n in ("halfcycle", "wptdist", "wptreached")]
@@ -408,6 +419,7 @@ def compare(case: Case, mission, plan_bytes: bytes | None, tables: int | None = 
             if reads_distance:
                 assert _bits(distance) == _bits(theirs[1]), f"{where}: wptdist"
         live = expected.state != NO_STATE
+    assert reference.envelope_notes == step.envelope_notes, "the envelope guard's words"
     assert reference.event_count == step.events_fired
     assert reference.suspends == step.suspends, "suspends"
     variables = reference.machine.variables if reference.machine else {}

@@ -34,6 +34,9 @@ CASES = [
         ["compile", "none.mission", "-o", "out"], ["sim", "none.mission", "-o", "out"],
         ["montecarlo", "none.mission", "--scenarios", "2", "-o", "out"],
         ["compare-sbc", "none.mission"], ["import-slocum", "none.mission", "-o", "out"],
+        ["fleet", "check", "none.mission"], ["fleet", "plan", "none.mission"],
+        ["fleet", "sim", "none.mission", "-o", "out"],
+        ["fleet", "montecarlo", "none.mission", "--scenarios", "2", "-o", "out"],
     ], ExitCode.USAGE, "none.mission: no such file"),
     ("a directory for a mission", [
         ["check", "."], ["fmt", "."], ["plan", "."], ["compile", ".", "-o", "out"],
@@ -149,10 +152,12 @@ CASES = [
     ("a scheduler address Dask cannot read", [  # once an internal error, exit 70
         ["montecarlo", FIG2, "--scenarios", "2", "--scheduler", "nowhere", "-o", "out"],
     ], ExitCode.USAGE, "--scheduler nowhere: expected local or tcp://HOST:PORT"),
-    ("a yo deeper than the vehicle can climb back from", [  # once an internal error
+    ("a yo deeper than the vehicle's rating", [  # once an internal error
         ["plan", "{deep}"], ["compare-sbc", "{deep}"], ["report", "{deep}", "-o", "out"],
         ["sim", "{deep}", "-o", "out"],  # the simulated glider once sank to 501 m, exit 0
         ["montecarlo", "{deep}", "--scenarios", "2", "-o", "out"],
+    ], ExitCode.BAD_INPUT, "max depth 500 m is beyond the vehicle's rated 100 m"),
+    ("a yo deeper than the vehicle can climb back from", [  # once an internal error
         ["power", "energy", "--max-depth", "500"],
         ["power", "speed", "--hotel-w", "1", "--max-depth", "500"],
     ], ExitCode.BAD_INPUT, "the glider cannot climb below "),
@@ -245,6 +250,7 @@ def test_a_named_pipe_in_a_mission_is_refused_at_once(tmp_path):
                  ["plan", FIG2, "--sign", "pipe.toml"], ["import-slocum", "pipe.toml", "-o", "o"]):
         process = gliderplan(*argv, cwd=tmp_path, stdout=subprocess.DEVNULL)
         _, err = process.communicate(timeout=120)
+        err = err.replace(f"{tmp_path}/", "")  # the mission's files are found beside it
         assert process.returncode == ExitCode.USAGE, (argv, err)
         assert err.startswith(f"gliderplan {argv[0]}: error: pipe.toml: "), err
         assert "not a regular file" in err, err

@@ -28,12 +28,14 @@ from gliderplan.language.codegen_c import (
     read_mask,
 )
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
+from gliderplan.power_models import load_vehicle
 from gliderplan.runtime.build import TARGETS
 
 ROOT = Path(__file__).resolve().parents[1]
 # the default vehicle's full stroke and the TS-7800's clocks, as `compile` passes them
+ENVELOPE = load_vehicle("slocum_g2_shallow").envelope
 LIMITS = FlightLimits(default_ballast_cc=233.0, max_ballast_cc=233.0,
-                      clocks_mhz=(300.0, 500.0))
+                      clocks_mhz=(300.0, 500.0), envelope=ENVELOPE)
 EXAMPLES = sorted((ROOT / "examples").glob("*.mission"))
 GOLDEN = ROOT / "tests" / "golden" / "fig2.c"
 INCLUDE = ROOT / "runtime" / "include"
@@ -121,7 +123,7 @@ def test_constants_are_decimal_only_when_the_decimal_is_exact():
 
 def test_the_vehicle_and_board_limits_are_inputs_not_files_read():
     mission = ir.CheckedMission(name="m", states=(_state("s"),), vehicle="no/such/glider.toml")
-    source = generate_c(mission, FlightLimits(123.5, 200.0, (133.0,)))
+    source = generate_c(mission, FlightLimits(123.5, 200.0, (133.0,), envelope=ENVELOPE))
     assert "    .default_ballast_cc = 123.5,\n    .max_ballast_cc = 200.0,\n" in source
     assert "board_clocks_mhz[1] = {133.0};" in source and "    .n_clocks = 1,\n" in source
 

@@ -74,7 +74,7 @@ def test_check_accepts_computer_none_and_carries_it_into_the_json(fig2_none, cap
     mission = checked(fig2_text())
     assert mission.computer == ir.Computer("none") and mission.computer.is_none
     assert "computer" not in mission.defaults_used
-    assert run_json(capsys, "check", str(fig2_none))["computer"] == {"board": "none",
+    assert run_json(capsys, "check", str(fig2_none))["mission"]["computer"] == {"board": "none",
                                                                     "clock_mhz": None}
     assert mission.hash != checked(fig2_text("computer ts7800")).hash
     assert "\ncomputer none\n" in format_source(fig2_text())
@@ -144,8 +144,8 @@ def test_the_plan_file_round_trips_and_the_readers_hold_none_to_clock_0(fig2_non
                                             "clock to set"):
         read_plan_bytes(data.replace(b"computer none 0", b"computer none 300"))
     board_plan = plan_mission(mission, load_hardware(mission, computer="ts7800@300")).plan
-    with pytest.raises(PlanFileError, match="clock 300 MHz: the mission names no board "
-                                            r"\(computer none\)"):
+    with pytest.raises(PlanFileError, match=r"4: computer ts7800: the mission flies on board "
+                                            r"none \(plan again with --computer none\)"):
         read_plan_bytes(write_plan_bytes(board_plan), mission, limits=flight_limits(mission))
     fig2 = checked(fig2_text("computer ts7800"))
     on_fig2 = plan_mission(fig2, load_hardware(fig2, computer="none")).plan
@@ -249,7 +249,8 @@ def test_the_runtime_flies_a_none_plan_on_a_boards_build_and_refuses_the_reverse
     capsys.readouterr()
     assert main(["compile", str(fig2_none), "--target", "host", "--plan", str(board_plan),
                  "-o", str(tmp_path / "none")]) == ExitCode.BAD_INPUT
-    assert "the mission names no board (computer none)" in capsys.readouterr().err
+    assert "line 4: computer ts7800: the mission flies on board none (plan again with " \
+        "--computer none)" in capsys.readouterr().err
 
 
 # ---- what a board costs ---------------------------------------------------------------

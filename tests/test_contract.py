@@ -19,6 +19,7 @@ from gliderplan.language import check_source
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.registry import PROFILES, ROUTES
 from gliderplan.planner.hardware import parse_battery
+from gliderplan.power_models import load_vehicle
 from gliderplan.power_models.battery import read_battery_file
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -165,7 +166,8 @@ def test_check_refuses_one_past_each_limit_at_its_line(what, fits, too_big, wher
                          ids=[case[0] for case in LIMITS[:4]])
 def test_what_check_accepts_at_a_limit_the_code_generator_accepts(what, fits):
     mission = check_source(_source(**fits), "m.mission").mission
-    limits = FlightLimits(200.0, 233.0, (300.0,))
+    limits = FlightLimits(200.0, 233.0, (300.0,),
+                          envelope=load_vehicle("slocum_g2_shallow").envelope)
     assert "const gp_mission gp_mission_table" in generate_c(mission, limits)
 
 

@@ -613,14 +613,17 @@ def test_compiled_altimeter_stop_turns_the_dives_as_the_python_executor_does(cac
     assert mask >> SENSOR_BY_NAME["altitude"].index & 1  # the routine reads the altimeter
     vehicle = load_vehicle(mission.vehicle)
     reference = PythonRuntime(mission, None, vehicle.unplanned_ballast_cc, True,
-                              vehicle.max_ballast_cc)
+                              vehicle.max_ballast_cc, vehicle.envelope)
     process = line.start([str(tmp_path / "bin" / mission.name)])
     link = line.link()
     link.wait_hello(30)
     rng = random.Random(seed)
     depth, turns = 3.0, 0
     for tick in range(4000):
-        altitude = rng.choice([math.nan, 40.0 - depth, 4.0, 3.99, 4.01, rng.uniform(0, 9)])
+        # near the floor (40 m) readings about the stop; above it, none or the floor's: a
+        # floor within the stop of the yo's top would turn it every tick (the envelope)
+        altitude = rng.choice([math.nan, 40.0 - depth, 4.0, 3.99, 4.01, rng.uniform(0, 9)]
+                              if depth > 30.0 else [math.nan, 40.0 - depth])
         values = {0: tick * TICK_S, 1: f32(depth), 5: f32(altitude), 6: 5441.0, 7: 647.0,
                   9: f32(rng.uniform(8.0, 20.0))}
         values = {i: v for i, v in values.items() if mask >> i & 1}

@@ -61,7 +61,7 @@ def test_the_forecast_adds_up_by_device_and_states_its_interval():
     low, high = data["energy_interval_j"]
     assert low < data["energy_j"] < high
     assert data["duration_s"] == pytest.approx(2 * DAY)
-    assert data["yos"] > 100 and data["surfacings"] == 3  # at 12, 24 and 36 h
+    assert data["yos"] > 100 and data["surfacing_count"] == 3  # at 12, 24 and 36 h
     assert data["yos_interval"][0] <= data["yos"] <= data["yos_interval"][1]
     assert data["yos_interval"][1] > data["yos_interval"][0]  # the flight figures' spread
     assert data["devices"]["computer"] == 0.0  # computer none
@@ -112,7 +112,7 @@ def test_forecast_of_a_slocum_mission_runs_on_its_own_computers(capsys):
     # nsb3 samples its CTD and FLNTU while it yos; its logger and DVL stay off
     assert data["devices"]["ctd"] > 0 and data["devices"]["optics"] > 0
     assert "dvl" not in data["devices"] and "logger" not in data["devices"]
-    assert data["surfacings"] == pytest.approx(10 * 8, abs=2)  # every 3 h
+    assert data["surfacing_count"] == pytest.approx(10 * 8, abs=2)  # every 3 h
     # what the import could not carry over is an assumption of the forecast
     assert any(a.startswith("import-slocum: ") and "d_use_pitch 1" in a
                for a in data["assumptions"])
@@ -244,3 +244,40 @@ def test_the_water_of_a_glider_s_logs_is_the_water_flown(capsys):
     low, high = (float(x) for x in water.split("(TEOS-10) ")[1].split(" kg/m3")[0].split("-"))
     assert 1000.0 < low <= high < 1012.0  # the Baltic's brackish water, not the ocean's
     assert data["energy_interval_j"][0] < data["energy_j"] < data["energy_interval_j"][1]
+
+
+def test_forecast_gives_every_surfacing_s_time_position_and_ellipse(capsys, tmp_path):
+    """nsb3's goto list heads north-east from its south-west start: so must its
+    surfacings, later and less sure each time; written as GeoJSON and KML."""
+    if not MISSIONS.is_dir():
+        pytest.skip("the Slocum missions are not present")
+    mi = str(MISSIONS / "nsb3" / "nsb3.mi")
+    out = tmp_path / "s.geojson"
+    data = _forecast(capsys, mi, "--duration", "12h", "--start", "54.20,7.00,2016-06-23T12:00Z",
+                     "--currents", "0.05,0", "--surfacings-out", str(out))
+    surfacings = data["surfacings"]
+    assert len(surfacings) == round(data["surfacing_count"]) == 4
+    assert all(set(s) >= {"time_s", "lat", "lon", "ellipse_m"} for s in surfacings)
+    lats = [s["lat"] for s in surfacings]
+    # it starts at the surface (prepare_to_dive), then heads for 54 33.5 N, 7 13.0 E
+    assert surfacings[0]["lat"] == pytest.approx(54.2) and surfacings[0]["time_s"] == 0.0
+    assert lats == sorted(lats) and lats[1] > 54.21
+    assert [s["time_s"] for s in surfacings] == sorted(s["time_s"] for s in surfacings)
+    majors = [s["ellipse_m"][0] for s in surfacings]
+    assert majors == sorted(majors) and all(len(s["ellipse_m"]) == 2 for s in surfacings)
+    features = json.loads(out.read_text())["features"]
+    assert [f["geometry"]["type"] for f in features[:2]] == ["Point", "Polygon"]
+    kml = tmp_path / "s.kml"
+    assert main(["forecast", mi, "--duration", "12h", "--surfacings-out", str(kml)]) == 0
+    assert kml.read_text().count("<Placemark>") == 4
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--surfacings-out", "s.txt"], "expected a .geojson, .json or .kml file"),
+    (["--currents", "0,7"], "faster than any ocean current"),
+    (["--start", "54.2"], "not an ISO 8601 time"),
+])
+def test_bad_surfacing_input_is_a_message(capsys, args, message):
+    code = main(["forecast", str(ROOT / "examples" / "fig2.mission"), *args])
+    err = capsys.readouterr().err
+    assert code != 0 and message in err and "Traceback" not in err

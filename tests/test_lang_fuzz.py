@@ -17,6 +17,7 @@ from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.diagnostics import Diagnostic, MissionSyntaxError
 from gliderplan.language.formatter import FormatError, format_source
 from gliderplan.language.syntax_errors import is_blank
+from gliderplan.power_models import load_vehicle
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 SOURCES = [p.read_text() for p in sorted(EXAMPLES.glob("*.mission"))]
@@ -55,7 +56,9 @@ def _front_end_survives(source: str) -> None:
         if _located(d, source):
             assert f"fuzz.mission:{d.span.line}:{d.span.column}: error: " in rendered
     if result.ok:  # check accepts nothing the code generator refuses
-        generate_c(result.mission, FlightLimits(200.0, 233.0, (300.0,)))
+        generate_c(result.mission, FlightLimits(200.0, 233.0, (300.0,),
+                                                  envelope=load_vehicle("slocum_g2_shallow")
+                                                  .envelope))
     try:
         format_source(source)
     except (MissionSyntaxError, FormatError):

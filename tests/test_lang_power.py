@@ -10,6 +10,7 @@ from gliderplan.contract import FlightLimits
 from gliderplan.language import check_source, ir
 from gliderplan.language.codegen_c import generate_c
 from gliderplan.language.formatter import format_source
+from gliderplan.power_models import load_vehicle
 
 MISSION = """mission pm
 {computer}
@@ -153,7 +154,8 @@ def test_syntax_errors_name_what_was_expected():
 
 
 def test_the_c_tables_carry_the_fixed_clock_and_the_sleep():
-    limits = FlightLimits(230.0, 233.0, (300.0, 500.0))
+    limits = FlightLimits(230.0, 233.0, (300.0, 500.0),
+                          envelope=load_vehicle("slocum_g2_shallow").envelope)
     code = generate_c(checked("computer clock 500 MHz\ncomputer sleep between ticks"), limits)
     assert ".clock_mhz = 500.0," in code and ".sleep = 1," in code
     plain = generate_c(checked(""), limits)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from gliderplan.contract import MAX_EXPRESSION_DEPTH
+from gliderplan.contract import MAX_EXPRESSION_DEPTH, MAX_PARSE_DEPTH
 from gliderplan.language import check_source
 from gliderplan.language.diagnostics import closest
 
@@ -145,9 +145,15 @@ def test_closest_name(word, candidates, expected):
 
 
 def test_deeply_nested_expressions_are_an_error_not_a_crash():
+    """Refused where the nesting passes the parser's limit, before any stage recurses."""
     source = HEADER + "    case " + "-" * 5000 + "depth > 1 exit\nend\n"
-    assert _errors(source) == ["0:0: expressions are nested too deeply | split the "
-                               "expression with a variable ('set v = ...')"]
+    (message,) = _errors(source)
+    where, said = message.split(": ", 1)
+    assert said == (f"nested more than {MAX_PARSE_DEPTH} deep (brackets and operators "
+                    "together) | split the expression with a variable ('set v = ...')")
+    line, column = map(int, where.split(":"))
+    # at the minus that passes the limit: the parser's stack holds the mission's items too
+    assert line == 7 and len("    case ") < column <= len("    case ") + MAX_PARSE_DEPTH
 
 
 @pytest.mark.parametrize("nest", [
@@ -173,5 +179,17 @@ def test_an_expression_may_nest_as_deep_as_the_contract_says(nest):
 
 
 def test_parentheses_do_not_nest_the_tree():
-    source = HEADER + "    case " + "(" * 3000 + "depth" + ")" * 3000 + " > 1 exit\nend\n"
+    deep = MAX_PARSE_DEPTH // 2  # brackets each hold a parser state or two
+    source = HEADER + "    case " + "(" * deep + "depth" + ")" * deep + " > 1 exit\nend\n"
     assert check_source(source).ok
+
+
+def test_brackets_past_the_parser_s_limit_are_refused_at_once_whatever_their_number():
+    """A megabyte of brackets is refused at the first past the limit, not parsed for
+    minutes (the parse is linear, and bounded)."""
+    source = HEADER + "    case " + "(" * 1_000_000 + "depth" + ")" * 1_000_000 + " > 1 exit"
+    (message,) = _errors(source + "\nend\n")
+    where = message.split(": ", 1)[0]
+    assert message.split(": ", 1)[1].startswith(f"nested more than {MAX_PARSE_DEPTH} deep")
+    line, column = map(int, where.split(":"))
+    assert line == 7 and column <= len("    case ") + MAX_PARSE_DEPTH

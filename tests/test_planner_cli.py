@@ -163,7 +163,8 @@ def test_sweep_writes_csvs_and_plot(tmp_path):
     assert list(packs["battery"]) == ["alkaline", "lithium_primary", "rechargeable"]
     png = (tmp_path / "sweep" / "pareto.png").read_bytes()
     assert png.startswith(b"\x89PNG")
-    assert "pareto: 12/12" in run.stderr
+    # off a terminal, progress is an occasional line, never one per budget solved
+    assert "\r" not in run.stderr and run.stderr.count("pareto") <= 1, run.stderr
 
 
 def test_mission_too_big_for_a_plan_file_is_refused_by_its_check(tmp_path, capsys):

@@ -70,3 +70,16 @@ def test_a_budget_no_plan_can_keep_says_so(capsys):
     err = capsys.readouterr().err
     assert code == 1 and "Traceback" not in err
     assert "in all 30 scenarios" in err or "too small" in err
+
+
+def test_a_confidence_that_needs_more_scenarios_than_a_run_may_fly_is_refused(capsys):
+    """0.999999 needs some 24 million scenarios: refused at once, naming the cap, before a
+    single one is flown."""
+    from gliderplan.cli.main import main
+    from gliderplan.contract import MAX_SCENARIOS, ExitCode
+
+    code = main(["plan", str(Path(__file__).parents[1] / "examples" / "fig2_annotated.mission"),
+                 "--confidence", "0.999999"])
+    err = capsys.readouterr().err
+    assert code == ExitCode.USAGE
+    assert f"more than the {MAX_SCENARIOS:,} a run may fly" in err and "Traceback" not in err

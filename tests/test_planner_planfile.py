@@ -72,8 +72,9 @@ def test_round_trip_gives_the_same_plan(path):
 def test_the_file_alone_carries_the_prediction(annotated):
     m, plan = annotated
     back = read_plan_bytes(write_plan_bytes(plan), m)
-    assert back.components[:6] == (*VEHICLE_COMPONENTS, Component.COMPUTER)
-    assert set(back.components[6:]) == {"ctd", "optode"}  # the devices the mission logs
+    shared = len(VEHICLE_COMPONENTS) + 1
+    assert back.components[:shared] == (*VEHICLE_COMPONENTS, Component.COMPUTER)
+    assert set(back.components[shared:]) == {"ctd", "optode"}  # the devices the mission logs
     for state in back.states:
         assert state.time_s > 0 and state.visits >= 1 and state.inflections > 0
         assert state.energy_by_component_j[Component.HOTEL] > 0
@@ -124,7 +125,7 @@ def _mutate(data: bytes, old: bytes, new: bytes, fix_crc: bool = True) -> bytes:
     (b"states 3", b"states 65", 11, "out of range"),
     (b"predict 1000 2", b"predict -1000 2", 13, "predicted time must be >= 0"),
     (b"predict 1000 2", b"predict 1000 2.5", 13, "COUNT"),
-    (b"energy 1373.64 ", b"energy ", 14, "takes 8 fields"),
+    (b"energy 1373.64 ", b"energy ", 14, "takes 9 fields"),
     (b"energy 1373.64 ", b"energy -1373.64 ", 14, "energy of hotel must be >= 0"),
     (b"\nend\n", b"\nend \n", 17, "one space"),
     (b"sensor temp 300 300", b"sensor temp 300 301", 15, "ON_S"),

@@ -264,7 +264,8 @@ MEASURED = (
 DEPENDS_ON_THE_BASE = ("pump_in_energy_per_volume",)
 
 
-@pytest.fixture(scope="module", params=preset_names("vehicle"))
+@pytest.fixture(scope="module", params=[n for n in preset_names("vehicle")
+                                         if load_vehicle(n).kind == "glider"])
 def calibrated_on(request, tmp_path_factory):
     """(base, its calibration of the shared log with --validate, the written file)."""
     if not LOGS.is_dir():

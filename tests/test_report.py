@@ -28,9 +28,10 @@ ANNOTATED = str(ROOT / "examples" / "fig2_annotated.mission")
 SURVEY = str(ROOT / "examples" / "thermocline_survey.mission")
 ARTIFACTS = ROOT / "out" / "test-artifacts"
 CHROMIUM = "/usr/bin/chromium"
-SECTIONS = ["summary", "pareto", "energy", "plan-vs-simulation", "profile", "sbc",
+SECTIONS = ["summary", "pareto", "energy", "plan-vs-simulation", "profile", "track", "sbc",
             "sensitivity", "montecarlo"]
 CSV = ["pareto.csv", "energy_by_state.csv", "plan_vs_simulation.csv", "profile.csv",
+       "track.csv",
        "sbc_boards.csv", "sbc_workload.csv", "sbc_crossovers.csv", "sensitivity.csv",
        "montecarlo.csv"]
 SCENARIOS = 6

@@ -1,7 +1,8 @@
 """The C runtime's input readers under libFuzzer with ASan and UBSan (runtime/fuzz).
 
-The frame decoder, the plan reader and the command line each run for FUZZ_SECONDS
-from their committed corpus (40 s under CI=true: two minutes in all; 15 s elsewhere, or
+The frame decoder, the plan reader, the command line and the plan-update applier each
+run for FUZZ_SECONDS from their committed corpus (40 s under CI=true: under three minutes
+in all; 15 s elsewhere, or
 GLIDERPLAN_FUZZ_SECONDS), and every committed input, the crashes found so far among
 them, is replayed as a regression test.
 """
@@ -18,7 +19,7 @@ import pytest
 from conftest import running_in_ci
 
 RUNTIME = Path(__file__).resolve().parents[1] / "runtime"
-FUZZERS = ("frame", "plan", "args")
+FUZZERS = ("frame", "plan", "args", "update")
 FUZZ_SECONDS = int(os.environ.get("GLIDERPLAN_FUZZ_SECONDS", 40 if running_in_ci() else 15))
 
 

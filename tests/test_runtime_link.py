@@ -106,9 +106,11 @@ def transitions(commands: list[p.Command]) -> list[str]:
             f"{c.stack_depth}" for c in commands if c.transition]
 
 
-def make_plan(s2_temp_on_s: float = 15, hash_: str = FIG2_HASH, s1_pitch: float = 0.3) -> bytes:
+def make_plan(s2_temp_on_s: float = 15, hash_: str = FIG2_HASH, s1_pitch: float = 0.3,
+              budget_j: float = 180000) -> bytes:
     body = (f"GPPLAN 3\nmission sampleMission\nhash {hash_}\ncomputer ts7800 300\n"
-            "budget_j 180000\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\nstates 3\n"
+            f"budget_j {budget_j:g}\npredicted_j 9876.5\ncomponents hotel\nassumptions 0\n"
+            "states 3\n"
             "state s1 300 600 0 1\npredict 1000 2 20\nenergy 3950\n"
             f"profile 0 1 {s1_pitch:g} 150 0.31\nend\n"
             "state s2 300 600 1 1\npredict 1000 1 12\nenergy 3950\n"
@@ -391,6 +393,27 @@ def test_plans_over_the_link_are_checked_and_a_bad_one_keeps_the_last(binary, gl
     assert status.accepted and status.message == "ok"
     commands += fly(link, 54, 400)  # the new window, from t_in 40 s: 30 s of every 60 s
     assert [c.sensor_power >> 9 & 1 for c in commands[54:59]] == [0, 0, 1, 1, 1]
+    assert transitions(commands) == FIG2_TRACE
+    assert process.wait(10) == 0
+
+
+def test_a_signed_plan_that_contradicts_itself_is_refused_over_the_link(binary, glider,
+                                                                         tmp_path, key_file):
+    """Signed with the vehicle's key, a plan predicting more than its budget is still
+    refused by the runtime's own check (`gp_plan_check`), naming the line and the field;
+    the plan in force flies on."""
+    plan_file = tmp_path / "fig2.plan"
+    plan_file.write_bytes(signed(1))
+    process = glider.start(binary, "--plan", str(plan_file), "--key", key_file,
+                           "--state-dir", str(tmp_path / "state"))
+    link = glider.link()
+    link.wait_hello()
+    commands = fly(link, 0, 10)
+    status = link.send_plan(signed(2, budget_j=1000))
+    assert not status.accepted
+    assert status.message.endswith("line 6: predicted_j 9876.5 J exceeds budget_j 1000 J")
+    commands += fly(link, 11, 400)
+    assert abs(commands[0].pitch_rad) == pytest.approx(0.3)  # the plan in force's pitch
     assert transitions(commands) == FIG2_TRACE
     assert process.wait(10) == 0
 

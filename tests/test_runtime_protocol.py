@@ -86,8 +86,9 @@ def test_every_message_round_trips_through_a_frame(message):
 
 def test_a_whole_command_carries_every_field_that_is_not_zero():
     every = CALL._replace(state=2, transition=TransitionKind.GOTO, from_state=1, to_state=2,
-                          profile=1)
-    assert len(every.pack()) == COMMAND_MAX_SIZE == 38
+                          profile=1, speed_mps=1.25, thrust_w=3.0)
+    assert len(every.pack()) == COMMAND_MAX_SIZE == 46
+    assert p.CommandUpdate.unpack(every.pack()).apply(p.ZERO_COMMAND) == every
     update = p.CommandUpdate.unpack(CALL.pack())
     assert update.base == 0
     assert update.fields == (1 << 13) - 1 - (1 << p.CommandField.FROM_STATE) \
@@ -121,7 +122,7 @@ _f32 = st.floats(width=32, allow_nan=False)
 _u8 = st.integers(0, 255)
 _commands = st.builds(p.Command, st.integers(0, 2**32 - 1), _u8, _u8, _u8, _u8, _u8, _u8, _u8,
                       _f32, _f32, _f32, _f32, st.integers(0, 2**32 - 1),
-                      st.integers(0, 2**32 - 1))
+                      st.integers(0, 2**32 - 1), _f32, _f32)
 
 
 @given(_commands, _commands, st.integers(1, 255))

@@ -103,7 +103,7 @@ def test_bad_durations_are_usage_errors(text):
     (["--duration", "soon"], 2, "--duration 'soon': expected a number with a unit"),
     (["--ocean", "atlantis"], 2, "no such ocean file or preset"),
     (["--plan", "missing.plan"], 2, "missing.plan: no such file"),
-    (["--current", "north"], 2, "--current 'north'"),
+    (["--current", "north"], 2, "--currents 'north': no such file or directory"),
     (["--tick", "0"], 2, "--tick 0"),
     (["--floor", "-3"], 2, "--floor -3.0: the sea floor's depth must be a finite number"),
     (["--floor", "0"], 2, "--floor 0.0: the sea floor's depth must be a finite number"),
@@ -277,13 +277,17 @@ def test_the_water_given_is_flown_at_its_density_with_the_glider_ballasted_for_i
     assert not table["depth_m"].equals(default_table["depth_m"])
 
 
-def test_a_long_run_shows_progress(tmp_path, capsys):
+def test_a_long_run_shows_progress(tmp_path, capsys, monkeypatch):
     mission = REPO / "tests" / "missions" / "sim_month.mission"
+    monkeypatch.setenv("GLIDERPLAN_PROGRESS_S", "0")  # a line per update
     assert main(["sim", str(mission), "--duration", "5d", "-o", str(tmp_path / "r")]) == 0
-    lines = capsys.readouterr().err.splitlines()  # not a terminal: one line per update
-    bars = [line for line in lines if line.startswith("[")]
-    assert len(bars) >= 2 and all("of 5.00 d simulated" in bar for bar in bars)
+    lines = capsys.readouterr().err.splitlines()  # not a terminal: plain lines
+    bars = [line for line in lines if line.startswith("progress: ")]
+    assert len(bars) >= 2 and all("of 5.00 d simulated (" in bar for bar in bars)
     assert "\r" not in "".join(lines)
+    monkeypatch.delenv("GLIDERPLAN_PROGRESS_S")  # by default, a line every 15 s at most
+    assert main(["sim", str(mission), "--duration", "5d", "-o", str(tmp_path / "r")]) == 0
+    assert "progress: " not in capsys.readouterr().err  # this run takes a few seconds
 
 
 def test_a_current_carries_the_glider_east(tmp_path):
@@ -473,3 +477,17 @@ def test_a_long_run_is_plotted_from_a_decimated_series_that_keeps_its_extremes()
         stretch = depth[start:start + width]
         assert depth[mine].max() == stretch.max() and depth[mine].min() == stretch.min()
     assert decimated(depth[:500]).tolist() == list(range(500))  # short runs: every tick
+
+
+@pytest.mark.parametrize("start", ["9999-12-31T23:59Z", "0001-01-01T00:00Z", "2101-01-01",
+                                   "1969-12-31T23:00Z"])
+def test_a_start_outside_the_years_a_run_may_start_in_is_bad_usage(tmp_path, capsys, start):
+    """Dates at the calendar's edges crashed the run or the export that read it."""
+    from gliderplan.contract import START_YEARS, ExitCode
+
+    code = main(["sim", str(FIG2), "--start", start, "--duration", "600s", "-o",
+                 str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    assert code == ExitCode.USAGE
+    assert f"a run starts between {START_YEARS[0]} and {START_YEARS[1]}" in err
+    assert not (tmp_path / "run").exists()

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import zlib
 from dataclasses import replace
@@ -43,6 +44,7 @@ RUN_OPTIONS = {
     "sim_month.mission": ["--duration", "1d"],
     "sim_altimeter.mission": ["--floor", "38"],  # dives turn 4 m above it, the last yo grounds
     "survey_month.mission": ["--duration", "1d"],
+    "sim_propelled_auv.mission": ["--floor", "40"],  # follows it 8 m above
 }
 
 needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc)")
@@ -141,6 +143,39 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
         assert c_trace == python_trace, runtime
         for column in ("depth_m", "profile", "temp_on", "oxygen_on"):
             assert python[column].equals(c[column]), (runtime, column)
+
+
+@needs_cc
+@pytest.mark.parametrize("vehicle", ["slocum_g2_shallow", "slocum_g3_hybrid", "lauv"])
+def test_a_propelled_plan_is_flown_the_same_by_both_runtimes_and_holds(vehicle, tmp_path):
+    """The propelled transect planned on a glider, a hybrid and an AUV (its vehicle line
+    alone changed): every runtime flies the plan alike, and its energy as planned."""
+    source = (REPO / "examples" / "propelled_transect.mission").read_text()
+    mission = tmp_path / "transect.mission"
+    mission.write_text(source.replace("vehicle slocum_g3_hybrid", f"vehicle {vehicle}"))
+    plan = tmp_path / "transect.plan"
+    assert main(["plan", str(mission), "-o", str(plan)]) == 0
+    outputs = {}
+    for runtime in ("python", "c", "step"):
+        out = tmp_path / runtime
+        assert main(["sim", str(mission), "--plan", str(plan), "--runtime", runtime,
+                     "-o", str(out)]) == 0
+        outputs[runtime] = ((out / "trace.csv").read_text(),
+                            pd.read_parquet(out / "timeseries.parquet"),
+                            json.loads((out / "summary.json").read_text()))
+    python_trace, python, summary = outputs["python"]
+    assert python_trace.count("goto") == 1
+    for runtime in ("c", "step"):
+        c_trace, c, _ = outputs[runtime]
+        assert c_trace == python_trace, runtime
+        for column in ("depth_m", "pitch_rad", "profile", "lat_deg", "lon_deg",
+                       "power_propulsion_w" if vehicle != "slocum_g2_shallow"
+                       else "power_pump_w"):
+            assert python[column].equals(c[column]), (runtime, column)
+    assert summary["plan_check"]["verdict"] == "pass", summary["plan_check"]["headline"]
+    if vehicle == "lauv":  # level at 20 m, then 10 m, on the propeller all the way
+        assert python["power_propulsion_w"].iloc[1:-1].min() > 0.0
+        assert python["depth_m"].max() == pytest.approx(20.0, abs=0.01)
 
 
 # ---- the C flight against the Python reference ---------------------------------------
@@ -263,13 +298,13 @@ def test_the_c_flight_flies_the_water_s_density_as_the_reference(name, ocean, fl
 # every profile and route the simulator flies, conditions on time, depth, temperature,
 # position, the runtime's readings (the yo's leg, the distance to the waypoint, the
 # waypoints reached), the clock and variables, assignments; flown in random water with
-# random noise.
+# random noise. Bands from the shallow glider's thinnest (its envelope's 3 m).
 _PROFILES = st.one_of(
     st.builds(lambda lo, band, p, q: f"yo({lo}, {lo + band}, {p}, {q})",
-              st.integers(0, 8), st.integers(2, 50), st.sampled_from([".3", ".454", ".6"]),
+              st.integers(0, 8), st.integers(3, 50), st.sampled_from([".3", ".454", ".6"]),
               st.sampled_from([".3", ".454", ".6"])),
     st.builds(lambda lo, band, stop: f"yo({lo}, {lo + band}, .454, .454, {stop})",
-              st.integers(0, 8), st.integers(2, 50), st.sampled_from(["0", "2", "4.5", "top"])),
+              st.integers(0, 8), st.integers(3, 50), st.sampled_from(["0", "2", "4.5", "top"])),
     st.just("yo(top, bottom, .454, .454)"),
     st.just("surface"),
     st.builds(lambda d: f"hover({d})", st.integers(0, 20)),

@@ -90,22 +90,130 @@ def _failures(results) -> list[tuple[int, str, list[str]]]:
     return [(r.weight, r.name, r.msgs) for r in results if r.value[0] != r.value[1]]
 
 
-@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # the checker's own, on loading
-def test_the_netcdf_passes_the_compliance_checkers_cf_and_acdd_checks(run):
+# ---- the compliance checker, offline ------------------------------------------------
+# cc-plugin-glider (gliderdac:3.0) fetches NCEI's thesauri (projects, platforms,
+# instruments, institutions) and its sea-names list when it is loaded; cc-plugin-og
+# (og:1.0) fetches NERC's OG1 parameter collection for one check. The tests run offline:
+# `_offline` serves them from stand-ins. The NCEI thesauri are served empty, so the one
+# check that looks names up in them (low priority: a simulation is registered with no
+# NCEI project) is the one that does not pass; the sea names are a few of NCEI's list;
+# the OG1 collection is served with the terms the export uses
+# (sim.netcdf_formats.OG1_TERMS, taken from the OG format manual's examples), so that
+# check tests their form and that every measurement variable has one, not NERC's list.
+NCEI_ISO = (b'<?xml version="1.0"?><gmd:MD_Metadata xmlns:gmd="http://www.isotc211.org/2005/'
+            b'gmd" xmlns:gco="http://www.isotc211.org/2005/gco" '
+            b'xmlns:gmx="http://www.isotc211.org/2005/gmx"/>')
+NCEI_SEA_NAMES = ("North Atlantic Ocean", "South Atlantic Ocean", "North Pacific Ocean",
+                  "South Pacific Ocean", "Indian Ocean", "Arctic Ocean", "Southern Ocean",
+                  "North Sea", "Baltic Sea")
+
+
+class _Served:
+    """What `requests.get(url)` returns for the plugins' resources, offline."""
+
+    status_code = 200
+
+    def __init__(self, url: str) -> None:
+        from gliderplan.sim.netcdf_formats import OG1, OG1_TERMS
+
+        self.url = url
+        seas = "".join(f"<seaname><seaname>{n}</seaname></seaname>" for n in NCEI_SEA_NAMES)
+        self.text = f'<?xml version="1.0" encoding="utf-8"?><seanames>{seas}</seanames>' \
+            if "seanames" in url else NCEI_ISO.decode()
+        self.content = self.text.encode()
+        self.graph = [{"@id": OG1 + term + "/"} for term in OG1_TERMS.values()] + [{}]
+
+    def raise_for_status(self) -> None:
+        pass
+
+    def json(self) -> dict:
+        return {"@graph": self.graph}
+
+
+def _check(path: Path, tests: list[str], monkeypatch) -> dict:
+    """test -> [(priority, name, messages)] of the checks `path` does not pass."""
+    import requests
     from compliance_checker.runner import CheckSuite
 
+    monkeypatch.setattr(requests, "get", lambda url, *args, **kwargs: _Served(url))
     suite = CheckSuite()
     suite.load_all_available_checkers()
-    dataset = suite.load_dataset(str(run / "trajectory.nc"))
-    results = suite.run_all(dataset, ["cf:1.6", "acdd:1.3"], skip_checks=[])
-    cf, cf_errors = results["cf:1.6"]
-    acdd, acdd_errors = results["acdd:1.3"]
-    assert not cf_errors and not acdd_errors
-    assert _failures(cf) == []  # every CF 1.6 check, of every priority
-    # ACDD's highly recommended attributes are all there, but a standard name for the
-    # profile number, which the CF table does not have
-    high = [f for f in _failures(acdd) if f[0] == 3]
-    assert [f[1] for f in high] == ['variable "profile_id" missing the following attributes:']
+    dataset = suite.load_dataset(str(path))
+    found = {}
+    for test in tests:
+        results, errors = suite.run_all(dataset, [test], skip_checks=[])[test]
+        assert not errors, (test, errors)
+        found[test] = _failures(results)
+    return found
+
+
+NCEI_TABLES = "File has NCEI approved project, institution, platform_type, and instrument"
+
+
+@pytest.fixture(scope="module")
+def exported(run, tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("formats")
+    assert main(["export", str(run), "--format", "og1,ioos", "--format", "cf", "-o",
+                 str(out)]) == 0
+    return out
+
+
+@pytest.mark.filterwarnings("ignore")  # the checker's own, on loading and parsing
+def test_the_og1_export_passes_the_oceangliders_checker_and_acdd(exported, monkeypatch):
+    failed = _check(exported / "trajectory_og1.nc", ["og:1.0", "acdd:1.3"], monkeypatch)
+    assert failed == {"og:1.0": [], "acdd:1.3": []}  # every check, of every priority
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_the_ioos_export_passes_the_glider_dac_checker_cf_and_acdd(exported, monkeypatch):
+    failed = _check(exported / "trajectory.nc", ["gliderdac:3.0", "cf:1.6", "acdd:1.3"],
+                    monkeypatch)
+    assert [f[1] for f in failed["gliderdac:3.0"]] == [NCEI_TABLES]  # low: see above
+    assert failed["acdd:1.3"] == []
+    # CF prefers "standard" to "gregorian" (suggested), which the DAC asks for (required)
+    assert [(f[0], f[1]) for f in failed["cf:1.6"]] == [(1, "§4.4.1 Calendar")]
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_the_cf_export_passes_cf_and_acdd(exported, monkeypatch):
+    failed = _check(exported / "trajectory_cf.nc", ["cf:1.6", "acdd:1.3"], monkeypatch)
+    assert failed == {"cf:1.6": [], "acdd:1.3": []}
+
+
+def test_salinity_conductivity_and_density_are_teos10_from_the_ctd(exported, run):
+    import gsw
+
+    table = pd.read_parquet(run / "timeseries.parquet")
+    og1 = xr.open_dataset(exported / "trajectory_og1.nc", decode_times=False)
+    on = ~np.isnan(table["temp_reading_c"].to_numpy())
+    assert on.sum() > 100 and np.isnan(og1.PSAL.values[~on]).all()  # fill while it is off
+    assert np.allclose(og1.PSAL.values[on], table["salinity_psu"].to_numpy()[on])
+    p = og1.PRES.values[on]
+    conductivity = gsw.C_from_SP(og1.PSAL.values[on], og1.TEMP.values[on], p)  # mS/cm
+    assert np.allclose(og1.CNDC.values[on], conductivity)
+    sa = gsw.SA_from_SP(og1.PSAL.values[on], p, og1.LONGITUDE.values[on],
+                        og1.LATITUDE.values[on])
+    rho = gsw.rho(sa, gsw.CT_from_t(sa, og1.TEMP.values[on], p), p)
+    assert np.allclose(og1.DENSITY.values[on], rho) and 1020 < np.nanmean(rho) < 1030
+    ioos = xr.open_dataset(exported / "trajectory.nc")
+    assert np.allclose(ioos.conductivity.values[on], conductivity / 10.0)  # S m-1
+    assert og1.attrs["start_date"] == "20240601T060000" and og1.sizes == {
+        "N_MEASUREMENTS": len(table)}
+
+
+def test_the_deployment_s_names_come_from_a_metadata_file(run, tmp_path, capsys):
+    (tmp_path / "meta.toml").write_text('creator_name = "A. Pilot"\nsea_name = "North Sea"\n'
+                                        'wmo_id = "6801665"\n')
+    assert main(["export", str(run), "--format", "og1", "--metadata",
+                 str(tmp_path / "meta.toml"), "-o", str(tmp_path)]) == 0
+    og1 = xr.open_dataset(tmp_path / "trajectory_og1.nc")
+    assert og1.attrs["creator_name"] == "A. Pilot" and og1.attrs["sea_name"] == "North Sea"
+    assert str(og1.WMO_IDENTIFIER.values) == "6801665"
+    (tmp_path / "bad.toml").write_text('creator_nam = "A. Pilot"\n')
+    capsys.readouterr()
+    assert main(["export", str(run), "--format", "og1", "--metadata",
+                 str(tmp_path / "bad.toml"), "-o", str(tmp_path / "x")]) == ExitCode.USAGE
+    assert "bad.toml: creator_nam: not a metadata key" in capsys.readouterr().err
 
 
 def test_export_writes_the_track_as_geojson_and_kml_for_standard_readers(run, tmp_path):
@@ -151,10 +259,11 @@ def test_profiles_are_dives_and_climbs_not_the_surface():
 
 
 @pytest.mark.parametrize("argv, code, message", [
-    (["export", "{run}"], 2, "--netcdf, --geojson and/or --kml"),
+    (["export", "{run}"], 2, "--format og1|ioos|cf (NetCDF), --geojson and/or --kml"),
+    (["export", "{run}", "--format", "netcdf4"], 2, "--format netcdf4: expected one of"),
     (["export", "{missing}", "--kml"], 2, "nope: no such directory"),
     (["export", "{empty}", "--kml"], 2, "summary.json: no such file; is"),
-    (["export", "{broken}", "--kml"], 1, "summary.json: cannot read"),
+    (["export", "{broken}", "--kml"], 1, "summary.json: not valid JSON"),
 ])
 def test_export_refuses_bad_input_in_one_line(run, tmp_path, capsys, argv, code, message):
     (tmp_path / "empty").mkdir()
@@ -182,7 +291,8 @@ def test_export_run_is_the_call_behind_export(run, tmp_path):
     with pytest.raises(ExportError) as refused:
         export_run(tmp_path / "bad", ["kml"])
     assert refused.value.exit_code == ExitCode.BAD_INPUT
-    assert str(refused.value) == f"{tmp_path / 'bad' / 'summary.json'}: not a run summary"
+    assert str(refused.value).startswith(f"{tmp_path / 'bad' / 'summary.json'}: expected a "
+                                         "JSON table (object), got list; is ")
     assert not (tmp_path / "bad" / "track.kml").exists()
 
 

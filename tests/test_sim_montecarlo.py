@@ -148,11 +148,12 @@ def test_ctrl_c_on_a_pool_keeps_what_finished_and_the_log_has_a_line_per_update(
     run = subprocess.Popen(
         [sys.executable, "-m", "gliderplan.cli", "montecarlo", str(SURVEY), "--scenarios",
          "200", "--workers", "2", "-o", str(out)],
-        stderr=subprocess.PIPE, text=True, start_new_session=True)
+        stderr=subprocess.PIPE, text=True, start_new_session=True,
+        env={**os.environ, "GLIDERPLAN_PROGRESS_S": "0"})  # a line per update in the log
     logged, counts = [], []
-    for line in run.stderr:  # a log, not a terminal: one line per update
+    for line in run.stderr:  # a log, not a terminal: plain lines
         logged.append(line)
-        counts.append(int(line.split("] ")[1].split(" of ")[0]))
+        counts.append(int(line.split("progress: ")[1].split(" of ")[0]))
         if counts[-1] >= 3:
             break
     os.killpg(run.pid, signal.SIGINT)  # Ctrl-C at a terminal reaches the workers too
@@ -229,3 +230,26 @@ def test_montecarlo_mission_is_the_command_as_one_call(tmp_path):
     assert [r["scenario"] for r in run.result.rows] == [0, 1, 2]
     assert json.loads((tmp_path / "mc" / "summary.json").read_text()) == run.summary
     assert run.summary["scenarios"] == 3 and run.summary["seed"] == 7
+
+
+def test_montecarlo_puts_every_glider_in_the_water_at_the_start(tmp_path, capsys,
+                                                               monkeypatch):
+    from gliderplan.cli.main import main
+    from gliderplan.sim import flight
+
+    fig2 = str(Path(__file__).resolve().parents[1] / "examples" / "fig2.mission")
+    starts = []
+    real_fly = flight.fly
+
+    def fly(mission, ocean, config, *args, **kwargs):
+        starts.append((config.start_lat_deg, config.start_lon_deg, config.start_epoch_s))
+        return real_fly(mission, ocean, config, *args, **kwargs)
+
+    monkeypatch.setattr(flight, "fly", fly)
+    assert main(["montecarlo", fig2, "--scenarios", "2", "--workers", "1", "--duration",
+                 "600s", "--start", "39.3,-73.9,2016-06-23T12:00Z",
+                 "-o", str(tmp_path / "mc")]) == 0
+    assert starts == [(39.3, -73.9, 1466683200.0)] * 2
+    assert main(["montecarlo", fig2, "--scenarios", "2", "--start", "39.3",
+                 "-o", str(tmp_path / "bad")]) == 2
+    assert "not an ISO 8601 time" in capsys.readouterr().err

@@ -44,10 +44,11 @@ ASSUMED = "planned at its expect upper bound (3600 s per visit)"
 
 
 def write_plan(tmp_path: Path, budget_j: float, planned_s: float,
-               board: tuple[str, float] = ("ts7800", 300.0)) -> Path:
-    """A plan for the survey predicting `planned_s` in it, written by hand from
-    docs/plan-format.md: the prediction travels in the plan file, nothing beside it."""
-    mission = check_file(str(MISSION)).mission
+               board: tuple[str, float] = ("ts7800", 300.0), survey: Path = MISSION) -> Path:
+    """A plan for the survey (`survey`: the mission) predicting `planned_s` in it, written
+    by hand from docs/plan-format.md: the prediction travels in the plan file, nothing
+    beside it."""
+    mission = check_file(str(survey)).mission
     components = predicted_components_j(planned_s)
     vehicle = load_vehicle("slocum_g2_shallow")
     inflections = float(vehicle.inflections_per_hour(3, 30, PITCH_RAD, BALLAST_CC)) \
@@ -68,8 +69,9 @@ def write_plan(tmp_path: Path, budget_j: float, planned_s: float,
     return plan
 
 
-def simulate(tmp_path: Path, plan: Path, capsys) -> tuple[int, dict, str]:
-    code = main(["sim", str(MISSION), "--plan", str(plan), "-o", str(tmp_path / "run")])
+def simulate(tmp_path: Path, plan: Path, capsys, survey: Path = MISSION
+             ) -> tuple[int, dict, str]:
+    code = main(["sim", str(survey), "--plan", str(plan), "-o", str(tmp_path / "run")])
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     return code, summary, capsys.readouterr().err
 
@@ -127,18 +129,20 @@ def test_a_plan_whose_prediction_lacks_a_component_is_rejected_naming_the_line(
     assert not (tmp_path / "run").exists()
 
 
-def test_over_budget_with_no_state_over_its_prediction_names_the_spenders(tmp_path, capsys):
-    # the prediction is right (three hours), the budget under it
-    code, summary, _ = simulate(tmp_path, write_plan(tmp_path, 40e3, 10800.0), capsys)
-    assert code == 3
-    (cause,) = summary["plan_check"]["causes"]
-    spent = f"{summary['plan_check']['simulated_j'] / 1e3:.1f}"
-    assert cause == f"{spent} kJ spent against a budget of 40.0 kJ; most in survey ({spent} kJ)"
+def test_a_plan_predicting_more_than_its_budget_is_refused(tmp_path, capsys):
+    # the prediction is right (three hours), the budget under it: the plan contradicts itself
+    plan = write_plan(tmp_path, 40e3, 10800.0)
+    code = main(["sim", str(MISSION), "--plan", str(plan), "-o", str(tmp_path / "run")])
+    assert code == 1 and not (tmp_path / "run" / "summary.json").exists()
+    assert re.search(r"survey.plan:6: predicted_j 5\d{4}(\.\d)? J exceeds budget_j 40000 J",
+                     capsys.readouterr().err)
 
 
 def test_the_computer_draws_the_power_of_the_plan_s_board_and_clock(tmp_path, capsys):
-    plan = write_plan(tmp_path, 120e3, 10800.0, board=("ts5500", 133.0))
-    code, summary, _ = simulate(tmp_path, plan, capsys)
+    survey = tmp_path / "ts5500.mission"
+    survey.write_text(MISSION.read_text().replace("computer ts7800 @ 300 MHz", "computer ts5500"))
+    plan = write_plan(tmp_path, 120e3, 10800.0, board=("ts5500", 133.0), survey=survey)
+    code, summary, _ = simulate(tmp_path, plan, capsys, survey)
     assert code == 0
     board = load_board("ts5500", 133.0)
     busy = board.busy_fraction(RUNTIME_CYCLES_PER_TICK, 1.0 / TICK_S)
@@ -232,7 +236,7 @@ def test_a_run_over_its_prediction_says_so_even_within_its_budget(tmp_path, caps
     assert code == 0 and check["simulated_j"] < check["budget_j"]
     assert check["simulated_j"] > check["predicted_j"] * 1.05
     assert check["verdict"] == "over prediction"
-    assert "plan check: over prediction" in err and "over the plan's prediction:" in err
+    assert "plan check: over prediction: " in err and "states over their own prediction:" in err
     # the state that overran, the component that overran most, and why
     assert any(re.match(r"track: .* \((\w+) \+[\d.]+ kJ\); \d+ inflections planned", c)
                for c in check["causes"])
@@ -242,8 +246,10 @@ def test_a_run_over_its_prediction_says_so_even_within_its_budget(tmp_path, caps
 
 
 @pytest.mark.parametrize(("edit", "said"), [
-    ((b" 0.454 233 ", b" 0.454 5000 "), ":15: ballast 5000 cc exceeds the vehicle's pump (233 cc)"),
-    ((b" 0.454 233 ", b" 0.454 1e300 "), ":15: ballast 1e+300 cc exceeds the vehicle's pump"),
+    ((b" 0.454 233 ", b" 0.454 5000 "),
+     ":11: state survey: profile 0: BALLAST_CC 5000 exceeds the vehicle's pump (233 cc)"),
+    ((b" 0.454 233 ", b" 0.454 1e300 "),
+     ":11: state survey: profile 0: BALLAST_CC 1e+300 exceeds the vehicle's pump"),
     ((b"\ncomputer ts7800 300\n", b"\ncomputer ts7800 133\n"),
      ":4: clock 133 MHz: the board has 300, 500 MHz"),
     ((b"\nstate survey 300 600 ", b"\nstate survey 300 1e300 "), ":11: cycle 1e+300 exceeds"),

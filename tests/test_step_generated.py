@@ -31,7 +31,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
-from missiongen import Case, cases, checked, compare, limits_of
+from missiongen import Case, cases, checked, compare, limits_of, readings
 
 REGRESSIONS = Path(__file__).with_name("step_regressions")
 # 8 missions an example: more overflow hypothesis's buffer, and drawing them is retried
@@ -86,3 +86,32 @@ def test_the_step_and_the_reference_agree_on_generated_missions(batch):
 def test_regressions_still_agree(path):
     case = Case(**json.loads(path.read_text()))
     compare(case, *checked(case))
+
+
+@needs_cc
+def test_a_yo_band_end_set_to_nan_ends_the_mission_at_the_envelope():
+    """A thermotrackyo whose bottom an event sets from a missing reading (`altitude + 30`
+    without a floor: NaN): neither runtime commands a NaN depth nor puts a number in its
+    place; the envelope ends the mission on that tick (the vehicle's `surface` action), in
+    the same words."""
+    from gliderplan.contract import NO_STATE, TransitionKind
+    from gliderplan.sim.cstep import CStep
+    from gliderplan.sim.executor import PythonRuntime
+
+    case = Case(**json.loads((REGRESSIONS / "nan-bottom.json").read_text()))
+    mission, _ = checked(case)
+    limits = limits_of(mission)
+    runtimes = (PythonRuntime(mission, None, limits.default_ballast_cc, not case.naive,
+                              limits.max_ballast_cc, limits.envelope, limits),
+                CStep(mission, None, limits, case.naive))
+    masks, values = readings(case.seed, case.tick_s)
+    for tick in range(len(masks)):
+        commands = [r.step(tick, int(masks[tick]), values[tick].tolist()) for r in runtimes]
+        assert all(c.depth_target_m == c.depth_target_m for c in commands), tick  # no NaN
+        if commands[0].state == NO_STATE:
+            break
+    assert [(c.state, c.transition, c.depth_target_m) for c in commands] == \
+        [(NO_STATE, TransitionKind.ENVELOPE, 0.0)] * 2
+    notes = [r.envelope_notes for r in runtimes]
+    assert notes[0] == notes[1] and len(notes[0]) == 1
+    assert "state g0: depth nan m beyond the vehicle's 100 m; the mission ends" in notes[0][0]

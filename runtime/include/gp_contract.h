@@ -31,6 +31,8 @@
 /** [s] a cycle, a sensor period, a state's predicted time (10 y) */
 #define GP_MAX_PLAN_TIME_S 315360000.0
 #define GP_MAX_PLAN_SPEED_MPS 2.0  /**< [m/s] a planned horizontal speed (a glider makes 0.2-0.5) */
+/** [W] a yo's thruster's commanded power (the Slocum G3 hybrid's commands 1-9 W) */
+#define GP_MAX_PLAN_THRUST_W 100.0
 /** [J] a budget or prediction (the largest Slocum pack is 12 MJ) */
 #define GP_MAX_PLAN_ENERGY_J 10000000000.0
 /** a state's predicted inflections (as many as its visits may be) */
@@ -38,11 +40,25 @@
 #define GP_MAX_BOARD_CLOCKS 8  /**< clocks of one board the compiled mission lists */
 #define GP_CLOCK_TOLERANCE_MHZ 1e-06  /**< [MHz] a plan's clock is the board's within this */
 #define GP_NO_BOARD "none"  /**< `computer none`: no board to set; its plans' clocks are all 0 */
+/** A plan's figures are written with 9 significant digits: two that should agree (a duty and its bound, the prediction and its states' sum) agree within this relative tolerance. */
+#define GP_PLAN_ROUNDING 1e-06
 
 /* ---- signed plans */
 
 #define GP_PLAN_KEY_BYTES 32  /**< [bytes] of the HMAC-SHA256 key provisioned on the vehicle */
 #define GP_MAX_PLAN_SEQUENCE 4294967295  /**< a signed plan's `seq` (a u32); 1 is the first */
+
+/* ---- plan updates (docs/plan-update.md) */
+
+#define GP_UPDATE_FORMAT_VERSION 1  /**< the update's version byte; a reader rejects any other */
+#define GP_MAX_UPDATE_BYTES 270  /**< [bytes] of one update, its tag included */
+/** [bytes] of SHA-256 that name the plan an update is for, and its result */
+#define GP_UPDATE_HASH_BYTES 8
+/** [bytes] magic, version, seqs, hashes, the count of changes */
+#define GP_UPDATE_HEADER_BYTES 28
+#define GP_UPDATE_MAX_DIGITS 15  /**< decimal digits of a value's mantissa: exact in a double */
+/** a value is mantissa x 10^exponent, |exponent| at most this */
+#define GP_UPDATE_MAX_EXPONENT 20
 
 /* ---- the library routines (docs/pilot.md) */
 
@@ -56,13 +72,18 @@
 
 /* ---- the serial link (docs/protocol.md) */
 
-#define GP_PROTOCOL_VERSION 2  /**< 2: COMMANDs as changes against a base, SENSORS without a mask */
+/** 2: COMMANDs as changes against a base, SENSORS without a mask; */
+#define GP_PROTOCOL_VERSION 3
 #define GP_MAX_PAYLOAD 240  /**< [bytes] of one frame's payload */
 #define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
 /** [bytes] of a plan sent over the link (PLAN's `total` is a u16) */
 #define GP_MAX_LINK_PLAN 65535
-#define GP_COMMAND_MAX_SIZE 38  /**< [bytes] of a COMMAND payload that carries every field */
+/** [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes) */
+#define GP_SBD_MT_MESSAGE_BYTES 1890
+#define GP_SBD_MO_SHORT_BYTES 340  /**< [bytes] of one short message up, glider to shore */
+#define GP_SBD_MT_SHORT_BYTES 270  /**< [bytes] of one short message down, shore to glider */
+#define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
@@ -109,6 +130,7 @@ enum {
     GP_FLAG_DONE = 2u,  /**< the mission exited */
     GP_FLAG_CLIMBING = 4u,  /**< else diving */
     GP_FLAG_HEADING = 8u,  /**< `heading_rad` is valid */
+    GP_FLAG_ENVELOPE = 16u,  /**< the envelope guard held this command at the vehicle's rating */
 };
 
 /* ---- SENSORS's flags */
@@ -120,13 +142,17 @@ enum {
 };
 
 /** Bytes of each COMMAND field on the wire, in gp_command_field order. */
-#define GP_COMMAND_FIELD_BYTES {1, 1, 1, 1, 1, 1, 1, 4, 4, 4, 4, 4, 4}
-#define GP_N_COMMAND_FIELDS 13
+#define GP_COMMAND_FIELD_BYTES {1, 1, 1, 1, 1, 1, 1, 4, 4, 4, 4, 4, 4, 4, 4}
+#define GP_N_COMMAND_FIELDS 15
 
 /** The type byte of a frame's header. */
 typedef enum {
     GP_MSG_HELLO = 0x01, GP_MSG_SENSORS = 0x02, GP_MSG_COMMAND = 0x03, GP_MSG_RELEASE = 0x04,
-    GP_MSG_PLAN = 0x05, GP_MSG_PLAN_STATUS = 0x06, GP_MSG_NAK = 0x7F,
+    GP_MSG_PLAN = 0x05, GP_MSG_PLAN_STATUS = 0x06,
+    /** pieces of a plan update (docs/plan-update.md), as PLAN carries plans */
+    GP_MSG_PLAN_UPDATE = 0x07,
+    GP_MSG_UPDATE_STATUS = 0x08,  /**< what became of the update: applied, or why not */
+    GP_MSG_NAK = 0x7F,
 } gp_msg_type;
 
 /** COMMAND's `transition` field, the event log's `kind` and an event's action. */
@@ -134,6 +160,8 @@ typedef enum {
     GP_TR_NONE = 0, GP_TR_START = 1, GP_TR_GOTO = 2, GP_TR_CALL = 3, GP_TR_RETURN = 4,
     GP_TR_EXIT = 5,
     GP_TR_RESERVE = 6,  /**< the energy guard ended the mission: the battery reached its reserve */
+    /** the envelope guard ended the mission: a command outside the vehicle's rating */
+    GP_TR_ENVELOPE = 7,
 } gp_transition_kind;
 
 /** A COMMAND's fields in wire order: bit i of its `fields` says that field i follows. */
@@ -151,6 +179,9 @@ typedef enum {
     GP_CMD_HEADING_RAD = 10,  /**< f32 [rad] true, clockwise from north (valid with FLAG_HEADING) */
     GP_CMD_SENSOR_POWER = 11,  /**< u32 bit i: power sensor i's device */
     GP_CMD_EVENT_COUNT = 12,  /**< u32 events fired so far */
+    GP_CMD_SPEED_MPS = 13,  /**< f32 [m/s] through the water on the propeller; 0: none (a glide) */
+    /** f32 [W] a glider's thruster's commanded power assisting a yo; 0: off */
+    GP_CMD_THRUST_W = 14,
 } gp_command_field;
 
 /** RELEASE's `reason`: why the runtime gave control back to the glider. */
@@ -160,6 +191,8 @@ typedef enum {
     GP_RELEASE_INTERNAL_ERROR = 2,
     GP_RELEASE_MISSION_EXITED = 3,
     GP_RELEASE_ENERGY_RESERVE = 4,  /**< the energy guard ended the mission: surface and hold */
+    /** a command outside the vehicle's rating: the envelope guard acted */
+    GP_RELEASE_ENVELOPE = 5,
 } gp_release_reason;
 
 /** Exit status of a mission binary (runtime/README.md). */
@@ -170,6 +203,59 @@ typedef enum {
     GP_EXIT_INTERNAL = 4,  /**< a mission fault, I/O that failed, a crash or a stop signal */
     /** the energy guard ended the mission: the battery reached its reserve */
     GP_EXIT_RESERVE = 5,
+    /** a command outside the vehicle's rating: the envelope guard ended it */
+    GP_EXIT_ENVELOPE = 6,
 } gp_exit_status;
+
+/** What a change of a plan update sets (a field of one plan-file line). */
+typedef enum {
+    GP_UF_STATE_CLOCK = 1,  /**< `state NAME CLOCK_MHZ ...`: field 2 */
+    GP_UF_STATE_CYCLE = 2,  /**< `state ... CYCLE_S ...`: field 3 */
+    GP_UF_POWER_SLEEP = 3,  /**< `power SLEEP CYCLES_PER_TICK`: field 1 */
+    GP_UF_POWER_CYCLES = 4,  /**< field 2 */
+    GP_UF_SENSOR_PERIOD = 5,  /**< `sensor NAME PERIOD_S ON_S`: field 2 */
+    GP_UF_SENSOR_ON = 6,  /**< field 3 */
+    GP_UF_PROFILE_SHARE = 7,  /**< `profile INDEX SHARE PITCH_RAD BALLAST_CC SPEED_MPS`: field 2 */
+    GP_UF_PROFILE_PITCH = 8,  /**< field 3 */
+    GP_UF_PROFILE_BALLAST = 9,  /**< field 4 */
+    GP_UF_PROFILE_SPEED = 10,  /**< field 5 */
+} gp_update_field;
+
+/** UPDATE_STATUS's `status`: what became of a plan update (docs/plan-update.md). */
+typedef enum {
+    GP_UPDATE_APPLIED = 0,  /**< the new plan is in force from the next tick */
+    /** the update that made the plan in force, sent again: nothing to do */
+    GP_UPDATE_DUPLICATE = 1,
+    GP_UPDATE_NO_KEY = 2,  /**< no key is provisioned on the vehicle: no update is trusted */
+    /** not an update, another version, or a change that cannot be made */
+    GP_UPDATE_MALFORMED = 3,
+    GP_UPDATE_FORGED = 4,  /**< the tag does not match: changed after signing, or another key */
+    GP_UPDATE_STALE = 5,  /**< not newer than the plan in force: replayed or stale */
+    GP_UPDATE_NOT_HELD = 6,  /**< made against a plan the vehicle does not hold */
+    /** made against a plan newer than the one in force: one is missing */
+    GP_UPDATE_OUT_OF_ORDER = 7,
+    GP_UPDATE_BAD_PLAN = 8,  /**< the plan it makes breaks the format or the vehicle's limits */
+    GP_UPDATE_NOT_STORED = 9,  /**< the new plan could not be stored: the plan in force stays */
+} gp_update_status;
+
+/** What the runtime does with a command outside the vehicle's envelope. */
+typedef enum {
+    /** release control to the glider's own layered control, as a mission fault */
+    GP_ENVELOPE_FAULT = 0,
+    /** the mission's abort: it ends there, the glider surfaces and holds */
+    GP_ENVELOPE_SURFACE = 1,
+    /** hold the command at the envelope's edge, fly on (a band or rate: as SURFACE) */
+    GP_ENVELOPE_CLAMP = 2,
+} gp_envelope_action;
+
+/** Which limit of the envelope a command broke (the event log's `envelope` record). */
+typedef enum {
+    GP_LIMIT_NONE = 0,
+    GP_LIMIT_DEPTH = 1,  /**< a depth target, or a yo's end, outside 0..max_depth */
+    GP_LIMIT_PITCH = 2,  /**< |pitch| above max_pitch */
+    GP_LIMIT_BALLAST = 3,  /**< |pumped volume| above the pump's max_ballast */
+    GP_LIMIT_BAND = 4,  /**< a yo band thinner than min_yo_band: it would turn all the time */
+    GP_LIMIT_INFLECTION = 5,  /**< a yo turned again sooner than its pump can move a full stroke */
+} gp_envelope_limit;
 
 #endif /* GP_CONTRACT_H */

@@ -45,6 +45,7 @@ typedef struct {
     float depth_target_m, pitch_rad, ballast_cc, heading_rad;
     uint32_t sensor_power;
     uint32_t event_count;
+    float speed_mps, thrust_w;   /**< propelled flight [m/s], a yo's thruster [W]; 0: none */
 } gp_command;
 
 /** Receiver state: bytes since the last delimiter, bounded by GP_MAX_WIRE. */
@@ -134,10 +135,16 @@ gp_frame_error gp_command_unpack(const gp_frame *frame, const gp_command *base,
 /** @brief HELLO payload for a mission; @return payload length. */
 size_t gp_hello_pack(const gp_mission *mission, uint8_t *payload);
 
-/** @brief PLAN payload view: offset, total and a pointer to the data inside `frame`. */
+/** @brief PLAN (or PLAN_UPDATE: the same pieces) payload view: offset, total and a pointer
+ *  to the data inside `frame`. */
 gp_frame_error gp_plan_piece_unpack(const gp_frame *frame, uint16_t *offset, uint16_t *total,
                                     const uint8_t **data, uint16_t *len);
 
 size_t gp_plan_status_pack(int accepted, const char *message, uint8_t *payload);
+
+/** @brief UPDATE_STATUS payload: `status` (gp_update_status), the sequence number of the
+ *  plan in force after the update, the message (cut to the payload); @return its length. */
+size_t gp_update_status_pack(uint8_t status, uint32_t seq, const char *message,
+                             uint8_t *payload);
 
 #endif /* GP_FRAME_H */

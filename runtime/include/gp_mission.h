@@ -36,6 +36,8 @@ typedef enum {
     GP_PROFILE_THERMOTRACKYO = 1,
     GP_PROFILE_SURFACE = 2,
     GP_PROFILE_HOVER = 3,
+    GP_PROFILE_CRUISE = 4,       /**< level at a depth on the propeller */
+    GP_PROFILE_ALTITUDE = 5,     /**< level at a height above the sea floor on the propeller */
 } gp_profile_kind;
 
 typedef enum {
@@ -70,7 +72,9 @@ typedef struct {
 typedef struct {
     uint8_t kind;          /**< gp_profile_kind */
     uint8_t n_args;
-    gp_args_fn args;       /**< fills n_args values [m, rad, degC as the registry says] */
+    gp_args_fn args;       /**< fills n_args values [m, rad, degC as the registry says];
+                                a propelled profile's speed written `auto` is left out */
+    double thrust_w;       /**< `thrust` on a yo: the commanded power [W]; 0: none or auto */
 } gp_profile;
 
 typedef struct {
@@ -93,7 +97,40 @@ typedef struct {
     uint8_t sleep;               /**< `computer sleep between ticks`: 1, else 0 */
     uint32_t sensor_mask;        /**< `sensors` as a mask (bit i: sensor i), which the
                                       schedule powers each tick */
+    uint8_t unplanned_profile;   /**< flown without a plan: the first the vehicle can fly */
 } gp_state;
+
+/** A sensor's duty bounds in one state (`contract.FlightLimits.duty_bounds`). */
+typedef struct {
+    uint8_t sensor;               /**< registry index */
+    double low, high;             /**< [1] the least and the most duty the mission allows */
+} gp_duty_bound;
+
+/** What a plan may ask of one state beyond the contract's bounds. */
+typedef struct {
+    const gp_duty_bound *duties;  /**< the state's sensors with a device, in its order */
+    uint8_t n_duties;
+    const double *min_ballast_cc; /**< per profile alternative: a plan's ballast exceeds it [cc] */
+} gp_state_bounds;
+
+/** The figures of the mission, vehicle and board a plan is held to (`gp_plan_check`, the
+ *  mirror of contract/plan_check.py; `contract.FlightLimits`). */
+typedef struct {
+    const char *board;            /**< the board a plan names (or "none" for any) */
+    double max_budget_j;          /**< the battery less its reserve [J] */
+    double min_pitch_rad, max_pitch_rad;  /**< commanded pitch, open range [rad] */
+    double max_speed_mps;         /**< the vehicle's fastest glide [m/s] */
+    const gp_state_bounds *states;  /**< one per state */
+} gp_plan_bounds;
+
+/** The vehicle's rating every command is held to (contract.Envelope, gp_envelope.h). */
+typedef struct {
+    double max_depth_m;          /**< deepest depth target or yo end [m] */
+    double max_pitch_rad;        /**< largest |pitch| [rad] */
+    double min_yo_band_m;        /**< thinnest yo band [m] */
+    double min_inflection_s;     /**< shortest time between two turns of a yo [s] */
+    uint8_t action;              /**< gp_envelope_action */
+} gp_envelope;
 
 typedef struct {
     const char *name;
@@ -107,12 +144,17 @@ typedef struct {
     uint32_t own_read_mask;       /**< the runtime's own readings it reads (halfcycle,
                                        wptdist, wptreached): it computes wptdist only then */
     double default_ballast_cc;    /**< pumped volume when no plan sets one [cc] */
-    double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc] */
+    double max_ballast_cc;        /**< the vehicle's pump: most a plan may set [cc]; 0:
+                                       none (a propeller AUV) */
+    double unplanned_speed_mps;   /**< a propelled profile's `auto` speed without a plan
+                                       [m/s]; 0: no propulsion */
     double reserve_j;             /**< energy left at which the guard ends the mission [J] */
+    gp_envelope envelope;         /**< the vehicle's rating, held every tick */
     const double *clocks_mhz;     /**< the clocks of the board it flies on [MHz]; {0}:
                                        no board (`computer none`), no clock to set */
     uint8_t n_clocks;             /**< 1..GP_MAX_BOARD_CLOCKS */
     const char *const *sensor_names;  /**< GP_N_SENSORS names, registry order */
+    const gp_plan_bounds *bounds; /**< NULL: a plan is held to the contract's bounds only */
 } gp_mission;
 
 /** The mission this binary was compiled for (defined by the generated file). */

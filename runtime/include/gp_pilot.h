@@ -1,7 +1,8 @@
 /**
  * @file gp_pilot.h
  * @brief Flight profiles as docs/pilot.md specifies them: yo, thermotrackyo (robust
- *        and naive thermocline trackers), surface, hover. Pure state machines over
+ *        and naive thermocline trackers), surface, hover, and on a propeller cruise and
+ *        altitude. Pure state machines over
  *        depth and temperature readings; no I/O.
  */
 #ifndef GP_PILOT_H
@@ -37,10 +38,12 @@ typedef struct {
     double shallowest_m, deepest_m;
 } gp_pilot;
 
-/** The vertical part of a COMMAND. */
+/** The vertical part of a COMMAND, and the propulsion's. */
 typedef struct {
     double depth_target_m, pitch_rad, ballast_cc;
     uint8_t flags;               /**< GP_FLAG_SURFACE, GP_FLAG_CLIMBING */
+    double speed_mps;            /**< cruise, altitude: through the water [m/s]; else 0 */
+    double thrust_w;             /**< yo, thermotrackyo: the thruster's power [W]; else 0 */
 } gp_pilot_command;
 
 /** Profile inputs for one tick. */
@@ -50,6 +53,10 @@ typedef struct {
     double plan_pitch_rad;       /**< NaN: the profile's own pitch arguments */
     double ballast_cc;           /**< B: the plan's, or the mission's default */
     uint8_t naive;               /**< thermotrackyo: the paper's first, naive tracker */
+    double plan_speed_mps;       /**< NaN: no plan; cruise and altitude fly their speed
+                                      argument, or `unplanned_speed_mps` for `auto` */
+    double unplanned_speed_mps;  /**< the mission's (gp_mission) */
+    double thrust_w;             /**< a yo's thruster [W]: the plan's, else the one written */
 } gp_profile_input;
 
 /** What the pilot did this tick: turned the yo, detected the thermocline. */

@@ -22,9 +22,12 @@ typedef struct {
 
 typedef struct {
     double share, pitch_rad, ballast_cc, speed_mps;
+    double thrust_w;                 /**< a yo's thruster [W]; 0: off (the field left out) */
 } gp_plan_profile;
 
 typedef struct {
+    int line;                        /**< of its `state` line in the file */
+    double energy_j;                 /**< predicted, all components [J] */
     double clock_mhz;                /**< [MHz]; 0: no clock to set (`computer none`) */
     double cycle_s;
     uint8_t sleep;                   /**< 1: the board sleeps between ticks */
@@ -57,9 +60,9 @@ typedef struct {
 
 /**
  * @brief Read a plan file strictly against the compiled mission: its form, its values
- *        within the contract's bounds, the vehicle's pump and the board's clocks (a plan
- *        for `computer none`, clocks 0, flies on any build), and
- *        with a key its signature.
+ *        within the contract's bounds, the board's clocks (a plan for `computer none`,
+ *        clocks 0, flies on any build), with a key its signature, and then
+ *        `gp_plan_check`.
  * @param auth NULL: no key; a signed plan's tag is read but not checked. Else the plan
  *             must be signed with auth->key, with a sequence number above auth->last_seq
  *             or, to send the plan in force again, equal to it with the same tag.
@@ -70,12 +73,25 @@ typedef struct {
 int gp_plan_read(const char *text, size_t len, const gp_mission *mission,
                  const gp_plan_auth *auth, gp_plan *out, char error[GP_PLAN_ERROR_LEN]);
 
+/**
+ * @brief Hold a plan read from its file to its mission (contract/plan_check.py, rule for
+ *        rule and message for message): the board, the budget against the battery, the
+ *        prediction against the budget, each state's duties against the mission's bounds,
+ *        its pitch, ballast and speed against the vehicle's flight model.
+ * @param error on failure: "line N: what is wrong" (NUL-terminated, GP_PLAN_ERROR_LEN)
+ * @return 0 the plan may fly, -1 it contradicts its mission
+ */
+int gp_plan_check(const gp_plan *plan, const gp_mission *mission,
+                  char error[GP_PLAN_ERROR_LEN]);
+
 /** What the schedule sets at time `t_in_s` in a state. */
 typedef struct {
     uint8_t profile;            /**< alternative flown */
     uint32_t sensor_power;      /**< bit i: power sensor i */
     double pitch_rad;           /**< planned pitch, NaN: the profile's own */
     double ballast_cc;          /**< B */
+    double speed_mps;           /**< planned speed [m/s], NaN: no plan */
+    double thrust_w;            /**< planned thrust [W], NaN: no plan */
 } gp_schedule_now;
 
 /**

@@ -9,6 +9,7 @@
 
 #include <stdint.h>
 
+#include "gp_envelope.h"
 #include "gp_frame.h"
 #include "gp_machine.h"
 #include "gp_mission.h"
@@ -28,6 +29,7 @@ typedef struct {
     uint8_t has_command;            /**< last_command is valid */
     uint32_t events_log_bytes;      /**< size of the event log once this state was reached */
     gp_pilot pilot;
+    gp_envelope_memory envelope;    /**< the envelope guard's memory of the profile's turns */
     gp_command last_command;        /**< the last tick answered (resent for the same tick) */
     uint16_t route_resume[GP_MAX_STACK_DEPTH];  /**< per call on the stack: the caller's waypoint */
     uint32_t reached_resume[GP_MAX_STACK_DEPTH];  /**< and the waypoints it had reached */
@@ -40,6 +42,8 @@ typedef struct {
     uint8_t n_transitions;
     uint8_t fault;                  /**< gp_step_result of a refused event, 0: none */
     gp_transition refused;          /**< the refused transition when `fault` */
+    gp_envelope_breach envelope;    /**< a command outside the envelope (limit 0: none) */
+    uint8_t envelope_state;         /**< the state that commanded it */
 } gp_tick_report;
 
 /** Options of a run. */

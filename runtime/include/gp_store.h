@@ -49,6 +49,7 @@
      + 8 * GP_MAX_VARIABLES + 8 * GP_N_SENSORS                                           \
      + 4 + 4 + 8 * 3 + 8 * 3 + 16 * GP_TRACK_WINDOW  /* pilot */                         \
      + 2 + 4                                   /* route: waypoint, waypoints reached */  \
+     + 3 + 8                                   /* envelope: flags, last turn */          \
      + 1 + GP_COMMAND_MAX_SIZE                 /* last COMMAND */                        \
      + 4)                                      /* CRC-32 */
 

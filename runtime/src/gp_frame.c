@@ -104,7 +104,7 @@ static int known_type(uint8_t type)
 {
     return type == GP_MSG_HELLO || type == GP_MSG_SENSORS || type == GP_MSG_COMMAND
         || type == GP_MSG_RELEASE || type == GP_MSG_PLAN || type == GP_MSG_PLAN_STATUS
-        || type == GP_MSG_NAK;
+        || type == GP_MSG_PLAN_UPDATE || type == GP_MSG_UPDATE_STATUS || type == GP_MSG_NAK;
 }
 
 /* A frame's bytes, which hold no zero (the reader split them at the delimiters). */
@@ -267,7 +267,8 @@ size_t gp_sensors_pack(uint32_t tick, uint8_t flags, uint32_t mask, uint32_t rea
     X(GP_CMD_TO_STATE, to, u8) X(GP_CMD_PROFILE, profile, u8) X(GP_CMD_FLAGS, flags, u8) \
     X(GP_CMD_DEPTH_TARGET_M, depth_target_m, f32) X(GP_CMD_PITCH_RAD, pitch_rad, f32)   \
     X(GP_CMD_BALLAST_CC, ballast_cc, f32) X(GP_CMD_HEADING_RAD, heading_rad, f32)       \
-    X(GP_CMD_SENSOR_POWER, sensor_power, u32) X(GP_CMD_EVENT_COUNT, event_count, u32)
+    X(GP_CMD_SENSOR_POWER, sensor_power, u32) X(GP_CMD_EVENT_COUNT, event_count, u32)   \
+    X(GP_CMD_SPEED_MPS, speed_mps, f32) X(GP_CMD_THRUST_W, thrust_w, f32)
 
 /* A field's value as it travels: an f32 by its bits (-0 and NaNs are kept). */
 static uint32_t bits_u8(uint8_t v) { return v; }
@@ -386,7 +387,8 @@ size_t gp_hello_pack(const gp_mission *mission, uint8_t *p)
 gp_frame_error gp_plan_piece_unpack(const gp_frame *frame, uint16_t *offset, uint16_t *total,
                                     const uint8_t **data, uint16_t *len)
 {
-    if (frame->type != GP_MSG_PLAN || frame->length < 4 || frame->length > 4 + GP_PLAN_PIECE) {
+    if ((frame->type != GP_MSG_PLAN && frame->type != GP_MSG_PLAN_UPDATE) || frame->length < 4
+        || frame->length > 4 + GP_PLAN_PIECE) {
         return GP_FRAME_LENGTH;
     }
     *offset = get_u16(frame->payload);
@@ -406,4 +408,17 @@ size_t gp_plan_status_pack(int accepted, const char *message, uint8_t *p)
     p[1] = (uint8_t)len;
     memcpy(p + 2, message, len);
     return 2 + len;
+}
+
+size_t gp_update_status_pack(uint8_t status, uint32_t seq, const char *message, uint8_t *p)
+{
+    size_t len = strlen(message);
+    if (len > GP_MAX_PAYLOAD - 6) {
+        len = GP_MAX_PAYLOAD - 6;
+    }
+    p[0] = status;
+    put_u32(p + 1, seq);
+    p[5] = (uint8_t)len;
+    memcpy(p + 6, message, len);
+    return 6 + len;
 }

@@ -19,6 +19,7 @@
 #include "gp_runtime.h"
 #include "gp_serial.h"
 #include "gp_store.h"
+#include "gp_update.h"
 
 #define READ_CHUNK 256
 #define ERROR_LEN 512
@@ -51,6 +52,7 @@ typedef struct {
     double hello_due_s;              /* next HELLO, before the first SENSORS */
     int has_plan;
     uint16_t plan_total, plan_received;
+    uint16_t update_total, update_received;  /* a plan update being assembled */
     uint32_t dropped;                /* frames dropped (bad CRC, COBS, ...) */
     uint32_t stale;                  /* SENSORS of a tick older than the last answered */
     int released;                    /* the watchdog gave control to layered control */
@@ -62,7 +64,10 @@ static int crash_fd = -1;                  /* the line, for the crash handler */
 static uint8_t crash_release[GP_MAX_FRAME];  /* RELEASE (internal error), framed ahead */
 static size_t crash_release_len;
 static gp_plan plan;
-static char plan_text[GP_MAX_PLAN_BYTES + 1];
+static char plan_text[GP_MAX_PLAN_BYTES + 1];   /* a plan read or assembled, an update's result */
+static char held_text[GP_MAX_PLAN_BYTES];       /* the file of the plan in force: updates */
+static size_t held_len;                         /* apply to it; 0: no plan */
+static uint8_t update_rx[GP_MAX_UPDATE_BYTES];  /* a plan update as it arrives */
 static gp_checkpoint checkpoint = {-1, 0, 0};
 static gp_plan_auth auth;                  /* with --key: what the next plan must show */
 static const gp_plan_auth *plan_auth;      /* &auth with --key, else NULL */
@@ -160,8 +165,8 @@ static int release(link_state *s, gp_release_reason reason, int status)
     }
     if (s->own_pty) {
         gp_serial_linger(s->fd, s->args->link_timeout_s,
-                         reason == GP_RELEASE_MISSION_EXITED
-                             || reason == GP_RELEASE_ENERGY_RESERVE ? answer_late : NULL, s);
+                         reason == GP_RELEASE_MISSION_EXITED || reason == GP_RELEASE_ENERGY_RESERVE
+                             || reason == GP_RELEASE_ENVELOPE ? answer_late : NULL, s);
     }
     crash_fd = -1;
     close(s->fd);
@@ -172,9 +177,36 @@ static int release(link_state *s, gp_release_reason reason, int status)
     return status;
 }
 
-/* The mission is over, by its exit or by the energy guard: hand over for good. */
+/* A command outside the envelope that hands control back (the fault action). */
+static int envelope_releases(const link_state *s, const gp_tick_report *report)
+{
+    return gp_envelope_ends(&s->mission->envelope, &report->envelope)
+           && s->mission->envelope.action == GP_ENVELOPE_FAULT;
+}
+
+/* A command held at the envelope's edge (the clamp action), flown on. */
+static int envelope_holds(const link_state *s, const gp_tick_report *report)
+{
+    return report->envelope.limit != GP_LIMIT_NONE
+           && !gp_envelope_ends(&s->mission->envelope, &report->envelope);
+}
+
+/* What the envelope guard did, on stderr: the state, the limit, the value and the bound. */
+static void say_envelope(link_state *s, const gp_tick_report *report)
+{
+    char message[ERROR_LEN];
+    gp_envelope_say(&s->mission->envelope, &report->envelope,
+                    runtime.sensors[GP_SENSOR_MISSIONTIME],
+                    s->mission->states[report->envelope_state].name, message, sizeof message);
+    say(s, message);
+}
+
+/* The mission is over, by its exit or by a guard: hand over for good. */
 static int end_mission(link_state *s)
 {
+    if (runtime.last_command.transition == GP_TR_ENVELOPE) {
+        return release(s, GP_RELEASE_ENVELOPE, GP_EXIT_ENVELOPE);
+    }
     if (runtime.last_command.transition == GP_TR_RESERVE) {
         say(s, "the battery reached its reserve: the mission ends, surfacing; releasing "
                "control");
@@ -203,6 +235,12 @@ static int log_transitions(link_state *s, const gp_tick_report *report)
         const gp_transition *t = &report->refused;
         gp_events_append(s->events_fd, s->mission, time_s, "fault", t->from, t->to, t->depth);
     }
+    if (envelope_releases(s, report) || envelope_holds(s, report)) {
+        /* a surfacing is the tick's `envelope` transition, logged above */
+        gp_events_append(s->events_fd, s->mission, time_s,
+                         envelope_releases(s, report) ? "fault" : "clamp", report->envelope_state,
+                         report->envelope_state, runtime.machine.depth);
+    }
     return 0;
 }
 
@@ -223,7 +261,8 @@ static int store_record(link_state *s)
  * tracker's window come back as they were. A full journal gives way to a record. */
 static int persist(link_state *s, const gp_frame *frame, const gp_tick_report *report)
 {
-    if (report->n_transitions == 0 && !report->fault) {  /* most ticks */
+    if (report->n_transitions == 0 && !report->fault
+        && report->envelope.limit == GP_LIMIT_NONE) {  /* most ticks */
         int journaled = s->args->state_dir
                             ? gp_journal_append(&checkpoint, frame->payload, frame->length)
                             : 0;
@@ -259,10 +298,13 @@ static int load_key(const char *path, char *message)
     return 0;
 }
 
-/* A plan just accepted: with a key, the next one must be newer. */
-static void adopt_plan(link_state *s)
+/* A plan just accepted, whose file is `text`: with a key, the next one must be newer, and
+ * an update applies to this file. */
+static void adopt_plan(link_state *s, const char *text, size_t len)
 {
     s->has_plan = 1;
+    memcpy(held_text, text, len);
+    held_len = len;
     if (plan_auth && plan.is_signed) {
         auth.last_seq = plan.seq;
         memcpy(auth.last_tag, plan.tag, sizeof auth.last_tag);
@@ -282,7 +324,7 @@ static int load_plan(link_state *s, const char *path, char *message)
         snprintf(message, ERROR_LEN, "%.80s %.170s", path, error);
         return -1;
     }
-    adopt_plan(s);
+    adopt_plan(s, plan_text, (size_t)len);
     return 0;
 }
 
@@ -510,6 +552,12 @@ static int on_sensors(link_state *s, const gp_frame *frame)
         say(s, "cannot write the checkpoint or event log; releasing control");
         return release(s, GP_RELEASE_INTERNAL_ERROR, GP_EXIT_INTERNAL);
     }
+    if (report.envelope.limit != GP_LIMIT_NONE) {
+        say_envelope(s, &report);
+    }
+    if (envelope_releases(s, &report)) {
+        return release(s, GP_RELEASE_ENVELOPE, GP_EXIT_ENVELOPE);
+    }
     if (report.fault) {
         char message[ERROR_LEN];
         snprintf(message, sizeof message, "mission fault at missiontime %g s in state %.64s: %s; "
@@ -589,7 +637,7 @@ static void on_plan(link_state *s, const gp_frame *frame)
                  "link are refused (start the runtime with --key FILE)");
     } else if (gp_plan_read(plan_text, total, s->mission, plan_auth, &plan, error) == 0) {
         accepted = 1;
-        adopt_plan(s);
+        adopt_plan(s, plan_text, total);
         /* a record first: the ticks journaled so far were stepped under the plan before,
          * and a resumed runtime steps the journal under the stored plan */
         if (s->args->state_dir
@@ -601,6 +649,103 @@ static void on_plan(link_state *s, const gp_frame *frame)
     snprintf(status, sizeof status, "%s", accepted ? "ok" : error);
     note_plan(s, accepted, status);
     send_frame(s, GP_MSG_PLAN_STATUS, gp_plan_status_pack(accepted, status, outgoing(s)));
+}
+
+/* What became of a plan update sent over the link: on stderr and in plans.log, as plans. */
+static void note_update(link_state *s, gp_update_status status, const char *message)
+{
+    int applied = status == GP_UPDATE_APPLIED || status == GP_UPDATE_DUPLICATE;
+    char line[ERROR_LEN];
+    unsigned long seq = applied ? (unsigned long)plan.seq : 0;
+    snprintf(line, sizeof line, "plan update over the link %s (seq %lu): %.300s",
+             applied ? "applied" : "refused", seq, message);
+    say(s, line);
+    char path[GP_PATH_MAX];
+    if (!s->args->state_dir || gp_path_join(s->args->state_dir, "plans.log", path) < 0) {
+        return;
+    }
+    int fd = open(path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        return;
+    }
+    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
+    int n = snprintf(line, sizeof line, "%.17g %s %lu update: %.300s\n",
+                     isnan(time_s) ? 0 : time_s, applied ? "accepted" : "rejected", seq,
+                     message);
+    if (n > 0 && write(fd, line, (size_t)n) == n) {
+        fsync(fd);
+    }
+    close(fd);
+}
+
+/* Make the update in update_rx (`len` bytes) the plan in force, or say why not. The new
+ * plan's file is made where plans over the link are assembled: an update ends a plan's
+ * assembly, which the science computer sends again whole. It is stored (after a record:
+ * the ticks journaled so far were stepped under the plan before) before it is flown, so
+ * that a power cut leaves the old plan or the new one in the state directory; a plan
+ * that cannot be stored is not flown. */
+static void apply_update(link_state *s, size_t len)
+{
+    char message[GP_UPDATE_MESSAGE_LEN];
+    size_t new_len = 0;
+    s->plan_received = 0;
+    gp_update_status status = gp_update_apply(update_rx, len, held_len ? held_text : NULL,
+                                              held_len, plan_auth, s->mission, plan_text,
+                                              &new_len, &plan, message);
+    if (status == GP_UPDATE_APPLIED && s->args->state_dir
+        && (store_record(s) < 0
+            || gp_write_atomically(s->args->state_dir, "plan", plan_text, new_len) < 0)) {
+        char error[GP_PLAN_ERROR_LEN];
+        int why = errno;
+        gp_plan_read(held_text, held_len, s->mission, plan_auth, &plan, error);
+        status = GP_UPDATE_NOT_STORED;
+        snprintf(message, sizeof message, "the new plan cannot be stored in the state "
+                 "directory (%.80s): plan %lu stays in force", strerror(why),
+                 (unsigned long)auth.last_seq);
+    } else if (status == GP_UPDATE_APPLIED) {
+        adopt_plan(s, plan_text, new_len);
+    }
+    note_update(s, status, message);
+    uint32_t seq = s->has_plan && plan_auth ? auth.last_seq : 0;
+    send_frame(s, GP_MSG_UPDATE_STATUS,
+               gp_update_status_pack((uint8_t)status, seq, message, outgoing(s)));
+}
+
+/* Assemble PLAN_UPDATE pieces sent in order from offset 0, as PLAN pieces; apply the
+ * update when complete. One longer than an update may be is refused at its first piece. */
+static void on_update(link_state *s, const gp_frame *frame)
+{
+    uint16_t offset, total, len;
+    const uint8_t *data;
+    if (gp_plan_piece_unpack(frame, &offset, &total, &data, &len) != GP_FRAME_OK) {
+        send_nak(s);
+        return;
+    }
+    if (offset == 0 && total > GP_MAX_UPDATE_BYTES) {
+        char message[GP_UPDATE_MESSAGE_LEN];
+        snprintf(message, sizeof message, "the update has %u bytes, more than %d",
+                 (unsigned)total, GP_MAX_UPDATE_BYTES);
+        note_update(s, GP_UPDATE_MALFORMED, message);
+        send_frame(s, GP_MSG_UPDATE_STATUS,
+                   gp_update_status_pack(GP_UPDATE_MALFORMED, plan_auth ? auth.last_seq : 0,
+                                         message, outgoing(s)));
+        s->update_total = 0;
+        return;
+    }
+    if (offset == 0) {
+        s->update_total = total;
+        s->update_received = 0;
+    }
+    if (total == 0 || total != s->update_total || offset != s->update_received
+        || (uint32_t)offset + len > total) {
+        return;  /* out of order: the science computer sends the whole update again */
+    }
+    memcpy(update_rx + offset, data, len);
+    s->update_received = (uint16_t)(offset + len);
+    if (s->update_received == total) {
+        s->update_received = 0;
+        apply_update(s, total);
+    }
 }
 
 /* @return -1 to go on, else the exit status */
@@ -623,6 +768,9 @@ static int on_frame(link_state *s, const gp_frame *frame)
         return -1;
     case GP_MSG_PLAN:
         on_plan(s, frame);
+        return -1;
+    case GP_MSG_PLAN_UPDATE:
+        on_update(s, frame);
         return -1;
     default:  /* messages the runtime sends, not receives: ignore */
         return -1;

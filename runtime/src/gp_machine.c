@@ -3,6 +3,8 @@
 
 #include <string.h>
 
+#include "gp_envelope.h"
+
 static int known_action(uint8_t action)
 {
     return action == GP_ACT_NONE || (action >= GP_ACT_GOTO && action <= GP_ACT_EXIT);
@@ -101,15 +103,23 @@ const char *gp_mission_check(const gp_mission *mission)
     if (mission->stack_depth < 1 || mission->stack_depth > GP_MAX_STACK_DEPTH) {
         return "stack depth outside 1..GP_MAX_STACK_DEPTH";
     }
-    if (!(mission->reserve_j >= 0) || !(mission->max_ballast_cc > 0) || mission->n_clocks < 1
+    if (!(mission->reserve_j >= 0) || !(mission->max_ballast_cc >= 0)
+        || !(mission->unplanned_speed_mps >= 0) || mission->n_clocks < 1
         || mission->n_clocks > GP_MAX_BOARD_CLOCKS || !mission->clocks_mhz) {
         return "no pump volume or energy reserve, or a clock count outside 1..GP_MAX_BOARD_CLOCKS";
+    }
+    const char *envelope_problem = gp_envelope_check(&mission->envelope);
+    if (envelope_problem) {
+        return envelope_problem;
     }
     for (int s = 0; s < mission->n_states; s++) {
         const gp_state *state = &mission->states[s];
         if (state->n_profiles < 1 || state->n_profiles > GP_MAX_PROFILE_ALTERNATIVES
             || !state->profiles) {
             return "profile count outside 1..GP_MAX_PROFILE_ALTERNATIVES";
+        }
+        if (state->unplanned_profile >= state->n_profiles) {
+            return "the profile flown without a plan is not one of the state's";
         }
         for (int p = 0; p < state->n_profiles; p++) {
             const gp_profile *profile = &state->profiles[p];

@@ -163,8 +163,11 @@ static int track_thermocline(gp_pilot *pilot, const gp_profile_input *in, double
         return 0;
     }
     double z = (pilot->window[a].depth_m + depth_m) / 2.0;
-    pilot->lo_m = fmax(min_m, z - depth_threshold / 2.0);
-    pilot->hi_m = fmin(max_m, z + depth_threshold / 2.0);
+    /* max(min, lo) and min(max, hi) that keep a NaN bound (fmax and fmin would put a
+     * number the mission never gave in its place: docs/pilot.md) */
+    double lo = z - depth_threshold / 2.0, hi = z + depth_threshold / 2.0;
+    pilot->lo_m = lo > min_m ? lo : min_m;
+    pilot->hi_m = hi < max_m ? hi : max_m;
     pilot->n_window = 0;
     pilot->detected = 1;
     return GP_PILOT_DETECTED;
@@ -205,7 +208,27 @@ static int fly_yo(gp_pilot *pilot, const gp_profile_input *in, double depth_m, d
     out->pitch_rad = climbing ? pitch : -pitch;
     out->ballast_cc = climbing ? in->ballast_cc : -in->ballast_cc;
     out->flags = climbing ? GP_FLAG_CLIMBING : 0;
+    out->speed_mps = 0.0;
+    out->thrust_w = in->thrust_w;
     return changed;
+}
+
+/* A propelled profile's speed: the plan's; without a plan the speed argument, or the
+ * mission's unplanned speed where it is `auto` (left out: 0) or not positive. */
+static double propelled_speed(const gp_profile_input *in)
+{
+    if (!isnan(in->plan_speed_mps)) {
+        return in->plan_speed_mps;
+    }
+    return in->args[1] > 0.0 ? in->args[1] : in->unplanned_speed_mps;
+}
+
+/* altitude(height, speed): the depth at which the altimeter would read `height`; with no
+ * floor in the altimeter's range (NaN) the floor lies deeper: down by `height`. */
+static double altitude_target_m(double height_m, double depth_m, double altitude_m)
+{
+    double target = isnan(altitude_m) ? depth_m + height_m : depth_m + altitude_m - height_m;
+    return target > 0.0 ? target : 0.0;  /* a NaN depth too: the surface */
 }
 
 int gp_pilot_step(gp_pilot *pilot, const gp_profile_input *in, double depth_m, double temp_c,
@@ -217,10 +240,17 @@ int gp_pilot_step(gp_pilot *pilot, const gp_profile_input *in, double depth_m, d
         return fly_yo(pilot, in, depth_m, temp_c, altitude_m, out);
     case GP_PROFILE_SURFACE:
         *out = (gp_pilot_command){0.0, GP_SURFACE_PITCH_RAD, in->ballast_cc,
-                                  GP_FLAG_SURFACE | GP_FLAG_CLIMBING};
+                                  GP_FLAG_SURFACE | GP_FLAG_CLIMBING, 0.0, 0.0};
+        return 0;
+    case GP_PROFILE_CRUISE:
+        *out = (gp_pilot_command){in->args[0], 0.0, 0.0, 0, propelled_speed(in), 0.0};
+        return 0;
+    case GP_PROFILE_ALTITUDE:
+        *out = (gp_pilot_command){altitude_target_m(in->args[0], depth_m, altitude_m), 0.0,
+                                  0.0, 0, propelled_speed(in), 0.0};
         return 0;
     default:  /* hover */
-        *out = (gp_pilot_command){in->args[0], 0.0, 0.0, 0};
+        *out = (gp_pilot_command){in->args[0], 0.0, 0.0, 0, 0.0, 0.0};
         return 0;
     }
 }

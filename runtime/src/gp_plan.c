@@ -403,11 +403,20 @@ static int built_for_no_board(const gp_mission *mission)
     return mission->n_clocks == 1 && mission->clocks_mhz[0] == 0;
 }
 
+/* Whether a plan for board `computer` is for another board than the mission's: its clocks
+ * are not checked against the mission's board, gp_plan_check refuses the board. */
+static int for_another_board(const gp_mission *mission, const char *computer)
+{
+    const gp_plan_bounds *bounds = mission->bounds;
+    return bounds != NULL && bounds->board != NULL && strcmp(computer, bounds->board) != 0;
+}
+
 /* A clock [MHz] in field `index`: in a plan for `computer none` (`no_board`) 0, there
- * being no clock to set, whatever board the mission was compiled for; else one of the
- * clocks of the board the mission flies on, above 0. */
+ * being no clock to set, whatever board the mission was compiled for; else above 0 and,
+ * unless the plan is for another board (`other_board`), one of the clocks of the board
+ * the mission flies on. */
 static int clock_field(reader *r, int index, const gp_mission *mission, int no_board,
-                       double *out)
+                       int other_board, double *out)
 {
     if (number_field(r, index, "CLOCK_MHZ", out) < 0) {
         return -1;
@@ -415,6 +424,9 @@ static int clock_field(reader *r, int index, const gp_mission *mission, int no_b
     if (no_board) {
         return *out == 0 ? 0 : fail(r, "clock %g MHz: computer " GP_NO_BOARD " has no clock "
                                        "to set, its clocks are 0", *out);
+    }
+    if (other_board) {
+        return *out > 0 ? 0 : fail(r, "the clock must be > 0 MHz");
     }
     if (built_for_no_board(mission)) {
         return fail(r, "clock %g MHz: the mission names no board (computer " GP_NO_BOARD
@@ -502,13 +514,15 @@ static int read_header(reader *r, const gp_mission *mission, gp_plan *plan)
         return fail(r, "hash does not match the compiled mission (plan made for another "
                        "version of '%.32s')", mission->name);
     }
-    if (expect(r, "computer", 3) < 0 || name_field(r, 1, "computer") < 0
-        || clock_field(r, 2, mission, field_is(&r->fields[1], GP_NO_BOARD),
-                       &plan->clock_mhz) < 0) {
+    if (expect(r, "computer", 3) < 0 || name_field(r, 1, "computer") < 0) {
         return -1;
     }
     memcpy(plan->computer, r->fields[1].start, r->fields[1].len);
     plan->computer[r->fields[1].len] = '\0';
+    if (clock_field(r, 2, mission, strcmp(plan->computer, GP_NO_BOARD) == 0,
+                    for_another_board(mission, plan->computer), &plan->clock_mhz) < 0) {
+        return -1;
+    }
     if (expect(r, "budget_j", 2) < 0
         || amount_field(r, 1, "budget_j", GP_MAX_PLAN_ENERGY_J, &plan->budget_j) < 0
         || expect(r, "predicted_j", 2) < 0
@@ -572,11 +586,11 @@ static int read_sensor(reader *r, const gp_mission *mission, const gp_state *sta
     return 0;
 }
 
-static int read_profile(reader *r, const gp_mission *mission, int expected_index,
-                        gp_plan_profile *out)
+static int read_profile(reader *r, int expected_index, gp_plan_profile *out)
 {
     int index;
-    if (expect(r, "profile", 6) < 0
+    /* `profile INDEX SHARE PITCH_RAD BALLAST_CC SPEED_MPS [THRUST_W]` */
+    if (expect_fields(r, "profile", 6, 7, 0) < 0
         || count_field(r, 1, "profile INDEX", 0, GP_MAX_PROFILE_ALTERNATIVES - 1, &index) < 0) {
         return -1;
     }
@@ -589,18 +603,23 @@ static int read_profile(reader *r, const gp_mission *mission, int expected_index
         || number_field(r, 5, "SPEED_MPS", &out->speed_mps) < 0) {
         return -1;
     }
+    out->thrust_w = 0.0;  /* left out: the thruster is off */
+    if (r->n_fields == 7 && number_field(r, 6, "THRUST_W", &out->thrust_w) < 0) {
+        return -1;
+    }
+    if (!(out->thrust_w >= 0 && out->thrust_w <= GP_MAX_PLAN_THRUST_W)) {
+        return fail(r, "THRUST_W %g outside [0, %g]", out->thrust_w, GP_MAX_PLAN_THRUST_W);
+    }
     if (out->share < 0 || out->share > 1) {
         return fail(r, "SHARE %g outside [0, 1]", out->share);
     }
-    if (!(out->pitch_rad > 0 && out->pitch_rad < HALF_PI)) {
+    /* pitch and ballast 0: a propelled profile, flown level on its propeller */
+    int level = out->pitch_rad == 0.0 && out->ballast_cc == 0.0;
+    if (!level && !(out->pitch_rad > 0 && out->pitch_rad < HALF_PI)) {
         return fail(r, "PITCH_RAD %g outside (0, pi/2)", out->pitch_rad);
     }
-    if (!(out->ballast_cc > 0) || !(out->speed_mps > 0)) {
+    if (!(level || out->ballast_cc > 0) || !(out->speed_mps > 0)) {
         return fail(r, "BALLAST_CC and SPEED_MPS must be > 0");
-    }
-    if (out->ballast_cc > mission->max_ballast_cc) {
-        return fail(r, "BALLAST_CC %g exceeds the vehicle's pump (%g cc)", out->ballast_cc,
-                    mission->max_ballast_cc);
     }
     if (out->speed_mps > GP_MAX_PLAN_SPEED_MPS) {
         return fail(r, "SPEED_MPS %g exceeds %g", out->speed_mps, GP_MAX_PLAN_SPEED_MPS);
@@ -609,8 +628,9 @@ static int read_profile(reader *r, const gp_mission *mission, int expected_index
 }
 
 /* `predict TIME_S VISITS INFLECTIONS` and `energy J...`: what the plan predicts of the
- * state; the simulator checks a flight against it, the runtime only its form. */
-static int read_prediction(reader *r, int n_components)
+ * state; the simulator checks a flight against it, the runtime its form and that its sum
+ * is the plan's `predicted_j` (into `energy_j`). */
+static int read_prediction(reader *r, int n_components, double *energy_j)
 {
     double amount;
     int visits;
@@ -627,6 +647,7 @@ static int read_prediction(reader *r, int n_components)
         if (amount_field(r, i, "energy", GP_MAX_PLAN_ENERGY_J, &amount) < 0) {
             return -1;
         }
+        *energy_j += amount;
     }
     return 0;
 }
@@ -663,9 +684,10 @@ static int read_power(reader *r, const gp_state *state, gp_plan_state *out)
     return 0;
 }
 
-/* State block `s`; `no_board`: the plan is for `computer none`. */
+/* State block `s`; `no_board`: the plan is for `computer none`, `other_board`: for a
+ * board not the mission's. */
 static int read_state(reader *r, const gp_mission *mission, int n_components, int s,
-                      int no_board, gp_plan_state *out)
+                      int no_board, int other_board, gp_plan_state *out)
 {
     const gp_state *state = &mission->states[s];
     int n_sensors, n_profiles, logged_from = 0;
@@ -676,7 +698,8 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
         return fail(r, "state '%.*s' where the mission has '%.32s'", (int)r->fields[1].len,
                     r->fields[1].start, state->name);
     }
-    if (clock_field(r, 2, mission, no_board, &out->clock_mhz) < 0
+    out->line = r->line_no;
+    if (clock_field(r, 2, mission, no_board, other_board, &out->clock_mhz) < 0
         || number_field(r, 3, "CYCLE_S", &out->cycle_s) < 0
         || count_field(r, 4, "N_SENSORS", 0, GP_MAX_PLAN_SENSORS, &n_sensors) < 0
         || count_field(r, 5, "N_PROFILES", 1, GP_MAX_PROFILE_ALTERNATIVES, &n_profiles) < 0) {
@@ -689,7 +712,7 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
         return fail(r, "%d profiles, state '%.32s' has %d", n_profiles, state->name,
                     state->n_profiles);
     }
-    if (read_power(r, state, out) < 0 || read_prediction(r, n_components) < 0) {
+    if (read_power(r, state, out) < 0 || read_prediction(r, n_components, &out->energy_j) < 0) {
         return -1;
     }
     out->n_sensors = (uint8_t)n_sensors;
@@ -701,7 +724,7 @@ static int read_state(reader *r, const gp_mission *mission, int n_components, in
     }
     double total = 0;
     for (int i = 0; i < n_profiles; i++) {
-        if (read_profile(r, mission, i, &out->profiles[i]) < 0) {
+        if (read_profile(r, i, &out->profiles[i]) < 0) {
             return -1;
         }
         total += out->profiles[i].share;
@@ -733,8 +756,10 @@ int gp_plan_read(const char *text, size_t len, const gp_mission *mission,
         return -1;
     }
     int no_board = strcmp(plan.computer, GP_NO_BOARD) == 0;
+    int other_board = for_another_board(mission, plan.computer);
     for (int s = 0; s < plan.n_states; s++) {
-        if (read_state(&r, mission, plan.n_components, s, no_board, &plan.states[s]) < 0) {
+        if (read_state(&r, mission, plan.n_components, s, no_board, other_board,
+                       &plan.states[s]) < 0) {
             return -1;
         }
     }
@@ -742,7 +767,137 @@ int gp_plan_read(const char *text, size_t len, const gp_mission *mission,
         next_line(&r, 0);
         return fail(&r, "extra line after the last state block");
     }
+    if (gp_plan_check(&plan, mission, error) < 0) {
+        return -1;
+    }
     *out = plan;
+    return 0;
+}
+
+/* ---- the plan against its mission (contract/plan_check.py) ----------------------- */
+
+/* Lines of the plan file's header: fixed by the format. */
+enum { COMPUTER_LINE = 4, BUDGET_LINE = 5, PREDICTED_LINE = 6 };
+
+/* A mission table without bounds holds a plan to the contract's. */
+static const gp_plan_bounds contract_bounds = {
+    .board = NULL, .max_budget_j = GP_MAX_PLAN_ENERGY_J, .min_pitch_rad = 0,
+    .max_pitch_rad = HALF_PI, .max_speed_mps = GP_MAX_PLAN_SPEED_MPS, .states = NULL,
+};
+
+static int refuse(char error[GP_PLAN_ERROR_LEN], int line, const char *format, ...)
+{
+    int n = snprintf(error, GP_PLAN_ERROR_LEN, "line %d: ", line);
+    va_list args;
+    va_start(args, format);
+    vsnprintf(error + n, (size_t)(GP_PLAN_ERROR_LEN - n), format, args);
+    va_end(args);
+    return -1;
+}
+
+/* `value` exceeds `bound` by more than the plan file's rounding. */
+static int above(double value, double bound)
+{
+    return value > bound + GP_PLAN_ROUNDING * fabs(bound);
+}
+
+/* The duty [1] a state's plan gives `sensor`: a sensor without a line is always on. */
+static double planned_duty(const gp_plan_state *ps, uint8_t sensor)
+{
+    for (int i = 0; i < ps->n_sensors; i++) {
+        if (ps->sensors[i].sensor == sensor) {
+            return ps->sensors[i].on_s / ps->sensors[i].period_s;
+        }
+    }
+    return 1.0;
+}
+
+static int check_state(const gp_plan_state *ps, const gp_state *state,
+                       const gp_state_bounds *sb, const gp_mission *mission,
+                       const gp_plan_bounds *b, char error[GP_PLAN_ERROR_LEN])
+{
+    for (int i = 0; sb != NULL && i < sb->n_duties; i++) {
+        const gp_duty_bound *d = &sb->duties[i];
+        double flown = planned_duty(ps, d->sensor);
+        if (flown < d->low - GP_PLAN_ROUNDING || above(flown, d->high)) {
+            return refuse(error, ps->line, "state %.32s: sensor %.32s: duty %g outside the "
+                          "mission's [%g, %g]", state->name, mission->sensor_names[d->sensor],
+                          flown, d->low, d->high);
+        }
+    }
+    for (int k = 0; k < ps->n_profiles; k++) {
+        const gp_plan_profile *p = &ps->profiles[k];
+        double least = sb != NULL ? sb->min_ballast_cc[k] : 0;
+        if (p->pitch_rad == 0.0 && p->ballast_cc == 0.0) {  /* level: propelled */
+            if (!(mission->unplanned_speed_mps > 0)) {
+                return refuse(error, ps->line, "state %.32s: profile %d: PITCH_RAD and "
+                              "BALLAST_CC 0 fly it level on a propeller, and the vehicle has "
+                              "none", state->name, k);
+            }
+            continue;  /* no glide: its speed is the contract's to bound */
+        }
+        if (p->thrust_w > 0 && !(mission->unplanned_speed_mps > 0)) {
+            return refuse(error, ps->line, "state %.32s: profile %d: THRUST_W %g on a vehicle "
+                          "without a thruster", state->name, k, p->thrust_w);
+        }
+        if (!(b->min_pitch_rad < p->pitch_rad && p->pitch_rad < b->max_pitch_rad)) {
+            return refuse(error, ps->line, "state %.32s: profile %d: PITCH_RAD %g outside the "
+                          "vehicle's (%g, %g) rad", state->name, k, p->pitch_rad,
+                          b->min_pitch_rad, b->max_pitch_rad);
+        }
+        if (!(p->ballast_cc > least)) {
+            return refuse(error, ps->line, "state %.32s: profile %d: BALLAST_CC %g does not "
+                          "fly it: the vehicle needs more than %g cc", state->name, k,
+                          p->ballast_cc, least);
+        }
+        if (p->ballast_cc > mission->max_ballast_cc) {
+            return refuse(error, ps->line, "state %.32s: profile %d: BALLAST_CC %g exceeds "
+                          "the vehicle's pump (%g cc)", state->name, k, p->ballast_cc,
+                          mission->max_ballast_cc);
+        }
+        if (p->thrust_w == 0 && above(p->speed_mps, b->max_speed_mps)) {
+            return refuse(error, ps->line, "state %.32s: profile %d: SPEED_MPS %g exceeds the "
+                          "vehicle's fastest glide (%g m/s)", state->name, k, p->speed_mps,
+                          b->max_speed_mps);
+        }
+    }
+    return 0;
+}
+
+int gp_plan_check(const gp_plan *plan, const gp_mission *mission,
+                  char error[GP_PLAN_ERROR_LEN])
+{
+    const gp_plan_bounds *b = mission->bounds != NULL ? mission->bounds : &contract_bounds;
+    if (for_another_board(mission, plan->computer) && strcmp(plan->computer, GP_NO_BOARD) != 0) {
+        return refuse(error, COMPUTER_LINE, "computer %s: the mission flies on board %.32s "
+                      "(plan again with --computer %.32s)", plan->computer, b->board, b->board);
+    }
+    if (above(plan->budget_j, b->max_budget_j)) {
+        return refuse(error, BUDGET_LINE, "budget_j %g J exceeds the mission's battery less "
+                      "its reserve (%g J)", plan->budget_j, b->max_budget_j);
+    }
+    double states_j = 0;
+    for (int s = 0; s < plan->n_states; s++) {
+        states_j += plan->states[s].energy_j;
+    }
+    if (fabs(plan->predicted_j - states_j)
+        > GP_PLAN_ROUNDING * fmax(plan->predicted_j, states_j)) {
+        return refuse(error, PREDICTED_LINE, "predicted_j %g J is not the sum of its states' "
+                      "energy (%g J)", plan->predicted_j, states_j);
+    }
+    if (!(plan->predicted_j > 0)) {
+        return refuse(error, PREDICTED_LINE, "predicted_j 0 J: a flight draws energy");
+    }
+    if (above(plan->predicted_j, plan->budget_j)) {
+        return refuse(error, PREDICTED_LINE, "predicted_j %g J exceeds budget_j %g J",
+                      plan->predicted_j, plan->budget_j);
+    }
+    for (int s = 0; s < plan->n_states; s++) {
+        const gp_state_bounds *sb = b->states != NULL ? &b->states[s] : NULL;
+        if (check_state(&plan->states[s], &mission->states[s], sb, mission, b, error) < 0) {
+            return -1;
+        }
+    }
     return 0;
 }
 
@@ -781,9 +936,11 @@ void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
                  double default_ballast_cc, gp_schedule_now *out)
 {
     out->sensor_power = state->sensor_mask;
-    out->profile = 0;
+    out->profile = state->unplanned_profile;
     out->pitch_rad = NAN;
     out->ballast_cc = default_ballast_cc;
+    out->speed_mps = NAN;
+    out->thrust_w = NAN;
     if (ps == NULL) {
         return;
     }
@@ -797,4 +954,6 @@ void gp_schedule(const gp_state *state, const gp_plan_state *ps, double t_in_s,
     out->profile = (uint8_t)alternative_at(ps, t_in_s);
     out->pitch_rad = ps->profiles[out->profile].pitch_rad;
     out->ballast_cc = ps->profiles[out->profile].ballast_cc;
+    out->speed_mps = ps->profiles[out->profile].speed_mps;
+    out->thrust_w = ps->profiles[out->profile].thrust_w;
 }

@@ -28,8 +28,8 @@ static void record(gp_tick_report *report, gp_transition transition)
     report->transitions[report->n_transitions++] = transition;
 }
 
-/* Vertical and horizontal commands of the current state. */
-static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
+/* Vertical and horizontal commands of the current state, held to the envelope. */
+static gp_envelope_breach fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
                 gp_command *cmd)
 {
     const gp_state *state = &mission->states[rt->machine.state];
@@ -42,11 +42,15 @@ static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options 
     }
     const gp_profile *profile = &state->profiles[now.profile];
     gp_profile_input in = {.kind = profile->kind, .plan_pitch_rad = now.pitch_rad,
-                           .ballast_cc = now.ballast_cc, .naive = options->naive_tracker};
+                           .ballast_cc = now.ballast_cc, .naive = options->naive_tracker,
+                           .plan_speed_mps = now.speed_mps,
+                           .unplanned_speed_mps = mission->unplanned_speed_mps,
+                           .thrust_w = isnan(now.thrust_w) ? profile->thrust_w : now.thrust_w};
     if (profile->args && profile->n_args > 0) {
         profile->args(rt->sensors, rt->machine.vars, in.args);
     }
-    if (now.profile != rt->profile) {  /* entering the state or switching alternative */
+    int entered = now.profile != rt->profile;
+    if (entered) {  /* entering the state or switching alternative */
         gp_pilot_enter(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH],
                        rt->sensors[GP_SENSOR_ALTITUDE]);
         rt->profile = now.profile;
@@ -63,7 +67,32 @@ static void fly(gp_runtime *rt, const gp_mission *mission, const gp_run_options 
     cmd->pitch_rad = (float)vertical.pitch_rad;
     cmd->ballast_cc = (float)vertical.ballast_cc;
     cmd->heading_rad = (float)heading;
+    cmd->speed_mps = (float)vertical.speed_mps;
+    cmd->thrust_w = (float)vertical.thrust_w;
     cmd->sensor_power = now.sensor_power;
+    int yo = profile->kind == GP_PROFILE_YO || profile->kind == GP_PROFILE_THERMOTRACKYO;
+    return gp_envelope_hold(&mission->envelope, mission->max_ballast_cc, &rt->envelope, entered,
+                            yo ? in.args : NULL, rt->sensors[GP_SENSOR_MISSIONTIME], cmd);
+}
+
+/* The mission has ended on a guard: the glider surfaces and holds there. */
+static void surface_and_hold(const gp_mission *mission, gp_command *cmd)
+{
+    cmd->flags = GP_FLAG_DONE | GP_FLAG_SURFACE | GP_FLAG_CLIMBING;
+    cmd->pitch_rad = (float)GP_SURFACE_PITCH_RAD;
+    cmd->ballast_cc = (float)mission->max_ballast_cc;
+}
+
+/* The transition fields of the command from the tick's last transition. */
+static void name_transition(const gp_tick_report *report, gp_command *cmd)
+{
+    cmd->from = cmd->to = GP_NO_STATE;
+    if (report->n_transitions > 0) {
+        const gp_transition *last = &report->transitions[report->n_transitions - 1];
+        cmd->transition = last->kind;
+        cmd->from = last->from;
+        cmd->to = last->to;
+    }
 }
 
 void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
@@ -123,21 +152,33 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
     cmd->state = rt->machine.state;
     cmd->stack_depth = rt->machine.depth;
     cmd->event_count = rt->machine.event_count;
-    cmd->from = cmd->to = GP_NO_STATE;
-    if (report->n_transitions > 0) {
-        const gp_transition *last = &report->transitions[report->n_transitions - 1];
-        cmd->transition = last->kind;
-        cmd->from = last->from;
-        cmd->to = last->to;
-    }
+    name_transition(report, cmd);
     if (cmd->transition == GP_TR_RESERVE) {
-        cmd->flags = GP_FLAG_DONE | GP_FLAG_SURFACE | GP_FLAG_CLIMBING;
-        cmd->pitch_rad = (float)GP_SURFACE_PITCH_RAD;
-        cmd->ballast_cc = (float)mission->max_ballast_cc;
+        surface_and_hold(mission, cmd);
     } else if (rt->machine.state == GP_EXITED) {
         cmd->flags = GP_FLAG_DONE;
     } else {
-        fly(rt, mission, options, cmd);
+        uint8_t was_held = rt->envelope.held;
+        gp_envelope_breach breach = fly(rt, mission, options, cmd);
+        if (breach.limit != GP_LIMIT_NONE && (!was_held || !rt->envelope.held)) {
+            report->envelope = breach;  /* logged: an end, or the first of a held stretch */
+            report->envelope_state = rt->machine.state;
+        }
+        if (gp_envelope_ends(&mission->envelope, &breach)
+            && mission->envelope.action != GP_ENVELOPE_FAULT) {
+            /* the mission's abort: whatever the state and the stack, it ends here */
+            record(report, (gp_transition){GP_TR_ENVELOPE, rt->machine.state, GP_EXITED, 0});
+            rt->machine.state = GP_EXITED;
+            rt->machine.depth = 0;
+            cmd->state = GP_EXITED;
+            cmd->stack_depth = 0;
+            cmd->profile = 0;
+            name_transition(report, cmd);
+            surface_and_hold(mission, cmd);
+            cmd->depth_target_m = 0;
+            cmd->heading_rad = 0;
+            cmd->sensor_power = 0;
+        }
     }
     rt->last_command = *cmd;
     rt->has_command = 1;

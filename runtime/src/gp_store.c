@@ -80,6 +80,10 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
     put(&w, pilot->window, sizeof pilot->window[0] * n_window);
     put(&w, &rt->route.next, 2);
     put(&w, &rt->route.reached, 4);
+    const uint8_t envelope_head[3] = {rt->envelope.turned, rt->envelope.climbing,
+                                      rt->envelope.held};
+    put(&w, envelope_head, sizeof envelope_head);
+    put(&w, &rt->envelope.last_turn_s, 8);
     uint8_t *command_len = w.at++;  /* the last COMMAND as the link sends it whole */
     *command_len = (uint8_t)gp_command_pack(&rt->last_command, NULL, w.at);
     w.at += *command_len;
@@ -153,6 +157,12 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     get(&r, pilot->window, sizeof pilot->window[0] * pilot->n_window);
     get(&r, &loaded.route.next, 2);
     get(&r, &loaded.route.reached, 4);
+    uint8_t envelope_head[3];
+    get(&r, envelope_head, sizeof envelope_head);
+    loaded.envelope.turned = envelope_head[0];
+    loaded.envelope.climbing = envelope_head[1];
+    loaded.envelope.held = envelope_head[2];
+    get(&r, &loaded.envelope.last_turn_s, 8);
     uint8_t command_len;
     get(&r, &command_len, 1);
     gp_frame command = {GP_MSG_COMMAND, 0, 0, command_len, r.at};
@@ -525,7 +535,7 @@ long gp_read_file(const char *path, void *buf, size_t cap)
 const char *gp_transition_name(uint8_t kind)
 {
     static const char *const names[] = {"none",   "start", "goto",   "call",
-                                        "return", "exit",  "reserve"};
+                                        "return", "exit",  "reserve", "envelope"};
     return kind < sizeof names / sizeof names[0] ? names[kind] : "?";
 }
 

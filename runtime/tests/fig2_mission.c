@@ -45,9 +45,9 @@ static void yo_5_20(const double *s, const double *v, double *a)
 
 static const double s1_point[1][2] = {{3910.5, -7349.8058}};
 static const double s3_point[1][2] = {{3910.5, -7349.5058}};
-static const gp_profile s1_profiles[] = {{GP_PROFILE_YO, 4, yo_5_10}};
-static const gp_profile s2_profiles[] = {{GP_PROFILE_THERMOTRACKYO, 6, thermo_5_20}};
-static const gp_profile s3_profiles[] = {{GP_PROFILE_YO, 4, yo_5_20}};
+static const gp_profile s1_profiles[] = {{GP_PROFILE_YO, 4, yo_5_10, 0.0}};
+static const gp_profile s2_profiles[] = {{GP_PROFILE_THERMOTRACKYO, 6, thermo_5_20, 0.0}};
+static const gp_profile s3_profiles[] = {{GP_PROFILE_YO, 4, yo_5_20, 0.0}};
 static const uint8_t s1_sensors[] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH};
 static const uint8_t s2_sensors[] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH,
                                        GP_SENSOR_TEMP};
@@ -61,11 +61,11 @@ static const gp_event s3_events[] = {{s3_exit, NULL, GP_ACT_EXIT, 0}};
 
 static const gp_state states[] = {
     {"s1", {GP_ROUTE_NAV, 1, 0.0, s1_point}, s1_profiles, 1, s1_sensors, 3, s1_events, 2, 0, 0,
-     0x7},
+     0x7, 0},
     {"s2", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, s2_profiles, 1, s2_sensors, 4, s2_events, 1, 0, 0,
-     0x207},
+     0x207, 0},
     {"s3", {GP_ROUTE_NAV, 1, 0.0, s3_point}, s3_profiles, 1, s3_sensors, 3, s3_events, 1, 0, 0,
-     0x7},
+     0x7, 0},
 };
 
 /* the TS-7800 and the Slocum G2 shallow glider's pump (+-233 cc) */
@@ -83,6 +83,9 @@ const gp_mission gp_mission_table = {
     .default_ballast_cc = 230.0,
     .max_ballast_cc = 233.0,
     .reserve_j = 1.17e6,  /* 15 % of the 7.8 MJ pack Fig. 2 flies without annotations */
+    /* the shallow Slocum's envelope (its vehicle file): 100 m, 2 x its 26 deg, its 3 m
+     * nominal top, a full stroke of 466 cc at 42.09 cc/s; surface on a breach */
+    .envelope = {100.0, 0.9075712110370514, 3.0, 11.07, GP_ENVELOPE_SURFACE},
     .clocks_mhz = clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,

@@ -3,6 +3,12 @@
 
 #define TESTS(X)                                                            \
     X(test_machine_should_follow_fig2)                                      \
+    X(test_envelope_should_pass_a_command_within_the_rating)                \
+    X(test_envelope_should_name_each_limit_a_command_breaks)                \
+    X(test_envelope_should_stop_a_yo_turning_faster_than_its_pump)          \
+    X(test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates)  \
+    X(test_envelope_check_should_refuse_no_envelope)                        \
+    X(test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating) \
     X(test_machine_should_run_assignments_in_order)                         \
     X(test_machine_should_refuse_a_call_past_the_stack_depth)               \
     X(test_machine_should_refuse_return_with_an_empty_stack)                \
@@ -14,6 +20,8 @@
     X(test_yo_should_turn_a_dive_at_its_altimeter_stop)                     \
     X(test_thermotrackyo_should_turn_a_dive_at_its_altimeter_stop)          \
     X(test_surface_and_hover_should_command_fixed_attitudes)                \
+    X(test_cruise_and_altitude_should_fly_level_at_their_speed)             \
+    X(test_a_yo_should_command_its_thrust)                                  \
     X(test_naive_tracker_should_detect_a_clean_cast)                        \
     X(test_naive_tracker_should_never_detect_a_noisy_cast)                  \
     X(test_robust_tracker_should_detect_clean_and_noisy_casts)              \
@@ -30,9 +38,11 @@
     X(test_sweep_should_clip_lines_to_a_triangle)                           \
     X(test_sweep_should_stop_at_256_waypoints)                              \
     X(test_plan_should_accept_a_good_plan)                                  \
+    X(test_plan_should_read_a_yos_thrust_and_a_level_profile)               \
     X(test_plan_should_reject_bad_files_naming_the_line)                    \
     X(test_plan_should_read_a_states_power_line_where_its_mission_sleeps)   \
     X(test_plan_should_accept_computer_none_on_any_build)                   \
+    X(test_plan_should_be_held_to_its_missions_bounds)                      \
     X(test_plan_should_reject_clocks_on_computer_none_and_boards_on_its_build) \
     X(test_plan_should_reject_a_file_of_only_its_checksum_line)             \
     X(test_plan_should_reject_an_overlong_line)                             \
@@ -80,6 +90,12 @@
     X(test_hmac_sha256_should_match_rfc_4231)                               \
     X(test_tags_should_compare_every_byte)                                  \
     X(test_signed_plan_should_carry_the_tag_gliderplan_plan_sign_writes)    \
+    X(test_update_should_make_its_change_and_sign_the_result)               \
+    X(test_update_should_refuse_forged_stale_and_replayed_updates_and_other_plans) \
+    X(test_update_should_refuse_malformed_updates_naming_the_change)        \
+    X(test_update_should_refuse_a_plan_the_reader_refuses)                  \
+    X(test_update_decimal_text_should_write_plan_numbers)                   \
+    X(test_random_updates_should_never_crash_the_applier)                   \
     X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \
     X(test_signed_plan_should_have_a_well_formed_tail)                      \
     X(test_key_file_should_be_64_hex_digits_readable_by_its_owner_only)    \

@@ -19,12 +19,12 @@ static int after_10(const double *s, const double *v) { (void)v; return s[MISSIO
 static int after_20(const double *s, const double *v) { (void)v; return s[MISSIONTIME] >= 20; }
 static void hover_5(const double *s, const double *v, double *a) { (void)s; (void)v; a[0] = 5; }
 
-static const gp_profile hover[] = {{GP_PROFILE_HOVER, 1, hover_5}};
+static const gp_profile hover[] = {{GP_PROFILE_HOVER, 1, hover_5, 0.0}};
 static const gp_event a_events[] = {{after_10, NULL, GP_ACT_CALL, 1}};
 static const gp_event b_events[] = {{after_20, NULL, GP_ACT_CALL, 0}};
 static const gp_state states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, hover, 1, NULL, 0, a_events, 1, 0, 0, 0},
-    {"b", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, hover, 1, NULL, 0, b_events, 1, 0, 0, 0},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, hover, 1, NULL, 0, a_events, 1, 0, 0, 0, 0},
+    {"b", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, hover, 1, NULL, 0, b_events, 1, 0, 0, 0, 0},
 };
 
 /* the TS-7800 and the Slocum G2 shallow glider's pump (+-233 cc) */
@@ -40,6 +40,9 @@ const gp_mission gp_mission_table = {
     .default_ballast_cc = 230.0,
     .max_ballast_cc = 233.0,
     .reserve_j = 1.17e6,  /* 15 % of the 7.8 MJ pack Fig. 2 flies without annotations */
+    /* the shallow Slocum's envelope (its vehicle file): 100 m, 2 x its 26 deg, its 3 m
+     * nominal top, a full stroke of 466 cc at 42.09 cc/s; surface on a breach */
+    .envelope = {100.0, 0.9075712110370514, 3.0, 11.07, GP_ENVELOPE_SURFACE},
     .clocks_mhz = clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,

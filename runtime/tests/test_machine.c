@@ -76,9 +76,9 @@ static const gp_event vars_events[] = {
     {vars_first, vars_assign, GP_ACT_NONE, 0},
     {vars_second, NULL, GP_ACT_EXIT, 0},
 };
-static const gp_profile hover_profile[] = {{GP_PROFILE_HOVER, 0, NULL}};
+static const gp_profile hover_profile[] = {{GP_PROFILE_HOVER, 0, NULL, 0.0}};
 static const gp_state vars_states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, vars_events, 2, 0, 0, 0},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, vars_events, 2, 0, 0, 0, 0},
 };
 static const double vars_initial[] = {5, 20};
 static const gp_mission vars_mission = {
@@ -122,8 +122,8 @@ static const gp_event just_return[] = {{always, NULL, GP_ACT_RETURN, 0}};
 static const gp_event goto_nowhere[] = {{always, NULL, GP_ACT_GOTO, 9}};
 static const double zero[] = {0};
 static const gp_state stacker_states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_b, 1, 0, 0, 0},
-    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_a, 1, 0, 0, 0},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_b, 1, 0, 0, 0, 0},
+    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, call_a, 1, 0, 0, 0, 0},
 };
 static const gp_mission stacker = {
     .name = "stacker", .hash = "", .states = stacker_states, .n_states = 2,
@@ -158,7 +158,8 @@ void test_machine_should_refuse_a_call_past_the_stack_depth(void)
 void test_machine_should_refuse_return_with_an_empty_stack(void)
 {
     static const gp_state states[] = {
-        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, just_return, 1, 0, 0, 0},
+        {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, just_return, 1, 0, 0,
+         0, 0},
     };
     static const gp_mission mission = {.name = "r", .hash = "", .states = states,
                                        .n_states = 1, .stack_depth = 1};
@@ -175,7 +176,7 @@ void test_machine_should_refuse_a_target_outside_the_table(void)
 {
     static const gp_state states[] = {
         {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, goto_nowhere, 1, 0, 0,
-         0},
+         0, 0},
     };
     static const gp_mission mission = {.name = "g", .hash = "", .states = states,
                                        .n_states = 1, .stack_depth = 1};
@@ -214,7 +215,7 @@ void test_mission_check_should_accept_fig2_and_reject_bad_tables(void)
     CHECK(gp_mission_check(&bad) != NULL);
     static const gp_state nowhere[] = {
         {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover_profile, 1, NULL, 0, goto_nowhere, 1, 0, 0,
-         0},
+         0, 0},
     };
     bad = stacker;
     bad.states = nowhere;
@@ -227,7 +228,16 @@ void test_mission_check_should_accept_fig2_and_reject_bad_tables(void)
     bad.n_clocks = 0;  /* no clock a plan could name */
     CHECK(gp_mission_check(&bad) != NULL);
     bad = gp_mission_table;
-    bad.max_ballast_cc = 0;  /* no pump */
+    bad.max_ballast_cc = -1;  /* a pump of negative volume (0: none, a propeller AUV) */
+    CHECK(gp_mission_check(&bad) != NULL);
+    bad = gp_mission_table;
+    bad.unplanned_speed_mps = NAN;
+    CHECK(gp_mission_check(&bad) != NULL);
+    static gp_state unplanned[3];  /* the alternative flown without a plan is not one */
+    memcpy(unplanned, gp_mission_table.states, sizeof unplanned);
+    unplanned[0].unplanned_profile = 1;
+    bad = gp_mission_table;
+    bad.states = unplanned;
     CHECK(gp_mission_check(&bad) != NULL);
     static gp_state unpowered[3];  /* a sensor logged but missing from the state's mask */
     memcpy(unpowered, gp_mission_table.states, sizeof unpowered);

@@ -282,3 +282,48 @@ void test_robust_tracker_should_skip_its_walk_only_where_it_changes_nothing(void
 
     CHECK(skipped > 1000 && walked > 1000);  /* both paths taken, many times */
 }
+
+void test_cruise_and_altitude_should_fly_level_at_their_speed(void)
+{
+    /* cruise(12, 1.1) without a plan, then with a plan's 0.9 m/s */
+    gp_profile_input cruise = {.kind = GP_PROFILE_CRUISE, .args = {12, 1.1},
+                               .plan_pitch_rad = NAN, .plan_speed_mps = NAN,
+                               .unplanned_speed_mps = 1.3};
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &cruise, 0, NAN);
+    gp_pilot_step(&pilot, &cruise, 0, NAN, NAN, &out);
+    CHECK_NEAR(out.depth_target_m, 12, 0);
+    CHECK_NEAR(out.pitch_rad, 0, 0);
+    CHECK_NEAR(out.ballast_cc, 0, 0);
+    CHECK_NEAR(out.speed_mps, 1.1, 0);
+    CHECK_NEAR(out.thrust_w, 0, 0);
+    cruise.plan_speed_mps = 0.9;
+    gp_pilot_step(&pilot, &cruise, 0, NAN, NAN, &out);
+    CHECK_NEAR(out.speed_mps, 0.9, 0);
+    /* altitude(8, auto): the speed left out flies the unplanned speed; 8 m above the floor */
+    gp_profile_input altitude = {.kind = GP_PROFILE_ALTITUDE, .args = {8},
+                                 .plan_pitch_rad = NAN, .plan_speed_mps = NAN,
+                                 .unplanned_speed_mps = 1.3};
+    gp_pilot_enter(&pilot, &altitude, 20, 15);
+    gp_pilot_step(&pilot, &altitude, 20, NAN, 15, &out);
+    CHECK_NEAR(out.depth_target_m, 27, 0);
+    CHECK_NEAR(out.speed_mps, 1.3, 0);
+    gp_pilot_step(&pilot, &altitude, 20, NAN, NAN, &out);  /* no floor in range: deeper */
+    CHECK_NEAR(out.depth_target_m, 28, 0);
+    gp_pilot_step(&pilot, &altitude, 2, NAN, 5, &out);  /* shallower than 8 m: the surface */
+    CHECK_NEAR(out.depth_target_m, 0, 0);
+}
+
+void test_a_yo_should_command_its_thrust(void)
+{
+    gp_profile_input in = yo_input(5, 10);
+    in.thrust_w = 4;
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, 0, NAN);
+    gp_pilot_step(&pilot, &in, 0, NAN, NAN, &out);
+    CHECK_NEAR(out.thrust_w, 4, 0);
+    CHECK_NEAR(out.speed_mps, 0, 0);
+    CHECK(out.pitch_rad < 0);  /* still a glide: the thruster assists it */
+}

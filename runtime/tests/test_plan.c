@@ -6,37 +6,8 @@
 
 #include "gp_crc.h"
 #include "gp_plan.h"
+#include "fig2_plan.h"
 #include "gp_test.h"
-
-#define GOOD_BODY                                                                   \
-    "GPPLAN 3\n"                                                                    \
-    "mission sampleMission\n"                                                       \
-    "hash 5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9\n"       \
-    "computer ts7800 300\n"                                                         \
-    "budget_j 180000\n"                                                             \
-    "predicted_j 10203\n"                                                           \
-    "components hotel pump ctd\n"                                                   \
-    "assumptions 2\n"                                                               \
-    "assume mission vehicle slocum_g2_shallow (default)\n"                          \
-    "assume s2 planned at its expect upper bound (3600 s per visit)\n"              \
-    "states 3\n"                                                                    \
-    "state s1 300 600 0 1\n"                                                        \
-    "predict 1000 2 19.8\n"                                                         \
-    "energy 2410 1540 0\n"                                                          \
-    "profile 0 1 0.454 230 0.31\n"                                                  \
-    "end\n"                                                                         \
-    "state s2 500 600 2 1\n"                                                        \
-    "predict 1000 1 12.4\n"                                                         \
-    "energy 2410 1585 240\n"                                                        \
-    "sensor depth 60 0\n"                                                           \
-    "sensor temp 60 15\n"                                                           \
-    "profile 0 1 0.4 200 0.3\n"                                                     \
-    "end\n"                                                                         \
-    "state s3 300 600 0 1\n"                                                        \
-    "predict 500 1 4.7\n"                                                           \
-    "energy 1205 813 0\n"                                                           \
-    "profile 0 1 0.454 230 0.31\n"                                                  \
-    "end\n"
 
 static char text[GP_MAX_PLAN_BYTES + 512];
 
@@ -86,6 +57,36 @@ void test_plan_should_accept_a_good_plan(void)
     CHECK_INT(plan.states[1].sensors[1].sensor, 9);
     CHECK_NEAR(plan.states[1].sensors[1].on_s, 15, 0);
     CHECK_NEAR(plan.states[1].profiles[0].pitch_rad, 0.4, 0);
+}
+
+/* Fig. 2 on a vehicle with propulsion (a hybrid's thruster: its `auto` speed > 0). */
+static const gp_mission *fig2_propelled(void)
+{
+    static gp_mission mission;
+    mission = gp_mission_table;
+    mission.unplanned_speed_mps = 0.45;
+    return &mission;
+}
+
+void test_plan_should_read_a_yos_thrust_and_a_level_profile(void)
+{
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    const gp_mission *hybrid = fig2_propelled();
+    size_t len = variant("profile 0 1 0.454 230 0.31\nend\nstate s2",
+                         "profile 0 1 0.454 230 0.31 4.5\nend\nstate s2");
+    CHECK_INT(gp_plan_read(text, len, hybrid, NULL, &plan, error), 0);
+    CHECK_NEAR(plan.states[0].profiles[0].thrust_w, 4.5, 0);
+    CHECK_NEAR(plan.states[2].profiles[0].thrust_w, 0, 0);  /* left out: off */
+    /* the glider has no thruster: the plan contradicts its vehicle (gp_plan_check) */
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), -1);
+    CHECK_CONTAINS(error, "state s1: profile 0: THRUST_W 4.5 on a vehicle without a thruster");
+    len = variant("profile 0 1 0.4 200 0.3", "profile 0 1 0 0 1.2");  /* cruise, level */
+    CHECK_INT(gp_plan_read(text, len, hybrid, NULL, &plan, error), 0);
+    CHECK_NEAR(plan.states[1].profiles[0].speed_mps, 1.2, 0);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), -1);
+    CHECK_CONTAINS(error, "state s2: profile 0: PITCH_RAD and BALLAST_CC 0 fly it level on a "
+                   "propeller, and the vehicle has none");
 }
 
 void test_plan_should_reject_bad_files_naming_the_line(void)
@@ -149,12 +150,16 @@ void test_plan_should_reject_bad_files_naming_the_line(void)
         {"profile 0 1 0.454", "profile 0 1 1.6", "line 15: PITCH_RAD 1.6 outside (0, pi/2)"},
         {"profile 0 1 0.454 230", "profile 0 1 0.454 0", "line 15: BALLAST_CC and SPEED_MPS"},
         {"profile 0 1 0.454 230", "profile 0 1 0.454 1e300",
-         "line 15: BALLAST_CC 1e+300 exceeds the vehicle's pump (233 cc)"},
+         "line 12: state s1: profile 0: BALLAST_CC 1e+300 exceeds the vehicle's pump (233 cc)"},
         {"profile 0 1 0.454 230", "profile 0 1 0.454 5000",
-         "line 15: BALLAST_CC 5000 exceeds the vehicle's pump (233 cc)"},
+         "line 12: state s1: profile 0: BALLAST_CC 5000 exceeds the vehicle's pump (233 cc)"},
         {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 40",
          "line 15: SPEED_MPS 40 exceeds 2"},
         {"profile 0 1 0.454", "profile 0 1.5 0.454", "line 15: SHARE 1.5 outside [0, 1]"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 0.31 -3",
+         "line 15: THRUST_W -3 outside [0, 100]"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 0.31 3 4",
+         "line 15: 'profile' takes 5 to 6 fields, found 7"},
         {"state s2", "state s9", "line 17: state 's9' where the mission has 's2'"},
         {"sensor temp 60 15", "sensor oxygen 60 15", "line 21: sensor 'oxygen' is not logged"},
         {"sensor depth 60 0\nsensor temp", "sensor temp 60 15\nsensor depth",
@@ -205,6 +210,75 @@ void test_plan_should_read_a_states_power_line_where_its_mission_sleeps(void)
     CHECK_NEAR(plan.states[1].cycles_per_tick, 7.3e6, 0);
     CHECK_INT(plan.states[0].sleep, 0);  /* no power line: awake, the runtime's own work */
     CHECK_NEAR(plan.states[0].cycles_per_tick, 0, 0);
+}
+
+/* Fig. 2 with the bounds the code generator writes (contract.FlightLimits): the board,
+ * the battery, s2's temp duty, the vehicle's pitch, ballast and speed. */
+static const gp_mission *fig2_with_bounds(void)
+{
+    static const gp_duty_bound s2_duties[] = {{GP_SENSOR_TEMP, 0.2, 0.5}};
+    static const double least_cc[] = {100};
+    static const gp_state_bounds states[] = {
+        {NULL, 0, least_cc}, {s2_duties, 1, least_cc}, {NULL, 0, least_cc}};
+    static const gp_plan_bounds bounds = {
+        .board = "ts7800", .max_budget_j = 200000, .min_pitch_rad = 0.1, .max_pitch_rad = 1.5,
+        .max_speed_mps = 0.5, .states = states};
+    static gp_mission mission;
+    mission = gp_mission_table;
+    mission.bounds = &bounds;
+    return &mission;
+}
+
+static size_t none_variant(const char *from, const char *to);
+
+void test_plan_should_be_held_to_its_missions_bounds(void)
+{
+    static const struct {
+        const char *from, *to, *error;
+    } cases[] = {
+        {"computer ts7800", "computer ts5500",
+         "line 4: computer ts5500: the mission flies on board ts7800 (plan again with "
+         "--computer ts7800)"},
+        {"budget_j 180000", "budget_j 300000",
+         "line 5: budget_j 300000 J exceeds the mission's battery less its reserve (200000 J)"},
+        {"predicted_j 10203", "predicted_j 0",
+         "line 6: predicted_j 0 J is not the sum of its states' energy (10203 J)"},
+        {"budget_j 180000", "budget_j 10000", "line 6: predicted_j 10203 J exceeds budget_j 10000 J"},
+        {"sensor temp 60 15", "sensor temp 60 0",
+         "line 17: state s2: sensor temp: duty 0 outside the mission's [0.2, 0.5]"},
+        {"sensor temp 60 15", "sensor temp 60 60",
+         "line 17: state s2: sensor temp: duty 1 outside the mission's [0.2, 0.5]"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.05 230 0.31",
+         "line 12: state s1: profile 0: PITCH_RAD 0.05 outside the vehicle's (0.1, 1.5) rad"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 50 0.31",
+         "line 12: state s1: profile 0: BALLAST_CC 50 does not fly it: the vehicle needs more "
+         "than 100 cc"},
+        {"profile 0 1 0.454 230 0.31", "profile 0 1 0.454 230 0.6",
+         "line 12: state s1: profile 0: SPEED_MPS 0.6 exceeds the vehicle's fastest glide "
+         "(0.5 m/s)"},
+    };
+    static gp_plan plan;
+    char error[GP_PLAN_ERROR_LEN];
+    const gp_mission *mission = fig2_with_bounds();
+    CHECK_INT(gp_plan_read(text, with_crc(GOOD_BODY), mission, NULL, &plan, error), 0);
+    CHECK_INT(gp_plan_check(&plan, mission, error), 0);
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        CHECK_INT(gp_plan_read(text, variant(cases[i].from, cases[i].to), mission, NULL, &plan,
+                               error), -1);
+        CHECK_CONTAINS(error, cases[i].error);
+    }
+    /* a plan for no board names no board to compare: it flies on this one */
+    CHECK_INT(gp_plan_read(text, none_variant("", ""), mission, NULL, &plan, error), 0);
+    /* on a hybrid, a thruster-assisted yo outruns the fastest glide, and a level profile
+     * (propelled) has no pitch or volume to hold to the glide's */
+    static gp_mission hybrid;
+    hybrid = *mission;
+    hybrid.unplanned_speed_mps = 0.45;
+    CHECK_INT(gp_plan_read(text, variant("profile 0 1 0.454 230 0.31",
+                                         "profile 0 1 0.454 230 0.6 4.5"),
+                           &hybrid, NULL, &plan, error), 0);
+    CHECK_INT(gp_plan_read(text, variant("profile 0 1 0.454 230 0.31", "profile 0 1 0 0 1.2"),
+                           &hybrid, NULL, &plan, error), 0);
 }
 
 /* `body` with its first `from` replaced by `to`, in place (`from` must be there). */
@@ -333,7 +407,7 @@ void test_plan_should_keep_the_last_good_plan_on_rejection(void)
     static gp_plan plan;
     char error[GP_PLAN_ERROR_LEN];
     CHECK_INT(gp_plan_read(text, with_crc(GOOD_BODY), &gp_mission_table, NULL, &plan, error), 0);
-    size_t len = variant("budget_j 180000", "budget_j 1");
+    size_t len = variant("budget_j 180000", "budget_j 20000");
     text[30] ^= 1;  /* and break its checksum */
     CHECK_INT(gp_plan_read(text, len, &gp_mission_table, NULL, &plan, error), -1);
     CHECK_NEAR(plan.budget_j, 180000, 0);
@@ -438,18 +512,16 @@ void test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans
     CHECK_INT(gp_plan_read(text, with_signature(with_crc(GOOD_BODY), 4, auth.key),
                            &gp_mission_table, &auth, &plan, error), -1);
     CHECK_CONTAINS(error, "line 30: seq 4 is older than the plan in force (seq 5): a replayed");
-    CHECK_INT(gp_plan_read(text, with_signature(variant("budget_j 180000", "budget_j 1"), 5,
-                                                auth.key),
-                           &gp_mission_table, &auth, &plan, error), -1);
+    len = with_signature(variant("budget_j 180000", "budget_j 20000"), 5, auth.key);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), -1);
     CHECK_CONTAINS(error, "line 30: seq 5 is the plan in force's, but this is another plan");
     CHECK_INT(gp_plan_read(text, with_signature(variant("hash 5db9", "hash 6db9"), 6, auth.key),
                            &gp_mission_table, &auth, &plan, error), -1);
     CHECK_CONTAINS(error, "line 3: hash does not match");  /* signed, for another mission */
-    CHECK_INT(gp_plan_read(text, with_signature(variant("budget_j 180000", "budget_j 1"), 6,
-                                                auth.key),
-                           &gp_mission_table, &auth, &plan, error), 0);
+    len = with_signature(variant("budget_j 180000", "budget_j 20000"), 6, auth.key);
+    CHECK_INT(gp_plan_read(text, len, &gp_mission_table, &auth, &plan, error), 0);
     CHECK_INT(plan.seq, 6);
-    CHECK_NEAR(plan.budget_j, 1, 0);
+    CHECK_NEAR(plan.budget_j, 20000, 0);
 }
 
 void test_signed_plan_should_have_a_well_formed_tail(void)
@@ -482,10 +554,11 @@ void test_signed_plan_should_have_a_well_formed_tail(void)
 
 /* ---- schedule ------------------------------------------------------------------ */
 
-static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL}, {GP_PROFILE_HOVER, 0, NULL}};
+static const gp_profile two_profiles[] = {{GP_PROFILE_YO, 0, NULL, 0.0},
+                                          {GP_PROFILE_HOVER, 0, NULL, 0.0}};
 static const uint8_t logged[] = {0, 1, 9, 12};  /* missiontime, depth, temp, oxygen */
 static const gp_state scheduled = {
-    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0, 0, 0, 0x1203,
+    "s", {GP_ROUTE_NOHEADING, 0, 0, NULL}, two_profiles, 2, logged, 4, NULL, 0, 0, 0, 0x1203, 0,
 };
 
 void test_schedule_without_a_plan_should_power_every_logged_sensor(void)

@@ -107,7 +107,7 @@ void test_runtime_should_follow_the_plan_schedule(void)
     static const char body[] =
         "GPPLAN 3\nmission sampleMission\n"
         "hash 5db9c7f6bccd8ec471713fb8071fb0f3aceb0069b185b69571c5783b1814d1b9\n"
-        "computer ts7800 300\nbudget_j 180000\npredicted_j 9876.5\ncomponents hotel\n"
+        "computer ts7800 300\nbudget_j 180000\npredicted_j 6025\ncomponents hotel\n"
         "assumptions 0\nstates 3\n"
         "state s1 300 600 0 1\npredict 1000 2 20\nenergy 2410\nprofile 0 1 0.3 150 0.31\nend\n"
         "state s2 300 600 1 1\npredict 1000 1 12\nenergy 2410\nsensor temp 60 20\n"
@@ -160,10 +160,10 @@ void test_runtime_should_resume_from_a_checkpoint_with_the_same_trace(void)
 static int always(const double *s, const double *v) { (void)s; (void)v; return 1; }
 static const gp_event call_b[] = {{always, NULL, GP_ACT_CALL, 1}};
 static const gp_event call_a[] = {{always, NULL, GP_ACT_CALL, 0}};
-static const gp_profile hover[] = {{GP_PROFILE_HOVER, 0, NULL}};
+static const gp_profile hover[] = {{GP_PROFILE_HOVER, 0, NULL, 0.0}};
 static const gp_state stacker_states[] = {
-    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_b, 1, 0, 0, 0},
-    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_a, 1, 0, 0, 0},
+    {"a", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_b, 1, 0, 0, 0, 0},
+    {"b", {GP_ROUTE_NOHEADING, 0, 0, NULL}, hover, 1, NULL, 0, call_a, 1, 0, 0, 0, 0},
 };
 static const gp_mission stacker = {.name = "stacker", .hash = "", .states = stacker_states,
                                    .n_states = 2, .stack_depth = 1};

@@ -51,6 +51,7 @@ static void sample_runtime(gp_runtime *rt)
     rt->route_resume[0] = 2;  /* the caller's waypoint, for its return */
     rt->reached_resume[0] = 70000;  /* and the waypoints it had reached: past a u16 */
     rt->route.reached = 1;  /* s2 flies no route: 0, or 1 for a list's last */
+    rt->envelope = (gp_envelope_memory){796.0, 1, 1, 0};  /* its last turn, a climb */
     rt->profile = 0;
     rt->last_command.tick = 81;
     rt->last_command.pitch_rad = 0.454f;

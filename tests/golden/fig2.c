@@ -40,7 +40,7 @@ static void state0_profile0_args(const double *s, const double *v, double *args)
 }
 
 static const gp_profile state0_profiles[1] = {
-    {GP_PROFILE_YO, 4, state0_profile0_args},
+    {GP_PROFILE_YO, 4, state0_profile0_args, 0.0},
 };
 
 static const double state0_route_points[1][2] = {
@@ -74,7 +74,7 @@ static void state1_profile0_args(const double *s, const double *v, double *args)
 }
 
 static const gp_profile state1_profiles[1] = {
-    {GP_PROFILE_THERMOTRACKYO, 6, state1_profile0_args},
+    {GP_PROFILE_THERMOTRACKYO, 6, state1_profile0_args, 0.0},
 };
 
 static const uint8_t state1_sensors[4] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH, GP_SENSOR_PITCH, GP_SENSOR_TEMP};
@@ -102,7 +102,7 @@ static void state2_profile0_args(const double *s, const double *v, double *args)
 }
 
 static const gp_profile state2_profiles[1] = {
-    {GP_PROFILE_YO, 4, state2_profile0_args},
+    {GP_PROFILE_YO, 4, state2_profile0_args, 0.0},
 };
 
 static const double state2_route_points[1][2] = {
@@ -146,6 +146,7 @@ static const gp_state states[3] = {
         .route = {GP_ROUTE_NAV, 1, 0.0, state0_route_points},
         .profiles = state0_profiles,
         .n_profiles = 1,
+        .unplanned_profile = 0,
         .sensors = state0_sensors,
         .n_sensors = 3,
         .sensor_mask = 0x00000007u,
@@ -157,6 +158,7 @@ static const gp_state states[3] = {
         .route = {GP_ROUTE_NOHEADING, 0, 0.0, NULL},
         .profiles = state1_profiles,
         .n_profiles = 1,
+        .unplanned_profile = 0,
         .sensors = state1_sensors,
         .n_sensors = 4,
         .sensor_mask = 0x00000207u,
@@ -168,12 +170,22 @@ static const gp_state states[3] = {
         .route = {GP_ROUTE_NAV, 1, 0.0, state2_route_points},
         .profiles = state2_profiles,
         .n_profiles = 1,
+        .unplanned_profile = 0,
         .sensors = state2_sensors,
         .n_sensors = 3,
         .sensor_mask = 0x00000007u,
         .events = state2_events,
         .n_events = 1,
     },
+};
+
+static const gp_plan_bounds plan_bounds = {
+    .board = NULL,
+    .max_budget_j = 10000000000.0,
+    .min_pitch_rad = 0.0,
+    .max_pitch_rad = 0x1.921fb54442d18p+0 /* 1.5707963267948966 */,
+    .max_speed_mps = 2.0,
+    .states = NULL,
 };
 
 const gp_mission gp_mission_table = {
@@ -188,8 +200,17 @@ const gp_mission gp_mission_table = {
     .own_read_mask = 0x00000000u,
     .default_ballast_cc = 233.0,
     .max_ballast_cc = 233.0,
+    .unplanned_speed_mps = 0.0,
     .reserve_j = 1170000.0,
+    .envelope = {
+        .max_depth_m = 100.0,
+        .max_pitch_rad = 0x1.d0ad2c7c63f7dp-1 /* 0.9075712110370514 */,
+        .min_yo_band_m = 3.0,
+        .min_inflection_s = 0x1.623fb6166aefbp+3 /* 11.07027725580655 */,
+        .action = GP_ENVELOPE_SURFACE,
+    },
     .clocks_mhz = board_clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,
+    .bounds = &plan_bounds,
 };

@@ -1,0 +1,172 @@
+/* The envelope guard: each limit, each action, and a mission whose variable takes the yo
+ * past the vehicle's rating (the tick ends it, surfacing). */
+#include <math.h>
+#include <string.h>
+
+#include "gp_envelope.h"
+#include "gp_runtime.h"
+#include "gp_test.h"
+
+static const gp_envelope SURFACE = {100.0, 0.9, 3.0, 11.0, GP_ENVELOPE_SURFACE};
+
+static gp_command command(double depth_m, double pitch_rad, double ballast_cc, int climbing)
+{
+    gp_command cmd;
+    memset(&cmd, 0, sizeof cmd);
+    cmd.depth_target_m = (float)depth_m;
+    cmd.pitch_rad = (float)pitch_rad;
+    cmd.ballast_cc = (float)ballast_cc;
+    cmd.flags = climbing ? GP_FLAG_CLIMBING : 0;
+    return cmd;
+}
+
+void test_envelope_should_pass_a_command_within_the_rating(void)
+{
+    gp_envelope_memory memory = {0};
+    gp_command cmd = command(10.0, -0.454, -233.0, 0);
+    double band[2] = {5.0, 10.0};
+    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 0.0, &cmd);
+    CHECK_INT(b.limit, GP_LIMIT_NONE);
+    CHECK_INT(cmd.flags & GP_FLAG_ENVELOPE, 0);
+    CHECK(gp_envelope_check(&SURFACE) == NULL);
+}
+
+void test_envelope_should_name_each_limit_a_command_breaks(void)
+{
+    double band[2] = {5.0, 10.0};
+    struct { gp_command cmd; const double *band; uint8_t limit; double value; } cases[] = {
+        {command(812.0, -0.454, -233.0, 0), NULL, GP_LIMIT_DEPTH, 812.0},
+        {command(-1.0, 0.454, 233.0, 1), NULL, GP_LIMIT_DEPTH, -1.0},
+        {command(NAN, 0.454, 233.0, 1), NULL, GP_LIMIT_DEPTH, NAN},
+        {command(10.0, -1.2, -233.0, 0), band, GP_LIMIT_PITCH, -1.2},
+        {command(10.0, 0.454, 560.0, 1), band, GP_LIMIT_BALLAST, 560.0},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        gp_envelope_memory memory = {0};
+        gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, cases[i].band, 0.0,
+                                                &cases[i].cmd);
+        CHECK_INT(b.limit, cases[i].limit);
+        CHECK(fabs(b.value - cases[i].value) < 1e-6 || (isnan(b.value) && isnan(cases[i].value)));
+        CHECK(gp_envelope_ends(&SURFACE, &b));
+    }
+    gp_envelope_memory memory = {0};
+    gp_command cmd = command(10.0, -0.454, -233.0, 0);
+    double deep[2] = {5.0, 3000.0}, thin[2] = {5.0, 6.0}, upside_down[2] = {5.0, -1000.0};
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, deep, 0, &cmd).limit,
+              GP_LIMIT_DEPTH);
+    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, thin, 0, &cmd);
+    CHECK_INT(b.limit, GP_LIMIT_BAND);
+    CHECK_NEAR(b.value, 1.0, 1e-12);
+    CHECK_NEAR(b.bound, 3.0, 1e-12);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, upside_down, 0, &cmd).limit,
+              GP_LIMIT_DEPTH);
+}
+
+void test_envelope_should_stop_a_yo_turning_faster_than_its_pump(void)
+{
+    gp_envelope_memory memory = {0};
+    double band[2] = {5.0, 10.0};
+    gp_command dive = command(10.0, -0.454, -233.0, 0), climb = command(5.0, 0.454, 233.0, 1);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 0.0, &dive).limit, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 4.0, &climb).limit, 0);
+    dive = command(10.0, -0.454, -233.0, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 40.0, &dive).limit, 0);
+    climb = command(5.0, 0.454, 233.0, 1);
+    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 44.0, &climb);
+    CHECK_INT(b.limit, GP_LIMIT_INFLECTION);
+    CHECK_NEAR(b.value, 4.0, 1e-12);
+    /* a new profile turns afresh: its first turn is never too soon */
+    dive = command(10.0, -0.454, -233.0, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 45.0, &dive).limit, 0);
+    climb = command(5.0, 0.454, 233.0, 1);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 46.0, &climb).limit, 0);
+}
+
+void test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates(void)
+{
+    gp_envelope clamp = SURFACE;
+    clamp.action = GP_ENVELOPE_CLAMP;
+    gp_envelope_memory memory = {0};
+    gp_command cmd = command(812.0, -1.2, -560.0, 0);
+    gp_envelope_breach b = gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, &cmd);
+    CHECK_INT(b.limit, GP_LIMIT_DEPTH);
+    CHECK(!gp_envelope_ends(&clamp, &b));
+    CHECK_NEAR(cmd.depth_target_m, 100.0, 0);
+    CHECK_NEAR(cmd.pitch_rad, -(float)0.9, 0);
+    CHECK_NEAR(cmd.ballast_cc, -233.0, 0);
+    CHECK(cmd.flags & GP_FLAG_ENVELOPE);
+    CHECK(memory.held);
+    cmd = command(NAN, 0.454, 233.0, 1);
+    b = gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, &cmd);
+    CHECK(gp_envelope_ends(&clamp, &b));  /* a NaN has no edge */
+    double thin[2] = {5.0, 5.5};
+    cmd = command(5.5, -0.454, -233.0, 0);
+    b = gp_envelope_hold(&clamp, 233.0, &memory, 1, thin, 0.0, &cmd);
+    CHECK_INT(b.limit, GP_LIMIT_BAND);
+    CHECK(gp_envelope_ends(&clamp, &b));
+}
+
+void test_envelope_check_should_refuse_no_envelope(void)
+{
+    gp_envelope bad[] = {
+        {0.0, 0.9, 3.0, 11.0, GP_ENVELOPE_SURFACE},
+        {100.0, 1.6, 3.0, 11.0, GP_ENVELOPE_SURFACE},
+        {100.0, 0.9, 100.0, 11.0, GP_ENVELOPE_SURFACE},
+        {100.0, 0.9, 3.0, NAN, GP_ENVELOPE_SURFACE},
+        {100.0, 0.9, 3.0, 11.0, 3},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        CHECK(gp_envelope_check(&bad[i]) != NULL);
+    }
+    gp_mission table = gp_mission_table;
+    table.envelope.max_depth_m = NAN;
+    CHECK(gp_mission_check(&table) != NULL);
+}
+
+/* A yo whose bottom is a variable an event sets past the rating (`set bottom = 3000`). */
+static int at_100_s(const double *s, const double *v) { (void)v; return s[0] >= 100.0; }
+static int never(const double *s, const double *v) { (void)s; (void)v; return 0; }
+static void set_bottom(const double *s, double *v) { (void)s; v[0] = 3000.0; }
+static void yo_to_bottom(const double *s, const double *v, double *a)
+{
+    (void)s;
+    a[0] = 5.0; a[1] = v[0]; a[2] = .454; a[3] = .454;
+}
+static const gp_profile deep_profiles[] = {{GP_PROFILE_YO, 4, yo_to_bottom, 0.0}};
+static const uint8_t deep_sensors[] = {GP_SENSOR_MISSIONTIME, GP_SENSOR_DEPTH};
+static const gp_event deep_events[] = {{at_100_s, set_bottom, GP_ACT_NONE, 0},
+                                       {never, NULL, GP_ACT_EXIT, 0}};
+static const gp_state deep_states[] = {
+    {"deep", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, deep_profiles, 1, deep_sensors, 2, deep_events,
+     2, 0, 0, 0x3, 0},
+};
+static const double deep_initial[] = {10.0};
+
+void test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating(void)
+{
+    gp_mission mission = gp_mission_table;
+    mission.states = deep_states;
+    mission.n_states = 1;
+    mission.var_initial = deep_initial;
+    mission.n_vars = 1;
+    CHECK(gp_mission_check(&mission) == NULL);
+    static gp_runtime rt;
+    gp_runtime_init(&rt);
+    rt.sensors[GP_SENSOR_ENERGY_LEFT] = 1e9;
+    gp_run_options options = {NULL, 0};
+    gp_command cmd;
+    gp_tick_report report;
+    uint32_t tick = 0;
+    for (; tick < 100 && (!rt.started || rt.machine.state != GP_EXITED); tick++) {
+        rt.sensors[GP_SENSOR_MISSIONTIME] = tick * 4.0;
+        rt.sensors[GP_SENSOR_DEPTH] = 7.0;
+        gp_runtime_tick(&rt, &mission, &options, tick, &cmd, &report);
+    }
+    CHECK_INT(tick, 26);  /* the tick at 100 s sets the bottom and ends there */
+    CHECK_INT(report.envelope.limit, GP_LIMIT_DEPTH);
+    CHECK_NEAR(report.envelope.value, 3000.0, 0);
+    CHECK_INT(cmd.transition, GP_TR_ENVELOPE);
+    CHECK_INT(cmd.state, GP_NO_STATE);
+    CHECK_INT(cmd.flags, GP_FLAG_DONE | GP_FLAG_SURFACE | GP_FLAG_CLIMBING);
+    CHECK_NEAR(cmd.ballast_cc, mission.max_ballast_cc, 0);
+}
