@@ -197,6 +197,7 @@ def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=No
         (reference.ended, reference.surfacings, reference.events_fired,
          reference.grounded_ticks)
     assert flown.entry_variables == reference.entry_variables
+    assert flown.envelope == reference.envelope
     assert flown.columns.keys() == reference.columns.keys()
     for name, column in reference.columns.items():
         ours = flown.columns[name]
