@@ -170,3 +170,21 @@ void test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating(vo
     CHECK_INT(cmd.flags, GP_FLAG_DONE | GP_FLAG_SURFACE | GP_FLAG_CLIMBING);
     CHECK_NEAR(cmd.ballast_cc, mission.max_ballast_cc, 0);
 }
+
+void test_envelope_should_say_what_it_did_in_the_simulator_s_words(void)
+{
+    char text[256];
+    gp_envelope_breach deep = {GP_LIMIT_DEPTH, 3000.0, 100.0};
+    gp_envelope_say(&SURFACE, &deep, 300.0, "s1", text, sizeof text);
+    CHECK(strcmp(text, "envelope: missiontime 300 s, state s1: depth 3000 m beyond the "
+                       "vehicle's 100 m; the mission ends, surfacing") == 0);
+    gp_envelope clamp = SURFACE;
+    clamp.action = GP_ENVELOPE_CLAMP;
+    gp_envelope_say(&clamp, &deep, 8.5, "s2", text, sizeof text);
+    CHECK_CONTAINS(text, "state s2: depth 3000 m beyond the vehicle's 100 m; held at the limit");
+    gp_envelope fault = SURFACE;
+    fault.action = GP_ENVELOPE_FAULT;
+    gp_envelope_breach nan_band = {GP_LIMIT_DEPTH, -NAN, 100.0};  /* x86's negative NaN */
+    gp_envelope_say(&fault, &nan_band, 18.5, "g0", text, sizeof text);
+    CHECK_CONTAINS(text, "depth nan m beyond the vehicle's 100 m; releasing control");
+}
