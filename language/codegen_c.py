@@ -363,13 +363,13 @@ class _MissionWriter:
             f"    .clocks_mhz = {self.p}board_clocks_mhz,",
             f"    .n_clocks = {len(self.limits.clocks_mhz)},",
             f"    .sensor_names = {self.p}sensor_names,",
-            f"    .bounds = &{self.p}mission_bounds,",
+            f"    .bounds = &{self.p}plan_bounds,",
             "};",
         ]
         return lines
 
     def visit_plan_bounds(self) -> list[str]:
-        """`mission_bounds`: the figures `gp_plan_check` holds a plan to (`FlightLimits`)."""
+        """`plan_bounds`: the figures `gp_plan_check` holds a plan to (`FlightLimits`)."""
         limits, lines, p = self.limits, [], self.p
         if limits.duty_bounds:
             for index, (duties, least) in enumerate(zip(limits.duty_bounds,
@@ -389,7 +389,7 @@ class _MissionWriter:
         low, high = limits.pitch_range_rad
         board = "NULL" if limits.board is None else _c_string(limits.board)
         return lines + [
-            f"static const gp_plan_bounds {p}mission_bounds = {{",
+            f"static const gp_plan_bounds {p}plan_bounds = {{",
             f"    .board = {board},",
             f"    .max_budget_j = {c_double(limits.max_budget_j)},",
             f"    .min_pitch_rad = {c_double(low)},",

@@ -126,7 +126,7 @@ def conditions(draw, variables: tuple[str, ...], depth: int = 0) -> str:
 def profiles(draw, variables: tuple[str, ...]) -> str:
     kind = draw(st.integers(0, 5))
     low = draw(st.integers(0, 10))
-    high = low + draw(st.integers(2, 40))
+    high = low + draw(st.integers(3, 40))  # check refuses a band thinner than the envelope's 3 m
     pitch = draw(st.sampled_from([".3", ".454", ".6"]))
     band = (f"{low}, {high}" if "top" not in variables or draw(st.booleans())
             else "top, bottom")
