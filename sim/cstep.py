@@ -237,7 +237,7 @@ class Report(ctypes.Structure):
     """gp_tick_report: a tick's transitions, a refused event, a command outside the
     envelope."""
 
-    _fields_ = [("transitions", _Transition * 2), ("n_transitions", ctypes.c_uint8),
+    _fields_ = [("transitions", _Transition * 3), ("n_transitions", ctypes.c_uint8),
                 ("fault", ctypes.c_uint8), ("refused", _Transition),
                 ("envelope", _Breach), ("envelope_state", ctypes.c_uint8)]
 

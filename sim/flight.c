@@ -712,7 +712,7 @@ int gps_fly(gps_flight *f, int32_t ticks)
             if (f->normal_at >= GPS_NOISE_BLOCK || (p->spikes && f->spike_at >= GPS_NOISE_BLOCK)) {
                 return GPS_NEED_NOISE;
             }
-            if (f->n_trace + 2 > GPS_TRACE) {
+            if (f->n_trace + 3 > GPS_TRACE) {  /* a tick's transitions: 3 at most */
                 return GPS_TRACE_FULL;
             }
             gauge(f, tick);

@@ -38,7 +38,8 @@ typedef struct {
 
 /** What happened in one tick, for the event log. */
 typedef struct {
-    gp_transition transitions[2];   /**< start and an event can share tick 0 */
+    /** start, an event and the envelope guard's end can share tick 0 */
+    gp_transition transitions[3];
     uint8_t n_transitions;
     uint8_t fault;                  /**< gp_step_result of a refused event, 0: none */
     gp_transition refused;          /**< the refused transition when `fault` */

@@ -9,6 +9,7 @@
     X(test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates)  \
     X(test_envelope_check_should_refuse_no_envelope)                        \
     X(test_envelope_should_say_what_it_did_in_the_simulator_s_words)        \
+    X(test_runtime_should_report_start_event_and_envelope_on_one_tick)      \
     X(test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating) \
     X(test_machine_should_run_assignments_in_order)                         \
     X(test_machine_should_refuse_a_call_past_the_stack_depth)               \
