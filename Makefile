@@ -8,11 +8,11 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint sysdeps clean lock
+.PHONY: demo test lint sysdeps mutants clean lock
 
 # Installs are reproducible: every package at the version constraints.txt pins (`make
 # lock` updates it on purpose).
-$(STAMP): pyproject.toml setup.py sim/native.c constraints.txt
+$(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -c constraints.txt -e '.[test]'
@@ -65,6 +65,11 @@ lint: $(STAMP)
 
 test: $(STAMP) lint sysdeps
 	$(BIN)/python -m pytest -q
+
+# Each listed fault planted in turn in the Python reference and in the C step: one line
+# per mutant, `caught` or `survived`; fails if any survived (tests/mutants.py).
+mutants: $(STAMP)
+	$(BIN)/python tests/mutants.py
 
 # Toolchains for the TS-7800 (ARMv5TE) and TS-5500 (i486) builds, qemu-user to run them
 # on the boards' CPU models, valgrind, libFuzzer, musl built for the i486. Under CI=true

@@ -8,8 +8,8 @@ parallel efficiency, and the whole `gliderplan montecarlo` command of 1,000 scen
 Each backend flies the same --scenarios scenarios (seed 0) of
 examples/survey_month.mission with its plan; the tables must be identical. The baseline
 is 1 worker (this process) in the same run: efficiency at K workers = rate(K) / (K x
-rate(1)). The first --reference scenarios are also flown tick by tick (the reference
-executor): the fast executor's speed-up, rows identical. Then the command a user runs,
+rate(1)). The first --reference scenarios are also flown by the Python reference
+executor: the C step's speed-up, rows identical. Then the command a user runs,
 `gliderplan montecarlo ... --scenarios 1000 --workers 2` (target: at most 10 minutes on
 a 2-core machine), timed as a whole process.
 """
@@ -39,21 +39,21 @@ TARGET_MIN = 10.0  # 1,000 scenarios on 2 cores
 
 
 def reference_speedup(job: montecarlo.Job, scenarios: int) -> bool:
-    """The first `scenarios` scenarios flown in runs of ticks and tick by tick (the
-    reference), in this process: the fast executor's speed-up; False if a row differs."""
+    """The first `scenarios` scenarios flown by the C step and by the Python reference, in
+    this process: the C step's speed-up; False if a row differs."""
     import pandas as pd
 
-    times = {False: 0.0, True: 0.0}
-    rows = {False: [], True: []}
+    times = {"step": 0.0, "python": 0.0}
+    rows: dict[str, list] = {"step": [], "python": []}
     for index in range(scenarios):
-        for tick_by_tick in (False, True):
+        for runtime in times:
             start = time.perf_counter()
-            rows[tick_by_tick].append(montecarlo.fly_scenario(job, index, tick_by_tick))
-            times[tick_by_tick] += time.perf_counter() - start
-    same = pd.DataFrame(rows[False]).equals(pd.DataFrame(rows[True]))
-    print(f"{scenarios} scenarios in runs of ticks {times[False]:.1f} s, tick by tick "
-          f"{times[True]:.1f} s: {times[True] / times[False]:.1f}x; identical rows: {same} "
-          f"({load_average()})")
+            rows[runtime].append(montecarlo.fly_scenario(job, index, runtime))
+            times[runtime] += time.perf_counter() - start
+    same = pd.DataFrame(rows["step"]).equals(pd.DataFrame(rows["python"]))
+    print(f"{scenarios} scenarios on the C step {times['step']:.1f} s, on the Python "
+          f"reference {times['python']:.1f} s: {times['python'] / times['step']:.1f}x; "
+          f"identical rows: {same} ({load_average()})")
     return same
 
 
@@ -65,8 +65,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="scenarios of the whole command (0: skip it)")
     parser.add_argument("--no-dask", action="store_true")
     parser.add_argument("--reference", type=int, default=2,
-                        help="scenarios also flown tick by tick, for the fast executor's "
-                             "speed-up (0: skip)")
+                        help="scenarios also flown by the Python reference, for the C "
+                             "step's speed-up (0: skip)")
     args = parser.parse_args(argv)
     print(load_average())
     mission = check_file(str(SURVEY)).mission

@@ -1,31 +1,34 @@
-"""Benchmark: a simulated month. The fast executor against the tick-by-tick reference, and
-the whole `gliderplan sim` command of the month-long survey.
+"""Benchmark: a simulated month on the runtime's C step, against the Python reference and
+per simulated day across missions, printed as ratios from one run.
 
-    .venv/bin/python bench/bench_sim_month.py [--days 30] [--runs 5] [--tick 4]
+    .venv/bin/python bench/bench_sim_month.py [--days 30] [--reference-days 1] [--runs 3]
 
-1. The Python executor flies --days (30) of examples/survey_month.mission (the month-long
-   thermocline survey) and of tests/missions/sim_month.mission (yo 3-38 m along three
-   waypoints, a surfacing with an Iridium call every 6 h, CTD on), bench ocean, seed 0,
-   in runs of ticks (sim/fast.py; target: 30 days in <= 1 s) and, as the baseline in the
-   same run, tick by tick (`fly(..., tick_by_tick=True)`, the reference). The two flights
-   must be identical, trace and every per-tick column bit for bit.
-2. The whole command as the user runs it, `gliderplan sim examples/survey_month.mission
-   -o DIR` (check, fly, account, trace.csv, timeseries.parquet, summary.json and the two
-   plots, which a second process draws while the first writes the rest; target <= 2 s):
-   a fresh process each run, median of --runs after a warm-up; beside it the CPU time
-   of each stage in this process.
+1. In this process: the C flight (the compiled runtime's step with the glider, science
+   and energy models in C, sim/flight.c; `fly`'s default) and the Python reference
+   (`fly(..., runtime="python")`) fly --reference-days of examples/survey_month.mission
+   and of tests/missions/sim_month.mission, bench ocean, seed 0: the flights must be
+   identical (trace and every per-tick column bit for bit); ticks per second of each.
+2. The month-long survey and the event-heavy imported Slocum missions nsb3 and helgo
+   (`import-slocum` of the shared logs' .mi files), --days each (a mission may end
+   before): the flight in this process on the C step, CPU time per simulated day, as a
+   ratio of the survey's (target: nsb3 and helgo <= 1.5x); and the whole command as the
+   user runs it, `gliderplan sim MISSION --duration 30d -o DIR` (check, fly, account,
+   every file and plot; a fresh process, median of --runs after a warm-up): wall and
+   CPU time (target < 2 s wall).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-from whole_process import gliderplan, load_average, median_of
+from whole_process import ENV, gliderplan, load_average, median_of
 
 from gliderplan.language import check_file
 from gliderplan.power_models import load_vehicle
@@ -36,15 +39,18 @@ from gliderplan.sim.loop import RunConfig, RunRecord
 REPO = Path(__file__).resolve().parents[1]
 SURVEY = REPO / "examples" / "survey_month.mission"
 MISSIONS = (SURVEY, REPO / "tests" / "missions" / "sim_month.mission")
+SLOCUM = REPO.parent / "shared" / "data" / "slocum-missions"
+IMPORTED = {"nsb3": SLOCUM / "nsb3" / "nsb3.mi", "helgo": SLOCUM / "helgo" / "helgo.mi"}
+COMMAND_GOAL_S = 2.0
+PER_DAY_GOAL = 1.5  # an imported mission's cost per simulated day, over the survey's
 
 
-def timed_run(mission, days: float, tick_s: float,
-              tick_by_tick: bool = False) -> tuple[RunRecord, float]:
+def timed_run(mission, days: float, tick_s: float, runtime: str) -> tuple[RunRecord, float]:
     """A flight and its wall time [s]."""
     config = RunConfig(tick_s=tick_s, duration_s=days * 86400.0, seed=0)
     vehicle = load_vehicle(mission.vehicle)
     start = time.perf_counter()
-    record = fly(mission, ocean.bench(), config, vehicle, tick_by_tick=tick_by_tick)
+    record = fly(mission, ocean.bench(), config, vehicle, runtime=runtime)
     return record, time.perf_counter() - start
 
 
@@ -54,75 +60,78 @@ def identical(a: RunRecord, b: RunRecord) -> bool:
         for k in a.columns)
 
 
-def fast_against_reference(path: Path, days: float, tick_s: float) -> bool:
+def step_against_reference(path: Path, days: float, tick_s: float) -> bool:
     """Section 1 for one mission; False if the two flights differ."""
     mission = check_file(str(path)).mission
-    timed_run(mission, 0.1, tick_s)  # warm-up: imports, caches
-    fast, fast_s = timed_run(mission, days, tick_s)
-    reference, reference_s = timed_run(mission, days, tick_s, tick_by_tick=True)
-    ticks = len(fast.columns["time_s"])
-    same = identical(fast, reference)
-    print(f"{path.name}, {days:g} d at {tick_s:g} s ({ticks:,} ticks, {len(fast.trace)} "
-          f"transitions): runs of ticks {fast_s:.2f} s ({ticks / fast_s:,.0f} ticks/s), "
-          f"tick by tick {reference_s:.2f} s ({ticks / reference_s:,.0f} ticks/s): "
-          f"{reference_s / fast_s:.1f}x; identical flights: {same}")
+    timed_run(mission, 0.1, tick_s, "step")  # warm-up: imports, the build's cache
+    step, step_s = timed_run(mission, days, tick_s, "step")
+    reference, reference_s = timed_run(mission, days, tick_s, "python")
+    ticks = len(step.columns["time_s"])
+    same = identical(step, reference)
+    print(f"{path.name}, {days:g} d at {tick_s:g} s ({ticks:,} ticks, {len(step.trace)} "
+          f"transitions): C step {step_s:.2f} s ({ticks / step_s:,.0f} ticks/s), Python "
+          f"reference {reference_s:.2f} s ({ticks / reference_s:,.0f} ticks/s): "
+          f"{reference_s / step_s:.0f}x; identical flights: {same}")
     return same
 
 
-def whole_command(runs: int) -> None:
-    """Section 2: `gliderplan sim` of the month-long survey, whole process and by stage."""
-    with tempfile.TemporaryDirectory() as tmp:
-        command = gliderplan("sim", str(SURVEY), "-o", str(Path(tmp) / "run"))
-        timing = median_of({"sim": command}, runs)["sim"]
-    print(f"gliderplan sim {SURVEY.name} (30 d, every file and plot): "
-          f"{timing.wall_s:.2f} s wall, {timing.cpu_s:.2f} s CPU (median of {runs}; "
-          f"{load_average()})")
-    stages = stage_times()
-    print("  stages (CPU, this process): " + ", ".join(
-        f"{name} {seconds:.2f} s" for name, seconds in stages.items())
-        + f"; {sum(stages.values()):.2f} s")
-
-
-def stage_times() -> dict[str, float]:
-    """CPU time [s] of each stage of `run_mission`'s pipeline after the check, in this
-    process (the imports of pyarrow and matplotlib counted in the stage that needs them)."""
-    from gliderplan.sim import energy, outputs, plots
-
-    clock = time.process_time
-    times: dict[str, float] = {}
-    mission = check_file(str(SURVEY)).mission
-    vehicle = load_vehicle(mission.vehicle)
-    start = clock()
-    record = fly(mission, ocean.bench(), RunConfig(), vehicle)
-    times["fly"] = clock() - start
-    start = clock()
-    used = energy.account(record, mission, vehicle, None)
-    times["account"] = clock() - start
-    start = clock()
-    table = outputs.timeseries_table(record, used, mission.battery.energy_j)
-    outputs.parquet_bytes(table, outputs.TIMESERIES_DICTIONARY)
-    outputs.trace_csv(record.trace)
-    times["files"] = clock() - start
-    start = clock()
-    plots.depth_png(plots.depth_series(record))
-    plots.energy_png(plots.energy_series(record, used, None))
-    times["plots (a second process in the command)"] = clock() - start
-    return times
+def whole_commands(work: Path, days: float, runs: int) -> bool:
+    """Section 2; False if a target is missed."""
+    missions = {"survey_month": SURVEY}
+    for name, source in IMPORTED.items():
+        if not source.is_file():
+            print(f"  {name}: {source} not found: skipped")
+            continue
+        missions[name] = work / f"{name}.mission"
+        subprocess.run(gliderplan("import-slocum", str(source), "--allow-missing-mafiles",
+                                  "-o", str(missions[name])),
+                       check=True, env=ENV, capture_output=True)
+    per_day = {}
+    for name, path in missions.items():
+        mission = check_file(str(path)).mission
+        start = time.process_time()
+        record, _ = timed_run(mission, days, 4.0, "step")
+        flown_days = record.columns["time_s"][-1] / 86400.0
+        per_day[name] = (time.process_time() - start) / flown_days
+        print(f"{name}: {flown_days:.1f} days flown ({record.ended}) on the C step, "
+              f"{per_day[name] * 1000:.1f} ms CPU per simulated day")
+    outputs = {name: work / name for name in missions}
+    commands = {name: gliderplan("sim", str(path), "--duration", f"{days:g}d", "-o",
+                                 str(outputs[name])) for name, path in missions.items()}
+    timings = median_of(commands, runs)
+    for name, timing in timings.items():
+        summary = json.loads((outputs[name] / "summary.json").read_text())
+        print(f"gliderplan sim {name} --duration {days:g}d: {timing.wall_s:.2f} s wall, "
+              f"{timing.cpu_s:.2f} s CPU, {summary['simulated_s'] / 86400:.1f} days flown "
+              f"(median of {runs})")
+    met = all(t.wall_s < COMMAND_GOAL_S for t in timings.values())
+    for name in per_day.keys() - {"survey_month"}:
+        ratio = per_day[name] / per_day["survey_month"]
+        met &= ratio <= PER_DAY_GOAL
+        print(f"  {name} per simulated day: {ratio:.2f}x the survey's (target <= "
+              f"{PER_DAY_GOAL:g}x)")
+    print(f"  every command under {COMMAND_GOAL_S:g} s: "
+          f"{all(t.wall_s < COMMAND_GOAL_S for t in timings.values())}")
+    return met
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--days", type=float, default=30.0)
-    parser.add_argument("--runs", type=int, default=5, help="runs of the whole command")
+    parser.add_argument("--days", type=float, default=30.0, help="of each whole command")
+    parser.add_argument("--reference-days", type=float, default=1.0,
+                        help="flown by both the C step and the Python reference")
+    parser.add_argument("--runs", type=int, default=3, help="runs of each whole command")
     parser.add_argument("--tick", type=float, default=4.0)
     args = parser.parse_args(argv)
     print(load_average())
-    same = [fast_against_reference(path, args.days, args.tick) for path in MISSIONS]
+    same = [step_against_reference(path, args.reference_days, args.tick) for path in MISSIONS]
     if not all(same):
-        print("the fast executor's flight differs from the reference!", file=sys.stderr)
+        print("the C step's flight differs from the reference!", file=sys.stderr)
         return 1
-    whole_command(args.runs)
-    return 0
+    with tempfile.TemporaryDirectory() as tmp:
+        met = whole_commands(Path(tmp), args.days, args.runs)
+    print(load_average())
+    return 0 if met else 2
 
 
 if __name__ == "__main__":

@@ -62,9 +62,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plan", metavar="PLANFILE",
                         help="plan file to fly; the run is checked against the budget and "
                              "the per-state prediction it carries")
-    parser.add_argument("--runtime", choices=("python", "c"), default="python",
-                        help="python: the reference executor (default); c: the compiled "
-                             "runtime over a pseudo-terminal")
+    parser.add_argument("--runtime", choices=("step", "python", "c"),
+                        help="step: the compiled runtime's step in this process (default; "
+                             "python where no C compiler is installed); python: the "
+                             "reference executor; c: the compiled runtime over a "
+                             "pseudo-terminal")
     parser.add_argument("--state-dir", metavar="DIR",
                         help="with --runtime c: the runtime keeps its checkpoints and event "
                              "log in DIR as on the glider (created if missing; must hold no "

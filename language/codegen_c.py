@@ -45,15 +45,17 @@ class CodegenError(GliderplanError):
     """The mission uses something the C runtime cannot hold (the message says what and where)."""
 
 
-def generate_c(mission: ir.CheckedMission, limits: FlightLimits) -> str:
+def generate_c(mission: ir.CheckedMission, limits: FlightLimits, prefix: str = "") -> str:
     """The C source of the mission's tables, ready to compile with the runtime.
 
     `limits` are the vehicle's and the board's (`planner.limits.flight_limits`): the
     pumped volume flown where no plan sets one, the most a plan may set, the board's
-    clocks; the runtime refuses a plan past them.
+    clocks; the runtime refuses a plan past them. `prefix` starts every name the file
+    defines (its table is then `PREFIXgp_mission_table`), so that the sources of several
+    missions make one translation unit (the generated differential tests build them so).
     """
     _check_limits(mission)
-    return _MissionWriter(mission, limits).write()
+    return _MissionWriter(mission, limits, prefix).write()
 
 
 def _sensors_read(mission: ir.CheckedMission) -> int:
@@ -95,16 +97,16 @@ _ARITHMETIC = {"+": "add", "-": "sub", "*": "mul", "/": "div"}
 # Helpers the expressions call, emitted only when used (-Wunused-function).
 _HELPERS = {
     # A truth value as a double through a call, not a conversion in place (see below).
-    "truth": ("static double mission_truth(int c)", "    return c ? 1.0 : 0.0;"),
+    "truth": ("static double {p}mission_truth(int c)", "    return c ? 1.0 : 0.0;"),
     # Arithmetic through calls too: gcc's front end folds `0.0 - x` to `-x` for some x
     # (fabs, converted ints), wrong for x == +0.0; and on the i486's x87, whose registers
     # carry 80 bits, the return rounds each result to double as the reference does.
-    **{name: (f"static double mission_{name}(double a, double b)", f"    return a {op} b;")
+    **{name: (f"static double {{p}}mission_{name}(double a, double b)", f"    return a {op} b;")
        for name, op in (("add", "+"), ("sub", "-"), ("mul", "*"), ("div", "/"))},
     # fmin/fmax as ir.evaluate has them: a NaN argument is ignored, a tie keeps `a`.
-    "fmin": ("static double mission_fmin(double a, double b)",
+    "fmin": ("static double {p}mission_fmin(double a, double b)",
              "    return isnan(a) ? b : isnan(b) ? a : b < a ? b : a;"),
-    "fmax": ("static double mission_fmax(double a, double b)",
+    "fmax": ("static double {p}mission_fmax(double a, double b)",
              "    return isnan(a) ? b : isnan(b) ? a : b > a ? b : a;"),
 }
 
@@ -114,6 +116,7 @@ class ExpressionWriter:
     """C text of expressions; `value` is a double, `truth` an int (0 or 1)."""
 
     helpers: set[str] = field(default_factory=set)  # of _HELPERS, as they are used
+    prefix: str = ""  # of every name the file defines
 
     def value(self, expr: ir.Expr) -> str:
         match expr:
@@ -122,23 +125,24 @@ class ExpressionWriter:
             case ir.SensorRef(name):
                 return f"s[{sensor_index(name)}]"
             case ir.VarRef(name):
-                return f"v[VAR_{name}]"
+                return f"v[{self.prefix}VAR_{name}]"
             case ir.UnaryOp("-", operand):
                 return f"(-{self.value(operand)})"
             case ir.BinaryOp("+" | "-" | "*" | "/" as op, left, right):
                 name = _ARITHMETIC[op]
                 self.helpers.add(name)
-                return f"mission_{name}({self.value(left)}, {self.value(right)})"
+                return f"{self.prefix}mission_{name}({self.value(left)}, {self.value(right)})"
             case ir.FuncCall("abs", (arg,)):
                 return f"fabs({self.value(arg)})"
             case ir.FuncCall("mod", (first, second)):  # exact: the same on every target
                 return f"fmod({self.value(first)}, {self.value(second)})"
             case ir.FuncCall("min" | "max" as function, (first, second)):
                 self.helpers.add(f"f{function}")
-                return f"mission_f{function}({self.value(first)}, {self.value(second)})"
+                return (f"{self.prefix}mission_f{function}({self.value(first)}, "
+                        f"{self.value(second)})")
             case ir.UnaryOp("!") | ir.BinaryOp():
                 self.helpers.add("truth")
-                return f"mission_truth{self.truth(expr)}"
+                return f"{self.prefix}mission_truth{self.truth(expr)}"
         raise CodegenError(f"unsupported expression {expr!r}")
 
     def truth(self, expr: ir.Expr) -> str:
@@ -227,10 +231,11 @@ def _route_param(route: ir.Route) -> float:
 class _MissionWriter:
     """Writes the C file, one `visit_*` per part of the mission, each returning lines."""
 
-    def __init__(self, mission: ir.CheckedMission, limits: FlightLimits):
+    def __init__(self, mission: ir.CheckedMission, limits: FlightLimits, prefix: str = ""):
         self.mission = mission
         self.limits = limits
-        self.expressions = ExpressionWriter()
+        self.p = prefix
+        self.expressions = ExpressionWriter(prefix=prefix)
 
     def write(self) -> str:
         body: list[str] = []
@@ -257,16 +262,17 @@ class _MissionWriter:
             "",
         ]
         if mission.variables:
-            lines += ["enum variable_index {",
-                      *(f"    VAR_{v.name} = {i}," for i, v in enumerate(mission.variables)),
+            lines += [f"enum {self.p}variable_index {{",
+                      *(f"    {self.p}VAR_{v.name} = {i},"
+                        for i, v in enumerate(mission.variables)),
                       "};", ""]
         for name, (signature, body) in _HELPERS.items():
             if name in self.expressions.helpers:
-                lines += [signature, "{", body, "}", ""]
+                lines += [signature.format(p=self.p), "{", body, "}", ""]
         return lines
 
     def visit_state(self, index: int, state: ir.State) -> list[str]:
-        prefix = f"state{index}"
+        prefix = f"{self.p}state{index}"
         lines = [f"/* ---- state {index}: {state.name} " + "-" * 40 + " */", ""]
         for number, event in enumerate(state.events):
             lines += self.visit_event(f"{prefix}_event{number}", event)
@@ -297,7 +303,7 @@ class _MissionWriter:
             values = [a.value for a in event.assignments]
             lines += [f"static void {name}_assign(const double *s, double *v)", "{",
                       *self._unused(*values, reads_vars=False)]
-            lines += [f"    v[VAR_{a.variable}] = {self.expressions.value(a.value)};"
+            lines += [f"    v[{self.p}VAR_{a.variable}] = {self.expressions.value(a.value)};"
                       for a in event.assignments]
             lines += ["}", ""]
         return lines
@@ -328,25 +334,25 @@ class _MissionWriter:
         lines = []
         if mission.variables:
             initial = ", ".join(c_double(v.initial) for v in mission.variables)
-            lines += [f"static const double var_initial[{len(mission.variables)}] = "
+            lines += [f"static const double {self.p}var_initial[{len(mission.variables)}] = "
                       f"{{{initial}}};", ""]
         clocks = ", ".join(c_double(c) for c in self.limits.clocks_mhz)
-        lines += [f"static const double board_clocks_mhz[{len(self.limits.clocks_mhz)}] = "
-                  f"{{{clocks}}};", ""]
-        lines += ["static const char *const sensor_names[GP_N_SENSORS] = {",
+        count = len(self.limits.clocks_mhz)
+        lines += [f"static const double {self.p}board_clocks_mhz[{count}] = {{{clocks}}};", ""]
+        lines += [f"static const char *const {self.p}sensor_names[GP_N_SENSORS] = {{",
                   *(f'    "{s.name}",' for s in SENSORS), "};", ""]
-        lines += [f"static const gp_state states[{len(mission.states)}] = {{"]
+        lines += [f"static const gp_state {self.p}states[{len(mission.states)}] = {{"]
         for index, state in enumerate(mission.states):
             lines += self.visit_state_entry(index, state)
         lines += ["};", ""]
         lines += self.visit_plan_bounds()
         lines += [
-            "const gp_mission gp_mission_table = {",
+            f"const gp_mission {self.p}gp_mission_table = {{",
             f"    .name = {_c_string(mission.name)},",
             f'    .hash = "{mission.hash}",',
-            "    .states = states,",
+            f"    .states = {self.p}states,",
             f"    .n_states = {len(mission.states)},",
-            f"    .var_initial = {'var_initial' if mission.variables else 'NULL'},",
+            f"    .var_initial = {f'{self.p}var_initial' if mission.variables else 'NULL'},",
             f"    .n_vars = {len(mission.variables)},",
             f"    .stack_depth = {mission.stack_depth},",
             f"    .read_mask = 0x{read_mask(mission):08x}u,",
@@ -356,36 +362,36 @@ class _MissionWriter:
             f"    .unplanned_speed_mps = {c_double(self.limits.unplanned_speed_mps)},",
             f"    .reserve_j = {c_double(mission.battery.reserve_j)},",
             *self.visit_envelope(),
-            "    .clocks_mhz = board_clocks_mhz,",
+            f"    .clocks_mhz = {self.p}board_clocks_mhz,",
             f"    .n_clocks = {len(self.limits.clocks_mhz)},",
-            "    .sensor_names = sensor_names,",
-            "    .bounds = &plan_bounds,",
+            f"    .sensor_names = {self.p}sensor_names,",
+            f"    .bounds = &{self.p}plan_bounds,",
             "};",
         ]
         return lines
 
     def visit_plan_bounds(self) -> list[str]:
         """`plan_bounds`: the figures `gp_plan_check` holds a plan to (`FlightLimits`)."""
-        limits, lines = self.limits, []
+        limits, lines, p = self.limits, [], self.p
         if limits.duty_bounds:
             for index, (duties, least) in enumerate(zip(limits.duty_bounds,
                                                         limits.min_ballast_cc, strict=True)):
                 if duties:
                     rows = ", ".join(f"{{{SENSOR_BY_NAME[name].index}, {c_double(low)}, "
                                      f"{c_double(high)}}}" for name, low, high in duties)
-                    lines.append(f"static const gp_duty_bound state{index}_duties"
+                    lines.append(f"static const gp_duty_bound {p}state{index}_duties"
                                  f"[{len(duties)}] = {{{rows}}};")
-                lines.append(f"static const double state{index}_min_ballast_cc[{len(least)}] "
+                lines.append(f"static const double {p}state{index}_min_ballast_cc[{len(least)}] "
                              f"= {{{', '.join(c_double(x) for x in least)}}};")
-            lines += [f"static const gp_state_bounds state_bounds[{len(limits.duty_bounds)}] "
+            lines += [f"static const gp_state_bounds {p}state_bounds[{len(limits.duty_bounds)}] "
                       "= {",
-                      *(f"    {{{f'state{i}_duties' if duties else 'NULL'}, {len(duties)}, "
-                        f"state{i}_min_ballast_cc}},"
+                      *(f"    {{{f'{p}state{i}_duties' if duties else 'NULL'}, {len(duties)}, "
+                        f"{p}state{i}_min_ballast_cc}},"
                         for i, duties in enumerate(limits.duty_bounds)), "};"]
         low, high = limits.pitch_range_rad
         board = "NULL" if limits.board is None else _c_string(limits.board)
         return lines + [
-            "static const gp_plan_bounds plan_bounds = {",
+            f"static const gp_plan_bounds {p}plan_bounds = {{",
             f"    .board = {board},",
             f"    .max_budget_j = {c_double(limits.max_budget_j)},",
             f"    .min_pitch_rad = {c_double(low)},",
@@ -395,7 +401,7 @@ class _MissionWriter:
             f"    .max_propelled_mps = {c_double(limits.propelled_speed_mps[1])},",
             f"    .min_thrust_w = {c_double(limits.thrust_range_w[0])},",
             f"    .max_thrust_w = {c_double(limits.thrust_range_w[1])},",
-            f"    .states = {'state_bounds' if limits.duty_bounds else 'NULL'},",
+            f"    .states = {f'{p}state_bounds' if limits.duty_bounds else 'NULL'},",
             "};", ""]
 
     def visit_envelope(self) -> list[str]:
@@ -410,7 +416,7 @@ class _MissionWriter:
                 "    },"]
 
     def visit_state_entry(self, index: int, state: ir.State) -> list[str]:
-        prefix = f"state{index}"
+        prefix = f"{self.p}state{index}"
         route = state.route
         points = _route_points(route)
         sensor_mask = sum(1 << SENSOR_BY_NAME[u.name].index for u in state.sensors)

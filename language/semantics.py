@@ -73,10 +73,17 @@ def fire(mission: ir.CheckedMission, machine: Machine, event: ir.Event,
          sensors: Mapping[str, float], time_s: float) -> tuple[Machine, Transition | None]:
     """Fire `event`, whose condition holds: its assignments in order (each sees the ones
     before), then its action. For a caller that found the event itself (once per tick)."""
-    variables = dict(machine.variables)
-    for assign in event.assignments:
-        variables[assign.variable] = ir.evaluate(assign.value, sensors, variables)
+    variables = assigned(event, sensors, machine.variables)
     return act(mission, Machine(machine.state, machine.stack, variables), event, time_s)
+
+
+def assigned(event: ir.Event, sensors: Mapping[str, float],
+             variables: Mapping[str, float]) -> dict[str, float]:
+    """The variables after the event's assignments, in order (each sees the ones before)."""
+    result = dict(variables)
+    for assign in event.assignments:
+        result[assign.variable] = ir.evaluate(assign.value, sensors, result)
+    return result
 
 
 def act(mission: ir.CheckedMission, machine: Machine, event: ir.Event,

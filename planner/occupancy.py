@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 
 from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
 from gliderplan.language import ir
-from gliderplan.language.semantics import Machine, act, fired_event, start
+from gliderplan.language.semantics import Machine, act, assigned, fired_event, start
 from gliderplan.planner.legs import Position, leg_length_m, route_targets
 
 NOMINAL_SPEED_MPS = 0.35  # Slocum horizontal speed (paper; BCO-DMO): transit times in the walk
@@ -145,15 +145,10 @@ def _sensor_exit(mission: ir.CheckedMission, state: ir.State) -> ir.Event | None
 
 
 def _assign(event: ir.Event, time_s: float, variables: dict[str, float]) -> dict[str, float]:
-    """Variables after the event's assignments; a value that needs an unknown reading
-    (NaN) leaves the variable as it was."""
-    result = dict(variables)
-    sensors = _NaNSensors(time_s)
-    for assign in event.assignments:
-        value = ir.evaluate(assign.value, sensors, result)
-        if math.isfinite(value):
-            result[assign.variable] = value
-    return result
+    """Variables after the event's assignments (the reference's); a value that needs an
+    unknown reading (not finite) leaves the variable as it was."""
+    after = assigned(event, _NaNSensors(time_s), variables)
+    return {k: v if math.isfinite(v) else variables[k] for k, v in after.items()}
 
 
 # what the walk notes when a mission without `horizon` runs to the default one

@@ -3,7 +3,9 @@
 A run is a closed loop, lock-step on the simulator's clock (loop.py): each tick the
 science computer (science.py) fills the sensor array from the simulated glider
 (vehicle.py) in a simulated ocean (ocean.py) and sends it to a runtime, which answers
-with a COMMAND that the glider flies for one tick. The runtime is the Python reference
+with a COMMAND that the glider flies for one tick. The runtime is the compiled C
+runtime's own step in this process (cstep.py, step.c; by default, with the glider, its
+science computer and its battery in C too: cflight.py, flight.c), the Python reference
 executor (executor.py, pilot.py, compiled.py: language/semantics.py plus the library
 routines of docs/pilot.md) or the compiled C runtime over a pseudo-terminal
 (emulator.py). energy.py integrates every component's energy over the run and checks

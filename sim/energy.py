@@ -156,7 +156,6 @@ class BatteryGauge:
         self.left_j = mission.battery.energy_j
         self.reserve_j = mission.battery.reserve_j
         self.counted = 0  # ticks billed
-        self.most_per_tick_j = 0.0  # [J] the most a tick billed has drawn
 
     def reading(self, tick: int, columns) -> float:
         """The reading at `tick` [J]; every tick before it is flown and in `columns`
@@ -169,20 +168,8 @@ class BatteryGauge:
             drawn = sum(self.billing.per_tick_j(part, boot=self.counted == 0).values()
                         )[self.counted - start:]
             self.left_j -= float(drawn.sum())
-            self.most_per_tick_j = max(self.most_per_tick_j, float(drawn.max()))
             self.counted = update
         return self.left_j
-
-    def safe_ticks(self, tick: int) -> int:
-        """How many ticks from `tick` (the reading at it taken) can be flown in one run
-        without passing an update that could read the reserve: four times the most a tick
-        has drawn so far is taken as the bound on what a tick draws."""
-        next_update = tick - tick % GAUGE_TICKS + GAUGE_TICKS
-        if self.most_per_tick_j <= 0.0:
-            return next_update - tick
-        ticks = int((self.left_j - self.reserve_j) / (4.0 * self.most_per_tick_j))
-        last_safe = self.counted + ticks - ticks % GAUGE_TICKS  # an update that reads above
-        return max(next_update, last_safe + GAUGE_TICKS) - tick
 
 
 # ---- the flight against its plan -------------------------------------------------------

@@ -1,9 +1,11 @@
 """One simulated flight of a checked mission: the glider and its science computer in an
-ocean, flown by the Python executor or by the compiled C runtime over a pty."""
+ocean, flown by the compiled runtime's step in this process (the default), by the
+Python reference executor or by the compiled C runtime over a pty."""
 
 from __future__ import annotations
 
 import re
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -22,25 +24,34 @@ if TYPE_CHECKING:
     from gliderplan.sim.faults import FaultSpec
     from gliderplan.sim.replanning import ShoreLoop
 
-RUNTIMES = ("python", "c")
+RUNTIMES = ("python", "c", "step")
+
+
+def default_runtime() -> str:
+    """"step" (the compiled runtime's step in this process), or "python" (the reference
+    executor) where no C compiler is installed to build it."""
+    from gliderplan.runtime.build import TARGETS
+
+    return "step" if shutil.which(TARGETS["host"].compiler) else "python"
 
 
 def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Vehicle,
-        plan: Plan | None = None, plan_path: str | None = None, runtime: str = "python",
+        plan: Plan | None = None, plan_path: str | None = None, runtime: str | None = None,
         robust_tracker: bool = True,
         progress: Callable[[float, float], None] | None = None,
-        tick_by_tick: bool = False, key_path: str | None = None,
+        key_path: str | None = None,
         state_dir: str | Path | None = None,
         faults: FaultSpec | None = None, shore: ShoreLoop | None = None,
         keep_interrupted: bool = False) -> RunRecord:
     """Fly the mission until it exits or `config.duration_s` ends; KeyboardInterrupt
     goes through, but with `keep_interrupted` it ends the flight (sim.loop.simulate).
 
-    The Python executor flies runs of ticks at once where nothing can happen between them
-    (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
-    the reference loop instead, as does a vehicle with a propeller or a thruster (the fast
-    executor flies gliders only). The C runtime reads its plan from `plan_path` (the file
-    `plan` was read from), or with `key_path` (the key provisioned on the vehicle) gets it
+    `runtime`: "step" (the compiled runtime's step with the glider, science and energy
+    models in C, sim/flight.c; a flight the C loop does not model, `cflight.flies_in_c`,
+    flies the same step in the Python loop), "python" (the reference executor, tick by
+    tick: the same flight bit for bit), "c" (the board binary over a pty); default
+    `default_runtime()`. The C runtime reads its plan from `plan_path` (the file `plan`
+    was read from), or with `key_path` (the key provisioned on the vehicle) gets it
     uploaded over the link, and keeps its checkpoints and event log in `state_dir` if
     given; raises emulator.EmulatorError when it cannot be built or started, PlanRejected
     when it refuses the plan. `faults` (C runtime only) are injected on the line and into
@@ -52,6 +63,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     from gliderplan.planner.limits import flight_limits
     from gliderplan.sim.energy import BatteryGauge
 
+    runtime = runtime or default_runtime()
     science = make_science(mission, ocean, config, vehicle)
     gauge = BatteryGauge(mission, vehicle, plan, config.tick_s)
     if runtime == "python":
@@ -69,27 +81,24 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
             hook = _surfacing(shore, PythonVehicle(executor, shore.held, shore.key, mission,
                                                    _reader(mission, vehicle, plan)).deliver,
                               gauge, science.glider, mission)
-        if tick_by_tick or vehicle.propulsion is not None:  # sim/fast.py: gliders only
-            record = simulate(mission, executor, science, config, progress, gauge=gauge,
-                              on_surfacing=hook, keep_interrupted=keep_interrupted)
-        else:
-            from gliderplan.sim.fast import FastForward
-
-            record = simulate(mission, executor, science, config, progress,
-                              FastForward(mission, executor, science), gauge, hook,
-                              keep_interrupted)
+        record = simulate(mission, executor, science, config, progress, gauge=gauge,
+                          on_surfacing=hook, keep_interrupted=keep_interrupted)
         record.entry_variables = executor.entry_variables
         record.envelope = located(executor.envelope_notes, mission)
         record.events_fired = executor.event_count
         return record
-    if runtime != "c":
+    if runtime not in ("c", "step"):
         raise ValueError(f"runtime must be one of {RUNTIMES}, not {runtime!r}")
     from gliderplan.planner.planfile import plan_board_limits
-    from gliderplan.sim.emulator import start_c_runtime
 
     board = plan_board_limits(mission, plan) if plan is not None else flight_limits(mission)
     # the vehicle flown: a scenario's may differ
     limits = flown_limits(mission, vehicle, board.clocks_mhz)
+    if runtime == "step":
+        return _fly_step(mission, science, config, plan, limits, robust_tracker, progress,
+                         gauge, shore, keep_interrupted)
+    from gliderplan.sim.emulator import start_c_runtime
+
     schedule = None
     if faults is not None:
         from gliderplan.planner.occupancy import mission_occupancy
@@ -114,6 +123,36 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         record.faults, record.events_log = c_runtime.report(), c_runtime.events_log
         if record.events_log is not None:  # the transitions made, lost COMMANDs or not
             record.trace = logged_trace(record.events_log, record.flown_s)
+    return record
+
+
+def _fly_step(mission: ir.CheckedMission, science, config: RunConfig,  # noqa: ANN001
+              plan: Plan | None, limits: FlightLimits, robust_tracker: bool,
+              progress: Callable[[float, float], None] | None, gauge,  # noqa: ANN001
+              shore: ShoreLoop | None, keep_interrupted: bool) -> RunRecord:
+    """The compiled runtime's step in this process: in the C loop where it models the
+    flight, else (and with the shore in the loop) in the Python loop."""
+    from gliderplan.planner.planfile import write_plan_bytes
+    from gliderplan.sim.cflight import CFlight, flies_in_c, flight_context_bytes
+    from gliderplan.sim.cstep import CStep
+
+    held = shore.held if shore is not None else \
+        None if plan is None else write_plan_bytes(plan)
+    step = CStep(mission, held, limits, naive_tracker=not robust_tracker,
+                 context_bytes=flight_context_bytes())
+    if shore is None and flies_in_c(science):
+        record = CFlight(mission, step, science, gauge.billing, mission.battery.energy_j,
+                         config).fly(progress, keep_interrupted)
+    else:
+        hook = None
+        if shore is not None:
+            hook = _surfacing(shore, step.update_plan(shore.key), gauge, science.glider,
+                              mission)
+        record = simulate(mission, step, science, config, progress, gauge=gauge,
+                          on_surfacing=hook, keep_interrupted=keep_interrupted)
+        record.entry_variables, record.events_fired = step.entry_variables, step.events_fired
+        record.suspends = step.suspends
+    record.envelope = located(step.envelope_notes, mission)
     return record
 
 

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from gliderplan.contract import EARTH_RADIUS_M
 
 TWO_PI = 2.0 * math.pi
@@ -44,11 +42,3 @@ def bearing_rad(north_m: float, east_m: float) -> float:
     """Heading [rad] clockwise from north in [0, 2 pi)."""
     heading = math.atan2(east_m, north_m)
     return heading + TWO_PI if heading < 0.0 else heading
-
-
-# ---- over arrays (the fast executor's), bit for bit ----------------------------------
-
-def degrees_to_ddmm_array(x: np.ndarray) -> np.ndarray:
-    a = np.abs(x)
-    whole = np.floor(a)
-    return np.copysign(whole * 100.0 + (a - whole) * 60.0, x)

@@ -159,8 +159,7 @@ COLUMN_TYPES: dict[str, type] = {
 
 class Columns:
     """The record's columns as they grow: rows appended one tick at a time (`rows`, lists
-    of Python numbers) and runs of ticks appended as arrays (`extend`), both written into
-    arrays sized for the whole run."""
+    of Python numbers), written into arrays sized for the whole run."""
 
     def __init__(self, ticks: int) -> None:
         self.rows: dict[str, list] = {k: [] for k in COLUMN_TYPES}
@@ -176,17 +175,6 @@ class Columns:
             values.clear()  # the same list: appends bound to it stay valid
         self._filled += n
 
-    def extend(self, ticks: int, run: dict[str, np.ndarray | float]) -> None:
-        """Append a run of ticks: per column an array of `ticks` values, or one value
-        for them all; a column left out is 0 (the fast executor's runs have no
-        propulsion)."""
-        if any(self.rows.values()):
-            self._flush_rows()
-        at = self._filled
-        for key, array in self._arrays.items():
-            array[at:at + ticks] = run.get(key, 0)
-        self._filled += ticks
-
     def arrays(self) -> dict[str, np.ndarray]:
         """Every column over the ticks whose rows are complete (an interruption may have
         left the last tick's row half written)."""
@@ -201,15 +189,6 @@ class Gauge(Protocol):
 
     def reading(self, tick: int, columns: Columns) -> float: ...
 
-    def safe_ticks(self, tick: int) -> int: ...
-
-
-class FastForward(Protocol):
-    def __call__(self, tick: int, last_tick: int, columns: Columns) -> int:
-        """Fly ticks `tick`.. ahead in one go, as the tick-by-tick loop would, appending
-        their rows; the number flown (0: the loop must fly `tick` itself)."""
-        ...
-
 
 class SurfacingHook(Protocol):
     def __call__(self, tick: int, columns: Columns) -> None:
@@ -220,18 +199,15 @@ class SurfacingHook(Protocol):
 
 def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceComputer,
              config: RunConfig, progress: Callable[[float, float], None] | None = None,
-             fast_forward: FastForward | None = None, gauge: Gauge | None = None,
-             on_surfacing: SurfacingHook | None = None,
+             gauge: Gauge | None = None, on_surfacing: SurfacingHook | None = None,
              keep_interrupted: bool = False) -> RunRecord:
     """Run the loop until the mission exits (or its energy guard ends it), the runtime
     faults or the duration ends. KeyboardInterrupt (Ctrl-C, SIGTERM) goes through, but
     with `keep_interrupted` it ends the run, which the record says ("interrupted"): the
-    caller writes the part flown and marks it partial (never a result of its own). With
-    `fast_forward`, the ticks on which nothing can happen are flown in runs by it, the
-    others one by one here. `gauge` gives the science computer its `energy_left` reading
-    (NaN without one). `on_surfacing` is called once per surfacing, before the first tick
-    flown after the loop sees the glider at the surface (the next tick when flown one by
-    one; after a run that holds the surfacing, when flown in runs)."""
+    caller writes the part flown and marks it partial (never a result of its own).
+    `gauge` gives the science computer its `energy_left` reading (NaN without one).
+    `on_surfacing` is called once per surfacing, before the first tick flown after the
+    loop sees the glider at the surface."""
     names = tuple(s.name for s in mission.states)
     glider = science.glider
     tick_s = config.tick_s
@@ -258,24 +234,6 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 surfaced = glider.surfacings
                 on_surfacing(tick, columns)
             energy_left = math.nan if gauge is None else gauge.reading(tick, columns)
-            if fast_forward is not None and tick and (
-                    gauge is None or energy_left > gauge.reserve_j):
-                # a run never passes a read-out of the gauge at which the guard could fire
-                end = last_tick if gauge is None else min(
-                    last_tick, tick + gauge.safe_ticks(tick) - 1)
-                flown = fast_forward(tick, end, columns)
-                if flown:
-                    if progress is not None and (tick + flown) // PROGRESS_TICKS \
-                            > tick // PROGRESS_TICKS:
-                        progress((tick + flown) * tick_s, last_tick * tick_s)
-                    tick += flown
-                    if tick > last_tick:
-                        break
-                    if gauge is not None:
-                        energy_left = gauge.reading(tick, columns)
-                    if on_surfacing is not None and glider.surfacings != surfaced:
-                        surfaced = glider.surfacings
-                        on_surfacing(tick, columns)
             science.energy_left_j = energy_left
             mask, values = readings(tick)
             depth_c.append(glider.depth_m)

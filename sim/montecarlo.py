@@ -71,11 +71,11 @@ def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(job.seed, spawn_key=(index,))
 
 
-def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
-    """Fly scenario `index`: one row of the results table (`tick_by_tick`: on the
-    reference executor alone, as sim.flight.fly). With replanning the row is the flight
-    with the shore in the loop, and the static plan's flight of the same scenario beside
-    it (`held_static`, `quality_static`, ...)."""
+def fly_scenario(job: Job, index: int, runtime: str | None = None) -> dict:
+    """Fly scenario `index`: one row of the results table (`runtime` as sim.flight.fly's:
+    by default the compiled runtime's step). With replanning the row is the flight with
+    the shore in the loop, and the static plan's flight of the same scenario beside it
+    (`held_static`, `quality_static`, ...)."""
     from gliderplan.sim.flight import fly
 
     scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
@@ -84,7 +84,7 @@ def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
                        noise=scenario.noise, current=scenario.current, start_lat_deg=lat,
                        start_lon_deg=lon, start_epoch_s=job.start_epoch_s)
     record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
-                 robust_tracker=job.robust_tracker, tick_by_tick=tick_by_tick)
+                 robust_tracker=job.robust_tracker, runtime=runtime)
     row = _row(job, scenario, record)
     if not job.replan:
         return row
@@ -94,7 +94,7 @@ def fly_scenario(job: Job, index: int, tick_by_tick: bool = False) -> dict:
                       usable_truth=scenario.usable_fraction, seed=scenario.seed,
                       confidence=job.confidence, spec=job.spec.model())
     replanned = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
-                    robust_tracker=job.robust_tracker, tick_by_tick=tick_by_tick, shore=shore)
+                    robust_tracker=job.robust_tracker, runtime=runtime, shore=shore)
     link = shore.log.summary(max(float(replanned.columns["time_s"][-1]), job.tick_s))
     return {**_row(job, scenario, replanned),
             **{f"{k}_static": row[k] for k in STATIC_COLUMNS},

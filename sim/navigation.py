@@ -9,8 +9,8 @@ steady current the second dive's estimate is right. With current correction
 (`u_use_current_correction`) the glider heads upstream of its waypoint so that, in the
 current it measured, its track over the ground points at it.
 
-The simulated glider (`sim.vehicle.GliderSim`) is the model of record; the fast
-executor leaves to it every run a current moves.
+The simulated glider (`sim.vehicle.GliderSim`) is the model of record; sim/flight.c
+flies it bit for bit in the C flight.
 """
 
 from __future__ import annotations

@@ -38,7 +38,6 @@ import numpy as np
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import read_input_text
 from gliderplan.power_models.flight import DensityProfile
-from gliderplan.sim import native
 
 if TYPE_CHECKING:
     from gliderplan.sim.bathymetry import Bathymetry
@@ -98,21 +97,12 @@ class Thermocline:
 
     def water_at(self, depth_m: float, time_s: float) -> tuple[float, float]:
         """(temperature [degC], salinity [PSU]) at one depth [m] and time [s]: the model
-        above on plain floats, the simulator's once-a-tick call."""
-        return self._water(depth_m, time_s, math.sin, math.tanh)
-
-    def water_along(self, depth_m: np.ndarray, time_s: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray]:
-        """`water_at` at each (depth, time) of two arrays, bit for bit."""
-        return self._water(depth_m, time_s, native.sin, native.tanh)
-
-    def _water(self, depth_m, time_s, sin, tanh):
-        """The model in the simulator's order of operations, on floats or arrays."""
+        above on plain floats in the simulator's order of operations (sim/flight.c's)."""
         centre = self.depth_m
         for wave in self.waves:
-            centre = centre + wave.amplitude_m * sin(
+            centre = centre + wave.amplitude_m * math.sin(
                 2.0 * math.pi * time_s / wave.period_s + wave.phase_rad)
-        warm = 0.5 * (1.0 - tanh((depth_m - centre) / (max(self.thickness_m, 1e-6) / 4.0)))
+        warm = 0.5 * (1.0 - math.tanh((depth_m - centre) / (max(self.thickness_m, 1e-6) / 4.0)))
         return (self.deep_c + (self.surface_c - self.deep_c) * warm,
                 self.deep_psu + (self.surface_psu - self.deep_psu) * warm)
 
@@ -138,27 +128,6 @@ class MeasuredProfile:
         """(temperature [degC], salinity [PSU]) at one depth [m] and time [s]."""
         return (self._interpolate(self.temperatures_c, depth_m, time_s),
                 self._interpolate(self.salinities_psu, depth_m, time_s))
-
-    def water_along(self, depth_m: np.ndarray, time_s: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray]:
-        """`water_at` at each (depth, time) of two arrays, bit for bit (the same
-        operations in the same order as on floats)."""
-        return (self._interpolate_exact(self.temperatures_c, depth_m, time_s),
-                self._interpolate_exact(self.salinities_psu, depth_m, time_s))
-
-    def _interpolate_exact(self, table: tuple[tuple[float, ...], ...], depth_m: np.ndarray,
-                           time_s: np.ndarray) -> np.ndarray:
-        if len(self.casts_s) == 1:
-            return _interp_exact(self.depths_m, table[0], depth_m)
-        casts = np.asarray(self.casts_s)
-        k = np.clip(np.searchsorted(casts, time_s, side="left") - 1, 0, len(casts) - 2)
-        t0, t1 = casts[k], casts[k + 1]
-        w = (time_s - t0) / (t1 - t0)
-        w = np.where(0.0 > w, 0.0, w)  # min(max(w, 0), 1) as Python's min and max pick
-        w = np.where(1.0 < w, 1.0, w)
-        rows = np.array([_interp_exact(self.depths_m, row, depth_m) for row in table])
-        index = np.arange(len(depth_m))
-        return rows[k, index] * (1.0 - w) + rows[k + 1, index] * w
 
     def _interpolate(self, table: tuple[tuple[float, ...], ...], depth_m: Number,
                      time_s: Number) -> Number:

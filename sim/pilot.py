@@ -13,8 +13,6 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from gliderplan.contract import (
     EARTH_RADIUS_M,
     MAX_SWEEP_WAYPOINTS,
@@ -233,6 +231,12 @@ PROFILE_ROUTINES = {"yo": Yo, "thermotrackyo": ThermoTrackYo, "surface": Surface
 
 # ---- routes ----------------------------------------------------------------------------
 
+def length_m(north_m: float, east_m: float) -> float:
+    """The length [m] of an offset: sqrt(north^2 + east^2), each operation rounded once
+    (not math.hypot, whose last bit differs from the C library's)."""
+    return math.sqrt(north_m * north_m + east_m * east_m)
+
+
 class NoHeading:
     k = 0  # no waypoint: nothing to resume
     reached = 0  # waypoints reached (the runtime's `wptreached`): never one
@@ -298,14 +302,14 @@ class Waypoints:
             return math.nan
         north, east = offset_m(ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm),
                                *self.points[self.k])
-        return math.hypot(north, east)
+        return length_m(north, east)
 
     def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
         if not (math.isfinite(lat_ddmm) and math.isfinite(lon_ddmm)):
             return 0.0, False
         lat, lon = ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm)
         north, east = offset_m(lat, lon, *self.points[self.k])
-        if math.hypot(north, east) <= self.radius_m and self.may_reach():
+        if length_m(north, east) <= self.radius_m and self.may_reach():
             self.reached += 1
             if self._advances():
                 self.k = (self.k + 1) % len(self.points)
@@ -435,42 +439,4 @@ def sensor_power_mask(logged: tuple[tuple[int, float, float], ...], t_in_s: floa
     for index, period_s, on_s in logged:
         if period_s == 0.0 or math.fmod(t_in_s, period_s) < on_s:
             mask |= 1 << index
-    return mask
-
-
-def profile_indices(state_plan: StatePlan | None, t_in_s: np.ndarray) -> np.ndarray:
-    """`profile_index` at each time of an array, bit for bit (the fast executor's)."""
-    if state_plan is None:
-        return np.zeros(len(t_in_s), np.int64)
-    cycle = state_plan.cycle_s
-    c = np.fmod(t_in_s, cycle)
-    index = np.full(len(c), -1, np.int64)
-    start = 0.0
-    last = 0
-    for i, p in enumerate(state_plan.profiles):
-        if p.share > 0.0:
-            last = i
-            index[(index < 0) & (start <= c) & (c < start + p.share * cycle)] = i
-        start += p.share * cycle
-    index[index < 0] = last
-    return index
-
-
-def sensor_power_masks(logged: tuple[tuple[int, float, float], ...],
-                       t_in_s: np.ndarray) -> np.ndarray:
-    """`sensor_power_mask` at each time of an array (the fast executor's). Sensors that
-    share a schedule (the CTD's temperature and conductivity, say) are decided at once."""
-    always = 0
-    schedules: dict[tuple[float, float], int] = {}  # (period, on) -> their sensors' bits
-    for index, period_s, on_s in logged:
-        if period_s == 0.0:
-            always |= 1 << index
-        else:
-            schedules[period_s, on_s] = schedules.get((period_s, on_s), 0) | 1 << index
-    mask = np.full(len(t_in_s), always, np.int64)
-    phases: dict[float, np.ndarray] = {}  # sensors of a plan mostly share one period
-    for (period_s, on_s), bits in schedules.items():
-        if period_s not in phases:
-            phases[period_s] = np.fmod(t_in_s, period_s)
-        mask |= np.where(phases[period_s] < on_s, bits, 0)
     return mask

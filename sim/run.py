@@ -132,7 +132,7 @@ def grounding(record: RunRecord) -> dict | None:
 
 
 def run_mission(mission: CheckedMission, output_dir: str | Path, *,
-                plan_path: str | Path | None = None, runtime: str = "python",
+                plan_path: str | Path | None = None, runtime: str | None = None,
                 ocean: str | None = None, noise: str = "ctd", tracker: str = "robust",
                 currents: str | None = None, seed: int = 0, tick_s: float = TICK_S,
                 duration_s: float | None = None, start_utc: str | None = None,
@@ -151,15 +151,16 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     refused inside it, as every file the run reads).
 
     `plan_path`: the plan to fly and to check the flight against (without one every
-    sensor a state logs is always on). `runtime`: "python" (the reference executor) or
-    "c" (the compiled runtime over a pseudo-terminal). `ocean`: a preset (bench,
-    sea-trial, uniform), a CSV file, or Slocum science logs to replay (FILE.ebd or a
-    directory): the glider flies its temperature, salinity and in-situ density (TEOS-10),
-    ballasted for the mean density over the depths the mission flies, as `gliderplan
-    forecast` flies it (`planner.rates.band_density`, `Vehicle.ballasted_for`); default:
-    the bench preset's temperatures in uniform water of the vehicle's reference density.
-    `noise`: a key of
-    `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
+    sensor a state logs is always on). `runtime`: "step" (the compiled runtime's step in
+    this process; the default where a C compiler is installed), "python" (the reference
+    executor) or "c" (the compiled runtime over a pseudo-terminal).
+    `ocean`: a preset (bench, sea-trial, uniform), a CSV file, or Slocum science logs to
+    replay (FILE.ebd or a directory): the glider flies its temperature, salinity and
+    in-situ density (TEOS-10), ballasted for the mean density over the depths the mission
+    flies, as `gliderplan forecast` flies it (`planner.rates.band_density`,
+    `Vehicle.ballasted_for`); default: the bench preset's temperatures in uniform water of
+    the vehicle's reference density. `noise`: a key of `science.NOISE_PRESETS`.
+    `tracker`: "robust" or "naive" (the paper's first).
     `currents`: the text of `sim --currents` (N,E [m/s], a NetCDF field, flight logs:
     sim.current_files), refused where it does not cover the run or the start is on its
     land. `seed`, `tick_s` [s], `duration_s` [s] (default: the mission's horizon, else
@@ -200,7 +201,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.sim import export, outputs
     from gliderplan.sim import plots as drawing
     from gliderplan.sim.export import parse_utc, utc_text
-    from gliderplan.sim.flight import fly, refuse_unflyable_yos
+    from gliderplan.sim.flight import default_runtime, fly, refuse_unflyable_yos
     from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig
     from gliderplan.sim.ocean import flat_floor, load_water, parse_floor
     from gliderplan.sim.plotter import PlotProcess
@@ -211,6 +212,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     if noise not in NOISE_PRESETS or tracker not in TRACKERS:
         raise UsageError(f"noise {noise!r} or tracker {tracker!r}: expected one of "
                          f"{', '.join(NOISE_PRESETS)} and one of {', '.join(TRACKERS)}")
+    runtime = runtime or default_runtime()
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
@@ -262,7 +264,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         from gliderplan.planner.signing import check_signature, read_key
 
         key = read_key(key_path)
-        if runtime == "python":  # the C runtime checks for itself
+        if runtime != "c":  # the C runtime over the link checks for itself
             check_signature(read_plan_data(plan_path), key, str(plan_path))
     # every file the run reads (refused inside the folder it replaces)
     read = (mission_path, plan_path, key_path, state_dir, _path_of(ocean), _path_of(currents),
@@ -325,7 +327,7 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                                       **shore.log.summary(flown_s)}
                 contents[REPLANS_FILE] = _replans_csv(shore.log.events)
             columns = record.columns  # the water's salinity where the glider was: the CTD's
-            salinity = water.water_along(columns["depth_m"], columns["time_s"])[1]
+            salinity = water.salinity_psu(columns["depth_m"], columns["time_s"])
             table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
             contents["trace.csv"] = outputs.trace_csv(record.trace)
             contents["timeseries.parquet"] = outputs.parquet_bytes(

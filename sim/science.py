@@ -36,7 +36,6 @@ from gliderplan.contract import (
     RUNTIME_READINGS_MASK,
 )
 from gliderplan.language.registry import SENSOR_BY_NAME, SENSORS
-from gliderplan.sim import native
 from gliderplan.sim.currents import CurrentField
 from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.ocean import Ocean, SeaFloor
@@ -57,7 +56,7 @@ BATTERY_V = 15.0  # assumption: alkaline pack voltage, constant over the run
 # Readings the simulated glider holds constant, by sensor index: no roll, and the optode,
 # optics, modem, DVL and microstructure logger of a quiet shelf sea without currents
 # (assumption: over the ground a Slocum's ~0.35 m/s through the water, DESIGN.md section 8;
-# shear 0.01 1/s, a dissipation near 1e-9 W/kg). The fast executor sends the same.
+# shear 0.01 1/s, a dissipation near 1e-9 W/kg). sim/flight.c sends the same.
 CONSTANT_READINGS: dict[int, float] = {SENSOR_BY_NAME[name].index: value for name, value in (
     ("roll", 0.0), ("oxygen", 250.0), ("chlorophyll", 1.0), ("backscatter", 0.001),
     ("modem", 0.0), ("groundspeed", 0.35), ("shear", 0.01))}
@@ -105,48 +104,25 @@ NOISE_PRESETS: dict[str, SensorNoise] = {
 
 class Draws:
     """Random numbers drawn from a generator a block at a time, one row per tick: row i is
-    the same whether the rows are taken one by one (`next`) or as an array of a run of
-    ticks (`peek`, then `skip`), so a run flown either way sees the same noise."""
+    the same whether the rows are taken one by one (`next`) or a block at a time
+    (`block`, by sim/flight.c), so a run flown either way sees the same noise."""
 
     def __init__(self, draw_block: Callable[[], np.ndarray]) -> None:
         self._draw_block = draw_block
-        self._blocks: list[np.ndarray] = []  # the current block and any drawn after it
-        self._rows: list = []  # the current block as Python numbers (for `next`)
+        self._rows: list = []  # the current block as Python numbers
         self._at = _NOISE_BLOCK  # row of the current block taken next
 
     def next(self):
         """The next row, as Python numbers."""
-        at = self._at
-        if at == _NOISE_BLOCK:
-            if self._blocks:
-                del self._blocks[0]
-            if not self._blocks:
-                self._blocks.append(self._draw_block())
-            self._rows, at = self._blocks[0].tolist(), 0
-        self._at = at + 1
-        if self._rows:
-            return self._rows[at]
-        return self._blocks[0][at].tolist()  # a block entered by `skip`: row by row
-
-    def peek(self, count: int) -> np.ndarray:
-        """The next `count` rows as an array, without taking them."""
         if self._at == _NOISE_BLOCK:
-            self._blocks, self._rows, self._at = self._blocks[1:], [], 0
-        while len(self._blocks) * _NOISE_BLOCK - self._at < max(count, 1):
-            self._blocks.append(self._draw_block())
-        first = self._blocks[0][self._at:self._at + count]
-        if len(first) == count:
-            return first
-        return np.concatenate([first, *self._blocks[1:]])[:count]
+            self._rows, self._at = self._draw_block().tolist(), 0
+        self._at += 1
+        return self._rows[self._at - 1]
 
-    def skip(self, count: int) -> None:
-        """Take `count` rows (after `peek` has drawn them)."""
-        blocks, self._at = divmod(self._at + count, _NOISE_BLOCK)
-        if blocks and self._at == 0:  # at the end of a block, as before the first draw
-            blocks, self._at = blocks - 1, _NOISE_BLOCK
-        if blocks:
-            del self._blocks[:blocks]
-            self._rows = []
+    def block(self) -> np.ndarray:
+        """The next block of rows as the generator draws it (for a caller that takes the
+        rows itself, sim/cflight.py, and no longer `next`)."""
+        return self._draw_block()
 
 
 def _spike_signs(rng: np.random.Generator, probability: float) -> np.ndarray:
@@ -185,10 +161,12 @@ class ScienceComputer:
         self.start_epoch_s = start_epoch_s  # UTC of missiontime 0 [s since 1970]
         self.rng = np.random.default_rng(seed)
         self.sensor_power = 0  # from the last COMMAND; nothing is powered before the first
-        self._lag_keep = math.exp(-tick_s / noise.temperature_lag_s) \
+        self.lag_keep = math.exp(-tick_s / noise.temperature_lag_s) \
             if noise.temperature_lag_s > 0.0 else 0.0
         self._ctd_temp = math.nan
-        self._flicker_c = noise.flicker_c if self.rng.random() < 0.5 else -noise.flicker_c
+        self.flicker_c = noise.flicker_c if self.rng.random() < 0.5 else -noise.flicker_c
+        c = glider.current
+        self.current_reading = math.hypot(c.north_mps, c.east_mps)  # [m s-1]
         # (temperature, depth) standard normal draws, one row per tick
         self.normal = Draws(lambda: self.rng.standard_normal((_NOISE_BLOCK, 2)))
         # spikes come from a stream of their own: a run without them draws as before
@@ -224,19 +202,18 @@ class ScienceComputer:
         temp, salinity = self.ocean.water_at(g.depth_m, time_s)
         self.water_temperature_c = temp
         ctd = self._ctd_temp
-        ctd = temp if ctd != ctd else temp + (ctd - temp) * self._lag_keep
+        ctd = temp if ctd != ctd else temp + (ctd - temp) * self.lag_keep
         self._ctd_temp = ctd
-        self._flicker_c = -self._flicker_c
-        measured = ctd + noise.temperature_sigma_c * z_temp + self._flicker_c
+        self.flicker_c = -self.flicker_c
+        measured = ctd + noise.temperature_sigma_c * z_temp + self.flicker_c
         if self.spikes is not None:
             measured += self.noise.spike_c * self.spikes.next()
         depth = max(0.0, g.depth_m + noise.depth_sigma_m * z_depth)
-        c = self.glider.current
         values = [  # in _READINGS_ORDER; the runtime's own readings are never sent: NaN
             time_s, depth, g.pitch_rad, _ROLL, g.heading_rad, altitude,
             degrees_to_ddmm(g.dr_lat_deg), degrees_to_ddmm(g.dr_lon_deg), BATTERY_V,
             measured, conductivity_s_m(measured, salinity), salinity,
-            _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, math.hypot(c.north_mps, c.east_mps), _MODEM,
+            _OXYGEN, _CHLOROPHYLL, _BACKSCATTER, self.current_reading, _MODEM,
             math.nan, math.nan,  # halfcycle, wptdist
             math.fmod(self.start_epoch_s + time_s, SECONDS_PER_DAY),  # the clock's time of day
             self.energy_left_j,
@@ -246,31 +223,6 @@ class ScienceComputer:
         mask = powered_mask(self.sensor_power)
         self.ctd_temperature_c = measured if mask & _TEMP_BIT else math.nan
         return mask, values
-
-    def ctd_along(self, depth_m: np.ndarray, time_s: np.ndarray) -> CtdRun:
-        """`readings`' CTD over a run of ticks at these depths [m] and times [s], bit for
-        bit, without advancing: the fast executor's (`commit_ctd` advances)."""
-        noise = self.noise
-        count = len(depth_m)
-        water, salinity = self.ocean.water_along(depth_m, time_s)
-        lagged = native.first_order_lag(water, self._ctd_temp, self._lag_keep)
-        odd = np.arange(count) % 2 == 1
-        flicker = np.where(odd, self._flicker_c, -self._flicker_c)
-        z_temp = self.normal.peek(count)[:, 0]
-        measured = lagged + noise.temperature_sigma_c * z_temp + flicker
-        if self.spikes is not None:
-            measured = measured + noise.spike_c * self.spikes.peek(count)
-        return CtdRun(water, salinity, measured, lagged, flicker)
-
-    def commit_ctd(self, run: CtdRun, count: int, last_reading_c: float) -> None:
-        """Advance past the first `count` ticks of `run` (their random numbers too)."""
-        self._ctd_temp = float(run.lagged_c[count - 1])
-        self._flicker_c = float(run.flicker_c[count - 1])
-        self.water_temperature_c = float(run.water_c[count - 1])
-        self.ctd_temperature_c = last_reading_c
-        self.normal.skip(count)
-        if self.spikes is not None:
-            self.spikes.skip(count)
 
     def apply(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
               heading_rad: float, flags: int, sensor_power: int, speed_mps: float = 0.0,
@@ -285,17 +237,6 @@ class ScienceComputer:
             if not self.grounded_ticks:
                 self.first_grounded_s = self._time_s
             self.grounded_ticks += 1
-
-
-@dataclass(frozen=True)
-class CtdRun:
-    """The CTD over a run of ticks (`ScienceComputer.ctd_along`)."""
-
-    water_c: np.ndarray  # water temperature at the glider [degC]
-    salinity_psu: np.ndarray
-    measured_c: np.ndarray  # the reading the CTD makes, sent or not [degC]
-    lagged_c: np.ndarray  # the sensor's lagged temperature before noise [degC]
-    flicker_c: np.ndarray
 
 
 def conductivity_s_m(temperature_c: float, salinity_psu: float) -> float:

@@ -25,13 +25,11 @@ One `GliderSim` is stepped once per tick; it is mutable for speed (a 30-day run 
 
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from gliderplan.contract import EARTH_RADIUS_M
 from gliderplan.power_models.flight import (
     DensityProfile,
     FlightParams,
@@ -41,11 +39,8 @@ from gliderplan.power_models.flight import (
 from gliderplan.power_models.propulsion import thrust_assisted_speed
 from gliderplan.power_models.segments import GLIDE, IRIDIUM, MIN_PUMPED_CC, PUMP, SURFACE
 from gliderplan.power_models.vehicle import Vehicle
-from gliderplan.sim import native
 from gliderplan.sim.geo import move_degrees, offset_m
 from gliderplan.sim.navigation import corrected_heading, updated_current
-
-_RAD = math.pi / 180.0
 
 SURFACE_DEPTH_M = 0.3  # shallower than this the antenna is out of the water
 HOVER_RATE_M_S = 0.05  # assumption: small buoyancy corrections move a hovering glider slowly
@@ -72,8 +67,8 @@ class Stratification:
     """The buoyancy [cc] the water's density adds to a glider at each depth,
     (Vg - trim)(1 - rho0 / rho(z)) (`flight.net_buoyancy_cc` with an in-situ density),
     tabled every `step_m` [m] from the surface, linear between, held beyond the last. One
-    interpolation, written alike here (`at`, `along`) and in sim/native.c (`lift_at`), so
-    that the tick-by-tick loop and the fast executor add the very same numbers."""
+    interpolation, written alike here (`at`) and in sim/flight.c, so that the two loops
+    add the very same numbers."""
 
     step_m: float
     lift_cc: tuple[float, ...]
@@ -97,73 +92,6 @@ class Stratification:
             return self.lift_cc[0]
         i = int(x)
         return self.lift_cc[i] + (self.lift_cc[i + 1] - self.lift_cc[i]) * (x - i)
-
-    def along(self, depth_m: np.ndarray) -> np.ndarray:
-        """`at` at each depth of an array, bit for bit."""
-        lift = np.asarray(self.lift_cc)
-        x = np.asarray(depth_m, float) / self.step_m
-        last = len(lift) - 1
-        i = np.clip(np.floor(np.where(np.isfinite(x), x, 0.0)), 0, max(last - 1, 0)).astype(int)
-        inside = lift[i] + (lift[np.minimum(i + 1, last)] - lift[i]) * (x - i)
-        return np.where(~(x < last), lift[last], np.where(x <= 0.0, lift[0], inside))
-
-
-Positions = tuple[float, float, float, float]  # dead-reckoned lat, lon, true lat, lon [deg]
-MAX_SETTLE_TICKS = 64  # a command whose actuators have not settled by then is flown tick by tick
-
-
-@dataclass(frozen=True)
-class Glide:
-    """The ticks of a glider under one command below the surface (`GliderSim.glide_from`):
-    row i < settled is the i-th tick, row `settled` every tick after (the actuators have
-    settled). Per row: the step's outputs, the pitch [rad] and the actuators at the start
-    of the tick, the pumped volume the glide flies with [cc] and the time it glides [s];
-    and, for a hull whose speed does not change with depth (`rigid`), the depth change
-    [m] and the distance through the water [m]. With a compressible hull those depend on
-    the depth each tick starts at: `GliderSim.glide_rates`."""
-
-    dz_m: np.ndarray
-    distance_m: np.ndarray
-    phase: np.ndarray
-    pumped_out_cc: np.ndarray
-    pumped_in_cc: np.ndarray
-    inflection: np.ndarray
-    pitch_rad: np.ndarray
-    ballast_cc: np.ndarray
-    glide_s: np.ndarray
-    actuators: list[tuple[float, float, float, float]]
-    settled: int
-    speeds_per_root: tuple[float, float]  # (u, w) [m s-1] per square root of a cc: `_per_root`
-    rigid: bool
-
-
-def _moves(start: tuple[float, float], north_m: np.ndarray, east_m: np.ndarray,
-           moved: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """`move_degrees` from `start` [deg] by each (north, east) [m] in turn where `moved`:
-    the positions before each move and after the last. Sums in order (cumsum), so the
-    bits are those of moving one tick at a time; a tick that does not move adds -0.0,
-    which changes no number."""
-    lat = np.empty(len(north_m) + 1)
-    lat[0] = start[0]
-    np.copyto(lat[1:], north_m / (EARTH_RADIUS_M * _RAD))
-    np.copyto(lat[1:], -0.0, where=~moved)
-    np.add.accumulate(lat, out=lat)
-    cos_lat = native.cos(lat[:-1] * _RAD)
-    lon = np.empty(len(north_m) + 1)
-    lon[0] = start[1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        np.divide(east_m, EARTH_RADIUS_M * cos_lat * _RAD, out=lon[1:])
-    np.copyto(lon[1:], -0.0, where=~moved)
-    np.add.accumulate(lon, out=lon)
-    return lat, lon
-
-
-def _through_water(distance_m: np.ndarray, heading_rad: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(north, east) [m] moved through the water each tick, and whether it moved."""
-    north = distance_m * native.cos(heading_rad)
-    east = distance_m * native.sin(heading_rad)
-    return north, east, (north != 0.0) | (east != 0.0)
 
 
 class GliderSim:
@@ -209,7 +137,7 @@ class GliderSim:
         self.grounded = False  # the last step stopped at the sea floor
         self.propulsion_w = 0.0  # [W] the propeller's or thruster's draw in the last step
 
-    def _per_root(self, pitch_rad: float) -> tuple[float, float]:
+    def glide_speeds(self, pitch_rad: float) -> tuple[float, float]:
         """(u, w) [m s-1] per square root of the net buoyancy [cc] at a pitch [rad]
         magnitude; commands repeat, so the angle-of-attack solve runs once per pitch."""
         if pitch_rad <= 0.0 or pitch_rad >= math.pi / 2:
@@ -290,14 +218,6 @@ class GliderSim:
                                              fl.rho_kg_m3, fl.wing_area_m2, fl.drag_cd0)) / speed
         return dz_m * faster, distance_m * faster
 
-    @property
-    def speed_depends_on_depth(self) -> bool:
-        """Whether the hull's compressibility, or the water's density, makes the glide
-        speed change with depth."""
-        flight = self.vehicle.flight
-        return flight.hull_volume_cc * flight.compressibility_per_pa != 0.0 \
-            or self.stratification is not None
-
     def below_surface(self, depth_target_m: float, pitch_rad: float, ballast_cc: float
                       ) -> tuple[float, float, bool]:
         """One tick under water: the battery, the pump and the turn move toward the command
@@ -309,7 +229,7 @@ class GliderSim:
             # hovering: small buoyancy corrections toward the target depth
             step_m = min(abs(depth_target_m - self.depth_m), HOVER_RATE_M_S * self.tick_s)
             return math.copysign(step_m, depth_target_m - self.depth_m), 0.0, True
-        dz, distance = self.glide_rates(self._per_root(abs(pitch_rad)), self.ballast_cc,
+        dz, distance = self.glide_rates(self.glide_speeds(abs(pitch_rad)), self.ballast_cc,
                                         glide_s, self.depth_m)
         return dz, distance, False
 
@@ -353,47 +273,6 @@ class GliderSim:
             glide_s -= turning
         return glide_s, pitch_rad
 
-    @property
-    def actuators(self) -> tuple[float, float, float, float]:
-        """What the next tick's battery, pump and turn start from: (pitch [rad], pumped
-        volume [cc], sign of the last inflection, turn time left [s])."""
-        return self.pitch_rad, self.ballast_cc, self._turning_to, self._turn_left_s
-
-    @actuators.setter
-    def actuators(self, values: tuple[float, float, float, float]) -> None:
-        self.pitch_rad, self.ballast_cc, self._turning_to, self._turn_left_s = values
-
-    # ---- runs of ticks, for the fast executor: `step`'s results, bit for bit ----------
-
-    def glide_from(self, actuators: tuple[float, float, float, float], pitch_rad: float,
-                   ballast_cc: float) -> Glide | None:
-        """The ticks under water under one gliding command from `actuators`: `step` on a
-        scratch copy until the battery, the pump and the turn have settled. None if the
-        glider would hover or does not settle."""
-        scratch = copy.copy(self)
-        scratch.actuators = actuators
-        rows, starts = [], []
-        per_root = (0.0, 0.0)
-        for _ in range(MAX_SETTLE_TICKS):
-            before = scratch.actuators
-            scratch.pumped_out_cc = scratch.pumped_in_cc = 0.0
-            scratch.inflection = False
-            glide_s, servo_pitch = scratch._actuate(pitch_rad, ballast_cc)
-            if ballast_cc == 0.0 and scratch.ballast_cc == 0.0:
-                return None  # hovering
-            per_root = scratch._per_root(abs(servo_pitch))
-            dz, distance = scratch.glide_rates(per_root, scratch.ballast_cc, glide_s,
-                                               scratch.depth_m)
-            rows.append((dz, distance, scratch.phase, scratch.pumped_out_cc,
-                         scratch.pumped_in_cc, scratch.inflection, before[0],
-                         scratch.ballast_cc, glide_s))
-            starts.append(before)
-            if scratch.actuators == before:
-                return Glide(*(np.array(c) for c in zip(*rows, strict=True)), actuators=starts,
-                             settled=len(rows) - 1, speeds_per_root=per_root,
-                             rigid=not self.speed_depends_on_depth)
-        return None
-
     def glide_rates(self, per_root: tuple[float, float], ballast_cc: float, glide_s: float,
                     depth_m: float) -> tuple[float, float]:
         """(depth change [m], distance through the water [m]) of a tick that glides
@@ -405,49 +284,6 @@ class GliderSim:
         root = math.sqrt(max(math.copysign(1.0, ballast_cc) * net, 0.0))
         u, w = per_root[0] * root, per_root[1] * root
         return (-w if ballast_cc > 0.0 else w) * glide_s, u * glide_s
-
-    def glide_distances(self, u_per_root: np.ndarray, ballast_cc: np.ndarray,
-                        glide_s: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
-        """`glide_rates`' distance [m] over arrays of ticks, element by element bit for bit
-        (the fast executor's): `u_per_root` [m s-1 cc^-1/2], `ballast_cc` [cc], `glide_s`
-        [s] and the depth each tick starts at [m]."""
-        net = net_buoyancy_cc(self.vehicle.flight, ballast_cc, depth_m)
-        if self.stratification is not None:
-            net = net + self.stratification.along(depth_m)
-        root = np.sqrt(np.maximum(np.copysign(1.0, ballast_cc) * net, 0.0))
-        return u_per_root * root * glide_s
-
-    def surface_along(self, count: int, surface_time_s: float
-                      ) -> tuple[np.ndarray, np.ndarray, int]:
-        """`count` ticks at the surface, the first at `surface_time_s` [s] into the
-        surfacing (< 0: it begins): (phase of each tick, time at the surface after each
-        [s], the tick of the GPS fix or -1), as `_at_surface` counts them."""
-        v = self.vehicle
-        first = max(surface_time_s, 0.0)
-        elapsed = np.add.accumulate(np.concatenate([[first], np.full(count, self.tick_s)]))
-        before, after = elapsed[:-1], elapsed[1:]
-        in_call = (v.surface_s <= before) & (before < v.surface_s + v.iridium_s)
-        fix = np.flatnonzero((before < v.surface_s) & (v.surface_s <= after))
-        return (np.where(in_call, IRIDIUM, SURFACE), after,
-                int(fix[0]) if len(fix) else -1)
-
-    @property
-    def positions(self) -> Positions:
-        return (self.dr_lat_deg, self.dr_lon_deg, self.lat_deg, self.lon_deg)
-
-    @positions.setter
-    def positions(self, values: Positions) -> None:
-        self.dr_lat_deg, self.dr_lon_deg, self.lat_deg, self.lon_deg = values
-
-    def drift_along(self, distance_m: np.ndarray, heading_rad: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Positions [deg] before each of the ticks and after the last (estimated lat and
-        lon, true lat and lon): `_drift` along `distance_m` [m] on `heading_rad` [rad] each
-        tick from where the glider is, in still water (`flows` False: the estimate is the
-        true position, and a GPS fix moves neither)."""
-        north, east, moved = _through_water(distance_m, heading_rad)
-        lat, lon = _moves(self.positions[:2], north, east, moved)
-        return lat, lon, lat, lon
 
     @property
     def flows(self) -> bool:

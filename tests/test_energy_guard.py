@@ -155,10 +155,10 @@ def test_a_plan_that_under_predicts_is_cut_short_by_the_guard(tmp_path):
     assert summary["simulated_s"] < 10800 and summary["energy_j"] > 2 * result.plan.predicted_j
 
 
-def test_the_fast_executor_stops_where_the_guard_fires(tmp_path):
-    """The month-long survey on a tenth of its battery: the fast executor flies runs of
-    ticks until the gauge could read the reserve, and the flight, the tick of the guard
-    and every record are the tick-by-tick reference's."""
+def test_the_c_flight_stops_where_the_guard_fires(tmp_path):
+    """The month-long survey on a tenth of its battery: the C flight's gauge reads the
+    reserve where the Python reference's does, and the flight, the tick of the guard and
+    every record are the reference's."""
     from test_sim_differential import flown_alike
 
     from gliderplan.sim.loop import RunConfig

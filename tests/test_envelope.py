@@ -65,11 +65,12 @@ def test_both_runtimes_hold_a_variable_to_the_rating_alike(tmp_path, capsys, act
                                                             assignment, ended, says):
     mission = _mission(tmp_path, action, assignment)
     python = _sim(mission, tmp_path / "py", "python", capsys)
-    c = _sim(mission, tmp_path / "c", "c", capsys)
-    assert python[0] == c[0] == ExitCode.ENVELOPE
-    assert python[1] == c[1]  # the same transitions at the same times
-    assert python[2]["ended"] == c[2]["ended"] == ended
-    assert python[2]["envelope"] == c[2]["envelope"]
+    for runtime in ("c", "step"):  # the board binary, the step in the C flight
+        c = _sim(mission, tmp_path / runtime, runtime, capsys)
+        assert python[0] == c[0] == ExitCode.ENVELOPE, runtime
+        assert python[1] == c[1], runtime  # the same transitions at the same times
+        assert python[2]["ended"] == c[2]["ended"] == ended, runtime
+        assert python[2]["envelope"] == c[2]["envelope"], runtime
     assert says in python[2]["envelope"][-1]
     assert says in python[3] and "outside its rating" in python[3]
 
@@ -77,7 +78,7 @@ def test_both_runtimes_hold_a_variable_to_the_rating_alike(tmp_path, capsys, act
 @needs_cc
 def test_the_fault_action_releases_control_and_the_sim_exits_5(tmp_path, capsys):
     mission = _mission(tmp_path, "fault", "set bottom = 3000")
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         code, trace, summary, said = _sim(mission, tmp_path / runtime, runtime, capsys)
         assert code == ExitCode.ENVELOPE, said
         assert summary["ended"].startswith("fault")

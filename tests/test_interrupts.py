@@ -236,8 +236,10 @@ def reference_plan(argv: list[str], tmp_path: Path) -> bytes:
 def interrupt_scenario(monkeypatch, scenario: int, at_tick: int = 50) -> None:
     """Ctrl-C in the middle of the flight of the `scenario`-th flight flown (0 first)."""
     original, flights = ScienceComputer.readings, []
+    # the stop is injected where the Python loop reads the sensors: fly it there
+    monkeypatch.setattr("gliderplan.sim.flight.default_runtime", lambda: "python")
 
-    def readings(self, tick):  # the ticks flown one by one (others are flown in runs)
+    def readings(self, tick):
         if tick == 0:
             flights.append(self)
         if tick >= at_tick and len(flights) == scenario + 1:
@@ -368,7 +370,8 @@ def test_an_interrupted_run_says_so_in_its_netcdf_and_report_refuses_it(tmp_path
         return original(self, tick)
     monkeypatch.setattr(ScienceComputer, "readings", readings)
     run = tmp_path / "run"
-    assert main(["sim", str(FIG2), "--netcdf", "-o", str(run)]) == ExitCode.INTERRUPTED
+    assert main(["sim", str(FIG2), "--runtime", "python", "--netcdf", "-o",
+                 str(run)]) == ExitCode.INTERRUPTED
     with xr.open_dataset(run / "trajectory.nc") as data:
         assert "PARTIAL RUN: interrupted after 1196 s" in data.attrs["summary"]
         assert "PARTIAL RUN" in data.attrs["comment"]

@@ -69,9 +69,9 @@ def test_sim_replans_at_each_surfacing_and_counts_the_link(tmp_path, signed, sho
     assert seqs[0] == 5 and seqs == sorted(seqs) and seqs[-1] > 5  # the glider's plan moved on
 
 
-def test_the_c_runtime_applies_the_updates_the_python_executor_does(tmp_path, signed, short):
-    """Flown tick by tick, both runtimes get the updates on the same ticks: the same
-    updates, the same flight."""
+def test_the_c_runtimes_apply_the_updates_the_python_executor_does(tmp_path, signed, short):
+    """The board binary over its link, the step in this process and the reference
+    executor get the updates on the same ticks: the same updates, the same flight."""
     from gliderplan.planner.planfile import read_plan_bytes
     from gliderplan.planner.signing import read_key
     from gliderplan.sim.flight import fly
@@ -85,18 +85,19 @@ def test_the_c_runtime_applies_the_updates_the_python_executor_does(tmp_path, si
     vehicle = load_vehicle(short.vehicle)
     config = RunConfig(duration_s=8 * 3600.0)
     records, shores = {}, {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         shore = ShoreLoop(short, held, read_key(key_file), tick_s=config.tick_s,
                           spec=read_spec())
         records[runtime] = fly(short, load_ocean("bench"), config, vehicle, plan,
-                               str(plan_file), runtime, tick_by_tick=True,
-                               key_path=str(key_file), shore=shore)
+                               str(plan_file), runtime, key_path=str(key_file), shore=shore)
         shores[runtime] = shore
-    assert shores["c"].log.applied == shores["python"].log.applied >= 2
-    assert [e.get("update_bytes") for e in shores["c"].log.events] == \
-        [e.get("update_bytes") for e in shores["python"].log.events]
-    for column in ("state", "sensor_power", "depth_m"):
-        assert np.array_equal(records["c"].columns[column], records["python"].columns[column])
+    for runtime in ("c", "step"):
+        assert shores[runtime].log.applied == shores["python"].log.applied >= 2, runtime
+        assert [e.get("update_bytes") for e in shores[runtime].log.events] == \
+            [e.get("update_bytes") for e in shores["python"].log.events], runtime
+        for column in ("state", "sensor_power", "depth_m"):
+            assert np.array_equal(records[runtime].columns[column],
+                                  records["python"].columns[column]), (runtime, column)
 
 
 def test_montecarlo_replan_reports_both_side_by_side(tmp_path, signed, short, capsys):

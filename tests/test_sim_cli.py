@@ -304,7 +304,9 @@ def test_a_current_carries_the_glider_east(tmp_path):
 
 
 def interrupt_at(monkeypatch, at_tick: int) -> None:
-    """Ctrl-C while the science computer reads the sensors of tick `at_tick`."""
+    """Ctrl-C while the science computer reads the sensors of tick `at_tick` (in the
+    Python loop, `--runtime python`; the C flight is interrupted at a progress report,
+    below)."""
     from gliderplan.sim.science import ScienceComputer
 
     original = ScienceComputer.readings
@@ -318,7 +320,8 @@ def interrupt_at(monkeypatch, at_tick: int) -> None:
 
 def test_ctrl_c_keeps_the_part_flown(tmp_path, capsys, monkeypatch):
     interrupt_at(monkeypatch, 300)
-    assert main(["sim", str(FIG2), "--tick", "4", "-o", str(tmp_path)]) == 130
+    assert main(["sim", str(FIG2), "--runtime", "python", "--tick", "4", "-o",
+                 str(tmp_path)]) == 130
     assert {p.name for p in tmp_path.iterdir()} == WRITTEN
     table = pd.read_parquet(tmp_path / "timeseries.parquet")
     assert len(table) == 300 and table["time_s"].iloc[-1] == 299 * 4
@@ -354,7 +357,7 @@ def test_ctrl_c_in_a_long_run_keeps_the_part_flown_and_its_plots(tmp_path, capsy
 
 def test_ctrl_c_before_the_first_tick_writes_nothing(tmp_path, capsys, monkeypatch):
     interrupt_at(monkeypatch, 0)
-    assert main(["sim", str(FIG2), "-o", str(tmp_path / "run")]) == 130
+    assert main(["sim", str(FIG2), "--runtime", "python", "-o", str(tmp_path / "run")]) == 130
     assert not (tmp_path / "run").exists()
     assert "interrupted" in capsys.readouterr().err
 

@@ -224,3 +224,26 @@ def test_a_bathymetry_grid_is_the_floor_under_the_glider(tmp_path, capsys):
     bad = write_field(tmp_path / "currents.nc")
     assert main(["sim", str(FIG2), "--floor", str(bad), "-o", str(tmp_path / "b")]) == 1
     assert "no bathymetry: expected a variable named" in capsys.readouterr().err
+
+
+def test_the_step_flies_a_field_over_a_grid_as_the_reference(tmp_path):
+    """A current field and a bathymetry grid are looked up where the glider is, in Python:
+    the runtime's C step flies them in the Python loop, the same flight as the reference
+    executor's, grounding included."""
+    field = str(write_field(tmp_path / "field.nc", north=0.05))
+    floor = str(write_bathymetry(tmp_path / "gebco.nc"))
+    runs = {}
+    for runtime in ("python", "step"):
+        out = tmp_path / runtime
+        assert main(["sim", str(FIG2), "--start", "39.17,-73.605,2016-06-23T12:00:00Z",
+                     "--currents", field,
+                     "--floor", floor, "--duration", "1200s", "--runtime", runtime,
+                     "-o", str(out)]) == 0
+        runs[runtime] = ((out / "trace.csv").read_text(),
+                         pd.read_parquet(out / "timeseries.parquet"),
+                         json.loads((out / "summary.json").read_text()))
+    (trace, table, summary), (step_trace, step_table, step_summary) = runs.values()
+    assert step_trace == trace
+    assert summary["grounded"] and step_summary["grounded"] == summary["grounded"]
+    for column in ("depth_m", "lat_deg", "lon_deg", "state", "power_pump_w"):
+        assert table[column].equals(step_table[column]), column

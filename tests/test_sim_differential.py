@@ -1,11 +1,14 @@
 """Differential tests.
 
-1. Every example mission and every simulator mission, flown once by the Python executor
-   and once by the compiled C runtime over a pty against the same simulated glider,
-   gives the same trace.csv (and, through the same glider, the same dive profile).
-2. The fast executor (runs of ticks at once, sim/fast.py) and the tick-by-tick reference
-   fly every example, every simulator mission and random missions alike: the same
-   transition trace and every per-tick record, bit for bit.
+1. Every example mission and every simulator mission, flown by the Python executor, by
+   the compiled C runtime over a pty and by its step in this process against the same
+   simulated glider, gives the same trace.csv (and, through the same glider, the same dive
+   profile).
+2. The C flight (the runtime's step with the glider, science and energy models in C,
+   sim/flight.c: the simulator's default) and the Python reference (the reference
+   executor and the Python models, tick by tick) fly every example, every simulator
+   mission and random missions alike: the same transition trace, events, variables and
+   every per-tick record (the energy's too), bit for bit.
 """
 
 from __future__ import annotations
@@ -52,7 +55,7 @@ needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler 
 def test_python_and_c_runtimes_give_identical_traces(path, tmp_path, capsys):
     options = RUN_OPTIONS.get(path.name, [])
     runs = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         code = main(["sim", str(path), "--runtime", runtime, "--seed", "7", *options,
                      "-o", str(out)])
@@ -60,23 +63,24 @@ def test_python_and_c_runtimes_give_identical_traces(path, tmp_path, capsys):
         runs[runtime] = out
     python_trace = (runs["python"] / "trace.csv").read_text()
     assert python_trace.count("\n") >= 2  # a start and at least one more transition
-    assert (runs["c"] / "trace.csv").read_text() == python_trace
     python_series = pd.read_parquet(runs["python"] / "timeseries.parquet")
-    c_series = pd.read_parquet(runs["c"] / "timeseries.parquet")
-    for column in ("depth_m", "pitch_rad", "state", "stack_depth", "profile", "temp_on"):
-        assert python_series[column].equals(c_series[column]), column
+    for runtime in ("c", "step"):
+        assert (runs[runtime] / "trace.csv").read_text() == python_trace, runtime
+        series = pd.read_parquet(runs[runtime] / "timeseries.parquet")
+        for column in ("depth_m", "pitch_rad", "state", "stack_depth", "profile", "temp_on"):
+            assert python_series[column].equals(series[column]), (runtime, column)
 
 
 @needs_cc
 def test_the_naive_tracker_is_the_same_in_both_runtimes(tmp_path):
     path = REPO / "tests" / "missions" / "sim_sea_trial.mission"
     depths = []
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         assert main(["sim", str(path), "--runtime", runtime, "--ocean", "sea-trial",
                      "--noise", "nonmonotonic", "--tracker", "naive", "-o", str(out)]) == 0
         depths.append(pd.read_parquet(out / "timeseries.parquet")["depth_m"])
-    assert depths[0].equals(depths[1])
+    assert depths[0].equals(depths[1]) and depths[0].equals(depths[2])
 
 
 def write_plan(path: Path, mission_path: Path) -> Path:
@@ -100,17 +104,20 @@ def test_a_plan_s_schedule_is_flown_the_same_by_both_runtimes(tmp_path):
     mission = REPO / "tests" / "missions" / "sim_alternating.mission"
     plan = write_plan(tmp_path / "alternating.plan", mission)
     series = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         assert main(["sim", str(mission), "--plan", str(plan), "--runtime", runtime,
                      "-o", str(out)]) == 0
         series[runtime] = (pd.read_parquet(out / "timeseries.parquet"),
                            (out / "trace.csv").read_text())
-    (python, python_trace), (c, c_trace) = series["python"], series["c"]
-    assert c_trace == python_trace and python_trace.count("call") == 2
-    for column in ("depth_m", "pitch_rad", "profile", "temp_on", "oxygen_on", "lat_deg",
-                   "lon_deg"):
-        assert python[column].equals(c[column]), column
+    python, python_trace = series["python"]
+    assert python_trace.count("call") == 2
+    for runtime in ("c", "step"):
+        c, c_trace = series[runtime]
+        assert c_trace == python_trace, runtime
+        for column in ("depth_m", "pitch_rad", "profile", "temp_on", "oxygen_on", "lat_deg",
+                       "lon_deg"):
+            assert python[column].equals(c[column]), (runtime, column)
     survey = python[python["state"] == "survey"]
     assert set(survey["profile"]) == {0, 1}  # both bands flown
     assert 0.25 < survey["temp_on"].mean() < 0.45  # 20 s of every 60 s
@@ -124,71 +131,79 @@ def test_the_planner_s_plans_are_flown_the_same_by_both_runtimes(name, tmp_path)
     plan = tmp_path / "mission.plan"
     assert main(["plan", str(mission), "-o", str(plan)]) == 0
     outputs = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         assert main(["sim", str(mission), "--plan", str(plan), "--runtime", runtime,
                      "-o", str(out)]) == 0
         outputs[runtime] = ((out / "trace.csv").read_text(),
                             pd.read_parquet(out / "timeseries.parquet"))
-    (python_trace, python), (c_trace, c) = outputs["python"], outputs["c"]
-    assert c_trace == python_trace
-    for column in ("depth_m", "profile", "temp_on", "oxygen_on"):
-        assert python[column].equals(c[column]), column
+    python_trace, python = outputs["python"]
+    for runtime in ("c", "step"):
+        c_trace, c = outputs[runtime]
+        assert c_trace == python_trace, runtime
+        for column in ("depth_m", "profile", "temp_on", "oxygen_on"):
+            assert python[column].equals(c[column]), (runtime, column)
 
 
 @needs_cc
 @pytest.mark.parametrize("vehicle", ["slocum_g2_shallow", "slocum_g3_hybrid", "lauv"])
 def test_a_propelled_plan_is_flown_the_same_by_both_runtimes_and_holds(vehicle, tmp_path):
     """The propelled transect planned on a glider, a hybrid and an AUV (its vehicle line
-    alone changed): both runtimes fly the plan alike, and its energy as planned."""
+    alone changed): every runtime flies the plan alike, and its energy as planned."""
     source = (REPO / "examples" / "propelled_transect.mission").read_text()
     mission = tmp_path / "transect.mission"
     mission.write_text(source.replace("vehicle slocum_g3_hybrid", f"vehicle {vehicle}"))
     plan = tmp_path / "transect.plan"
     assert main(["plan", str(mission), "-o", str(plan)]) == 0
     outputs = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         out = tmp_path / runtime
         assert main(["sim", str(mission), "--plan", str(plan), "--runtime", runtime,
                      "-o", str(out)]) == 0
         outputs[runtime] = ((out / "trace.csv").read_text(),
                             pd.read_parquet(out / "timeseries.parquet"),
                             json.loads((out / "summary.json").read_text()))
-    (python_trace, python, summary), (c_trace, c, _) = outputs["python"], outputs["c"]
-    assert c_trace == python_trace and python_trace.count("goto") == 1
-    for column in ("depth_m", "pitch_rad", "profile", "lat_deg", "lon_deg",
-                   "power_propulsion_w" if vehicle != "slocum_g2_shallow" else "power_pump_w"):
-        assert python[column].equals(c[column]), column
+    python_trace, python, summary = outputs["python"]
+    assert python_trace.count("goto") == 1
+    for runtime in ("c", "step"):
+        c_trace, c, _ = outputs[runtime]
+        assert c_trace == python_trace, runtime
+        for column in ("depth_m", "pitch_rad", "profile", "lat_deg", "lon_deg",
+                       "power_propulsion_w" if vehicle != "slocum_g2_shallow"
+                       else "power_pump_w"):
+            assert python[column].equals(c[column]), (runtime, column)
     assert summary["plan_check"]["verdict"] == "pass", summary["plan_check"]["headline"]
     if vehicle == "lauv":  # level at 20 m, then 10 m, on the propeller all the way
         assert python["power_propulsion_w"].iloc[1:-1].min() > 0.0
         assert python["depth_m"].max() == pytest.approx(20.0, abs=0.01)
 
 
-# ---- the fast executor against the tick-by-tick reference ------------------------------
+# ---- the C flight against the Python reference ---------------------------------------
 
 def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=None,
                 rigid: bool = False):
-    """Fly `mission` tick by tick and in runs (in `ocean`, a preset name or an Ocean;
-    `vehicle`: default the mission's, whose calibrated hull is compressible: its speed
-    changes with depth; `rigid`: with the hull made incompressible, whose legs the fast
-    executor predicts and certifies instead); the two flights must be the same (the
-    flight is returned)."""
+    """Fly `mission` on the Python reference and in the C flight (in `ocean`, a preset name
+    or an Ocean; `vehicle`: default the mission's, whose calibrated hull is compressible:
+    its speed changes with depth; `rigid`: with the hull made incompressible); the two
+    flights must be the same (the flight is returned)."""
     vehicle = vehicle or load_vehicle(mission.vehicle)
     if rigid:
         vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
     water = load_ocean(ocean) if isinstance(ocean, str) else ocean
-    reference = fly(mission, water, config, vehicle, plan, tick_by_tick=True)
-    fast = fly(mission, water, config, vehicle, plan)
-    assert fast.trace == reference.trace
-    assert (fast.ended, fast.surfacings, fast.events_fired) == \
-        (reference.ended, reference.surfacings, reference.events_fired)
-    assert fast.columns.keys() == reference.columns.keys()
+    reference = fly(mission, water, config, vehicle, plan, runtime="python")
+    flown = fly(mission, water, config, vehicle, plan, runtime="step")
+    assert flown.trace == reference.trace
+    assert (flown.ended, flown.surfacings, flown.events_fired, flown.grounded_ticks) == \
+        (reference.ended, reference.surfacings, reference.events_fired,
+         reference.grounded_ticks)
+    assert flown.entry_variables == reference.entry_variables
+    assert flown.envelope == reference.envelope
+    assert flown.columns.keys() == reference.columns.keys()
     for name, column in reference.columns.items():
-        ours = fast.columns[name]
+        ours = flown.columns[name]
         assert ours.dtype == column.dtype and ours.shape == column.shape, name
         assert np.array_equal(ours.view(np.uint8), column.view(np.uint8)), name
-    return fast
+    return flown
 
 
 # (ocean, noise, current north/east [m/s], duration [s], rigid hull) each mission is
@@ -199,7 +214,7 @@ FAST_CASES = [("bench", "ctd", (0.0, 0.0), 2 * 86400.0, False),
 
 @pytest.mark.parametrize("case", FAST_CASES, ids=["bench", "sea-trial-current-rigid"])
 @pytest.mark.parametrize("path", MISSIONS, ids=lambda p: p.name)
-def test_the_fast_executor_flies_every_mission_as_the_reference(path, case):
+def test_the_c_flight_flies_every_mission_as_the_reference(path, case):
     ocean, noise, (north, east), duration_s, rigid = case
     mission = check_file(str(path)).mission
     config = RunConfig(duration_s=min(duration_s, mission.horizon_s or duration_s), seed=11,
@@ -210,7 +225,7 @@ def test_the_fast_executor_flies_every_mission_as_the_reference(path, case):
 @pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
 @pytest.mark.parametrize("name", ["fig2_annotated.mission", "thermocline_survey.mission",
                                   "survey_month.mission"])
-def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, rigid, tmp_path):
+def test_the_c_flight_flies_the_planner_s_plans_as_the_reference(name, rigid, tmp_path):
     from gliderplan.planner.planfile import load_plan
 
     path = REPO / "examples" / name
@@ -222,13 +237,29 @@ def test_the_fast_executor_flies_the_planner_s_plans_as_the_reference(name, rigi
     flown_alike(mission, config, "sea-trial", load_plan(plan_path, mission), rigid=rigid)
 
 
-def test_the_fast_executor_flies_a_hand_written_schedule_as_the_reference(tmp_path):
+def test_the_c_flight_flies_a_hand_written_schedule_as_the_reference(tmp_path):
     from gliderplan.planner.planfile import load_plan
 
     path = REPO / "tests" / "missions" / "sim_alternating.mission"
     mission = check_file(str(path)).mission
     plan = load_plan(write_plan(tmp_path / "alternating.plan", path), mission)
     flown_alike(mission, RunConfig(duration_s=14400.0, seed=5), "bench", plan)
+
+
+def test_the_c_flight_holds_a_heading_uncorrected_in_a_current_as_the_reference():
+    """A held heading (Slocum's set_heading) after fixes have measured the current: the
+    current correction, on for the mission, leaves it alone in the C flight as in the
+    reference, and the glider is carried north with the current."""
+    from gliderplan.planner.routing import transit_mission
+
+    goto = "goto_list(1000, (3906.0000, -7324.0000))"
+    text = transit_mission([(39.1, -73.4)], 4 * 3600.0, surface_every_s=3600.0)
+    mission = check_source(text.replace(goto, "heading(90)")).mission
+    assert mission.current_correction
+    config = RunConfig(duration_s=4 * 3600.0, seed=3, current=Current(0.1, 0.0))
+    flown = flown_alike(mission, config, "sea-trial")
+    north_m = (flown.columns["lat_deg"][-1] - flown.columns["lat_deg"][0]) * 111_000.0
+    assert north_m > 0.9 * 0.1 * 4 * 3600.0  # carried the whole way, not steered upstream
 
 
 # floors under the altimeter mission: flat, shallower than a dive's turn, and one that
@@ -239,7 +270,7 @@ FLOORS = [flat_floor(38.0), flat_floor(20.0),
 
 @pytest.mark.parametrize("rigid", [False, True], ids=["calibrated", "rigid"])
 @pytest.mark.parametrize("floor", FLOORS, ids=["38m", "20m", "along-time"])
-def test_the_fast_executor_flies_over_a_sea_floor_as_the_reference(floor, rigid):
+def test_the_c_flight_flies_over_a_sea_floor_as_the_reference(floor, rigid):
     mission = check_file(str(REPO / "tests" / "missions" / "sim_altimeter.mission")).mission
     config = RunConfig(duration_s=mission.horizon_s or 12600.0, seed=4,
                        noise=NOISE_PRESETS["ctd"], floor=floor)
@@ -258,10 +289,10 @@ def test_the_fast_executor_flies_over_a_sea_floor_as_the_reference(floor, rigid)
     ("examples/thermocline_survey.mission", "sea-trial", None),
     ("examples/fig2_annotated.mission", "bench", None),
     ("tests/missions/sim_altimeter.mission", "sea-trial", flat_floor(38.0))])
-def test_the_fast_executor_flies_the_water_s_density_as_the_reference(name, ocean, floor,
+def test_the_c_flight_flies_the_water_s_density_as_the_reference(name, ocean, floor,
                                                                        rigid):
     # the water's in-situ density at each depth (sim --ocean): a rigid hull's speed then
-    # changes with depth too, and its yos are flown as a compressible hull's are
+    # changes with depth too
     from gliderplan.sim.ocean import density_profile_of, load_water
     from gliderplan.sim.run import flown_water
 
@@ -353,7 +384,7 @@ def random_missions(draw) -> str:
             + "\n".join(states))
 
 
-_SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return ends a run on the tick the climb surfaces
+_SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return on the tick the climb surfaces
     "mission random\nstate s0\nbegin\n  flightroute noheading\n  flightprofile yo(0, 10, .3, .3)\n"
     "  sensors missiontime, depth\n  events\n    case missiontime >= 1800 exit\n"
     "    case depth > 10 call s1\nend\nstate s1\nbegin\n  flightroute noheading\n"
@@ -370,7 +401,7 @@ _SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return ends a run on the tick the clim
        floor=st.sampled_from([None, 12.0, 30.0, 55.0]))
 @example(source=_SURFACED_ON_THE_RUN_S_LAST_TICK, ocean="bench", noise="none",
          current=(0.0, 0.0), seed=0, tick_s=4.0, start_s=9e8, rigid=True, floor=None)
-def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean, noise,
+def test_the_c_flight_flies_random_missions_as_the_reference(source, ocean, noise,
                                                                   current, seed, tick_s,
                                                                   start_s, rigid, floor):
     result = check_source(source, "random.mission")
@@ -382,13 +413,13 @@ def test_the_fast_executor_flies_random_missions_as_the_reference(source, ocean,
 
 
 # (mission, scenario, days): the survey's whole flight; 10 days of the month's scenario 1
-# end a run of ticks on the last of a block of random numbers (the spikes' stream)
+# cross the end of a block of random numbers (the spikes' stream)
 MONTE_CARLO_CASES = [("thermocline_survey.mission", 0, 1.5), ("thermocline_survey.mission", 1, 1.5),
                      ("survey_month.mission", 1, 10.0)]
 
 
 @pytest.mark.parametrize(("name", "index", "days"), MONTE_CARLO_CASES)
-def test_the_fast_executor_flies_monte_carlo_scenarios_as_the_reference(name, index, days):
+def test_the_c_flight_flies_monte_carlo_scenarios_as_the_reference(name, index, days):
     # the scenarios' own water (an internal wave), noise (spikes), current and vehicle
     from gliderplan.sim.montecarlo import Job, scenario_seed
     from gliderplan.sim.scenarios import draw_scenario, read_spec

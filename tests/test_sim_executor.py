@@ -8,7 +8,6 @@ import math
 import zlib
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 from hypothesis import given, settings
@@ -64,24 +63,6 @@ def test_compiled_event_checks_agree_with_the_reference_semantics(path, data):
             got = compiled.arguments(profile)(s, v)
             want = tuple(ir.evaluate(a, named, v) for a in profile.args)
             assert [repr(x) for x in got] == [repr(float(x)) for x in want]
-
-
-@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
-@settings(max_examples=30, deadline=None)
-@given(data=st.data())
-def test_events_checked_over_a_run_fire_where_the_reference_fires(path, data):
-    """The fast executor checks a state's events over a run of ticks at once."""
-    mission = check_file(str(path)).mission
-    ticks = data.draw(st.integers(1, 12))
-    rows = [data.draw(st.lists(sensor_values, min_size=len(SENSORS), max_size=len(SENSORS)))
-            for _ in range(ticks)]
-    v = {var.name: data.draw(sensor_values) for var in mission.variables}
-    for state in mission.states:
-        reference = compiled.event_checker(state)
-        read = compiled.sensors_read([e.condition for e in state.events])
-        arrays = {i: np.array([row[i] for row in rows]) for i in read}
-        fires = compiled.firing_ticks(state.events)(arrays, v, ticks)
-        assert fires.tolist() == [reference(row, v) >= 0 for row in rows]
 
 
 def test_sensor_values_reach_conditions_as_binary32():

@@ -30,11 +30,11 @@ def vehicle_sim(vehicle, depth_m: float) -> GliderSim:
 
 def test_an_auv_flies_level_at_the_commanded_speed_drawing_its_model_s_power():
     auv = vehicle_sim(LAUV, 20.0)
-    start = auv.positions
+    start = auv.lon_deg
     auv.step(20.0, 0.0, 0.0, math.pi / 2, True, False, 1.2)  # east at 1.2 m/s
     assert auv.depth_m == 20.0 and auv.pitch_rad == 0.0
     assert auv.propulsion_w == pytest.approx(float(LAUV.propulsion.power_w(1.2)))
-    east = (auv.lon_deg - start[3]) * math.pi / 180 * 6371000.0 * math.cos(39.0 * math.pi / 180)
+    east = (auv.lon_deg - start) * math.pi / 180 * 6371000.0 * math.cos(39.0 * math.pi / 180)
     assert east == pytest.approx(1.2 * 4.0, rel=1e-6)
     # toward a deeper target along a path no steeper than its limit, nose down
     auv.step(60.0, 0.0, 0.0, math.pi / 2, True, False, 1.2)

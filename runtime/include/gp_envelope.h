@@ -8,6 +8,7 @@
 #ifndef GP_ENVELOPE_H
 #define GP_ENVELOPE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "gp_frame.h"
@@ -54,5 +55,14 @@ const char *gp_envelope_limit_name(uint8_t limit);
 
 /** @brief The unit of a limit's value and bound ("m", "rad", "cc", "s"). */
 const char *gp_envelope_limit_unit(uint8_t limit);
+
+/**
+ * @brief What the guard did, in words (stderr's and the simulator's `envelope:` line):
+ *        the missiontime [s], the state, the limit, the value and the bound, and whether
+ *        the command was held, control released or the mission ended.
+ * @param out `len` bytes, NUL-terminated (cut to fit)
+ */
+void gp_envelope_say(const gp_envelope *envelope, const gp_envelope_breach *found,
+                     double time_s, const char *state, char *out, size_t len);
 
 #endif /* GP_ENVELOPE_H */

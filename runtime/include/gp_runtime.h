@@ -38,7 +38,8 @@ typedef struct {
 
 /** What happened in one tick, for the event log. */
 typedef struct {
-    gp_transition transitions[2];   /**< start and an event can share tick 0 */
+    /** start, an event and the envelope guard's end can share tick 0 */
+    gp_transition transitions[3];
     uint8_t n_transitions;
     uint8_t fault;                  /**< gp_step_result of a refused event, 0: none */
     gp_transition refused;          /**< the refused transition when `fault` */
@@ -61,5 +62,13 @@ void gp_runtime_init(gp_runtime *rt);
  */
 void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_options *options,
                      uint32_t tick, gp_command *cmd, gp_tick_report *report);
+
+/**
+ * @brief Whether the board sleeps after answering the last tick: the state flown sleeps
+ *        between ticks (the plan's SLEEP, without a plan the mission's `computer sleep
+ *        between ticks`); never once the mission has ended.
+ */
+int gp_runtime_sleeps(const gp_runtime *rt, const gp_mission *mission,
+                      const gp_run_options *options);
 
 #endif /* GP_RUNTIME_H */

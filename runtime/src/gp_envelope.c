@@ -2,6 +2,7 @@
 #include "gp_envelope.h"
 
 #include <math.h>
+#include <stdio.h>
 
 const char *gp_envelope_check(const gp_envelope *envelope)
 {
@@ -115,4 +116,17 @@ const char *gp_envelope_limit_unit(uint8_t limit)
     case GP_LIMIT_INFLECTION: return "s";
     default: return "m";
     }
+}
+
+void gp_envelope_say(const gp_envelope *envelope, const gp_envelope_breach *found,
+                     double time_s, const char *state, char *out, size_t len)
+{
+    const char *what = !gp_envelope_ends(envelope, found)         ? "held at the limit"
+                       : envelope->action == GP_ENVELOPE_FAULT ? "releasing control"
+                                                               : "the mission ends, surfacing";
+    const char *unit = gp_envelope_limit_unit(found->limit);
+    double value = isnan(found->value) ? fabs(found->value) : found->value;  /* "nan", signless */
+    snprintf(out, len, "envelope: missiontime %g s, state %.64s: %s %g %s beyond the vehicle's "
+             "%g %s; %s", time_s, state, gp_envelope_limit_name(found->limit), value, unit,
+             found->bound, unit, what);
 }

@@ -194,16 +194,10 @@ static int envelope_holds(const link_state *s, const gp_tick_report *report)
 /* What the envelope guard did, on stderr: the state, the limit, the value and the bound. */
 static void say_envelope(link_state *s, const gp_tick_report *report)
 {
-    const gp_envelope_breach *b = &report->envelope;
-    const char *what = envelope_holds(s, report)      ? "held at the limit"
-                       : envelope_releases(s, report) ? "releasing control"
-                                                      : "the mission ends, surfacing";
     char message[ERROR_LEN];
-    const char *unit = gp_envelope_limit_unit(b->limit);
-    snprintf(message, sizeof message, "envelope: missiontime %g s, state %.64s: %s %g %s beyond "
-             "the vehicle's %g %s; %s", runtime.sensors[GP_SENSOR_MISSIONTIME],
-             s->mission->states[report->envelope_state].name,
-             gp_envelope_limit_name(b->limit), b->value, unit, b->bound, unit, what);
+    gp_envelope_say(&s->mission->envelope, &report->envelope,
+                    runtime.sensors[GP_SENSOR_MISSIONTIME],
+                    s->mission->states[report->envelope_state].name, message, sizeof message);
     say(s, message);
 }
 
@@ -280,10 +274,15 @@ static int persist(link_state *s, const gp_frame *frame, const gp_tick_report *r
     return s->args->state_dir ? store_record(s) : 0;
 }
 
+static gp_run_options run_options(const link_state *s)
+{
+    return (gp_run_options){s->has_plan ? &plan : NULL, (uint8_t)s->args->naive_tracker};
+}
+
 /* One tick of the mission on the readings in runtime.sensors. */
 static void step(link_state *s, uint32_t tick, gp_command *command, gp_tick_report *report)
 {
-    gp_run_options options = {s->has_plan ? &plan : NULL, (uint8_t)s->args->naive_tracker};
+    gp_run_options options = run_options(s);
     gp_runtime_tick(&runtime, s->mission, &options, tick, command, report);
 }
 
@@ -498,9 +497,9 @@ static void follow_clock(link_state *s)
  * that cannot sleep costs energy, not safety: say so once and stay awake. */
 static void sleep_until_next_tick(link_state *s)
 {
-    int state = runtime.machine.state;
-    if (!s->args->suspend_path || s->suspend_failed || state == GP_EXITED
-        || !(s->has_plan ? plan.states[state].sleep : s->mission->states[state].sleep)) {
+    gp_run_options options = run_options(s);
+    if (!s->args->suspend_path || s->suspend_failed
+        || !gp_runtime_sleeps(&runtime, s->mission, &options)) {
         return;
     }
     int error = write_control(s->args->suspend_path, O_APPEND, "mem\n", 4);

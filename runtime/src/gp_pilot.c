@@ -163,8 +163,11 @@ static int track_thermocline(gp_pilot *pilot, const gp_profile_input *in, double
         return 0;
     }
     double z = (pilot->window[a].depth_m + depth_m) / 2.0;
-    pilot->lo_m = fmax(min_m, z - depth_threshold / 2.0);
-    pilot->hi_m = fmin(max_m, z + depth_threshold / 2.0);
+    /* max(min, lo) and min(max, hi) that keep a NaN bound (fmax and fmin would put a
+     * number the mission never gave in its place: docs/pilot.md) */
+    double lo = z - depth_threshold / 2.0, hi = z + depth_threshold / 2.0;
+    pilot->lo_m = lo > min_m ? lo : min_m;
+    pilot->hi_m = hi < max_m ? hi : max_m;
     pilot->n_window = 0;
     pilot->detected = 1;
     return GP_PILOT_DETECTED;

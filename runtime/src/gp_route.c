@@ -31,13 +31,21 @@ void gp_offset_m(const double from[2], const double to[2], double *north_m, doub
     *east_m = (to[1] - from[1]) * scale * cos(from[0] * GP_PI / 180.0);
 }
 
+/* The length of an offset [m]: the square root of the sum of squares, each operation
+ * rounded once, as the reference computes it (docs/pilot.md); not the C library's hypot,
+ * whose last bit differs between libraries, and between them and Python's. */
+static double length_m(double north_m, double east_m)
+{
+    return sqrt(north_m * north_m + east_m * east_m);
+}
+
 /* @param distance_m NULL when the distance is not wanted (a nav route never arrives) */
 static double heading_to(const double from[2], const double to[2], double *distance_m)
 {
     double north, east;
     gp_offset_m(from, to, &north, &east);
     if (distance_m) {
-        *distance_m = hypot(north, east);
+        *distance_m = length_m(north, east);
     }
     double heading = atan2(east, north);
     return heading < 0 ? heading + 2.0 * GP_PI : heading;
@@ -191,7 +199,7 @@ double gp_route_distance_m(const gp_route_state *rs, const gp_route *route, doub
     double here[2] = {gp_ddmm_to_deg(lat_ddmm), gp_ddmm_to_deg(lon_ddmm)};
     double north, east;
     gp_offset_m(here, rs->waypoints[rs->next], &north, &east);
-    return hypot(north, east);
+    return length_m(north, east);
 }
 
 int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, double lon_ddmm,

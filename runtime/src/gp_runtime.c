@@ -118,7 +118,7 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
         rt->machine.depth = 0;
     } else if (rt->machine.state != GP_EXITED) {
         /* the runtime's own readings, as this tick's events see them, if they read them
-         * (the distance to the waypoint costs a cosine and a hypot) */
+         * (the distance to the waypoint costs a cosine and a square root) */
         rt->sensors[GP_SENSOR_HALFCYCLE] =
             rt->profile == GP_NO_PROFILE ? 0.0 : (double)rt->pilot.halfcycle;
         rt->sensors[GP_SENSOR_WPTREACHED] = (double)rt->route.reached;
@@ -184,4 +184,14 @@ void gp_runtime_tick(gp_runtime *rt, const gp_mission *mission, const gp_run_opt
     }
     rt->last_command = *cmd;
     rt->has_command = 1;
+}
+
+int gp_runtime_sleeps(const gp_runtime *rt, const gp_mission *mission,
+                      const gp_run_options *options)
+{
+    uint8_t state = rt->machine.state;
+    if (state >= mission->n_states) {
+        return 0;
+    }
+    return options->plan ? options->plan->states[state].sleep : mission->states[state].sleep;
 }

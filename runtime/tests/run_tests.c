@@ -8,6 +8,8 @@
     X(test_envelope_should_stop_a_yo_turning_faster_than_its_pump)          \
     X(test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates)  \
     X(test_envelope_check_should_refuse_no_envelope)                        \
+    X(test_envelope_should_say_what_it_did_in_the_simulator_s_words)        \
+    X(test_runtime_should_report_start_event_and_envelope_on_one_tick)      \
     X(test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating) \
     X(test_machine_should_run_assignments_in_order)                         \
     X(test_machine_should_refuse_a_call_past_the_stack_depth)               \
@@ -27,6 +29,7 @@
     X(test_robust_tracker_should_detect_clean_and_noisy_casts)              \
     X(test_tracker_should_turn_at_the_band_and_reset_a_lost_band)           \
     X(test_tracker_should_ignore_missing_readings)                          \
+    X(test_tracker_should_keep_a_nan_band_end_on_detection)                 \
     X(test_robust_tracker_should_skip_its_walk_only_where_it_changes_nothing) \
     X(test_ddmm_should_convert_to_degrees)                                  \
     X(test_ddmm_should_equal_the_fmod_definition)                           \

@@ -170,3 +170,55 @@ void test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating(vo
     CHECK_INT(cmd.flags, GP_FLAG_DONE | GP_FLAG_SURFACE | GP_FLAG_CLIMBING);
     CHECK_NEAR(cmd.ballast_cc, mission.max_ballast_cc, 0);
 }
+
+void test_envelope_should_say_what_it_did_in_the_simulator_s_words(void)
+{
+    char text[256];
+    gp_envelope_breach deep = {GP_LIMIT_DEPTH, 3000.0, 100.0};
+    gp_envelope_say(&SURFACE, &deep, 300.0, "s1", text, sizeof text);
+    CHECK(strcmp(text, "envelope: missiontime 300 s, state s1: depth 3000 m beyond the "
+                       "vehicle's 100 m; the mission ends, surfacing") == 0);
+    gp_envelope clamp = SURFACE;
+    clamp.action = GP_ENVELOPE_CLAMP;
+    gp_envelope_say(&clamp, &deep, 8.5, "s2", text, sizeof text);
+    CHECK_CONTAINS(text, "state s2: depth 3000 m beyond the vehicle's 100 m; held at the limit");
+    gp_envelope fault = SURFACE;
+    fault.action = GP_ENVELOPE_FAULT;
+    gp_envelope_breach nan_band = {GP_LIMIT_DEPTH, -NAN, 100.0};  /* x86's negative NaN */
+    gp_envelope_say(&fault, &nan_band, 18.5, "g0", text, sizeof text);
+    CHECK_CONTAINS(text, "depth nan m beyond the vehicle's 100 m; releasing control");
+}
+
+/* Tick 0 holds the start, an event's goto and the envelope's end: three transitions, the
+ * report holds them all (it held two: the third ran over its fault field). */
+static int always(const double *s, const double *v) { (void)s; (void)v; return 1; }
+static const gp_event at_once_events[] = {{always, set_bottom, GP_ACT_GOTO, 0}};
+static const gp_state at_once_states[] = {
+    {"deep", {GP_ROUTE_NOHEADING, 0, 0.0, NULL}, deep_profiles, 1, deep_sensors, 2,
+     at_once_events, 1, 0, 0, 0x3, 0},
+};
+
+void test_runtime_should_report_start_event_and_envelope_on_one_tick(void)
+{
+    gp_mission mission = gp_mission_table;
+    mission.states = at_once_states;
+    mission.n_states = 1;
+    mission.var_initial = deep_initial;
+    mission.n_vars = 1;
+    CHECK(gp_mission_check(&mission) == NULL);
+    static gp_runtime rt;
+    gp_runtime_init(&rt);
+    rt.sensors[GP_SENSOR_ENERGY_LEFT] = 1e9;
+    rt.sensors[GP_SENSOR_DEPTH] = 7.0;
+    gp_run_options options = {NULL, 0};
+    gp_command cmd;
+    gp_tick_report report;
+    gp_runtime_tick(&rt, &mission, &options, 0, &cmd, &report);
+    CHECK_INT(report.fault, 0);
+    CHECK_INT(report.n_transitions, 3);
+    CHECK_INT(report.transitions[0].kind, GP_TR_START);
+    CHECK_INT(report.transitions[1].kind, GP_TR_GOTO);
+    CHECK_INT(report.transitions[2].kind, GP_TR_ENVELOPE);
+    CHECK_INT(cmd.transition, GP_TR_ENVELOPE);
+    CHECK_INT(cmd.state, GP_NO_STATE);
+}

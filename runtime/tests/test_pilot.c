@@ -240,6 +240,27 @@ void test_tracker_should_ignore_missing_readings(void)
     CHECK_INT(pilot.n_window, 0);
 }
 
+/* A band end a variable set to NaN (docs/pilot.md): a detection keeps it NaN, as the
+ * reference's max(min, lo) and min(max, hi) do, never the detected depth in its place. */
+void test_tracker_should_keep_a_nan_band_end_on_detection(void)
+{
+    gp_profile_input in = {.kind = GP_PROFILE_THERMOTRACKYO, .args = {5, NAN, 0.4, 0.4, 3, 4},
+                           .plan_pitch_rad = NAN, .ballast_cc = 230};
+    gp_pilot pilot;
+    gp_pilot_command out;
+    gp_pilot_enter(&pilot, &in, 0, NAN);
+    int detected = 0;
+    for (int i = 0; i < 156 && !detected; i++) {
+        double depth = 0.25 * i;
+        detected = gp_pilot_step(&pilot, &in, depth, cast_temp(depth), NAN, &out)
+                   & GP_PILOT_DETECTED;
+    }
+    CHECK(detected);
+    CHECK(pilot.lo_m > 5 && pilot.lo_m < 25);  /* a number bound: the detected band's */
+    CHECK(isnan(pilot.hi_m));
+    CHECK(isnan(out.depth_target_m));          /* the dive's target: the envelope's to end */
+}
+
 /* The robust tracker skips its walk of the window on a tick that keeps every reading
  * (its summary: shallowest, deepest, warmest, coldest). Against the same tracker made
  * to walk the window every tick, on random casts that wander up and down (readings
