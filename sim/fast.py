@@ -274,6 +274,7 @@ class FastForward:
             return 0
         nav = values.nav = self._route(flight, count)
         count = self._until_event(_NAV, values, nav.count)
+        count = self._within_guard(flight, values, self._volume(state_plan, k), count)
         if count == 0:
             return 0
 
@@ -375,13 +376,39 @@ class FastForward:
         ex = self.ex
         profile = ex.state.profiles[k]
         args = ex.constant_args[i][k] or ex.argument_fns[i][k](ex.s, ex.machine.variables)
-        if state_plan is not None:
-            pitch, ballast = state_plan.profiles[k].pitch_rad, state_plan.profiles[k].ballast_cc
-        else:
-            pitch, ballast = None, ex.default_ballast_cc
+        pitch = state_plan.profiles[k].pitch_rad if state_plan is not None else None
+        ballast = self._volume(state_plan, k)
         if profile.kind == "yo":
             return self._yo(args, pitch, ballast, count)
         return self._surfacing(ballast, count)
+
+    def _volume(self, state_plan, k: int) -> float:
+        """[cc] the volume alternative `k` pumps either side of neutral: the plan's, else
+        the mission's default."""
+        return state_plan.profiles[k].ballast_cc if state_plan is not None \
+            else self.ex.default_ballast_cc
+
+    def _within_guard(self, flight: _Flight, values: _Readings, ballast_cc: float,
+                      count: int) -> int:
+        """The run's ticks before the first on which the envelope guard would act on the
+        heading's turns or the pump's energy (`EnvelopeGuard.replay`), from the headings
+        and volumes the routines command on each."""
+        ex = self.ex
+        guard = ex.guard
+        if guard is None or count == 0 or not (
+                math.isfinite(guard.envelope.max_turn_rate_rad_s)
+                or math.isfinite(guard.envelope.max_pump_power_w)):
+            return count
+        headings = [ex.route.toward_rad(a, b) for a, b in zip(
+            values.sensor(_S.LAT, 0, count).tolist(), values.sensor(_S.LON, 0, count).tolist(),
+            strict=True)]
+        volumes = np.full(count, ballast_cc)
+        if isinstance(ex.routine, pilot.Yo):  # its leg turns on the ticks its halfcycle counts
+            turned = np.diff(halfcycles(ex.routine, flight)[:count + 1]) != 0
+            climbing = (np.cumsum(turned) % 2 == 1) != (ex.routine.leg == _CLIMB)
+            volumes = np.where(climbing, ballast_cc, -ballast_cc)
+        return guard.replay(values.missiontime[:count].tolist(),
+                            values.depth_reading[:count].tolist(), headings, volumes.tolist())
 
     def _glide(self, actuators: tuple, command: tuple[float, float]) -> Glide | None:
         key = (actuators, command)

@@ -242,6 +242,9 @@ class NoHeading:
     def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
         return 0.0, False
 
+    def toward_rad(self, lat_ddmm: float, lon_ddmm: float) -> float | None:
+        return None
+
     def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
         return math.nan
 
@@ -289,6 +292,14 @@ class Waypoints:
                 self.k = (self.k + 1) % len(self.points)
                 north, east = offset_m(lat, lon, *self.points[self.k])
         return bearing_rad(north, east), True
+
+    def toward_rad(self, lat_ddmm: float, lon_ddmm: float) -> float | None:
+        """The heading [rad] `heading` commands where no waypoint is reached, leaving the
+        route as it is; None without a position fix."""
+        if not (math.isfinite(lat_ddmm) and math.isfinite(lon_ddmm)):
+            return None
+        return bearing_rad(*offset_m(ddmm_to_degrees(lat_ddmm), ddmm_to_degrees(lon_ddmm),
+                                     *self.points[self.k]))
 
 
 class Nav(Waypoints):
