@@ -102,8 +102,7 @@ class EnvelopeLimit(IntEnum):
     INFLECTION = 5  # a yo turned again sooner than its pump can move a full stroke
     SPEED = 6  # a propelled speed outside the propulsion's range (0: the motor off)
     THRUST = 7  # a thruster's commanded power outside its range (0: off)
-    TURN = 8  # a turn commanded before the last one could be flown at the rated turn rate
-    PUMP_ENERGY = 9  # the pump's energy over the last hour above its rated mean power
+    PUMP_ENERGY = 8  # the pump's energy over the last hour above its rated mean power
 
 
 @dataclass(frozen=True)
@@ -136,7 +135,8 @@ class Envelope:
     speed_range_mps: tuple[float, float] = (0.0, 0.0)
     # [W] a thruster's commanded power is 0 (off) or within these (0, 0: no thruster)
     thrust_range_w: tuple[float, float] = (0.0, 0.0)
-    max_turn_rate_rad_s: float = math.inf  # [rad/s] the fastest the vehicle turns (inf: no limit)
+    # [rad/s] the fastest the vehicle turns: every heading command turns no faster (inf: any)
+    max_turn_rate_rad_s: float = math.inf
     # [W] the pump's mean power over an hour (its energy per hour / 3600 s; inf: no limit)
     max_pump_power_w: float = math.inf
     pump: PumpEnergy = PumpEnergy()

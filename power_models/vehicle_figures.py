@@ -79,6 +79,7 @@ def envelope_fields(top: Table, nominal_max_depth_m: float) -> dict:
     return fields
 
 
+PUMP_DUTY = 0.25  # [1] the share of the time a pump may work, averaged over an hour
 # the pump's energy figures (`FIGURES` keys), in PumpEnergy's order
 PUMP_FIGURES = ("pump_out_energy_per_volume", "pump_out_energy_per_volume_depth",
                 "pump_in_energy_per_volume", "pump_in_energy_per_volume_depth")
@@ -96,7 +97,9 @@ def derive_envelope(nominal_max_depth_m: float, nominal_pitch_rad: float,
     depth rating twice its nominal yo's bottom (the G3's 100 m yo of its 200 m), a pitch
     twice its nominal (within a right angle), a band no thinner than its nominal yo's top;
     inflections no closer than its pump's full stroke (from one side of neutral to the
-    other); no turn-rate and no pump-energy limit (the shipped vehicles give both). A
+    other); the pump's mean power over an hour no more than it draws working a quarter of
+    the time at its nominal yo's bottom (the paper's Fig. 2, a 5-10 m yo, draws 2.4 W of the
+    shallow Slocum's 9 W); no turn-rate limit (the shipped gliders give theirs). A
     vehicle without a buoyancy engine (an AUV: no pitch of its own, NaN, and no pump, 0 cc)
     commands pitch and volume 0: its pitch is bound only short of a right angle, and its
     inflections not at all."""
@@ -113,7 +116,9 @@ def derive_envelope(nominal_max_depth_m: float, nominal_pitch_rad: float,
         action=fields.get("envelope_action", EnvelopeAction.SURFACE),
         speed_range_mps=speed_range_mps, thrust_range_w=thrust_range_w,
         max_turn_rate_rad_s=fields.get("max_turn_rate_rad_s", math.inf),
-        max_pump_power_w=fields.get("max_pump_power_w", math.inf), pump=pump)
+        max_pump_power_w=fields.get("max_pump_power_w", PUMP_DUTY * pump_rate_cc_s * (
+            pump.out_j_per_cc + pump.out_j_per_cc_m * nominal_max_depth_m)
+            if max_ballast_cc > 0 else math.inf), pump=pump)
 
 
 def load_envelope(spec: str) -> Envelope:

@@ -1,8 +1,8 @@
 """The envelope guard, as the C runtime's (runtime/src/gp_envelope.c) holds each COMMAND:
 depth, pitch, pumped volume, propelled speed and thruster power within the vehicle's
 rating, a yo's band no thinner than its `min_yo_band`, its turns no closer than its pump's
-full stroke, a heading's turns no faster than its rated turn rate and the pump's energy
-within its rated mean power (docs/pilot.md, The envelope). Values are compared as the
+full stroke, the pump's energy within its rated mean power, and every heading turned no
+faster than its rated turn rate (docs/pilot.md, The envelope). Values are compared as the
 runtime compares them: a COMMAND's binary32 fields against the envelope's doubles."""
 
 from __future__ import annotations
@@ -19,12 +19,11 @@ LIMIT_NAMES = {EnvelopeLimit.DEPTH: "depth", EnvelopeLimit.PITCH: "pitch",
                EnvelopeLimit.BALLAST: "pumped volume", EnvelopeLimit.BAND: "yo band",
                EnvelopeLimit.INFLECTION: "time between inflections",
                EnvelopeLimit.SPEED: "speed", EnvelopeLimit.THRUST: "thruster power",
-               EnvelopeLimit.TURN: "turn rate",
                EnvelopeLimit.PUMP_ENERGY: "pump energy within an hour"}
 LIMIT_UNITS = {EnvelopeLimit.DEPTH: "m", EnvelopeLimit.PITCH: "rad", EnvelopeLimit.BALLAST: "cc",
                EnvelopeLimit.BAND: "m", EnvelopeLimit.INFLECTION: "s",
                EnvelopeLimit.SPEED: "m/s", EnvelopeLimit.THRUST: "W",
-               EnvelopeLimit.TURN: "rad/s", EnvelopeLimit.PUMP_ENERGY: "J"}
+               EnvelopeLimit.PUMP_ENERGY: "J"}
 # the limits the clamp action cannot hold at an edge: they end the flight
 _ENDING = (EnvelopeLimit.BAND, EnvelopeLimit.INFLECTION, EnvelopeLimit.PUMP_ENERGY)
 
@@ -86,8 +85,6 @@ class EnvelopeGuard:
         self.held = False
         self.heading: float | None = None  # the last heading commanded [rad], None: none
         self.heading_s = 0.0
-        self.turn_s = 0.0  # when the turn in progress was commanded [s]
-        self.turn_rad = 0.0  # its angle [rad]
         self.ballast_cc: float | None = None  # the last volume commanded [cc], None: none
         self.pump_s = 0.0
         self.pump_j = 0.0  # the pump's energy not yet paid back at the rated mean power [J]
@@ -125,7 +122,7 @@ class EnvelopeGuard:
             self.turned = True
             self.last_turn_s = time_s
         self.climbing = climbing
-        found = found or self._turn(time_s, command, headed)
+        self._turn(time_s, command, headed)
         pump = self._pump(time_s, depth_m, command.ballast_cc)
         if pump is not None and not self.ends(found):  # as thrashing, it ends the flight
             found = pump
@@ -163,31 +160,25 @@ class EnvelopeGuard:
                 command.thrust_w = _edge(thrust, low, high)
         return found[0] if found else None
 
-    def _turn(self, time_s: float, command: Held, headed: bool) -> Breach | None:
-        """A heading that turns further than the vehicle turns by this tick starts a turn,
-        flown at the rated rate; another before that one could be flown is a breach (its
-        value: the rate the two ask). With the clamp action the turn in progress is held."""
+    def _turn(self, time_s: float, command: Held, headed: bool) -> None:
+        """The heading turns at most at the rated rate: whatever the route asks, the
+        command turns toward it by no more than the vehicle turns in the time since the
+        last command, and gets there. Under every action: a turn is flown, never refused."""
         heading = f32(command.heading_rad)
         if not headed or not math.isfinite(heading):
-            self.heading = None  # no heading flown: the next one starts afresh
-            return None
-        found = None
+            self.heading = None  # no heading flown: the next one is taken as it is
+            return
         if self.heading is not None:
-            rate = self.envelope.max_turn_rate_rad_s
+            most = self.envelope.max_turn_rate_rad_s * (time_s - self.heading_s)
             turn = heading - self.heading
             turn = turn - 2.0 * math.pi if turn > math.pi else \
                 turn + 2.0 * math.pi if turn < -math.pi else turn
-            if not abs(turn) <= rate * (time_s - self.heading_s):
-                since = time_s - self.turn_s
-                if since < self.turn_rad / rate:
-                    found = Breach(EnvelopeLimit.TURN, _divide(self.turn_rad, since), rate)
-                    if self.envelope.action == EnvelopeAction.CLAMP:
-                        heading = self.heading
-                        command.heading_rad = heading
-                else:
-                    self.turn_s, self.turn_rad = time_s, abs(turn)
+            if abs(turn) > most:  # NaN (an infinite rate, no time since): any turn
+                heading = self.heading + math.copysign(most if most > 0.0 else 0.0, turn)
+                heading = heading + 2.0 * math.pi if heading < 0.0 else \
+                    heading - 2.0 * math.pi if heading >= 2.0 * math.pi else heading
+                heading = command.heading_rad = f32(heading)
         self.heading, self.heading_s = heading, time_s
-        return found
 
     def _pump(self, time_s: float, depth_m: float, ballast_cc: float) -> Breach | None:
         """The pump's energy as a bucket paid back at the rated mean power: a volume moved
@@ -214,27 +205,19 @@ class EnvelopeGuard:
     def replay(self, times_s: list[float], depths_m: list[float],
                headings_rad: list[float | None], ballasts_cc: list[float]) -> int:
         """A run of ticks computed at once (sim.fast) whose depth, pitch, band and turns of
-        its yo are within the rating: the ticks before the first on which the heading's
-        turns or the pump's energy would break it, as `hold` would find them tick by tick
-        from these missiontimes [s], depth readings [m], headings commanded [rad] (None:
-        none) and volumes commanded [cc]; the guard's memory as after those ticks."""
+        its yo are within the rating: the ticks before the first on which the guard would
+        act, turning the heading or ending on the pump's energy, as `hold` would tick by
+        tick from these missiontimes [s], depth readings [m], headings the route commands
+        [rad] (None: none) and volumes commanded [cc]; the guard's memory as after those
+        ticks."""
         command = Held(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         for j, time_s in enumerate(times_s):
-            before = (self.heading, self.heading_s, self.turn_s, self.turn_rad,
-                      self.ballast_cc, self.pump_s, self.pump_j)
+            before = (self.heading, self.heading_s, self.ballast_cc, self.pump_s, self.pump_j)
             heading = headings_rad[j]
-            command.heading_rad = 0.0 if heading is None else heading
-            if self._turn(time_s, command, heading is not None) is not None \
+            command.heading_rad = asked = 0.0 if heading is None else f32(heading)
+            self._turn(time_s, command, heading is not None)
+            if command.heading_rad != asked \
                     or self._pump(time_s, depths_m[j], ballasts_cc[j]) is not None:
-                (self.heading, self.heading_s, self.turn_s, self.turn_rad, self.ballast_cc,
-                 self.pump_s, self.pump_j) = before
+                self.heading, self.heading_s, self.ballast_cc, self.pump_s, self.pump_j = before
                 return j
         return len(times_s)
-
-
-def _divide(a: float, b: float) -> float:
-    """a / b as C divides doubles: by zero, an infinity (or NaN for 0 / 0)."""
-    if b == 0.0:
-        return math.nan if a == 0.0 or math.isnan(a) else math.copysign(math.inf, a) * \
-            math.copysign(1.0, b)
-    return a / b

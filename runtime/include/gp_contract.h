@@ -258,10 +258,8 @@ typedef enum {
     GP_LIMIT_INFLECTION = 5,  /**< a yo turned again sooner than its pump can move a full stroke */
     GP_LIMIT_SPEED = 6,  /**< a propelled speed outside the propulsion's range (0: the motor off) */
     GP_LIMIT_THRUST = 7,  /**< a thruster's commanded power outside its range (0: off) */
-    /** a turn commanded before the last one could be flown at the rated turn rate */
-    GP_LIMIT_TURN = 8,
     /** the pump's energy over the last hour above its rated mean power */
-    GP_LIMIT_PUMP_ENERGY = 9,
+    GP_LIMIT_PUMP_ENERGY = 8,
 } gp_envelope_limit;
 
 #endif /* GP_CONTRACT_H */

@@ -18,8 +18,6 @@ typedef struct {
     double last_turn_s;          /**< missiontime of the profile's last turn [s] */
     double heading_rad;          /**< the last heading commanded [rad] */
     double heading_s;            /**< missiontime it was commanded [s] */
-    double turn_s;               /**< missiontime the turn in progress was commanded [s] */
-    double turn_rad;             /**< its angle, flown at the rated turn rate [rad] */
     double ballast_cc;           /**< the last volume commanded [cc] */
     double pump_s;               /**< missiontime of the last command [s] */
     double pump_j;               /**< the pump's energy not yet paid back at the rated mean
@@ -49,10 +47,11 @@ const char *gp_envelope_check(const gp_envelope *envelope);
  * @param time_s the tick's missiontime [s]
  * @param depth_m the depth reading [m], where the pump works (NaN: at the surface)
  * @param cmd the command: clamped (and GP_FLAG_ENVELOPE set) when the action is clamp
- *        and the limit can be held at an edge
+ *        and the limit can be held at an edge; its heading turned from the last at most
+ *        at the rated turn rate, under every action
  * @return the first limit broken (GP_LIMIT_NONE: none); with the clamp action a depth,
- *         pitch, ballast, speed, thrust or turn breach has been held, a band, inflection
- *         or pump-energy one has not
+ *         pitch, ballast, speed or thrust breach has been held, a band, inflection or
+ *         pump-energy one has not
  */
 gp_envelope_breach gp_envelope_hold(const gp_envelope *envelope, double max_ballast_cc,
                                     gp_envelope_memory *memory, int entered,

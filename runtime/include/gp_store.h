@@ -34,7 +34,7 @@
 #define GP_PATH_MAX 1024
 #define GP_CHECKPOINT_MAGIC "GPCKPT06"
 /** The envelope guard's figures a checkpoint keeps (gp_envelope_memory's doubles). */
-#define GP_ENVELOPE_MEMORY_FIGURES 8
+#define GP_ENVELOPE_MEMORY_FIGURES 6
 /** Header to first slot, slot to slot: a flash page, so a torn write stays in its slot. */
 #define GP_CHECKPOINT_SLOT_BYTES 4096
 /** The journal after the slots: four flash pages, 341 Fig. 2 ticks between records. */

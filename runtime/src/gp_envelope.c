@@ -91,40 +91,33 @@ static gp_envelope_breach hold_values(const gp_envelope *envelope, double max_ba
     return first;
 }
 
-/* A heading that turns further than the vehicle turns by this tick starts a turn, which it
- * flies at its rated rate; another before that one could be flown is a breach (its value:
- * the rate the two ask). With the clamp action the turn in progress is held. */
-static gp_envelope_breach hold_turn(const gp_envelope *envelope, gp_envelope_memory *memory,
-                                    double time_s, gp_command *cmd)
+/* The heading turns at most at the rated rate: whatever the route asks (a waypoint behind,
+ * a state with another route), the command turns toward it by no more than the vehicle
+ * turns in the time since the last command, and gets there. Under every action: a turn
+ * is flown, never refused, so it is no breach. */
+static void hold_turn(const gp_envelope *envelope, gp_envelope_memory *memory, double time_s,
+                      gp_command *cmd)
 {
-    gp_envelope_breach found = breach(GP_LIMIT_NONE, 0, 0);
     double heading = cmd->heading_rad;
     if (!(cmd->flags & GP_FLAG_HEADING) || !isfinite(heading)) {
-        memory->headed = 0;  /* no heading flown: the next one starts afresh */
-        return found;
+        memory->headed = 0;  /* no heading flown: the next one is taken as it is */
+        return;
     }
     if (memory->headed) {
-        double rate = envelope->max_turn_rate_rad_s;
+        double most = envelope->max_turn_rate_rad_s * (time_s - memory->heading_s);
         double turn = heading - memory->heading_rad;
         turn = turn > PI ? turn - 2.0 * PI : turn < -PI ? turn + 2.0 * PI : turn;
-        if (!(fabs(turn) <= rate * (time_s - memory->heading_s))) {
-            double since = time_s - memory->turn_s;
-            if (since < memory->turn_rad / rate) {
-                found = breach(GP_LIMIT_TURN, memory->turn_rad / since, rate);
-                if (envelope->action == GP_ENVELOPE_CLAMP) {
-                    heading = memory->heading_rad;
-                    cmd->heading_rad = (float)heading;
-                }
-            } else {
-                memory->turn_s = time_s;
-                memory->turn_rad = fabs(turn);
-            }
+        if (fabs(turn) > most) {  /* NaN (an infinite rate, no time since): any turn */
+            heading = memory->heading_rad + copysign(most > 0.0 ? most : 0.0, turn);
+            heading = heading < 0.0 ? heading + 2.0 * PI : heading >= 2.0 * PI ? heading - 2.0 * PI
+                                                                                : heading;
+            cmd->heading_rad = (float)heading;
+            heading = cmd->heading_rad;
         }
     }
     memory->headed = 1;
     memory->heading_rad = heading;
     memory->heading_s = time_s;
-    return found;
 }
 
 /* The pump's energy as a bucket paid back at the rated mean power: a volume moved out at
@@ -185,8 +178,7 @@ gp_envelope_breach gp_envelope_hold(const gp_envelope *envelope, double max_ball
         memory->last_turn_s = time_s;
     }
     memory->climbing = climbing;
-    gp_envelope_breach turn = hold_turn(envelope, memory, time_s, cmd);
-    found = found.limit ? found : turn;
+    hold_turn(envelope, memory, time_s, cmd);
     gp_envelope_breach pump = hold_pump(envelope, memory, time_s, depth_m, cmd);
     if (pump.limit && !gp_envelope_ends(envelope, &found)) {  /* as thrashing, it ends */
         found = pump;
@@ -218,7 +210,6 @@ const char *gp_envelope_limit_name(uint8_t limit)
     case GP_LIMIT_INFLECTION: return "time between inflections";
     case GP_LIMIT_SPEED: return "speed";
     case GP_LIMIT_THRUST: return "thruster power";
-    case GP_LIMIT_TURN: return "turn rate";
     case GP_LIMIT_PUMP_ENERGY: return "pump energy within an hour";
     default: return "none";
     }
@@ -232,7 +223,6 @@ const char *gp_envelope_limit_unit(uint8_t limit)
     case GP_LIMIT_INFLECTION: return "s";
     case GP_LIMIT_SPEED: return "m/s";
     case GP_LIMIT_THRUST: return "W";
-    case GP_LIMIT_TURN: return "rad/s";
     case GP_LIMIT_PUMP_ENERGY: return "J";
     default: return "m";
     }

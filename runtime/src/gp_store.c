@@ -85,8 +85,8 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
                                       guard->headed, guard->pumped};
     put(&w, envelope_head, sizeof envelope_head);
     const double envelope_figures[GP_ENVELOPE_MEMORY_FIGURES] = {
-        guard->last_turn_s, guard->heading_rad, guard->heading_s, guard->turn_s,
-        guard->turn_rad, guard->ballast_cc, guard->pump_s, guard->pump_j};
+        guard->last_turn_s, guard->heading_rad, guard->heading_s, guard->ballast_cc,
+        guard->pump_s, guard->pump_j};
     put(&w, envelope_figures, sizeof envelope_figures);
     uint8_t *command_len = w.at++;  /* the last COMMAND as the link sends it whole */
     *command_len = (uint8_t)gp_command_pack(&rt->last_command, NULL, w.at);
@@ -174,11 +174,9 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     guard->last_turn_s = envelope_figures[0];
     guard->heading_rad = envelope_figures[1];
     guard->heading_s = envelope_figures[2];
-    guard->turn_s = envelope_figures[3];
-    guard->turn_rad = envelope_figures[4];
-    guard->ballast_cc = envelope_figures[5];
-    guard->pump_s = envelope_figures[6];
-    guard->pump_j = envelope_figures[7];
+    guard->ballast_cc = envelope_figures[3];
+    guard->pump_s = envelope_figures[4];
+    guard->pump_j = envelope_figures[5];
     uint8_t command_len;
     get(&r, &command_len, 1);
     gp_frame command = {GP_MSG_COMMAND, 0, 0, command_len, r.at};

@@ -168,48 +168,45 @@ static gp_command headed(double heading_rad)
     return cmd;
 }
 
-void test_envelope_should_stop_a_heading_turning_faster_than_the_vehicle(void)
+void test_envelope_should_turn_a_heading_no_faster_than_the_vehicle(void)
 {
-    gp_envelope_memory memory = {0};
-    gp_command cmd = headed(0.0);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd).limit, 0);
-    cmd = headed(0.5);  /* steering within 0.15 rad/s x 4 s */
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, NULL, 4.0, NAN, &cmd).limit, 0);
-    cmd = headed(0.5 + 3.0);  /* a waypoint's turn: 3 rad, flown in 20 s */
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, NULL, 8.0, NAN, &cmd).limit, 0);
-    cmd = headed(0.5);  /* back again 4 s later: the turn asked 3 rad in 4 s */
-    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 0, NULL, 12.0, NAN, &cmd);
-    CHECK_INT(b.limit, GP_LIMIT_TURN);
-    CHECK_NEAR(b.value, (double)((float)3.5 - (float)0.5) / 4.0, 1e-12);
-    CHECK_NEAR(b.bound, 0.15, 0);
-    CHECK(gp_envelope_ends(&SURFACE, &b));
-    /* across north: 6.2 rad to 0.1 rad is a turn of 0.18 rad, steering */
-    memory = (gp_envelope_memory){0};
-    cmd = headed(6.2);
-    gp_envelope_hold(&SURFACE, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
-    cmd = headed(0.1);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, NULL, 4.0, NAN, &cmd).limit, 0);
-    /* the clamp action holds the turn in progress; once flown, the next turn is taken */
-    gp_envelope clamp = SURFACE;
-    clamp.action = GP_ENVELOPE_CLAMP;
-    memory = (gp_envelope_memory){0};
-    cmd = headed(0.0);
-    gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
-    cmd = headed(3.0);
-    CHECK_INT(gp_envelope_hold(&clamp, 233.0, &memory, 0, NULL, 4.0, NAN, &cmd).limit, 0);
-    cmd = headed(0.0);
-    b = gp_envelope_hold(&clamp, 233.0, &memory, 0, NULL, 8.0, NAN, &cmd);
-    CHECK_INT(b.limit, GP_LIMIT_TURN);
-    CHECK(!gp_envelope_ends(&clamp, &b));
-    CHECK_NEAR(cmd.heading_rad, 3.0f, 0);
-    CHECK(cmd.flags & GP_FLAG_ENVELOPE);
-    cmd = headed(0.0);  /* 3 rad at 0.15 rad/s: 20 s after the turn began, it is flown */
-    CHECK_INT(gp_envelope_hold(&clamp, 233.0, &memory, 0, NULL, 24.0, NAN, &cmd).limit, 0);
-    CHECK_NEAR(cmd.heading_rad, 0.0f, 0);
-    /* no heading (noheading, no fix) forgets the last one */
-    cmd = command(10.0, -0.454, -233.0, 0);
-    gp_envelope_hold(&SURFACE, 233.0, &memory, 0, NULL, 28.0, NAN, &cmd);
-    CHECK_INT(memory.headed, 0);
+    static const uint8_t actions[] = {GP_ENVELOPE_FAULT, GP_ENVELOPE_SURFACE, GP_ENVELOPE_CLAMP};
+    for (size_t a = 0; a < sizeof actions; a++) {  /* a turn is flown under every action */
+        gp_envelope envelope = SURFACE;
+        envelope.action = actions[a];
+        gp_envelope_memory memory = {0};
+        gp_command cmd = headed(1.0);  /* the first heading: taken as it is */
+        CHECK_INT(gp_envelope_hold(&envelope, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd).limit, 0);
+        CHECK_NEAR(cmd.heading_rad, 1.0f, 0);
+        cmd = headed(1.5);  /* steering within 0.15 rad/s x 4 s: untouched */
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 4.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 1.5f, 0);
+        for (int tick = 3; tick < 8; tick++) {  /* a waypoint behind: 0.6 rad a tick */
+            cmd = headed(4.5);
+            gp_envelope_breach b = gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL,
+                                                    4.0 * (tick - 1), NAN, &cmd);
+            CHECK_INT(b.limit, GP_LIMIT_NONE);
+            CHECK_INT(cmd.flags & GP_FLAG_ENVELOPE, 0);
+            CHECK_NEAR(cmd.heading_rad, fmin(1.5 + 0.6 * (tick - 2), 4.5), 1e-6);
+        }
+        /* across north, the short way: from 0.2 rad to 6.0 rad turns left through 0 */
+        memory = (gp_envelope_memory){0};
+        cmd = headed(0.2);
+        gp_envelope_hold(&envelope, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
+        cmd = headed(6.0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 1.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 0.05f, 1e-6);
+        cmd = headed(6.0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 2.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 0.2 - 0.3 + 2.0 * 3.14159265358979323846, 1e-5);
+        /* no heading (noheading, no fix) forgets the last one */
+        cmd = command(10.0, -0.454, -233.0, 0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 3.0, NAN, &cmd);
+        CHECK_INT(memory.headed, 0);
+        cmd = headed(3.0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 4.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 3.0f, 0);
+    }
 }
 
 void test_envelope_should_stop_a_pump_working_past_its_energy_per_hour(void)

@@ -51,10 +51,9 @@ static void sample_runtime(gp_runtime *rt)
     rt->route_resume[0] = 2;  /* the caller's waypoint, for its return */
     rt->reached_resume[0] = 70000;  /* and the waypoints it had reached: past a u16 */
     rt->route.reached = 1;  /* s2 flies no route: 0, or 1 for a list's last */
-    /* its last turn, a climb; a heading turned 1.5 rad at 780 s; the pump owes 420 J */
+    /* its last turn, a climb; its heading commanded at 796 s; the pump owes 420 J */
     rt->envelope = (gp_envelope_memory){.last_turn_s = 796.0, .heading_rad = 2.5,
-                                        .heading_s = 796.0, .turn_s = 780.0, .turn_rad = 1.5,
-                                        .ballast_cc = 230.0, .pump_s = 796.0, .pump_j = 420.0,
+                                        .heading_s = 796.0, .ballast_cc = 230.0, .pump_s = 796.0, .pump_j = 420.0,
                                         .turned = 1, .climbing = 1, .headed = 1, .pumped = 1};
     rt->profile = 0;
     rt->last_command.tick = 81;
