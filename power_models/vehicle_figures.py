@@ -87,7 +87,7 @@ PUMP_FIGURES = ("pump_out_energy_per_volume", "pump_out_energy_per_volume_depth"
 
 def derive_envelope(nominal_max_depth_m: float, nominal_pitch_rad: float,
                     nominal_min_depth_m: float, max_ballast_cc: float, pump_rate_cc_s: float,
-                    fields: dict, pump: PumpEnergy = PumpEnergy(),
+                    fields: dict, pump: PumpEnergy,
                     speed_range_mps: tuple[float, float] = (0.0, 0.0),
                     thrust_range_w: tuple[float, float] = (0.0, 0.0)) -> Envelope:
     """The rating the runtime holds every command to (docs/pilot.md, The envelope), from a
