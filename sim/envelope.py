@@ -187,6 +187,9 @@ class EnvelopeGuard:
         ballast = f32(ballast_cc)
         if not math.isfinite(ballast):
             return None  # the pumped volume's own limit says so
+        if ballast == self.ballast_cc and self.pump_j == 0.0:  # most ticks: nothing owed
+            self.pump_s = time_s
+            return None
         env, pump = self.envelope, self.envelope.pump
         if self.ballast_cc is not None:
             z = depth_m if depth_m > 0.0 else 0.0  # NaN: no reading, the surface
