@@ -366,8 +366,8 @@ def test_both_runtimes_turn_the_heading_at_the_rated_rate_under_every_action(
     assert python[1] == c[1] and python[2]["envelope"] == c[2]["envelope"] == []
     turns = _track_turns_rad(tmp_path / "py")
     assert np.array_equal(turns, _track_turns_rad(tmp_path / "c"))
-    # each swap asks a half turn at once; the glider turns 0.15 rad/s x 4 s a tick
-    assert 0.5 < turns.max() <= 0.15 * 4.0 * 1.001  # the track's bearing: to 1e-3
+    # each swap asks a half turn at once; the glider turns 0.154 rad/s x 4 s a tick
+    assert 0.5 < turns.max() <= 0.154 * 4.0 * 1.001  # the track's bearing: to 1e-3
 
 
 def test_without_a_turn_rate_the_same_swaps_turn_at_once(tmp_path, capsys):
@@ -377,7 +377,7 @@ def test_without_a_turn_rate_the_same_swaps_turn_at_once(tmp_path, capsys):
                                  if not line.startswith("max_turn_rate")))
     code, _, _, said = _sim(mission, tmp_path / "py", "python", capsys)
     assert code == ExitCode.OK, said
-    assert _track_turns_rad(tmp_path / "py").max() > 2 * 0.15 * 4.0  # the test above bites
+    assert _track_turns_rad(tmp_path / "py").max() > 2 * 0.154 * 4.0  # the test above bites
 
 
 def _fastest_mps(out: Path) -> float:
