@@ -146,7 +146,8 @@ class Envelope:
         if not (self.max_depth_m > 0 and 0 < self.max_pitch_rad < 1.5707963267948966
                 and 0 <= self.min_yo_band_m < self.max_depth_m and self.min_inflection_s >= 0
                 and all(0 <= low <= high < math.inf for low, high in ranges)
-                and self.max_turn_rate_rad_s > 0 and self.max_pump_power_w > 0):
+                and self.max_turn_rate_rad_s > 0 and self.max_pump_power_w > 0
+                and all(math.isfinite(f) for f in vars(self.pump).values())):
             raise ValueError(f"not an envelope: {self}")
 
 

@@ -6,7 +6,7 @@
 #define PI 3.14159265358979323846
 #define HOUR_S 3600.0
 
-/* A rate or a range's edges: positive or zero, never NaN; a rate may be INFINITY (none). */
+/* A range's edges: from zero up, finite, the low no higher than the high. */
 static int is_range(double low, double high)
 {
     return low >= 0 && low <= high && isfinite(high);
@@ -23,8 +23,8 @@ const char *gp_envelope_check(const gp_envelope *envelope)
     if (!is_range(envelope->min_speed_mps, envelope->max_speed_mps)
         || !is_range(envelope->min_thrust_w, envelope->max_thrust_w)
         || !(envelope->max_turn_rate_rad_s > 0) || !(envelope->max_pump_power_w > 0)
-        || isnan(envelope->pump_out_j_per_cc + envelope->pump_out_j_per_cc_m
-                 + envelope->pump_in_j_per_cc + envelope->pump_in_j_per_cc_m)) {
+        || !isfinite(envelope->pump_out_j_per_cc) || !isfinite(envelope->pump_out_j_per_cc_m)
+        || !isfinite(envelope->pump_in_j_per_cc) || !isfinite(envelope->pump_in_j_per_cc_m)) {
         return "no envelope: a speed, thrust, turn rate or pump figure out of range";
     }
     return NULL;
@@ -133,8 +133,9 @@ static gp_envelope_breach hold_pump(const gp_envelope *envelope, gp_envelope_mem
     if (memory->pumped) {
         double z = depth_m > 0.0 ? depth_m : 0.0;  /* NaN: no reading, the surface */
         double moved = ballast - memory->ballast_cc;
-        double per_cc = moved > 0.0 ? envelope->pump_out_j_per_cc + envelope->pump_out_j_per_cc_m * z
-                                    : envelope->pump_in_j_per_cc + envelope->pump_in_j_per_cc_m * z;
+        const gp_envelope *e = envelope;
+        double per_cc = moved > 0.0 ? e->pump_out_j_per_cc + e->pump_out_j_per_cc_m * z
+                                    : e->pump_in_j_per_cc + e->pump_in_j_per_cc_m * z;
         double owed = memory->pump_j - envelope->max_pump_power_w * (time_s - memory->pump_s);
         memory->pump_j = (owed > 0.0 ? owed : 0.0) + (per_cc > 0.0 ? per_cc * fabs(moved) : 0.0);
     }

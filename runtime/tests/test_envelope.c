@@ -248,7 +248,7 @@ void test_envelope_should_stop_a_pump_working_past_its_energy_per_hour(void)
 
 void test_envelope_check_should_refuse_no_envelope(void)
 {
-    gp_envelope bad[11];
+    gp_envelope bad[12];
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         bad[i] = SURFACE;
     }
@@ -263,6 +263,7 @@ void test_envelope_check_should_refuse_no_envelope(void)
     bad[8].max_turn_rate_rad_s = 0.0;
     bad[9].max_pump_power_w = NAN;
     bad[10].pump_in_j_per_cc_m = NAN;
+    bad[11].pump_out_j_per_cc = INFINITY;
     CHECK(gp_envelope_check(&SURFACE) == NULL);
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         CHECK(gp_envelope_check(&bad[i]) != NULL);
