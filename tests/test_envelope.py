@@ -5,6 +5,7 @@ exits 5; `check` refuses what it can prove out of range, with its place."""
 from __future__ import annotations
 
 import json
+import math
 import shutil
 from pathlib import Path
 
@@ -13,7 +14,7 @@ import pandas as pd
 import pytest
 
 from gliderplan.cli.main import main
-from gliderplan.contract import ExitCode
+from gliderplan.contract import Envelope, EnvelopeAction, ExitCode, PumpEnergy
 from gliderplan.power_models.vehicle_figures import load_envelope
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -463,3 +464,17 @@ def test_a_bad_turn_rate_or_pump_rating_is_refused_with_its_place(tmp_path, caps
     err = capsys.readouterr().err
     assert "bad.toml" in err and problem in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("bad", [
+    {"speed_range_mps": (1.0, 0.5)}, {"speed_range_mps": (0.5, math.inf)},
+    {"thrust_range_w": (-1.0, 9.0)}, {"max_turn_rate_rad_s": 0.0},
+    {"max_turn_rate_rad_s": math.nan}, {"max_pump_power_w": -1.0},
+    {"pump": PumpEnergy(out_j_per_cc=math.inf)},
+])
+def test_the_contract_refuses_an_envelope_with_a_bad_figure(bad):
+    good = {"max_depth_m": 100.0, "max_pitch_rad": 0.9, "min_yo_band_m": 3.0,
+            "min_inflection_s": 11.0, "action": EnvelopeAction.SURFACE}
+    Envelope(**good)
+    with pytest.raises(ValueError, match="not an envelope"):
+        Envelope(**good, **bad)
