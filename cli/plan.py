@@ -22,6 +22,7 @@ import os
 
 from gliderplan.cli.common import (
     add_cycles_argument,
+    add_force_argument,
     add_mission_argument,
     load_mission,
     refuse_unpaired,
@@ -75,6 +76,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --sign: the plan's sequence number, above every plan "
                              "signed before (default: the time in seconds since 1970)")
     add_cycles_argument(parser)
+    add_force_argument(parser)
 
 
 # an option -> the options it works with (refused alone: it would be silently ignored)
@@ -85,6 +87,7 @@ NEEDS = {
     "--scenario-file": ("--confidence", "--scenarios"),
     "--workers": ("--confidence", "--scenarios"),
     "--seq": ("--sign",),
+    "--force": ("--sweep",),
 }
 # what a sweep does not do: refused beside --sweep rather than ignored
 NOT_WITH_SWEEP = ("--confidence", "--occupancy-from-sim", "--sign", "--scenarios")
@@ -151,7 +154,7 @@ def _sweep(mission, args: argparse.Namespace) -> int:  # noqa: ANN001
     try:
         sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
                               computer=args.computer, progress=progress,
-                              cycles_per_tick=args.cycles_per_tick)
+                              cycles_per_tick=args.cycles_per_tick, force=args.force)
     finally:
         for bar in bars.values():
             bar.finish()

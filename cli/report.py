@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 
-from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.cli.common import add_force_argument, add_mission_argument, load_mission
 
 ORDER = 70
 
@@ -31,7 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help="print the files written as JSON (docs/json.md)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
-                        help="directory for report.html and its CSV files")
+                        help="directory for report.html and its CSV files (a folder "
+                             "written whole)")
+    add_force_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -39,7 +41,8 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.reports.report import make_report
 
     report = make_report(mission, args.output, plan_path=args.plan, run_dir=args.run,
-                         montecarlo_dir=args.montecarlo, source=args.mission)
+                         montecarlo_dir=args.montecarlo, source=args.mission,
+                         force=args.force)
     if args.json:
         from gliderplan.cli.main import print_json
 

@@ -11,9 +11,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, interrupts
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import output_folder, write_files_atomically
 from gliderplan.language.ir import CheckedMission
 
 if TYPE_CHECKING:
@@ -44,9 +44,11 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     again until it settles (planner/simulated.py): one flight in the simulator's default
     water from `seed`, or the mean of `scenarios` scenarios drawn as for `confidence`.
     With `output`, write the plan file there and its
-    JSON report beside it (`output`.json), atomically, and where it flies propelled its
-    energy per km against speed (`output`.speed.png, reports/speed.py); with `sign` (a
-    key file) the plan
+    JSON report beside it (`output`.json), atomically and together (never one without the
+    other), and where it flies propelled its energy per km against speed
+    (`output`.speed.png, reports/speed.py), unless a stop signal arrived
+    (KeyboardInterrupt: an interrupted plan is no plan, even where a library swallowed
+    the signal); with `sign` (a key file) the plan
     file is signed as plan number `seq` (default: `signing.default_sequence()`). The
     result holds the plan
     (`.plan`, what the file holds) and what its solve tells (quality, minimum energy,
@@ -93,15 +95,17 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
         data = sign_plan(data, read_key(sign), seq)
         result = replace(result, plan=replace(result.plan, seq=seq))
     result = replace(result, upload_bytes=len(data))
+    interrupts.raise_if_stopped()
     if output is not None:
-        write_atomically(output, data)
-        write_atomically(f"{output}.json", json.dumps(report_json(result), indent=2) + "\n")
+        files = {output: data,
+                 f"{output}.json": json.dumps(report_json(result), indent=2) + "\n"}
         if hardware.vehicle.propulsion is not None:
             from gliderplan.reports.speed import speed_frame, speed_png
 
             frame = speed_frame(mission, hardware, result.plan)
             if len(frame):
-                write_atomically(f"{output}.speed.png", speed_png(frame))
+                files[f"{output}.speed.png"] = speed_png(frame)
+        write_files_atomically(files)
     return result
 
 
@@ -139,9 +143,11 @@ class Sweep:
 def sweep_mission(mission: CheckedMission, points: int, output_dir: str | Path, *,
                   battery: str | None = None, computer: str | None = None,
                   cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK,
-                  progress: SweepProgress | None = None) -> Sweep:
+                  progress: SweepProgress | None = None, force: bool = False) -> Sweep:
     """The Pareto frontier at `points` budgets (2 to 10000), the plan on each computer at
-    the mission's budget and with each battery; writes SWEEP_FILES into `output_dir`."""
+    the mission's budget and with each battery; writes SWEEP_FILES into `output_dir`, a
+    folder written whole (contract.files.output_folder; `force`: replace a folder holding
+    other files than a gliderplan run's). Interrupted, it writes nothing."""
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
     from gliderplan.planner.sweep import batteries, computers, pareto, plot_pareto
@@ -157,16 +163,18 @@ def sweep_mission(mission: CheckedMission, points: int, output_dir: str | Path, 
     def labelled(label: str) -> Callable[[int, int], None] | None:
         return None if progress is None else lambda done, total: progress(label, done, total)
 
-    _, model = prepare(mission, hardware)
-    frame = pareto(model, points, labelled("pareto"))
-    boards = computers(mission, budget_j=hardware.budget_j, progress=labelled("computers"),
-                       cycles_per_tick=cycles_per_tick)
-    packs = batteries(mission, computer=computer, progress=labelled("batteries"),
-                      cycles_per_tick=cycles_per_tick)
-    contents = {"pareto.csv": frame.to_csv(index=False),
-                "computers.csv": boards.to_csv(index=False),
-                "batteries.csv": packs.to_csv(index=False),
-                "pareto.png": plot_pareto(frame, f"{mission.name}: quality against budget")}
-    for name in SWEEP_FILES:
-        write_atomically(out / name, contents[name])
-    return Sweep(frame, boards, packs, tuple(out / name for name in SWEEP_FILES))
+    with output_folder(out, command="plan --sweep", force=force,
+                       recognised=SWEEP_FILES) as folder:
+        _, model = prepare(mission, hardware)
+        frame = pareto(model, points, labelled("pareto"))
+        boards = computers(mission, budget_j=hardware.budget_j, progress=labelled("computers"),
+                           cycles_per_tick=cycles_per_tick)
+        packs = batteries(mission, computer=computer, progress=labelled("batteries"),
+                          cycles_per_tick=cycles_per_tick)
+        contents = {"pareto.csv": frame.to_csv(index=False),
+                    "computers.csv": boards.to_csv(index=False),
+                    "batteries.csv": packs.to_csv(index=False),
+                    "pareto.png": plot_pareto(frame, f"{mission.name}: quality against budget")}
+        interrupts.raise_if_stopped()
+        files = tuple(folder.write(name, contents[name]) for name in SWEEP_FILES)
+    return Sweep(frame, boards, packs, files)

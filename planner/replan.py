@@ -658,13 +658,16 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
     spreads and battery share. With `output` (and the vehicle's key in `key_path`), write
     the update (`output`; a chain of several: `output`.1, .2, ...), the plan the glider
     will hold (`output`.plan, signed: the next replan's --plan) and the report
-    (`output`.json), atomically. Raises TelemetryError (bad telemetry), TelemetryMismatch
-    (the glider reports another plan), ReplanInfeasible, UpdateError (the update cannot be
-    sent as asked: what to cut), PlanRejected."""
+    (`output`.json), atomically and together (never an update beside another's plan),
+    unless a stop signal arrived (an interrupted replan is no update). Raises
+    TelemetryError (bad telemetry), TelemetryMismatch (the glider reports another plan),
+    ReplanInfeasible, UpdateError (the update cannot be sent as asked: what to cut),
+    PlanRejected."""
     import json
 
+    from gliderplan.contract import interrupts
     from gliderplan.contract.errors import UsageError
-    from gliderplan.contract.files import write_atomically
+    from gliderplan.contract.files import write_files_atomically
     from gliderplan.planner.planfile import plan_board_limits, read_plan_data
     from gliderplan.planner.signing import read_key
     from gliderplan.planner.update import make_updates
@@ -711,6 +714,6 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
         files = [*contents, out.with_name(out.name + ".json")]
         run = replace(run, files=tuple(files))
         contents[files[-1]] = json.dumps(run.to_json(), indent=2) + "\n"
-        for path, data in contents.items():
-            write_atomically(path, data)
+        interrupts.raise_if_stopped()  # an interrupted replan sends nothing
+        write_files_atomically(contents)  # together or not at all
     return run
