@@ -32,7 +32,9 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
               risk: float = 1e-3, scenario_file: str | Path | None = None, workers: int = 1,
               occupancy_from_sim: bool = False,
               progress: Callable[[float, float], None] | None = None,
-              sign: str | Path | None = None, seq: int | None = None) -> PlanResult:
+              sign: str | Path | None = None, seq: int | None = None,
+              currents: str | None = None, start: tuple[float, float] | None = None,
+              start_epoch_s: float | None = None) -> PlanResult:
     """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
     preset) and `computer` ("ts7800@500"; "ts7800" lets the planner pick the clock) in
     its place; `cycles_per_tick` [cycles] is the board's work every tick. With
@@ -52,8 +54,13 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     file is signed as plan number `seq` (default: `signing.default_sequence()`). The
     result holds the plan
     (`.plan`, what the file holds) and what its solve tells (quality, minimum energy,
-    shadow price, the confidence). Raises InfeasibleBudget (with the minimum energy and
-    the largest consumers), PlanningError, HardwareError or ModelFileError."""
+    shadow price, the confidence). With `currents` (N,E [m/s], a NetCDF field or a
+    directory of glider logs, as `sim --currents`), each propelled `auto` speed is the
+    least energy per km over ground on its state's route legs from `start` (lat, lon
+    [deg]; default: where the simulator puts the vehicle in) at `start_epoch_s` [s since
+    1970] (planner/water.py). Raises InfeasibleBudget (with the minimum energy and
+    the largest consumers), PlanningError, NoHeadway (naming the leg no speed can fly),
+    CurrentError, HardwareError or ModelFileError."""
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import plan_mission
     from gliderplan.planner.planfile import write_plan_bytes
@@ -69,6 +76,10 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     check_run_size(scenarios, workers)
     hardware = load_hardware(mission, battery=battery, computer=computer,
                              cycles_per_tick=cycles_per_tick)
+    if currents is not None:
+        from gliderplan.planner.water import in_water
+
+        hardware = in_water(hardware, mission, currents, start, start_epoch_s)
     if occupancy_from_sim:
         result = _plan_on_simulation(mission, hardware, scenarios, seed, scenario_file,
                                      workers, progress)

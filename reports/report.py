@@ -218,7 +218,9 @@ def _montecarlo(directory: Path, mission: CheckedMission) -> tuple[pd.DataFrame,
 def make_report(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, run_dir: str | Path | None = None,
                 montecarlo_dir: str | Path | None = None, source: str = "",
-                sweep_points: int = SWEEP_POINTS, force: bool = False) -> Report:
+                sweep_points: int = SWEEP_POINTS, force: bool = False,
+                currents: str | None = None, start: tuple[float, float] | None = None,
+                start_utc: str | None = None) -> Report:
     """Write the report of `mission` into `output_dir`: report.html and its CSV files,
     a folder written whole (contract.files.output_folder; `force`: replace a folder
     holding other files than a gliderplan run's). Interrupted, it writes nothing; a run
@@ -228,8 +230,10 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     it); without one the mission is planned now and the plan written beside the page.
     `run_dir`: a `gliderplan sim` run of that plan; without one the plan is flown now
     into `output_dir`/run. `montecarlo_dir`: a `gliderplan montecarlo` result, shown
-    when given. `source`: the mission file's name, for the summary. Raises a
-    GliderplanError for any input that cannot be used."""
+    when given. `source`: the mission file's name, for the summary. With `currents` (as
+    `plan --currents`, from `start` (lat, lon [deg]) at `start_utc`), the mission is
+    planned, drawn and flown in that water. Raises a GliderplanError for any input that
+    cannot be used."""
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory (report writes several files there)")
@@ -241,11 +245,12 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
                        recognised=(*REPORT_FILES, *plan_files),
                        inputs=(source or None, plan_path, run_dir, montecarlo_dir)) as folder:
         return _write_report(mission, folder, plan_path, run_dir, montecarlo_dir, source,
-                             sweep_points)
+                             sweep_points, currents, start, start_utc)
 
 
 def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_dir,  # noqa: ANN001
-                  montecarlo_dir, source: str, sweep_points: int) -> Report:
+                  montecarlo_dir, source: str, sweep_points: int, currents: str | None,
+                  start: tuple[float, float] | None, start_utc: str | None) -> Report:
     from gliderplan.planner.compare import compare_boards
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
@@ -259,6 +264,15 @@ def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_
     flown = _read_run(mission, Path(run_dir)) if run_dir else None
     carlo = _montecarlo(Path(montecarlo_dir), mission) if montecarlo_dir else None
     hardware = load_hardware(mission)
+    if currents is not None:
+        from gliderplan.planner.water import in_water
+        from gliderplan.sim.export import parse_utc
+
+        try:
+            epoch = parse_utc(start_utc) if start_utc else None
+        except ValueError as err:
+            raise UsageError(f"--start: {err}") from None
+        hardware = in_water(hardware, mission, currents, start, epoch)
     _, model = prepare(mission, hardware)
     comparison = compare_boards(mission)  # before anything is written: it may refuse
     report, plan_file, written = _plan_report(
@@ -271,7 +285,8 @@ def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_
     if flown is None:
         from gliderplan.sim import run_mission
 
-        run_mission(mission, folder.path / "run", plan_path=plan_file, plots=False)
+        run_mission(mission, folder.path / "run", plan_path=plan_file, plots=False,
+                    currents=currents, start_utc=start_utc, start_position=start)
         interrupts.raise_if_stopped()  # a flight cut short is no flight to report
         flown = _read_run(mission, folder.path / "run")
         run_origin = ("flown now on the simulated glider (Python executor, bench ocean) "
@@ -294,11 +309,12 @@ def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_
     speeds = speed_frame(mission, hardware, load_plan(plan_file, mission))
     vehicles = None
     if len(speeds):
-        from gliderplan.planner.vehicles import compare_vehicles, crossovers
+        from gliderplan.planner.vehicles import compare_vehicles, crossovers, flies_on
 
         tables["speed.csv"] = speeds
-        compared = compare_vehicles(mission, list(dict.fromkeys(
-            [mission.vehicle, *COMPARED_VEHICLES])))
+        compared = compare_vehicles(mission, [  # those that can fly it: a glider no cruise
+            spec for spec in dict.fromkeys([mission.vehicle, *COMPARED_VEHICLES])
+            if flies_on(mission, spec)])
         tables["vehicles.csv"] = vehicles_frame(compared)
         vehicles = _vehicles_section(tables["vehicles.csv"], crossovers(compared))
     sections = [
@@ -482,9 +498,11 @@ def _speed_section(frame: pd.DataFrame) -> Section:
     headers = {"state": "state", "speed_mps": "chosen speed [m/s]",
                "energy_per_km_kj": "energy per km [kJ]"}
     return Section("speed", "Energy per km against speed", (
-        "<p>Where the plan flies on the propeller: the energy each km takes at each speed "
-        "through the water (the vehicle's propulsion model with the state's hotel load and "
-        "board, in still water), and the speed the planner chose, the least energy per km "
+        "<p>Where the plan flies on the propeller: the energy each km over ground takes at "
+        "each speed through the water (the vehicle's propulsion model with the state's hotel "
+        "load and board, in the water it was planned for: still water, or along its route in "
+        "the current given, still water dashed beside it), and the speed the planner chose, "
+        "the least energy per km "
         "(or the one written). Too slow and the hotel load takes the battery, too fast "
         f"and drag does; the dotted line is a fixed {REFERENCE_SPEED_MPS:g} m/s cruise.</p>",),
         speed_svg(frame), "Energy per km [kJ] against speed [m/s]; stars: the chosen speeds.",
