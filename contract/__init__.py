@@ -100,24 +100,54 @@ class EnvelopeLimit(IntEnum):
     BALLAST = 3  # |pumped volume| above the pump's max_ballast
     BAND = 4  # a yo band thinner than min_yo_band: it would turn all the time
     INFLECTION = 5  # a yo turned again sooner than its pump can move a full stroke
+    SPEED = 6  # a propelled speed outside the propulsion's range (0: the motor off)
+    THRUST = 7  # a thruster's commanded power outside its range (0: off)
+    PUMP_ENERGY = 8  # the pump's energy over the last hour above its rated mean power
+
+
+@dataclass(frozen=True)
+class PumpEnergy:
+    """The buoyancy pump's energy per volume moved at a depth z [m]: out (buoyancy up,
+    against sea pressure) (out + out_per_m z) per cc, in max(0, in + in_per_m z) per cc
+    [J cc-1, J cc-1 m-1] (`power_models.vehicle.Vehicle.pump_energy_j`)."""
+
+    out_j_per_cc: float = 0.0
+    out_j_per_cc_m: float = 0.0
+    in_j_per_cc: float = 0.0
+    in_j_per_cc_m: float = 0.0
 
 
 @dataclass(frozen=True)
 class Envelope:
     """The vehicle's rating that the runtime holds every command to, every tick, whatever
     the events computed (docs/pilot.md, The envelope). From the vehicle file's
-    `[envelope]` table (`power_models.vehicle.Envelope` defaults), compiled into the
-    mission (`gp_mission.envelope`)."""
+    `[envelope]` table and its propulsion and pump figures
+    (`power_models.vehicle_figures.derive_envelope`), compiled into the mission
+    (`gp_mission.envelope`)."""
 
     max_depth_m: float  # [m] deepest depth target or yo end
     max_pitch_rad: float  # [rad] largest |pitch| commanded
     min_yo_band_m: float  # [m] thinnest yo band (max - min depth)
     min_inflection_s: float  # [s] shortest time between two turns of a yo
     action: EnvelopeAction
+    # [m/s] a propelled speed is 0 (the motor off) or within these: its propulsion's range
+    # (0, 0: no propulsion)
+    speed_range_mps: tuple[float, float] = (0.0, 0.0)
+    # [W] a thruster's commanded power is 0 (off) or within these (0, 0: no thruster)
+    thrust_range_w: tuple[float, float] = (0.0, 0.0)
+    # [rad/s] the fastest the vehicle turns: every heading command turns no faster (inf: any)
+    max_turn_rate_rad_s: float = math.inf
+    # [W] the pump's mean power over an hour (its energy per hour / 3600 s; inf: no limit)
+    max_pump_power_w: float = math.inf
+    pump: PumpEnergy = PumpEnergy()
 
     def __post_init__(self) -> None:
+        ranges = (self.speed_range_mps, self.thrust_range_w)
         if not (self.max_depth_m > 0 and 0 < self.max_pitch_rad < 1.5707963267948966
-                and 0 <= self.min_yo_band_m < self.max_depth_m and self.min_inflection_s >= 0):
+                and 0 <= self.min_yo_band_m < self.max_depth_m and self.min_inflection_s >= 0
+                and all(0 <= low <= high < math.inf for low, high in ranges)
+                and self.max_turn_rate_rad_s > 0 and self.max_pump_power_w > 0
+                and all(math.isfinite(f) for f in vars(self.pump).values())):
             raise ValueError(f"not an envelope: {self}")
 
 

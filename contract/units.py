@@ -25,6 +25,7 @@ UNITS: dict[str, dict[str, float]] = {
     "speed": {"m/s": 1.0, "km/h": 1.0 / 3.6, "kn": 1852.0 / 3600.0},
     "rotation": {"rpm": 1.0},  # propeller revolutions per minute
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
+    "angular_rate": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
     "area": {"m2": 1.0},
     "mass": {"kg": 1.0, "g": 1e-3},
     "density": {"kg/m3": 1.0},

@@ -412,6 +412,16 @@ class _MissionWriter:
                 f"        .max_pitch_rad = {c_double(env.max_pitch_rad)},",
                 f"        .min_yo_band_m = {c_double(env.min_yo_band_m)},",
                 f"        .min_inflection_s = {c_double(env.min_inflection_s)},",
+                f"        .min_speed_mps = {c_double(env.speed_range_mps[0])},",
+                f"        .max_speed_mps = {c_double(env.speed_range_mps[1])},",
+                f"        .min_thrust_w = {c_double(env.thrust_range_w[0])},",
+                f"        .max_thrust_w = {c_double(env.thrust_range_w[1])},",
+                f"        .max_turn_rate_rad_s = {c_double(env.max_turn_rate_rad_s)},",
+                f"        .max_pump_power_w = {c_double(env.max_pump_power_w)},",
+                f"        .pump_out_j_per_cc = {c_double(env.pump.out_j_per_cc)},",
+                f"        .pump_out_j_per_cc_m = {c_double(env.pump.out_j_per_cc_m)},",
+                f"        .pump_in_j_per_cc = {c_double(env.pump.in_j_per_cc)},",
+                f"        .pump_in_j_per_cc_m = {c_double(env.pump.in_j_per_cc_m)},",
                 f"        .action = GP_ENVELOPE_{env.action.name},",
                 "    },"]
 

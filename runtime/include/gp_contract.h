@@ -262,6 +262,10 @@ typedef enum {
     GP_LIMIT_BALLAST = 3,  /**< |pumped volume| above the pump's max_ballast */
     GP_LIMIT_BAND = 4,  /**< a yo band thinner than min_yo_band: it would turn all the time */
     GP_LIMIT_INFLECTION = 5,  /**< a yo turned again sooner than its pump can move a full stroke */
+    GP_LIMIT_SPEED = 6,  /**< a propelled speed outside the propulsion's range (0: the motor off) */
+    GP_LIMIT_THRUST = 7,  /**< a thruster's commanded power outside its range (0: off) */
+    /** the pump's energy over the last hour above its rated mean power */
+    GP_LIMIT_PUMP_ENERGY = 8,
 } gp_envelope_limit;
 
 #endif /* GP_CONTRACT_H */

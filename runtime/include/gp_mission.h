@@ -133,6 +133,12 @@ typedef struct {
     double max_pitch_rad;        /**< largest |pitch| [rad] */
     double min_yo_band_m;        /**< thinnest yo band [m] */
     double min_inflection_s;     /**< shortest time between two turns of a yo [s] */
+    double min_speed_mps, max_speed_mps;  /**< a propelled speed: 0 (off) or within [m/s] */
+    double min_thrust_w, max_thrust_w;    /**< a thruster's command: 0 (off) or within [W] */
+    double max_turn_rate_rad_s;  /**< the fastest the vehicle turns [rad/s]; INFINITY: any */
+    double max_pump_power_w;     /**< the pump's mean power over an hour [W]; INFINITY: any */
+    double pump_out_j_per_cc, pump_out_j_per_cc_m;  /**< pumping out at z: (a + b z) [J/cc] */
+    double pump_in_j_per_cc, pump_in_j_per_cc_m;    /**< pumping in: max(0, a + b z) [J/cc] */
     uint8_t action;              /**< gp_envelope_action */
 } gp_envelope;
 

@@ -74,7 +74,8 @@ static gp_envelope_breach fly(gp_runtime *rt, const gp_mission *mission, const g
     cmd->sensor_power = now.sensor_power;
     int yo = profile->kind == GP_PROFILE_YO || profile->kind == GP_PROFILE_THERMOTRACKYO;
     return gp_envelope_hold(&mission->envelope, mission->max_ballast_cc, &rt->envelope, entered,
-                            yo ? in.args : NULL, rt->sensors[GP_SENSOR_MISSIONTIME], cmd);
+                            yo ? in.args : NULL, rt->sensors[GP_SENSOR_MISSIONTIME],
+                            rt->sensors[GP_SENSOR_DEPTH], cmd);
 }
 
 /* The mission has ended on a guard: the glider surfaces and holds there. */

@@ -6,6 +6,9 @@
     X(test_envelope_should_pass_a_command_within_the_rating)                \
     X(test_envelope_should_name_each_limit_a_command_breaks)                \
     X(test_envelope_should_stop_a_yo_turning_faster_than_its_pump)          \
+    X(test_envelope_should_hold_speed_and_thrust_to_the_propulsion_s_range) \
+    X(test_envelope_should_turn_a_heading_no_faster_than_the_vehicle)       \
+    X(test_envelope_should_stop_a_pump_working_past_its_energy_per_hour)    \
     X(test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates)  \
     X(test_envelope_check_should_refuse_no_envelope)                        \
     X(test_envelope_should_say_what_it_did_in_the_simulator_s_words)        \
