@@ -547,6 +547,11 @@ class Replanner:
             (self.belief.usable_mean, self.belief.usable_sd), self.belief.usable_prior,
             tuple(self.notes), solve_s)
 
+    def at_launch(self, held: bytes) -> ReplanResult:
+        """The plan before launch (nothing flown, nothing drawn), at the confidence against
+        the prior belief: a plan made on the model, planned at the shore's confidence."""
+        return self.replan(held, SurfacingReport(0.0, 0.0))
+
     def _infeasible_message(self, least_j: float, left_j: float,
                             report: SurfacingReport) -> str:
         wh = J_PER_WH

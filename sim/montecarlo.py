@@ -401,8 +401,16 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     budget_j = plan.budget_j if plan is not None else \
         mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
     held = key = None
-    if replan:
+    launched = {}
+    if replan:  # both flights planned at one confidence: the plan alone, and replanned
+        from gliderplan.planner.planfile import read_plan_bytes
+        from gliderplan.sim.replanning import plan_at_confidence
+
         held, key = _vehicle_plan(plan_path, key_path)
+        held, confidence, how = plan_at_confidence(mission, held, key, confidence=confidence,
+                                                   spec=spec.model())
+        plan = read_plan_bytes(held, mission)
+        launched = {"confidence": confidence, "plan_flown": how}
     job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
               robust_tracker=tracker == "robust", held=held, key=key, confidence=confidence,
               start=start, start_epoch_s=start_epoch_s)
@@ -419,7 +427,7 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
             "budget_j": budget_j, "workers": workers,
             "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
             "scheduler": scheduler or ("local pool" if workers > 1 else "none"),
-            "replan": replan}
+            "replan": replan, **launched}
     stated = summary(result, meta)
     contents = {
         "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table, preserve_index=False)),
