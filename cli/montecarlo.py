@@ -59,7 +59,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--replan", action="store_true",
                         help="fly each scenario twice: the plan alone, and with the shore "
                              "replanning the rest at each surfacing (plan updates); report "
-                             "both side by side")
+                             "both side by side, both planned at one confidence (a plan "
+                             "made at another, or on the model, is replanned at it before "
+                             "launch)")
     parser.add_argument("--confidence", type=replan_confidence, metavar="P",
                         help="with --replan: the confidence the rest is replanned at "
                              "(default: the plan's own, else 0.95)")
@@ -132,7 +134,7 @@ def _replanned(name: str, s: dict) -> str:
     link = s["link"]
     return (f"{name}: the budget held in {rate('hold_rate')} of {s['scenarios']} scenarios "
             f"with replanning at each surfacing, {rate('hold_rate_static')} with the plan "
-            f"alone\n"
+            f"alone; both from {s['plan_flown']}\n"
             f"  quality as flown {s['quality']:.4f} with replanning, {s['quality_static']:.4f} "
             f"alone\n"
             f"  link: {link['surfacings_per_mission']:.0f} surfacings a mission; up "

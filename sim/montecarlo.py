@@ -368,7 +368,9 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     write MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`).
     `replan`: each scenario is flown twice, with the plan alone and with the shore in the
     loop replanning the rest at each surfacing at `confidence` (default: the plan's own),
-    its prior the scenario file without its drift (sim/replanning.py); the vehicle holds
+    its prior the scenario file without its drift (sim/replanning.py), both from the plan
+    at that confidence (a plan that states another, or none, is replanned before launch:
+    `plan_at_confidence`); the vehicle holds
     `key_path`'s key (the plan signed with it) or one made for the run. The summary
     then holds `hold_rate`, `hold_rate_static`, `quality`, `quality_static`,
     `update_bytes_max` and what the link carried (`replanning`).
