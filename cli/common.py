@@ -55,6 +55,16 @@ def replan_confidence(text: str) -> float:
     return value
 
 
+def add_replan_confidence_argument(parser: argparse.ArgumentParser,
+                                   needs: str | None = None) -> None:
+    """`--confidence P`: the probability the rest of the mission, replanned, holds its
+    budget; `needs`: the option that turns replanning on, if there is one."""
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
+                        help=f"{f'with {needs}: ' if needs else ''}the confidence the rest is "
+                             "replanned at: the probability its budget holds (default: the "
+                             "plan's own, else 0.95)")
+
+
 def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]]) -> None:
     """UsageError for an option given without one of the options it works with: `needs`
     maps an option ("--scenarios") to those ("--confidence", "--occupancy-from-sim"); an

@@ -20,11 +20,11 @@ import sys
 
 from gliderplan.cli.common import (
     add_mission_argument,
+    add_replan_confidence_argument,
     add_start_argument,
     load_mission,
     parse_start,
     refuse_unpaired,
-    replan_confidence,
     seed,
     start_epoch_s,
 )
@@ -62,9 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "both side by side, both planned at one confidence (a plan "
                              "made at another, or on the model, is replanned at it before "
                              "launch)")
-    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
-                        help="with --replan: the confidence the rest is replanned at "
-                             "(default: the plan's own, else 0.95)")
+    add_replan_confidence_argument(parser, "--replan")
     parser.add_argument("--key", metavar="KEYFILE",
                         help="with --replan: the vehicle's key (the plan signed with it; "
                              "default: a key made for the run)")

@@ -21,9 +21,9 @@ import argparse
 
 from gliderplan.cli.common import (
     add_mission_argument,
+    add_replan_confidence_argument,
     load_mission,
     refuse_unpaired,
-    replan_confidence,
 )
 from gliderplan.contract import ExitCode
 
@@ -37,9 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--telemetry", required=True, nargs="+", metavar="T",
                         help="the glider's surfacing reports: a JSON file, or Slocum logs "
                              "(.sbd/.tbd, .dbd/.ebd) or directories of them")
-    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
-                        help="the probability the budget holds (default: the plan's own, "
-                             "else 0.95)")
+    add_replan_confidence_argument(parser)
     parser.add_argument("--key", metavar="KEYFILE",
                         help="the vehicle's key (gliderplan keygen): signs the update")
     parser.add_argument("--seq", type=int, metavar="N",

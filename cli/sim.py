@@ -21,11 +21,11 @@ import sys
 from gliderplan.cli.common import (
     add_at_sea_arguments,
     add_mission_argument,
+    add_replan_confidence_argument,
     add_start_argument,
     load_mission,
     parse_start,
     refuse_unpaired,
-    replan_confidence,
     seed,
 )
 from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
@@ -114,9 +114,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="put the shore in the loop: at each surfacing the glider reports, "
                              "the rest of the mission is replanned and the plan update sent "
                              "to the runtime (needs --plan; RUNDIR/replans.csv)")
-    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
-                        help="with --replan-every: the confidence the rest is replanned at "
-                             "(default: the plan's own, else 0.95)")
+    add_replan_confidence_argument(parser, "--replan-every")
     parser.add_argument("--scenario-file", metavar="FILE",
                         help="with --replan-every: the spreads and battery share the replan's "
                              "prior takes (default: the shipped scenario file)")

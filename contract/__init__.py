@@ -323,7 +323,14 @@ SBD_MT_MESSAGE_BYTES = 1890
 SBD_MO_SHORT_BYTES = 340  # [bytes] of one short message up, glider to shore
 SBD_MT_SHORT_BYTES = 270  # [bytes] of one short message down, shore to glider
 COMMAND_MAX_SIZE = 46  # [bytes] of a COMMAND payload that carries every field
+MISSION_HASH_BYTES = 32  # [bytes] of HELLO's mission hash (raw SHA-256 of the mission)
+# [bytes] of HELLO before the mission's name: protocol, n_sensors, read_mask, hash, name_len
+HELLO_FIXED_BYTES = 1 + 1 + 4 + MISSION_HASH_BYTES + 1
 BAUD = 115200  # 8N1: 10 bits per byte on the line
+# [ms] a frame unanswered this long is sent again (science computer's frames, runtime's HELLO)
+RETRANSMIT_MS = 200
+# [s] the watchdog: the runtime releases the glider after this long without a valid frame
+LINK_TIMEOUT_S = 10.0
 
 
 class MessageType(IntEnum):

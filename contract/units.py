@@ -33,7 +33,6 @@ UNITS: dict[str, dict[str, float]] = {
     "compressibility": {"1/Pa": 1.0, "1/dbar": 1e-4},
     "pump_per_volume": {"J/cc": 1.0},
     "pump_per_volume_depth": {"J/(cc m)": 1.0},
-    "energy_per_byte": {"J/B": 1.0},
     "voltage": {"V": 1.0},
     "charge": {"Ah": 3600.0, "mAh": 3.6},  # [C]
     "dimensionless": {"1": 1.0},

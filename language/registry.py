@@ -145,7 +145,7 @@ ROUTES: dict[str, RouteInfo] = {
             "sweep",
             (ParamSpec("spacing", unit="m", low=0.0, low_open=True),),
             3,
-            32,
+            MAX_ROUTE_POINTS,  # the runtime's route table, whose hull it sweeps
             "lawn-mower sweep of the convex hull of (lat, lon) corner points",
         ),
         RouteInfo(

@@ -46,7 +46,6 @@ MAGIC = b"GU"
 TAG_BYTES = 32
 # the smallest update: header and tag, no change
 MIN_UPDATE_BYTES = UPDATE_HEADER_BYTES + TAG_BYTES
-MAX_CHANGES = 255  # the header's count is a u8
 _MAX_MANTISSA = 10**UPDATE_MAX_DIGITS - 1
 _HEADER = struct.Struct(f"<2sBII{UPDATE_HASH_BYTES}s{UPDATE_HASH_BYTES}sB")
 assert _HEADER.size == UPDATE_HEADER_BYTES

@@ -28,8 +28,6 @@ SWEEP_POINTS = 20  # budgets on the Pareto curve
 QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
-SECTIONS = ("summary", "pareto", "energy", "speed", "vehicles", "plan-vs-simulation",
-            "profile", "track", "sbc", "sensitivity", "montecarlo")
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
+from gliderplan.contract import MAX_ROUTE_POINTS
 from gliderplan.language import check_source
 
 _TEMPLATE = """mission m
@@ -160,6 +163,20 @@ def test_mission_that_never_exits():
 
 def test_the_template_itself_is_clean():
     assert _diagnostics() == []
+
+
+def _sweep(corners: int) -> str:
+    """A sweep over `corners` points on a circle about 39 10'N 73 49'W."""
+    ring = ((3910 + 0.5 * math.sin(2 * math.pi * k / corners),
+             -7349 + 0.5 * math.cos(2 * math.pi * k / corners)) for k in range(corners))
+    return "sweep(100, " + ", ".join(f"({lat:.4f}, {lon:.4f})" for lat, lon in ring) + ")"
+
+
+def test_a_sweep_takes_as_many_corners_as_the_runtime_s_route_table_holds():
+    assert _diagnostics(route=_sweep(MAX_ROUTE_POINTS)) == []
+    (refused,) = _diagnostics(route=_sweep(MAX_ROUTE_POINTS + 1))
+    assert refused.startswith(f"error: 'sweep' takes spacing [m], 3 to {MAX_ROUTE_POINTS} "
+                              "(lat, lon) points"), refused
 
 
 def test_all_errors_of_a_pass_at_once():

@@ -229,6 +229,12 @@ def test_reports_in_several_json_files_are_read_in_order(tmp_path, signed, capsy
      "with --replan"),
     (["montecarlo", SHORT, "--scenarios", "2", "--replan", "--confidence", "1", "-o", "mc"],
      "expected a probability in [0.5, 1), got '1'"),
+    (["montecarlo", SHORT, "--scenarios", "2", "--confidence", "0.9", "-o", "mc"],
+     "--confidence works only with --replan"),
+    (["sim", SHORT, "--replan-every", "surfacing", "--confidence", "0.4", "-o", "run"],
+     "expected a probability in [0.5, 1), got '0.4'"),
+    (["replan", SHORT, "--plan", "p", "--telemetry", "t", "--confidence", "lots"],
+     "expected a probability in [0.5, 1), got 'lots'"),
     (["replan", SHORT, "--plan", "p", "--telemetry", "t", "--seq", "3"], "--seq works only "
      "with --key"),
 ])

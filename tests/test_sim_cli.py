@@ -351,7 +351,7 @@ def test_ctrl_c_in_a_long_run_keeps_the_part_flown_and_its_plots(tmp_path, capsy
 def test_ctrl_c_before_the_first_tick_writes_nothing(tmp_path, capsys, monkeypatch):
     interrupt_at(monkeypatch, 0)
     assert main(["sim", str(FIG2), "-o", str(tmp_path / "run")]) == 130
-    assert not (tmp_path / "run").exists() or not any((tmp_path / "run").iterdir())
+    assert not (tmp_path / "run").exists()
     assert "interrupted" in capsys.readouterr().err
 
 

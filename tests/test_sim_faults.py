@@ -7,6 +7,7 @@ leaves each of its files whole (the old one or the new one) or absent."""
 
 from __future__ import annotations
 
+import functools
 import json
 import random
 import signal
@@ -16,6 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
+from waiting import wait_until
 
 from gliderplan.cli.main import main
 from gliderplan.contract.errors import UsageError
@@ -151,6 +153,11 @@ def snapshot(directory: Path) -> set[tuple[str, int, int]]:
     return files
 
 
+def _ended_or_wrote(process: subprocess.Popen, out: Path, before: set) -> bool:
+    """Whether `process` has ended or changed the files in `out` from `before`."""
+    return process.poll() is not None or snapshot(out) != before
+
+
 def test_a_killed_sim_leaves_each_file_whole_or_absent(tmp_path):
     """`gliderplan sim` killed (SIGKILL) while it writes its files (a few milliseconds
     after the first one is touched): each file is the previous run's, the new run's, or
@@ -168,9 +175,9 @@ def test_a_killed_sim_leaves_each_file_whole_or_absent(tmp_path):
         before = snapshot(out)
         process = subprocess.Popen([*command, str(out), *seed], stdout=subprocess.DEVNULL,
                                    stderr=subprocess.DEVNULL)
-        while process.poll() is None and snapshot(out) == before:
-            time.sleep(0.0005)  # until it starts writing
-        time.sleep(rng.uniform(0.0, 0.03))
+        wait_until(functools.partial(_ended_or_wrote, process, out, before), 120,
+                   "sim starts writing its files")
+        time.sleep(rng.uniform(0.0, 0.03))  # then a random moment of its writing
         process.send_signal(signal.SIGKILL)
         killed_while_writing += process.wait() == -signal.SIGKILL
         for name in names:

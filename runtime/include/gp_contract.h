@@ -77,14 +77,17 @@
 #define GP_MAX_PAYLOAD 240  /**< [bytes] of one frame's payload */
 #define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
-/** [bytes] of a plan sent over the link (PLAN's `total` is a u16) */
-#define GP_MAX_LINK_PLAN 65535
-/** [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes) */
-#define GP_SBD_MT_MESSAGE_BYTES 1890
-#define GP_SBD_MO_SHORT_BYTES 340  /**< [bytes] of one short message up, glider to shore */
-#define GP_SBD_MT_SHORT_BYTES 270  /**< [bytes] of one short message down, shore to glider */
 #define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
+/** [bytes] of HELLO's mission hash (raw SHA-256 of the mission) */
+#define GP_MISSION_HASH_BYTES 32
+/** [bytes] of HELLO before the mission's name: protocol, n_sensors, read_mask, hash, name_len */
+#define GP_HELLO_FIXED_BYTES 39
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
+#define GP_BAUD 115200  /**< 8N1: 10 bits per byte on the line */
+/** [ms] a frame unanswered this long is sent again (science computer's frames, runtime's HELLO) */
+#define GP_RETRANSMIT_MS 200
+/** [s] the watchdog: the runtime releases the glider after this long without a valid frame */
+#define GP_LINK_TIMEOUT_S 10.0
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
 

@@ -37,6 +37,7 @@
     X(test_sweep_should_mow_a_square_in_alternating_lines)                  \
     X(test_sweep_should_clip_lines_to_a_triangle)                           \
     X(test_sweep_should_stop_at_256_waypoints)                              \
+    X(test_sweep_should_read_every_corner_a_route_holds)                    \
     X(test_plan_should_accept_a_good_plan)                                  \
     X(test_plan_should_read_a_yos_thrust_and_a_level_profile)               \
     X(test_plan_should_reject_bad_files_naming_the_line)                    \
