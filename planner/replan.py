@@ -557,7 +557,8 @@ class Replanner:
         wh = J_PER_WH
         worst = sorted(((m, abs(m.change)) for m in self.belief.moves()), key=lambda x: -x[1])
         moved = ", ".join(str(m) for m, _ in worst[:2])
-        return (f"at {report.time_s / 3600:.1f} h the budget left, {left_j / wh:,.1f} Wh "
+        where = f"{report.source}: " if report.source else ""
+        return (f"{where}at {report.time_s / 3600:.1f} h the budget left, {left_j / wh:,.1f} Wh "
                 f"expected, cannot hold the rest of the mission at confidence "
                 f"{self.confidence:g}: with every duty at its floor it needs "
                 f"{least_j / wh:,.1f} Wh at that confidence ({moved}). No update is made: "

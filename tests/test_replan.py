@@ -159,6 +159,7 @@ def test_a_budget_that_cannot_hold_the_rest_is_refused_and_no_update_is_written(
     said = capsys.readouterr().err
     assert code == ExitCode.BAD_INPUT
     assert "cannot hold the rest of the mission at confidence" in said
+    assert f"{reports.name}: report 3: at 24.0 h the budget left" in said  # where
     assert "No update is made: the glider keeps flying its current plan" in said
     assert not list(tmp_path.glob("u*"))
     run = replan_mission(check_file(SHORT).checked(), plan, reports, key_path=key,
