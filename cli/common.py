@@ -81,6 +81,13 @@ def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]])
                              f"{option} out")
 
 
+def add_force_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--force", action="store_true",
+                        help="write into an -o folder that holds files other than a "
+                             "gliderplan run's: they are deleted (without it such a folder "
+                             "is refused; a previous run's folder is always replaced whole)")
+
+
 def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cycles-per-tick", type=cycles_per_tick, metavar="N",
                         default=RUNTIME_CYCLES_PER_TICK,
@@ -108,15 +115,20 @@ def add_start_argument(parser: argparse.ArgumentParser, default: str) -> None:
                              + default)
 
 
-def add_at_sea_arguments(parser: argparse.ArgumentParser, currents_default: str,
-                         map_shows: str) -> None:
-    """`--currents` (sim.current_files.load_currents) and `--map FILE` (sim.seamap)."""
+def add_currents_argument(parser: argparse.ArgumentParser, default: str) -> None:
+    """`--currents` (sim.current_files.load_currents)."""
     parser.add_argument("--currents", metavar="N,E|FIELD.nc|LOGDIR",
                         help="the current the glider flies through: N,E toward north and "
                              "east [m/s]; a CF NetCDF current field (eastward/northward_"
                              "sea_water_velocity, Copernicus uo/vo, HYCOM water_u/water_v); "
                              "or Slocum flight logs (*.dbd) whose measured currents persist "
-                             f"(default: {currents_default})")
+                             f"(default: {default})")
+
+
+def add_at_sea_arguments(parser: argparse.ArgumentParser, currents_default: str,
+                         map_shows: str) -> None:
+    """`--currents` (sim.current_files.load_currents) and `--map FILE` (sim.seamap)."""
+    add_currents_argument(parser, currents_default)
     parser.add_argument("--map", metavar="FILE.png",
                         help=f"also draw {map_shows} (PNG or SVG)")
 

@@ -9,7 +9,8 @@ the budget is the mission's usable battery) in N scenarios drawn from the scenar
 DIR/scenarios.parquet (one row per scenario), DIR/summary.json (the probability that the
 budget holds, with its 95 % interval; energy and duration quantiles), DIR/energy.png and
 DIR/exhaustion.png. Deterministic for a seed, whatever the number or kind of workers.
-Ctrl-C keeps the scenarios that finished (exit 130).
+Ctrl-C (or SIGTERM) stops it at once, workers and all, and writes the scenarios that
+finished, marked partial and with no probability (exit 130, 143).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import os
 import sys
 
 from gliderplan.cli.common import (
+    add_force_argument,
     add_mission_argument,
     add_replan_confidence_argument,
     add_start_argument,
@@ -70,7 +72,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                "2000-01-01T00:00:00Z")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
-                        help="directory for scenarios.parquet, summary.json and the plots")
+                        help="directory for scenarios.parquet, summary.json and the plots "
+                             "(written whole: it replaces a previous run there)")
+    add_force_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -90,19 +94,35 @@ def run(args: argparse.Namespace) -> int:
             duration_s=parse_duration_s(args.duration) if args.duration else None,
             tracker=args.tracker, progress=progress, replan=args.replan,
             confidence=args.confidence, key_path=args.key,
-            start=None if lat is None else (lat, lon), start_epoch_s=start_epoch_s(when))
+            start=None if lat is None else (lat, lon), start_epoch_s=start_epoch_s(when),
+            force=args.force, mission_path=args.mission)
     finally:
         progress.finish()
     summary = run_.summary
     if args.json:
         print_json(summary)
+    elif run_.result.interrupted:
+        print(_partial(mission.name, summary))
     else:
         print(_verdict(mission.name, summary))
     if run_.result.interrupted:
         print(f"  interrupted: {len(run_.result.rows)} of {args.scenarios} scenarios "
-              f"finished; the files in {args.output} hold them", file=sys.stderr)
+              f"finished; the files in {args.output} hold them, marked partial "
+              "(summary.json: complete false, no probability)", file=sys.stderr)
+        return ExitCode.INTERRUPTED
+    if run_.stopped:
+        print(f"  interrupted once every scenario had flown: the files in {args.output} "
+              "hold the whole run", file=sys.stderr)
         return ExitCode.INTERRUPTED
     return ExitCode.OK
+
+
+def _partial(name: str, s: dict) -> str:
+    """An interrupted run as a pilot reads it: how far it got, and no hold rate."""
+    return (f"{name}: INTERRUPTED after {s['scenarios']} of {s['requested']} scenarios: no "
+            "probability that the budget holds (the scenarios that finished before a stop "
+            "are not the run asked for; run it again to the end)\n"
+            f"  of those that finished, the budget held in {s['budget_held']}")
 
 
 def _verdict(name: str, s: dict) -> str:

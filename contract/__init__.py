@@ -148,6 +148,11 @@ class FlightLimits:
     # per state, the alternative flown where no plan sets one: the first the vehicle can
     # fly (a propeller AUV skips a yo); empty: the first of each state
     unplanned_profiles: tuple[int, ...] = field(default=(), kw_only=True)
+    # [m/s] the speeds a level (propelled) profile may fly: its propulsion's range
+    propelled_speed_mps: tuple[float, float] = field(default=(0.0, MAX_PLAN_SPEED_MPS),
+                                                     kw_only=True)
+    # [W] a yo's thruster command, where one is on: its power-command range
+    thrust_range_w: tuple[float, float] = field(default=(0.0, MAX_PLAN_THRUST_W), kw_only=True)
     # the vehicle's rating every command is held to in flight (`gp_mission.envelope`):
     # always given, by name
     envelope: Envelope = field(kw_only=True)
@@ -377,6 +382,7 @@ FLAG_DONE = 1 << 1  # the mission exited
 FLAG_CLIMBING = 1 << 2  # else diving
 FLAG_HEADING = 1 << 3  # `heading_rad` is valid
 FLAG_ENVELOPE = 1 << 4  # the envelope guard held this command at the vehicle's rating
+FLAG_HEADING_HOLD = 1 << 5  # `heading_rad` is held as it is, uncorrected for the current
 
 # SENSORS's `flags`; the other bits are reserved (0), and a SENSORS with one set is dropped.
 SENSORS_MASK = 1 << 0  # a u32 mask follows; else the values are those of HELLO's read_mask
@@ -456,6 +462,12 @@ class UpdateField(IntEnum):
     PROFILE_PITCH = 8  # field 3
     PROFILE_BALLAST = 9  # field 4
     PROFILE_SPEED = 10  # field 5
+    PROFILE_THRUST = 11  # `profile ... THRUST_W`: field 6, appended where the line has none
+
+
+# Each UpdateField that a line may leave out (0 by the format): a change to it on a line
+# without it appends it after the line's last field.
+UPDATE_OPTIONAL_FIELDS = frozenset({UpdateField.PROFILE_THRUST})
 
 
 # Each UpdateField's line keyword and the 1-based place of the field after it.
@@ -464,7 +476,8 @@ UPDATE_FIELD_LINES: dict[UpdateField, tuple[str, int]] = {
     UpdateField.POWER_SLEEP: ("power", 1), UpdateField.POWER_CYCLES: ("power", 2),
     UpdateField.SENSOR_PERIOD: ("sensor", 2), UpdateField.SENSOR_ON: ("sensor", 3),
     UpdateField.PROFILE_SHARE: ("profile", 2), UpdateField.PROFILE_PITCH: ("profile", 3),
-    UpdateField.PROFILE_BALLAST: ("profile", 4), UpdateField.PROFILE_SPEED: ("profile", 5)}
+    UpdateField.PROFILE_BALLAST: ("profile", 4), UpdateField.PROFILE_SPEED: ("profile", 5),
+    UpdateField.PROFILE_THRUST: ("profile", 6)}
 
 
 class UpdateStatus(IntEnum):

@@ -47,7 +47,7 @@ HEX = frozenset({"NO_STATE"})  # byte values written in hex, as docs/protocol.md
 # Bits of a message's flags byte, as C enumerations.
 FLAGS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("COMMAND's flags", ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING",
-                         "FLAG_ENVELOPE")),
+                         "FLAG_ENVELOPE", "FLAG_HEADING_HOLD")),
     ("SENSORS's flags", ("SENSORS_MASK", "SENSORS_RESYNC")),
 )
 # Enumeration -> (C type name, prefix of its members).

@@ -26,7 +26,11 @@ The time left in each state is the plan's less what the glider has flown there, 
 to the time left in the plan's mission; the plan's own rates (its prediction per state
 and component) are the model each figure multiplies. What changes is what the glider
 flies: the duties of the sensors marked `duty auto` (on-time rounded to 0.1 s) and the
-profile shares (to 1e-4); the clocks, the sleep, the pitch and buoyancy stay.
+profile shares (to 1e-4); the clocks, the sleep, the pitch and buoyancy stay. Given the
+water the vehicle flies (`legs`: the current on each state's route, planner/water.py,
+as `plan --currents` takes it), the speeds and thruster commands the planner chooses
+(`auto` speeds, `thrust auto`) are chosen in it anew, and the rest of the mission's
+energy is modelled at them.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ from gliderplan.contract import NO_BOARD, VEHICLE_COMPONENTS, Component, same_cl
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language import ir
+from gliderplan.language.registry import PROFILES
 from gliderplan.planner.inputs import ENERGY_UNIT_J, PlanInputs, build_inputs, coefficients
 from gliderplan.planner.model import SOLVER, model_for
 from gliderplan.planner.occupancy import measured_occupancy
@@ -54,9 +59,12 @@ from gliderplan.planner.planfile import (
     Plan,
     PlanFileError,
     PlanRejected,
+    ProfilePlan,
     SensorPlan,
     read_plan_bytes,
 )
+from gliderplan.planner.rates import ProfileRates
+from gliderplan.planner.speed import Leg
 from gliderplan.power_models.posterior import (
     COMPONENT_GROUPS,
     MODEL_NOISE,
@@ -283,7 +291,8 @@ class Replanner:
 
     def __init__(self, mission: ir.CheckedMission, held: bytes, *,
                  confidence: float | None = None, spec=None,  # noqa: ANN001
-                 if_infeasible: str = "refuse", once: bool = False) -> None:
+                 if_infeasible: str = "refuse",
+                 legs: dict[str, tuple[Leg, ...]] | None = None, once: bool = False) -> None:
         if if_infeasible not in IF_INFEASIBLE:
             raise ValueError(f"if_infeasible must be one of {IF_INFEASIBLE}")
         try:
@@ -297,6 +306,9 @@ class Replanner:
             raise PlanningError(f"confidence {self.confidence:g}: must lie in [0.5, 1)")
         self.z = NormalDist().inv_cdf(self.confidence)
         hardware = plan_hardware(mission, plan)
+        if legs is not None:  # the water now known: propelled speeds and thrusts anew
+            hardware = replace(hardware, legs=legs)
+        self.rechoose = legs is not None
         times = {s.name: s.time_s for s in plan.states}
         occupancy = measured_occupancy(mission, times, {s.name: s.visits for s in plan.states},
                                        note="time in each state: the plan's")
@@ -598,8 +610,22 @@ class Replanner:
                 shares = _rounded_shares(share[rows])
                 profiles = tuple(replace(p, share=f)  # pitch, ballast, speed, thrust kept
                                  for p, f in zip(state.profiles, shares, strict=True))
+            if self.rechoose:
+                profiles = self._in_water(s, profiles, [inputs.profiles[r] for r in rows])
             states.append(replace(state, sensors=tuple(sensors), profiles=profiles))
         return replace(held, states=tuple(states)), tuple(changes)
+
+
+    def _in_water(self, s: int, profiles: tuple[ProfilePlan, ...], rates: list[ProfileRates]
+                  ) -> tuple[ProfilePlan, ...]:
+        """State `s`'s planned profiles with the speed and thrust the planner chooses in
+        the water given (`rates`, planner.rates): a propelled profile's speed, a
+        thruster-assisted yo's speed and command; the others as they are."""
+        written = self.mission.states[s].profiles
+        return tuple(replace(p, speed_mps=r.speed_mps, thrust_w=r.thrust_w)
+                     if r.flyable and (PROFILES[written[p.index].kind].propelled
+                                       or written[p.index].thrust is not None) else p
+                     for p, r in zip(profiles, rates, strict=True))
 
 
 def _values(model):  # noqa: ANN001, ANN202
@@ -654,6 +680,20 @@ class ReplanRun:
                 "files": [str(f) for f in self.files]}
 
 
+def _water_at(mission: ir.CheckedMission, currents: str, report: SurfacingReport,
+              start_epoch_s: float | None) -> dict[str, tuple[Leg, ...]]:
+    """The route's legs in `--currents` from where `report` places the glider (where the
+    mission starts, if it gives no position), at its time."""
+    from gliderplan.planner.legs import ddmm_to_degrees
+    from gliderplan.planner.water import plan_water
+    from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
+
+    here = None if report.lat is None or report.lon is None else \
+        (ddmm_to_degrees(report.lat), ddmm_to_degrees(report.lon))
+    epoch = DEFAULT_START_EPOCH_S if start_epoch_s is None else start_epoch_s
+    return plan_water(mission, currents, here, epoch + report.time_s)[0]
+
+
 class TelemetryMismatch(GliderplanError):
     """Telemetry that says the glider holds another plan than the one replanned."""
 
@@ -663,20 +703,27 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
                    confidence: float | None = None, key_path: str | Path | None = None,
                    output: str | Path | None = None, seq: int | None = None,
                    max_updates: int = 1, scenario_file: str | Path | None = None,
-                   if_infeasible: str = "refuse") -> ReplanRun:
+                   if_infeasible: str = "refuse", currents: str | None = None,
+                   start_epoch_s: float | None = None) -> ReplanRun:
     """Replan the rest of `mission` after the telemetry (a JSON file or Slocum logs) from
     the signed plan in `plan_path`, which the glider holds, at `confidence` (default: the
     plan's own, else 0.95); the prior is the vehicle's figures with the scenario file's
     spreads and battery share. With `output` (and the vehicle's key in `key_path`), write
     the update (`output`; a chain of several: `output`.1, .2, ...), the plan the glider
     will hold (`output`.plan, signed: the next replan's --plan) and the report
-    (`output`.json), atomically. Raises TelemetryError (bad telemetry), TelemetryMismatch
-    (the glider reports another plan), ReplanInfeasible, UpdateError (the update cannot be
-    sent as asked: what to cut), PlanRejected."""
+    (`output`.json), atomically and together (never an update beside another's plan),
+    unless a stop signal arrived (an interrupted replan is no update). Raises
+    TelemetryError (bad telemetry), TelemetryMismatch (the glider reports another plan),
+    ReplanInfeasible, UpdateError (the update cannot be sent as asked: what to cut),
+    PlanRejected. With `currents` (as `plan --currents`) the speeds and thrusts the
+    planner chooses are chosen anew in that water, on the route from the glider's last
+    reported position, the field read at the report's time after the mission's start
+    `start_epoch_s` [s since 1970] (default: the simulator's)."""
     import json
 
+    from gliderplan.contract import interrupts
     from gliderplan.contract.errors import UsageError
-    from gliderplan.contract.files import write_atomically
+    from gliderplan.contract.files import write_files_atomically
     from gliderplan.planner.planfile import plan_board_limits, read_plan_data
     from gliderplan.planner.signing import read_key
     from gliderplan.planner.update import make_updates
@@ -693,7 +740,8 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
     notes = check_reports(reports, tuple(s.name for s in mission.states))
     replanner = Replanner(mission, held, confidence=confidence,
                           spec=read_spec(scenario_file), if_infeasible=if_infeasible,
-                          once=True)
+                          legs=None if currents is None else
+                          _water_at(mission, currents, reports[-1], start_epoch_s), once=True)
     said = next((r for r in reversed(reports) if r.plan_seq is not None), None)
     if said is not None and said.plan_seq != replanner.plan.seq:
         ack = "" if said.ack is None else f" (its last update: {said.ack.status.name.lower()}"\
@@ -724,6 +772,6 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
         files = [*contents, out.with_name(out.name + ".json")]
         run = replace(run, files=tuple(files))
         contents[files[-1]] = json.dumps(run.to_json(), indent=2) + "\n"
-        for path, data in contents.items():
-            write_atomically(path, data)
+        interrupts.raise_if_stopped()  # an interrupted replan sends nothing
+        write_files_atomically(contents)  # together or not at all
     return run

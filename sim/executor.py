@@ -20,6 +20,7 @@ from gliderplan.contract import (
     FLAG_DONE,
     FLAG_ENVELOPE,
     FLAG_HEADING,
+    FLAG_HEADING_HOLD,
     FLAG_SURFACE,
     N_SENSORS,
     NO_STATE,
@@ -230,7 +231,8 @@ class PythonRuntime:
         thrust = thrust if profile.kind in pilot.ASSISTED else 0.0
         heading, valid = self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
-                 | (FLAG_HEADING if valid else 0))
+                 | (FLAG_HEADING if valid else 0)
+                 | (FLAG_HEADING_HOLD if valid and self.route.holds else 0))
         if self.guard is not None:
             band = (args[0], args[1]) if profile.kind in ("yo", "thermotrackyo") else None
             held = self._hold(tick, entered, band, target, pitch_cmd, ballast_cmd, flags)

@@ -31,8 +31,10 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         progress: Callable[[float, float], None] | None = None,
         tick_by_tick: bool = False, key_path: str | None = None,
         state_dir: str | Path | None = None,
-        faults: FaultSpec | None = None, shore: ShoreLoop | None = None) -> RunRecord:
-    """Fly the mission until it exits or `config.duration_s` ends.
+        faults: FaultSpec | None = None, shore: ShoreLoop | None = None,
+        keep_interrupted: bool = False) -> RunRecord:
+    """Fly the mission until it exits or `config.duration_s` ends; KeyboardInterrupt
+    goes through, but with `keep_interrupted` it ends the flight (sim.loop.simulate).
 
     The Python executor flies runs of ticks at once where nothing can happen between them
     (sim/fast.py), the same flight bit for bit; `tick_by_tick` flies every tick through
@@ -69,12 +71,13 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                               gauge, science.glider, mission)
         if tick_by_tick or vehicle.propulsion is not None:  # sim/fast.py: gliders only
             record = simulate(mission, executor, science, config, progress, gauge=gauge,
-                              on_surfacing=hook)
+                              on_surfacing=hook, keep_interrupted=keep_interrupted)
         else:
             from gliderplan.sim.fast import FastForward
 
             record = simulate(mission, executor, science, config, progress,
-                              FastForward(mission, executor, science), gauge, hook)
+                              FastForward(mission, executor, science), gauge, hook,
+                              keep_interrupted)
         record.entry_variables = executor.entry_variables
         record.envelope = located(executor.envelope_notes, mission)
         record.events_fired = executor.event_count
@@ -102,7 +105,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                                                  science.glider, mission)
     try:
         record = simulate(mission, c_runtime, science, config, progress, gauge=gauge,
-                          on_surfacing=hook)
+                          on_surfacing=hook, keep_interrupted=keep_interrupted)
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended

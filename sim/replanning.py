@@ -32,6 +32,7 @@ from gliderplan.language import ir
 from gliderplan.planner.plan import PlanningError
 from gliderplan.planner.planfile import read_plan_bytes
 from gliderplan.planner.replan import Replanner, stated_confidence
+from gliderplan.planner.speed import Leg
 from gliderplan.planner.update import UpdateError, apply_update, make_updates
 from gliderplan.power_models.posterior import DischargeCurve
 from gliderplan.power_models.telemetry import (
@@ -93,15 +94,17 @@ class ShoreLoop:
     at the start, `key` the vehicle's. `usable_truth`: the share of its rating the
     simulated battery really holds (what its voltage tells); `confidence`, `spec`: as for
     `Replanner` (its prior); the rest of the mission is planned at the least energy when
-    the budget left cannot hold it at the confidence."""
+    the budget left cannot hold it at the confidence. `legs`: the water the shore knows
+    the vehicle flies (planner/water.py), its speeds and thrusts chosen anew in it."""
 
     def __init__(self, mission: ir.CheckedMission, held: bytes, key: bytes, *,
                  tick_s: float, usable_truth: float = 1.0, seed: int = 0,
                  confidence: float | None = None, spec=None,  # noqa: ANN001
-                 if_infeasible: str = "least-energy", check=None) -> None:  # noqa: ANN001
+                 if_infeasible: str = "least-energy", check=None,  # noqa: ANN001
+                 legs: dict[str, tuple[Leg, ...]] | None = None) -> None:
         self.mission, self.key, self.tick_s = mission, key, tick_s
         self.replanner = Replanner(mission, held, confidence=confidence, spec=spec,
-                                   if_infeasible=if_infeasible)
+                                   if_infeasible=if_infeasible, legs=legs)
         self.held = held  # the plan the shore knows the vehicle holds
         self.sent: dict[int, bytes] = {}  # seq -> the plan file an update sent makes
         self.names = tuple(s.name for s in mission.states)

@@ -10,9 +10,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
+from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S, interrupts
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import output_folder
 from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.planfile import Plan, load_plan
 
@@ -29,6 +29,10 @@ RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "en
 NETCDF_FILE = "trajectory.nc"  # with netcdf=True
 REPLANS_FILE = "replans.csv"  # with replan_every: what each surfacing did
 REPLAN_EVERY = ("surfacing",)
+# what a run's folder may hold (its files, `gliderplan export`'s): a folder holding only
+# these is taken for an earlier run (one written before folders carried their marker)
+RECOGNISED_FILES = (*RUN_FILES, NETCDF_FILE, "trajectory_og1.nc", "trajectory_cf.nc",
+                    "track.geojson", "track.kml", REPLANS_FILE)
 TRACKERS = ("robust", "naive")
 
 
@@ -40,14 +44,18 @@ class RunResult:
     energy: RunEnergy  # every component's energy, per tick and per state [J]
     check: FlightCheck  # the flight against the plan ("no plan" without one)
     plan: Plan | None
-    files: tuple[Path, ...]  # the run's files, written atomically
+    files: tuple[Path, ...]  # the run's files, written into their folder whole
     water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
+    # a stop signal arrived once the flight was over, while its files were written: they
+    # hold the whole flight, and the command stops (exit 130 or 143) all the same
+    stopped: bool = False
     replanning: dict | None = None  # with replan_every: what crossed the link (summary.json's)
     current_notes: tuple[str, ...] = ()  # the currents flown, and warnings about them
     currents: CurrentField | None = None  # the field flown (None: none, or a constant)
 
     @property
     def interrupted(self) -> bool:
+        """The flight was cut short by a stop signal: the files hold the part flown."""
         return self.record.ended == "interrupted"
 
 
@@ -90,6 +98,11 @@ def flown_water(mission: CheckedMission, vehicle: Vehicle, given: Water, spec: s
     return vehicle.ballasted_for(rho), density, note
 
 
+def _path_of(spec: str | None) -> str | None:
+    """The file or folder `--ocean` or `--currents` names (None: a preset, numbers)."""
+    return spec if spec is not None and Path(spec).exists() else None
+
+
 def with_currents(mission: CheckedMission, config: RunConfig, spec: str, vehicle: Vehicle
                   ) -> tuple[RunConfig, list[str]]:
     """`config` flying the currents of `--currents SPEC` (sim.current_files.checked_field),
@@ -130,8 +143,12 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                 state_dir: str | Path | None = None, faults: str | None = None,
                 floor: float | str | None = None,
                 replan_every: str | None = None, confidence: float | None = None,
-                scenario_file: str | Path | None = None) -> RunResult:
-    """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`.
+                scenario_file: str | Path | None = None, force: bool = False,
+                mission_path: str | Path | None = None) -> RunResult:
+    """Fly `mission` on the simulated glider and write RUN_FILES into `output_dir`, a
+    folder written whole (contract.files.output_folder; `force`: replace a folder that
+    holds other files than a gliderplan run's; `mission_path`, the mission's file, is
+    refused inside it, as every file the run reads).
 
     `plan_path`: the plan to fly and to check the flight against (without one every
     sensor a state logs is always on). `runtime`: "python" (the reference executor) or
@@ -173,8 +190,10 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     crossed the link, and replans.csv what each surfacing did.
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
-    runtime that cannot be built); KeyboardInterrupt only if nothing was flown: a run
-    interrupted later keeps and writes the part flown (`RunResult.interrupted`).
+    runtime that cannot be built, a folder that cannot be written); KeyboardInterrupt if
+    nothing was flown, or on a second stop signal while the files are written (the folder
+    then keeps its previous run): a run interrupted in flight keeps and writes the part
+    flown, marked partial (`RunResult.interrupted`, summary.json's `complete`).
     """
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import energy as accounting
@@ -245,6 +264,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         key = read_key(key_path)
         if runtime == "python":  # the C runtime checks for itself
             check_signature(read_plan_data(plan_path), key, str(plan_path))
+    # every file the run reads (refused inside the folder it replaces)
+    read = (mission_path, plan_path, key_path, state_dir, _path_of(ocean), _path_of(currents),
+            scenario_file)
     shore = None
     if replan_every is not None:
         shore, plan_path, key_path = _shore(mission, replan_every, plan_path, key_path, runtime,
@@ -260,67 +282,81 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
         if progress is not None:
             progress(done_s, total_s)
 
-    try:
-        record = fly(mission, water, config, vehicle, plan, None if plan_path is None
-                     else str(plan_path), runtime, robust_tracker=tracker == "robust",
-                     progress=progressed, key_path=None if key_path is None else str(key_path),
-                     state_dir=state_dir, faults=fault_spec, shore=shore)
-        if not len(record.columns["time_s"]):
-            raise KeyboardInterrupt  # nothing flown, nothing to write
-        used = accounting.account(record, mission, vehicle, plan)
-        check = accounting.check_flight(used, plan)
-        contents = {}
-        if plots:
-            series = drawing.depth_series(record), drawing.energy_series(record, used, plan)
+    # The first stop signal during the flight ends it (the record says "interrupted");
+    # once the flight is over, one waits while what was flown is written (a second one
+    # abandons it, leaving the folder's previous run): the run is written whole or not.
+    with interrupts.deferred(armed=False) as writing, \
+            output_folder(out, command="sim", force=force, recognised=RECOGNISED_FILES,
+                          inputs=read) as folder:
+        try:
+            record = fly(mission, water, config, vehicle, plan, None if plan_path is None
+                         else str(plan_path), runtime, robust_tracker=tracker == "robust",
+                         progress=progressed,
+                         key_path=None if key_path is None else str(key_path),
+                         state_dir=state_dir, faults=fault_spec, shore=shore,
+                         keep_interrupted=True)
+            writing.arm()
+            if not len(record.columns["time_s"]):
+                raise KeyboardInterrupt  # nothing flown, nothing to write
+            used = accounting.account(record, mission, vehicle, plan)
+            check = accounting.check_flight(used, plan)
+            contents = {}
+            if plots:
+                series = drawing.depth_series(record), drawing.energy_series(record, used, plan)
+                if plotter is not None:
+                    plotter.draw(*series)  # drawn there while the other files are written here
+                else:
+                    contents["depth.png"] = drawing.depth_png(series[0])
+                    contents["energy.png"] = drawing.energy_png(series[1])
+            meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
+                    "ocean": ocean or "bench", "water_density": density_note, "noise": noise,
+                    "tracker": tracker, "seed": seed,
+                    "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
+                    "vehicle": mission.vehicle, "start_utc": utc_text(start),
+                    "currents": currents or "none",
+                    "sea_floor": given.floor_note, "grounded": grounding(record),
+                    "current_mps": {"north": config.current.north_mps,
+                                    "east": config.current.east_mps},
+                    "run_limit_s": duration}
+            if shore is not None:
+                flown_s = float(record.columns["time_s"][-1]) + tick_s
+                meta["replanning"] = {"every": replan_every,
+                                      "confidence": shore.replanner.confidence,
+                                      **shore.log.summary(flown_s)}
+                contents[REPLANS_FILE] = _replans_csv(shore.log.events)
+            columns = record.columns  # the water's salinity where the glider was: the CTD's
+            salinity = water.water_along(columns["depth_m"], columns["time_s"])[1]
+            table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
+            contents["trace.csv"] = outputs.trace_csv(record.trace)
+            contents["timeseries.parquet"] = outputs.parquet_bytes(
+                table, dictionary=outputs.TIMESERIES_DICTIONARY)
+            contents["summary.json"] = outputs.summary(record, used, check, plan, meta)
+            if record.events_log is not None:
+                contents["events.log"] = record.events_log
+            if netcdf:
+                contents[NETCDF_FILE] = export.netcdf_bytes(
+                    table.to_pandas(), {**meta, "ended": record.ended,
+                                        "simulated_s": outputs.simulated_s(record)})
             if plotter is not None:
-                plotter.draw(*series)  # drawn there while the other files are written here
-            else:
-                contents["depth.png"] = drawing.depth_png(series[0])
-                contents["energy.png"] = drawing.energy_png(series[1])
-        meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
-                "ocean": ocean or "bench", "water_density": density_note, "noise": noise,
-                "tracker": tracker, "seed": seed,
-                "tick_s": tick_s, "plan": None if plan_path is None else str(plan_path),
-                "vehicle": mission.vehicle, "start_utc": utc_text(start),
-                "currents": currents or "none",
-                "sea_floor": given.floor_note, "grounded": grounding(record),
-                "current_mps": {"north": config.current.north_mps,
-                                "east": config.current.east_mps}}
-        if shore is not None:
-            flown_s = float(record.columns["time_s"][-1]) + tick_s
-            meta["replanning"] = {"every": replan_every,
-                                  "confidence": shore.replanner.confidence,
-                                  **shore.log.summary(flown_s)}
-            contents["replans.csv"] = _replans_csv(shore.log.events)
-        columns = record.columns  # the water's salinity where the glider was: the CTD's
-        salinity = water.water_along(columns["depth_m"], columns["time_s"])[1]
-        table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
-        contents["trace.csv"] = outputs.trace_csv(record.trace)
-        contents["timeseries.parquet"] = outputs.parquet_bytes(
-            table, dictionary=outputs.TIMESERIES_DICTIONARY)
-        contents["summary.json"] = outputs.summary(record, used, check, plan, meta)
-        if record.events_log is not None:
-            contents["events.log"] = record.events_log
-        if netcdf:
-            contents[NETCDF_FILE] = export.netcdf_bytes(table.to_pandas(), meta)
-        if plotter is not None:
-            contents["depth.png"], contents["energy.png"] = plotter.pngs()
-    finally:
-        if plotter is not None:
-            plotter.close()
-        if getattr(shore, "workdir", None) is not None:
-            shore.workdir.cleanup()
-    written = [name for name in (*RUN_FILES, REPLANS_FILE, NETCDF_FILE) if name in contents]
-    for name in written:
-        write_atomically(out / name, contents[name])
+                contents["depth.png"], contents["energy.png"] = plotter.pngs()
+        finally:
+            if plotter is not None:
+                plotter.close()
+            if getattr(shore, "workdir", None) is not None:
+                shore.workdir.cleanup()
+        written = [name for name in (*RUN_FILES, REPLANS_FILE, NETCDF_FILE) if name in contents]
+        for name in written:
+            folder.write(name, contents[name])
+        folder.complete = record.ended != "interrupted"
     notes = [density_note, given.floor_note]
     if record.grounded_ticks:
         notes.append(f"the glider reached the sea floor at {record.first_grounded_s:g} s and "
                      f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
                      "the water: give it an altimeter stop, yo's fifth argument)")
-    return RunResult(record, used, check, plan, tuple(out / name for name in written),
-                     tuple(notes), meta.get("replanning"), tuple(field_notes),
-                     config.currents)
+    return RunResult(record, used, check, plan, tuple(folder.final(n) for n in written),
+                     tuple(notes), stopped=writing.requested,
+                     replanning=meta.get("replanning"), current_notes=tuple(field_notes),
+                     currents=config.currents)
 
 
 def _shore(mission: CheckedMission, every: str, plan_path: str | Path | None,

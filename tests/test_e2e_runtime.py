@@ -531,11 +531,12 @@ def test_without_a_plan_the_runtime_follows_the_missions_own_power_settings(
         "  sensors missiontime, depth, pitch, temp\n  computer clock 500 MHz\n"
         "  computer sleep between ticks\n")
     (tmp_path / "power.mission").write_text(source)
-    assert main(["compile", str(tmp_path / "power.mission"), "-o", str(tmp_path)]) == 0
+    build = tmp_path / "build"
+    assert main(["compile", str(tmp_path / "power.mission"), "-o", str(build)]) == 0
     speed, suspend = tmp_path / "scaling_setspeed", tmp_path / "power_state"
     speed.write_text("")
     suspend.write_text("")
-    process = line.start([str(tmp_path / "sampleMission"), "--clock-file", str(speed),
+    process = line.start([str(build / "sampleMission"), "--clock-file", str(speed),
                           "--suspend-file", str(suspend)])
     clocks = clocks_by_state(line.link(), speed)
     assert process.wait(30) == 0, process.stderr.read()

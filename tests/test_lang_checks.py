@@ -73,6 +73,10 @@ CASES = [
     ({"profile": "yo(5, 20, .454, 1.6)"}, "error: climb_pitch of 'yo' is 1.6 rad, outside"),
     ({"route": "nav(3975.5, -7349.8)"}, "error: 3975.5 is not DDMM.MMMM"),
     ({"route": "nav(9100, -7349.8)"}, "error: lat of 'nav' is 9100 DDMM.MMMM, outside"),
+    ({"route": "heading(360)"}, "error: heading of 'heading' is 360 deg, outside [0, 360) | "
+     "a compass heading in degrees, true, clockwise from north: 0 north, 90 east"),
+    ({"route": "heading(-90)"}, "error: heading of 'heading' is -90 deg, outside [0, 360)"),
+    ({"route": "heading(90, (3910, -7349))"}, "error: 'heading' takes heading"),
     ({"profile": "hover(depth)"}, "error: sensor 'depth' cannot be used here"),
     ({"event": "case max(depth) > 5 exit"}, "error: 'max' takes 2 argument(s), got 1"),
     ({"sensors": "missiontime, depth duty auto"},

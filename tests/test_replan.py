@@ -6,6 +6,9 @@ the rest refused with a message, no update written, the glider flying its plan o
 from __future__ import annotations
 
 import json
+import os
+import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -290,3 +293,46 @@ def test_a_transit_leg_keeps_its_planned_speed_and_time(tmp_path):
 
 def test_replan_infeasible_is_a_planning_error():
     assert issubclass(ReplanInfeasible, PlanningError)
+
+
+def test_an_update_its_plan_and_its_report_are_written_together(tmp_path, signed, monkeypatch,
+                                                                 capsys):
+    """A disk that fills as the report is written leaves none of the three (an update
+    beside the plan of another would desynchronise the next replan), nor an earlier
+    update touched; an interrupted replan writes nothing."""
+    from gliderplan.contract import files
+
+    plan, key = signed
+    reports = write(tmp_path, telemetry(plan, (3, 6, 9), dvl=1.3))
+    out = tmp_path / "u1"
+    out.write_bytes(b"an earlier update")
+    real = files.write_atomically
+
+    def full_at_the_report(path, data, **kwargs):
+        if str(path).endswith("u1.json"):
+            raise files.OutputFileError(f"{path}: cannot write: No space left on device")
+        return real(path, data, **kwargs)
+    monkeypatch.setattr(files, "write_atomically", full_at_the_report)
+    argv = ["replan", SHORT, "--plan", str(plan), "--telemetry", str(reports), "--key",
+            str(key), "-o", str(out)]
+    assert main(argv) == ExitCode.USAGE
+    assert "No space left on device" in capsys.readouterr().err
+    assert out.read_bytes() == b"an earlier update"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "held.plan", "held.plan.json", "telemetry.json", "u1", "vehicle.key"]
+    monkeypatch.setattr(files, "write_atomically", real)
+    from gliderplan.planner import update
+
+    made = update.make_updates
+
+    def swallowing(*args, **kwargs):  # Ctrl-C that something on the way caught
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)  # the handler raises here
+        except KeyboardInterrupt:
+            pass
+        return made(*args, **kwargs)
+    monkeypatch.setattr(update, "make_updates", swallowing)
+    assert main(argv) == ExitCode.INTERRUPTED
+    assert out.read_bytes() == b"an earlier update"
+    assert not (tmp_path / "u1.plan").exists()

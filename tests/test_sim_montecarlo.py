@@ -111,7 +111,7 @@ def test_command_writes_its_files_and_says_how_likely(tmp_path, capsys):
     args = ["montecarlo", str(FIG2), "--scenarios", "4", "--workers", "1", "--seed", "5",
             "-o", str(out)]
     assert main(args) == 0
-    assert {p.name for p in out.iterdir()} == FILES
+    assert {p.name for p in out.iterdir()} == FILES | {".gliderplan-run"}
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenarios"] == 4 and summary["budget_held"] == 4
     low, high = summary["probability_interval_95"]

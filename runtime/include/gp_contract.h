@@ -134,6 +134,7 @@ enum {
     GP_FLAG_CLIMBING = 4u,  /**< else diving */
     GP_FLAG_HEADING = 8u,  /**< `heading_rad` is valid */
     GP_FLAG_ENVELOPE = 16u,  /**< the envelope guard held this command at the vehicle's rating */
+    GP_FLAG_HEADING_HOLD = 32u,  /**< `heading_rad` is held as it is, uncorrected for the current */
 };
 
 /* ---- SENSORS's flags */
@@ -222,6 +223,8 @@ typedef enum {
     GP_UF_PROFILE_PITCH = 8,  /**< field 3 */
     GP_UF_PROFILE_BALLAST = 9,  /**< field 4 */
     GP_UF_PROFILE_SPEED = 10,  /**< field 5 */
+    /** `profile ... THRUST_W`: field 6, appended where the line has none */
+    GP_UF_PROFILE_THRUST = 11,
 } gp_update_field;
 
 /** UPDATE_STATUS's `status`: what became of a plan update (docs/plan-update.md). */

@@ -46,6 +46,7 @@ typedef enum {
     GP_ROUTE_WAYPOINTS = 2,
     GP_ROUTE_SWEEP = 3,
     GP_ROUTE_GOTO_LIST = 4,
+    GP_ROUTE_HEADING = 5,        /**< a compass heading held, uncorrected for the current */
 } gp_route_kind;
 
 /**
@@ -80,7 +81,8 @@ typedef struct {
 typedef struct {
     uint8_t kind;          /**< gp_route_kind */
     uint8_t n_points;
-    double param;          /**< sweep: line spacing [m]; goto_list: radius [m]; else unused */
+    double param;          /**< sweep: line spacing [m]; goto_list: radius [m];
+                                heading: the heading held [rad]; else unused */
     const double (*points)[2];  /**< (lat, lon) DDMM.MMMM; nav has one point */
 } gp_route;
 
@@ -120,6 +122,8 @@ typedef struct {
     double max_budget_j;          /**< the battery less its reserve [J] */
     double min_pitch_rad, max_pitch_rad;  /**< commanded pitch, open range [rad] */
     double max_speed_mps;         /**< the vehicle's fastest glide [m/s] */
+    double min_propelled_mps, max_propelled_mps;  /**< a level profile's speeds [m/s] */
+    double min_thrust_w, max_thrust_w;  /**< a yo's thruster command, where on [W] */
     const gp_state_bounds *states;  /**< one per state */
 } gp_plan_bounds;
 

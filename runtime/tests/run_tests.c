@@ -32,6 +32,7 @@
     X(test_ddmm_should_equal_the_fmod_definition)                           \
     X(test_nav_should_head_to_its_point)                                    \
     X(test_noheading_and_missing_fix_should_give_no_heading)                \
+    X(test_heading_should_be_held_with_or_without_a_fix_and_reach_nothing)  \
     X(test_waypoints_should_advance_within_50_m_and_hold_the_last)          \
     X(test_goto_list_should_loop_with_its_radius_and_report_the_distance)   \
     X(test_sweep_should_mow_a_square_in_alternating_lines)                  \
@@ -95,6 +96,7 @@
     X(test_update_should_refuse_forged_stale_and_replayed_updates_and_other_plans) \
     X(test_update_should_refuse_malformed_updates_naming_the_change)        \
     X(test_update_should_refuse_a_plan_the_reader_refuses)                  \
+    X(test_update_should_set_a_thrusters_power_within_its_rating)           \
     X(test_update_decimal_text_should_write_plan_numbers)                   \
     X(test_random_updates_should_never_crash_the_applier)                   \
     X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \

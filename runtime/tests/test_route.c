@@ -91,6 +91,20 @@ void test_noheading_and_missing_fix_should_give_no_heading(void)
     CHECK_INT(gp_route_step(&rs, &nav, NAN, -6300, &heading), 0);
 }
 
+void test_heading_should_be_held_with_or_without_a_fix_and_reach_nothing(void)
+{
+    gp_route route = {GP_ROUTE_HEADING, 0, 4.0, NULL};  /* [rad] */
+    gp_route_state rs;
+    double heading;
+    gp_route_enter(&rs, &route);
+    CHECK_INT(gp_route_step(&rs, &route, 4400, -6300, &heading), 1);
+    CHECK_NEAR(heading, 4.0, 0.0);
+    CHECK_INT(gp_route_step(&rs, &route, NAN, NAN, &heading), 1);  /* a compass, no fix */
+    CHECK_NEAR(heading, 4.0, 0.0);
+    CHECK_INT(rs.reached, 0);
+    CHECK_INT(isnan(gp_route_distance_m(&rs, &route, 4400, -6300)), 1);
+}
+
 void test_waypoints_should_advance_within_50_m_and_hold_the_last(void)
 {
     double points[2][2];

@@ -185,6 +185,10 @@ static const gp_plan_bounds plan_bounds = {
     .min_pitch_rad = 0.0,
     .max_pitch_rad = 0x1.921fb54442d18p+0 /* 1.5707963267948966 */,
     .max_speed_mps = 2.0,
+    .min_propelled_mps = 0.0,
+    .max_propelled_mps = 2.0,
+    .min_thrust_w = 0.0,
+    .max_thrust_w = 100.0,
     .states = NULL,
 };
 
