@@ -61,7 +61,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--replan", action="store_true",
                         help="fly each scenario twice: the plan alone, and with the shore "
                              "replanning the rest at each surfacing (plan updates); report "
-                             "both side by side")
+                             "both side by side, both planned at one confidence (a plan "
+                             "made at another, or on the model, is replanned at it before "
+                             "launch)")
     add_replan_confidence_argument(parser, "--replan")
     parser.add_argument("--key", metavar="KEYFILE",
                         help="with --replan: the vehicle's key (the plan signed with it; "
@@ -150,7 +152,7 @@ def _replanned(name: str, s: dict) -> str:
     link = s["link"]
     return (f"{name}: the budget held in {rate('hold_rate')} of {s['scenarios']} scenarios "
             f"with replanning at each surfacing, {rate('hold_rate_static')} with the plan "
-            f"alone\n"
+            f"alone; both from {s['plan_flown']}\n"
             f"  quality as flown {s['quality']:.4f} with replanning, {s['quality_static']:.4f} "
             f"alone\n"
             f"  link: {link['surfacings_per_mission']:.0f} surfacings a mission; up "

@@ -18,7 +18,9 @@ budget holds with the plan's confidence if the belief is right (a second-order-c
 chance constraint, exact for a Gaussian belief; DESIGN.md section 10 plans at a
 confidence by the scenario approach, which needs simulated scenarios the shore does not
 have at sea). Every number is a cvxpy Parameter of the model built once (`Replanner`),
-so a replan is warm: it sets values and solves again (DPP).
+so a replan is warm: it sets values and solves again (DPP). Compiling the parameters costs
+more than a solve (0.5 s against 0.05 s on a 64-state mission), so a process that replans
+once (`gliderplan replan`) solves with the values in place of the parameters instead.
 
 The time left in each state is the plan's less what the glider has flown there, scaled
 to the time left in the plan's mission; the plan's own rates (its prediction per state
@@ -141,16 +143,18 @@ class ChanceModel:
                         self.least_free_problem):
             assert problem.is_dcp(dpp=True), "the chance model must stay DCP and DPP"
 
-    def solve(self, problem: cp.Problem) -> tuple[str, float]:
-        """Solve; (status, wall time [s]). Clarabel now and then stalls on the exponential
-        cones of a problem whose numbers are fine (a few in a month of replans): it is
-        asked again without equilibration, then with more regularisation, then SCS is."""
+    def solve(self, problem: cp.Problem, *, once: bool = False) -> tuple[str, float]:
+        """Solve; (status, wall time [s]). `once`: the parameters' values taken as
+        constants, not compiled for the next solves. Clarabel now and then stalls on the
+        exponential cones of a problem whose numbers are fine (a few in a month of
+        replans): it is asked again without equilibration, then with more regularisation,
+        then SCS is."""
         start = time.perf_counter()
         for solver, options in RETRIES:
             try:
                 with warnings.catch_warnings():  # the status says "optimal_inaccurate"
                     warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-                    problem.solve(solver=solver, **options)
+                    problem.solve(solver=solver, ignore_dpp=once, **options)
             except cp.SolverError:  # its status would still be the last solve's
                 continue
             return problem.status or "solver_error", time.perf_counter() - start
@@ -282,12 +286,13 @@ class Replanner:
 
     `held`: the signed plan file the glider holds at the start (its prediction is the
     model the figures multiply); `spec`: the scenario file whose spreads and battery share
-    are the prior (None: the vehicle file's alone, a battery that holds its rating)."""
+    are the prior (None: the vehicle file's alone, a battery that holds its rating);
+    `once`: this process replans once, so the model's parameters are not compiled."""
 
     def __init__(self, mission: ir.CheckedMission, held: bytes, *,
                  confidence: float | None = None, spec=None,  # noqa: ANN001
                  if_infeasible: str = "refuse",
-                 legs: dict[str, tuple[Leg, ...]] | None = None) -> None:
+                 legs: dict[str, tuple[Leg, ...]] | None = None, once: bool = False) -> None:
         if if_infeasible not in IF_INFEASIBLE:
             raise ValueError(f"if_infeasible must be one of {IF_INFEASIBLE}")
         try:
@@ -295,6 +300,7 @@ class Replanner:
         except PlanFileError as err:
             raise PlanRejected(str(err)) from None
         self.mission, self.plan, self.if_infeasible = mission, plan, if_infeasible
+        self.once = once
         self.confidence = confidence or stated_confidence(plan) or DEFAULT_CONFIDENCE
         if not 0.5 <= self.confidence < 1.0:
             raise PlanningError(f"confidence {self.confidence:g}: must lie in [0.5, 1)")
@@ -514,7 +520,7 @@ class Replanner:
         objective = self.mission.objective.sense
         problem = chance.energy_problem if objective == "minimize_energy" \
             else chance.quality_problem
-        status, solve_s = chance.solve(problem)
+        status, solve_s = chance.solve(problem, once=self.once)
         least = None
         result_status = "updated"
         if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE, cp.INFEASIBLE,
@@ -524,7 +530,7 @@ class Replanner:
         if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
             least_problem = chance.least_problem if objective == "minimize_energy" \
                 else chance.least_free_problem
-            least_status, spent = chance.solve(least_problem)
+            least_status, spent = chance.solve(least_problem, once=self.once)
             solve_s += spent
             if least_status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
                 raise PlanningError(f"the rest of the mission cannot be planned "
@@ -553,12 +559,18 @@ class Replanner:
             (self.belief.usable_mean, self.belief.usable_sd), self.belief.usable_prior,
             tuple(self.notes), solve_s)
 
+    def at_launch(self, held: bytes) -> ReplanResult:
+        """The plan before launch (nothing flown, nothing drawn), at the confidence against
+        the prior belief: a plan made on the model, planned at the shore's confidence."""
+        return self.replan(held, SurfacingReport(0.0, 0.0))
+
     def _infeasible_message(self, least_j: float, left_j: float,
                             report: SurfacingReport) -> str:
         wh = J_PER_WH
         worst = sorted(((m, abs(m.change)) for m in self.belief.moves()), key=lambda x: -x[1])
         moved = ", ".join(str(m) for m, _ in worst[:2])
-        return (f"at {report.time_s / 3600:.1f} h the budget left, {left_j / wh:,.1f} Wh "
+        where = f"{report.source}: " if report.source else ""
+        return (f"{where}at {report.time_s / 3600:.1f} h the budget left, {left_j / wh:,.1f} Wh "
                 f"expected, cannot hold the rest of the mission at confidence "
                 f"{self.confidence:g}: with every duty at its floor it needs "
                 f"{least_j / wh:,.1f} Wh at that confidence ({moved}). No update is made: "
@@ -729,7 +741,7 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
     replanner = Replanner(mission, held, confidence=confidence,
                           spec=read_spec(scenario_file), if_infeasible=if_infeasible,
                           legs=None if currents is None else
-                          _water_at(mission, currents, reports[-1], start_epoch_s))
+                          _water_at(mission, currents, reports[-1], start_epoch_s), once=True)
     said = next((r for r in reversed(reports) if r.plan_seq is not None), None)
     if said is not None and said.plan_seq != replanner.plan.seq:
         ack = "" if said.ack is None else f" (its last update: {said.ack.status.name.lower()}"\

@@ -394,7 +394,9 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     files than a gliderplan run's; `mission_path`, the mission's file, is refused inside).
     `replan`: each scenario is flown twice, with the plan alone and with the shore in the
     loop replanning the rest at each surfacing at `confidence` (default: the plan's own),
-    its prior the scenario file without its drift (sim/replanning.py); the vehicle holds
+    its prior the scenario file without its drift (sim/replanning.py), both from the plan
+    at that confidence (a plan that states another, or none, is replanned before launch:
+    `plan_at_confidence`); the vehicle holds
     `key_path`'s key (the plan signed with it) or one made for the run. The summary
     then holds `hold_rate`, `hold_rate_static`, `quality`, `quality_static`,
     `update_bytes_max` and what the link carried (`replanning`). `start`: (lat, lon)
@@ -431,8 +433,16 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     budget_j = plan.budget_j if plan is not None else \
         mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
     held = key = None
-    if replan:
+    launched = {}
+    if replan:  # both flights planned at one confidence: the plan alone, and replanned
+        from gliderplan.planner.planfile import read_plan_bytes
+        from gliderplan.sim.replanning import plan_at_confidence
+
         held, key = _vehicle_plan(plan_path, key_path)
+        held, confidence, how = plan_at_confidence(mission, held, key, confidence=confidence,
+                                                   spec=spec.model())
+        plan = read_plan_bytes(held, mission)
+        launched = {"confidence": confidence, "plan_flown": how}
     job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
               robust_tracker=tracker == "robust", held=held, key=key, confidence=confidence,
               start=start, start_epoch_s=start_epoch_s)
@@ -456,7 +466,7 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
                 "budget_j": budget_j, "workers": workers,
                 "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
                 "scheduler": scheduler or ("local pool" if workers > 1 else "none"),
-                "replan": replan}
+                "replan": replan, **launched}
         stated = summary(result, meta)
         contents = {
             "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table,

@@ -31,7 +31,7 @@ from gliderplan.contract import (
 from gliderplan.language import ir
 from gliderplan.planner.plan import PlanningError
 from gliderplan.planner.planfile import read_plan_bytes
-from gliderplan.planner.replan import Replanner
+from gliderplan.planner.replan import Replanner, stated_confidence
 from gliderplan.planner.speed import Leg
 from gliderplan.planner.update import UpdateError, apply_update, make_updates
 from gliderplan.power_models.posterior import DischargeCurve
@@ -49,6 +49,7 @@ from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.loop import Columns
 
 MAX_UPDATES = 2  # a replan's changes may take this many updates at one surfacing
+LAUNCH_UPDATES = 64  # before launch the plan goes on by cable: no message limit to keep
 
 
 @dataclass
@@ -209,6 +210,28 @@ class ShoreLoop:
         else:
             self.log.refused += 1
             self.log.refusals.append(f"{status.name.lower()}: {message}")
+
+
+def plan_at_confidence(mission: ir.CheckedMission, held: bytes, key: bytes, *,
+                       confidence: float | None, spec) -> tuple[bytes, float, str]:  # noqa: ANN001
+    """The plan to launch with so that flying it alone and replanning it at each surfacing
+    are both planned at one confidence: `held` itself if it was planned at `confidence`
+    (`plan --confidence`; None: the plan's own, else the default), else `held` replanned
+    before launch by the shore's model at that confidence against the prior (`spec`), as
+    the signed plan file its updates make. (plan file, confidence, how it was made); a
+    PlanningError when the budget cannot hold the mission at that confidence."""
+    replanner = Replanner(mission, held, confidence=confidence, spec=spec, once=True)
+    p = replanner.confidence
+    if stated_confidence(replanner.plan) == p:
+        return held, p, f"the plan as given, planned at confidence {p:g}"
+    try:
+        result = replanner.at_launch(held)
+    except PlanningError as err:
+        raise PlanningError(f"before launch: {err}") from None
+    chain = make_updates(held, result.target, key, max_updates=LAUNCH_UPDATES,
+                         check=lambda data: read_plan_bytes(data, mission))
+    return chain.plan_file, p, (f"the plan replanned before launch at confidence {p:g} "
+                                "(the shore's model, the prior figures)")
 
 
 class PythonVehicle:

@@ -136,6 +136,22 @@ def test_a_warm_replan_reuses_the_compiled_model_and_follows_the_telemetry(signe
     assert hungrier.quality < first.quality and replanner.chance is model
 
 
+def test_a_replan_solved_once_plans_what_the_compiled_model_plans(signed, short):
+    """`gliderplan replan` solves without compiling the parameters: the same plan."""
+    plan, _ = signed
+    held = plan.read_bytes()
+    reports = telemetry(plan, (3, 6), energy=1.15)
+    results = []
+    for once in (False, True):
+        replanner = Replanner(short, held, confidence=0.95, spec=read_spec(), once=once)
+        for report in reports:
+            replanner.observe(report)
+        results.append(replanner.replan(held, reports[-1]))
+    compiled, solved_once = results
+    assert solved_once.target == compiled.target and solved_once.changes
+    assert solved_once.quality == pytest.approx(compiled.quality, abs=1e-6)
+
+
 def test_a_budget_that_cannot_hold_the_rest_is_refused_and_no_update_is_written(
         tmp_path, signed, capsys):
     plan, key = signed
@@ -146,6 +162,7 @@ def test_a_budget_that_cannot_hold_the_rest_is_refused_and_no_update_is_written(
     said = capsys.readouterr().err
     assert code == ExitCode.BAD_INPUT
     assert "cannot hold the rest of the mission at confidence" in said
+    assert f"{reports.name}: report 3: at 24.0 h the budget left" in said  # where
     assert "No update is made: the glider keeps flying its current plan" in said
     assert not list(tmp_path.glob("u*"))
     run = replan_mission(check_file(SHORT).checked(), plan, reports, key_path=key,
