@@ -53,8 +53,9 @@ ROUTE_BEHAVIORS = ("goto_list", "goto_wpt", "set_heading")
 # set_heading's use_heading modes without a translation, and why
 HEADING_MODES_LEFT_OUT = {
     2: "a roll held (HM_ROLL)", 3: "a battery roll held (HM_BATTROLL)",
-    4: "a fin angle held (HM_FIN)",
     5: "a heading relative to the measured current's direction (HM_CURRENT)"}
+HM_FIN = 4  # use_heading: a fin angle held, flown as a turn at the vehicle's fin_turn_rate
+FIN_LIMIT_RAD = 0.43  # the Slocum fin's stop: c_fin never beyond it in the shared logs
 # surface's start_when modes translated that read when_secs: when they surface
 WHEN_SECS_MODES = {9: "when_secs after it last reached the surface",
                    12: "when_secs after it last left the surface"}
@@ -375,6 +376,8 @@ class _Translator:
                                   "use_heading and heading_value")
         self.route_never = self.route_reaches = ("set_heading holds a heading: it reaches "
                                                  "no waypoint")
+        if mode.value == HM_FIN:
+            return self.fin_hold(behavior, value, comment)
         if mode.value != 1:
             why = HEADING_MODES_LEFT_OUT.get(int(mode.value)) \
                 if mode.value == int(mode.value) else None
@@ -393,6 +396,30 @@ class _Translator:
         comment += self.leave_out(behavior, ["stop_when", "when_secs", "end_action"],
                                   "the heading is held for the whole survey")
         return f"heading({_number(degrees)})", comment
+
+    def fin_hold(self, behavior: Behavior, fin: Arg, comment: list[str]
+                 ) -> tuple[str, list[str]]:
+        """use_heading 4 (HM_FIN): heading_value [rad] of fin held, flown as `turn(deg/s)`
+        at the rate the vehicle's `fin_turn_rate` gives that fin (a spiral)."""
+        from gliderplan.power_models.vehicle import load_vehicle
+
+        if not abs(fin.value) <= FIN_LIMIT_RAD:
+            raise SlocumFileError(f"{fin.where}: heading_value {fin.text} rad is no fin angle "
+                                  f"of use_heading 4: the fin stops at +-{FIN_LIMIT_RAD} rad")
+        vehicle = load_vehicle(self.hardware.vehicle)
+        if math.isnan(vehicle.fin_turn_rate_per_s):
+            return "noheading", comment + self.leave_out(
+                behavior, ["use_heading", "heading_value"],
+                f"a fin angle held (HM_FIN): vehicle {self.hardware.vehicle} gives no "
+                "fin_turn_rate to turn it into a turn rate: no heading is flown")
+        rate_deg_s = math.degrees(vehicle.fin_turn_rate_per_s * fin.value)
+        comment.append(f"use_heading 4, heading_value {fin.text} rad of fin: a steady turn "
+                       f"of {_number(rate_deg_s)} deg/s (the vehicle's fin_turn_rate "
+                       f"{_number(vehicle.fin_turn_rate_per_s)} 1/s) from the heading at "
+                       "entry, uncorrected for the current")
+        comment += self.leave_out(behavior, ["stop_when", "when_secs", "end_action"],
+                                  "the fin is held for the whole survey")
+        return f"turn({_number(rate_deg_s)})", comment
 
     # ---- yo
     def yo(self, behavior: Behavior | None) -> tuple[str, list[str], tuple[str, str] | None]:
