@@ -51,9 +51,13 @@ FLIGHT_SENSORS = ("missiontime", "depth", "pitch", "lat", "lon")
 # behaviors that command the heading: the first in priority order is the route flown
 ROUTE_BEHAVIORS = ("goto_list", "goto_wpt", "set_heading")
 # set_heading's use_heading modes without a translation, and why
+_NO_ROLL_FIT = ("the shared Slocum logs command no roll (c_roll and c_battroll stay 0: "
+                "the fin steers), so no turn rate per roll is fitted")
 HEADING_MODES_LEFT_OUT = {
-    2: "a roll held (HM_ROLL)", 3: "a battery roll held (HM_BATTROLL)",
-    5: "a heading relative to the measured current's direction (HM_CURRENT)"}
+    2: f"a roll held (HM_ROLL): {_NO_ROLL_FIT}",
+    3: f"a battery roll held (HM_BATTROLL): {_NO_ROLL_FIT}",
+    5: "a heading relative to the measured current's direction (HM_CURRENT): the runtime "
+       "has no heading that follows the current's"}
 HM_FIN = 4  # use_heading: a fin angle held, flown as a turn at the vehicle's fin_turn_rate
 FIN_LIMIT_RAD = 0.43  # the Slocum fin's stop: c_fin never beyond it in the shared logs
 # surface's start_when modes translated that read when_secs: when they surface
@@ -367,8 +371,8 @@ class _Translator:
 
     def set_heading(self, behavior: Behavior, comment: list[str]) -> tuple[str, list[str]]:
         """use_heading 1 (HM_HEADING): heading_value [rad] held as `heading(deg)`, the
-        current correction leaving it alone as the Slocum's does; the other modes turn
-        the glider by its roll or fin, which gliderplan's flight model does not fly."""
+        current correction leaving it alone as the Slocum's does; 4 (HM_FIN) a steady turn
+        (`fin_hold`); the others are left out (HEADING_MODES_LEFT_OUT says why)."""
         mode = behavior.args.get("use_heading")
         value = behavior.args.get("heading_value")
         if mode is None or value is None:
@@ -387,8 +391,7 @@ class _Translator:
                                       "fin, 5 relative to the current)")
             return "noheading", comment + self.leave_out(
                 behavior, ["use_heading", "heading_value"],
-                f"{why} turns the glider at a rate gliderplan's flight model does not "
-                "have: no heading is flown")
+                f"{why}: no heading is flown")
         degrees = math.degrees(value.value) % 360.0
         degrees = 0.0 if degrees >= 360.0 else degrees  # a tiny negative rounds up to 360
         comment.append(f"use_heading 1, heading_value {value.text} rad: {_number(degrees)} "

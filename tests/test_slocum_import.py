@@ -325,7 +325,8 @@ def test_a_roll_held_is_left_out_and_says_why(tmp_path, capsys):
     assert main(["import-slocum", str(path), "-o", str(out)]) == 0
     err = capsys.readouterr().err
     assert "set_he10.ma:3: warning: set_heading: not translated: use_heading 2 " \
-           "(set_he10.ma:3), heading_value 0.2 (set_he10.ma:4): a roll held (HM_ROLL)" in err
+           "(set_he10.ma:3), heading_value 0.2 (set_he10.ma:4): a roll held (HM_ROLL): the " \
+           "shared Slocum logs command no roll" in err
     text = out.read_text()
     assert "flightroute noheading" in text and "# not translated: use_heading 2" in text
 
