@@ -25,8 +25,13 @@ from gliderplan.contract import FlightLimits
 from gliderplan.contract.c_header import sensor_index
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
-from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS, held_heading_rad, \
-    turn_rate_rad_s
+from gliderplan.language.registry import (
+    PROFILES,
+    SENSOR_BY_NAME,
+    SENSORS,
+    held_heading_rad,
+    turn_rate_rad_s,
+)
 
 _ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
             "return": "GP_ACT_RETURN", "exit": "GP_ACT_EXIT"}

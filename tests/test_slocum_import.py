@@ -5,6 +5,7 @@ not through the importer); bad files stop with one line naming file and line."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import re
@@ -288,7 +289,8 @@ def test_set_heading_is_a_heading_held_uncorrected_by_both_runtimes(tmp_path, ca
 
 def test_a_fin_held_is_a_spiral_at_the_fin_s_turn_rate_in_both_runtimes(tmp_path, capsys):
     """use_heading 4 (HM_FIN): 0.3 rad of fin held is a `turn` at the vehicle's
-    fin_turn_rate times the fin; both runtimes fly the same spiral, whose course turns
+    fin_turn_rate times the fin; the Python reference and the C runtime (over the pty and
+    as the in-process step) fly the same spiral, whose course turns
     clockwise at that rate under water (no current: the course is the heading)."""
     mi = SET_HEADING_MI.replace("behavior: goto_list\n b_arg: args_from_file(enum) 10\n", "")
     path = _mission(tmp_path, mi, yo10_ma=YO_MA, set_he10_ma=_set_heading_ma("4", "0.3"))
@@ -301,12 +303,12 @@ def test_a_fin_held_is_a_spiral_at_the_fin_s_turn_rate_in_both_runtimes(tmp_path
     assert "# use_heading 4, heading_value 0.3 rad of fin: a steady turn" in text
     assert main(["check", str(out)]) == 0
     tracks = {}
-    for runtime in ("python", "c"):
+    for runtime in ("python", "c", "step"):
         assert main(["sim", str(out), "--runtime", runtime, "--start", "54.5,7.5",
                      "--duration", "1h", "-o", str(tmp_path / runtime)]) == 0
         tracks[runtime] = pd.read_parquet(tmp_path / runtime / "timeseries.parquet")
-    for column in ("lat_deg", "lon_deg", "depth_m"):
-        assert tracks["python"][column].equals(tracks["c"][column]), column
+    for runtime, column in itertools.product(("c", "step"), ("lat_deg", "lon_deg", "depth_m")):
+        assert tracks["python"][column].equals(tracks[runtime][column]), (runtime, column)
     track = tracks["python"]
     north = np.diff(track["lat_deg"].to_numpy()) * METRES_PER_DEGREE
     east = np.diff(track["lon_deg"].to_numpy()) * METRES_PER_DEGREE * np.cos(np.radians(54.5))
