@@ -271,14 +271,22 @@ class Heading:
         return math.nan
 
 
-class Turn(Heading):
+class Turn:
     """turn(deg/s): the heading measured at the state's entry, advanced at a steady rate
     (positive clockwise), held as it is like `heading`'s: a spiral, Slocum's set_heading
-    holding its fin. No heading measured at entry: no heading."""
+    holding its fin. No heading measured at entry: no heading. Its heading depends on
+    the time since entry (`turned`), not on the position. Nothing to reach or resume."""
+
+    k = 0
+    reached = 0
+    holds = True
 
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         self.rate_rad_s = turn_rate_rad_s(params[0])
         self.from_rad = math.nan  # the heading measured at entry, set by `enter`
+
+    def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
+        return math.nan
 
     def enter(self, heading_rad: float) -> None:
         self.from_rad = heading_rad
