@@ -32,7 +32,7 @@
 #include "gp_runtime.h"
 
 #define GP_PATH_MAX 1024
-#define GP_CHECKPOINT_MAGIC "GPCKPT06"
+#define GP_CHECKPOINT_MAGIC "GPCKPT07"
 /** The envelope guard's figures a checkpoint keeps (gp_envelope_memory's doubles). */
 #define GP_ENVELOPE_MEMORY_FIGURES 6
 /** Header to first slot, slot to slot: a flash page, so a torn write stays in its slot. */
