@@ -43,9 +43,10 @@ if TYPE_CHECKING:
 # COMMAND's `transition` of each kind the reference semantics reports.
 _KIND_CODES = {name: kind for kind, name in TRANSITION_NAMES.items()}
 _F32 = struct.Struct(f"<{N_SENSORS}f")
-_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _WPTREACHED, _ENERGY, _ALTITUDE = (
+(_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _WPTREACHED, _ENERGY, _ALTITUDE,
+ _HEADING) = (
     SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp", "halfcycle", "wptdist",
-                                      "wptreached", "energy_left", "altitude"))
+                                      "wptreached", "energy_left", "altitude", "heading"))
 _SURFACE_PITCH_F32 = struct.unpack("<f", struct.pack("<f", SURFACE_PITCH_RAD))[0]
 
 
@@ -140,6 +141,8 @@ class PythonRuntime:
         self.routine = None
         route = self.state.route
         self.route = pilot.ROUTE_ROUTINES[route.kind](route.params, route.points)
+        if isinstance(self.route, pilot.Turn):
+            self.route.enter(self.s[_HEADING])
 
     def _follow(self, kind: str, state: str | None) -> None:
         """Enter the state a transition leads to. A call keeps the caller's waypoint and
@@ -229,7 +232,8 @@ class PythonRuntime:
         speed = pilot.propelled_speed(args, speed, self.unplanned_speed_mps) \
             if PROFILES[profile.kind].propelled else 0.0
         thrust = thrust if profile.kind in pilot.ASSISTED else 0.0
-        heading, valid = self.route.heading(s[_LAT], s[_LON])
+        heading, valid = self.route.turned(t_in) if isinstance(self.route, pilot.Turn) \
+            else self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
                  | (FLAG_HEADING if valid else 0)
                  | (FLAG_HEADING_HOLD if valid and self.route.holds else 0))

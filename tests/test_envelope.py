@@ -182,6 +182,29 @@ end
     assert "the rating of vehicle slocum_g2_shallow (its file's [envelope])" in err
 
 
+@pytest.mark.parametrize(("rate", "code"), [("-9", ExitCode.BAD_INPUT), ("8.8", ExitCode.OK)])
+def test_check_refuses_a_turn_faster_than_the_vehicle_s_rated_turn_rate(tmp_path, capsys,
+                                                                          rate, code):
+    # the shallow Slocum's max_turn_rate: 0.154 rad/s, 8.82 deg/s, either way
+    mission = tmp_path / "m.mission"
+    mission.write_text(f"""mission m
+vehicle slocum_g2_shallow
+
+state s1
+begin
+  flightroute turn({rate})
+  flightprofile yo(5, 20, .454, .454)
+  sensors missiontime, depth
+  events
+    case missiontime >= 100 exit
+end
+""")
+    assert main(["check", str(mission)]) == code
+    err = capsys.readouterr().err
+    assert ("m.mission:6:20: error: turn rate -9 deg/s is beyond the vehicle's rated 8.82 "
+            "deg/s" in err) == (code == ExitCode.BAD_INPUT), err
+
+
 def test_check_passes_the_shipped_examples_within_their_vehicles_ratings(capsys):
     missions = sorted(str(p) for p in (ROOT / "examples").glob("*.mission"))
     assert main(["check", *missions]) == ExitCode.OK
