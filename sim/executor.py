@@ -89,6 +89,10 @@ class PythonRuntime:
         # what the guard did: "missiontime T s, state S: <limit>; <action>", as the C
         # runtime says it
         self.envelope_notes: list[str] = []
+        # the transitions (kind, from, to, depth codes) a step made before its COMMAND's:
+        # an event's, on the tick the envelope ended the mission after it
+        self.superseded: list[tuple[int, int, int, int]] = []
+        self.tick_transition: semantics.Transition | None = None
         self.reserve_j = mission.battery.reserve_j
         self.robust = robust_tracker
         self.index = mission.state_index
@@ -164,6 +168,7 @@ class PythonRuntime:
         """Answer one SENSORS frame: `values` holds all sensors [registry units], of which
         those in `mask` arrive, through binary32 as on the link."""
         s = self.s
+        self.superseded = []
         carried = _F32.unpack(_F32.pack(*values))
         for first, stop in _runs(mask):
             s[first:stop] = carried[first:stop]
@@ -194,6 +199,7 @@ class PythonRuntime:
         return self._command(tick, transition)
 
     def _command(self, tick: int, transition: semantics.Transition | None) -> Command:
+        self.tick_transition = transition
         kind, src, dst = TransitionKind.NONE, NO_STATE, NO_STATE
         if transition is not None:
             kind = _KIND_CODES[transition.kind]
@@ -275,6 +281,11 @@ class PythonRuntime:
         if fault:
             raise semantics.MissionFault(f"tick {tick}: {self.envelope_notes[-1]}")
         if ends:
+            fired = self.tick_transition  # an event's, before the end: both are the tick's
+            if fired is not None and fired.kind != "start":
+                self.superseded = [(_KIND_CODES[fired.kind], self.index[fired.from_state],
+                                    self.index[fired.to_state] if fired.to_state
+                                    else NO_STATE, fired.stack_depth)]
             machine = self.machine
             self.machine = semantics.Machine(None, (), machine.variables)
             return self._command(tick, semantics.Transition(self.s[0], "envelope",
