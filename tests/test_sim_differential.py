@@ -181,17 +181,21 @@ def test_a_propelled_plan_is_flown_the_same_by_both_runtimes_and_holds(vehicle, 
 # ---- the C flight against the Python reference ---------------------------------------
 
 def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=None,
-                rigid: bool = False):
+                rigid: bool = False, shore=None):
     """Fly `mission` on the Python reference and in the C flight (in `ocean`, a preset name
     or an Ocean; `vehicle`: default the mission's, whose calibrated hull is compressible:
-    its speed changes with depth; `rigid`: with the hull made incompressible); the two
+    its speed changes with depth; `rigid`: with the hull made incompressible; `shore`:
+    makes the shore each flight has in the loop, whose logs must be the same too); the two
     flights must be the same (the flight is returned)."""
     vehicle = vehicle or load_vehicle(mission.vehicle)
     if rigid:
         vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
     water = load_ocean(ocean) if isinstance(ocean, str) else ocean
-    reference = fly(mission, water, config, vehicle, plan, runtime="python")
-    flown = fly(mission, water, config, vehicle, plan, runtime="step")
+    shores = (shore(), shore()) if shore else (None, None)
+    reference = fly(mission, water, config, vehicle, plan, runtime="python", shore=shores[0])
+    flown = fly(mission, water, config, vehicle, plan, runtime="step", shore=shores[1])
+    if shore:
+        assert shores[1].log == shores[0].log
     assert flown.trace == reference.trace
     assert (flown.ended, flown.surfacings, flown.events_fired, flown.grounded_ticks) == \
         (reference.ended, reference.surfacings, reference.events_fired,
@@ -450,6 +454,35 @@ def test_the_c_flight_flies_random_missions_as_the_reference(source, ocean, nois
                        noise=NOISE_PRESETS[noise], current=Current(*current),
                        start_epoch_s=start_s, floor=None if floor is None else flat_floor(floor))
     flown_alike(result.mission, config, ocean, rigid=rigid)
+
+
+def test_the_c_flight_flies_the_shore_s_updates_as_the_reference(tmp_path):
+    """With the shore in the loop the C flight stops at each surfacing for its report and
+    replan, and flies the updates the runtime applies from the next tick: the same flight,
+    reports and updates as the reference's."""
+    from gliderplan.planner import make_plan
+    from gliderplan.planner.planfile import read_plan_bytes
+    from gliderplan.sim.replanning import ShoreLoop
+    from gliderplan.sim.scenarios import read_spec
+
+    mission = check_file(str(REPO / "tests" / "missions" / "replan_short.mission")).mission
+    key = bytes(range(32))
+    key_file = tmp_path / "vehicle.key"
+    key_file.write_text(key.hex() + "\n")
+    key_file.chmod(0o600)
+    make_plan(mission, output=tmp_path / "held.plan", sign=key_file, seq=5)
+    held = (tmp_path / "held.plan").read_bytes()
+    config = RunConfig(duration_s=86400.0, seed=3, noise=NOISE_PRESETS["ctd"])
+    shores = []
+
+    def shore():  # a truth hungrier than the model: the replans change the plan
+        shores.append(ShoreLoop(mission, held, key, tick_s=config.tick_s, usable_truth=0.9,
+                                seed=5, spec=read_spec()))
+        return shores[-1]
+
+    flown = flown_alike(mission, config, plan=read_plan_bytes(held, mission), shore=shore)
+    assert flown.surfacings == shores[1].log.surfacings >= 6
+    assert shores[1].log.applied >= 2
 
 
 # (mission, scenario, days): the survey's whole flight; 10 days of the month's scenario 1
