@@ -17,6 +17,7 @@ from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.planfile import Plan, load_plan
 
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
+    from gliderplan.planner.speed import Leg
     from gliderplan.power_models.flight import DensityProfile
     from gliderplan.power_models.vehicle import Vehicle
     from gliderplan.sim.currents import CurrentField
@@ -188,7 +189,8 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     shipped one), and the plan update goes down to the runtime, which applies it (the C
     runtime over its link). The vehicle holds `key_path`'s key, or without one a key made
     for the run, with which the plan is signed; summary.json's `replanning` says what
-    crossed the link, and replans.csv what each surfacing did.
+    crossed the link, and replans.csv what each surfacing did. With `currents`, the shore
+    replans in them (`shore_water`).
 
     Raises a GliderplanError (a missing or bad file, a plan for another mission, a
     runtime that cannot be built, a folder that cannot be written); KeyboardInterrupt if
@@ -272,7 +274,9 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
     shore = None
     if replan_every is not None:
         shore, plan_path, key_path = _shore(mission, replan_every, plan_path, key_path, runtime,
-                                            tick_s, confidence, scenario_file)
+                                            tick_s, confidence, scenario_file,
+                                            None if currents is None else
+                                            shore_water(mission, config))
     plotter: PlotProcess | None = None
 
     def progressed(done_s: float, total_s: float) -> None:
@@ -361,12 +365,28 @@ def run_mission(mission: CheckedMission, output_dir: str | Path, *,
                      currents=config.currents)
 
 
+def shore_water(mission: CheckedMission, config: RunConfig) -> dict[str, tuple[Leg, ...]]:
+    """The water the shore replans in: the run's current on each state's route from where
+    and when the glider is put in (planner.water.route_legs), the water `plan --currents
+    --start` plans in, so that a replan chooses the speeds and thrusts for the current
+    flown, not for still water."""
+    from gliderplan.planner.water import route_legs
+    from gliderplan.sim.currents import UniformCurrent
+    from gliderplan.sim.loop import start_position
+
+    field = config.currents or UniformCurrent(config.current.north_mps,
+                                              config.current.east_mps)
+    return route_legs(mission, field, start_position(mission, config), config.start_epoch_s)
+
+
 def _shore(mission: CheckedMission, every: str, plan_path: str | Path | None,
            key_path: str | Path | None, runtime: str, tick_s: float,
-           confidence: float | None, scenario_file: str | Path | None):  # noqa: ANN202
+           confidence: float | None, scenario_file: str | Path | None,
+           legs: dict[str, tuple[Leg, ...]] | None):  # noqa: ANN202
     """The shore of a run with replanning, and the plan and key the vehicle holds (the plan
     signed with a key made for the run when none is given; for the C runtime, which reads
-    both from files, they are kept in a temporary directory for the run)."""
+    both from files, they are kept in a temporary directory for the run). `legs`: the
+    water it replans in (`shore_water`; None: still water, the plan's speeds kept)."""
     import secrets
 
     from gliderplan.planner.planfile import read_plan_data
@@ -386,7 +406,7 @@ def _shore(mission: CheckedMission, every: str, plan_path: str | Path | None,
         key = secrets.token_bytes(32)
         held = sign_plan(held, key, 1)
     shore = ShoreLoop(mission, held, key, tick_s=tick_s, confidence=confidence,
-                      spec=read_spec(scenario_file))
+                      spec=read_spec(scenario_file), legs=legs)
     if key_path is None and runtime == "c":  # files for the runtime, removed after the run
         import tempfile
 
