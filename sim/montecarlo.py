@@ -28,6 +28,7 @@ from gliderplan.contract import (
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
+from gliderplan.power_models.battery import drawn_budget_j, usable_budget_j
 from gliderplan.power_models.vehicle import Vehicle
 from gliderplan.sim.energy import RunEnergy, account, check_flight
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig, RunRecord
@@ -113,7 +114,7 @@ def _row(job: Job, scenario, record: RunRecord) -> dict:  # noqa: ANN001
     """The results table's row of one flight of a scenario."""
     energy = account(record, job.mission, scenario.vehicle, job.plan)
     check = check_flight(energy, job.plan)
-    budget = job.budget_j * scenario.usable_fraction
+    budget = drawn_budget_j(job.budget_j, scenario.usable_fraction)
     spent = np.cumsum(sum(energy.per_tick_j.values()))
     over = np.flatnonzero(spent > budget)
     component, excess = _most_overrun(energy, job.plan)
@@ -399,7 +400,7 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     vehicle = load_vehicle(mission.vehicle)
     refuse_unflyable_yos(mission, vehicle, plan)
     budget_j = plan.budget_j if plan is not None else \
-        mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
+        usable_budget_j(mission.battery.energy_j, mission.battery.reserve_fraction)
     held = key = None
     if replan:
         held, key = _vehicle_plan(plan_path, key_path)

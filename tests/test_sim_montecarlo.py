@@ -253,3 +253,24 @@ def test_montecarlo_puts_every_glider_in_the_water_at_the_start(tmp_path, capsys
     assert main(["montecarlo", fig2, "--scenarios", "2", "--start", "39.3",
                  "-o", str(tmp_path / "bad")]) == 2
     assert "not an ISO 8601 time" in capsys.readouterr().err
+
+
+def test_the_budget_is_the_battery_less_its_reserve_times_the_share_drawn(tmp_path):
+    """Fig. 2 carries 1.2 kWh and keeps 15 % in reserve: a plan may spend 1.02 kWh
+    (3.672 MJ), the planner, `check` and a run without a plan alike; a scenario whose pack
+    holds 90 % of its rating may spend 0.9 of that."""
+    from gliderplan.planner.hardware import load_hardware
+    from gliderplan.planner.limits import flight_limits
+    from gliderplan.power_models.battery import drawn_budget_j, usable_budget_j
+
+    assert usable_budget_j(1.2 * 3.6e6, 0.15) == pytest.approx(3.672e6)
+    assert drawn_budget_j(3.672e6, 0.9) == pytest.approx(3.3048e6)
+    mission = check_file(str(FIG2)).mission
+    assert load_hardware(mission).budget_j == pytest.approx(3.672e6)
+    assert flight_limits(mission).max_budget_j == pytest.approx(3.672e6)
+    run = montecarlo.montecarlo_mission(mission, tmp_path, scenarios=3, seed=2,
+                                        duration_s=600.0)
+    assert run.summary["budget_j"] == pytest.approx(3.672e6)
+    table = run.result.table()
+    assert table["budget_j"].to_numpy() == pytest.approx(
+        3.672e6 * table["drawn_usable_fraction_1"].to_numpy())
