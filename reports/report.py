@@ -71,11 +71,16 @@ def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Pa
     from gliderplan.planner.report import report_json
 
     if plan_path is not None:
-        load_plan(plan_path, mission)  # a sane plan for this mission, or a clear error
+        plan = load_plan(plan_path, mission)  # a sane plan for this mission, or a clear error
         report = _json(Path(f"{plan_path}.json"), "the plan's report, written beside it by "
                        "`gliderplan plan -o PLAN`")
         if report.get("hash") != mission.hash or not isinstance(report.get("states"), list):
             raise UsageError(f"{plan_path}.json: not the report of a plan for this mission")
+        differs = _differs(report, plan)
+        if differs:
+            raise UsageError(f"{plan_path}.json: not the report of {plan_path} ({differs} "
+                             "differ): plan again with `gliderplan plan -o PLAN`, which "
+                             "writes both")
         if "budgeted_energy_j" not in report:
             raise UsageError(f"{plan_path}.json: made by an older gliderplan (no "
                              "budgeted_energy_j, the plan's place on the Pareto curve): plan "
@@ -87,6 +92,36 @@ def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Pa
     write_atomically(path, write_plan_bytes(result.plan))
     write_atomically(f"{path}.json", json.dumps(report, indent=2) + "\n")
     return report, path, [path, Path(f"{path}.json")]
+
+
+def _differs(report: dict, plan) -> str:  # noqa: ANN001 (planner.planfile.Plan)
+    """What of a plan's JSON report is not the plan's own figure as its file writes it
+    (9 significant digits): its budget, prediction, states, their times and sensor
+    schedules ("" when nothing)."""
+    from gliderplan.planner.planfile import number
+
+    def figures(entry: object, keys: tuple[str, ...]) -> tuple:
+        if not isinstance(entry, dict):
+            return ()
+        return tuple(number(float(v)) if isinstance(v := entry.get(k), (int, float))
+                     and not isinstance(v, bool) else v for k in keys)
+
+    states = report["states"]
+    if [s.get("name") if isinstance(s, dict) else None for s in states] != \
+            [s.name for s in plan.states]:
+        return "the states"
+    wrong = [what for what, given, own in (
+        ("budget_j", figures(report, ("budget_j",)), (number(plan.budget_j),)),
+        ("energy_j", figures(report, ("energy_j",)), (number(plan.predicted_j),)),
+        *((f"{s.name}'s time_s", figures(r, ("time_s",)), (number(s.time_s),))
+          for r, s in zip(states, plan.states, strict=True)),
+        *((f"{s.name}'s sensors",
+           tuple(figures(x, ("name", "period_s", "on_s")) for x in r.get("sensors")
+                 if isinstance(r.get("sensors"), list)),
+           tuple((x.name, number(x.period_s), number(x.on_s)) for x in s.sensors))
+          for r, s in zip(states, plan.states, strict=True)))
+        if given != own]
+    return ", ".join(wrong[:3])
 
 
 def _energy_frame(report: dict) -> pd.DataFrame:
