@@ -28,8 +28,7 @@ from whole_process import gliderplan, load_average
 from gliderplan.language import check_file
 from gliderplan.planner.plan import plan_mission
 from gliderplan.planner.planfile import write_plan_bytes
-from gliderplan.power_models import load_vehicle
-from gliderplan.sim import montecarlo
+from gliderplan.sim import FlightOptions, flight_setup, montecarlo
 from gliderplan.sim.backends import scenario_executor
 from gliderplan.sim.scenarios import read_spec
 
@@ -71,8 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     print(load_average())
     mission = check_file(str(SURVEY)).mission
     plan = plan_mission(mission).plan
-    job = montecarlo.Job(mission, plan, load_vehicle(mission.vehicle), read_spec(),
-                         plan.budget_j, 0, mission.horizon_s)
+    job = montecarlo.Job(flight_setup(mission, FlightOptions(duration_s=mission.horizon_s),
+                                      plan=plan), read_spec())
     runs = [("1 worker (this process)", 1, None), ("2 local workers", 2, None)]
     if not args.no_dask:
         runs.append(("Dask LocalCluster, 2 workers", 2, "local"))

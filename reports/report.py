@@ -272,9 +272,10 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     run_path = Path(run_dir) if run_dir else out / "run"
     run_origin = "the run given"
     if flown is None:
-        from gliderplan.sim import run_mission
+        from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
-        run_mission(mission, run_path, plan_path=plan_file, plots=False)
+        run_mission(flight_setup(mission, FlightOptions(plan_path=plan_file)), run_path,
+                    plots=False)
         flown = _read_run(mission, run_path)
         run_origin = ("flown now on the simulated glider (Python executor, bench ocean) "
                       f"into {run_path}")

@@ -100,17 +100,18 @@ def _fly_one(task: dict) -> dict:
     """Fly one glider with `run_mission` into a scratch directory; return its files and
     what the survey needs of the flight (a worker's task: plain data in and out)."""
     from gliderplan.language import check_source
-    from gliderplan.sim import run_mission
+    from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
     mission = check_source(task["mission_text"], task["mission_name"]).checked()
     with tempfile.TemporaryDirectory(prefix="gliderplan-fleet-") as scratch:
         plan_path = Path(scratch) / "glider.plan"
         plan_path.write_bytes(task["plan_bytes"])
-        result = run_mission(mission, Path(scratch) / "run", plan_path=plan_path,
-                             runtime=task["runtime"], ocean=task["ocean"],
-                             currents="{!r},{!r}".format(*task["current"]),
-                             seed=task["seed"],
-                             duration_s=task["duration_s"], start_utc=task["start_utc"],
+        options = FlightOptions(plan_path=plan_path, runtime=task["runtime"],
+                                ocean=task["ocean"],
+                                currents="{!r},{!r}".format(*task["current"]),
+                                seed=task["seed"], duration_s=task["duration_s"],
+                                start_utc=task["start_utc"])
+        result = run_mission(flight_setup(mission, options), Path(scratch) / "run",
                              netcdf=True)
         files = {p.name: p.read_bytes() for p in result.files}
     columns = result.record.columns
@@ -373,11 +374,10 @@ def montecarlo_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, scenarios:
     summary.json's content; an interrupted run (Ctrl-C) keeps and writes the scenarios
     every glider finished (`interrupted`), and raises KeyboardInterrupt only if none."""
     from gliderplan.language import check_file
-    from gliderplan.planner.planfile import load_plan
-    from gliderplan.power_models import load_vehicle
     from gliderplan.sim import montecarlo
     from gliderplan.sim.backends import check_run_size, scenario_executor
     from gliderplan.sim.scenarios import read_spec
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     check_run_size(scenarios, workers)
     out = Path(output_dir)
@@ -387,13 +387,12 @@ def montecarlo_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, scenarios:
     jobs = {}
     for glider in stored.gliders:
         mission = check_file(str(glider.mission_path)).checked()
-        plan = load_plan(glider.plan_path, mission)
         g = fleet.glider(glider.name)
         duration = fleet.period_s - g.start_offset_s
         if lose is not None and lose[0] == glider.name:
             duration = lose[1] - g.start_offset_s
-        jobs[glider.name] = montecarlo.Job(mission, plan, load_vehicle(mission.vehicle), spec,
-                                           plan.budget_j, seed, duration)
+        options = FlightOptions(plan_path=glider.plan_path, seed=seed, duration_s=duration)
+        jobs[glider.name] = montecarlo.Job(flight_setup(mission, options), spec)
     # batches of a few scenarios per glider, so that every worker stays busy
     per = max(1, math.ceil(scenarios / (4 * max(workers, 1))))
     work = [(name, list(range(i, min(i + per, scenarios))))

@@ -361,12 +361,13 @@ def test_ctrl_c_before_the_first_tick_writes_nothing(tmp_path, capsys, monkeypat
 def test_run_mission_is_the_sim_command_as_one_call(tmp_path):
     from gliderplan.language import check_file
     from gliderplan.planner import make_plan
-    from gliderplan.sim import run_mission
+    from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
     annotated = check_file(str(REPO / "examples" / "fig2_annotated.mission")).checked()
     plan_path = tmp_path / "fig2.plan"
     make_plan(annotated, output=plan_path)
-    result = run_mission(annotated, tmp_path / "run", plan_path=plan_path, seed=3)
+    result = run_mission(flight_setup(annotated, FlightOptions(plan_path=plan_path, seed=3)),
+                         tmp_path / "run")
     assert {p.name for p in result.files} == FILES and all(p.is_file() for p in result.files)
     assert [t.kind for t in result.record.trace] == ["start", "call", "return", "goto", "exit"]
     assert result.check.verdict in ("pass", "over prediction") and not result.interrupted
