@@ -52,8 +52,10 @@ MUTANTS = (
            "for i, event in enumerate(state.events):",
            "for i, event in reversed(list(enumerate(state.events))):"),
     Mutant("events evaluated in reverse order", "c", "runtime/src/gp_machine.c",
-           "for (int i = 0; i < state->n_events; i++) {",
-           "for (int i = state->n_events - 1; i >= 0; i--) {"),
+           "for (int i = 0; i < state->n_events; i++) {\n"
+           "        if (state->events[i].condition(sensors, m->vars)) {",
+           "for (int i = state->n_events - 1; i >= 0; i--) {\n"
+           "        if (state->events[i].condition(sensors, m->vars)) {"),
     # the state entered sees the variables before the event's `set`
     Mutant("set applied after the transition", "python", "sim/executor.py",
            "            self.machine = after\n            self.event_count += 1\n"
