@@ -38,10 +38,11 @@ class FlightOptions:
     `plan_path`: the plan to fly and to check the flight against (without one every sensor
     a state logs is always on). `runtime`: "step" (the compiled runtime's step in this
     process; the default where a C compiler is installed), "python" (the reference
-    executor) or "c" (the compiled runtime over a pseudo-terminal). `ocean`: a preset (bench, sea-trial, uniform), a CSV file, or
-    Slocum science logs to replay (FILE.ebd or a directory): the glider flies its
-    temperature, salinity and in-situ density (TEOS-10), ballasted for the mean density
-    over the depths the mission flies, as `gliderplan forecast` flies it
+    executor) or "c" (the compiled runtime over a pseudo-terminal). `ocean`: a preset
+    (bench, sea-trial, uniform), a CSV file, or Slocum science logs to replay (FILE.ebd or
+    a directory): the glider flies its temperature, salinity and in-situ density
+    (TEOS-10), ballasted for the mean density over the depths the mission flies, as
+    `gliderplan forecast` flies it
     (`planner.rates.band_density`, `Vehicle.ballasted_for`); default: the bench preset's
     temperatures in uniform water of the vehicle's reference density. `noise`: a key of
     `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
