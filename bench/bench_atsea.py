@@ -1,6 +1,7 @@
 """Benchmark: a 12-hour surfacing forecast with its 200 draws in a gridded current field,
-and current-aware routing across a 100 x 100 field over 10 waypoints, each the whole
-`gliderplan` command a user runs (targets: under 5 s and under 10 s).
+and current-aware routing across a 100 x 100 field over 10 waypoints (headings only, and
+with the pitch chosen for the least energy), each the whole `gliderplan` command a user
+runs (targets: under 5 s and under 10 s).
 
     .venv/bin/python bench/bench_atsea.py [--runs 3]
 
@@ -62,16 +63,21 @@ def main() -> int:
                                                 "12h", "--json"),
             "route": gliderplan("route", str(mission), "--start", START, "--currents",
                                 str(field), "--speed", "0.25", "--json"),
+            "route --minimise energy": gliderplan("route", str(mission), "--start", START,
+                                                  "--currents", str(field), "--speed", "0.25",
+                                                  "--minimise", "energy", "--json"),
             "check": gliderplan("check", str(mission)),
         }, args.runs)
     print(f"whole process, median of {args.runs} ({load_average()}):")
     for name, t in times.items():
         print(f"  {name:24s} {t.wall_s:6.2f} s wall, {t.cpu_s:6.2f} s CPU")
     forecast, route = times["forecast"].wall_s, times["route"].wall_s
-    still = times["forecast, still water"].wall_s
+    paced = times["route --minimise energy"].wall_s
+    still, check = times["forecast, still water"].wall_s, times["check"].wall_s
     print(f"the field adds {forecast - still:.2f} s to the forecast ({forecast / still:.1f}x); "
-          f"routing {route / times['check'].wall_s:.1f}x a check")
-    ok = forecast < FORECAST_TARGET_S and route < ROUTE_TARGET_S
+          f"routing {route / check:.1f}x a check, with the pitch chosen {paced / check:.1f}x "
+          f"({paced / route:.1f}x headings only)")
+    ok = forecast < FORECAST_TARGET_S and max(route, paced) < ROUTE_TARGET_S
     print(f"targets: forecast < {FORECAST_TARGET_S:g} s, route < {ROUTE_TARGET_S:g} s: "
           f"{'met' if ok else 'NOT met'}")
     return 0 if ok else 1

@@ -6,15 +6,19 @@
 1. Whole process (bench/whole_process.py: medians after a warm-up, wall and CPU):
    `gliderplan fleet plan BIG --json` of a generated fleet of 10 gliders over 200 lines
    (a 100 km strip of 2 km lines 0.5 km apart, 14 days). Target: under 10 s. Beside it,
-   the same command on the example (examples/shelf.fleet, 5 gliders, 12 lines).
+   the same command on the example (examples/shelf.fleet, 5 gliders, 12 lines), and the
+   baseline every fleet command pays: `gliderplan fleet check BIG` (start-up, reading
+   the file, cutting the survey into lines); ratios against it.
 2. The assignment against its baselines, measured in the same run:
    - on the example: the coordinated plan's mapping error against the equal split's;
    - on small cases (3 gliders, 8 lines): the MILP against brute force (every cut and
      every order of the gliders), their objectives and times;
    - on BIG: the MILP (HiGHS) against the heuristic and its Lagrangian bound.
 3. `fleet montecarlo`: a generated fleet of 10 gliders, 7 days, --scenarios scenarios
-   with 1 local worker, 2 local workers and a Dask LocalCluster of 2; the parallel
-   efficiency rate(K) / (K rate(1)); the tables must be identical.
+   flown in this process (the baseline), and on Dask (the commands' default) by a
+   LocalCluster of 1 and of 2 workers; the parallel efficiency rate(K) / (K rate(1)) of
+   Dask's workers; the tables must be identical. The issue's 200 scenarios, extrapolated
+   from the rates measured (the scenarios are independent flights).
 """
 
 from __future__ import annotations
@@ -46,14 +50,19 @@ def whole_process(work: Path, runs: int) -> None:
     big = work / "big.fleet"
     big.write_text(generated_fleet(11, **BIG))
     times = median_of({"big": gliderplan("fleet", "plan", str(big), "--json"),
-                       "example": gliderplan("fleet", "plan", str(EXAMPLE), "--json")}, runs)
+                       "example": gliderplan("fleet", "plan", str(EXAMPLE), "--json"),
+                       "check": gliderplan("fleet", "check", str(big))}, runs)
     print(f"1. whole process, median of {runs} ({load_average()}):")
-    for name, label in (("big", "10 gliders x 200 lines"), ("example", "the example")):
+    base = times["check"]
+    for name, label in (("big", "plan 10 gliders x 200 lines"), ("example", "plan the example"),
+                        ("check", "check 10 x 200 (baseline)")):
         t = times[name]
         verdict = "" if name != "big" else (
             f"  target {TARGET_S:g} s: {'met' if t.wall_s <= TARGET_S else 'MISSED'} "
             f"(wall), {'met' if t.cpu_s <= TARGET_S else 'MISSED'} (CPU)")
-        print(f"   fleet plan {label:<24} wall {t.wall_s:6.2f} s  CPU {t.cpu_s:6.2f} s{verdict}")
+        print(f"   fleet {label:<28} wall {t.wall_s:6.2f} s  CPU {t.cpu_s:6.2f} s  "
+              f"x{t.wall_s / base.wall_s:5.1f} wall, x{t.cpu_s / base.cpu_s:5.1f} CPU of "
+              f"the check{verdict}")
 
 
 def assignment(work: Path) -> None:
@@ -96,6 +105,8 @@ def assignment(work: Path) -> None:
 
 
 def montecarlo(work: Path, scenarios: int) -> None:
+    import resource
+
     import pandas as pd
 
     from gliderplan.planner.fleet_report import load_plan_dir, write_plan_dir
@@ -104,25 +115,36 @@ def montecarlo(work: Path, scenarios: int) -> None:
     fleet = check_fleet_source(generated_fleet(21, **FLOWN), "flown.fleet").checked()
     write_plan_dir(plan_fleet(fleet), work / "plan")
     stored = load_plan_dir(work / "plan", fleet)
+    flights = scenarios * len(fleet.gliders)
     print(f"3. fleet montecarlo: {len(fleet.gliders)} gliders x {scenarios} scenarios x "
           f"{fleet.period_s / 86400:g} days ({load_average()})")
     rates, tables = {}, {}
-    for label, workers, scheduler in (("1 worker", 1, None), ("2 workers", 2, None),
+    for label, workers, scheduler in (("this process", 1, None), ("Dask, 1 worker", 1, "local"),
                                       ("Dask, 2 workers", 2, "local")):
+        out = work / label.replace(" ", "_").replace(",", "")
+        before = [resource.getrusage(who) for who in (resource.RUSAGE_SELF,
+                                                      resource.RUSAGE_CHILDREN)]
         start = time.perf_counter()
-        summary = montecarlo_fleet(fleet, stored, work / label.replace(" ", "_"),
-                                   scenarios=scenarios, workers=workers, scheduler=scheduler)
+        summary = montecarlo_fleet(fleet, stored, out, scenarios=scenarios, workers=workers,
+                                   scheduler=scheduler)
         spent = time.perf_counter() - start
-        rates[label] = scenarios * len(fleet.gliders) / spent
-        tables[label] = pd.read_parquet(work / label.replace(" ", "_") / "scenarios.parquet")
-        efficiency = rates[label] / (workers * rates["1 worker"])
-        print(f"   {label:<16} {spent:7.1f} s  {rates[label]:5.2f} flights/s  efficiency "
-              f"{efficiency:.2f}  finished {summary['finished']} of {summary['scenarios']}")
-    base = tables["1 worker"].sort_values(["scenario", "glider"]).reset_index(drop=True)
-    for table in tables.values():
+        cpu = sum(after.ru_utime + after.ru_stime - (was.ru_utime + was.ru_stime)
+                  for after, was in zip([resource.getrusage(who) for who in (
+                      resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)], before, strict=True))
+        rates[label] = flights / spent
+        tables[label] = pd.read_parquet(out / "scenarios.parquet")
+        against = rates["Dask, 1 worker"] if workers > 1 else rates["this process"]
+        efficiency = rates[label] / (workers * against)
+        print(f"   {label:<16} {spent:7.1f} s wall  {cpu:7.1f} s CPU  {rates[label]:5.2f} "
+              f"flights/s  efficiency {efficiency:.2f}  200 scenarios: "
+              f"{200 * len(fleet.gliders) / rates[label] / 60:5.1f} min (extrapolated)  "
+              f"finished {summary['finished']} of {summary['scenarios']}")
+    base = tables["this process"].sort_values(["scenario", "glider"]).reset_index(drop=True)
+    for label, table in tables.items():
         other = table.sort_values(["scenario", "glider"]).reset_index(drop=True)
-        pd.testing.assert_frame_equal(base, other)
-    print("   the three tables are identical")
+        pd.testing.assert_frame_equal(base, other, obj=label)
+    print("   the three tables are identical; efficiency of Dask at 1 worker is against this "
+          "process, at 2 against Dask at 1")
 
 
 def main() -> None:

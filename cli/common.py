@@ -55,6 +55,16 @@ def replan_confidence(text: str) -> float:
     return value
 
 
+def add_replan_confidence_argument(parser: argparse.ArgumentParser,
+                                   needs: str | None = None) -> None:
+    """`--confidence P`: the probability the rest of the mission, replanned, holds its
+    budget; `needs`: the option that turns replanning on, if there is one."""
+    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
+                        help=f"{f'with {needs}: ' if needs else ''}the confidence the rest is "
+                             "replanned at: the probability its budget holds (default: the "
+                             "plan's own, else 0.95)")
+
+
 def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]]) -> None:
     """UsageError for an option given without one of the options it works with: `needs`
     maps an option ("--scenarios") to those ("--confidence", "--occupancy-from-sim"); an
@@ -69,6 +79,13 @@ def refuse_unpaired(args: argparse.Namespace, needs: dict[str, tuple[str, ...]])
             raise UsageError(f"{option} works only with {' or '.join(partners)}: give "
                              f"{'one of them' if len(partners) > 1 else 'it'} too, or leave "
                              f"{option} out")
+
+
+def add_force_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--force", action="store_true",
+                        help="write into an -o folder that holds files other than a "
+                             "gliderplan run's: they are deleted (without it such a folder "
+                             "is refused; a previous run's folder is always replaced whole)")
 
 
 def add_cycles_argument(parser: argparse.ArgumentParser) -> None:
@@ -98,15 +115,20 @@ def add_start_argument(parser: argparse.ArgumentParser, default: str) -> None:
                              + default)
 
 
-def add_at_sea_arguments(parser: argparse.ArgumentParser, currents_default: str,
-                         map_shows: str) -> None:
-    """`--currents` (sim.current_files.load_currents) and `--map FILE` (sim.seamap)."""
+def add_currents_argument(parser: argparse.ArgumentParser, default: str) -> None:
+    """`--currents` (sim.current_files.load_currents)."""
     parser.add_argument("--currents", metavar="N,E|FIELD.nc|LOGDIR",
                         help="the current the glider flies through: N,E toward north and "
                              "east [m/s]; a CF NetCDF current field (eastward/northward_"
                              "sea_water_velocity, Copernicus uo/vo, HYCOM water_u/water_v); "
                              "or Slocum flight logs (*.dbd) whose measured currents persist "
-                             f"(default: {currents_default})")
+                             f"(default: {default})")
+
+
+def add_at_sea_arguments(parser: argparse.ArgumentParser, currents_default: str,
+                         map_shows: str) -> None:
+    """`--currents` (sim.current_files.load_currents) and `--map FILE` (sim.seamap)."""
+    add_currents_argument(parser, currents_default)
     parser.add_argument("--map", metavar="FILE.png",
                         help=f"also draw {map_shows} (PNG or SVG)")
 

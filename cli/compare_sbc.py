@@ -14,10 +14,18 @@ crossovers.csv and sbc.png in DIR.
 from __future__ import annotations
 
 import argparse
+from contextlib import nullcontext
 from pathlib import Path
 
-from gliderplan.cli.common import add_cycles_argument, add_mission_argument, load_mission
+from gliderplan.cli.common import (
+    add_cycles_argument,
+    add_force_argument,
+    add_mission_argument,
+    load_mission,
+)
+from gliderplan.contract import interrupts
 from gliderplan.contract.errors import UsageError
+from gliderplan.contract.files import output_folder
 
 ORDER = 35
 
@@ -34,7 +42,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_cycles_argument(parser)
     parser.add_argument("--json", action="store_true", help="print the comparison as JSON")
     parser.add_argument("-o", "--output", metavar="DIR",
-                        help="write boards.csv, workload.csv, crossovers.csv and sbc.png here")
+                        help="write boards.csv, workload.csv, crossovers.csv and sbc.png here "
+                             "(a folder written whole)")
+    add_force_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -45,9 +55,12 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.planner.compare import COMPUTERS, compare_boards
     from gliderplan.reports import sbc
 
-    comparison = compare_boards(mission, args.computer or COMPUTERS, battery=args.battery,
-                                cycles_per_tick=args.cycles_per_tick)
-    files = sbc.write_files(comparison, out) if out is not None else ()
+    with output_folder(out, command="compare-sbc", force=args.force, recognised=sbc.FILES,
+                       inputs=(args.mission,)) if out is not None else nullcontext() as folder:
+        comparison = compare_boards(mission, args.computer or COMPUTERS, battery=args.battery,
+                                    cycles_per_tick=args.cycles_per_tick)
+        interrupts.raise_if_stopped()
+        files = sbc.write_files(comparison, folder) if folder is not None else ()
     print(sbc.as_json(comparison) if args.json else sbc.comparison_text(comparison), end="")
     if files and not args.json:
         print(f"wrote {', '.join(f.name for f in files)} to {out}")

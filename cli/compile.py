@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from pathlib import Path
 
-from gliderplan.cli.common import add_mission_argument, load_mission
+from gliderplan.cli.common import add_force_argument, add_mission_argument, load_mission
+from gliderplan.contract import interrupts
+from gliderplan.contract.files import output_folder
 
 ORDER = 40
 
@@ -27,19 +31,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help="print what was built as JSON (docs/json.md)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
-                        help="directory for MISSION.c, the binary and the plan")
+                        help="directory for MISSION.c, the binary and the plan (a folder "
+                             "written whole: an earlier build there is replaced)")
+    add_force_argument(parser)
+
+
+def _keep_unchanged_source(previous: Path, new: Path) -> None:
+    """The previous build's MISSION.c in the new folder, its timestamp and all (make's):
+    compile_mission leaves it if the C it generates is the same."""
+    try:
+        if previous.is_file():
+            os.link(previous, new)
+    except OSError:
+        pass
 
 
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from gliderplan.cli.common import refuse_unpaired
     from gliderplan.runtime.build import build_target, compile_mission
 
     refuse_unpaired(args, {"--key": ("--plan",)})
     mission = load_mission(args)
     target = build_target(mission, args.target)
-    binary = compile_mission(mission, args.output, target, args.plan, key_path=args.key)
+    source = f"{mission.name}.c"
+    names = (source, mission.name, *(() if args.plan is None else (Path(args.plan).name,)))
+    with output_folder(args.output, command="compile", force=args.force, recognised=names,
+                       inputs=(args.mission, args.plan, args.key)) as folder:
+        _keep_unchanged_source(Path(args.output) / source, folder.path / source)
+        built = compile_mission(mission, folder.path, target, args.plan, key_path=args.key)
+        interrupts.raise_if_stopped()
+    binary = folder.final(built.name)
     print(f"{binary} ({target})", file=sys.stderr)
     if args.json:
         from gliderplan.cli.main import print_json

@@ -37,7 +37,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="TOML file of the deployment's people and names for the NetCDF "
                              "files (docs/json.md lists its keys)")
     parser.add_argument("-o", "--output", metavar="DIR",
-                        help="where to write (default: RUNDIR)")
+                        help="where to write (default: RUNDIR); another folder is written "
+                             "whole, as a run of its own")
+    parser.add_argument("--force", action="store_true",
+                        help="with -o: replace a folder that holds files other than a "
+                             "gliderplan run's (they are deleted)")
     parser.add_argument("--json", action="store_true",
                         help="print the files written as JSON (docs/json.md)")
 
@@ -47,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
 
     formats = [*args.format, *(["ioos"] if args.netcdf else []),
                *(name for name in ("geojson", "kml") if getattr(args, name))]
-    written = export_run(args.run, formats, args.output, args.metadata)
+    written = export_run(args.run, formats, args.output, args.metadata, force=args.force)
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
     if args.json:

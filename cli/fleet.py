@@ -3,6 +3,7 @@
   fleet check FLEET                      diagnostics of a fleet file (exit 1: bad file)
   fleet plan FLEET [-o DIR] [--json]     lines to gliders, speeds, each glider's mission
   fleet sim FLEET [--plan DIR] -o DIR [--lose GLIDER@TIME] [--current N,E] [--workers K]
+            [--scheduler local|tcp://HOST:PORT]
   fleet montecarlo FLEET [--plan DIR] --scenarios N -o DIR [--lose GLIDER@TIME]
                    [--workers K] [--scheduler local|tcp://HOST:PORT]
 
@@ -22,12 +23,12 @@ Without --plan, both plan the fleet first (with --seed) and write that plan into
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
-from pathlib import Path
 
-from gliderplan.cli.common import seed
+from gliderplan.cli.common import add_force_argument, seed
 from gliderplan.contract import ExitCode
 from gliderplan.contract.errors import UsageError
 
@@ -47,7 +48,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                            "plan each glider's mission")
     _common(plan)
     plan.add_argument("-o", "--output", metavar="DIR",
-                      help="write the missions, plans, fleet.json, the map and fleet.html")
+                      help="write the missions, plans, fleet.json, the map and fleet.html "
+                           "(written whole: it replaces a previous plan there)")
+    add_force_argument(plan)
     plan.add_argument("--json", action="store_true", help="print the report as JSON")
     plan.add_argument("--solver", choices=("auto", "milp", "heuristic"), default="auto",
                       help="the assignment: the MILP (HiGHS) up to its size limit (auto), "
@@ -63,7 +66,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         fly.add_argument("--plan", metavar="DIR", help="the plan to fly (fleet plan -o DIR); "
                                                        "default: plan now, into -o")
         fly.add_argument("-o", "--output", metavar="DIR", required=True,
-                         help="directory for the runs, the summary, the map and fleet.html")
+                         help="directory for the runs, the summary, the map and fleet.html "
+                              "(written whole: it replaces a previous run there)")
+        add_force_argument(fly)
         fly.add_argument("--lose", metavar="GLIDER@TIME",
                          help="the glider is lost at TIME after the survey's start (e.g. "
                               "ru29@3d); the report says what the rest can still cover")
@@ -71,8 +76,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                          help="worker processes (default: one per core; 1 flies in this "
                               "process)")
         fly.add_argument("--scheduler", metavar="local|tcp://HOST:PORT",
-                         help="run on Dask distributed: a LocalCluster of --workers "
-                              "processes, or a running scheduler")
+                         help="where the flights run, on Dask distributed: a LocalCluster "
+                              "of --workers processes (the default for more than one), or "
+                              "a running scheduler")
         fly.add_argument("--json", action="store_true", help="print the summary as JSON")
         if name == "sim":
             fly.add_argument("--ocean", default=None,
@@ -158,10 +164,11 @@ def _check(args: argparse.Namespace) -> int:
     return code
 
 
-def _planned(args: argparse.Namespace, fleet, output: str | None):
+def _planned(args: argparse.Namespace, fleet):
+    """The fleet planned (a stop while it is planned is no plan)."""
     from gliderplan.cli.progress import ProgressBar
+    from gliderplan.contract import interrupts
     from gliderplan.planner.fleet import plan_fleet
-    from gliderplan.planner.fleet_report import report_json, write_plan_dir
 
     progress = ProgressBar(lambda done, total: f"step {done:.0f} of {total:.0f}")
     try:
@@ -170,18 +177,28 @@ def _planned(args: argparse.Namespace, fleet, output: str | None):
                           solver=getattr(args, "solver", "auto"), progress=progress)
     finally:
         progress.finish()
-    if output is not None:
-        write_plan_dir(plan, output)
-    return plan, report_json(plan)
+    interrupts.raise_if_stopped()  # the MILP's solver may have swallowed it
+    return plan
 
 
 def _plan(args: argparse.Namespace) -> int:
-    from gliderplan.planner.fleet_report import report_text
+    from gliderplan.planner.fleet_report import (
+        plan_folder,
+        report_json,
+        report_text,
+        write_plan_dir,
+    )
 
     if not 0.0 < args.time_limit:
         raise UsageError(f"--time-limit {args.time_limit:g}: must be positive")
     fleet = load_fleet(args.fleet)
-    _, report = _planned(args, fleet, args.output)
+    with plan_folder(args.output, fleet, force=args.force,
+                     inputs=(args.fleet, args.scenario_file)) if args.output \
+            else contextlib.nullcontext() as folder:
+        plan = _planned(args, fleet)
+        if folder is not None:
+            write_plan_dir(plan, folder)
+    report = report_json(plan)
     print(json.dumps(report, indent=1) if args.json else report_text(report))
     if args.output and not args.json:
         print(f"wrote the plan to {args.output}/ (fleet.json, GLIDER.mission, GLIDER.plan, "
@@ -198,35 +215,42 @@ def _fly(args: argparse.Namespace) -> int:
     lose = parse_loss(args.lose, fleet)
     if args.workers < 1:
         raise UsageError(f"--workers {args.workers}: must be at least 1")
-    directory = args.plan
-    if directory is None:
-        directory = str(Path(args.output) / "plan")
-        _planned(args, fleet, directory)
-    stored = load_plan_dir(directory, fleet)
+    # on Dask by default: a LocalCluster of the workers (one worker: this process)
+    scheduler = args.scheduler or ("local" if args.workers > 1 else None)
+    # without --plan, the fleet is planned now and the plan written into -o DIR/plan
+    plan = _planned(args, fleet) if args.plan is None else load_plan_dir(args.plan, fleet)
+    inputs = (args.fleet, args.scenario_file)
     if args.action == "sim":
         current = _current(args.current)
         progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} gliders flown")
         try:
-            summary = fly_fleet(fleet, stored, args.output, workers=args.workers,
-                                scheduler=args.scheduler, seed=args.seed, ocean=args.ocean,
+            summary = fly_fleet(fleet, plan, args.output, workers=args.workers,
+                                scheduler=scheduler, seed=args.seed, ocean=args.ocean,
                                 current=current, runtime=args.runtime, lose=lose,
-                                progress=progress)
+                                progress=progress, force=args.force, inputs=inputs)
         finally:
             progress.finish()
         print(json.dumps(summary, indent=1) if args.json else _sim_text(summary))
+        if summary["interrupted"]:
+            print(f"  interrupted: {summary['flown']} of {summary['requested']} gliders "
+                  f"flown; the files in {args.output} hold them (fleet_sim.json: complete "
+                  "false)", file=sys.stderr)
+            return ExitCode.INTERRUPTED
         return ExitCode.OK
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} flights")
     try:
-        summary = montecarlo_fleet(fleet, stored, args.output, scenarios=args.scenarios,
-                                   workers=args.workers, scheduler=args.scheduler,
+        summary = montecarlo_fleet(fleet, plan, args.output, scenarios=args.scenarios,
+                                   workers=args.workers, scheduler=scheduler,
                                    seed=args.seed, scenario_file=args.scenario_file,
-                                   lose=lose, progress=progress)
+                                   lose=lose, progress=progress, force=args.force,
+                                   inputs=inputs)
     finally:
         progress.finish()
     print(json.dumps(summary, indent=1) if args.json else _montecarlo_text(summary))
     if summary["interrupted"]:
         print(f"  interrupted: {summary['scenarios']} of {summary['requested']} scenarios "
-              f"finished; the files in {args.output} hold them", file=sys.stderr)
+              f"finished; the files in {args.output} hold them (summary.json: complete "
+              "false, no finish probability)", file=sys.stderr)
         return ExitCode.INTERRUPTED
     return ExitCode.OK
 
@@ -245,6 +269,13 @@ def _current(text: str) -> tuple[float, float]:
 
 
 def _sim_text(s: dict) -> str:
+    if not s["complete"]:
+        lines = [f"{s['fleet']}: interrupted: {s['flown']} of {s['requested']} gliders flown; "
+                 "no verdict on the survey"]
+        lines += [f"  {g['name']:<10} {g['energy_j'] / 3600:>7.0f} Wh of "
+                  f"{g['budget_j'] / 3600:>6.0f} Wh, ended by {g['ended']}"
+                  for g in s["gliders"]]
+        return "\n".join(lines)
     lines = [f"{s['fleet']}: the survey {'was' if s['finished'] else 'was not'} finished; "
              f"realised mapping error {s['mapping_error']:.3f} (planned "
              f"{s['planned_mapping_error']:.3f})"]
@@ -260,11 +291,17 @@ def _sim_text(s: dict) -> str:
 
 
 def _montecarlo_text(s: dict) -> str:
-    low, high = s["finish_interval"]
-    lines = [f"{s['fleet']}: the whole survey finished in {s['finished']} of "
-             f"{s['scenarios']} scenarios: {100 * s['finish_probability']:.1f} % (95 % "
-             f"interval {100 * low:.1f}-{100 * high:.1f} %), planned at "
-             f"{100 * s['planned_confidence']:.0f} %",
+    if s["complete"]:
+        low, high = s["finish_interval"]
+        finish = (f"{s['fleet']}: the whole survey finished in {s['finished']} of "
+                  f"{s['scenarios']} scenarios: {100 * s['finish_probability']:.1f} % (95 % "
+                  f"interval {100 * low:.1f}-{100 * high:.1f} %), planned at "
+                  f"{100 * s['planned_confidence']:.0f} %")
+    else:
+        finish = (f"{s['fleet']}: interrupted after {s['scenarios']} of {s['requested']} "
+                  "scenarios: no finish probability (a partial run is not the sample asked "
+                  "for)")
+    lines = [finish,
              f"  realised mapping error {s['mapping_error']['p05']:.3f} / "
              f"{s['mapping_error']['p50']:.3f} / {s['mapping_error']['p95']:.3f} (5 / 50 / 95 %)"
              f", planned {s['planned_mapping_error']:.3f}"]

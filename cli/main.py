@@ -16,16 +16,16 @@ import importlib
 import os
 import pkgutil
 import select
-import signal
 import sys
 from collections.abc import Callable, Sequence
 from types import ModuleType
 from typing import TextIO
 
 import gliderplan.cli
-from gliderplan.contract import ExitCode
+from gliderplan.contract import ExitCode, interrupts
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.files import OutputFileError
+from gliderplan.contract.interrupts import Terminated  # noqa: F401 (cli.main.Terminated)
 
 
 def subcommands(only: str | None = None) -> dict[str, ModuleType]:
@@ -74,54 +74,43 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (a scheduler, `kill`, a shutting-down system): raised where Ctrl-C's
-    KeyboardInterrupt is, so that every command stops as it does on Ctrl-C: a simulation
-    writes what it flew, children (the C runtime, worker processes) are stopped and
-    temporary files removed on the way out; the exit status is then 143."""
-
-
-_terminated = False  # a SIGTERM arrived: an interrupted command exits 143, not 130
-
-
-def _on_sigterm(signum: int, frame: object) -> None:
-    global _terminated
-    _terminated = True
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one does not cut the clean-up
-    raise Terminated
-
-
 def _stop_code() -> ExitCode:
-    return ExitCode.TERMINATED if _terminated else ExitCode.INTERRUPTED
+    return ExitCode.TERMINATED if interrupts.terminated() else ExitCode.INTERRUPTED
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit code (`contract.ExitCode`)."""
-    global _terminated
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["--version"]:
         print(f"gliderplan {version()}")
         return ExitCode.OK
-    # The top-level parser has no option but --help, so a first word is the command.
-    command = argv[0] if argv and not argv[0].startswith("-") else None
-    args = build_parser(command).parse_args(argv)
-    _terminated = False
-    try:
-        previous = signal.signal(signal.SIGTERM, _on_sigterm)
-    except ValueError:  # not the main thread (a test's, or an embedding program's)
-        previous = None
+    with interrupts.handling():  # from here on a stop signal stops it with 130 or 143
+        try:
+            # The top-level parser has no option but --help, so a first word is the command.
+            command = argv[0] if argv and not argv[0].startswith("-") else None
+            args = build_parser(command).parse_args(argv)
+        except KeyboardInterrupt:
+            return _stop_code()
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command: SIGINT and SIGTERM stop it (contract.interrupts: exit 130,
+    143); its errors become a message and an exit code here."""
     real_stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
         code = int(args._run(args))
         sys.stdout.flush()  # here, where a reader that went away is handled below
-        return _stop_code() if code == ExitCode.INTERRUPTED else code
+        # a stop signal that arrived while the command ran stops it with 130 or 143, even
+        # one that its last moments swallowed: the outputs then say what they hold
+        return _stop_code() if code == ExitCode.INTERRUPTED or interrupts.stopped() else code
     except GliderplanError as err:
         if getattr(args, "json", False):  # the error as JSON where the result would be
             print_json(err.to_json(args.command))
         return report(args.command, err)
     except KeyboardInterrupt:
-        print(f"gliderplan {args.command}: {'terminated' if _terminated else 'interrupted'}",
-              file=sys.stderr)
+        print(f"gliderplan {args.command}: "
+              f"{'terminated' if interrupts.terminated() else 'interrupted'}", file=sys.stderr)
         return _stop_code()
     except Exception as err:  # a bug: say so plainly; the traceback only on request
         if isinstance(err, BrokenPipeError) and _stdout_reader_gone():
@@ -140,8 +129,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         return ExitCode.INTERNAL
     finally:
         sys.stdout = real_stdout
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
 
 
 def print_json(data: object) -> None:
@@ -224,4 +211,8 @@ def report(command: str, err: GliderplanError) -> ExitCode:
 
 
 def entry() -> None:
-    sys.exit(main())
+    try:
+        code = main()
+    except KeyboardInterrupt:  # Ctrl-C before the command started, or as it ended
+        code = ExitCode.INTERRUPTED
+    sys.exit(code)

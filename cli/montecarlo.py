@@ -9,7 +9,8 @@ the budget is the mission's usable battery) in N scenarios drawn from the scenar
 DIR/scenarios.parquet (one row per scenario), DIR/summary.json (the probability that the
 budget holds, with its 95 % interval; energy and duration quantiles), DIR/energy.png and
 DIR/exhaustion.png. Deterministic for a seed, whatever the number or kind of workers.
-Ctrl-C keeps the scenarios that finished (exit 130).
+Ctrl-C (or SIGTERM) stops it at once, workers and all, and writes the scenarios that
+finished, marked partial and with no probability (exit 130, 143).
 """
 
 from __future__ import annotations
@@ -19,12 +20,13 @@ import os
 import sys
 
 from gliderplan.cli.common import (
+    add_force_argument,
     add_mission_argument,
+    add_replan_confidence_argument,
     add_start_argument,
     load_mission,
     parse_start,
     refuse_unpaired,
-    replan_confidence,
     seed,
 )
 from gliderplan.cli.main import print_json
@@ -58,10 +60,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--replan", action="store_true",
                         help="fly each scenario twice: the plan alone, and with the shore "
                              "replanning the rest at each surfacing (plan updates); report "
-                             "both side by side")
-    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
-                        help="with --replan: the confidence the rest is replanned at "
-                             "(default: the plan's own, else 0.95)")
+                             "both side by side, both planned at one confidence (a plan "
+                             "made at another, or on the model, is replanned at it before "
+                             "launch)")
+    add_replan_confidence_argument(parser, "--replan")
     parser.add_argument("--key", metavar="KEYFILE",
                         help="with --replan: the vehicle's key (the plan signed with it; "
                              "default: a key made for the run)")
@@ -69,7 +71,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                "2000-01-01T00:00:00Z")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
-                        help="directory for scenarios.parquet, summary.json and the plots")
+                        help="directory for scenarios.parquet, summary.json and the plots "
+                             "(written whole: it replaces a previous run there)")
+    add_force_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,19 +95,34 @@ def run(args: argparse.Namespace) -> int:
             flight_setup(mission, options), args.output, scenarios=args.scenarios,
             workers=args.workers, scheduler=args.scheduler,
             scenario_file=args.scenario_file, progress=progress, replan=args.replan,
-            confidence=args.confidence)
+            confidence=args.confidence, force=args.force, mission_path=args.mission)
     finally:
         progress.finish()
     summary = run_.summary
     if args.json:
         print_json(summary)
+    elif run_.result.interrupted:
+        print(_partial(mission.name, summary))
     else:
         print(_verdict(mission.name, summary))
     if run_.result.interrupted:
         print(f"  interrupted: {len(run_.result.rows)} of {args.scenarios} scenarios "
-              f"finished; the files in {args.output} hold them", file=sys.stderr)
+              f"finished; the files in {args.output} hold them, marked partial "
+              "(summary.json: complete false, no probability)", file=sys.stderr)
+        return ExitCode.INTERRUPTED
+    if run_.stopped:
+        print(f"  interrupted once every scenario had flown: the files in {args.output} "
+              "hold the whole run", file=sys.stderr)
         return ExitCode.INTERRUPTED
     return ExitCode.OK
+
+
+def _partial(name: str, s: dict) -> str:
+    """An interrupted run as a pilot reads it: how far it got, and no hold rate."""
+    return (f"{name}: INTERRUPTED after {s['scenarios']} of {s['requested']} scenarios: no "
+            "probability that the budget holds (the scenarios that finished before a stop "
+            "are not the run asked for; run it again to the end)\n"
+            f"  of those that finished, the budget held in {s['budget_held']}")
 
 
 def _verdict(name: str, s: dict) -> str:
@@ -133,7 +152,7 @@ def _replanned(name: str, s: dict) -> str:
     link = s["link"]
     return (f"{name}: the budget held in {rate('hold_rate')} of {s['scenarios']} scenarios "
             f"with replanning at each surfacing, {rate('hold_rate_static')} with the plan "
-            f"alone\n"
+            f"alone; both from {s['plan_flown']}\n"
             f"  quality as flown {s['quality']:.4f} with replanning, {s['quality_static']:.4f} "
             f"alone\n"
             f"  link: {link['surfacings_per_mission']:.0f} surfacings a mission; up "

@@ -5,6 +5,8 @@
   plan MISSION --confidence 0.95 [--scenarios N]   the budget holds in that share of scenarios
   plan MISSION --occupancy-from-sim [--scenarios N]   each state's time as simulated
   plan MISSION --sweep N -o DIR     pareto.csv, computers.csv, batteries.csv, pareto.png
+  plan MISSION --currents N,E|FIELD.nc|LOGDIR [--start LAT,LON[,UTC]]
+                                    propelled speeds chosen for the water on the route
 
 With -o the plan file (docs/plan-format.md) is written to PLANFILE and its report to
 PLANFILE.json (and where it flies propelled, its energy per km against speed with the
@@ -21,11 +23,16 @@ import argparse
 import os
 
 from gliderplan.cli.common import (
+    add_currents_argument,
     add_cycles_argument,
+    add_force_argument,
     add_mission_argument,
+    add_start_argument,
     load_mission,
+    parse_start,
     refuse_unpaired,
     seed,
+    start_epoch_s,
 )
 from gliderplan.cli.main import print_json
 from gliderplan.contract.errors import UsageError
@@ -75,6 +82,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --sign: the plan's sequence number, above every plan "
                              "signed before (default: the time in seconds since 1970)")
     add_cycles_argument(parser)
+    add_force_argument(parser)
+    add_currents_argument(parser, "still water; with one, each propelled `auto` speed is "
+                                  "chosen for the least energy per km over ground on its "
+                                  "route")
+    add_start_argument(parser, "the mission's start, else 500 m south of its first waypoint, "
+                               "at 2000-01-01T00:00:00Z")
 
 
 # an option -> the options it works with (refused alone: it would be silently ignored)
@@ -85,9 +98,12 @@ NEEDS = {
     "--scenario-file": ("--confidence", "--scenarios"),
     "--workers": ("--confidence", "--scenarios"),
     "--seq": ("--sign",),
+    "--force": ("--sweep",),
+    "--start": ("--currents",),
 }
 # what a sweep does not do: refused beside --sweep rather than ignored
-NOT_WITH_SWEEP = ("--confidence", "--occupancy-from-sim", "--sign", "--scenarios")
+NOT_WITH_SWEEP = ("--confidence", "--occupancy-from-sim", "--sign", "--scenarios",
+                  "--currents")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -103,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
     args.seed = 0 if args.seed is None else args.seed
     args.workers = (os.cpu_count() or 1) if args.workers is None else args.workers
     mission = load_mission(args)
+    lat, lon, when = parse_start(args.start) if args.start else (None, None, None)
+    start = (lat, lon) if lat is not None else None
     if args.sweep is not None:
         return _sweep(mission, args)
     from gliderplan.cli.progress import ProgressBar
@@ -118,7 +136,8 @@ def run(args: argparse.Namespace) -> int:
                            scenarios=args.scenarios, seed=args.seed, risk=args.risk,
                            scenario_file=args.scenario_file, workers=args.workers,
                            occupancy_from_sim=args.occupancy_from_sim, progress=progress,
-                           sign=args.sign, seq=args.seq)
+                           sign=args.sign, seq=args.seq, currents=args.currents,
+                           start=start, start_epoch_s=start_epoch_s(when))
     except InfeasibleBudget as short:  # --json prints the report beside the error (main)
         short.report = infeasible_json(short)
         raise
@@ -151,7 +170,7 @@ def _sweep(mission, args: argparse.Namespace) -> int:  # noqa: ANN001
     try:
         sweep = sweep_mission(mission, args.sweep, args.output, battery=args.battery,
                               computer=args.computer, progress=progress,
-                              cycles_per_tick=args.cycles_per_tick)
+                              cycles_per_tick=args.cycles_per_tick, force=args.force)
     finally:
         for bar in bars.values():
             bar.finish()

@@ -20,10 +20,13 @@ from __future__ import annotations
 import argparse
 
 from gliderplan.cli.common import (
+    add_currents_argument,
     add_mission_argument,
+    add_replan_confidence_argument,
     load_mission,
+    parse_start,
     refuse_unpaired,
-    replan_confidence,
+    start_epoch_s,
 )
 from gliderplan.contract import ExitCode
 
@@ -37,9 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--telemetry", required=True, nargs="+", metavar="T",
                         help="the glider's surfacing reports: a JSON file, or Slocum logs "
                              "(.sbd/.tbd, .dbd/.ebd) or directories of them")
-    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
-                        help="the probability the budget holds (default: the plan's own, "
-                             "else 0.95)")
+    add_replan_confidence_argument(parser)
     parser.add_argument("--key", metavar="KEYFILE",
                         help="the vehicle's key (gliderplan keygen): signs the update")
     parser.add_argument("--seq", type=int, metavar="N",
@@ -53,6 +54,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default="refuse",
                         help="when the budget left cannot hold the rest at the confidence: "
                              "refuse (default) or send the plan that needs the least")
+    add_currents_argument(parser, "none: the plan's speeds and thruster commands stay; with "
+                                  "one, the `auto` speeds and `thrust auto` are chosen anew "
+                                  "for it from the glider's last position")
+    parser.add_argument("--start", metavar="UTC",
+                        help="with --currents: when the mission started (ISO 8601; default "
+                             "2000-01-01T00:00:00Z), to read the field at the report's time")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("-o", "--output", metavar="OUT",
                         help="write the update OUT, the plan OUT.plan and the report OUT.json")
@@ -62,12 +69,14 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.cli.main import print_json
     from gliderplan.planner.replan import replan_mission
 
-    refuse_unpaired(args, {"--seq": ("--key",)})
+    refuse_unpaired(args, {"--seq": ("--key",), "--start": ("--currents",)})
     mission = load_mission(args)
+    when = parse_start(args.start)[2] if args.start else None
     run_ = replan_mission(mission, args.plan, args.telemetry, confidence=args.confidence,
                           key_path=args.key, output=args.output, seq=args.seq,
                           max_updates=args.max_updates, scenario_file=args.scenario_file,
-                          if_infeasible=args.if_infeasible)
+                          if_infeasible=args.if_infeasible, currents=args.currents,
+                          start_epoch_s=start_epoch_s(when))
     if args.json:
         print_json(run_.to_json())
         return ExitCode.OK

@@ -9,6 +9,9 @@ from the run's total: exit status 3, the run spent more than the plan's budget (
 violation); "over prediction", it spent more than the plan predicted by more than the 5 %
 tolerance but kept its budget (exit 0, or 4 with --strict-prediction); the states that
 overran their own prediction are listed below it, with the component responsible.
+RUNDIR is written whole, replacing a previous run there (a folder holding other files is
+refused without --force). Ctrl-C (or SIGTERM) in flight writes the part flown, marked
+partial (summary.json: complete false), and exits 130 (143).
 """
 
 from __future__ import annotations
@@ -20,12 +23,13 @@ import sys
 
 from gliderplan.cli.common import (
     add_at_sea_arguments,
+    add_force_argument,
     add_mission_argument,
+    add_replan_confidence_argument,
     add_start_argument,
     load_mission,
     parse_start,
     refuse_unpaired,
-    replan_confidence,
     seed,
 )
 from gliderplan.contract import DEFAULT_HORIZON_S, MAX_PLAN_TIME_S, TICK_S, ExitCode
@@ -116,14 +120,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="put the shore in the loop: at each surfacing the glider reports, "
                              "the rest of the mission is replanned and the plan update sent "
                              "to the runtime (needs --plan; RUNDIR/replans.csv)")
-    parser.add_argument("--confidence", type=replan_confidence, metavar="P",
-                        help="with --replan-every: the confidence the rest is replanned at "
-                             "(default: the plan's own, else 0.95)")
+    add_replan_confidence_argument(parser, "--replan-every")
     parser.add_argument("--scenario-file", metavar="FILE",
                         help="with --replan-every: the spreads and battery share the replan's "
                              "prior takes (default: the shipped scenario file)")
     parser.add_argument("-o", "--output", metavar="RUNDIR", required=True,
-                        help="directory for the run's files")
+                        help="directory for the run's files (written whole: it replaces "
+                             "a previous run there)")
+    add_force_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -149,7 +153,8 @@ def run(args: argparse.Namespace) -> int:
             faults=args.faults, key_path=args.key, state_dir=args.state_dir)
         result = run_mission(flight_setup(mission, options), args.output, netcdf=args.netcdf,
                              progress=progress, replan_every=args.replan_every,
-                             confidence=args.confidence, scenario_file=args.scenario_file)
+                             confidence=args.confidence, scenario_file=args.scenario_file,
+                             force=args.force, mission_path=args.mission)
     finally:
         if progress is not None:
             progress.finish()
@@ -187,8 +192,13 @@ def run(args: argparse.Namespace) -> int:
               "run ended before the others fell due (drawn over the mission's timeline; "
               "kill=N@T draws them over T)", file=sys.stderr)
     if result.interrupted:
-        print(f"  interrupted: the outputs in {args.output} cover the part flown",
+        print(f"  interrupted: the outputs in {args.output} cover the part flown, "
+              f"{_time_text(record.columns['time_s'][-1])} (summary.json: complete false)",
               file=sys.stderr)
+        code = ExitCode.INTERRUPTED
+    elif result.stopped:
+        print(f"  interrupted once the flight was over: the outputs in {args.output} hold "
+              "all of it", file=sys.stderr)
         code = ExitCode.INTERRUPTED
     elif record.envelope_acted:
         print("  the vehicle was commanded outside its rating (its vehicle file's "

@@ -100,24 +100,54 @@ class EnvelopeLimit(IntEnum):
     BALLAST = 3  # |pumped volume| above the pump's max_ballast
     BAND = 4  # a yo band thinner than min_yo_band: it would turn all the time
     INFLECTION = 5  # a yo turned again sooner than its pump can move a full stroke
+    SPEED = 6  # a propelled speed outside the propulsion's range (0: the motor off)
+    THRUST = 7  # a thruster's commanded power outside its range (0: off)
+    PUMP_ENERGY = 8  # the pump's energy over the last hour above its rated mean power
+
+
+@dataclass(frozen=True)
+class PumpEnergy:
+    """The buoyancy pump's energy per volume moved at a depth z [m]: out (buoyancy up,
+    against sea pressure) (out + out_per_m z) per cc, in max(0, in + in_per_m z) per cc
+    [J cc-1, J cc-1 m-1] (`power_models.vehicle.Vehicle.pump_energy_j`)."""
+
+    out_j_per_cc: float = 0.0
+    out_j_per_cc_m: float = 0.0
+    in_j_per_cc: float = 0.0
+    in_j_per_cc_m: float = 0.0
 
 
 @dataclass(frozen=True)
 class Envelope:
     """The vehicle's rating that the runtime holds every command to, every tick, whatever
     the events computed (docs/pilot.md, The envelope). From the vehicle file's
-    `[envelope]` table (`power_models.vehicle.Envelope` defaults), compiled into the
-    mission (`gp_mission.envelope`)."""
+    `[envelope]` table and its propulsion and pump figures
+    (`power_models.vehicle_figures.derive_envelope`), compiled into the mission
+    (`gp_mission.envelope`)."""
 
     max_depth_m: float  # [m] deepest depth target or yo end
     max_pitch_rad: float  # [rad] largest |pitch| commanded
     min_yo_band_m: float  # [m] thinnest yo band (max - min depth)
     min_inflection_s: float  # [s] shortest time between two turns of a yo
     action: EnvelopeAction
+    # [m/s] a propelled speed is 0 (the motor off) or within these: its propulsion's range
+    # (0, 0: no propulsion)
+    speed_range_mps: tuple[float, float] = (0.0, 0.0)
+    # [W] a thruster's commanded power is 0 (off) or within these (0, 0: no thruster)
+    thrust_range_w: tuple[float, float] = (0.0, 0.0)
+    # [rad/s] the fastest the vehicle turns: every heading command turns no faster (inf: any)
+    max_turn_rate_rad_s: float = math.inf
+    # [W] the pump's mean power over an hour (its energy per hour / 3600 s; inf: no limit)
+    max_pump_power_w: float = math.inf
+    pump: PumpEnergy = PumpEnergy()
 
     def __post_init__(self) -> None:
+        ranges = (self.speed_range_mps, self.thrust_range_w)
         if not (self.max_depth_m > 0 and 0 < self.max_pitch_rad < 1.5707963267948966
-                and 0 <= self.min_yo_band_m < self.max_depth_m and self.min_inflection_s >= 0):
+                and 0 <= self.min_yo_band_m < self.max_depth_m and self.min_inflection_s >= 0
+                and all(0 <= low <= high < math.inf for low, high in ranges)
+                and self.max_turn_rate_rad_s > 0 and self.max_pump_power_w > 0
+                and all(math.isfinite(f) for f in vars(self.pump).values())):
             raise ValueError(f"not an envelope: {self}")
 
 
@@ -148,6 +178,11 @@ class FlightLimits:
     # per state, the alternative flown where no plan sets one: the first the vehicle can
     # fly (a propeller AUV skips a yo); empty: the first of each state
     unplanned_profiles: tuple[int, ...] = field(default=(), kw_only=True)
+    # [m/s] the speeds a level (propelled) profile may fly: its propulsion's range
+    propelled_speed_mps: tuple[float, float] = field(default=(0.0, MAX_PLAN_SPEED_MPS),
+                                                     kw_only=True)
+    # [W] a yo's thruster command, where one is on: its power-command range
+    thrust_range_w: tuple[float, float] = field(default=(0.0, MAX_PLAN_THRUST_W), kw_only=True)
     # the vehicle's rating every command is held to in flight (`gp_mission.envelope`):
     # always given, by name
     envelope: Envelope = field(kw_only=True)
@@ -323,7 +358,14 @@ SBD_MT_MESSAGE_BYTES = 1890
 SBD_MO_SHORT_BYTES = 340  # [bytes] of one short message up, glider to shore
 SBD_MT_SHORT_BYTES = 270  # [bytes] of one short message down, shore to glider
 COMMAND_MAX_SIZE = 46  # [bytes] of a COMMAND payload that carries every field
+MISSION_HASH_BYTES = 32  # [bytes] of HELLO's mission hash (raw SHA-256 of the mission)
+# [bytes] of HELLO before the mission's name: protocol, n_sensors, read_mask, hash, name_len
+HELLO_FIXED_BYTES = 1 + 1 + 4 + MISSION_HASH_BYTES + 1
 BAUD = 115200  # 8N1: 10 bits per byte on the line
+# [ms] a frame unanswered this long is sent again (science computer's frames, runtime's HELLO)
+RETRANSMIT_MS = 200
+# [s] the watchdog: the runtime releases the glider after this long without a valid frame
+LINK_TIMEOUT_S = 10.0
 
 
 class MessageType(IntEnum):
@@ -370,6 +412,7 @@ FLAG_DONE = 1 << 1  # the mission exited
 FLAG_CLIMBING = 1 << 2  # else diving
 FLAG_HEADING = 1 << 3  # `heading_rad` is valid
 FLAG_ENVELOPE = 1 << 4  # the envelope guard held this command at the vehicle's rating
+FLAG_HEADING_HOLD = 1 << 5  # `heading_rad` is held as it is, uncorrected for the current
 
 # SENSORS's `flags`; the other bits are reserved (0), and a SENSORS with one set is dropped.
 SENSORS_MASK = 1 << 0  # a u32 mask follows; else the values are those of HELLO's read_mask
@@ -449,6 +492,12 @@ class UpdateField(IntEnum):
     PROFILE_PITCH = 8  # field 3
     PROFILE_BALLAST = 9  # field 4
     PROFILE_SPEED = 10  # field 5
+    PROFILE_THRUST = 11  # `profile ... THRUST_W`: field 6, appended where the line has none
+
+
+# Each UpdateField that a line may leave out (0 by the format): a change to it on a line
+# without it appends it after the line's last field.
+UPDATE_OPTIONAL_FIELDS = frozenset({UpdateField.PROFILE_THRUST})
 
 
 # Each UpdateField's line keyword and the 1-based place of the field after it.
@@ -457,7 +506,8 @@ UPDATE_FIELD_LINES: dict[UpdateField, tuple[str, int]] = {
     UpdateField.POWER_SLEEP: ("power", 1), UpdateField.POWER_CYCLES: ("power", 2),
     UpdateField.SENSOR_PERIOD: ("sensor", 2), UpdateField.SENSOR_ON: ("sensor", 3),
     UpdateField.PROFILE_SHARE: ("profile", 2), UpdateField.PROFILE_PITCH: ("profile", 3),
-    UpdateField.PROFILE_BALLAST: ("profile", 4), UpdateField.PROFILE_SPEED: ("profile", 5)}
+    UpdateField.PROFILE_BALLAST: ("profile", 4), UpdateField.PROFILE_SPEED: ("profile", 5),
+    UpdateField.PROFILE_THRUST: ("profile", 6)}
 
 
 class UpdateStatus(IntEnum):

@@ -38,16 +38,16 @@ CONSTANTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "SURFACE_PITCH_RAD", "TRACK_WINDOW", "YO_ALTITUDE_ARG", "THERMOTRACKYO_ALTITUDE_ARG",
         "WAYPOINT_RADIUS_M", "EARTH_RADIUS_M")),
     ("the serial link (docs/protocol.md)", (
-        "PROTOCOL_VERSION", "MAX_PAYLOAD", "MAX_WIRE", "PLAN_PIECE", "MAX_LINK_PLAN",
-        "SBD_MT_MESSAGE_BYTES", "SBD_MO_SHORT_BYTES", "SBD_MT_SHORT_BYTES",
-        "COMMAND_MAX_SIZE", "NO_STATE")),
+        "PROTOCOL_VERSION", "MAX_PAYLOAD", "MAX_WIRE", "PLAN_PIECE", "COMMAND_MAX_SIZE",
+        "MISSION_HASH_BYTES", "HELLO_FIXED_BYTES", "NO_STATE", "BAUD", "RETRANSMIT_MS",
+        "LINK_TIMEOUT_S")),
 )
 LINE_LENGTH = 100
 HEX = frozenset({"NO_STATE"})  # byte values written in hex, as docs/protocol.md has them
 # Bits of a message's flags byte, as C enumerations.
 FLAGS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("COMMAND's flags", ("FLAG_SURFACE", "FLAG_DONE", "FLAG_CLIMBING", "FLAG_HEADING",
-                         "FLAG_ENVELOPE")),
+                         "FLAG_ENVELOPE", "FLAG_HEADING_HOLD")),
     ("SENSORS's flags", ("SENSORS_MASK", "SENSORS_RESYNC")),
 )
 # Enumeration -> (C type name, prefix of its members).

@@ -4,7 +4,8 @@ the board, the sensors' duty bounds and the vehicle's flight model.
 A plan file can be well formed, within the contract's bounds and signed, and still
 contradict its mission: a budget larger than the battery, a prediction of 0 J, a sensor off
 that a state requires, a board other than the mission's, a glide the vehicle cannot fly,
-level flight (a propelled profile) or a thrust on a vehicle without propulsion.
+level flight (a propelled profile) or a thrust on a vehicle without propulsion, a propelled
+speed outside its propulsion's range or a thrust outside its thruster's power command.
 `plan_problem` finds the first such contradiction; the plan readers (Python's
 `planner.planfile.read_plan_bytes` and the runtime's `gp_plan_read`, through
 `gp_plan_check`, which mirrors this function rule for rule and message for message) refuse
@@ -72,10 +73,20 @@ def plan_problem(plan: Plan, limits: FlightLimits) -> PlanProblem | None:
                 if not limits.unplanned_speed_mps > 0:
                     return PlanProblem(state.line, f"{where} PITCH_RAD and BALLAST_CC 0 fly "
                                        "it level on a propeller, and the vehicle has none")
-                continue  # no glide: its speed is the contract's to bound
+                low, high = limits.propelled_speed_mps
+                if _above(low, profile.speed_mps) or _above(profile.speed_mps, high):
+                    return PlanProblem(state.line, f"{where} SPEED_MPS {profile.speed_mps:g} "
+                                       f"outside the vehicle's propulsion ({low:g}-{high:g} "
+                                       "m/s)")
+                continue  # no glide
             if profile.thrust_w > 0 and not limits.unplanned_speed_mps > 0:
                 return PlanProblem(state.line, f"{where} THRUST_W {profile.thrust_w:g} on a "
                                    "vehicle without a thruster")
+            low, high = limits.thrust_range_w
+            if profile.thrust_w > 0 and (_above(low, profile.thrust_w)
+                                         or _above(profile.thrust_w, high)):
+                return PlanProblem(state.line, f"{where} THRUST_W {profile.thrust_w:g} outside "
+                                   f"the vehicle's thruster ({low:g}-{high:g} W)")
             low, high = limits.pitch_range_rad
             least = limits.min_ballast_cc[s][k] if limits.min_ballast_cc else 0.0
             if not low < profile.pitch_rad < high:

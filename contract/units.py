@@ -25,6 +25,7 @@ UNITS: dict[str, dict[str, float]] = {
     "speed": {"m/s": 1.0, "km/h": 1.0 / 3.6, "kn": 1852.0 / 3600.0},
     "rotation": {"rpm": 1.0},  # propeller revolutions per minute
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
+    "angular_rate": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
     "area": {"m2": 1.0},
     "mass": {"kg": 1.0, "g": 1e-3},
     "density": {"kg/m3": 1.0},
@@ -33,7 +34,6 @@ UNITS: dict[str, dict[str, float]] = {
     "compressibility": {"1/Pa": 1.0, "1/dbar": 1e-4},
     "pump_per_volume": {"J/cc": 1.0},
     "pump_per_volume_depth": {"J/(cc m)": 1.0},
-    "energy_per_byte": {"J/B": 1.0},
     "voltage": {"V": 1.0},
     "charge": {"Ah": 3600.0, "mAh": 3.6},  # [C]
     "dimensionless": {"1": 1.0},

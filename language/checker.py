@@ -966,6 +966,9 @@ def _range_hint(spec: ParamSpec) -> str | None:
                 "d_target_altitude), 0 or more; 0: no altimeter stop")
     if spec.unit == "rad":
         return "pitch is in radians: 26 degrees is 0.454"
+    if spec.name == "heading":
+        return ("a compass heading in degrees, true, clockwise from north: 0 north, 90 east, "
+                "270 west (Slocum's set_heading is in radians: 4.712 is 270)")
     if spec.unit == "m":
         return "depths are metres below the surface, 0 or more"
     return None

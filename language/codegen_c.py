@@ -25,7 +25,7 @@ from gliderplan.contract import FlightLimits
 from gliderplan.contract.c_header import sensor_index
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
-from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
+from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS, held_heading_rad
 
 _ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
             "return": "GP_ACT_RETURN", "exit": "GP_ACT_EXIT"}
@@ -34,7 +34,7 @@ _PROFILE_KINDS = {"yo": "GP_PROFILE_YO", "thermotrackyo": "GP_PROFILE_THERMOTRAC
                   "cruise": "GP_PROFILE_CRUISE", "altitude": "GP_PROFILE_ALTITUDE"}
 _ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
                 "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP",
-                "goto_list": "GP_ROUTE_GOTO_LIST"}
+                "goto_list": "GP_ROUTE_GOTO_LIST", "heading": "GP_ROUTE_HEADING"}
 _HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep", "goto_list"})
 # Sensors every compiled mission reads: the state timers and the plan's schedule run on
 # missiontime, every profile turns on depth (pitch is commanded, never read).
@@ -218,8 +218,10 @@ def _route_points(route: ir.Route) -> tuple[tuple[float, float], ...]:
 
 
 def _route_param(route: ir.Route) -> float:
-    """The route's scalar parameter (sweep: line spacing [m], goto_list: radius [m]); 0
-    when it has none."""
+    """The route's scalar parameter (sweep: line spacing [m], goto_list: radius [m],
+    heading: the heading held [rad], as the Python pilot holds it); 0 when it has none."""
+    if route.kind == "heading":
+        return held_heading_rad(route.params[0])
     return route.params[0] if route.kind in ("sweep", "goto_list") else 0.0
 
 
@@ -395,6 +397,10 @@ class _MissionWriter:
             f"    .min_pitch_rad = {c_double(low)},",
             f"    .max_pitch_rad = {c_double(high)},",
             f"    .max_speed_mps = {c_double(limits.max_speed_mps)},",
+            f"    .min_propelled_mps = {c_double(limits.propelled_speed_mps[0])},",
+            f"    .max_propelled_mps = {c_double(limits.propelled_speed_mps[1])},",
+            f"    .min_thrust_w = {c_double(limits.thrust_range_w[0])},",
+            f"    .max_thrust_w = {c_double(limits.thrust_range_w[1])},",
             f"    .states = {f'{p}state_bounds' if limits.duty_bounds else 'NULL'},",
             "};", ""]
 
@@ -406,6 +412,16 @@ class _MissionWriter:
                 f"        .max_pitch_rad = {c_double(env.max_pitch_rad)},",
                 f"        .min_yo_band_m = {c_double(env.min_yo_band_m)},",
                 f"        .min_inflection_s = {c_double(env.min_inflection_s)},",
+                f"        .min_speed_mps = {c_double(env.speed_range_mps[0])},",
+                f"        .max_speed_mps = {c_double(env.speed_range_mps[1])},",
+                f"        .min_thrust_w = {c_double(env.thrust_range_w[0])},",
+                f"        .max_thrust_w = {c_double(env.thrust_range_w[1])},",
+                f"        .max_turn_rate_rad_s = {c_double(env.max_turn_rate_rad_s)},",
+                f"        .max_pump_power_w = {c_double(env.max_pump_power_w)},",
+                f"        .pump_out_j_per_cc = {c_double(env.pump.out_j_per_cc)},",
+                f"        .pump_out_j_per_cc_m = {c_double(env.pump.out_j_per_cc_m)},",
+                f"        .pump_in_j_per_cc = {c_double(env.pump.in_j_per_cc)},",
+                f"        .pump_in_j_per_cc_m = {c_double(env.pump.in_j_per_cc_m)},",
                 f"        .action = GP_ENVELOPE_{env.action.name},",
                 "    },"]
 

@@ -198,8 +198,3 @@ class Router:
             route.append(nodes[at])
             at = previous[at]
         return [a, *reversed(route)]
-
-
-def path_length_m(points: list[XY]) -> float:
-    """Length [m] of a polyline on the plane."""
-    return float(sum(math.dist(p, q) for p, q in zip(points, points[1:], strict=False)))

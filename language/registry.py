@@ -139,13 +139,21 @@ ROUTES: dict[str, RouteInfo] = {
             "fly toward one waypoint",
         ),
         RouteInfo("noheading", (), 0, 0, "no horizontal goal: hold no heading"),
+        RouteInfo(
+            "heading",
+            (ParamSpec("heading", unit="deg", low=0.0, high=360.0, high_open=True),),
+            0,
+            0,
+            "hold a compass heading (true, clockwise from north), uncorrected for the "
+            "current: Slocum's set_heading",
+        ),
         RouteInfo("waypoints", (), 1, MAX_ROUTE_POINTS,
                   "fly a list of (lat, lon) waypoints in order"),
         RouteInfo(
             "sweep",
             (ParamSpec("spacing", unit="m", low=0.0, low_open=True),),
             3,
-            32,
+            MAX_ROUTE_POINTS,  # the runtime's route table, whose hull it sweeps
             "lawn-mower sweep of the convex hull of (lat, lon) corner points",
         ),
         RouteInfo(
@@ -158,6 +166,12 @@ ROUTES: dict[str, RouteInfo] = {
         ),
     )
 }
+
+
+def held_heading_rad(heading_deg: float) -> float:
+    """[rad] the heading a `heading(deg)` route holds: the runtime is given this value
+    (codegen_c) and the Python pilot holds it, so both fly the same number."""
+    return math.radians(heading_deg)
 
 
 def cannot_fly(kind: str, thrust: object, vehicle: object) -> tuple[str, str, bool] | None:

@@ -39,15 +39,22 @@ from gliderplan.language.slocum_files import number_text as _number
 from gliderplan.language.slocum_sampling import ALL_ON_SWITCH, SWITCHES, ScienceBay
 
 # Behaviors this translation reads, and real Slocum behaviors it knows but leaves out.
-TRANSLATED = ("abend", "surface", "goto_list", "goto_wpt", "yo", "prepare_to_dive", "sample",
-              "sensors_in")
-NOT_TRANSLATED = ("dive_to", "climb_to", "set_heading", "thruster", "drift_at_depth",
+TRANSLATED = ("abend", "surface", "goto_list", "goto_wpt", "set_heading", "yo",
+              "prepare_to_dive", "sample", "sensors_in")
+NOT_TRANSLATED = ("dive_to", "climb_to", "thruster", "drift_at_depth",
                   "pinger_on", "comatose", "mission_ender", "nop_cmds", "science_super",
                   "tb_bus", "sleep", "sgyo", "hover", "fin_motor", "digifin")
 DEFAULT_PITCH_RAD = 0.454  # a yo whose pitch is a battery position, not an angle
 AT_SURFACE_M = 0.3  # shallower, the glider is at the surface (sim.vehicle.SURFACE_DEPTH_M)
 SAMEDEPTH_CHANGE_M = 1.0  # abend samedepth_for: "the same depth" is within this [m]
 FLIGHT_SENSORS = ("missiontime", "depth", "pitch", "lat", "lon")
+# behaviors that command the heading: the first in priority order is the route flown
+ROUTE_BEHAVIORS = ("goto_list", "goto_wpt", "set_heading")
+# set_heading's use_heading modes without a translation, and why
+HEADING_MODES_LEFT_OUT = {
+    2: "a roll held (HM_ROLL)", 3: "a battery roll held (HM_BATTROLL)",
+    4: "a fin angle held (HM_FIN)",
+    5: "a heading relative to the measured current's direction (HM_CURRENT)"}
 # surface's start_when modes translated that read when_secs: when they surface
 WHEN_SECS_MODES = {9: "when_secs after it last reached the surface",
                    12: "when_secs after it last left the surface"}
@@ -199,7 +206,9 @@ class _Translator:
             by_name.setdefault(behavior.name, []).append(behavior)
         science_all_on = self.sensor_lines()
         yo = self.single(by_name, "yo")
-        routes = by_name.get("goto_list", []) + by_name.get("goto_wpt", [])
+        # the behaviors that command the heading, in priority order
+        routes = [b for b in self.mission.behaviors if b.name in ROUTE_BEHAVIORS
+                  and b.missing_mafile is None]
         if len(routes) > 1:
             for extra in routes[1:]:
                 self.warn(extra.where, f"{extra.name}: only the first route behavior "
@@ -210,7 +219,7 @@ class _Translator:
             if behavior.missing_mafile is not None:
                 continue
             if behavior.name == "abend":
-                self.abend(behavior, bool(routes))
+                self.abend(behavior, bool(routes) and routes[0].name != "set_heading")
             elif behavior.name == "surface":
                 self.surface(behavior, yo_done)
         if yo_done is not None and not any(
@@ -277,6 +286,8 @@ class _Translator:
         comment = [f"{behavior.name} ({behavior.source})"]
         if behavior.name == "goto_wpt":
             return self.goto_wpt(behavior, comment)
+        if behavior.name == "set_heading":
+            return self.set_heading(behavior, comment)
         points = behavior.waypoints
         count = behavior.value("num_waypoints")
         if not points:
@@ -352,6 +363,36 @@ class _Translator:
         self.route_never = self.route_reaches = ("goto_wpt is flown as nav, a heading that "
                                                  "never reaches its waypoint")
         return f"nav({_number(y.value)}, {_number(x.value)})", comment
+
+    def set_heading(self, behavior: Behavior, comment: list[str]) -> tuple[str, list[str]]:
+        """use_heading 1 (HM_HEADING): heading_value [rad] held as `heading(deg)`, the
+        current correction leaving it alone as the Slocum's does; the other modes turn
+        the glider by its roll or fin, which gliderplan's flight model does not fly."""
+        mode = behavior.args.get("use_heading")
+        value = behavior.args.get("heading_value")
+        if mode is None or value is None:
+            raise SlocumFileError(f"{behavior.mafile or behavior.where}: set_heading needs "
+                                  "use_heading and heading_value")
+        self.route_never = self.route_reaches = ("set_heading holds a heading: it reaches "
+                                                 "no waypoint")
+        if mode.value != 1:
+            why = HEADING_MODES_LEFT_OUT.get(int(mode.value)) \
+                if mode.value == int(mode.value) else None
+            if why is None:
+                raise SlocumFileError(f"{mode.where}: use_heading {mode.text} is no mode of "
+                                      "set_heading (1 heading, 2 roll, 3 battery roll, 4 "
+                                      "fin, 5 relative to the current)")
+            return "noheading", comment + self.leave_out(
+                behavior, ["use_heading", "heading_value"],
+                f"{why} turns the glider at a rate gliderplan's flight model does not "
+                "have: no heading is flown")
+        degrees = math.degrees(value.value) % 360.0
+        degrees = 0.0 if degrees >= 360.0 else degrees  # a tiny negative rounds up to 360
+        comment.append(f"use_heading 1, heading_value {value.text} rad: {_number(degrees)} "
+                       "deg held, uncorrected for the current")
+        comment += self.leave_out(behavior, ["stop_when", "when_secs", "end_action"],
+                                  "the heading is held for the whole survey")
+        return f"heading({_number(degrees)})", comment
 
     # ---- yo
     def yo(self, behavior: Behavior | None) -> tuple[str, list[str], tuple[str, str] | None]:

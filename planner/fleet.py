@@ -240,6 +240,20 @@ def plan_fleet(fleet: Fleet, *, seed: int = 0, scenario_file=None,
     FleetError, located in the fleet file, for a glider that cannot reach the survey, a
     fleet that cannot sweep it at its confidence, a vehicle that cannot fly the yo, or
     gliders planned closer than the separation."""
+    import scipy.linalg  # noqa: F401  (its own BLAS: loaded before the limit, to be held by it)
+    from threadpoolctl import threadpool_limits
+
+    # The fleet's matrices are small (the mapping error's at most some 800 samples; the
+    # planner's a few dozen variables): one BLAS thread solves them as fast, where
+    # threads that wait on each other for a busy core cost a fifth more CPU
+    # (bench/README.md, "Fleet").
+    with threadpool_limits(1, user_api="blas"):
+        return _plan_fleet(fleet, seed, scenario_file, time_limit_s, solver, require_sweep,
+                           progress)
+
+
+def _plan_fleet(fleet: Fleet, seed: int, scenario_file, time_limit_s: float, solver: str,
+                require_sweep: bool, progress: Progress | None) -> FleetPlan:
     began = time.perf_counter()
     kinds = {kind_key(g, b) for g in fleet.gliders for b in bands(fleet)}
     step = _Steps(progress, len(kinds) + 2 + len(fleet.gliders))
@@ -680,17 +694,23 @@ def evaluate(fleet: Fleet, tracks: list[Track], grid: Grid) -> Evaluation:
     spacing = sample_spacing(fleet)
     samples = combined([t.samples(spacing) for t in tracks])
     error, errors = mapping_error(samples, grid, fleet.field)
+    finish = max((track.first_coverage_s() for track in tracks), default=0.0)
+    return Evaluation(error, errors, coverage(fleet, [(t, fleet.period_s) for t in tracks]),
+                      finish, float((errors < 0.5).mean()))
+
+
+def coverage(fleet: Fleet, flown: list[tuple[Track, float]]) -> float:
+    """Share of the survey's line length swept at least once by the gliders flying
+    `flown`'s tracks, each until its time [s after the fleet's start] (the finish; for a
+    lost glider, the loss)."""
     total = sum(p.length_m for p in fleet.parts)
-    swept = 0.0
-    finish = 0.0
-    for track in tracks:
+    swept = set()
+    for track, until_s in flown:
         for index, visits in track.line_visits.items():
             if visits and track.start_offset_s + float(track.time_at(visits[0])) \
-                    <= fleet.period_s:
-                swept += fleet.parts[index].length_m
-        finish = max(finish, track.first_coverage_s())
-    return Evaluation(error, errors, swept / total if total else 0.0, finish,
-                      float((errors < 0.5).mean()))
+                    <= min(until_s, fleet.period_s):
+                swept.add(index)
+    return sum(fleet.parts[i].length_m for i in swept) / total if total else 0.0
 
 
 def closest_approach(fleet: Fleet, tracks: list[Track], step_s: float = 600.0) -> dict:

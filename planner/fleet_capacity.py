@@ -90,15 +90,18 @@ def speed_curve(glider: GliderSpec, fleet: Fleet, band: tuple[float, float],
     track = Track(line, np.array([0.0, PROBE_LEG_M]), (1,), 0.3, fleet.surface_every_s,
                   fleet.surface_stay_s, 0.0, PROBE_LEG_M, {})
     model = None
+    checked: dict[float, tuple] = {}  # horizon -> its probe mission, hardware, occupancy
 
     def plan(horizon_s: float, vehicle=None):
         nonlocal model
-        text = mission_text("probe", probe, fleet, band, track, horizon_s, "probe")
-        mission = check_source(text, "probe.mission").checked()
-        hardware = load_hardware(mission)
+        if horizon_s not in checked:  # the figures' probes fly one horizon: check it once
+            text = mission_text("probe", probe, fleet, band, track, horizon_s, "probe")
+            mission = check_source(text, "probe.mission").checked()
+            checked[horizon_s] = (mission, load_hardware(mission), mission_occupancy(mission))
+        mission, hardware, occupancy = checked[horizon_s]
         if vehicle is not None:
             hardware = replace(hardware, vehicle=vehicle)
-        inputs = build_inputs(mission, hardware, mission_occupancy(mission))
+        inputs = build_inputs(mission, hardware, occupancy)
         model = model_for(inputs, model)
         result = solve_plan(model)
         states = {s.name: s for s in result.plan.states}
@@ -134,10 +137,8 @@ def speed_curve(glider: GliderSpec, fleet: Fleet, band: tuple[float, float],
     # elasticities at the middle speed probed
     middle = speeds[len(speeds) // 2]
     horizon = LAUNCH_S + PROBE_LEG_M / middle + fleet.surface_stay_s
-    vehicle = load_hardware(check_source(
-        mission_text("probe", probe, fleet, band, track, horizon, "probe"),
-        "probe.mission").checked()).vehicle
     base_seg, base_fix, _ = plan(horizon)
+    vehicle = checked[horizon][1].vehicle
     elasticity, figures = {}, {}
     for key in figure_keys:
         value = figure_value(vehicle, key)

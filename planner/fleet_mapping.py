@@ -100,38 +100,59 @@ def _covariance(t1, x1, y1, t2, x2, y2, scales: FieldScales) -> np.ndarray:
     return np.exp(-(dx * dx + dy * dy) / scales.length_m ** 2 - dt * dt / scales.time_s ** 2)
 
 
+def _whitener(t: np.ndarray, x: np.ndarray, y: np.ndarray, scales: FieldScales,
+              noise: np.ndarray | float) -> np.ndarray:
+    """L, the lower Cholesky factor of the samples' covariance C + n I."""
+    from scipy.linalg import cholesky
+
+    gram = _covariance(t, x, y, t, x, y, scales)
+    gram[np.diag_indices_from(gram)] += noise
+    return cholesky(gram, lower=True, check_finite=False)
+
+
+def _unexplained(lower: np.ndarray, cross: np.ndarray) -> np.ndarray:
+    """err = 1 - c^T (L L^T)^-1 c = 1 - |L^-1 c|^2 for each column c of `cross` (one
+    triangular solve, not a Cholesky solve's two)."""
+    from scipy.linalg import solve_triangular
+
+    whitened = solve_triangular(lower, cross, lower=True, check_finite=False)
+    return np.clip(1.0 - np.einsum("ij,ij->j", whitened, whitened), 0.0, 1.0)
+
+
 def point_errors(samples: tuple[np.ndarray, np.ndarray, np.ndarray], at_t: np.ndarray,
                  at_x: np.ndarray, at_y: np.ndarray, scales: FieldScales,
                  noise: np.ndarray | float | None = None) -> np.ndarray:
     """err at each evaluation point (at_t [s], at_x, at_y [m]) from samples (t, x, y);
     `noise` per sample (default: the scales' share for every one)."""
-    from scipy.linalg import cho_factor, cho_solve
-
     t, x, y = (np.asarray(a, float) for a in samples)
     if len(t) == 0:
         return np.ones(len(at_t))
-    noise = scales.noise if noise is None else noise
-    gram = _covariance(t, x, y, t, x, y, scales)
-    gram[np.diag_indices_from(gram)] += noise
-    factor = cho_factor(gram, lower=True, check_finite=False)
+    lower = _whitener(t, x, y, scales, scales.noise if noise is None else noise)
     errors = np.empty(len(at_t))
     for start in range(0, len(at_t), CHUNK):
         stop = start + CHUNK
-        cross = _covariance(t, x, y, at_t[start:stop], at_x[start:stop], at_y[start:stop],
-                            scales)
-        weights = cho_solve(factor, cross, check_finite=False)
-        errors[start:stop] = 1.0 - np.einsum("ij,ij->j", cross, weights)
-    return np.clip(errors, 0.0, 1.0)
+        errors[start:stop] = _unexplained(lower, _covariance(
+            t, x, y, at_t[start:stop], at_x[start:stop], at_y[start:stop], scales))
+    return errors
 
 
 def mapping_error(samples: tuple[np.ndarray, np.ndarray, np.ndarray], grid: Grid,
                   scales: FieldScales) -> tuple[float, np.ndarray]:
-    """(mean err over the grid's points and times, err as (times, points))."""
-    t = np.repeat(grid.times, len(grid.x))
-    x = np.tile(grid.x, len(grid.times))
-    y = np.tile(grid.y, len(grid.times))
-    errors = point_errors(_relevant(samples, grid, scales), t, x, y, scales)
-    return float(errors.mean()), errors.reshape(len(grid.times), len(grid.x))
+    """(mean err over the grid's points and times, err as (times, points)). The
+    covariance is a product of space and time parts: the samples' covariance with the
+    grid's points is computed once and scaled for each time (exp over samples x points,
+    not samples x points x times)."""
+    t, x, y = _relevant(samples, grid, scales)
+    errors = np.ones((len(grid.times), len(grid.x)))
+    if len(t):
+        lower = _whitener(t, x, y, scales, scales.noise)
+        dx = x[:, None] - grid.x[None, :]
+        dy = y[:, None] - grid.y[None, :]
+        space = np.exp(-(dx * dx + dy * dy) / scales.length_m ** 2)
+        for m, at in enumerate(grid.times):
+            errors[m] = _unexplained(lower, space * np.exp(-((t - at) / scales.time_s) ** 2
+                                                           )[:, None])
+    return float(errors.mean()), errors
 
 
 def _relevant(samples, grid: Grid, scales: FieldScales):

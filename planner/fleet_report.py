@@ -8,12 +8,15 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterable
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from gliderplan.contract.errors import GliderplanError, UsageError
+from gliderplan.contract.files import OutputFolder, output_folder
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.fleet import Fleet
 from gliderplan.planner.fleet import TARGET_IMPROVEMENT, FleetPlan, GliderPlan
@@ -243,17 +246,16 @@ def report_text(report: dict) -> str:
 
 # ---- the plan directory ------------------------------------------------------------------
 
-def write_plan_dir(plan: FleetPlan, output_dir) -> tuple[Path, ...]:
+def write_plan_dir(plan: FleetPlan, output: str | Path | OutputFolder, *, force: bool = False,
+                   inputs: Iterable[str | Path | None] = ()) -> tuple[Path, ...]:
     """Write the plan: per glider its mission and plan (and the plan's JSON report), the
-    fleet report, the map (PNG, GeoJSON, KML) and the fleet page, each atomically."""
-    from gliderplan.contract.files import write_atomically
+    fleet report, the map (PNG, GeoJSON, KML) and the fleet page; into `output`, a folder
+    written whole (contract.files.output_folder, with `force` and `inputs`), or a folder
+    being written (a fleet run's plan/). Where the files will be."""
     from gliderplan.planner.planfile import write_plan_bytes
     from gliderplan.planner.report import report_json as plan_report
     from gliderplan.reports import fleet as drawing
 
-    out = Path(output_dir)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {out}: not a directory")
     report = report_json(plan)
     files: dict[str, str | bytes] = {}
     for glider in plan.gliders:
@@ -264,11 +266,21 @@ def write_plan_dir(plan: FleetPlan, output_dir) -> tuple[Path, ...]:
     files[REPORT_FILE] = json.dumps(report, indent=1) + "\n"
     files.update(drawing.map_files(plan.fleet, report, plan))
     files["fleet.html"] = drawing.page(plan.fleet, report, plan=plan, png=files["fleet.png"])
-    written = []
-    for name, data in files.items():
-        write_atomically(out / name, data)
-        written.append(out / name)
-    return tuple(written)
+    if isinstance(output, OutputFolder):
+        return tuple(output.write(name, data) for name, data in files.items())
+    with plan_folder(output, plan.fleet, force=force, inputs=inputs) as folder:
+        return write_plan_dir(plan, folder)
+
+
+def plan_folder(output: str | Path, fleet: Fleet, *, force: bool = False,
+                inputs: Iterable[str | Path | None] = ()) -> AbstractContextManager:
+    """The folder `output` for a plan of `fleet` (contract.files.output_folder): opened
+    before the fleet is planned, so that a folder that cannot take it is refused first."""
+    names = [REPORT_FILE, "fleet.png", "fleet.geojson", "fleet.kml", "fleet.html"]
+    for glider in fleet.gliders:
+        names += [f"{glider.name}.mission", f"{glider.name}.plan", f"{glider.name}.plan.json"]
+    return output_folder(output, command="fleet plan", force=force, recognised=names,
+                         inputs=inputs)
 
 
 @dataclass(frozen=True)

@@ -177,22 +177,36 @@ def _hover(vehicle: Vehicle, state: ir.State, occupancy: Occupancy, time_s: floa
     return StateBill(time_s, occupancy.visits[state.name], 0.0, 0.0, time_s, energy)
 
 
-def _computer_w(mission: ir.CheckedMission, state: ir.State) -> float:
-    """[W] the mission's board draws in `state` (0 for `computer none`)."""
+@dataclass(frozen=True)
+class ComputerDraw:
+    """What the mission's board draws: [W] in each state (0 for `computer none`) and [J]
+    its boot. It does not depend on the vehicle: read once for all the drawn vehicles."""
+
+    state_w: dict[str, float]
+    boot_j: float
+
+
+def computer_draw(mission: ir.CheckedMission) -> ComputerDraw:
+    """The board's draw in each state of `mission` (its board file read once)."""
     c = mission.computer
     board = load_board(c.board, c.clock_mhz)
-    use = state.computer
-    at = board.at_clock(use.clock_mhz) if use.clock_mhz else board
-    power = float(at.mean_power_w(use.cycles_per_tick or RUNTIME_CYCLES_PER_TICK, TICK_S,
-                                  use.sleep and at.sleep is not None))
-    return at.active_w if math.isnan(power) else power
+    state_w = {}
+    for state in mission.states:
+        use = state.computer
+        at = board.at_clock(use.clock_mhz) if use.clock_mhz else board
+        power = float(at.mean_power_w(use.cycles_per_tick or RUNTIME_CYCLES_PER_TICK, TICK_S,
+                                      use.sleep and at.sleep is not None))
+        state_w[state.name] = at.active_w if math.isnan(power) else power
+    return ComputerDraw(state_w, board.boot_j)
 
 
 def bill_states(mission: ir.CheckedMission, vehicle: Vehicle, occupancy: Occupancy,
-                ocean: DensityProfile | None = None, floor_m: float | None = None
-                ) -> dict[str, StateBill]:
+                ocean: DensityProfile | None = None, floor_m: float | None = None,
+                computer: ComputerDraw | None = None) -> dict[str, StateBill]:
     """Each state of `mission` flown by `vehicle` for the time `occupancy` gives it, over
-    a sea floor `floor_m` [m] deep (None: unknown)."""
+    a sea floor `floor_m` [m] deep (None: unknown); `computer`: the board's draw
+    (default: read from the mission's board)."""
+    computer = computer or computer_draw(mission)
     bills: dict[str, StateBill] = {}
     for state in mission.states:
         time_s = occupancy.time_s.get(state.name, 0.0)
@@ -212,12 +226,12 @@ def bill_states(mission: ir.CheckedMission, vehicle: Vehicle, occupancy: Occupan
         keep = max(1.0 - extra / gliding, 0.0)
         bills = {name: _scaled(b, keep) if b.gliding_s > 0.0 else b
                  for name, b in bills.items()}
-    board = load_board(mission.computer.board, mission.computer.clock_mhz)
     first = True
     for state in mission.states:
         if state.name in bills:
             bill = bills[state.name]
-            joules = _computer_w(mission, state) * bill.time_s + (board.boot_j if first else 0.0)
+            joules = computer.state_w[state.name] * bill.time_s + (
+                computer.boot_j if first else 0.0)
             first = False
             bills[state.name] = replace(bill, energy_j={**bill.energy_j,
                                                         Component.COMPUTER: joules})
@@ -284,11 +298,12 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
     horizon = duration_s if duration_s is not None else mission.horizon_s
     occupancy = mission_occupancy(mission, horizon if horizon is not None
                                   else DEFAULT_HORIZON_S)
-    bills = bill_states(mission, glider, occupancy, ocean, floor_m)
+    computer = computer_draw(mission)
+    bills = bill_states(mission, glider, occupancy, ocean, floor_m, computer)
     rng = np.random.default_rng(seed)
     drift_w = glider.base_drift_w or DEFAULT_DRIFT_W
     gliding_s = sum(b.gliding_s for b in bills.values())
-    drawn = [bill_states(mission, v, occupancy, ocean, floor_m)
+    drawn = [bill_states(mission, v, occupancy, ocean, floor_m, computer)
              for v in draw_vehicles(glider, draws, rng)]
     energies = np.array([sum(sum(b.energy_j.values()) for b in d.values()) for d in drawn])
     energies = energies + rng.normal(0.0, drift_w, energies.size) * gliding_s

@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from gliderplan.contract import MAX_PLAN_ENERGY_J, RUNTIME_CYCLES_PER_TICK, ExitCode, same_clock
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
+from gliderplan.planner.speed import STILL_WATER, Leg
 from gliderplan.power_models import load_battery, load_board, load_vehicle
 from gliderplan.power_models.battery import energy_to_j, usable_budget_j
 from gliderplan.power_models.board import Board, board_spec
@@ -44,6 +45,10 @@ class Hardware:
     cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK  # work per tick of states that say none
     board_modes: tuple[Board, ...] = ()  # every clock of the board, slowest first
     held: bool = False  # every state at `modes`, whatever its `computer clock` says
+    # the water it flies: state -> its route's legs with their currents
+    # (`planner.water.route_legs`); a state without is planned in still water
+    legs: dict[str, tuple[Leg, ...]] = field(default_factory=dict)
+    water_notes: tuple[str, ...] = ()  # where the current came from, for the assumptions
 
     @property
     def budget_j(self) -> float:
@@ -67,6 +72,11 @@ class Hardware:
     def cycles(self, state: ir.State) -> float:
         """The board's work every tick in `state` [cycles]: its own, else the mission's."""
         return state.computer.cycles_per_tick or self.cycles_per_tick
+
+    def water(self, state: ir.State) -> tuple[Leg, ...]:
+        """The legs `state`'s speed is chosen for: its route's in the plan's current, else
+        still water."""
+        return self.legs.get(state.name, STILL_WATER)
 
 
 def parse_battery(spec: str) -> tuple[float, float | None]:

@@ -3,7 +3,8 @@ and the current the glider measured up to it, forecast the next surfacings and c
 them with the fixes the glider then took (`gliderplan hindcast LOGDIR`).
 
 At surfacing k the forecast knows what a pilot knows: the last fix before the dive, the
-depth-averaged current last logged (`m_water_vx`, `m_water_vy`), the waypoint
+depth-averaged current last logged (`m_water_vx`, `m_water_vy`; in logs without them,
+the current of the dead-reckoning error between fixes, sim.dr_currents), the waypoint
 (`c_wpt_lat`, `c_wpt_lon`), the glider's own estimate of its speed through the water
 (`m_avg_speed`), and how long the last dive and surfacing lasted (dives keep their
 length while the mission does not change). How far these stray is drawn from the
@@ -59,21 +60,6 @@ def _latest(times: np.ndarray, values: np.ndarray, at_s: float) -> float:
     return float(values[i]) if i >= 0 else math.nan
 
 
-def read_flight(path: str | Path):
-    """The flight logs (*.dbd, or a directory of them) as one dbdreader.MultiDBD."""
-    import dbdreader
-
-    from gliderplan.sim.slocum_ocean import logs_in
-
-    files = logs_in(path, "*.dbd", "flight log")
-    cac = files[0].parent / "cac"
-    try:
-        return dbdreader.MultiDBD(filenames=[str(f) for f in files],
-                                  cacheDir=str(cac) if cac.is_dir() else None)
-    except (dbdreader.DbdError, OSError, ValueError) as err:
-        raise CurrentError(f"{path}: the flight logs cannot be read: {err}") from None
-
-
 def _series(logs, name: str, path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     import dbdreader
 
@@ -103,10 +89,15 @@ def surfacing_fixes(logs, path: str | Path) -> _Fixes:
 def hindcast(path: str | Path, ahead: int = 2, draws: int = 200) -> list[Check]:
     """Each surfacing after the first forecast from the fixes and currents up to it,
     `ahead` surfacings on, against the fixes the glider took."""
-    logs = read_flight(path)
+    from gliderplan.sim.current_files import flight_logs, logged_currents
+
+    logs = flight_logs(path)
     fixes = surfacing_fixes(logs, path)
-    logged = {name: _series(logs, name, path) for name in
-              ("m_water_vx", "m_water_vy", "c_wpt_lat", "c_wpt_lon", "m_avg_speed")}
+    currents = logged_currents(logs, path)
+    logged = {"m_water_vx": (currents.time_s, currents.east_mps),
+              "m_water_vy": (currents.time_s, currents.north_mps),
+              **{name: _series(logs, name, path) for name in
+                 ("c_wpt_lat", "c_wpt_lon", "m_avg_speed")}}
     checks = []
     for k in range(1, len(fixes.start_s) - 1):
         dive_s = fixes.start_s[k] - fixes.end_s[k - 1]

@@ -202,9 +202,18 @@ def _no_board_notes(mission: ir.CheckedMission) -> list[str]:
                              for s in mission.states if not s.computer.is_default)]
 
 
+def water_notes(hardware: Hardware) -> list[str]:
+    """What each state's speed is chosen for where the plan has a current."""
+    return [f"{name}: speed chosen for the current on its {len(legs)} leg(s), "
+            f"{sum(g.length_m for g in legs) / 1000:.3g} km: "
+            + "; ".join(f"{g.where.split(': ', 1)[-1]} {g.along_mps:+.3g} m/s along, "
+                        f"{abs(g.across_mps):.3g} m/s across" for g in legs)
+            for name, legs in hardware.legs.items()]
+
+
 def build_inputs(mission: ir.CheckedMission, hardware: Hardware,
                  occupancy: Occupancy) -> PlanInputs:
-    notes: list[str] = list(occupancy.notes)
+    notes: list[str] = [*occupancy.notes, *hardware.water_notes, *water_notes(hardware)]
     duty: list[tuple] = []
     fixed: list[tuple] = []
     dev_keys: dict[tuple[int, str], int] = {}

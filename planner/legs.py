@@ -32,12 +32,15 @@ def route_targets(route: ir.Route) -> list[Position]:
     return []
 
 
+def offset_m(a: Position, b: Position) -> tuple[float, float]:
+    """(north, east) [m] from `a` to the nearby `b` [deg] (equirectangular about `a`)."""
+    scale = EARTH_RADIUS_M * math.pi / 180.0
+    return (b[0] - a[0]) * scale, (b[1] - a[1]) * scale * math.cos(math.radians(a[0]))
+
+
 def distance_m(a: Position, b: Position) -> float:
     """Distance [m] between two nearby points [deg] (equirectangular about `a`)."""
-    scale = EARTH_RADIUS_M * math.pi / 180.0
-    north = (b[0] - a[0]) * scale
-    east = (b[1] - a[1]) * scale * math.cos(math.radians(a[0]))
-    return math.hypot(north, east)
+    return math.hypot(*offset_m(a, b))
 
 
 def leg_length_m(start: Position | None, targets: list[Position]) -> float | None:

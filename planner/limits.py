@@ -61,8 +61,9 @@ def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[
     """The limits of `mission` flown by `vehicle` on a board of `clocks_mhz` [MHz] named
     `board` (None: any): the battery less its reserve, the sensors' duty bounds, the pump,
     the pitches and fastest glide of a vehicle with a buoyancy engine (an AUV has none:
-    no glide bounds beyond the contract's), the volume each yo needs, and what it flies
-    without a plan (`unplanned`)."""
+    no glide bounds beyond the contract's), the volume each yo needs, the speeds its
+    propulsion flies and its thruster's power command, and what it flies without a plan
+    (`unplanned`)."""
     from gliderplan.planner.inputs import duty_bounds
     from gliderplan.planner.rates import yo_band
     from gliderplan.power_models.devices import sensor_on
@@ -85,6 +86,11 @@ def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[
         return float(vehicle.trim_offset_cc(*yo_band(profile, args)))
 
     speed, flown = unplanned(mission, vehicle)
+    propulsion = vehicle.propulsion
+    rated = {} if propulsion is None else {
+        "propelled_speed_mps": (propulsion.min_speed_mps, propulsion.max_speed_mps),
+        **({"thrust_range_w": (propulsion.min_command_w, propulsion.max_command_w)}
+           if propulsion.is_thruster else {})}
     return FlightLimits(
         vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, clocks_mhz, board=board,
         max_budget_j=usable_budget_j(mission.battery.energy_j, mission.battery.reserve_fraction),
@@ -99,4 +105,5 @@ def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[
             for state in mission.states),
         min_ballast_cc=tuple(tuple(least_ballast_cc(p) for p in state.profiles)
                              for state in mission.states),
-        unplanned_speed_mps=speed, unplanned_profiles=flown, envelope=vehicle.envelope)
+        unplanned_speed_mps=speed, unplanned_profiles=flown, envelope=vehicle.envelope,
+        **rated)

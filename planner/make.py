@@ -11,9 +11,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import RUNTIME_CYCLES_PER_TICK
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, interrupts
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import output_folder, write_files_atomically
 from gliderplan.language.ir import CheckedMission
 
 if TYPE_CHECKING:
@@ -32,7 +32,9 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
               risk: float = 1e-3, scenario_file: str | Path | None = None, workers: int = 1,
               occupancy_from_sim: bool = False,
               progress: Callable[[float, float], None] | None = None,
-              sign: str | Path | None = None, seq: int | None = None) -> PlanResult:
+              sign: str | Path | None = None, seq: int | None = None,
+              currents: str | None = None, start: tuple[float, float] | None = None,
+              start_epoch_s: float | None = None) -> PlanResult:
     """Plan `mission` on its own hardware, or with `battery` ("1.2kWh", "60Ah@14.4V", a
     preset) and `computer` ("ts7800@500"; "ts7800" lets the planner pick the clock) in
     its place; `cycles_per_tick` [cycles] is the board's work every tick. With
@@ -44,14 +46,21 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     again until it settles (planner/simulated.py): one flight in the simulator's default
     water from `seed`, or the mean of `scenarios` scenarios drawn as for `confidence`.
     With `output`, write the plan file there and its
-    JSON report beside it (`output`.json), atomically, and where it flies propelled its
-    energy per km against speed (`output`.speed.png, reports/speed.py); with `sign` (a
-    key file) the plan
+    JSON report beside it (`output`.json), atomically and together (never one without the
+    other), and where it flies propelled its energy per km against speed
+    (`output`.speed.png, reports/speed.py), unless a stop signal arrived
+    (KeyboardInterrupt: an interrupted plan is no plan, even where a library swallowed
+    the signal); with `sign` (a key file) the plan
     file is signed as plan number `seq` (default: `signing.default_sequence()`). The
     result holds the plan
     (`.plan`, what the file holds) and what its solve tells (quality, minimum energy,
-    shadow price, the confidence). Raises InfeasibleBudget (with the minimum energy and
-    the largest consumers), PlanningError, HardwareError or ModelFileError."""
+    shadow price, the confidence). With `currents` (N,E [m/s], a NetCDF field or a
+    directory of glider logs, as `sim --currents`), each propelled `auto` speed is the
+    least energy per km over ground on its state's route legs from `start` (lat, lon
+    [deg]; default: where the simulator puts the vehicle in) at `start_epoch_s` [s since
+    1970] (planner/water.py). Raises InfeasibleBudget (with the minimum energy and
+    the largest consumers), PlanningError, NoHeadway (naming the leg no speed can fly),
+    CurrentError, HardwareError or ModelFileError."""
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import plan_mission
     from gliderplan.planner.planfile import write_plan_bytes
@@ -67,6 +76,10 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
     check_run_size(scenarios, workers)
     hardware = load_hardware(mission, battery=battery, computer=computer,
                              cycles_per_tick=cycles_per_tick)
+    if currents is not None:
+        from gliderplan.planner.water import in_water
+
+        hardware = in_water(hardware, mission, currents, start, start_epoch_s)
     if occupancy_from_sim:
         result = _plan_on_simulation(mission, hardware, scenarios, seed, scenario_file,
                                      workers, progress)
@@ -93,15 +106,17 @@ def make_plan(mission: CheckedMission, *, battery: str | None = None,
         data = sign_plan(data, read_key(sign), seq)
         result = replace(result, plan=replace(result.plan, seq=seq))
     result = replace(result, upload_bytes=len(data))
+    interrupts.raise_if_stopped()
     if output is not None:
-        write_atomically(output, data)
-        write_atomically(f"{output}.json", json.dumps(report_json(result), indent=2) + "\n")
+        files = {output: data,
+                 f"{output}.json": json.dumps(report_json(result), indent=2) + "\n"}
         if hardware.vehicle.propulsion is not None:
             from gliderplan.reports.speed import speed_frame, speed_png
 
             frame = speed_frame(mission, hardware, result.plan)
             if len(frame):
-                write_atomically(f"{output}.speed.png", speed_png(frame))
+                files[f"{output}.speed.png"] = speed_png(frame)
+        write_files_atomically(files)
     return result
 
 
@@ -139,9 +154,11 @@ class Sweep:
 def sweep_mission(mission: CheckedMission, points: int, output_dir: str | Path, *,
                   battery: str | None = None, computer: str | None = None,
                   cycles_per_tick: float = RUNTIME_CYCLES_PER_TICK,
-                  progress: SweepProgress | None = None) -> Sweep:
+                  progress: SweepProgress | None = None, force: bool = False) -> Sweep:
     """The Pareto frontier at `points` budgets (2 to 10000), the plan on each computer at
-    the mission's budget and with each battery; writes SWEEP_FILES into `output_dir`."""
+    the mission's budget and with each battery; writes SWEEP_FILES into `output_dir`, a
+    folder written whole (contract.files.output_folder; `force`: replace a folder holding
+    other files than a gliderplan run's). Interrupted, it writes nothing."""
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
     from gliderplan.planner.sweep import batteries, computers, pareto, plot_pareto
@@ -157,16 +174,18 @@ def sweep_mission(mission: CheckedMission, points: int, output_dir: str | Path, 
     def labelled(label: str) -> Callable[[int, int], None] | None:
         return None if progress is None else lambda done, total: progress(label, done, total)
 
-    _, model = prepare(mission, hardware)
-    frame = pareto(model, points, labelled("pareto"))
-    boards = computers(mission, budget_j=hardware.budget_j, progress=labelled("computers"),
-                       cycles_per_tick=cycles_per_tick)
-    packs = batteries(mission, computer=computer, progress=labelled("batteries"),
-                      cycles_per_tick=cycles_per_tick)
-    contents = {"pareto.csv": frame.to_csv(index=False),
-                "computers.csv": boards.to_csv(index=False),
-                "batteries.csv": packs.to_csv(index=False),
-                "pareto.png": plot_pareto(frame, f"{mission.name}: quality against budget")}
-    for name in SWEEP_FILES:
-        write_atomically(out / name, contents[name])
-    return Sweep(frame, boards, packs, tuple(out / name for name in SWEEP_FILES))
+    with output_folder(out, command="plan --sweep", force=force,
+                       recognised=SWEEP_FILES) as folder:
+        _, model = prepare(mission, hardware)
+        frame = pareto(model, points, labelled("pareto"))
+        boards = computers(mission, budget_j=hardware.budget_j, progress=labelled("computers"),
+                           cycles_per_tick=cycles_per_tick)
+        packs = batteries(mission, computer=computer, progress=labelled("batteries"),
+                          cycles_per_tick=cycles_per_tick)
+        contents = {"pareto.csv": frame.to_csv(index=False),
+                    "computers.csv": boards.to_csv(index=False),
+                    "batteries.csv": packs.to_csv(index=False),
+                    "pareto.png": plot_pareto(frame, f"{mission.name}: quality against budget")}
+        interrupts.raise_if_stopped()
+        files = tuple(folder.write(name, contents[name]) for name in SWEEP_FILES)
+    return Sweep(frame, boards, packs, files)

@@ -10,6 +10,7 @@ computer: its mean power for the runtime's workload. Per sensor device: its on-p
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +20,14 @@ from gliderplan.language import ir
 from gliderplan.language.registry import PROFILES, altitude_stop_m, cannot_fly
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.occupancy import Occupancy, mission_occupancy
-from gliderplan.planner.speed import SpeedChoice, best_speed, choice_at
+from gliderplan.planner.speed import (
+    STILL_WATER,
+    Leg,
+    SpeedChoice,
+    best_speed,
+    choice_at,
+    route_pace_s_per_m,
+)
 from gliderplan.power_models.board import Board
 from gliderplan.power_models.devices import base_power_w
 from gliderplan.power_models.flight import DensityProfile
@@ -127,15 +135,17 @@ def _profile_args(profile: ir.Profile, variables: dict[str, float]) -> tuple[flo
 
 def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
                   variables: dict[str, float], fixed_load_w: float,
-                  visit_s: float, notes: list[str], where: str) -> ProfileRates:
+                  visit_s: float, notes: list[str], where: str,
+                  legs: Sequence[Leg] = STILL_WATER) -> ProfileRates:
     """Component powers of one profile alternative. `fixed_load_w` [W] is the load the
-    glide speed is optimised for (hotel + computer); `visit_s` the mean time per visit."""
+    glide speed is optimised for (hotel + computer); `visit_s` the mean time per visit;
+    `legs` the route and current a propelled speed is chosen for."""
     pitch0 = vehicle.nominal_pitch_rad
     if (problem := cannot_fly(profile.kind, profile.thrust, vehicle)) is not None:
         notes.append(f"{where}: {problem[0]}: given no time")
         return _not_flown(vehicle, profile, index)
     if PROFILES[profile.kind].propelled:
-        return _propelled_rates(vehicle, profile, index, variables, fixed_load_w)
+        return _propelled_rates(vehicle, profile, index, variables, fixed_load_w, legs)
     if profile.kind in ("yo", "thermotrackyo"):
         args = _profile_args(profile, variables)
         low, high = yo_band(profile, args)
@@ -164,7 +174,7 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
         rates = ProfileRates(index, profile.kind, power, per_hour / 3600.0, speed, pitch,
                              ballast)
         return rates if profile.thrust is None else _thrust_assisted(vehicle, profile, rates,
-                                                                     fixed_load_w)
+                                                                     fixed_load_w, legs)
     # surface and hover do not glide: the plan file still carries a glide command, the
     # vehicle's nominal pitch at full buoyancy (what it climbs with).
     ballast = vehicle.max_ballast_cc
@@ -185,12 +195,13 @@ def profile_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
 
 
 def _propelled_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
-                     variables: dict[str, float], fixed_load_w: float) -> ProfileRates:
+                     variables: dict[str, float], fixed_load_w: float,
+                     legs: Sequence[Leg]) -> ProfileRates:
     """A level, propelled profile (`cruise`, `altitude`): at its written speed, or with
-    `auto` at the speed of least energy per metre for the load `fixed_load_w` [W] (hotel
-    and computer: a hungrier computer makes it faster). It holds its depth on the
-    propeller: no pump, no inflections; the plan carries a level pitch."""
-    choice = propelled_speed(vehicle, profile, variables, fixed_load_w)
+    `auto` at the speed of least energy per metre over ground along `legs` for the load
+    `fixed_load_w` [W] (hotel and computer: a hungrier computer makes it faster). It holds
+    its depth on the propeller: no pump, no inflections; the plan carries a level pitch."""
+    choice = propelled_speed(vehicle, profile, variables, fixed_load_w, legs)
     power = {Component.HOTEL: base_power_w(vehicle), Component.PUMP: 0.0,
              Component.PITCH: 0.0, Component.SURFACE: 0.0, Component.IRIDIUM: 0.0,
              Component.PROPULSION: choice.propulsion_w}
@@ -199,12 +210,15 @@ def _propelled_rates(vehicle: Vehicle, profile: ir.Profile, index: int,
 
 
 def propelled_speed(vehicle: Vehicle, profile: ir.Profile, variables: dict[str, float],
-                    fixed_load_w: float) -> SpeedChoice:
+                    fixed_load_w: float, legs: Sequence[Leg] = STILL_WATER) -> SpeedChoice:
     """The speed a propelled profile flies at: written, or for `auto` the least energy per
-    metre for the load `fixed_load_w` [W] besides the motor."""
+    metre over ground along `legs` for the load `fixed_load_w` [W] besides the motor.
+    Raises NoHeadway naming the leg where the speed (every speed, for `auto`) makes no
+    way against the current."""
     if "speed" in profile.auto:
-        return best_speed(vehicle.propulsion, fixed_load_w)
-    return choice_at(vehicle.propulsion, fixed_load_w, _profile_args(profile, variables)[1])
+        return best_speed(vehicle.propulsion, fixed_load_w, legs)
+    return choice_at(vehicle.propulsion, fixed_load_w, _profile_args(profile, variables)[1],
+                     legs)
 
 
 def transit_speeds(hardware: Hardware, mission: ir.CheckedMission) -> dict[str, float]:
@@ -220,7 +234,8 @@ def transit_speeds(hardware: Hardware, mission: ir.CheckedMission) -> dict[str, 
         if flown and all(PROFILES[p.kind].propelled for p in flown) and \
                 flown[0].constant_args() is not None:
             speeds[state.name] = propelled_speed(vehicle, flown[0], initial,
-                                                 state_load_w(hardware, state)).speed_mps
+                                                 state_load_w(hardware, state),
+                                                 hardware.water(state)).speed_mps
     return speeds
 
 
@@ -248,12 +263,12 @@ THRUST_STEPS = 33  # commanded powers tried across a thruster's range for `thrus
 
 
 def _thrust_assisted(vehicle: Vehicle, profile: ir.Profile, glide: ProfileRates,
-                     fixed_load_w: float) -> ProfileRates:
+                     fixed_load_w: float, legs: Sequence[Leg]) -> ProfileRates:
     """A yo with the thruster on: thrust along the glide path speeds it up
     (`thrust_assisted_speed`, on the hull's zero-lift drag); with the path's angle kept,
     the yos come faster in proportion, and so do the pump and battery-shift powers. `auto`
     tries off and commands across the thruster's range and keeps the least energy per
-    metre for the load `fixed_load_w` [W]."""
+    metre over ground along `legs` for the load `fixed_load_w` [W]."""
     propulsion, fl = vehicle.propulsion, vehicle.flight
     commands = np.array([0.0, *np.linspace(propulsion.min_command_w,
                                             propulsion.max_command_w, THRUST_STEPS)]) \
@@ -263,7 +278,8 @@ def _thrust_assisted(vehicle: Vehicle, profile: ir.Profile, glide: ProfileRates,
                                    fl.rho_kg_m3, fl.wing_area_m2, fl.drag_cd0)
     actuators = glide.power_w[Component.PUMP] + glide.power_w[Component.PITCH]
     draws = np.array([propulsion.assist_draw_w(c) for c in commands])
-    per_m = (fixed_load_w + actuators * speeds / glide.speed_mps + draws) / speeds
+    per_m = (fixed_load_w + actuators * speeds / glide.speed_mps + draws) \
+        * route_pace_s_per_m(speeds, legs)
     best = int(np.argmin(per_m))
     faster = float(speeds[best] / glide.speed_mps)
     power = {**glide.power_w, Component.PUMP: glide.power_w[Component.PUMP] * faster,
@@ -282,7 +298,7 @@ def state_profiles(hardware: Hardware, state: ir.State, occupancy: Occupancy,
     visit_s = occupancy.time_s[state.name] / visits
     variables = occupancy.variables[state.name]
     return [profile_rates(hardware.vehicle, p, j, variables, load, visit_s, notes,
-                          f"{state.name}: flightprofile {j}")
+                          f"{state.name}: flightprofile {j}", hardware.water(state))
             for j, p in enumerate(state.profiles)]
 
 

@@ -18,13 +18,19 @@ budget holds with the plan's confidence if the belief is right (a second-order-c
 chance constraint, exact for a Gaussian belief; DESIGN.md section 10 plans at a
 confidence by the scenario approach, which needs simulated scenarios the shore does not
 have at sea). Every number is a cvxpy Parameter of the model built once (`Replanner`),
-so a replan is warm: it sets values and solves again (DPP).
+so a replan is warm: it sets values and solves again (DPP). Compiling the parameters costs
+more than a solve (0.5 s against 0.05 s on a 64-state mission), so a process that replans
+once (`gliderplan replan`) solves with the values in place of the parameters instead.
 
 The time left in each state is the plan's less what the glider has flown there, scaled
 to the time left in the plan's mission; the plan's own rates (its prediction per state
 and component) are the model each figure multiplies. What changes is what the glider
 flies: the duties of the sensors marked `duty auto` (on-time rounded to 0.1 s) and the
-profile shares (to 1e-4); the clocks, the sleep, the pitch and buoyancy stay.
+profile shares (to 1e-4); the clocks, the sleep, the pitch and buoyancy stay. Given the
+water the vehicle flies (`legs`: the current on each state's route, planner/water.py,
+as `plan --currents` takes it), the speeds and thruster commands the planner chooses
+(`auto` speeds, `thrust auto`) are chosen in it anew, and the rest of the mission's
+energy is modelled at them.
 """
 
 from __future__ import annotations
@@ -44,6 +50,7 @@ from gliderplan.contract import NO_BOARD, VEHICLE_COMPONENTS, Component, same_cl
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language import ir
+from gliderplan.language.registry import PROFILES
 from gliderplan.planner.inputs import ENERGY_UNIT_J, PlanInputs, build_inputs, coefficients
 from gliderplan.planner.model import SOLVER, model_for
 from gliderplan.planner.occupancy import measured_occupancy
@@ -52,9 +59,12 @@ from gliderplan.planner.planfile import (
     Plan,
     PlanFileError,
     PlanRejected,
+    ProfilePlan,
     SensorPlan,
     read_plan_bytes,
 )
+from gliderplan.planner.rates import ProfileRates
+from gliderplan.planner.speed import Leg
 from gliderplan.power_models.battery import drawn_budget_j
 from gliderplan.power_models.posterior import (
     COMPONENT_GROUPS,
@@ -134,16 +144,18 @@ class ChanceModel:
                         self.least_free_problem):
             assert problem.is_dcp(dpp=True), "the chance model must stay DCP and DPP"
 
-    def solve(self, problem: cp.Problem) -> tuple[str, float]:
-        """Solve; (status, wall time [s]). Clarabel now and then stalls on the exponential
-        cones of a problem whose numbers are fine (a few in a month of replans): it is
-        asked again without equilibration, then with more regularisation, then SCS is."""
+    def solve(self, problem: cp.Problem, *, once: bool = False) -> tuple[str, float]:
+        """Solve; (status, wall time [s]). `once`: the parameters' values taken as
+        constants, not compiled for the next solves. Clarabel now and then stalls on the
+        exponential cones of a problem whose numbers are fine (a few in a month of
+        replans): it is asked again without equilibration, then with more regularisation,
+        then SCS is."""
         start = time.perf_counter()
         for solver, options in RETRIES:
             try:
                 with warnings.catch_warnings():  # the status says "optimal_inaccurate"
                     warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-                    problem.solve(solver=solver, **options)
+                    problem.solve(solver=solver, ignore_dpp=once, **options)
             except cp.SolverError:  # its status would still be the last solve's
                 continue
             return problem.status or "solver_error", time.perf_counter() - start
@@ -275,11 +287,13 @@ class Replanner:
 
     `held`: the signed plan file the glider holds at the start (its prediction is the
     model the figures multiply); `spec`: the scenario file whose spreads and battery share
-    are the prior (None: the vehicle file's alone, a battery that holds its rating)."""
+    are the prior (None: the vehicle file's alone, a battery that holds its rating);
+    `once`: this process replans once, so the model's parameters are not compiled."""
 
     def __init__(self, mission: ir.CheckedMission, held: bytes, *,
                  confidence: float | None = None, spec=None,  # noqa: ANN001
-                 if_infeasible: str = "refuse") -> None:
+                 if_infeasible: str = "refuse",
+                 legs: dict[str, tuple[Leg, ...]] | None = None, once: bool = False) -> None:
         if if_infeasible not in IF_INFEASIBLE:
             raise ValueError(f"if_infeasible must be one of {IF_INFEASIBLE}")
         try:
@@ -287,11 +301,15 @@ class Replanner:
         except PlanFileError as err:
             raise PlanRejected(str(err)) from None
         self.mission, self.plan, self.if_infeasible = mission, plan, if_infeasible
+        self.once = once
         self.confidence = confidence or stated_confidence(plan) or DEFAULT_CONFIDENCE
         if not 0.5 <= self.confidence < 1.0:
             raise PlanningError(f"confidence {self.confidence:g}: must lie in [0.5, 1)")
         self.z = NormalDist().inv_cdf(self.confidence)
         hardware = plan_hardware(mission, plan)
+        if legs is not None:  # the water now known: propelled speeds and thrusts anew
+            hardware = replace(hardware, legs=legs)
+        self.rechoose = legs is not None
         times = {s.name: s.time_s for s in plan.states}
         occupancy = measured_occupancy(mission, times, {s.name: s.visits for s in plan.states},
                                        note="time in each state: the plan's")
@@ -503,7 +521,7 @@ class Replanner:
         objective = self.mission.objective.sense
         problem = chance.energy_problem if objective == "minimize_energy" \
             else chance.quality_problem
-        status, solve_s = chance.solve(problem)
+        status, solve_s = chance.solve(problem, once=self.once)
         least = None
         result_status = "updated"
         if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE, cp.INFEASIBLE,
@@ -513,7 +531,7 @@ class Replanner:
         if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
             least_problem = chance.least_problem if objective == "minimize_energy" \
                 else chance.least_free_problem
-            least_status, spent = chance.solve(least_problem)
+            least_status, spent = chance.solve(least_problem, once=self.once)
             solve_s += spent
             if least_status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
                 raise PlanningError(f"the rest of the mission cannot be planned "
@@ -542,12 +560,18 @@ class Replanner:
             (self.belief.usable_mean, self.belief.usable_sd), self.belief.usable_prior,
             tuple(self.notes), solve_s)
 
+    def at_launch(self, held: bytes) -> ReplanResult:
+        """The plan before launch (nothing flown, nothing drawn), at the confidence against
+        the prior belief: a plan made on the model, planned at the shore's confidence."""
+        return self.replan(held, SurfacingReport(0.0, 0.0))
+
     def _infeasible_message(self, least_j: float, left_j: float,
                             report: SurfacingReport) -> str:
         wh = J_PER_WH
         worst = sorted(((m, abs(m.change)) for m in self.belief.moves()), key=lambda x: -x[1])
         moved = ", ".join(str(m) for m, _ in worst[:2])
-        return (f"at {report.time_s / 3600:.1f} h the budget left, {left_j / wh:,.1f} Wh "
+        where = f"{report.source}: " if report.source else ""
+        return (f"{where}at {report.time_s / 3600:.1f} h the budget left, {left_j / wh:,.1f} Wh "
                 f"expected, cannot hold the rest of the mission at confidence "
                 f"{self.confidence:g}: with every duty at its floor it needs "
                 f"{least_j / wh:,.1f} Wh at that confidence ({moved}). No update is made: "
@@ -587,8 +611,22 @@ class Replanner:
                 shares = _rounded_shares(share[rows])
                 profiles = tuple(replace(p, share=f)  # pitch, ballast, speed, thrust kept
                                  for p, f in zip(state.profiles, shares, strict=True))
+            if self.rechoose:
+                profiles = self._in_water(s, profiles, [inputs.profiles[r] for r in rows])
             states.append(replace(state, sensors=tuple(sensors), profiles=profiles))
         return replace(held, states=tuple(states)), tuple(changes)
+
+
+    def _in_water(self, s: int, profiles: tuple[ProfilePlan, ...], rates: list[ProfileRates]
+                  ) -> tuple[ProfilePlan, ...]:
+        """State `s`'s planned profiles with the speed and thrust the planner chooses in
+        the water given (`rates`, planner.rates): a propelled profile's speed, a
+        thruster-assisted yo's speed and command; the others as they are."""
+        written = self.mission.states[s].profiles
+        return tuple(replace(p, speed_mps=r.speed_mps, thrust_w=r.thrust_w)
+                     if r.flyable and (PROFILES[written[p.index].kind].propelled
+                                       or written[p.index].thrust is not None) else p
+                     for p, r in zip(profiles, rates, strict=True))
 
 
 def _values(model):  # noqa: ANN001, ANN202
@@ -643,6 +681,20 @@ class ReplanRun:
                 "files": [str(f) for f in self.files]}
 
 
+def _water_at(mission: ir.CheckedMission, currents: str, report: SurfacingReport,
+              start_epoch_s: float | None) -> dict[str, tuple[Leg, ...]]:
+    """The route's legs in `--currents` from where `report` places the glider (where the
+    mission starts, if it gives no position), at its time."""
+    from gliderplan.planner.legs import ddmm_to_degrees
+    from gliderplan.planner.water import plan_water
+    from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
+
+    here = None if report.lat is None or report.lon is None else \
+        (ddmm_to_degrees(report.lat), ddmm_to_degrees(report.lon))
+    epoch = DEFAULT_START_EPOCH_S if start_epoch_s is None else start_epoch_s
+    return plan_water(mission, currents, here, epoch + report.time_s)[0]
+
+
 class TelemetryMismatch(GliderplanError):
     """Telemetry that says the glider holds another plan than the one replanned."""
 
@@ -652,20 +704,27 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
                    confidence: float | None = None, key_path: str | Path | None = None,
                    output: str | Path | None = None, seq: int | None = None,
                    max_updates: int = 1, scenario_file: str | Path | None = None,
-                   if_infeasible: str = "refuse") -> ReplanRun:
+                   if_infeasible: str = "refuse", currents: str | None = None,
+                   start_epoch_s: float | None = None) -> ReplanRun:
     """Replan the rest of `mission` after the telemetry (a JSON file or Slocum logs) from
     the signed plan in `plan_path`, which the glider holds, at `confidence` (default: the
     plan's own, else 0.95); the prior is the vehicle's figures with the scenario file's
     spreads and battery share. With `output` (and the vehicle's key in `key_path`), write
     the update (`output`; a chain of several: `output`.1, .2, ...), the plan the glider
     will hold (`output`.plan, signed: the next replan's --plan) and the report
-    (`output`.json), atomically. Raises TelemetryError (bad telemetry), TelemetryMismatch
-    (the glider reports another plan), ReplanInfeasible, UpdateError (the update cannot be
-    sent as asked: what to cut), PlanRejected."""
+    (`output`.json), atomically and together (never an update beside another's plan),
+    unless a stop signal arrived (an interrupted replan is no update). Raises
+    TelemetryError (bad telemetry), TelemetryMismatch (the glider reports another plan),
+    ReplanInfeasible, UpdateError (the update cannot be sent as asked: what to cut),
+    PlanRejected. With `currents` (as `plan --currents`) the speeds and thrusts the
+    planner chooses are chosen anew in that water, on the route from the glider's last
+    reported position, the field read at the report's time after the mission's start
+    `start_epoch_s` [s since 1970] (default: the simulator's)."""
     import json
 
+    from gliderplan.contract import interrupts
     from gliderplan.contract.errors import UsageError
-    from gliderplan.contract.files import write_atomically
+    from gliderplan.contract.files import write_files_atomically
     from gliderplan.planner.planfile import plan_board_limits, read_plan_data
     from gliderplan.planner.signing import read_key
     from gliderplan.planner.update import make_updates
@@ -681,7 +740,9 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
     reports = read_telemetry(telemetry)
     notes = check_reports(reports, tuple(s.name for s in mission.states))
     replanner = Replanner(mission, held, confidence=confidence,
-                          spec=read_spec(scenario_file), if_infeasible=if_infeasible)
+                          spec=read_spec(scenario_file), if_infeasible=if_infeasible,
+                          legs=None if currents is None else
+                          _water_at(mission, currents, reports[-1], start_epoch_s), once=True)
     said = next((r for r in reversed(reports) if r.plan_seq is not None), None)
     if said is not None and said.plan_seq != replanner.plan.seq:
         ack = "" if said.ack is None else f" (its last update: {said.ack.status.name.lower()}"\
@@ -712,6 +773,6 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
         files = [*contents, out.with_name(out.name + ".json")]
         run = replace(run, files=tuple(files))
         contents[files[-1]] = json.dumps(run.to_json(), indent=2) + "\n"
-        for path, data in contents.items():
-            write_atomically(path, data)
+        interrupts.raise_if_stopped()  # an interrupted replan sends nothing
+        write_files_atomically(contents)  # together or not at all
     return run

@@ -26,6 +26,9 @@ MARGIN = 0.5  # [1] of a leg's length the grid reaches beyond its box, each side
 STEP_M = 100.0  # [m] a route's time is integrated over steps this long
 CAPTURE_M = 1000.0  # [m] a transit's waypoint is reached within this (a dive's length)
 SURFACING_S = 1200.0  # [s] a transit's climb, GPS fix and call (sim: 135 s + 206 s)
+SURFACE_EVERY_S = 7200.0  # [s] a transit surfaces this often for a fix
+TRANSIT_BAND_M = (3.0, 30.0)  # [m] a transit's yo
+TRANSIT_PITCH_RAD = 0.454  # a transit's yo pitch unless a route chooses another
 _M_PER_DEG = EARTH_RADIUS_M * math.pi / 180.0
 _MOVES = [(di, dj) for di in (-2, -1, 0, 1, 2) for dj in (-2, -1, 0, 1, 2)
           if (di, dj) != (0, 0) and math.gcd(abs(di), abs(dj)) == 1]
@@ -191,20 +194,22 @@ def _search(field: CurrentField, start: tuple[float, float], end: tuple[float, f
 
 
 def transit_mission(points: list[tuple[float, float]], duration_s: float,
-                    max_depth_m: float = 30.0, surface_every_s: float = 7200.0) -> str:
-    """A mission that yos from 3 m to `max_depth_m` along `points` (lat, lon) [deg] in
-    order (a goto list, each point reached within CAPTURE_M: a glider that overshoots a
-    point in a strong current cannot come back to a smaller circle), surfacing every
-    `surface_every_s` [s] for a GPS fix (which corrects its position estimate and
-    measures the current), for `duration_s` [s]."""
+                    surface_every_s: float = SURFACE_EVERY_S,
+                    pitch_rad: float = TRANSIT_PITCH_RAD) -> str:
+    """A mission that yos over TRANSIT_BAND_M at `pitch_rad` along `points` (lat, lon)
+    [deg] in order (a goto list, each point reached within CAPTURE_M: a glider that
+    overshoots a point in a strong current cannot come back to a smaller circle),
+    surfacing every `surface_every_s` [s] for a GPS fix (which corrects its position
+    estimate and measures the current), for `duration_s` [s]."""
     from gliderplan.sim.geo import degrees_to_ddmm
 
     pairs = ", ".join(f"({degrees_to_ddmm(lat):.4f}, {degrees_to_ddmm(lon):.4f})"
                       for lat, lon in points)
+    low, high = TRANSIT_BAND_M
     return (
         "mission transit\n\nvar surfaced_s = 0\n\nstate go\nbegin\n"
         f"  flightroute goto_list({CAPTURE_M:g}, {pairs})\n"
-        f"  flightprofile yo(3, {max_depth_m:g}, 0.454, 0.454)\n"
+        f"  flightprofile yo({low:g}, {high:g}, {pitch_rad:.4g}, {pitch_rad:.4g})\n"
         "  sensors missiontime, depth, pitch, lat, lon\n  events\n"
         f"    case missiontime >= {duration_s:.0f} exit\n"
         f"    case missiontime - surfaced_s >= {surface_every_s:.0f}\n"
@@ -216,22 +221,29 @@ def transit_mission(points: list[tuple[float, float]], duration_s: float,
 
 
 def flown_track(points: list[tuple[float, float]], field: CurrentField,
-                start: tuple[float, float], epoch_s: float, duration_s: float
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(time [s], true lat, lon [deg]) of the simulated glider flying `transit_mission`
-    along `points` from `start` at `epoch_s` in `field` for `duration_s`."""
+                start: tuple[float, float], epoch_s: float, duration_s: float,
+                pitch_rad: float = TRANSIT_PITCH_RAD
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(time [s], true lat, lon [deg], energy used [J]) of the simulated glider flying
+    `transit_mission` at `pitch_rad` along `points` from `start` at `epoch_s` in `field`
+    for `duration_s`."""
     from gliderplan.language import check_source
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim import ocean
+    from gliderplan.sim.energy import account
     from gliderplan.sim.flight import fly
     from gliderplan.sim.loop import RunConfig
 
-    mission = check_source(transit_mission(points, duration_s), "<route>").checked()
+    mission = check_source(transit_mission(points, duration_s, pitch_rad=pitch_rad),
+                           "<route>").checked()
     config = RunConfig(duration_s=duration_s, currents=field, start_lat_deg=start[0],
                        start_lon_deg=start[1], start_epoch_s=epoch_s)
-    record = fly(mission, ocean.bench(), config, load_vehicle(mission.vehicle))
+    vehicle = load_vehicle(mission.vehicle)
+    record = fly(mission, ocean.bench(), config, vehicle)
     c = record.columns
-    return np.asarray(c["time_s"]), np.asarray(c["lat_deg"]), np.asarray(c["lon_deg"])
+    per_tick = account(record, mission, vehicle, None).per_tick_j.values()
+    return (np.asarray(c["time_s"]), np.asarray(c["lat_deg"]), np.asarray(c["lon_deg"]),
+            np.cumsum(sum(per_tick)))
 
 
 def _distance_m(lat: np.ndarray, lon: np.ndarray, to: tuple[float, float]) -> np.ndarray:
@@ -239,13 +251,14 @@ def _distance_m(lat: np.ndarray, lon: np.ndarray, to: tuple[float, float]) -> np
                     (lon - to[1]) * _M_PER_DEG * math.cos(math.radians(to[0])))
 
 
-def arrival_s(track: tuple[np.ndarray, np.ndarray, np.ndarray], end: tuple[float, float],
-              reach_m: float = 1.5 * CAPTURE_M) -> float:
-    """[s] when a `flown_track` first comes within `reach_m` of `end` (lat, lon) [deg]
-    (inf: never)."""
-    time_s, lat, lon = track
+def arrival(track: tuple[np.ndarray, ...], end: tuple[float, float],
+            reach_m: float = 1.5 * CAPTURE_M) -> tuple[float, float]:
+    """([s] when, [J] the energy used by when) a `flown_track` first comes within
+    `reach_m` of `end` (lat, lon) [deg] (inf, inf: never)."""
+    time_s, lat, lon, used_j = track
     near = np.flatnonzero(_distance_m(lat, lon, end) <= reach_m)
-    return float(time_s[near[0]]) if len(near) else math.inf
+    return (float(time_s[near[0]]), float(used_j[near[0]])) if len(near) else \
+        (math.inf, math.inf)
 
 
 def transit_speed_mps(hours: float = 6.0) -> float:
@@ -254,6 +267,6 @@ def transit_speed_mps(hours: float = 6.0) -> float:
     from gliderplan.sim.currents import UniformCurrent
 
     far = (1.0, 0.0)  # a point it cannot reach in `hours`
-    _, lat, lon = flown_track([far], UniformCurrent(0.0, 0.0), (0.0, 0.0), 0.0,
+    _, lat, lon, _ = flown_track([far], UniformCurrent(0.0, 0.0), (0.0, 0.0), 0.0,
                               hours * 3600.0)
     return float(_distance_m(lat[-1:], lon[-1:], (0.0, 0.0))[0]) / (hours * 3600.0)

@@ -60,7 +60,7 @@ class Voyage:
     # of 0: it starts at the surface); after them, or without: dive_s and surface_s
     schedule: tuple[tuple[float, float], ...] = ()
     corrects: bool = True  # heads upstream for the current (u_use_current_correction)
-    heading_rad: float = 0.0  # flown without waypoints
+    heading_rad: float = 0.0  # [rad] held without waypoints (a `heading` route), uncorrected
 
 
 @dataclass(frozen=True)
@@ -198,8 +198,10 @@ def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s:
     state (`planner.occupancy`, as the energy forecast walks it), flown from `start`
     (lat, lon) [deg] (None: as the sim puts it in the water) through its waypoints at
     its yos' speed (`yo_speed_mps`) in `currents`; a goto list as the Slocum flies it
-    (sim.pilot.Waypoints: within its radius, looping)."""
+    (sim.pilot.Waypoints: within its radius, looping); a mission without waypoints holds
+    its first `heading` route's heading."""
     from gliderplan.contract import WAYPOINT_RADIUS_M
+    from gliderplan.language.registry import held_heading_rad
     from gliderplan.planner.occupancy import mission_occupancy
     from gliderplan.sim.loop import RunConfig, route_points_deg
     from gliderplan.sim.loop import start_position as sim_start
@@ -219,11 +221,13 @@ def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s:
         return []
     lat, lon = start if start is not None else sim_start(mission, RunConfig())
     lists = [s.route for s in mission.states if s.route.kind == "goto_list"]
+    held = [s.route for s in mission.states if s.route.kind == "heading"]
     voyage = Voyage(lat, lon, epoch_s, tuple(route_points_deg(mission)),
                     yo_speed_mps(mission, vehicle), schedule[-1][0], schedule[-1][1],
                     currents, capture_m=lists[0].params[0] if lists else WAYPOINT_RADIUS_M,
                     loops=bool(lists), schedule=tuple(schedule),
-                    corrects=mission.current_correction)
+                    corrects=mission.current_correction,
+                    heading_rad=held_heading_rad(held[0].params[0]) if held else 0.0)
     return forecast_surfacings(voyage, len(schedule))
 
 

@@ -35,6 +35,7 @@ from gliderplan.contract import (
     UPDATE_HEADER_BYTES,
     UPDATE_MAX_DIGITS,
     UPDATE_MAX_EXPONENT,
+    UPDATE_OPTIONAL_FIELDS,
     UpdateField,
     UpdateStatus,
 )
@@ -46,7 +47,6 @@ MAGIC = b"GU"
 TAG_BYTES = 32
 # the smallest update: header and tag, no change
 MIN_UPDATE_BYTES = UPDATE_HEADER_BYTES + TAG_BYTES
-MAX_CHANGES = 255  # the header's count is a u8
 _MAX_MANTISSA = 10**UPDATE_MAX_DIGITS - 1
 _HEADER = struct.Struct(f"<2sBII{UPDATE_HASH_BYTES}s{UPDATE_HASH_BYTES}sB")
 assert _HEADER.size == UPDATE_HEADER_BYTES
@@ -262,9 +262,13 @@ def changed_plan(held: bytes, changes: tuple[Change, ...] | list[Change], new_se
             raise Refused(UpdateStatus.MALFORMED, f"change {k}: line {change.line} is not "
                           f"in the plan's body (lines 1..{body_lines})")
         fields = lines[change.line - 1].split(b" ")
-        if fields[0].decode("ascii", "replace") != keyword or place >= len(fields):
+        appended = place == len(fields) and change.field in UPDATE_OPTIONAL_FIELDS
+        if fields[0].decode("ascii", "replace") != keyword or \
+                (place >= len(fields) and not appended):
             raise Refused(UpdateStatus.MALFORMED, f"change {k}: line {change.line} is no "
                           f"'{keyword}' line with a field {place}")
+        if appended:  # an optional last field the line left out
+            fields.append(b"")
         fields[place] = change.text.encode("ascii")
         lines[change.line - 1] = b" ".join(fields)
     body = b"".join(line + b"\n" for line in lines[:body_lines])
@@ -412,7 +416,9 @@ def change_groups(held: bytes, target: Plan, digits: int = 9) -> list[_Group]:
             profiles += [*wanted(number, UpdateField.PROFILE_SHARE, f[2], profile.share),
                          *wanted(number, UpdateField.PROFILE_PITCH, f[3], profile.pitch_rad),
                          *wanted(number, UpdateField.PROFILE_BALLAST, f[4], profile.ballast_cc),
-                         *wanted(number, UpdateField.PROFILE_SPEED, f[5], profile.speed_mps)]
+                         *wanted(number, UpdateField.PROFILE_SPEED, f[5], profile.speed_mps),
+                         *wanted(number, UpdateField.PROFILE_THRUST, f[6] if len(f) > 6
+                                 else "0", profile.thrust_w)]
         elif f[0] == "end" and state is not None:
             if profiles:
                 groups.append(_Group(f"{state.name} profiles", tuple(profiles)))

@@ -4,21 +4,20 @@ mission's battery, and the head current beyond which a propeller pays.
 
 Per vehicle the energy per metre over ground against a head current c is the least, over
 the ways it can fly (a yo of the mission's band on buoyancy, a cruise on its propulsion),
-of E_w(U) U / (U - c) (planner/speed.py); a glider that cannot outrun the current makes
+of E_w(U) U / (U - c), found by the planner's own search (`planner.speed.cheapest_way`,
+the one `plan` chooses a cruise speed with); a glider that cannot outrun the current makes
 no headway. The crossovers are the currents where the cheapest vehicle changes.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from gliderplan.language import ir
-from gliderplan.planner.speed import NoHeadway, least_energy_speed
+from gliderplan.planner.speed import cheapest_way, head_current
 from gliderplan.power_models.devices import base_power_w
-from gliderplan.power_models.vehicle import Vehicle
 
 HEAD_CURRENTS_MPS = np.linspace(0.0, 1.2, 49)  # [m s-1] the crossover's grid
 
@@ -46,36 +45,14 @@ def _yo_band(mission: ir.CheckedMission) -> tuple[float, float, float] | None:
     return None
 
 
-def _ways(vehicle: Vehicle, load_w: float, band: tuple[float, float, float] | None):
-    """(energy per metre through the water as a function of speed, low, high speed) of
-    each way the vehicle flies."""
-    ways = []
-    if vehicle.has_buoyancy_engine and band is not None:
-        low, high, pitch = band
-        c = float(vehicle.transit_coefficient(low, high, pitch, load_w))
-        e = float(vehicle.pitch_j_per_m(low, high, pitch))
-        turn = float(vehicle.turn_s_per_m(low, high, pitch))
-        ways.append((lambda u: load_w / u + e + load_w * turn + c * u * u, 0.05,
-                     float(vehicle.max_speed_mps(pitch))))
-    if vehicle.propulsion is not None:
-        p = vehicle.propulsion
-        ways.append((lambda u: p.energy_per_m_j(u, load_w), p.min_speed_mps, p.max_speed_mps))
-    return ways
+def flies_on(mission: ir.CheckedMission, spec: str) -> bool:
+    """Whether the vehicle `spec` (a preset or file) can fly an alternative of each state."""
+    from gliderplan.language.registry import cannot_fly
+    from gliderplan.power_models.vehicle import load_vehicle
 
-
-def per_metre_j(vehicle: Vehicle, load_w: float, band, head_mps: float
-                ) -> tuple[float, float]:
-    """(least energy per metre over ground [J m-1], its speed [m s-1]) against a head
-    current `head_mps`; (NaN, NaN) when no way makes headway."""
-    best = (math.nan, math.nan)
-    for energy, low, high in _ways(vehicle, load_w, band):
-        try:
-            speed, cost = least_energy_speed(energy, low, high, along_mps=-head_mps)
-        except NoHeadway:
-            continue
-        if not cost >= best[0]:
-            best = (cost, speed)
-    return best
+    vehicle = load_vehicle(spec)
+    return all(any(cannot_fly(p.kind, p.thrust, vehicle) is None for p in state.profiles)
+               for state in mission.states)
 
 
 def compare_vehicles(mission: ir.CheckedMission, specs: list[str],
@@ -95,8 +72,9 @@ def compare_vehicles(mission: ir.CheckedMission, specs: list[str],
                        for p in s.profiles) / 1000.0
         computer_j = sum(s.energy_by_component_j.get("computer", 0.0) for s in plan.states)
         load = base_power_w(vehicle) + computer_j / duration  # [W] drawn at any speed
-        curve = [per_metre_j(vehicle, load, band, c)[0] * 1000.0 for c in HEAD_CURRENTS_MPS]
-        per_m, speed = per_metre_j(vehicle, load, band, 0.0)
+        curve = [cheapest_way(vehicle, load, band, head_current(c))[0] * 1000.0
+                 for c in HEAD_CURRENTS_MPS]
+        per_m, speed = cheapest_way(vehicle, load, band)
         usable = plan.budget_j
         results.append(VehicleResult(vehicle.name, vehicle.kind, plan.predicted_j, duration,
                                      distance, per_m * 1000.0, speed,

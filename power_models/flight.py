@@ -26,6 +26,7 @@ the speed grows with sqrt(b) and `ballast_for_speed` is closed-form.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -85,7 +86,17 @@ def _check_pitch(pitch_rad: np.ndarray) -> None:
 
 def angle_of_attack_rad(params: FlightParams, pitch_rad: np.ndarray | float) -> np.ndarray:
     """Angle of attack [rad] of a steady glide at pitch `pitch_rad` [rad] (magnitude)."""
-    theta = np.asarray(pitch_rad, float)
+    if np.ndim(pitch_rad) == 0:  # a planner asks of the same few pitches, state by state
+        return np.asarray(_angle_of_attack_at(params, float(pitch_rad)))
+    return _angle_of_attack(params, np.asarray(pitch_rad, float))
+
+
+@functools.lru_cache(maxsize=1024)
+def _angle_of_attack_at(params: FlightParams, pitch_rad: float) -> float:
+    return float(_angle_of_attack(params, np.asarray(pitch_rad)))
+
+
+def _angle_of_attack(params: FlightParams, theta: np.ndarray) -> np.ndarray:
     _check_pitch(theta)
     lift_slope = params.lift_wing_per_rad + params.lift_hull_per_rad
     low = np.zeros_like(theta)

@@ -14,7 +14,6 @@ import numpy as np
 
 from gliderplan.power_models.flight import DensityProfile
 
-DBAR_PER_BAR = 10.0
 MS_CM_PER_S_M = 10.0  # conductivity: gsw takes mS/cm, Slocum logs S/m
 
 

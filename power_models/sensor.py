@@ -29,7 +29,6 @@ class Sensor:
     warmup_j: float
     sample_hz: float
     quality_alpha: float  # [1] curvature of the quality utility
-    energy_per_byte_j: float | None = None  # communication devices only
     # [W] the span of published on-powers for this class of device (low, high); a fitted
     # figure outside it is worth a second look. None: the file gives none
     power_range_w: tuple[float, float] | None = None
@@ -73,11 +72,6 @@ def read_sensor_file(path: Path) -> Sensor:
         warmup_j=top.quantity("warmup_energy", "energy", warmup_s * on_power),
         sample_hz=top.quantity("sample_rate", "frequency", positive=True),
         quality_alpha=top.quantity("quality_alpha", "dimensionless", positive=True),
-        energy_per_byte_j=(
-            top.quantity("energy_per_byte", "energy_per_byte")
-            if top.has("energy_per_byte")
-            else None
-        ),
         power_range_w=top.span("power_range", "power"),
         path=path,
     )

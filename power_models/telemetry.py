@@ -316,8 +316,12 @@ def check_reports(reports: list[SurfacingReport], state_names: tuple[str, ...] |
                              "reading: one interval spans the gap")
         last_counted = report
     if last_counted is None:
-        raise TelemetryError("no report has a coulomb counter reading: nothing measured the "
-                             "energy drawn")
+        first, last = (r.source or f"the report at {r.time_s:g} s" for r in (reports[0],
+                                                                             reports[-1]))
+        where = first if len(reports) == 1 else f"{first} to {last}"
+        raise TelemetryError(f"{where}: no report has a coulomb counter reading: nothing "
+                             "measured the energy drawn; the glider keeps flying its current "
+                             "plan")
     return notes
 
 

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gliderplan.contract import Component, Envelope, EnvelopeAction
+from gliderplan.contract import Component, Envelope, EnvelopeAction, PumpEnergy
 from gliderplan.contract.units import UNITS
 from gliderplan.power_models import flight
 from gliderplan.power_models.catalog import preset_names, resolve
@@ -121,6 +121,8 @@ class Vehicle:
     max_depth_m: float | None = None
     max_pitch_rad: float | None = None
     min_yo_band_m: float | None = None
+    max_turn_rate_rad_s: float | None = None
+    max_pump_power_w: float | None = None
     envelope_action: EnvelopeAction = EnvelopeAction.SURFACE
     uncertainty: Uncertainty | None = field(default=None, compare=False)
     path: Path | None = field(default=None, compare=False)  # its data file: the sources
@@ -128,10 +130,20 @@ class Vehicle:
     @property
     def envelope(self) -> Envelope:
         """The rating the runtime holds every command to (`derive_envelope`)."""
+        written = {name: getattr(self, name) for name in (
+            "max_depth_m", "max_pitch_rad", "min_yo_band_m", "max_turn_rate_rad_s",
+            "max_pump_power_w", "envelope_action")}
+        propulsion = self.propulsion
+        speeds = (0.0, 0.0) if propulsion is None else \
+            (propulsion.min_speed_mps, propulsion.max_speed_mps)
+        thrust = (propulsion.min_command_w, propulsion.max_command_w) \
+            if propulsion is not None and propulsion.is_thruster else (0.0, 0.0)
+        pump = PumpEnergy(self.pump_out_j_per_cc, self.pump_out_j_per_cc_m,
+                          self.pump_in_j_per_cc, self.pump_in_j_per_cc_m)
         return derive_envelope(self.nominal_max_depth_m, self.nominal_pitch_rad,
                                self.nominal_min_depth_m, self.max_ballast_cc, self.pump_rate_cc_s,
-                               self.max_depth_m, self.max_pitch_rad, self.min_yo_band_m,
-                               self.envelope_action)
+                               {k: v for k, v in written.items() if v is not None}, pump,
+                               speeds, thrust)
 
     @property
     def has_buoyancy_engine(self) -> bool:

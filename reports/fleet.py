@@ -284,15 +284,22 @@ def page(fleet: Fleet, report: dict, *, plan=None, flown: dict | None = None,
                                                "swept": "block swept", "lines": "lines swept"},
                   formats={"energy_wh": ",.0f", "budget_wh": ",.0f"}),)))
     if montecarlo is not None:
-        low, high = montecarlo["finish_interval"]
         rows = [{"glider": name, **{k: v / J_PER_WH for k, v in q.items()}}
                 for name, q in montecarlo["energy_j"].items()]
+        if montecarlo["finish_probability"] is None:  # interrupted: no finish probability
+            finish = (f"Interrupted after {montecarlo['scenarios']} of "
+                      f"{montecarlo['requested']} scenarios: a partial run gives no finish "
+                      "probability (those that finished are not the sample asked for).")
+        else:
+            low, high = montecarlo["finish_interval"]
+            finish = (f"The survey finished in {montecarlo['finished']} of "
+                      f"{montecarlo['scenarios']} scenarios: "
+                      f"{100 * montecarlo['finish_probability']:.1f} % (95 % interval "
+                      f"{100 * low:.1f}-{100 * high:.1f} %), against the planned "
+                      f"{100 * report['confidence']:.0f} %.")
         sections.append(Section(
             "fleet-montecarlo", "Monte Carlo",
-            (f"<p>The survey finished in {montecarlo['finished']} of "
-             f"{montecarlo['scenarios']} scenarios: {100 * montecarlo['finish_probability']:.1f}"
-             f" % (95 % interval {100 * low:.1f}-{100 * high:.1f} %), against the planned "
-             f"{100 * report['confidence']:.0f} %. Realised mapping error "
+            (f"<p>{finish} Realised mapping error "
              f"{montecarlo['mapping_error']['p50']:.3f} (median; 5-95 % "
              f"{montecarlo['mapping_error']['p05']:.3f}-"
              f"{montecarlo['mapping_error']['p95']:.3f}).</p>",),

@@ -16,9 +16,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gliderplan.contract import TICK_S, ExitCode
+from gliderplan.contract import TICK_S, ExitCode, interrupts
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import InputFileError, read_data, read_input, write_atomically
+from gliderplan.contract.files import (
+    InputFileError,
+    OutputFolder,
+    output_folder,
+    read_data,
+    read_input,
+)
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
@@ -28,8 +34,11 @@ SWEEP_POINTS = 20  # budgets on the Pareto curve
 QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
 PROFILE_ROWS = 4000  # the depth profile is drawn (and its CSV written) at most this dense
 HTML = "report.html"
-SECTIONS = ("summary", "pareto", "energy", "speed", "vehicles", "plan-vs-simulation",
-            "profile", "track", "sbc", "sensitivity", "montecarlo")
+# what a report's folder holds (a folder holding only these is an earlier report's)
+REPORT_FILES = (HTML, "pareto.csv", "energy_by_state.csv", "speed.csv", "vehicles.csv",
+                "plan_vs_simulation.csv", "profile.csv", "track.csv", "sbc_boards.csv",
+                "sbc_workload.csv", "sbc_crossovers.csv", "sensitivity.csv",
+                "montecarlo.csv", "run")
 
 
 @dataclass(frozen=True)
@@ -62,10 +71,11 @@ def _regular(path: Path, what: str) -> None:
 
 # ---- the plan ------------------------------------------------------------------------
 
-def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Path
+def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: OutputFolder
                  ) -> tuple[dict, Path, list[Path]]:
     """(the planner's JSON report of the plan, the plan file, files written): the plan
-    given with its report beside it (PLAN.json), or the plan made now, written to `out`."""
+    given with its report beside it (PLAN.json), or the plan made now, written to the
+    folder `out` (the file where it is written now; the files where they will be)."""
     from gliderplan.planner.plan import solve_plan
     from gliderplan.planner.planfile import load_plan, write_plan_bytes
     from gliderplan.planner.report import report_json
@@ -87,11 +97,11 @@ def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: Pa
                              "again with `gliderplan plan -o PLAN`")
         return report, plan_path, []
     result = solve_plan(model)
-    path = out / f"{mission.name}.plan"
+    name = f"{mission.name}.plan"
     report = report_json(result)
-    write_atomically(path, write_plan_bytes(result.plan))
-    write_atomically(f"{path}.json", json.dumps(report, indent=2) + "\n")
-    return report, path, [path, Path(f"{path}.json")]
+    files = [out.write(name, write_plan_bytes(result.plan)),
+             out.write(f"{name}.json", json.dumps(report, indent=2) + "\n")]
+    return report, out.path / name, files
 
 
 def _differs(report: dict, plan) -> str:  # noqa: ANN001 (planner.planfile.Plan)
@@ -142,6 +152,10 @@ def _read_run(mission: CheckedMission, run_dir: Path) -> tuple[dict, pd.DataFram
     summary = _json(run_dir / "summary.json", "the run's summary, written by `gliderplan sim`")
     if summary.get("mission_hash") != mission.hash:
         raise UsageError(f"{run_dir}: a run of another mission (or of another version of it)")
+    if summary.get("complete") is False or summary.get("ended") == "interrupted":
+        raise UsageError(f"{run_dir}: a partial run, interrupted after "
+                         f"{summary.get('simulated_s', 0):g} s (summary.json: complete "
+                         "false): fly it again to the end")
     try:
         _regular(run_dir / "timeseries.parquet", "run's time series")
         series = pq.read_table(run_dir / "timeseries.parquet",
@@ -213,6 +227,10 @@ def _montecarlo(directory: Path, mission: CheckedMission) -> tuple[pd.DataFrame,
     if summary.get("mission_hash") != mission.hash:
         raise UsageError(f"{directory}: Monte Carlo of another mission (or of another "
                          "version of it)")
+    if summary.get("complete") is False or summary.get("interrupted"):
+        raise UsageError(f"{directory}: a partial Monte Carlo, interrupted after "
+                         f"{summary.get('scenarios', '?')} of {summary.get('requested', '?')} "
+                         "scenarios (summary.json: complete false): run it again to the end")
     try:
         _regular(directory / "scenarios.parquet", "Monte Carlo table")
         table = pd.read_parquet(directory / "scenarios.parquet",
@@ -235,15 +253,39 @@ def _montecarlo(directory: Path, mission: CheckedMission) -> tuple[pd.DataFrame,
 def make_report(mission: CheckedMission, output_dir: str | Path, *,
                 plan_path: str | Path | None = None, run_dir: str | Path | None = None,
                 montecarlo_dir: str | Path | None = None, source: str = "",
-                sweep_points: int = SWEEP_POINTS) -> Report:
-    """Write the report of `mission` into `output_dir`: report.html and its CSV files.
+                sweep_points: int = SWEEP_POINTS, force: bool = False,
+                currents: str | None = None, start: tuple[float, float] | None = None,
+                start_utc: str | None = None) -> Report:
+    """Write the report of `mission` into `output_dir`: report.html and its CSV files,
+    a folder written whole (contract.files.output_folder; `force`: replace a folder
+    holding other files than a gliderplan run's). Interrupted, it writes nothing; a run
+    or a Monte Carlo given that was interrupted (marked partial) is refused.
 
     `plan_path`: a plan made by `gliderplan plan -o PLAN` (its report PLAN.json beside
     it); without one the mission is planned now and the plan written beside the page.
     `run_dir`: a `gliderplan sim` run of that plan; without one the plan is flown now
     into `output_dir`/run. `montecarlo_dir`: a `gliderplan montecarlo` result, shown
-    when given. `source`: the mission file's name, for the summary. Raises a
-    GliderplanError for any input that cannot be used."""
+    when given. `source`: the mission file's name, for the summary. With `currents` (as
+    `plan --currents`, from `start` (lat, lon [deg]) at `start_utc`), the mission is
+    planned, drawn and flown in that water. Raises a GliderplanError for any input that
+    cannot be used."""
+    out = Path(output_dir)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: not a directory (report writes several files there)")
+    for given, what in ((run_dir, "--run"), (montecarlo_dir, "--montecarlo")):
+        if given is not None and not Path(given).is_dir():
+            raise UsageError(f"{what} {given}: no such directory")
+    plan_files = (f"{mission.name}.plan", f"{mission.name}.plan.json")
+    with output_folder(out, command="report", force=force,
+                       recognised=(*REPORT_FILES, *plan_files),
+                       inputs=(source or None, plan_path, run_dir, montecarlo_dir)) as folder:
+        return _write_report(mission, folder, plan_path, run_dir, montecarlo_dir, source,
+                             sweep_points, currents, start, start_utc)
+
+
+def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_dir,  # noqa: ANN001
+                  montecarlo_dir, source: str, sweep_points: int, currents: str | None,
+                  start: tuple[float, float] | None, start_utc: str | None) -> Report:
     from gliderplan.planner.compare import compare_boards
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
@@ -253,30 +295,36 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     from gliderplan.reports import sbc
     from gliderplan.reports.speed import COMPARED_VEHICLES, speed_frame, vehicles_frame
 
-    out = Path(output_dir)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {out}: not a directory (report writes several files there)")
-    for given, what in ((run_dir, "--run"), (montecarlo_dir, "--montecarlo")):
-        if given is not None and not Path(given).is_dir():
-            raise UsageError(f"{what} {given}: no such directory")
     # what was given is read first: a wrong directory fails before anything is computed
     flown = _read_run(mission, Path(run_dir)) if run_dir else None
     carlo = _montecarlo(Path(montecarlo_dir), mission) if montecarlo_dir else None
     hardware = load_hardware(mission)
+    if currents is not None:
+        from gliderplan.planner.water import in_water
+        from gliderplan.sim.export import parse_utc
+
+        try:
+            epoch = parse_utc(start_utc) if start_utc else None
+        except ValueError as err:
+            raise UsageError(f"--start: {err}") from None
+        hardware = in_water(hardware, mission, currents, start, epoch)
     _, model = prepare(mission, hardware)
     comparison = compare_boards(mission)  # before anything is written: it may refuse
     report, plan_file, written = _plan_report(
-        mission, model, Path(plan_path) if plan_path else None, out)
+        mission, model, Path(plan_path) if plan_path else None, folder)
+    shown_plan = Path(plan_path) if plan_path else folder.final(plan_file.name)
     frontier = pareto(model, sweep_points)
     tornado = sensitivity(model)
-    run_path = Path(run_dir) if run_dir else out / "run"
+    run_path = Path(run_dir) if run_dir else folder.final("run")
     run_origin = "the run given"
     if flown is None:
         from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
-        run_mission(flight_setup(mission, FlightOptions(plan_path=plan_file)), run_path,
-                    plots=False)
-        flown = _read_run(mission, run_path)
+        options = FlightOptions(plan_path=plan_file, currents=currents, start_utc=start_utc,
+                                start_position=start)
+        run_mission(flight_setup(mission, options), folder.path / "run", plots=False)
+        interrupts.raise_if_stopped()  # a flight cut short is no flight to report
+        flown = _read_run(mission, folder.path / "run")
         run_origin = ("flown now on the simulated glider (Python executor, bench ocean) "
                       f"into {run_path}")
     summary, series = flown
@@ -297,16 +345,17 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     speeds = speed_frame(mission, hardware, load_plan(plan_file, mission))
     vehicles = None
     if len(speeds):
-        from gliderplan.planner.vehicles import compare_vehicles, crossovers
+        from gliderplan.planner.vehicles import compare_vehicles, crossovers, flies_on
 
         tables["speed.csv"] = speeds
-        compared = compare_vehicles(mission, list(dict.fromkeys(
-            [mission.vehicle, *COMPARED_VEHICLES])))
+        compared = compare_vehicles(mission, [  # those that can fly it: a glider no cruise
+            spec for spec in dict.fromkeys([mission.vehicle, *COMPARED_VEHICLES])
+            if flies_on(mission, spec)])
         tables["vehicles.csv"] = vehicles_frame(compared)
         vehicles = _vehicles_section(tables["vehicles.csv"], crossovers(compared))
     sections = [
-        _summary_section(mission, source, hardware, report, plan_file, summary, run_origin),
-        _pareto_section(frontier, report, _star(model, frontier, report), plan_file),
+        _summary_section(mission, source, hardware, report, shown_plan, summary, run_origin),
+        _pareto_section(frontier, report, _star(model, frontier, report), shown_plan),
         _energy_section(tables["energy_by_state.csv"]),
         *([_speed_section(speeds), vehicles] if vehicles is not None else []),
         _plan_vs_sim_section(tables["plan_vs_simulation.csv"], summary, run_path, run_origin),
@@ -317,16 +366,14 @@ def make_report(mission: CheckedMission, output_dir: str | Path, *,
     ]
     if carlo is not None:
         sections.append(_montecarlo_section(*carlo, Path(montecarlo_dir)))
+    interrupts.raise_if_stopped()
     for name, frame in tables.items():
-        path = out / name
-        write_atomically(path, frame.to_csv(index=False))
-        written.append(path)
+        written.append(folder.write(name, frame.to_csv(index=False)))
     title = f"{mission.name}: tradeoff report"
     subtitle = (f"mission {source or mission.name} (hash {mission.hash[:12]}), planned on "
                 f"{_computer(report)}; "
                 "every figure's numbers are in the CSV file named under it")
-    html_path = out / HTML
-    write_atomically(html_path, page(title, subtitle, sections))
+    html_path = folder.write(HTML, page(title, subtitle, sections))
     return Report(html_path, (html_path, *written), tuple(s.id for s in sections))
 
 
@@ -487,9 +534,11 @@ def _speed_section(frame: pd.DataFrame) -> Section:
     headers = {"state": "state", "speed_mps": "chosen speed [m/s]",
                "energy_per_km_kj": "energy per km [kJ]"}
     return Section("speed", "Energy per km against speed", (
-        "<p>Where the plan flies on the propeller: the energy each km takes at each speed "
-        "through the water (the vehicle's propulsion model with the state's hotel load and "
-        "board, in still water), and the speed the planner chose, the least energy per km "
+        "<p>Where the plan flies on the propeller: the energy each km over ground takes at "
+        "each speed through the water (the vehicle's propulsion model with the state's hotel "
+        "load and board, in the water it was planned for: still water, or along its route in "
+        "the current given, still water dashed beside it), and the speed the planner chose, "
+        "the least energy per km "
         "(or the one written). Too slow and the hotel load takes the battery, too fast "
         f"and drag does; the dotted line is a fixed {REFERENCE_SPEED_MPS:g} m/s cruise.</p>",),
         speed_svg(frame), "Energy per km [kJ] against speed [m/s]; stars: the chosen speeds.",

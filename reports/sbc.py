@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import OutputFolder, output_folder
 from gliderplan.contract.units import J_PER_WH
 from gliderplan.planner.compare import BoardResult, Comparison, Crossover
 from gliderplan.power_models.computation import load_computations
@@ -364,15 +364,17 @@ def energy_plot(comparison: Comparison, fmt: str = "png") -> bytes:
     return render(fig, fmt)
 
 
-def write_files(comparison: Comparison, out: Path) -> tuple[Path, ...]:
-    """Write FILES into the directory `out`, each atomically."""
+def write_files(comparison: Comparison, out: Path | OutputFolder) -> tuple[Path, ...]:
+    """Write FILES into the directory `out`, a folder written whole
+    (contract.files.output_folder), or into the folder `out` being written."""
+    if not isinstance(out, OutputFolder):
+        with output_folder(out, command="compare-sbc", recognised=FILES) as folder:
+            return write_files(comparison, folder)
     contents = {"boards.csv": boards_frame(comparison).to_csv(index=False),
                 "workload.csv": workload_frame(comparison).to_csv(index=False),
                 "crossovers.csv": crossovers_frame(comparison).to_csv(index=False),
                 "sbc.png": energy_plot(comparison, "png")}
-    for name in FILES:
-        write_atomically(out / name, contents[name])
-    return tuple(out / name for name in FILES)
+    return tuple(out.write(name, contents[name]) for name in FILES)
 
 
 def as_json(comparison: Comparison) -> str:

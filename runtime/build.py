@@ -69,7 +69,8 @@ TARGETS: dict[str, Target] = {
                "sudo apt-get install gcc-arm-linux-gnueabi", "TS-7800, ARMv5TE (ARM9)",
                emulator=("qemu-arm", "-cpu", "arm926")),
         # musl compiled for the i486, linked statically: no i686 instruction anywhere.
-        # -mpc64: the x87 rounds each result to double once, as the reference does.
+        # -mpc64: the x87 rounds each result to double once, as the reference does (but
+        # a subnormal result, below 2.2e-308, twice: to 53 bits, then to its fewer bits).
         Target("ts5500", "i486-linux-musl-gcc", ("-march=i486", "-mpc64", "-static"),
                MUSL_I486, "TS-5500, i486-class AMD Elan SC520",
                emulator=("qemu-i386", "-cpu", "486")),

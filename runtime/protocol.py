@@ -25,13 +25,16 @@ from gliderplan.contract import (
     COMMAND_FIELD_FORMATS,
     COMMAND_MAX_SIZE,
     FLAG_DONE,
+    HELLO_FIXED_BYTES,
     MAX_LINK_PLAN,
     MAX_PAYLOAD,
     MAX_UPDATE_BYTES,
     MAX_WIRE,
+    MISSION_HASH_BYTES,
     N_SENSORS,
     PLAN_PIECE,
     PROTOCOL_VERSION,
+    RETRANSMIT_MS,
     SENSORS_MASK,
     SENSORS_RESYNC,
     CommandField,
@@ -42,7 +45,6 @@ from gliderplan.contract import (
 
 HEADER = struct.Struct("<BBBBH")  # version, type, seq, ack, length
 READ_CHUNK = 4096  # [bytes] taken from the port at once: whatever has arrived
-MAX_PACKET = HEADER.size + MAX_PAYLOAD + 2  # 248 bytes decoded
 
 
 # ---- errors ------------------------------------------------------------------------
@@ -233,7 +235,7 @@ def _expect_size(name: str, payload: bytes, size: int) -> None:
 @dataclass(frozen=True)
 class Hello:
     read_mask: int
-    mission_hash: bytes  # 32 raw bytes of SHA-256
+    mission_hash: bytes  # MISSION_HASH_BYTES raw bytes of SHA-256
     name: str
     n_sensors: int = N_SENSORS
     protocol: int = PROTOCOL_VERSION
@@ -242,20 +244,21 @@ class Hello:
 
     def pack(self) -> bytes:
         name = self.name.encode("ascii")
-        if len(self.mission_hash) != 32:
-            raise LengthError("mission hash must be 32 bytes")
+        if len(self.mission_hash) != MISSION_HASH_BYTES:
+            raise LengthError(f"mission hash must be {MISSION_HASH_BYTES} bytes")
         return (struct.pack("<BBI", self.protocol, self.n_sensors, self.read_mask)
                 + self.mission_hash + bytes([len(name)]) + name)
 
     @classmethod
     def unpack(cls, payload: bytes) -> Hello:
-        if len(payload) < 6 + 32 + 1:
+        if len(payload) < HELLO_FIXED_BYTES:
             raise LengthError(f"HELLO payload of {len(payload)} bytes is too short")
         protocol, n_sensors, read_mask = struct.unpack_from("<BBI", payload)
-        name_len = payload[38]
-        _expect_size("HELLO", payload, 39 + name_len)
-        name = payload[39:].decode("ascii", errors="replace")
-        return cls(read_mask, bytes(payload[6:38]), name, n_sensors, protocol)
+        name_len = payload[HELLO_FIXED_BYTES - 1]
+        _expect_size("HELLO", payload, HELLO_FIXED_BYTES + name_len)
+        name = payload[HELLO_FIXED_BYTES:].decode("ascii", errors="replace")
+        return cls(read_mask, bytes(payload[6:6 + MISSION_HASH_BYTES]), name, n_sensors,
+                   protocol)
 
 
 @functools.cache
@@ -622,7 +625,8 @@ class Link:
     does not hold it sends the tick's SENSORS again asking for a whole COMMAND (resync).
     """
 
-    def __init__(self, port: Port, retransmit_s: float = 0.2, max_retries: int = 25) -> None:
+    def __init__(self, port: Port, retransmit_s: float = RETRANSMIT_MS / 1000,
+                 max_retries: int = 25) -> None:
         self.port = port
         self.retransmit_s = retransmit_s
         self.max_retries = max_retries

@@ -249,9 +249,11 @@ class CFlight:
 
     # ---- flying ------------------------------------------------------------------------
 
-    def fly(self, progress: Callable[[float, float], None] | None = None) -> RunRecord:
+    def fly(self, progress: Callable[[float, float], None] | None = None,
+            keep_interrupted: bool = False) -> RunRecord:
         """Fly until the mission exits (or its energy guard ends it), the runtime refuses
-        an event or the run's duration ends; Ctrl-C keeps what was flown."""
+        an event or the run's duration ends. KeyboardInterrupt goes through, but with
+        `keep_interrupted` it ends the flight, as `sim.loop.simulate`'s."""
         library, context = self.library, self.step.context
         names = tuple(s.name for s in self.mission.states)
         trace: list[Transition] = []
@@ -291,6 +293,8 @@ class CFlight:
                 time_s = float(np.float32((self._status()[0] - 1) * self.tick_s))
                 ended = f"fault: {fault_message(self.mission, report, time_s)}"
         except KeyboardInterrupt:  # keep what was flown: the caller writes it out
+            if not keep_interrupted:
+                raise
             ended = "interrupted"
         trace += self._take_trace(names)
         tick, surfacings, grounded, first_grounded, _ = self._status()

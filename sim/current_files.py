@@ -155,7 +155,15 @@ class LoggedCurrent:
 
 def read_logged_currents(path: str | Path) -> LoggedCurrent:
     """The currents a Slocum glider measured, from its flight logs (*.dbd or a directory
-    of them, cache files in cac/ beside them); CurrentError if they hold none."""
+    of them, cache files in cac/ beside them): its `m_water_vx`/`m_water_vy`, else the
+    currents of the dead-reckoning error between its fixes (sim.dr_currents);
+    CurrentError if they give neither."""
+    return logged_currents(flight_logs(path), path)
+
+
+def flight_logs(path: str | Path):
+    """The flight logs (*.dbd, or a directory of them, cache files in cac/ beside them)
+    as one dbdreader.MultiDBD; CurrentError where they cannot be read."""
     import dbdreader
 
     from gliderplan.sim.slocum_ocean import logs_in
@@ -163,23 +171,68 @@ def read_logged_currents(path: str | Path) -> LoggedCurrent:
     files = logs_in(path, "*.dbd", "flight log")
     cac = files[0].parent / "cac"
     try:
-        logs = dbdreader.MultiDBD(filenames=[str(f) for f in files],
+        return dbdreader.MultiDBD(filenames=[str(f) for f in files],
                                   cacheDir=str(cac) if cac.is_dir() else None)
+    except (dbdreader.DbdError, OSError, ValueError) as err:
+        raise CurrentError(f"{path}: the flight logs cannot be read: {err}") from None
+
+
+def logged_currents(logs, path: str | Path) -> LoggedCurrent:
+    """The currents of opened flight logs (a dbdreader.MultiDBD read from `path`): the
+    measured ones, else those of the dead-reckoning error between fixes."""
+    measured = _measured_currents(logs)
+    if measured is None:
+        return _estimated_currents(logs, path)
+    t, north, east = measured
+    check_speeds(north, east, f"{path}: m_water_vx, m_water_vy")
+    return LoggedCurrent(t, north, east, f"the currents measured in {path} ({len(t)} values)")
+
+
+def _measured_currents(logs) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(time [s since 1970], north, east [m s-1]) of the logs' m_water_vy/vx where both
+    are finite; None where the logs hold none."""
+    import dbdreader
+
+    try:
         t_east, east = logs.get("m_water_vx")
         t_north, north = logs.get("m_water_vy")
-    except (dbdreader.DbdError, OSError, ValueError) as err:
-        raise CurrentError(f"{path}: no depth-averaged current in the flight logs "
-                           f"(m_water_vx, m_water_vy): {err}") from None
+    except (dbdreader.DbdError, ValueError):
+        return None
+    if not len(t_east) or not len(t_north):
+        return None
     if len(t_east) != len(t_north) or not np.array_equal(t_east, t_north):
         north = np.interp(t_east, t_north, north)
     keep = np.isfinite(east) & np.isfinite(north)
     if not np.any(keep):
-        raise CurrentError(f"{path}: the flight logs hold no measured current "
-                           "(m_water_vx, m_water_vy)")
-    check_speeds(north[keep], east[keep], f"{path}: m_water_vx, m_water_vy")
-    return LoggedCurrent(np.asarray(t_east[keep], float), np.asarray(north[keep], float),
-                         np.asarray(east[keep], float),
-                         f"the currents measured in {path} ({int(keep.sum())} values)")
+        return None
+    return (np.asarray(t_east[keep], float), np.asarray(north[keep], float),
+            np.asarray(east[keep], float))
+
+
+def _estimated_currents(logs, path: str | Path) -> LoggedCurrent:
+    """The currents of the dead-reckoning error between the logs' fixes, each from the
+    fix that ends its segment; CurrentError where the logs allow none."""
+    import dbdreader
+
+    from gliderplan.sim.dr_currents import read_track, segment_currents
+
+    try:
+        estimate = segment_currents(read_track(logs))
+    except (dbdreader.DbdError, ValueError) as err:
+        raise CurrentError(f"{path}: no depth-averaged current in the flight logs "
+                           "(m_water_vx, m_water_vy), nor the fixes, speed, heading and "
+                           f"depth to estimate one (m_gps_lat/lon, m_speed, m_heading, "
+                           f"m_depth): {err}") from None
+    if not len(estimate.time_s):
+        raise CurrentError(f"{path}: no depth-averaged current in the flight logs "
+                           "(m_water_vx, m_water_vy), and no dive between two GPS fixes "
+                           "to estimate one from")
+    check_speeds(estimate.north_mps, estimate.east_mps,
+                 f"{path}: the currents of the dead-reckoning error between fixes")
+    return LoggedCurrent(estimate.time_s, estimate.north_mps, estimate.east_mps,
+                         f"the currents of the dead-reckoning error between the fixes in "
+                         f"{path} ({len(estimate.time_s)} dives, 1 sigma "
+                         f"{float(np.median(estimate.sigma_mps)):.2f} m/s each)")
 
 
 def faster_than_glider(field: CurrentField, speed_mps: float, lat_deg: float,

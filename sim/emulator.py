@@ -19,7 +19,7 @@ from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import ExitCode, FlightLimits
+from gliderplan.contract import RETRANSMIT_MS, ExitCode, FlightLimits
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
@@ -34,7 +34,7 @@ HELLO_TIMEOUT_S = 10.0
 # under line faults: a HELLO is a long frame, and a heavily noisy line damages most of them
 FAULT_HELLO_TIMEOUT_S = 60.0
 EXIT_TIMEOUT_S = 5.0
-FAULT_WATCHDOG_S = 2.0  # [s] the runtime's link timeout under faults (10 times the re-send)
+FAULT_WATCHDOG_S = 10 * RETRANSMIT_MS / 1000  # [s] the runtime's link timeout under faults
 # exchanges of one tick (each of the link's retransmission budget) before the link is
 # declared failed: a tick is never skipped, so a run flies the fault-free flight or ends
 LINK_FAILURE_EXCHANGES = 3

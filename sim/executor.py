@@ -20,6 +20,7 @@ from gliderplan.contract import (
     FLAG_DONE,
     FLAG_ENVELOPE,
     FLAG_HEADING,
+    FLAG_HEADING_HOLD,
     FLAG_SURFACE,
     N_SENSORS,
     NO_STATE,
@@ -34,7 +35,7 @@ from gliderplan.language import ir, semantics
 from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS
 from gliderplan.runtime.protocol import Command
 from gliderplan.sim import compiled, pilot
-from gliderplan.sim.envelope import EnvelopeGuard
+from gliderplan.sim.envelope import EnvelopeGuard, Held
 
 if TYPE_CHECKING:
     from gliderplan.planner.planfile import Plan
@@ -230,13 +231,18 @@ class PythonRuntime:
         thrust = thrust if profile.kind in pilot.ASSISTED else 0.0
         heading, valid = self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
-                 | (FLAG_HEADING if valid else 0))
+                 | (FLAG_HEADING if valid else 0)
+                 | (FLAG_HEADING_HOLD if valid and self.route.holds else 0))
         if self.guard is not None:
             band = (args[0], args[1]) if profile.kind in ("yo", "thermotrackyo") else None
-            held = self._hold(tick, entered, band, target, pitch_cmd, ballast_cmd, flags)
+            command = Held(target, pitch_cmd, ballast_cmd, heading, speed, thrust)
+            held = self._hold(tick, entered, band, command, flags)
             if isinstance(held, Command):
                 return held
-            target, pitch_cmd, ballast_cmd, flags = held
+            flags = held
+            target, pitch_cmd, ballast_cmd = command.target_m, command.pitch_rad, \
+                command.ballast_cc
+            heading, speed, thrust = command.heading_rad, command.speed_mps, command.thrust_w
         power = self.constant_power[i]
         if power is None:
             power = pilot.sensor_power_mask(self.power_tables[i], t_in)
@@ -244,18 +250,17 @@ class PythonRuntime:
         return Command(tick, i, len(machine.stack), kind, src, dst, k, flags, target, pitch_cmd,
                        ballast_cmd, heading, power, self.event_count, speed, thrust)
 
-    def _hold(self, tick: int, entered: bool, band: tuple[float, float] | None, target: float,
-              pitch: float, ballast: float, flags: int
-              ) -> tuple[float, float, float, int] | Command:
-        """The envelope guard on this tick's command (runtime/src/gp_runtime.c): the
-        command to send, held with the clamp action; or the mission's end (the surface
+    def _hold(self, tick: int, entered: bool, band: tuple[float, float] | None,
+              command: Held, flags: int) -> int | Command:
+        """The envelope guard on this tick's command (runtime/src/gp_runtime.c): the flags
+        to send, `command` held with the clamp action; or the mission's end (the surface
         action: a COMMAND) or a MissionFault (the fault action)."""
         guard = self.guard
         was_held = guard.held
-        breach, target, pitch, ballast = guard.hold(entered, band, self.s[0], target, pitch,
-                                                    ballast, bool(flags & FLAG_CLIMBING))
+        breach = guard.hold(entered, band, self.s[0], self.s[_DEPTH], command,
+                            bool(flags & FLAG_CLIMBING), bool(flags & FLAG_HEADING))
         if breach is None:
-            return target, pitch, ballast, flags
+            return flags
         ends = guard.ends(breach)
         fault = ends and guard.envelope.action == EnvelopeAction.FAULT
         if ends or not was_held:
@@ -270,4 +275,4 @@ class PythonRuntime:
             self.machine = semantics.Machine(None, (), machine.variables)
             return self._command(tick, semantics.Transition(self.s[0], "envelope",
                                                             machine.state, "", 0))
-        return target, pitch, ballast, flags | FLAG_ENVELOPE
+        return flags | FLAG_ENVELOPE

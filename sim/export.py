@@ -17,15 +17,16 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gliderplan.contract import START_YEARS, ExitCode
+from gliderplan.contract import START_YEARS, ExitCode, interrupts
 from gliderplan.contract.errors import GliderplanError, UsageError
-from gliderplan.contract.files import InputFileError, read_data, write_atomically
+from gliderplan.contract.files import InputFileError, output_folder, read_data
 from gliderplan.sim.loop import DEFAULT_START_EPOCH_S
 from gliderplan.sim.slocum_ocean import leg_starts
 from gliderplan.sim.vehicle import SURFACE_DEPTH_M
@@ -182,14 +183,18 @@ FORMATS = {"ioos": ("trajectory.nc", lambda t, m, d: netcdf_bytes(t, m, "ioos", 
            "geojson": ("track.geojson", lambda t, m, d: track_geojson(t, m)),
            "kml": ("track.kml", lambda t, m, d: track_kml(t, m))}
 ALIASES = {"netcdf": "ioos"}
+EXPORT_FILES = tuple(filename for filename, _ in FORMATS.values())
 
 
 def export_run(run_dir: str | Path, formats: list[str],
                output_dir: str | Path | None = None,
-               metadata_path: str | Path | None = None) -> list[Path]:
+               metadata_path: str | Path | None = None, force: bool = False) -> list[Path]:
     """Write the run in `run_dir` in each of `formats` (keys of FORMATS, or "netcdf" for
-    "ioos") into `output_dir` (default `run_dir`), atomically; the files written
-    (`gliderplan export`). `metadata_path`: a TOML file of the deployment's people and
+    "ioos") into `output_dir` (default `run_dir`); the files written (`gliderplan
+    export`). Another folder is written whole as a run of its own (contract.files.
+    output_folder; `force`: replace one holding other files than a gliderplan run's);
+    the run's own folder is replaced whole by itself and these files. Interrupted, it
+    writes nothing. `metadata_path`: a TOML file of the deployment's people and
     names (sim.netcdf_formats.METADATA_KEYS) for the NetCDF files.
 
     Raises UsageError (exit 2) for no format or an unknown one, a run directory that does
@@ -217,12 +222,17 @@ def export_run(run_dir: str | Path, formats: list[str],
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
     table, meta = read_run(run_dir)
-    written = []
-    for name in formats:
-        filename, produce = FORMATS[name]
-        write_atomically(out / filename, produce(table, meta, metadata))
-        written.append(out / filename)
-    return written
+    # into the run's own folder: the folder, its run and these files, replaces the run
+    into_run = os.path.realpath(out) == os.path.realpath(run_dir)
+    with output_folder(out, command="sim" if into_run else "export", force=force,
+                       keep=into_run, recognised=EXPORT_FILES,
+                       inputs=(run_dir, metadata_path)) as folder:
+        if into_run:
+            folder.complete = meta.get("complete", meta.get("ended") != "interrupted")
+        files = [(name, *FORMATS[name]) for name in formats]
+        contents = {filename: produce(table, meta, metadata) for _, filename, produce in files}
+        interrupts.raise_if_stopped()
+        return [folder.write(filename, data) for filename, data in contents.items()]
 
 
 def read_run(run_dir: str | Path) -> tuple[pd.DataFrame, dict]:

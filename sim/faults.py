@@ -9,7 +9,7 @@ SPEC is a comma-separated list of `name=value`:
   reorder=P         a frame is held back and arrives after the next one
   truncate=P        a frame loses its tail (it still ends in its delimiter)
   burst=N@P         N consecutive bytes of a frame turn to noise, with probability P per frame
-  delay=T@P         a frame arrives T late (wall time; 0.2 s is the retransmission timeout):
+  delay=T@P         a frame arrives T late (wall time; the link re-sends after RETRANSMIT_MS):
                     with the first read or write on the line once it is due
   disconnect=T@AT   the line is cut for T of mission time from mission time AT (repeatable)
   kill=N[@T]        the runtime is killed (SIGKILL) N times at random moments of the run's

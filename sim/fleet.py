@@ -7,8 +7,10 @@ finish, what map do the profiles flown make. `montecarlo_fleet` flies every glid
 scenarios with `sim.montecarlo`'s own scenario flights: all gliders of scenario i share
 its seed, so they fly the same ocean and current and draw the same battery share (and
 gliders of one preset the same model error). Work goes out through
-`sim.backends.scenario_executor`: this process, a process pool, or Dask (a LocalCluster
-or a scheduler's address): results depend on the seed only, never on the workers.
+`sim.backends.scenario_executor`, as `gliderplan montecarlo`'s does: by default on Dask,
+a LocalCluster of `workers` processes, or a running scheduler given by its address
+(`scheduler=None`: this process, or a process pool); results depend on the seed only,
+never on the workers nor where they run.
 
 A glider can be lost (`lose=(name, time)`): it flies until then. What the rest of the
 fleet can still cover is the fleet planned again from that moment, the survivors where
@@ -17,25 +19,37 @@ their plans had them and with what their batteries still hold (`replan_after_los
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import json
 import math
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from gliderplan.contract.errors import GliderplanError, UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract import interrupts
+from gliderplan.contract.errors import GliderplanError
+from gliderplan.contract.files import OutputFolder, output_folder
 from gliderplan.language.fleet import Fleet
+from gliderplan.planner.fleet import FleetPlan
 from gliderplan.planner.fleet_mapping import sample_spacing
 from gliderplan.planner.fleet_missions import LAUNCH_S, Track
-from gliderplan.planner.fleet_report import StoredGlider, StoredPlan
+from gliderplan.planner.fleet_report import (
+    StoredGlider,
+    StoredPlan,
+    load_plan_dir,
+    write_plan_dir,
+)
 
 TRACK_STEP_S = 60.0  # flown positions kept every minute
+PLAN_DIR = "plan"  # in a run's folder: the plan made for it (no --plan)
+MAP_FILES = ("fleet.png", "fleet.geojson", "fleet.kml", "fleet.html")
+SIM_FILES = ("fleet_sim.json", *MAP_FILES, PLAN_DIR)  # and a folder per glider
+MONTECARLO_FILES = ("scenarios.parquet", "summary.json", "mapping_error.png", *MAP_FILES,
+                    PLAN_DIR)
 Progress = Callable[[float, float], None]
 
 
@@ -113,6 +127,9 @@ def _fly_one(task: dict) -> dict:
                                 start_utc=task["start_utc"])
         result = run_mission(flight_setup(mission, options), Path(scratch) / "run",
                              netcdf=True)
+        if result.interrupted:  # the part flown, which run_mission keeps: no flight here
+            raise KeyboardInterrupt
+        interrupts.raise_if_stopped()  # one while it was written stops the fleet too
         files = {p.name: p.read_bytes() for p in result.files}
     columns = result.record.columns
     t = columns["time_s"]
@@ -129,65 +146,110 @@ def _fly_one(task: dict) -> dict:
             "entered": entered, "time_by_state_s": dict(result.energy.time_by_state_s)}
 
 
-def fly_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, workers: int = 1,
-              scheduler: str | None = None, seed: int = 0, ocean: str | None = None,
+@contextmanager
+def _run_folder(output_dir: str | Path, command: str, fleet: Fleet,
+                plan: FleetPlan | StoredPlan, force: bool, recognised: tuple[str, ...],
+                inputs: Iterable) -> Iterator[tuple[OutputFolder, StoredPlan]]:
+    """The run's folder (contract.files.output_folder) and the stored plan to fly: `plan`
+    as stored (`fleet plan -o`), or made now and written into the folder's plan/."""
+    names = (*recognised, *(g.name for g in fleet.gliders))
+    stored_in = plan.directory if isinstance(plan, StoredPlan) else None
+    with output_folder(output_dir, command=command, force=force, recognised=names,
+                       inputs=(*inputs, stored_in)) as folder:
+        if isinstance(plan, StoredPlan):
+            yield folder, plan
+        else:
+            write_plan_dir(plan, folder.sub(PLAN_DIR))
+            stored = load_plan_dir(folder.path / PLAN_DIR, fleet)
+            yield folder, replace(stored, directory=folder.final(PLAN_DIR))
+
+
+def fly_fleet(fleet: Fleet, plan: FleetPlan | StoredPlan, output_dir, *, workers: int = 1,
+              scheduler: str | None = "local", seed: int = 0, ocean: str | None = None,
               current: tuple[float, float] = (0.0, 0.0), runtime: str = "python",
-              lose: tuple[str, float] | None = None,
-              progress: Progress | None = None) -> dict:
-    """Fly every glider of `stored` once (`gliderplan fleet sim`); write OUTPUT/GLIDER/ (its
-    run files, trajectory.nc) and OUTPUT/fleet_sim.json, the map and the fleet page.
+              lose: tuple[str, float] | None = None, progress: Progress | None = None,
+              force: bool = False, inputs: Iterable = ()) -> dict:
+    """Fly every glider of `plan` once (`gliderplan fleet sim`); write OUTPUT/GLIDER/ (its
+    run files, trajectory.nc) and OUTPUT/fleet_sim.json, the map and the fleet page, a
+    folder written whole (contract.files.output_folder: `force`, and `inputs`, the files
+    read, refused inside it); a plan made now (a FleetPlan) is written into OUTPUT/plan.
     `ocean` as `run_mission`'s (default: uniform water, as the plans assume); `current`
     (north, east) [m/s] is the whole ocean's; each glider's sensor noise is
-    seeded from `seed` and its place in the fleet. Returns fleet_sim.json's content."""
-    from gliderplan.sim.backends import scenario_executor
+    seeded from `seed` and its place in the fleet. Returns fleet_sim.json's content.
 
-    out = Path(output_dir)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {out}: not a directory")
-    tasks = []
-    for n, glider in enumerate(stored.gliders):
-        spec = fleet.glider(glider.name)
-        duration = fleet.period_s - spec.start_offset_s
-        if lose is not None and lose[0] == glider.name:
-            duration = lose[1] - spec.start_offset_s
-        tasks.append({
-            "name": glider.name, "mission_text": glider.mission_path.read_text(),
-            "mission_name": str(glider.mission_path), "plan_bytes": glider.plan_path.read_bytes(),
-            "runtime": runtime, "ocean": ocean, "current": current,
-            "seed": int(np.random.SeedSequence([seed, n]).generate_state(1)[0]),
-            "duration_s": duration,
-            "start_utc": _utc(fleet.start_epoch_s + spec.start_offset_s)})
-    flights: dict[str, dict] = {}
-    with scenario_executor(min(workers, len(tasks)), scheduler) as executor:
-        if executor is None:
-            for task in tasks:
-                flights[task["name"]] = _fly_one(task)
-                if progress:
-                    progress(len(flights), len(tasks))
+    Ctrl-C or SIGTERM stops it at once: the gliders whose flights finished are written,
+    fleet_sim.json `complete` false with no verdict on the survey (`finished` and the
+    mapping error null: the survey was not flown); KeyboardInterrupt if none finished."""
+    from gliderplan.sim.backends import gather, scenario_executor
+
+    # what finished is written whole: a stop once it has is remembered (exit 130 or 143),
+    # a second one abandons the writing and leaves the folder's previous run
+    with interrupts.deferred(armed=False) as writing, \
+            _run_folder(output_dir, "fleet sim", fleet, plan, force, SIM_FILES,
+                        (*inputs, ocean)) as (folder, stored):
+        tasks = []
+        for n, glider in enumerate(stored.gliders):
+            spec = fleet.glider(glider.name)
+            duration = fleet.period_s - spec.start_offset_s
+            if lose is not None and lose[0] == glider.name:
+                duration = lose[1] - spec.start_offset_s
+            tasks.append(({
+                "name": glider.name, "mission_text": glider.mission_path.read_text(),
+                "mission_name": str(stored.directory / glider.mission_path.name),
+                "plan_bytes": glider.plan_path.read_bytes(),
+                "runtime": runtime, "ocean": ocean, "current": current,
+                "seed": int(np.random.SeedSequence([seed, n]).generate_state(1)[0]),
+                "duration_s": duration,
+                "start_utc": _utc(fleet.start_epoch_s + spec.start_offset_s)},))
+        flights: dict[str, dict] = {}
+
+        def collect(task: tuple, flight: dict) -> None:
+            flights[flight["name"]] = flight
+            if progress:
+                progress(len(flights), len(tasks))
+
+        with scenario_executor(min(workers, len(tasks)), scheduler) as executor:
+            interrupted = gather(executor, _fly_one, tasks, collect)
+        if not flights:
+            raise KeyboardInterrupt  # nothing flown, nothing to write
+        writing.arm()
+        flown_gliders = [g for g in stored.gliders if g.name in flights]
+        for glider in flown_gliders:
+            for name, data in flights[glider.name]["files"].items():
+                folder.sub(glider.name).write(name, data)
+        meta = {"ocean": ocean, "current_mps": {"north": current[0], "east": current[1]},
+                "runtime": runtime, "seed": seed, "workers": workers,
+                "scheduler": scheduler or ("local pool" if workers > 1 else "none")}
+        if interrupted:
+            summary = _partial_sim(fleet, stored, [flights[g.name] for g in flown_gliders])
+            summary.update(meta)
         else:
-            futures = [executor.submit(_fly_one, task) for task in tasks]
-            for future in cf.as_completed(futures):
-                flight = future.result()
-                flights[flight["name"]] = flight
-                if progress:
-                    progress(len(flights), len(tasks))
-    outcomes = []
-    for glider in stored.gliders:
-        flight = flights[glider.name]
-        for name, data in flight["files"].items():
-            write_atomically(out / glider.name / name, data)
-        outcomes.append(_outcome_of_flight(fleet, glider, flight))
-    summary = _survey(fleet, stored, outcomes, lose)
-    summary.update(ocean=ocean, current_mps={"north": current[0], "east": current[1]},
-                   runtime=runtime, seed=seed, workers=workers,
-                   scheduler=scheduler or ("local pool" if workers > 1 else "none"))
-    if lose is not None:
-        summary["lost"] = replan_after_loss(fleet, stored, lose, summary["mapping_error"])
-    flown = {g.name: np.column_stack([flights[g.name]["lon"], flights[g.name]["lat"],
-                                      flights[g.name]["time_s"]]) for g in stored.gliders}
-    _write_fleet_files(out, fleet, stored, flown, sim=summary)
-    write_atomically(out / "fleet_sim.json", json.dumps(summary, indent=1) + "\n")
+            outcomes = [_outcome_of_flight(fleet, g, flights[g.name])
+                        for g in stored.gliders]
+            summary = _survey(fleet, stored, outcomes, lose)
+            summary.update(meta)
+            if lose is not None:
+                summary["lost"] = replan_after_loss(fleet, stored, lose,
+                                                    summary["mapping_error"])
+            flown = {g.name: np.column_stack([flights[g.name]["lon"],
+                                              flights[g.name]["lat"],
+                                              flights[g.name]["time_s"]])
+                     for g in stored.gliders}
+            _write_fleet_files(folder, fleet, stored, flown, sim=summary)
+        folder.write("fleet_sim.json", json.dumps(summary, indent=1) + "\n")
+        folder.complete = not interrupted
     return summary
+
+
+def _partial_sim(fleet: Fleet, stored: StoredPlan, flights: list[dict]) -> dict:
+    """fleet_sim.json of a run stopped before every glider flew: the flights that
+    finished, and no verdict on the survey."""
+    return {"fleet": fleet.name, "fleet_hash": fleet.hash, "plan": str(stored.directory),
+            "complete": False, "interrupted": True, "flown": len(flights),
+            "requested": len(stored.gliders), "finished": None, "mapping_error": None,
+            "planned_mapping_error": stored.report["mapping_error"],
+            "gliders": [{"name": f["name"], "energy_j": f["energy_j"],
+                         "budget_j": f["budget_j"], "ended": f["ended"]} for f in flights]}
 
 
 def _outcome_of_flight(fleet: Fleet, glider: StoredGlider, flight: dict) -> GliderOutcome:
@@ -226,7 +288,8 @@ def _survey(fleet: Fleet, stored: StoredPlan, outcomes: list[GliderOutcome],
     error, _ = mapping_error(combined([o.samples for o in outcomes]), grid, fleet.field)
     finished = all(o.swept and o.held for o in outcomes)
     return {"fleet": fleet.name, "fleet_hash": fleet.hash, "plan": str(stored.directory),
-            "finished": finished, "mapping_error": error,
+            "complete": True, "interrupted": False, "flown": len(outcomes),
+            "requested": len(stored.gliders), "finished": finished, "mapping_error": error,
             "planned_mapping_error": stored.report["mapping_error"],
             "gliders": [{"name": o.name, "energy_j": o.energy_j, "budget_j": o.budget_j,
                          "held": o.held, "ended": o.ended, "swept": o.swept,
@@ -241,16 +304,16 @@ def _utc(epoch_s: float) -> str:
     return utc_text(epoch_s)
 
 
-def _write_fleet_files(out: Path, fleet: Fleet, stored: StoredPlan, flown: dict | None,
-                       sim: dict | None = None, montecarlo: dict | None = None) -> None:
+def _write_fleet_files(folder: OutputFolder, fleet: Fleet, stored: StoredPlan,
+                       flown: dict | None, sim: dict | None = None,
+                       montecarlo: dict | None = None) -> None:
     from gliderplan.reports import fleet as drawing
 
     files = drawing.map_files(fleet, stored.report, flown=flown)
     for name, data in files.items():
-        write_atomically(out / name, data)
-    write_atomically(out / "fleet.html", drawing.page(fleet, stored.report, flown=flown,
-                                                      sim=sim, montecarlo=montecarlo,
-                                                      png=files["fleet.png"]))
+        folder.write(name, data)
+    folder.write("fleet.html", drawing.page(fleet, stored.report, flown=flown, sim=sim,
+                                            montecarlo=montecarlo, png=files["fleet.png"]))
 
 
 # ---- a lost glider -----------------------------------------------------------------------
@@ -264,10 +327,12 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     the loss count). The re-plan draws its scenarios from `scenario_file` (as
     `plan_fleet`)."""
     from gliderplan.language.ir import Battery
-    from gliderplan.planner.fleet import UnreachableGliders, plan_fleet
+    from gliderplan.planner.fleet import UnreachableGliders, coverage, plan_fleet
     from gliderplan.planner.fleet_mapping import combined, evaluation_grid, mapping_error
 
     name, at = lose
+    # until when each glider flies its own plan: the lost one until the loss
+    until = {g.name: at if g.name == name else fleet.period_s for g in stored.gliders}
     spacing = sample_spacing(fleet)
     grid = evaluation_grid(fleet)
     before, after = [], {}  # each glider's samples up to the loss; the others' after it
@@ -300,6 +365,8 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     visits = {part: [lost_track.start_offset_s + float(lost_track.time_at(d)) for d in seen]
               for part, seen in lost_track.line_visits.items()}
     result = {"glider": name, "at_s": at, "mapping_error_without_replan": untouched,
+              "coverage_without_replan": coverage(fleet, [(g.track, until[g.name])
+                                                          for g in stored.gliders]),
               "lines": sorted(visits),
               "lines_swept_before": sorted(p for p, t in visits.items() if t and t[0] <= at),
               "survivors": [s.name for s in survivors]}
@@ -336,14 +403,20 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
              "lines once")
     if again is None:
         result["replan"] = None
-        result["summary"] = (f"{swept}; they stay unswept after the loss (mapping error "
-                             f"{untouched:.3f}), and the rest cannot take them over: {reason}")
+        result["summary"] = (f"{swept}; they stay unswept after the loss (the rest flying "
+                             f"their plans cover {100 * result['coverage_without_replan']:.0f} "
+                             f"% of the lines' length, mapping error {untouched:.3f}), and "
+                             f"cannot take them over: {reason}")
         return result
     later = [glider.track.samples(spacing) for glider in again.gliders]
     later += [after[k] for k in kept]
     replanned, _ = mapping_error(combined(before + later), grid, fleet.field)
+    covered = coverage(fleet, [(g.track, at if g.name not in kept else until[g.name])
+                               for g in stored.gliders]
+                       + [(g.track, fleet.period_s) for g in again.gliders])
     result["replan"] = {
         "mapping_error": replanned,
+        "coverage": covered,
         "sweep_required": not finished,
         "confidence": asked,
         "confidence_lower_bound": again.validation.lower_bound,
@@ -355,90 +428,91 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
     aside = f" ({', '.join(kept)} cannot reach another line in time and keep their plan)" \
         if kept else ""
     result["summary"] = (f"{swept}{', so the survey is finished' if finished else ''}; left as "
-                         f"planned, its lines go unswept from then on (mapping error "
-                         f"{untouched:.3f} over the period); planned again from then, "
-                         f"{len(again.gliders)} others share all the lines and {promise} "
-                         f"(mapping error {replanned:.3f}){aside}")
+                         f"planned, its lines go unswept from then on (the rest flying "
+                         f"their plans cover {100 * result['coverage_without_replan']:.0f} % "
+                         f"of the lines' length, mapping error {untouched:.3f} over the "
+                         f"period); planned again from then, {len(again.gliders)} others "
+                         f"share all the lines and {promise} (coverage {100 * covered:.0f} %, "
+                         f"mapping error {replanned:.3f}){aside}")
     return result
 
 
 # ---- Monte Carlo ---------------------------------------------------------------------------
 
-def montecarlo_fleet(fleet: Fleet, stored: StoredPlan, output_dir, *, scenarios: int,
-                     workers: int = 1, scheduler: str | None = None, seed: int = 0,
-                     scenario_file=None, lose: tuple[str, float] | None = None,
-                     progress: Progress | None = None) -> dict:
+def montecarlo_fleet(fleet: Fleet, plan: FleetPlan | StoredPlan, output_dir, *,
+                     scenarios: int, workers: int = 1, scheduler: str | None = "local",
+                     seed: int = 0, scenario_file=None, lose: tuple[str, float] | None = None,
+                     progress: Progress | None = None, force: bool = False,
+                     inputs: Iterable = ()) -> dict:
     """Fly every glider in `scenarios` scenarios (`gliderplan fleet montecarlo`); write
     OUTPUT/scenarios.parquet (a row per glider and scenario), OUTPUT/summary.json, the
-    histogram of the realised mapping error, the map and the fleet page. Returns
-    summary.json's content; an interrupted run (Ctrl-C) keeps and writes the scenarios
-    every glider finished (`interrupted`), and raises KeyboardInterrupt only if none."""
+    histogram of the realised mapping error, the map and the fleet page, a folder written
+    whole (as `fly_fleet`'s). Returns summary.json's content. Ctrl-C or SIGTERM stops it
+    at once and keeps the scenarios every glider finished, never one cut short: the
+    summary says `complete` false and gives no finish probability (those that finished
+    are not the sample asked for); KeyboardInterrupt if none."""
     from gliderplan.language import check_file
     from gliderplan.sim import montecarlo
-    from gliderplan.sim.backends import check_run_size, scenario_executor
+    from gliderplan.sim.backends import check_run_size, gather, scenario_executor
     from gliderplan.sim.scenarios import read_spec
     from gliderplan.sim.setup import FlightOptions, flight_setup
 
     check_run_size(scenarios, workers)
-    out = Path(output_dir)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {out}: not a directory")
     spec = read_spec(scenario_file)
-    jobs = {}
-    for glider in stored.gliders:
-        mission = check_file(str(glider.mission_path)).checked()
-        g = fleet.glider(glider.name)
-        duration = fleet.period_s - g.start_offset_s
-        if lose is not None and lose[0] == glider.name:
-            duration = lose[1] - g.start_offset_s
-        options = FlightOptions(plan_path=glider.plan_path, seed=seed, duration_s=duration)
-        jobs[glider.name] = montecarlo.Job(flight_setup(mission, options), spec)
-    # batches of a few scenarios per glider, so that every worker stays busy
-    per = max(1, math.ceil(scenarios / (4 * max(workers, 1))))
-    work = [(name, list(range(i, min(i + per, scenarios))))
-            for i in range(0, scenarios, per) for name in jobs]
-    rows: dict[str, dict[int, dict]] = {name: {} for name in jobs}
-    interrupted = False
-    started = time.perf_counter()
-    total = len(jobs) * scenarios
-    with scenario_executor(workers, scheduler) as executor:
-        try:
-            if executor is None:
-                for name, batch in work:
-                    for row in montecarlo.run_batch(jobs[name], batch):
-                        rows[name][row["scenario"]] = row
-                    if progress:
-                        progress(sum(map(len, rows.values())), total)
-            else:
-                futures = {executor.submit(montecarlo.run_batch, jobs[name], batch): name
-                           for name, batch in work}
-                try:
-                    for future in cf.as_completed(futures):
-                        for row in future.result():
-                            rows[futures[future]][row["scenario"]] = row
-                        if progress:
-                            progress(sum(map(len, rows.values())), total)
-                except KeyboardInterrupt:
-                    for future in futures:
-                        future.cancel()
-                    raise
-        except KeyboardInterrupt:
-            interrupted = True
-    complete = sorted(set.intersection(*(set(r) for r in rows.values())))
-    if not complete:
-        raise KeyboardInterrupt
-    summary, table = _montecarlo_summary(fleet, stored, rows, complete, lose)
-    summary.update(requested=scenarios, interrupted=interrupted, seed=seed, workers=workers,
-                   scheduler=scheduler or ("local pool" if workers > 1 else "none"),
-                   scenario_file=spec.source, wall_s=time.perf_counter() - started)
-    if lose is not None:
-        summary["lost"] = replan_after_loss(fleet, stored, lose, scenario_file=scenario_file)
-    _write_montecarlo(out, fleet, stored, summary, table)
+    with interrupts.deferred(armed=False) as writing, \
+            _run_folder(output_dir, "fleet montecarlo", fleet, plan, force, MONTECARLO_FILES,
+                        (*inputs, scenario_file)) as (folder, stored):
+        jobs = {}
+        for glider in stored.gliders:
+            mission = check_file(str(glider.mission_path)).checked()
+            g = fleet.glider(glider.name)
+            duration = fleet.period_s - g.start_offset_s
+            if lose is not None and lose[0] == glider.name:
+                duration = lose[1] - g.start_offset_s
+            options = FlightOptions(plan_path=glider.plan_path, seed=seed, duration_s=duration)
+            jobs[glider.name] = montecarlo.Job(flight_setup(mission, options), spec)
+        # one scenario of one glider per task: a flight of days takes far longer than
+        # sending it (montecarlo.BATCH_S), progress is seen, and a stop keeps each one
+        # that finished
+        work = [(name, [i]) for i in range(scenarios) for name in jobs]
+        rows: dict[str, dict[int, dict]] = {name: {} for name in jobs}
+        started = time.perf_counter()
+        total = len(jobs) * scenarios
+
+        def collect(task: tuple, flown: list[dict]) -> None:
+            name = next(n for n, job in jobs.items() if job is task[0])
+            rows[name].update((row["scenario"], row) for row in flown)
+            if progress:
+                progress(sum(map(len, rows.values())), total)
+
+        with scenario_executor(workers, scheduler) as executor:
+            interrupted = gather(executor, montecarlo.run_batch,
+                                 [(jobs[name], batch) for name, batch in work], collect)
+        # a scenario counts once every glider flew it to its end
+        common = sorted(set.intersection(*(
+            {i for i, row in r.items() if row["ended"] != "interrupted"}
+            for r in rows.values())))
+        if not common:
+            raise KeyboardInterrupt  # nothing finished, nothing to write
+        writing.arm()
+        summary, table = _montecarlo_summary(fleet, stored, rows, common, lose,
+                                             complete=not interrupted)
+        summary.update(requested=scenarios, interrupted=interrupted, seed=seed,
+                       workers=workers,
+                       scheduler=scheduler or ("local pool" if workers > 1 else "none"),
+                       scenario_file=spec.source, wall_s=time.perf_counter() - started)
+        if lose is not None:
+            summary["lost"] = replan_after_loss(fleet, stored, lose,
+                                                scenario_file=scenario_file)
+        _write_montecarlo(folder, fleet, stored, summary, table)
+        folder.complete = not interrupted
     return summary
 
 
-def _montecarlo_summary(fleet: Fleet, stored: StoredPlan, rows: dict, complete: list[int],
-                        lose) -> tuple[dict, object]:
+def _montecarlo_summary(fleet: Fleet, stored: StoredPlan, rows: dict, common: list[int],
+                        lose, complete: bool = True) -> tuple[dict, object]:
+    """summary.json and the table of the scenarios `common` (flown by every glider). Not
+    `complete` (interrupted): no finish probability nor interval."""
     import pandas as pd
 
     from gliderplan.planner.fleet_mapping import combined, evaluation_grid, mapping_error
@@ -447,7 +521,7 @@ def _montecarlo_summary(fleet: Fleet, stored: StoredPlan, rows: dict, complete: 
     grid = evaluation_grid(fleet)
     spacing = sample_spacing(fleet)
     records, finished, errors = [], 0, []
-    for index in complete:
+    for index in common:
         outcomes = []
         for glider in stored.gliders:
             row = rows[glider.name][index]
@@ -468,7 +542,7 @@ def _montecarlo_summary(fleet: Fleet, stored: StoredPlan, rows: dict, complete: 
                                                           math.nan),
                             "duration_s": row["duration_s"]})
     table = pd.DataFrame(records)
-    n = len(complete)
+    n = len(common)
     low, high = wilson_interval(finished, n)
 
     def quantiles(values) -> dict[str, float]:
@@ -478,9 +552,9 @@ def _montecarlo_summary(fleet: Fleet, stored: StoredPlan, rows: dict, complete: 
 
     summary = {
         "fleet": fleet.name, "fleet_hash": fleet.hash, "plan": str(stored.directory),
-        "scenarios": n, "finished": finished,
-        "finish_probability": finished / n if n else None,
-        "finish_interval": [low, high],
+        "complete": complete, "scenarios": n, "finished": finished,
+        "finish_probability": finished / n if n and complete else None,
+        "finish_interval": [low, high] if complete else None,
         "planned_confidence": fleet.confidence,
         "planned_mapping_error": stored.report["mapping_error"],
         "mapping_error": quantiles(errors),
@@ -518,14 +592,15 @@ def _outcome_of_row(fleet: Fleet, glider: StoredGlider, row: dict,
                                  row["ended"], window, spacing)
 
 
-def _write_montecarlo(out: Path, fleet: Fleet, stored: StoredPlan, summary: dict, table) -> None:
+def _write_montecarlo(folder: OutputFolder, fleet: Fleet, stored: StoredPlan, summary: dict,
+                      table) -> None:
     import pyarrow as pa
 
     from gliderplan.reports.figures import pyplot, render
     from gliderplan.sim.outputs import parquet_bytes
 
-    write_atomically(out / "scenarios.parquet",
-                     parquet_bytes(pa.Table.from_pandas(table, preserve_index=False)))
+    folder.write("scenarios.parquet",
+                 parquet_bytes(pa.Table.from_pandas(table, preserve_index=False)))
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     errors = table.drop_duplicates("scenario")["mapping_error"].to_numpy(float)
@@ -534,9 +609,10 @@ def _write_montecarlo(out: Path, fleet: Fleet, stored: StoredPlan, summary: dict
     ax.set_xlabel("realised mapping error (share of the field's variance)")
     ax.set_ylabel("scenarios")
     ax.set_title(f"{fleet.name}: finished in {summary['finished']} of {summary['scenarios']} "
-                 "scenarios", fontsize=10)
+                 "scenarios" + ("" if summary["complete"] else
+                                f" (interrupted: {summary['requested']} asked)"), fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    write_atomically(out / "mapping_error.png", render(fig, "png"))
-    _write_fleet_files(out, fleet, stored, None, montecarlo=summary)
-    write_atomically(out / "summary.json", json.dumps(summary, indent=1) + "\n")
+    folder.write("mapping_error.png", render(fig, "png"))
+    _write_fleet_files(folder, fleet, stored, None, montecarlo=summary)
+    folder.write("summary.json", json.dumps(summary, indent=1) + "\n")

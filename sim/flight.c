@@ -458,13 +458,13 @@ static void glide_rates(const gps_flight *f, int speeds, double ballast_cc, doub
 
 /* GliderSim.step */
 static void glider_step(gps_flight *f, double target_m, double pitch_rad, double ballast_cc,
-                        double heading_rad, int heading_valid, int surface)
+                        double heading_rad, int heading_valid, int corrects, int surface)
 {
     const gps_physics *p = f->p;
     f->pumped_out_cc = f->pumped_in_cc = 0.0;
     f->inflection = f->grounded = 0;
-    if (heading_valid) {  /* upstream of it with current correction */
-        f->heading_rad = p->correction_speed_mps == 0.0
+    if (heading_valid) {  /* upstream of it with current correction, unless held as it is */
+        f->heading_rad = p->correction_speed_mps == 0.0 || !corrects
                              ? heading_rad
                              : corrected_heading(heading_rad, p->correction_speed_mps,
                                                  f->measured_north_mps, f->measured_east_mps);
@@ -766,7 +766,8 @@ int gps_fly(gps_flight *f, int32_t ticks)
         f->sensor_power = cmd->sensor_power;
         glider_step(f, (double)cmd->depth_target_m, (double)cmd->pitch_rad,
                     (double)cmd->ballast_cc, (double)cmd->heading_rad,
-                    (cmd->flags & GP_FLAG_HEADING) != 0, surface);
+                    (cmd->flags & GP_FLAG_HEADING) != 0,
+                    (cmd->flags & GP_FLAG_HEADING_HOLD) == 0, surface);
         if (f->grounded) {
             if (!f->grounded_ticks) {
                 f->first_grounded_s = (double)tick * p->tick_s;

@@ -41,8 +41,10 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
         progress: Callable[[float, float], None] | None = None,
         key_path: str | None = None,
         state_dir: str | Path | None = None,
-        faults: FaultSpec | None = None, shore: ShoreLoop | None = None) -> RunRecord:
-    """Fly the mission until it exits or `config.duration_s` ends.
+        faults: FaultSpec | None = None, shore: ShoreLoop | None = None,
+        keep_interrupted: bool = False) -> RunRecord:
+    """Fly the mission until it exits or `config.duration_s` ends; KeyboardInterrupt
+    goes through, but with `keep_interrupted` it ends the flight (sim.loop.simulate).
 
     `runtime`: "step" (the compiled runtime's step with the glider, science and energy
     models in C, sim/flight.c; a flight the C loop does not model, `cflight.flies_in_c`,
@@ -80,7 +82,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                                                    _reader(mission, vehicle, plan)).deliver,
                               gauge, science.glider, mission)
         record = simulate(mission, executor, science, config, progress, gauge=gauge,
-                          on_surfacing=hook)
+                          on_surfacing=hook, keep_interrupted=keep_interrupted)
         record.entry_variables = executor.entry_variables
         record.envelope = located(executor.envelope_notes, mission)
         record.events_fired = executor.event_count
@@ -94,7 +96,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
     limits = flown_limits(mission, vehicle, board.clocks_mhz)
     if runtime == "step":
         return _fly_step(mission, science, config, plan, limits, robust_tracker, progress,
-                         gauge, shore)
+                         gauge, shore, keep_interrupted)
     from gliderplan.sim.emulator import start_c_runtime
 
     schedule = None
@@ -112,7 +114,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                                                  science.glider, mission)
     try:
         record = simulate(mission, c_runtime, science, config, progress, gauge=gauge,
-                          on_surfacing=hook)
+                          on_surfacing=hook, keep_interrupted=keep_interrupted)
     finally:
         c_runtime.close()
     record.suspends = c_runtime.suspends  # counted once the runtime has ended
@@ -127,7 +129,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 def _fly_step(mission: ir.CheckedMission, science, config: RunConfig,  # noqa: ANN001
               plan: Plan | None, limits: FlightLimits, robust_tracker: bool,
               progress: Callable[[float, float], None] | None, gauge,  # noqa: ANN001
-              shore: ShoreLoop | None) -> RunRecord:
+              shore: ShoreLoop | None, keep_interrupted: bool) -> RunRecord:
     """The compiled runtime's step in this process: in the C loop where it models the
     flight, else (and with the shore in the loop) in the Python loop."""
     from gliderplan.planner.planfile import write_plan_bytes
@@ -140,14 +142,14 @@ def _fly_step(mission: ir.CheckedMission, science, config: RunConfig,  # noqa: A
                  context_bytes=flight_context_bytes())
     if shore is None and flies_in_c(science):
         record = CFlight(mission, step, science, gauge.billing, mission.battery.energy_j,
-                         config).fly(progress)
+                         config).fly(progress, keep_interrupted)
     else:
         hook = None
         if shore is not None:
             hook = _surfacing(shore, step.update_plan(shore.key), gauge, science.glider,
                               mission)
         record = simulate(mission, step, science, config, progress, gauge=gauge,
-                          on_surfacing=hook)
+                          on_surfacing=hook, keep_interrupted=keep_interrupted)
         record.entry_variables, record.events_fired = step.entry_variables, step.events_fired
         record.suspends = step.suspends
     record.envelope = located(step.envelope_notes, mission)

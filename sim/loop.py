@@ -199,12 +199,15 @@ class SurfacingHook(Protocol):
 
 def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceComputer,
              config: RunConfig, progress: Callable[[float, float], None] | None = None,
-             gauge: Gauge | None = None, on_surfacing: SurfacingHook | None = None
-             ) -> RunRecord:
+             gauge: Gauge | None = None, on_surfacing: SurfacingHook | None = None,
+             keep_interrupted: bool = False) -> RunRecord:
     """Run the loop until the mission exits (or its energy guard ends it), the runtime
-    faults or the duration ends. `gauge` gives the science computer its `energy_left`
-    reading (NaN without one). `on_surfacing` is called once per surfacing, before the
-    first tick flown after the loop sees the glider at the surface."""
+    faults or the duration ends. KeyboardInterrupt (Ctrl-C, SIGTERM) goes through, but
+    with `keep_interrupted` it ends the run, which the record says ("interrupted"): the
+    caller writes the part flown and marks it partial (never a result of its own).
+    `gauge` gives the science computer its `energy_left` reading (NaN without one).
+    `on_surfacing` is called once per surfacing, before the first tick flown after the
+    loop sees the glider at the surface."""
     names = tuple(s.name for s in mission.states)
     glider = science.glider
     tick_s = config.tick_s
@@ -279,6 +282,8 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
                 progress(time_s, last_tick * tick_s)
             tick += 1
     except KeyboardInterrupt:  # keep what was flown: the caller writes it out
+        if not keep_interrupted:
+            raise
         ended = "interrupted"
     arrays = columns.arrays()
     n = len(arrays["state"])

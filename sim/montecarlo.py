@@ -212,32 +212,38 @@ def batches(count: int, first_s: float, workers: int) -> list[list[int]]:
 def run_montecarlo(job: Job, count: int, executor: cf.Executor | None = None, workers: int = 1,
                    progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
     """Fly `count` scenarios: in this process without an executor, else batches through
-    `executor` (with `workers` workers). Ctrl-C stops it and keeps what finished."""
+    `executor` (with `workers` workers). Ctrl-C or SIGTERM stops it at once (workers and
+    all: sim.backends.halt) and keeps the scenarios that finished, never one cut short;
+    the result says it was interrupted."""
+    from gliderplan.contract import interrupts
+    from gliderplan.sim.backends import gather, halt
+
     start = time.perf_counter()
     rows: dict[int, dict] = {}
-    interrupted = False
-    futures: set[cf.Future] = set()
+
+    def collect(task: tuple, flown: list[dict]) -> None:
+        rows.update((row["scenario"], row) for row in flown)
+        if progress:
+            progress(len(rows), count)
+
     try:
         t0 = time.perf_counter()
         rows[0] = fly_scenario(job, 0)
         if progress:
             progress(1, count)
         plan = batches(count, time.perf_counter() - t0, workers)
-        if executor is None:
-            for batch in plan:
-                rows.update((r["scenario"], r) for r in run_batch(job, batch))
-                if progress:
-                    progress(len(rows), count)
-        else:
-            futures = {executor.submit(run_batch, job, batch) for batch in plan}
-            for future in cf.as_completed(futures):
-                rows.update((r["scenario"], r) for r in future.result())
-                if progress:
-                    progress(len(rows), count)
+        if executor is None:  # scenario by scenario: a stop keeps each one that finished
+            plan = [[index] for batch in plan for index in batch]
+        interrupted = gather(executor, run_batch, [(job, batch) for batch in plan], collect)
     except KeyboardInterrupt:
         interrupted = True
-        for future in futures:
-            future.cancel()
+        halt(executor)
+    # a stop that something on the way swallowed still stops the run; a scenario whose
+    # flight says it was interrupted is no scenario flown
+    cut = [i for i, row in rows.items() if row["ended"] == "interrupted"]
+    interrupted = interrupted or interrupts.stopped() or bool(cut)
+    for i in cut:
+        del rows[i]
     ordered = [rows[i] for i in sorted(rows)]
     return MonteCarloResult(ordered, count, interrupted, time.perf_counter() - start)
 
@@ -256,11 +262,15 @@ def wilson_interval(held: int, n: int, z: float = CONFIDENCE_Z) -> tuple[float, 
 
 def summary(result: MonteCarloResult, meta: dict) -> dict:
     """Probability that the budget holds with its 95 % interval, energy and duration
-    quantiles, how the runs ended."""
+    quantiles, how the runs ended. An interrupted run gives no probability (null): the
+    scenarios that finished before the stop are not the sample asked for (the moment of
+    a stop is chosen watching the run, and in a pool the short scenarios finish first);
+    `complete` false, `scenarios` of `requested` say how far it got."""
     table = result.table()
     n = len(table)
     held = int(table["held"].sum()) if n else 0
     low, high = wilson_interval(held, n)
+    complete = not result.interrupted
 
     def quantiles(column: str) -> dict[str, float]:
         if not n:
@@ -270,15 +280,16 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
                                                                    strict=True)}
 
     exhausted = table["exhausted_s"].dropna() if n else table
-    replanned = replanning(table) if n and "held_static" in table else {}
+    replanned = replanning(table, complete) if n and "held_static" in table else {}
     return {
         **meta,
+        "complete": complete,
         "scenarios": n,
         "requested": result.requested,
         "interrupted": result.interrupted,
         "budget_held": held,
-        "probability_budget_holds": held / n if n else None,
-        "probability_interval_95": [low, high],
+        "probability_budget_holds": held / n if n and complete else None,
+        "probability_interval_95": [low, high] if complete else None,
         "energy_j": quantiles("energy_j"),
         "duration_s": quantiles("duration_s"),
         # scenarios whose energy passed the plan's budget times the usable share of the
@@ -294,18 +305,27 @@ def summary(result: MonteCarloResult, meta: dict) -> dict:
     }
 
 
-def replanning(table) -> dict:  # noqa: ANN001
+def replanning(table, complete: bool = True) -> dict:  # noqa: ANN001
     """With replanning: the hold rate and the flown quality with and without it, side by
     side (95 % intervals), and what the link carried: bytes each way per day and per
-    mission (means over the scenarios, and the most), the largest update."""
+    mission (means over the scenarios, and the most), the largest update. Not
+    `complete` (interrupted), the hold rates and their intervals are None: the scenarios
+    that finished are not the sample asked for (as `summary`'s probability)."""
     n = len(table)
     held, held_static = int(table["held"].sum()), int(table["held_static"].sum())
     days = np.maximum(table["duration_s"].to_numpy(float), 1.0) / 86400.0
     up, down = table["up_bytes"].to_numpy(float), table["down_bytes"].to_numpy(float)
+
+    def rate(count: int) -> float | None:
+        return count / n if complete else None
+
+    def interval(count: int) -> list[float] | None:
+        return list(wilson_interval(count, n)) if complete else None
+
     return {
-        "hold_rate": held / n, "hold_rate_interval_95": list(wilson_interval(held, n)),
-        "hold_rate_static": held_static / n,
-        "hold_rate_static_interval_95": list(wilson_interval(held_static, n)),
+        "hold_rate": rate(held), "hold_rate_interval_95": interval(held),
+        "hold_rate_static": rate(held_static),
+        "hold_rate_static_interval_95": interval(held_static),
         "quality": float(table["quality"].mean()),
         "quality_static": float(table["quality_static"].mean()),
         "update_bytes_max": int(table["update_bytes_max"].max()),
@@ -338,32 +358,43 @@ class MonteCarloRun:
     result: MonteCarloResult
     summary: dict  # summary.json: the probability that the budget holds, quantiles, ...
     files: tuple  # of pathlib.Path: MONTECARLO_FILES in the output directory
+    # a stop signal arrived once every scenario had flown, while they were written: the
+    # files hold the whole run, and the command stops (exit 130 or 143) all the same
+    stopped: bool = False
 
 
 def montecarlo_mission(setup: FlightSetup, output_dir, *, scenarios: int,
                        workers: int = 1, scheduler: str | None = None, scenario_file=None,
                        progress: Callable[[int, int], None] | None = None,
-                       replan: bool = False, confidence: float | None = None
-                       ) -> MonteCarloRun:
+                       replan: bool = False, confidence: float | None = None,
+                       force: bool = False, mission_path=None) -> MonteCarloRun:
     """Fly the mission of `setup` (sim.setup.flight_setup: its plan's budget and
     prediction, or without one every sensor a state logs on and the budget the mission's
     usable battery; its seed, duration, tracker and start) in `scenarios` scenarios drawn
     from `scenario_file` (default: the shipped one) from the set-up's seed, on `workers`
     processes or the Dask `scheduler` ("local" or "tcp://HOST:PORT"); write
-    MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`).
+    MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`), a folder
+    written whole (contract.files.output_folder: `force` replaces one holding other files
+    than a gliderplan run's; `mission_path`, the mission's file, is refused inside, as
+    every file the run reads).
     `replan`: each scenario is flown twice, with the plan alone and with the shore in the
     loop replanning the rest at each surfacing at `confidence` (default: the plan's own),
-    its prior the scenario file without its drift (sim/replanning.py); the vehicle holds
-    the set-up's key (the plan signed with it) or one made for the run. The summary
-    then holds `hold_rate`, `hold_rate_static`, `quality`, `quality_static`,
-    `update_bytes_max` and what the link carried (`replanning`).
-    Raises KeyboardInterrupt only if no scenario finished: an interrupted run keeps and
-    writes those that did (`MonteCarloRun.result.interrupted`)."""
+    its prior the scenario file without its drift (sim/replanning.py), both from the plan
+    at that confidence (a plan that states another, or none, is replanned before launch:
+    `plan_at_confidence`); the vehicle holds the set-up's key (the plan signed with it)
+    or one made for the run. The summary then holds `hold_rate`, `hold_rate_static`,
+    `quality`, `quality_static`, `update_bytes_max` and what the link carried
+    (`replanning`).
+    Raises KeyboardInterrupt if no scenario finished, or on a second stop while the files
+    are written: an interrupted run keeps and writes those that did, marked partial and
+    with no probability nor hold rate (`MonteCarloRun.result.interrupted`, summary.json's
+    `complete`)."""
     import json
     from pathlib import Path
 
+    from gliderplan.contract import interrupts
     from gliderplan.contract.errors import UsageError
-    from gliderplan.contract.files import write_atomically
+    from gliderplan.contract.files import output_folder
     from gliderplan.sim import plots
     from gliderplan.sim.backends import check_run_size, scenario_executor
     from gliderplan.sim.outputs import parquet_bytes
@@ -376,37 +407,55 @@ def montecarlo_mission(setup: FlightSetup, output_dir, *, scenarios: int,
     spec = read_spec(scenario_file)
     mission, plan_path = setup.mission, setup.options.plan_path
     held = key = None
-    if replan:
-        held, key = _vehicle_plan(plan_path, setup.key)
-    job = Job(setup, spec, held=held, key=key, confidence=confidence)
-    with scenario_executor(workers, scheduler) as executor:
-        result = run_montecarlo(job, scenarios, executor, workers, progress)
-    if not result.rows:
-        raise KeyboardInterrupt  # nothing finished, nothing to write
-    import pyarrow as pa
+    launched = {}
+    if replan:  # both flights planned at one confidence: the plan alone, and replanned
+        from gliderplan.planner.planfile import read_plan_bytes
+        from gliderplan.sim.replanning import plan_at_confidence
 
-    table = result.table()
-    meta = {"mission": mission.name, "mission_hash": mission.hash,
-            "plan": None if plan_path is None else str(plan_path),
-            "scenario_file": spec.source, "seed": setup.config.seed,
-            "run_limit_s": setup.config.duration_s, "budget_j": setup.budget_j,
-            "workers": workers,
-            "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
-            "scheduler": scheduler or ("local pool" if workers > 1 else "none"),
-            "replan": replan}
-    stated = summary(result, meta)
-    contents = {
-        "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table, preserve_index=False)),
-        "summary.json": json.dumps(stated, indent=2) + "\n",
-        "energy.png": plots.energy_histogram_png(
-            table["energy_j"].to_numpy(float), table["budget_j"].to_numpy(float), setup.budget_j,
-            stated["probability_budget_holds"]),
-        "exhaustion.png": plots.exhaustion_png(
-            table["exhausted_s"].to_numpy(float), table["duration_s"].to_numpy(float)),
-    }
-    for name in MONTECARLO_FILES:
-        write_atomically(out / name, contents[name])
-    return MonteCarloRun(result, stated, tuple(out / name for name in MONTECARLO_FILES))
+        held, key = _vehicle_plan(plan_path, setup.key)
+        held, confidence, how = plan_at_confidence(mission, held, key, confidence=confidence,
+                                                   spec=spec.model())
+        setup = replace(setup, plan=read_plan_bytes(held, mission))
+        launched = {"confidence": confidence, "plan_flown": how}
+    job = Job(setup, spec, held=held, key=key, confidence=confidence)
+    # Stopped while scenarios fly, the run keeps those that finished; once they are all
+    # flown a stop waits while they are written (a second one abandons the writing and
+    # leaves the folder's previous run).
+    with interrupts.deferred(armed=False) as writing, \
+            output_folder(out, command="montecarlo", force=force, recognised=MONTECARLO_FILES,
+                          inputs=(mission_path, *setup.inputs, scenario_file)) as folder:
+        with scenario_executor(workers, scheduler) as executor:
+            result = run_montecarlo(job, scenarios, executor, workers, progress)
+            writing.arm()
+        if not result.rows:
+            raise KeyboardInterrupt  # nothing finished, nothing to write
+        import pyarrow as pa
+
+        table = result.table()
+        meta = {"mission": mission.name, "mission_hash": mission.hash,
+                "plan": None if plan_path is None else str(plan_path),
+                "scenario_file": spec.source, "seed": setup.config.seed,
+                "run_limit_s": setup.config.duration_s, "budget_j": setup.budget_j,
+                "workers": workers,
+                "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
+                "scheduler": scheduler or ("local pool" if workers > 1 else "none"),
+                "replan": replan, **launched}
+        stated = summary(result, meta)
+        contents = {
+            "scenarios.parquet": parquet_bytes(pa.Table.from_pandas(table,
+                                                                    preserve_index=False)),
+            "summary.json": json.dumps(stated, indent=2) + "\n",
+            "energy.png": plots.energy_histogram_png(
+                table["energy_j"].to_numpy(float), table["budget_j"].to_numpy(float),
+                setup.budget_j, stated["probability_budget_holds"], requested=scenarios),
+            "exhaustion.png": plots.exhaustion_png(
+                table["exhausted_s"].to_numpy(float), table["duration_s"].to_numpy(float)),
+        }
+        for name in MONTECARLO_FILES:
+            folder.write(name, contents[name])
+        folder.complete = not result.interrupted
+    return MonteCarloRun(result, stated, tuple(folder.final(n) for n in MONTECARLO_FILES),
+                         stopped=writing.requested)
 
 
 def _vehicle_plan(plan_path, key: bytes | None) -> tuple[bytes, bytes]:  # noqa: ANN001

@@ -166,6 +166,14 @@ def _bounds_wkt(lat: np.ndarray, lon: np.ndarray) -> str:
     return "POLYGON ((" + ", ".join(f"{a:.6f} {b:.6f}" for a, b in corners) + "))"
 
 
+def _partial(meta: dict) -> str:
+    """What the attributes add for a run interrupted in flight (a partial run)."""
+    if meta.get("ended") != "interrupted":
+        return ""
+    return (f" PARTIAL RUN: interrupted after {float(meta.get('simulated_s', 0.0)):g} s of "
+            "mission time; the flight did not end.")
+
+
 def global_attributes(s: Series, metadata: dict[str, str], conventions: str,
                       compact_dates: bool = False) -> dict:
     """ACDD-1.3 (and the Glider DAC's, OG1's) global attributes of a run."""
@@ -189,9 +197,9 @@ def global_attributes(s: Series, metadata: dict[str, str], conventions: str,
             f"{s.meta.get('runtime', 'python')}, ocean {s.meta.get('ocean', 'bench')}, seed "
             f"{s.meta.get('seed', 0)}): positions, depth, pressure and the CTD's "
             "temperature, salinity, conductivity and density at every tick of the science "
-            "computer.")),
+            "computer.")) + _partial(s.meta),
         "comment": info.get("comment", f"simulated, not observed; mission hash "
-                                       f"{s.meta.get('mission_hash', '')}"),
+                                       f"{s.meta.get('mission_hash', '')}") + _partial(s.meta),
         "keywords": "Oceans > Ocean Temperature > Water Temperature, Oceans > Ocean Pressure "
                     "> Water Pressure, Oceans > Salinity/Density > Salinity, Oceans > "
                     "Salinity/Density > Conductivity, Oceans > Salinity/Density > Density",

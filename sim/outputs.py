@@ -107,6 +107,11 @@ def parquet_bytes(table, dictionary: tuple[str, ...] = ()) -> bytes:
     return sink.getvalue()
 
 
+def simulated_s(record: RunRecord) -> float:
+    """[s] mission time of the last tick flown (0 before the first)."""
+    return float(record.columns["time_s"][-1]) if len(record.columns["time_s"]) else 0.0
+
+
 def surfacing_fixes(record: RunRecord) -> list[dict]:
     """Each surfacing's GPS fix: time [s] and true position [deg], on the first tick of
     its Iridium call (the fix comes just before it)."""
@@ -145,8 +150,9 @@ def summary(record: RunRecord, energy: RunEnergy, check: FlightCheck, plan: Plan
     data = {
         **meta,
         "ended": record.ended,
-        "simulated_s": float(record.columns["time_s"][-1]) if len(record.columns["time_s"])
-        else 0.0,
+        # False: interrupted in flight, the files hold the part flown (to simulated_s)
+        "complete": record.ended != "interrupted",
+        "simulated_s": simulated_s(record),
         "transitions": len(record.trace),
         "envelope": record.envelope,
         "surfacings": record.surfacings,

@@ -1,6 +1,6 @@
 """The runtime's library routines in Python, exactly as docs/pilot.md specifies them:
 flight profiles (yo, thermotrackyo, surface, hover; on a propeller cruise, altitude),
-routes (nav, noheading, waypoints, sweep, goto_list) and the plan's schedule (sensor
+routes (nav, noheading, heading, waypoints, sweep, goto_list) and the plan's schedule (sensor
 power windows, profile alternation).
 
 Each routine is a small object with the pilot's memory (leg, tracked band, waypoint
@@ -22,6 +22,7 @@ from gliderplan.contract import (
     WAYPOINT_RADIUS_M,
     YO_ALTITUDE_ARG,
 )
+from gliderplan.language.registry import held_heading_rad
 from gliderplan.sim.geo import bearing_rad, ddmm_to_degrees, offset_m
 
 if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
@@ -239,12 +240,32 @@ def length_m(north_m: float, east_m: float) -> float:
 class NoHeading:
     k = 0  # no waypoint: nothing to resume
     reached = 0  # waypoints reached (the runtime's `wptreached`): never one
+    holds = False  # whether its heading is held uncorrected for the current
 
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
         pass
 
     def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
         return 0.0, False
+
+    def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
+        return math.nan
+
+
+class Heading:
+    """heading(deg): a compass heading held as it is, with or without a position fix;
+    the glider's current correction leaves it alone (FLAG_HEADING_HOLD): Slocum's
+    set_heading. No waypoint: nothing to reach or resume."""
+
+    k = 0
+    reached = 0
+    holds = True
+
+    def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
+        self.heading_rad = held_heading_rad(params[0])
+
+    def heading(self, lat_ddmm: float, lon_ddmm: float) -> tuple[float, bool]:
+        return self.heading_rad, True
 
     def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
         return math.nan
@@ -257,6 +278,7 @@ class Waypoints:
 
     radius_m = WAYPOINT_RADIUS_M
     loops = False
+    holds = False
     arrives = True  # False: a heading only, no waypoint is ever reached (nav)
 
     def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
@@ -385,8 +407,8 @@ def _clip(hull: list[tuple[float, float]], y: float) -> tuple[float, float] | No
     return (min(xs), max(xs)) if xs else None
 
 
-ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "waypoints": Waypoints, "sweep": Sweep,
-                  "goto_list": GotoList}
+ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "heading": Heading,
+                  "waypoints": Waypoints, "sweep": Sweep, "goto_list": GotoList}
 
 
 # ---- the plan's schedule ---------------------------------------------------------------

@@ -199,9 +199,10 @@ def _png(fig, plt) -> bytes:
 # ---- Monte Carlo -----------------------------------------------------------------------
 
 def energy_histogram_png(energy_j: np.ndarray, budget_j: np.ndarray, nominal_budget_j: float,
-                         held_share: float) -> bytes:
+                         held_share: float | None, requested: int | None = None) -> bytes:
     """Energy spent in each scenario against the budget: the plan's budget as a line, the
-    range of the scenarios' own budgets (their batteries differ) as a band."""
+    range of the scenarios' own budgets (their batteries differ) as a band. `held_share`
+    None: an interrupted run (`requested` scenarios asked for), which gives no share."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     ax.hist(energy_j / 1e3, bins=min(50, max(10, len(energy_j) // 10)), color="tab:blue",
@@ -213,7 +214,10 @@ def energy_histogram_png(energy_j: np.ndarray, budget_j: np.ndarray, nominal_bud
     ax.axvline(nominal_budget_j / 1e3, color="red", lw=1.5, label="plan budget")
     ax.set_xlabel("energy spent [kJ]")
     ax.set_ylabel("scenarios")
-    ax.set_title(f"energy per scenario: the budget held in {100 * held_share:.1f} %")
+    ax.set_title(f"energy per scenario: the budget held in {100 * held_share:.1f} %"
+                 if held_share is not None else
+                 f"PARTIAL: interrupted after {len(energy_j)} of {requested or '?'} scenarios "
+                 "(no share held)")
     ax.legend(fontsize=8)
     return _png(fig, plt)
 

@@ -31,7 +31,8 @@ from gliderplan.contract import (
 from gliderplan.language import ir
 from gliderplan.planner.plan import PlanningError
 from gliderplan.planner.planfile import read_plan_bytes
-from gliderplan.planner.replan import Replanner
+from gliderplan.planner.replan import Replanner, stated_confidence
+from gliderplan.planner.speed import Leg
 from gliderplan.planner.update import UpdateError, apply_update, make_updates
 from gliderplan.power_models.battery import drawn_budget_j
 from gliderplan.power_models.posterior import DischargeCurve
@@ -49,6 +50,7 @@ from gliderplan.sim.geo import degrees_to_ddmm
 from gliderplan.sim.loop import Columns
 
 MAX_UPDATES = 2  # a replan's changes may take this many updates at one surfacing
+LAUNCH_UPDATES = 64  # before launch the plan goes on by cable: no message limit to keep
 
 
 @dataclass
@@ -93,15 +95,17 @@ class ShoreLoop:
     at the start, `key` the vehicle's. `usable_truth`: the share of its rating the
     simulated battery really holds (what its voltage tells); `confidence`, `spec`: as for
     `Replanner` (its prior); the rest of the mission is planned at the least energy when
-    the budget left cannot hold it at the confidence."""
+    the budget left cannot hold it at the confidence. `legs`: the water the shore knows
+    the vehicle flies (planner/water.py), its speeds and thrusts chosen anew in it."""
 
     def __init__(self, mission: ir.CheckedMission, held: bytes, key: bytes, *,
                  tick_s: float, usable_truth: float = 1.0, seed: int = 0,
                  confidence: float | None = None, spec=None,  # noqa: ANN001
-                 if_infeasible: str = "least-energy", check=None) -> None:  # noqa: ANN001
+                 if_infeasible: str = "least-energy", check=None,  # noqa: ANN001
+                 legs: dict[str, tuple[Leg, ...]] | None = None) -> None:
         self.mission, self.key, self.tick_s = mission, key, tick_s
         self.replanner = Replanner(mission, held, confidence=confidence, spec=spec,
-                                   if_infeasible=if_infeasible)
+                                   if_infeasible=if_infeasible, legs=legs)
         self.held = held  # the plan the shore knows the vehicle holds
         self.sent: dict[int, bytes] = {}  # seq -> the plan file an update sent makes
         self.names = tuple(s.name for s in mission.states)
@@ -207,6 +211,28 @@ class ShoreLoop:
         else:
             self.log.refused += 1
             self.log.refusals.append(f"{status.name.lower()}: {message}")
+
+
+def plan_at_confidence(mission: ir.CheckedMission, held: bytes, key: bytes, *,
+                       confidence: float | None, spec) -> tuple[bytes, float, str]:  # noqa: ANN001
+    """The plan to launch with so that flying it alone and replanning it at each surfacing
+    are both planned at one confidence: `held` itself if it was planned at `confidence`
+    (`plan --confidence`; None: the plan's own, else the default), else `held` replanned
+    before launch by the shore's model at that confidence against the prior (`spec`), as
+    the signed plan file its updates make. (plan file, confidence, how it was made); a
+    PlanningError when the budget cannot hold the mission at that confidence."""
+    replanner = Replanner(mission, held, confidence=confidence, spec=spec, once=True)
+    p = replanner.confidence
+    if stated_confidence(replanner.plan) == p:
+        return held, p, f"the plan as given, planned at confidence {p:g}"
+    try:
+        result = replanner.at_launch(held)
+    except PlanningError as err:
+        raise PlanningError(f"before launch: {err}") from None
+    chain = make_updates(held, result.target, key, max_updates=LAUNCH_UPDATES,
+                         check=lambda data: read_plan_bytes(data, mission))
+    return chain.plan_file, p, (f"the plan replanned before launch at confidence {p:g} "
+                                "(the shore's model, the prior figures)")
 
 
 class PythonVehicle:

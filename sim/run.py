@@ -9,8 +9,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gliderplan.contract import interrupts
 from gliderplan.contract.errors import UsageError
-from gliderplan.contract.files import write_atomically
+from gliderplan.contract.files import output_folder
 from gliderplan.planner.planfile import Plan
 
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
@@ -24,6 +25,10 @@ RUN_FILES = ("trace.csv", "timeseries.parquet", "summary.json", "depth.png", "en
 NETCDF_FILE = "trajectory.nc"  # with netcdf=True
 REPLANS_FILE = "replans.csv"  # with replan_every: what each surfacing did
 REPLAN_EVERY = ("surfacing",)
+# what a run's folder may hold (its files, `gliderplan export`'s): a folder holding only
+# these is taken for an earlier run (one written before folders carried their marker)
+RECOGNISED_FILES = (*RUN_FILES, NETCDF_FILE, "trajectory_og1.nc", "trajectory_cf.nc",
+                    "track.geojson", "track.kml", REPLANS_FILE)
 
 
 @dataclass(frozen=True)
@@ -34,14 +39,18 @@ class RunResult:
     energy: RunEnergy  # every component's energy, per tick and per state [J]
     check: FlightCheck  # the flight against the plan ("no plan" without one)
     plan: Plan | None
-    files: tuple[Path, ...]  # the run's files, written atomically
+    files: tuple[Path, ...]  # the run's files, written into their folder whole
     water_notes: tuple[str, ...] = ()  # the sea floor, where the glider reached it
+    # a stop signal arrived once the flight was over, while its files were written: they
+    # hold the whole flight, and the command stops (exit 130 or 143) all the same
+    stopped: bool = False
     replanning: dict | None = None  # with replan_every: what crossed the link (summary.json's)
     current_notes: tuple[str, ...] = ()  # the currents flown, and warnings about them
     currents: CurrentField | None = None  # the field flown (None: none, or a constant)
 
     @property
     def interrupted(self) -> bool:
+        """The flight was cut short by a stop signal: the files hold the part flown."""
         return self.record.ended == "interrupted"
 
 
@@ -57,9 +66,13 @@ def grounding(record: RunRecord) -> dict | None:
 def run_mission(setup: FlightSetup, output_dir: str | Path, *, netcdf: bool = False,
                 progress: Callable[[float, float], None] | None = None, plots: bool = True,
                 replan_every: str | None = None, confidence: float | None = None,
-                scenario_file: str | Path | None = None) -> RunResult:
+                scenario_file: str | Path | None = None, force: bool = False,
+                mission_path: str | Path | None = None) -> RunResult:
     """Fly the mission of `setup` (sim.setup.flight_setup: its plan, vehicle, water,
-    runtime, faults) on the simulated glider and write RUN_FILES into `output_dir`.
+    runtime, faults) on the simulated glider and write RUN_FILES into `output_dir`, a
+    folder written whole (contract.files.output_folder; `force`: replace a folder that
+    holds other files than a gliderplan run's; `mission_path`, the mission's file, is
+    refused inside it, as every file the run reads).
 
     `netcdf`: also write trajectory.nc (sim.export). `progress(done_s, total_s)` is
     called on long runs, whose plots a second process draws (sim/plotter.py).
@@ -72,9 +85,11 @@ def run_mission(setup: FlightSetup, output_dir: str | Path, *, netcdf: bool = Fa
     for the run, with which the plan is signed; summary.json's `replanning` says what
     crossed the link, and replans.csv what each surfacing did.
 
-    Raises a GliderplanError (a missing or bad file, a runtime that cannot be built);
-    KeyboardInterrupt only if nothing was flown: a run interrupted later keeps and writes
-    the part flown (`RunResult.interrupted`).
+    Raises a GliderplanError (a missing or bad file, a runtime that cannot be built, a
+    folder that cannot be written); KeyboardInterrupt if nothing was flown, or on a second
+    stop signal while the files are written (the folder then keeps its previous run): a
+    run interrupted in flight keeps and writes the part flown, marked partial
+    (`RunResult.interrupted`, summary.json's `complete`).
     """
     from gliderplan.sim import energy as accounting
     from gliderplan.sim import export, outputs
@@ -89,6 +104,7 @@ def run_mission(setup: FlightSetup, output_dir: str | Path, *, netcdf: bool = Fa
     mission, options, plan, vehicle = setup.mission, setup.options, setup.plan, setup.vehicle
     config, runtime, water = setup.config, setup.runtime, setup.water.ocean
     plan_path, key_path = options.plan_path, options.key_path
+    read = (mission_path, *setup.inputs, scenario_file)  # refused inside the folder replaced
     shore = None
     if replan_every is not None:
         shore, plan_path, key_path = _shore(setup, replan_every, confidence, scenario_file)
@@ -103,68 +119,82 @@ def run_mission(setup: FlightSetup, output_dir: str | Path, *, netcdf: bool = Fa
         if progress is not None:
             progress(done_s, total_s)
 
-    try:
-        record = fly(mission, water, config, vehicle, plan, None if plan_path is None
-                     else str(plan_path), runtime, robust_tracker=setup.robust_tracker,
-                     progress=progressed, key_path=None if key_path is None else str(key_path),
-                     state_dir=options.state_dir, faults=setup.faults, shore=shore)
-        if not len(record.columns["time_s"]):
-            raise KeyboardInterrupt  # nothing flown, nothing to write
-        used = accounting.account(record, mission, vehicle, plan)
-        check = accounting.check_flight(used, plan)
-        contents = {}
-        if plots:
-            series = drawing.depth_series(record), drawing.energy_series(record, used, plan)
+    # The first stop signal during the flight ends it (the record says "interrupted");
+    # once the flight is over, one waits while what was flown is written (a second one
+    # abandons it, leaving the folder's previous run): the run is written whole or not.
+    with interrupts.deferred(armed=False) as writing, \
+            output_folder(out, command="sim", force=force, recognised=RECOGNISED_FILES,
+                          inputs=read) as folder:
+        try:
+            record = fly(mission, water, config, vehicle, plan, None if plan_path is None
+                         else str(plan_path), runtime, robust_tracker=setup.robust_tracker,
+                         progress=progressed,
+                         key_path=None if key_path is None else str(key_path),
+                         state_dir=options.state_dir, faults=setup.faults, shore=shore,
+                         keep_interrupted=True)
+            writing.arm()
+            if not len(record.columns["time_s"]):
+                raise KeyboardInterrupt  # nothing flown, nothing to write
+            used = accounting.account(record, mission, vehicle, plan)
+            check = accounting.check_flight(used, plan)
+            contents = {}
+            if plots:
+                series = drawing.depth_series(record), drawing.energy_series(record, used, plan)
+                if plotter is not None:
+                    plotter.draw(*series)  # drawn there while the other files are written here
+                else:
+                    contents["depth.png"] = drawing.depth_png(series[0])
+                    contents["energy.png"] = drawing.energy_png(series[1])
+            meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
+                    "ocean": options.ocean or "bench", "water_density": setup.density_note,
+                    "noise": options.noise, "tracker": options.tracker, "seed": config.seed,
+                    "tick_s": config.tick_s,
+                    "plan": None if plan_path is None else str(plan_path),
+                    "vehicle": mission.vehicle, "start_utc": utc_text(config.start_epoch_s),
+                    "currents": options.currents or "none",
+                    "sea_floor": setup.water.floor_note, "grounded": grounding(record),
+                    "current_mps": {"north": config.current.north_mps,
+                                    "east": config.current.east_mps},
+                    "run_limit_s": config.duration_s}
+            if shore is not None:
+                flown_s = float(record.columns["time_s"][-1]) + config.tick_s
+                meta["replanning"] = {"every": replan_every,
+                                      "confidence": shore.replanner.confidence,
+                                      **shore.log.summary(flown_s)}
+                contents[REPLANS_FILE] = _replans_csv(shore.log.events)
+            columns = record.columns  # the water's salinity where the glider was: the CTD's
+            salinity = water.salinity_psu(columns["depth_m"], columns["time_s"])
+            table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
+            contents["trace.csv"] = outputs.trace_csv(record.trace)
+            contents["timeseries.parquet"] = outputs.parquet_bytes(
+                table, dictionary=outputs.TIMESERIES_DICTIONARY)
+            contents["summary.json"] = outputs.summary(record, used, check, plan, meta)
+            if record.events_log is not None:
+                contents["events.log"] = record.events_log
+            if netcdf:
+                contents[NETCDF_FILE] = export.netcdf_bytes(
+                    table.to_pandas(), {**meta, "ended": record.ended,
+                                        "simulated_s": outputs.simulated_s(record)})
             if plotter is not None:
-                plotter.draw(*series)  # drawn there while the other files are written here
-            else:
-                contents["depth.png"] = drawing.depth_png(series[0])
-                contents["energy.png"] = drawing.energy_png(series[1])
-        meta = {"mission": mission.name, "mission_hash": mission.hash, "runtime": runtime,
-                "ocean": options.ocean or "bench", "water_density": setup.density_note,
-                "noise": options.noise, "tracker": options.tracker, "seed": config.seed,
-                "tick_s": config.tick_s,
-                "plan": None if plan_path is None else str(plan_path),
-                "vehicle": mission.vehicle, "start_utc": utc_text(config.start_epoch_s),
-                "currents": options.currents or "none",
-                "sea_floor": setup.water.floor_note, "grounded": grounding(record),
-                "current_mps": {"north": config.current.north_mps,
-                                "east": config.current.east_mps}}
-        if shore is not None:
-            flown_s = float(record.columns["time_s"][-1]) + config.tick_s
-            meta["replanning"] = {"every": replan_every,
-                                  "confidence": shore.replanner.confidence,
-                                  **shore.log.summary(flown_s)}
-            contents["replans.csv"] = _replans_csv(shore.log.events)
-        columns = record.columns  # the water's salinity where the glider was: the CTD's
-        salinity = water.salinity_psu(columns["depth_m"], columns["time_s"])
-        table = outputs.timeseries_table(record, used, mission.battery.energy_j, salinity)
-        contents["trace.csv"] = outputs.trace_csv(record.trace)
-        contents["timeseries.parquet"] = outputs.parquet_bytes(
-            table, dictionary=outputs.TIMESERIES_DICTIONARY)
-        contents["summary.json"] = outputs.summary(record, used, check, plan, meta)
-        if record.events_log is not None:
-            contents["events.log"] = record.events_log
-        if netcdf:
-            contents[NETCDF_FILE] = export.netcdf_bytes(table.to_pandas(), meta)
-        if plotter is not None:
-            contents["depth.png"], contents["energy.png"] = plotter.pngs()
-    finally:
-        if plotter is not None:
-            plotter.close()
-        if getattr(shore, "workdir", None) is not None:
-            shore.workdir.cleanup()
-    written = [name for name in (*RUN_FILES, REPLANS_FILE, NETCDF_FILE) if name in contents]
-    for name in written:
-        write_atomically(out / name, contents[name])
+                contents["depth.png"], contents["energy.png"] = plotter.pngs()
+        finally:
+            if plotter is not None:
+                plotter.close()
+            if getattr(shore, "workdir", None) is not None:
+                shore.workdir.cleanup()
+        written = [name for name in (*RUN_FILES, REPLANS_FILE, NETCDF_FILE) if name in contents]
+        for name in written:
+            folder.write(name, contents[name])
+        folder.complete = record.ended != "interrupted"
     notes = [setup.density_note, setup.water.floor_note]
     if record.grounded_ticks:
         notes.append(f"the glider reached the sea floor at {record.first_grounded_s:g} s and "
                      f"stopped there, {record.grounded_ticks} ticks in all (a yo deeper than "
                      "the water: give it an altimeter stop, yo's fifth argument)")
-    return RunResult(record, used, check, plan, tuple(out / name for name in written),
-                     tuple(notes), meta.get("replanning"), setup.current_notes,
-                     config.currents)
+    return RunResult(record, used, check, plan, tuple(folder.final(n) for n in written),
+                     tuple(notes), stopped=writing.requested,
+                     replanning=meta.get("replanning"), current_notes=setup.current_notes,
+                     currents=config.currents)
 
 
 def _shore(setup: FlightSetup, every: str, confidence: float | None,

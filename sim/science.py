@@ -29,6 +29,7 @@ import numpy as np
 
 from gliderplan.contract import (
     FLAG_HEADING,
+    FLAG_HEADING_HOLD,
     FLAG_SURFACE,
     FLIGHT_SENSORS_MASK,
     N_SENSORS,
@@ -230,7 +231,8 @@ class ScienceComputer:
         self.sensor_power = sensor_power
         g = self.glider
         g.step(depth_target_m, pitch_rad, ballast_cc, heading_rad,
-               bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE), speed_mps, thrust_w)
+               bool(flags & FLAG_HEADING), bool(flags & FLAG_SURFACE), speed_mps, thrust_w,
+               corrects=not flags & FLAG_HEADING_HOLD)
         if g.grounded:
             if not self.grounded_ticks:
                 self.first_grounded_s = self._time_s

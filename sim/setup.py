@@ -104,6 +104,13 @@ class FlightSetup:
     def robust_tracker(self) -> bool:
         return self.options.tracker == "robust"
 
+    @property
+    def inputs(self) -> tuple[str | Path | None, ...]:
+        """Every file or folder the flight reads (None where an option names none): a run
+        refuses to replace a folder that holds one (contract.files.output_folder)."""
+        o = self.options
+        return (o.plan_path, o.key_path, o.state_dir, _path_of(o.ocean), _path_of(o.currents))
+
 
 def flight_setup(mission: CheckedMission, options: FlightOptions = FlightOptions(), *,
                  plan: Plan | None = None, vehicle: Vehicle | None = None) -> FlightSetup:
@@ -179,6 +186,11 @@ def flight_setup(mission: CheckedMission, options: FlightOptions = FlightOptions
         usable_budget_j(mission.battery.energy_j, mission.battery.reserve_fraction)
     return FlightSetup(mission, options, plan, vehicle, given, config, runtime, budget_j,
                        fault_spec, key, density_note, tuple(field_notes))
+
+
+def _path_of(spec: str | None) -> str | None:
+    """The file or folder `--ocean` or `--currents` names (None: a preset, numbers)."""
+    return spec if spec is not None and Path(spec).exists() else None
 
 
 def check_state_dir(state_dir: Path, runtime: str) -> None:

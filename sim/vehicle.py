@@ -151,20 +151,17 @@ class GliderSim:
 
     def step(self, depth_target_m: float, pitch_rad: float, ballast_cc: float,
              heading_rad: float, heading_valid: bool, surface: bool, speed_mps: float = 0.0,
-             thrust_w: float = 0.0) -> None:
+             thrust_w: float = 0.0, corrects: bool = True) -> None:
         """Fly one tick under a command (COMMAND fields, docs/protocol.md): with a speed
         [m/s] level on the propeller, else a glide (assisted by `thrust_w` [W] of a
-        thruster) or a hover."""
+        thruster) or a hover. `corrects`: False for a heading held as it is
+        (FLAG_HEADING_HOLD), which the current correction leaves alone."""
         self.pumped_out_cc = self.pumped_in_cc = 0.0
         self.inflection = self.grounded = False
         self.propulsion_w = 0.0
         propulsion = self.vehicle.propulsion
         if heading_valid:
-            through = self.correction_speed_mps
-            if through and speed_mps > 0.0 and propulsion is not None:  # on the propeller
-                through = min(max(speed_mps, propulsion.min_speed_mps), propulsion.max_speed_mps)
-            self.heading_rad = heading_rad if not through else corrected_heading(
-                heading_rad, through, self.measured.north_mps, self.measured.east_mps)
+            self.heading_rad = self._steered(heading_rad, speed_mps) if corrects else heading_rad
         if surface and self.depth_m <= SURFACE_DEPTH_M:
             self._at_surface(self.tick_s)
             return
@@ -181,6 +178,16 @@ class GliderSim:
             depth, self.grounded = self.floor_m, True
         self.depth_m = depth
         self._drift(distance, self.tick_s)
+
+    def _steered(self, heading_rad: float, speed_mps: float) -> float:
+        """[rad] the heading flown for a course `heading_rad` under the current correction
+        (none: the course itself), at `speed_mps` on the propeller, else at the glide's."""
+        propulsion = self.vehicle.propulsion
+        through = self.correction_speed_mps
+        if through and speed_mps > 0.0 and propulsion is not None:  # on the propeller
+            through = min(max(speed_mps, propulsion.min_speed_mps), propulsion.max_speed_mps)
+        return heading_rad if not through else corrected_heading(
+            heading_rad, through, self.measured.north_mps, self.measured.east_mps)
 
     def _propelled(self, depth_target_m: float, speed_mps: float) -> tuple[float, float]:
         """One tick on the propeller at `speed_mps` through the water (held to the

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from gliderplan.cli.common import check_file
-from gliderplan.contract import TICK_S
+from gliderplan.contract import RUNTIME_CYCLES_PER_TICK, TICK_S
 from gliderplan.planner.compare import compare_boards
 from gliderplan.planner.hardware import load_hardware
 from gliderplan.planner.inputs import PlanInputError
@@ -64,8 +64,10 @@ def test_the_three_boards_with_table_i_figures_and_the_data_files_idle_powers():
     assert boards["ts5500"]["sleep_power_w"] is None  # it cannot sleep between ticks
     assert any("assumption" in note for note in data["assumptions"])
     # the workload it rests on, and the measurement beside that assumption
-    assert data["assumptions"][0].startswith("workload per tick: 200,000 cycles")
-    assert data["assumptions"][1].startswith("ts5500: the runtime's own code is 10,948 cycles")
+    assert data["assumptions"][0].startswith(
+        f"workload per tick: {RUNTIME_CYCLES_PER_TICK:,.0f} cycles")
+    assert data["assumptions"][1].startswith(
+        f"ts5500: the runtime's own code is {load_board('ts5500').runtime_code_cycles:,.0f} cycles")
 
 
 def _bench_instructions(build: str, mission: str) -> int:
@@ -86,7 +88,7 @@ def test_the_workload_says_where_it_comes_from_beside_the_runtimes_measured_code
     The TS-7800's ARM build is not measured, and the comparison says that too."""
     data = compare_json(SURVEY)
     workload = data["workload"]
-    assert workload["cycles_per_tick"] == 200_000 and workload["assumed"]
+    assert workload["cycles_per_tick"] == RUNTIME_CYCLES_PER_TICK and workload["assumed"]
     assert "an assumption (contract.RUNTIME_CYCLES_PER_TICK)" in workload["source"]
     assert "are not" in workload["source"]  # what the measurement leaves out is said
     ts5500 = load_board("ts5500")
@@ -96,24 +98,27 @@ def test_the_workload_says_where_it_comes_from_beside_the_runtimes_measured_code
     assert code["instructions_source"].startswith("bench/bench_runtime.py")
     assert code["cycles_per_instruction_source"].startswith("assumption:")
     assert "cycles_per_instruction" in data["boards"]["ts5500"]["assumptions"]
-    assert code["cycles_per_tick"] == 2737 * 4
-    assert code["share_of_workload"] == pytest.approx(2737 * 4 / 200_000)
+    own = ts5500.runtime_instructions * ts5500.cycles_per_instruction
+    assert code["cycles_per_tick"] == ts5500.runtime_code_cycles == own
+    assert code["share_of_workload"] == pytest.approx(own / RUNTIME_CYCLES_PER_TICK)
     # the rest of the tick, idle power to active power for its cycles on every tick
     mission = check_file(SURVEY).mission
     plan = plan_mission(mission, load_hardware(mission, computer="ts5500")).plan
     ticks = sum(s.time_s for s in plan.states) / TICK_S
-    rest_s = (200_000 - 2737 * 4) / 133e6
-    assert code["rest_energy_j"] == pytest.approx(ticks * (2.7 - 2.2) * rest_s, rel=1e-9)
+    rest_s = (RUNTIME_CYCLES_PER_TICK - own) / ts5500.cycles_per_s
+    assert code["rest_energy_j"] == pytest.approx(
+        ticks * (ts5500.active_w - ts5500.idle_w) * rest_s, rel=1e-9)
     for name in ("ts7800@300", "ts7800@500"):
         assert data["boards"][name]["runtime_code"] is None
     text = gliderplan("compare-sbc", SURVEY).stdout
     assert "(workload: below)" in text.splitlines()[0]
-    assert "workload per tick: 200,000 cycles, the runtime's whole 4 s tick" in text
+    assert f"workload per tick: {RUNTIME_CYCLES_PER_TICK:,.0f} cycles, the runtime's whole " \
+        f"{TICK_S:g} s tick" in text
     assert "ts7800@300, ts7800@500: the runtime's own code is not measured" in text
     given = compare_json(SURVEY, "--cycles-per-tick", "5e7", "--computer", "ts5500")
     assert not given["workload"]["assumed"]
     assert given["boards"]["ts5500"]["runtime_code"]["share_of_workload"] == \
-        pytest.approx(2737 * 4 / 5e7)
+        pytest.approx(own / 5e7)
 
 
 def test_a_board_file_gives_its_measured_code_with_what_an_instruction_costs(tmp_path):

@@ -19,7 +19,6 @@ import shutil
 import signal
 import struct
 import subprocess
-import time
 import tty
 import zlib
 from collections.abc import Iterator
@@ -27,9 +26,11 @@ from pathlib import Path
 
 import pytest
 import serial
+from waiting import wait_until
 
 from gliderplan.cli.main import main
 from gliderplan.contract import (
+    BAUD,
     FLAG_CLIMBING,
     FLAG_DONE,
     NO_STATE,
@@ -102,7 +103,7 @@ class Line:
         return self.process
 
     def link(self) -> p.Link:
-        return p.Link(p.FdPort(self.master), retransmit_s=0.2, max_retries=20)
+        return p.Link(p.FdPort(self.master), max_retries=20)
 
     def close(self) -> None:
         if self.process and self.process.poll() is None:
@@ -165,8 +166,8 @@ def test_fig2_over_a_line_the_runtime_makes_with_a_pyserial_peer(binary, tmp_pat
         ready, _, _ = select.select([process.stdout], [], [], 30)
         device = process.stdout.readline().strip() if ready else ""
         assert device.startswith("/dev/pts/"), process.stderr.read()
-        with serial.Serial(device, 115200, timeout=0) as port:
-            link = p.Link(port, retransmit_s=0.2, max_retries=20)
+        with serial.Serial(device, BAUD, timeout=0) as port:
+            link = p.Link(port, max_retries=20)
             assert link.wait_hello(30).name == "sampleMission"
             commands = fly(link, 0)
             assert link.wait_release() == ReleaseReason.MISSION_EXITED
@@ -203,6 +204,12 @@ def test_a_second_compile_comes_from_the_cache(binary, cache, tmp_path):
     assert (tmp_path / "sampleMission").read_bytes() == binary.read_bytes()
 
 
+def _touched(path: Path) -> int:
+    """The modification time [ns] the file system gives a file written now."""
+    path.touch()
+    return path.stat().st_mtime_ns
+
+
 def test_the_cache_keeps_the_most_recently_used_builds(monkeypatch, tmp_path):
     monkeypatch.setenv("GLIDERPLAN_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(build, "CACHED_BUILDS", 2)
@@ -222,7 +229,11 @@ def test_the_cache_keeps_the_most_recently_used_builds(monkeypatch, tmp_path):
         source = tmp_path / "m.mission"
         source.write_text(text.replace("2500", str(horizon)))
         assert main(["compile", str(source), "-o", str(tmp_path / str(horizon))]) == 0
-        time.sleep(0.01)  # distinct modification times
+        # the cache orders builds by modification time: the next one's must be later
+        newest = max(m.parent.stat().st_mtime_ns
+                     for m in (tmp_path / "cache").glob(f"??/*/{build.CACHE_MARKER}"))
+        wait_until(lambda newest=newest: _touched(tmp_path / "clock") > newest, 5,
+                   "the file system's clock passes the newest build's")
     built = [b.read_bytes() for b in (tmp_path / "cache").rglob("sampleMission")]
     assert len(built) == 2
     assert (tmp_path / "2500" / "sampleMission").read_bytes() in built
@@ -520,11 +531,12 @@ def test_without_a_plan_the_runtime_follows_the_missions_own_power_settings(
         "  sensors missiontime, depth, pitch, temp\n  computer clock 500 MHz\n"
         "  computer sleep between ticks\n")
     (tmp_path / "power.mission").write_text(source)
-    assert main(["compile", str(tmp_path / "power.mission"), "-o", str(tmp_path)]) == 0
+    build = tmp_path / "build"
+    assert main(["compile", str(tmp_path / "power.mission"), "-o", str(build)]) == 0
     speed, suspend = tmp_path / "scaling_setspeed", tmp_path / "power_state"
     speed.write_text("")
     suspend.write_text("")
-    process = line.start([str(tmp_path / "sampleMission"), "--clock-file", str(speed),
+    process = line.start([str(build / "sampleMission"), "--clock-file", str(speed),
                           "--suspend-file", str(suspend)])
     clocks = clocks_by_state(line.link(), speed)
     assert process.wait(30) == 0, process.stderr.read()

@@ -87,9 +87,11 @@ def test_the_milp_finds_the_brute_force_optimum(seed):
 
 def test_an_infeasible_assignment_is_none_not_a_solver_status():
     inputs = block_problem(0, gliders=3, parts=8)
-    short = assign.BlockInputs(**{**inputs.__dict__, "end_s": np.full(3, 3600.0)})
+    # by 100,000 s a glider can sweep a block or two, and the fleet not every line
+    short = assign.BlockInputs(**{**inputs.__dict__, "end_s": np.full(3, 100_000.0)})
     arcs = assign.build_arcs(short)
-    assert len(arcs) == 0 or assign.solve_milp(arcs, short.parts, short.gliders) is None
+    assert len(arcs) > 0  # the solver is asked, and finds no assignment
+    assert assign.solve_milp(arcs, short.parts, short.gliders) is None
 
 
 def test_the_equal_split_cuts_the_lines_into_equal_lengths():
@@ -186,8 +188,7 @@ def test_a_survey_the_fleet_cannot_sweep_in_time_is_refused_at_the_finish():
     text = small(**{"finish by 2 d": "finish by 20 h",
                     "spacing 2 km": "spacing 1 km"})
     err = plan_error(text)
-    assert "cannot sweep even its nearest line" in str(err) or \
-        "no way to give every glider one block" in str(err)
+    assert "glider 'bravo' cannot sweep even its nearest line in time" in str(err)
     assert "t.fleet:" in err.details and "^" in err.details
 
 

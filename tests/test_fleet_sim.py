@@ -5,9 +5,14 @@ the files (NetCDF per glider, the map as GeoJSON and KML), the fleet page in Chr
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -72,6 +77,51 @@ def test_every_glider_flies_its_plan_in_one_ocean(flown, planned, fleet):
     assert json.loads((out / "fleet_sim.json").read_text()) == summary
 
 
+def test_the_survivors_of_a_loss_fly_their_own_plans_and_the_report_says_what_they_cover(
+        flown, fleet, planned, tmp_path):
+    """alpha lost after 12 h: bravo and charlie fly exactly the tracks they fly without the
+    loss (before and after it), their lines are their plan's, alpha's track stops at the
+    loss; the report gives what the survivors still cover and the map they make."""
+    import xarray as xr
+
+    whole, kept = flown
+    out = tmp_path / "lost"
+    lost_at = 12 * 3600.0
+    summary = fly_fleet(fleet, planned[1], out, workers=2,
+                        current=(0.05, -0.03), lose=("alpha", lost_at))
+    for name in ("bravo", "charlie"):
+        with xr.open_dataset(whole / name / "trajectory.nc") as a, \
+                xr.open_dataset(out / name / "trajectory.nc") as b:
+            for variable in ("time", "lat", "lon", "depth"):
+                assert a[variable].values.tolist() == b[variable].values.tolist(), variable
+    with xr.open_dataset(out / "alpha" / "trajectory.nc") as data:
+        flew_s = (data["time"].values[-1] - data["time"].values[0]) / np.timedelta64(1, "s")
+    assert lost_at - 120.0 <= flew_s <= lost_at
+
+    def features(directory, kind):
+        collection = json.loads((directory / "fleet.geojson").read_text())
+        return {f["properties"]["glider"]: f["geometry"] for f in collection["features"]
+                if f["properties"].get("kind") == kind}
+
+    assert features(out, "assignment") == features(whole, "assignment")
+    flown_before, flown_after = features(whole, "flown track"), features(out, "flown track")
+    assert flown_after["bravo"] == flown_before["bravo"]
+    assert flown_after["charlie"] == flown_before["charlie"]
+    assert flown_after["alpha"] != flown_before["alpha"]
+    gliders = {g["name"]: g for g in summary["gliders"]}
+    before = {g["name"]: g for g in kept["gliders"]}
+    assert gliders["alpha"]["lost"] and not gliders["alpha"]["swept"]
+    for name in ("bravo", "charlie"):
+        assert gliders[name] == before[name]
+    assert summary["finished"] is False
+    lost = summary["lost"]
+    assert lost["survivors"] == ["bravo", "charlie"]
+    assert lost["mapping_error_flown"] == summary["mapping_error"] > kept["mapping_error"]
+    assert 0.0 < lost["coverage_without_replan"] < 1.0
+    assert f"cover {100 * lost['coverage_without_replan']:.0f} % of the lines' length" \
+        in lost["summary"]
+
+
 def test_each_glider_has_its_netcdf_and_the_map_its_tracks(flown, fleet):
     import xarray as xr
 
@@ -102,7 +152,13 @@ def test_a_glider_lost_early_leaves_lines_the_rest_cannot_sweep_in_time(fleet, p
     assert lost["mapping_error_without_replan"] > stored.report["mapping_error"]
     assert lost["replan"] is None
     assert "it had swept 1 of its 2 lines once" in lost["summary"]
-    assert "the rest cannot take them over" in lost["summary"]
+    assert "and cannot take them over" in lost["summary"]
+    # its line 3 is left unswept: what the survivors cover, told beside the map they make
+    unswept = fleet.parts[3].length_m
+    total = sum(p.length_m for p in fleet.parts)
+    assert lost["coverage_without_replan"] == pytest.approx(1.0 - unswept / total)
+    assert f"cover {100 * (1.0 - unswept / total):.0f} % of the lines' length" \
+        in lost["summary"]
 
 
 def test_a_glider_lost_after_sweeping_its_lines_leaves_them_to_the_rest(fleet, planned):
@@ -115,22 +171,65 @@ def test_a_glider_lost_after_sweeping_its_lines_leaves_them_to_the_rest(fleet, p
     parts = sorted(p for g in replan["gliders"] for p in g["parts"])
     assert parts == list(range(len(fleet.parts)))
     assert "so the survey is finished" in lost["summary"]
+    assert lost["coverage_without_replan"] == replan["coverage"] == 1.0
 
 
-def test_the_monte_carlo_on_dask_gives_what_the_local_run_gives(fleet, planned, tmp_path):
+def test_the_monte_carlo_on_dask_gives_what_this_process_gives(fleet, planned, tmp_path):
+    """Dask by default (a LocalCluster of 1 and of 2 workers) and a running cluster given
+    by its address fly the very scenarios this process flies."""
+    from distributed import LocalCluster
+
     _, stored = planned
-    local = montecarlo_fleet(fleet, stored, tmp_path / "local", scenarios=4, workers=1,
-                             seed=3, scenario_file=CALM)
-    dask = montecarlo_fleet(fleet, stored, tmp_path / "dask", scenarios=4, workers=2,
-                            scheduler="local", seed=3, scenario_file=CALM)
-    a = pd.read_parquet(tmp_path / "local" / "scenarios.parquet")
-    b = pd.read_parquet(tmp_path / "dask" / "scenarios.parquet")
-    pd.testing.assert_frame_equal(a.sort_values(["scenario", "glider"]).reset_index(drop=True),
-                                  b.sort_values(["scenario", "glider"]).reset_index(drop=True))
-    for key in ("finished", "finish_probability", "finish_interval", "mapping_error",
-                "energy_j"):
-        assert local[key] == dask[key]
-    assert dask["scheduler"] == "local"
+
+    def flown(label, **where):
+        summary = montecarlo_fleet(fleet, stored, tmp_path / label, scenarios=4, seed=3,
+                                   scenario_file=CALM, **where)
+        table = pd.read_parquet(tmp_path / label / "scenarios.parquet")
+        return summary, table.sort_values(["scenario", "glider"]).reset_index(drop=True)
+
+    here, reference = flown("here", workers=1, scheduler=None)
+    runs = {"local1": flown("local1", workers=1), "local2": flown("local2", workers=2)}
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster:
+        runs["address"] = flown("address", workers=2, scheduler=cluster.scheduler_address)
+    assert here["scheduler"] == "none" and runs["local2"][0]["scheduler"] == "local"
+    assert runs["address"][0]["scheduler"].startswith("tcp://")
+    for label, (summary, table) in runs.items():
+        pd.testing.assert_frame_equal(reference, table, obj=label)
+        for key in ("finished", "finish_probability", "finish_interval", "mapping_error",
+                    "energy_j", "gliders"):
+            assert summary[key] == here[key], (label, key)
+
+
+def test_ctrl_c_on_dask_keeps_the_whole_scenarios_and_says_so(planned, tmp_path):
+    """Ctrl-C at a terminal (SIGINT to the whole process group, Dask's workers too) on
+    the default LocalCluster: exit 130, the scenarios every glider finished written and
+    marked incomplete, no finish probability, and no traceback from the cluster."""
+    _, stored = planned
+    out = tmp_path / "mc"
+    run = subprocess.Popen(
+        [sys.executable, "-m", "gliderplan.cli", "fleet", "montecarlo", str(SMALL), "--plan",
+         str(stored.directory), "--scenarios", "60", "--workers", "2", "--scenario-file", CALM,
+         "-o", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        env={**os.environ, "GLIDERPLAN_PROGRESS_S": "0"})
+    for line in run.stderr:
+        if "progress: " in line and int(line.split("progress: ")[1].split(" of ")[0]) >= 40:
+            break
+    os.killpg(run.pid, signal.SIGINT)
+    said, err = run.communicate(timeout=120)
+    assert run.returncode == 130
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scheduler"] == "local"
+    assert summary["interrupted"] and not summary["complete"] and summary["requested"] == 60
+    assert 1 <= summary["scenarios"] < 60
+    assert summary["finish_probability"] is None and summary["finish_interval"] is None
+    table = pd.read_parquet(out / "scenarios.parquet")
+    assert (table.groupby("scenario")["glider"].nunique() == 3).all()
+    assert table["scenario"].nunique() == summary["scenarios"]
+    assert f"interrupted after {summary['scenarios']} of 60 scenarios" in said
+    assert f"interrupted: {summary['scenarios']} of 60 scenarios finished" in err
+    assert "Traceback" not in err
 
 
 def test_the_survey_finishes_at_least_as_often_as_planned(fleet, planned, tmp_path):
@@ -163,6 +262,8 @@ def test_fleet_montecarlo_json_gives_the_keys_tools_read(planned, tmp_path, caps
     (["--lose", "zulu@1d"], "--lose zulu@1d: expected GLIDER@TIME"),
     (["--lose", "alpha@9d"], "--lose alpha@9d: alpha flies from 0 d to 2 d"),
     (["--current", "north"], "--current 'north': expected NORTH,EAST"),
+    (["--scheduler", "nowhere"], "--scheduler nowhere: expected local or tcp://HOST:PORT"),
+    (["--scheduler", "tcp://127.0.0.1:9"], "--scheduler tcp://127.0.0.1:9: cannot reach it"),
 ])
 def test_bad_options_are_bad_usage(planned, tmp_path, capsys, argv, message):
     _, stored = planned

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
+from gliderplan.contract import MAX_ROUTE_POINTS
 from gliderplan.language import check_source
 
 _TEMPLATE = """mission m
@@ -70,6 +73,10 @@ CASES = [
     ({"profile": "yo(5, 20, .454, 1.6)"}, "error: climb_pitch of 'yo' is 1.6 rad, outside"),
     ({"route": "nav(3975.5, -7349.8)"}, "error: 3975.5 is not DDMM.MMMM"),
     ({"route": "nav(9100, -7349.8)"}, "error: lat of 'nav' is 9100 DDMM.MMMM, outside"),
+    ({"route": "heading(360)"}, "error: heading of 'heading' is 360 deg, outside [0, 360) | "
+     "a compass heading in degrees, true, clockwise from north: 0 north, 90 east"),
+    ({"route": "heading(-90)"}, "error: heading of 'heading' is -90 deg, outside [0, 360)"),
+    ({"route": "heading(90, (3910, -7349))"}, "error: 'heading' takes heading"),
     ({"profile": "hover(depth)"}, "error: sensor 'depth' cannot be used here"),
     ({"event": "case max(depth) > 5 exit"}, "error: 'max' takes 2 argument(s), got 1"),
     ({"sensors": "missiontime, depth duty auto"},
@@ -160,6 +167,20 @@ def test_mission_that_never_exits():
 
 def test_the_template_itself_is_clean():
     assert _diagnostics() == []
+
+
+def _sweep(corners: int) -> str:
+    """A sweep over `corners` points on a circle about 39 10'N 73 49'W."""
+    ring = ((3910 + 0.5 * math.sin(2 * math.pi * k / corners),
+             -7349 + 0.5 * math.cos(2 * math.pi * k / corners)) for k in range(corners))
+    return "sweep(100, " + ", ".join(f"({lat:.4f}, {lon:.4f})" for lat, lon in ring) + ")"
+
+
+def test_a_sweep_takes_as_many_corners_as_the_runtime_s_route_table_holds():
+    assert _diagnostics(route=_sweep(MAX_ROUTE_POINTS)) == []
+    (refused,) = _diagnostics(route=_sweep(MAX_ROUTE_POINTS + 1))
+    assert refused.startswith(f"error: 'sweep' takes spacing [m], 3 to {MAX_ROUTE_POINTS} "
+                              "(lat, lon) points"), refused
 
 
 def test_all_errors_of_a_pass_at_once():

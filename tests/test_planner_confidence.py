@@ -69,7 +69,8 @@ def test_a_budget_no_plan_can_keep_says_so(capsys):
                  "--scenarios", "30", "--workers", "1"])
     err = capsys.readouterr().err
     assert code == 1 and "Traceback" not in err
-    assert "in all 30 scenarios" in err or "too small" in err
+    # 11.5 Wh less the 10 % reserve
+    assert "no plan keeps the budget of 10.35 Wh in all 30 scenarios (infeasible)" in err
 
 
 def test_a_confidence_that_needs_more_scenarios_than_a_run_may_fly_is_refused(capsys):

@@ -44,7 +44,7 @@ def test_bytes_follow_the_format(path):
     m = mission(path)
     data = write_plan_bytes(plan_mission(m).plan)
     assert data.endswith(b"\n") and b"\r" not in data and b"\t" not in data
-    assert all(0x20 <= b <= 0x7E or b == 0x0A for b in data)
+    assert set(data) <= {*range(0x20, 0x7F), 0x0A}  # printable ASCII and LF
     lines = data.decode("ascii").split("\n")[:-1]
     assert all(0 < len(line) + 1 <= 255 and "  " not in line and line == line.strip()
                for line in lines)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gliderplan.cli.main import main
-from gliderplan.planner.speed import NoHeadway, best_speed, choice_at
+from gliderplan.planner.speed import NoHeadway, best_speed, choice_at, head_current
 from gliderplan.power_models import load_vehicle
 from gliderplan.power_models.catalog import preset_path
 from gliderplan.power_models.errors import ModelFileError
@@ -95,16 +95,16 @@ def test_the_best_speed_matches_the_closed_form_of_the_cubic_model(tmp_path, veh
 def test_a_head_current_makes_the_best_speed_faster_and_each_km_dearer():
     lauv = load_vehicle("lauv")
     still = best_speed(lauv.propulsion, lauv.hotel_w)
-    against = best_speed(lauv.propulsion, lauv.hotel_w, along_mps=-0.5)
+    against = best_speed(lauv.propulsion, lauv.hotel_w, head_current(0.5))
     assert against.speed_mps > still.speed_mps - 1e-9
     assert against.energy_per_m_j > still.energy_per_m_j
     # energy per metre over ground: (hotel + propulsion) / (U - 0.5)
     assert against.energy_per_m_j == pytest.approx(
         (lauv.hotel_w + against.propulsion_w) / (against.speed_mps - 0.5))
     with pytest.raises(NoHeadway):
-        best_speed(lauv.propulsion, lauv.hotel_w, along_mps=-2.0)
+        best_speed(lauv.propulsion, lauv.hotel_w, head_current(2.0))
     with pytest.raises(NoHeadway):
-        choice_at(lauv.propulsion, lauv.hotel_w, 0.6, along_mps=-0.7)
+        choice_at(lauv.propulsion, lauv.hotel_w, 0.6, head_current(0.7))
 
 
 def test_ground_speed_crabs_into_a_cross_current():

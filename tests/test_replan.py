@@ -6,6 +6,9 @@ the rest refused with a message, no update written, the glider flying its plan o
 from __future__ import annotations
 
 import json
+import os
+import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -133,6 +136,22 @@ def test_a_warm_replan_reuses_the_compiled_model_and_follows_the_telemetry(signe
     assert hungrier.quality < first.quality and replanner.chance is model
 
 
+def test_a_replan_solved_once_plans_what_the_compiled_model_plans(signed, short):
+    """`gliderplan replan` solves without compiling the parameters: the same plan."""
+    plan, _ = signed
+    held = plan.read_bytes()
+    reports = telemetry(plan, (3, 6), energy=1.15)
+    results = []
+    for once in (False, True):
+        replanner = Replanner(short, held, confidence=0.95, spec=read_spec(), once=once)
+        for report in reports:
+            replanner.observe(report)
+        results.append(replanner.replan(held, reports[-1]))
+    compiled, solved_once = results
+    assert solved_once.target == compiled.target and solved_once.changes
+    assert solved_once.quality == pytest.approx(compiled.quality, abs=1e-6)
+
+
 def test_a_budget_that_cannot_hold_the_rest_is_refused_and_no_update_is_written(
         tmp_path, signed, capsys):
     plan, key = signed
@@ -143,6 +162,7 @@ def test_a_budget_that_cannot_hold_the_rest_is_refused_and_no_update_is_written(
     said = capsys.readouterr().err
     assert code == ExitCode.BAD_INPUT
     assert "cannot hold the rest of the mission at confidence" in said
+    assert f"{reports.name}: report 3: at 24.0 h the budget left" in said  # where
     assert "No update is made: the glider keeps flying its current plan" in said
     assert not list(tmp_path.glob("u*"))
     run = replan_mission(check_file(SHORT).checked(), plan, reports, key_path=key,
@@ -229,6 +249,12 @@ def test_reports_in_several_json_files_are_read_in_order(tmp_path, signed, capsy
      "with --replan"),
     (["montecarlo", SHORT, "--scenarios", "2", "--replan", "--confidence", "1", "-o", "mc"],
      "expected a probability in [0.5, 1), got '1'"),
+    (["montecarlo", SHORT, "--scenarios", "2", "--confidence", "0.9", "-o", "mc"],
+     "--confidence works only with --replan"),
+    (["sim", SHORT, "--replan-every", "surfacing", "--confidence", "0.4", "-o", "run"],
+     "expected a probability in [0.5, 1), got '0.4'"),
+    (["replan", SHORT, "--plan", "p", "--telemetry", "t", "--confidence", "lots"],
+     "expected a probability in [0.5, 1), got 'lots'"),
     (["replan", SHORT, "--plan", "p", "--telemetry", "t", "--seq", "3"], "--seq works only "
      "with --key"),
 ])
@@ -267,3 +293,46 @@ def test_a_transit_leg_keeps_its_planned_speed_and_time(tmp_path):
 
 def test_replan_infeasible_is_a_planning_error():
     assert issubclass(ReplanInfeasible, PlanningError)
+
+
+def test_an_update_its_plan_and_its_report_are_written_together(tmp_path, signed, monkeypatch,
+                                                                 capsys):
+    """A disk that fills as the report is written leaves none of the three (an update
+    beside the plan of another would desynchronise the next replan), nor an earlier
+    update touched; an interrupted replan writes nothing."""
+    from gliderplan.contract import files
+
+    plan, key = signed
+    reports = write(tmp_path, telemetry(plan, (3, 6, 9), dvl=1.3))
+    out = tmp_path / "u1"
+    out.write_bytes(b"an earlier update")
+    real = files.write_atomically
+
+    def full_at_the_report(path, data, **kwargs):
+        if str(path).endswith("u1.json"):
+            raise files.OutputFileError(f"{path}: cannot write: No space left on device")
+        return real(path, data, **kwargs)
+    monkeypatch.setattr(files, "write_atomically", full_at_the_report)
+    argv = ["replan", SHORT, "--plan", str(plan), "--telemetry", str(reports), "--key",
+            str(key), "-o", str(out)]
+    assert main(argv) == ExitCode.USAGE
+    assert "No space left on device" in capsys.readouterr().err
+    assert out.read_bytes() == b"an earlier update"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "held.plan", "held.plan.json", "telemetry.json", "u1", "vehicle.key"]
+    monkeypatch.setattr(files, "write_atomically", real)
+    from gliderplan.planner import update
+
+    made = update.make_updates
+
+    def swallowing(*args, **kwargs):  # Ctrl-C that something on the way caught
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)  # the handler raises here
+        except KeyboardInterrupt:
+            pass
+        return made(*args, **kwargs)
+    monkeypatch.setattr(update, "make_updates", swallowing)
+    assert main(argv) == ExitCode.INTERRUPTED
+    assert out.read_bytes() == b"an earlier update"
+    assert not (tmp_path / "u1.plan").exists()

@@ -119,6 +119,40 @@ def test_montecarlo_replan_reports_both_side_by_side(tmp_path, signed, short, ca
     assert code == ExitCode.OK
     said = json.loads(capsys.readouterr().out)
     assert said["replan"] is True and said["scenarios"] == 2
+    # the plan was made at 0.95: both flights fly it, the shore replans at 0.95
+    assert said["confidence"] == s["confidence"] == 0.95
+    assert said["plan_flown"] == "the plan as given, planned at confidence 0.95"
+
+
+def test_a_plan_made_on_the_model_is_planned_at_the_confidence_before_launch(tmp_path, short):
+    """A plan made without --confidence states none: flown alone it would be judged
+    against the replanned flight at another confidence. Both start from it replanned
+    before launch at the confidence: signed as a later plan, its duties changed, and the
+    shore, asked again at launch, changes nothing."""
+    from gliderplan.planner.planfile import read_plan_bytes
+    from gliderplan.planner.replan import Replanner
+    from gliderplan.planner.signing import check_signature
+    from gliderplan.sim.replanning import plan_at_confidence
+
+    key = tmp_path / "vehicle.key"
+    key.write_text(KEY.hex() + "\n")
+    key.chmod(0o600)
+    model_plan = tmp_path / "model.plan"
+    make_plan(short, output=model_plan, sign=key, seq=3)
+    held = model_plan.read_bytes()
+    prior = read_spec().model()
+    launched, confidence, how = plan_at_confidence(short, held, KEY, confidence=None,
+                                                   spec=prior)
+    assert confidence == 0.95 and "replanned before launch at confidence 0.95" in how
+    assert check_signature(launched, KEY) > 3
+    before, after = read_plan_bytes(held, short), read_plan_bytes(launched, short)
+    assert after.budget_j == before.budget_j and after.states != before.states
+    again = Replanner(short, launched, confidence=0.95, spec=prior).at_launch(launched)
+    assert again.status == "unchanged"  # what the shore would plan at 0.95 at launch
+    setup = flight_setup(short, FlightOptions(plan_path=model_plan, key_path=key,
+                                              duration_s=3 * 3600.0))
+    run = montecarlo_mission(setup, tmp_path / "mc", scenarios=1, replan=True)
+    assert run.summary["confidence"] == 0.95 and run.summary["plan_flown"] == how
 
 
 def test_replanning_holds_the_budget_where_a_hungrier_device_breaks_the_plan_alone(

@@ -79,6 +79,8 @@ def test_through_a_jet_the_planned_route_saves_time_and_flies_it(tmp_path, capsy
     (["--currents", "0,0", "--cells", "5"], "--cells 5: between 10 and 400"),
     (["--currents", "0,0", "--speed", "9"], "--speed 9: a glider flies 0.05 to 2 m/s"),
     (["--currents", "0,0.3", "--speed", "0.2"], "the current holds the glider off it"),
+    (["--currents", "0,0.5", "--speed", "0.2", "--minimise", "energy"],
+     "no route reaches the waypoints at any pitch of 15, 20, 26, 32 degrees"),
 ])
 def test_bad_route_input_is_a_message(tmp_path, capsys, args, message):
     mission = tmp_path / "hop.mission"
@@ -101,3 +103,42 @@ def test_maps_are_drawn_for_sim_forecast_and_route(tmp_path):
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["route", str(mission), "--start", start, "--currents", field,
                  "--map", str(tmp_path / "m.gif")]) == 2
+
+
+def test_the_pitch_is_chosen_for_the_least_time_or_energy():
+    """The fastest pace for time; for energy the pace whose route costs least, which in
+    still water is not the fastest (the pump's and pitch motor's draw grows faster than
+    the speed past the transit's pitch)."""
+    from gliderplan.planner.route_pace import paces, plan_paced_route
+
+    still = UniformCurrent(0.0, 0.0)
+    start, points = (39.1, -73.9), [(39.1, -73.8)]
+    nominal, choices = paces(0.23, points)
+    assert len(choices) == 4 and nominal.speed_mps == pytest.approx(0.23)
+    fastest = max(choices, key=lambda p: p.speed_mps)
+    by_time = plan_paced_route(still, start, points, 0.0, nominal, choices, "time", 20)
+    by_energy = plan_paced_route(still, start, points, 0.0, nominal, choices, "energy", 20)
+    assert by_time.pace == fastest
+    least = min(choices, key=lambda p: p.power_w / p.speed_mps)
+    assert by_energy.pace == least and least != fastest
+    assert by_energy.planned_j < by_time.planned_j and by_time.plan.planned_s < \
+        by_energy.plan.planned_s
+    assert by_energy.gains()["energy"] >= 0.0  # never worse than the straight line's
+
+
+def test_through_a_jet_the_paced_route_saves_time_and_energy_as_flown(tmp_path, capsys):
+    mission = tmp_path / "hop.mission"
+    mission.write_text(MISSION)
+    field = write_jet(tmp_path / "jet.nc")
+    assert main(["route", str(mission), "--currents", str(field), "--start",
+                 "39.1,-73.8,2016-06-23T00:00Z", "--speed", "0.23", "--minimise", "energy",
+                 "--fly", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["minimise"] == "energy" and r["energy_gain"] > 0.3
+    flown_s, flown_j = r["flown_s"], r["flown_j"]
+    assert flown_s["planned"] < flown_s["straight"] and flown_j["planned"] < flown_j["straight"]
+    # the sim's energy and time saved are what the plan predicts, within its model's error
+    assert r["flown_energy_gain"] == pytest.approx(r["energy_gain"], abs=0.15)
+    assert r["flown_gain"] == pytest.approx(r["time_gain"], abs=0.15)
+    # the forecast's power is the sim's: the straight line's energy within 15 %
+    assert flown_j["straight"] == pytest.approx(r["straight_nominal_j"], rel=0.15)

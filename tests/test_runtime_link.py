@@ -10,7 +10,6 @@ import select
 import shutil
 import signal
 import subprocess
-import time
 import tty
 import zlib
 from collections.abc import Iterator
@@ -18,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from waiting import wait_until
 
 from gliderplan.contract import N_SENSORS, NO_STATE, ReleaseReason, TransitionKind
 from gliderplan.planner.signing import sign_plan
@@ -69,7 +69,7 @@ class Glider:
         return self.process
 
     def link(self) -> p.Link:
-        return p.Link(p.FdPort(self.master), retransmit_s=0.2, max_retries=20)
+        return p.Link(p.FdPort(self.master), max_retries=20)
 
 
 @pytest.fixture
@@ -162,7 +162,7 @@ def test_a_killed_runtime_resumes_from_its_checkpoint(binary, glider, tmp_path):
         log.write("1010 return s2 s1 0\n")
 
     tap = Tap(glider.master)
-    link = p.Link(tap, retransmit_s=0.2, max_retries=20)
+    link = p.Link(tap, max_retries=20)
     process = glider.start(binary, "--state-dir", str(tmp_path))
     link.wait_hello()
     after = fly(link, 101, 400)
@@ -290,7 +290,7 @@ class Tap(p.FdPort):
 def test_commands_travel_as_their_changes_against_the_tick_before(binary, glider):
     process = glider.start(binary)
     tap = Tap(glider.master)
-    link = p.Link(tap, retransmit_s=0.2, max_retries=20)
+    link = p.Link(tap, max_retries=20)
     link.wait_hello()
     commands = fly(link, 0, 400)
     assert transitions(commands) == FIG2_TRACE  # the changes applied make the same trace
@@ -322,7 +322,7 @@ def test_a_lost_command_is_sent_again_against_what_the_science_computer_holds(bi
                                                                               glider):
     process = glider.start(binary)
     tap = Tap(glider.master)
-    link = p.Link(tap, retransmit_s=0.2, max_retries=20)
+    link = p.Link(tap, max_retries=20)
     link.wait_hello()
     commands = fly(link, 0, 49)
     _lose_the_answer(link, glider.master, 50)  # the call into s2
@@ -340,7 +340,7 @@ def test_a_science_computer_that_lost_its_commands_gets_a_whole_one(binary, glid
     process = glider.start(binary)
     commands = fly(glider.link(), 0, 60)
     tap = Tap(glider.master)
-    restarted = p.Link(tap, retransmit_s=0.2, max_retries=20)
+    restarted = p.Link(tap, max_retries=20)
     commands += fly(restarted, 61, 400)
     assert transitions(commands) == FIG2_TRACE
     assert restarted.resyncs == 1
@@ -705,8 +705,21 @@ def test_a_peer_that_stops_reading_never_blocks_the_runtime(binary, glider, link
     before)."""
     process = glider.start(binary, "--retransmit-ms", "1", "--link-timeout-s",
                            str(link_timeout_s))
-    time.sleep(4.0)  # the runtime fills the line (in about a second); nobody reads it
+    said = bytearray()  # the runtime's stderr so far
+
+    def line_full() -> bool:  # nobody reads it: the runtime's end takes no more
+        return not select.select([], [glider.slave], [], 0)[1]
+
+    def released() -> bool:  # the watchdog has said so
+        if select.select([process.stderr], [], [], 0)[0]:
+            said.extend(os.read(process.stderr.fileno(), 4096))
+        return b"link silent past its timeout" in said
+
+    wait_until(line_full, 30, "the runtime fills the line")
+    if link_timeout_s == 2:
+        wait_until(released, 30, "the watchdog releases control on a full line")
     assert process.poll() is None
     process.send_signal(signal.SIGTERM)
     assert process.wait(5) == (3 if link_timeout_s == 2 else 4)
-    assert ("link silent past its timeout" in process.stderr.read()) == (link_timeout_s == 2)
+    said.extend(process.stderr.read().encode())
+    assert (b"link silent past its timeout" in said) == (link_timeout_s == 2)

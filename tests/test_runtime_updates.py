@@ -155,7 +155,8 @@ def test_a_kill_during_an_update_leaves_the_old_plan_or_the_new(binary, glider, 
         glider.process.wait(5)
         stored = state / "plan"
         applied = stored.exists()
-        assert not applied or stored.read_bytes() == new
+        if applied:  # killed once the plan was stored: all of the new plan, never a part
+            assert stored.read_bytes() == new
         glider.start(binary, *args)
         link = glider.link()
         link.wait_hello()

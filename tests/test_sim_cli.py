@@ -18,16 +18,18 @@ from gliderplan.cli.main import main
 from gliderplan.cli.sim import parse_duration_s
 from gliderplan.contract import MAX_EXPRESSION_DEPTH
 from gliderplan.contract.errors import UsageError
+from gliderplan.contract.files import RUN_MARKER
 
 REPO = Path(__file__).resolve().parents[1]
 FIG2 = REPO / "examples" / "fig2.mission"
 FILES = {"trace.csv", "timeseries.parquet", "summary.json", "depth.png", "energy.png"}
+WRITTEN = FILES | {RUN_MARKER}  # a run's folder: its files and the marker saying what wrote it
 
 
 def test_a_run_writes_every_file(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["sim", str(FIG2), "--seed", "3", "-o", str(out)]) == 0
-    assert {p.name for p in out.iterdir()} == FILES
+    assert {p.name for p in out.iterdir()} == WRITTEN
     assert (out / "trace.csv").read_text() == (
         "time_s,kind,from_state,to_state,stack_depth\n"
         "0,start,,s1,0\n500,call,s1,s2,1\n1500,return,s2,s1,0\n"
@@ -42,7 +44,7 @@ def test_a_run_loads_no_library_it_does_not_use(tmp_path):
     costs a run half a second of start-up)."""
     code, loaded = modules_loaded_by(["sim", str(FIG2), "-o", str(tmp_path / "run")])
     assert (code, loaded & {"pandas", "scipy", "cvxpy", "clarabel", "xarray"}) == (0, set())
-    assert {p.name for p in (tmp_path / "run").iterdir()} == FILES
+    assert {p.name for p in (tmp_path / "run").iterdir()} == WRITTEN
 
 
 def test_timeseries_columns_and_summary(tmp_path):
@@ -147,7 +149,7 @@ def test_rerunning_into_the_same_directory_replaces_the_files(tmp_path):
     assert main(["sim", str(FIG2), "--duration", "10min", "-o", str(out)]) == 0
     assert main(["sim", str(FIG2), "-o", str(out)]) == 0
     assert (out / "trace.csv").read_text().endswith("2500,exit,s3,,0\n")
-    assert {p.name for p in out.iterdir()} == FILES  # no temporary files left behind
+    assert {p.name for p in out.iterdir()} == WRITTEN  # no temporary files left behind
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) for the runtime")
@@ -160,7 +162,7 @@ def test_the_c_runtime_keeps_its_state_directory_when_asked(tmp_path, capsys):
     assert (state / "events.log").read_text().splitlines() == [
         " ".join(field or "-" for field in row.split(",")) for row in rows]
     assert (state / "checkpoint").stat().st_size > 0
-    assert {p.name for p in out.iterdir()} == FILES
+    assert {p.name for p in out.iterdir()} == WRITTEN
 
     # a second flight into it would resume the first one's checkpoint: refused
     again = tmp_path / "again"
@@ -320,10 +322,12 @@ def test_ctrl_c_keeps_the_part_flown(tmp_path, capsys, monkeypatch):
     interrupt_at(monkeypatch, 300)
     assert main(["sim", str(FIG2), "--runtime", "python", "--tick", "4", "-o",
                  str(tmp_path)]) == 130
-    assert {p.name for p in tmp_path.iterdir()} == FILES
+    assert {p.name for p in tmp_path.iterdir()} == WRITTEN
     table = pd.read_parquet(tmp_path / "timeseries.parquet")
     assert len(table) == 300 and table["time_s"].iloc[-1] == 299 * 4
-    assert json.loads((tmp_path / "summary.json").read_text())["ended"] == "interrupted"
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["ended"] == "interrupted" and summary["complete"] is False
+    assert json.loads((tmp_path / RUN_MARKER).read_text())["complete"] is False
     trace = pd.read_csv(tmp_path / "trace.csv")
     assert list(trace["kind"]) == ["start", "call"]  # s1 -call-> s2 at 500 s, then Ctrl-C
     assert "interrupted" in capsys.readouterr().err
@@ -343,7 +347,7 @@ def test_ctrl_c_in_a_long_run_keeps_the_part_flown_and_its_plots(tmp_path, capsy
                         lambda self, done, total: os.kill(os.getpid(), signal.SIGINT))
     mission = REPO / "tests" / "missions" / "sim_month.mission"
     assert main(["sim", str(mission), "--duration", "10d", "-o", str(tmp_path)]) == 130
-    assert started and {p.name for p in tmp_path.iterdir()} == FILES
+    assert started and {p.name for p in tmp_path.iterdir()} == WRITTEN
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["ended"] == "interrupted" and 0 < summary["simulated_s"] < 10 * 86400
     for png in ("depth.png", "energy.png"):
@@ -354,7 +358,7 @@ def test_ctrl_c_in_a_long_run_keeps_the_part_flown_and_its_plots(tmp_path, capsy
 def test_ctrl_c_before_the_first_tick_writes_nothing(tmp_path, capsys, monkeypatch):
     interrupt_at(monkeypatch, 0)
     assert main(["sim", str(FIG2), "--runtime", "python", "-o", str(tmp_path / "run")]) == 130
-    assert not (tmp_path / "run").exists() or not any((tmp_path / "run").iterdir())
+    assert not (tmp_path / "run").exists()
     assert "interrupted" in capsys.readouterr().err
 
 
@@ -443,7 +447,7 @@ def test_a_mission_that_exits_on_its_first_tick_flies(tmp_path, capsys, runtime)
     mission.write_text(_FIRST_TICK_EXIT)
     out = tmp_path / "run"
     assert main(["sim", str(mission), "--runtime", runtime, "-o", str(out)]) == 0
-    assert {p.name for p in out.iterdir()} == FILES
+    assert {p.name for p in out.iterdir()} == WRITTEN
     assert (out / "trace.csv").read_text().splitlines()[1:] == ["0,start,,s,0", "0,exit,s,,0"]
     assert "brief: exit after 0 s" in capsys.readouterr().err
 

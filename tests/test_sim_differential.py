@@ -246,6 +246,22 @@ def test_the_c_flight_flies_a_hand_written_schedule_as_the_reference(tmp_path):
     flown_alike(mission, RunConfig(duration_s=14400.0, seed=5), "bench", plan)
 
 
+def test_the_c_flight_holds_a_heading_uncorrected_in_a_current_as_the_reference():
+    """A held heading (Slocum's set_heading) after fixes have measured the current: the
+    current correction, on for the mission, leaves it alone in the C flight as in the
+    reference, and the glider is carried north with the current."""
+    from gliderplan.planner.routing import transit_mission
+
+    goto = "goto_list(1000, (3906.0000, -7324.0000))"
+    text = transit_mission([(39.1, -73.4)], 4 * 3600.0, surface_every_s=3600.0)
+    mission = check_source(text.replace(goto, "heading(90)")).mission
+    assert mission.current_correction
+    config = RunConfig(duration_s=4 * 3600.0, seed=3, current=Current(0.1, 0.0))
+    flown = flown_alike(mission, config, "sea-trial")
+    north_m = (flown.columns["lat_deg"][-1] - flown.columns["lat_deg"][0]) * 111_000.0
+    assert north_m > 0.9 * 0.1 * 4 * 3600.0  # carried the whole way, not steered upstream
+
+
 # floors under the altimeter mission: flat, shallower than a dive's turn, and one that
 # rises and falls along the run as a glider's logged floor does
 FLOORS = [flat_floor(38.0), flat_floor(20.0),

@@ -205,8 +205,8 @@ def test_the_deployment_s_names_come_from_a_metadata_file(run, tmp_path, capsys)
     (tmp_path / "meta.toml").write_text('creator_name = "A. Pilot"\nsea_name = "North Sea"\n'
                                         'wmo_id = "6801665"\n')
     assert main(["export", str(run), "--format", "og1", "--metadata",
-                 str(tmp_path / "meta.toml"), "-o", str(tmp_path)]) == 0
-    og1 = xr.open_dataset(tmp_path / "trajectory_og1.nc")
+                 str(tmp_path / "meta.toml"), "-o", str(tmp_path / "out")]) == 0
+    og1 = xr.open_dataset(tmp_path / "out" / "trajectory_og1.nc")
     assert og1.attrs["creator_name"] == "A. Pilot" and og1.attrs["sea_name"] == "North Sea"
     assert str(og1.WMO_IDENTIFIER.values) == "6801665"
     (tmp_path / "bad.toml").write_text('creator_nam = "A. Pilot"\n')

@@ -7,6 +7,7 @@ leaves each of its files whole (the old one or the new one) or absent."""
 
 from __future__ import annotations
 
+import functools
 import json
 import random
 import signal
@@ -16,6 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
+from waiting import wait_until
 
 from gliderplan.cli.main import main
 from gliderplan.contract.errors import UsageError
@@ -151,16 +153,35 @@ def snapshot(directory: Path) -> set[tuple[str, int, int]]:
     return files
 
 
+def writing(parent: Path, name: str) -> bool:
+    """Whether a run into parent/name writes its files (into its hidden folder there)."""
+    for staging in parent.glob(f".{name}.new-*"):
+        try:
+            if any(staging.iterdir()):
+                return True
+        except FileNotFoundError:  # moved into place or removed as we looked
+            return True
+    return False
+
+
+def _ended_or_wrote(process: subprocess.Popen, out: Path, before: set) -> bool:
+    """Whether `process` has ended, changed the files in `out` from `before`, or started
+    writing them (into its hidden folder beside `out`)."""
+    return process.poll() is not None or snapshot(out) != before \
+        or writing(out.parent, out.name)
+
+
 def test_a_killed_sim_leaves_each_file_whole_or_absent(tmp_path):
     """`gliderplan sim` killed (SIGKILL) while it writes its files (a few milliseconds
-    after the first one is touched): each file is the previous run's, the new run's, or
-    (the first time) absent, never a part of one."""
+    after the first one is touched): the folder holds the previous run or the new one
+    whole, file for file (or, the first time, nothing), never a part of a file nor files
+    of two runs; what a killed run left beside it is cleared by the next."""
     command = [sys.executable, "-m", "gliderplan.cli", "sim", str(FIG2), "-o"]
     old, new, out = tmp_path / "old", tmp_path / "new", tmp_path / "out"
     subprocess.run([*command, str(old)], check=True, capture_output=True)
     subprocess.run([*command, str(new), "--seed", "1"], check=True, capture_output=True)
     names = sorted(p.name for p in old.iterdir())
-    allowed = {name: {(old / name).read_bytes(), (new / name).read_bytes()} for name in names}
+    runs = {run: {name: (run / name).read_bytes() for name in names} for run in (old, new)}
     rng = random.Random(7)
     killed_while_writing = 0
     for attempt in range(12):
@@ -168,14 +189,17 @@ def test_a_killed_sim_leaves_each_file_whole_or_absent(tmp_path):
         before = snapshot(out)
         process = subprocess.Popen([*command, str(out), *seed], stdout=subprocess.DEVNULL,
                                    stderr=subprocess.DEVNULL)
-        while process.poll() is None and snapshot(out) == before:
-            time.sleep(0.0005)  # until it starts writing
-        time.sleep(rng.uniform(0.0, 0.03))
+        wait_until(functools.partial(_ended_or_wrote, process, out, before), 120,
+                   "sim starts writing its files")
+        time.sleep(rng.uniform(0.0, 0.03))  # then a random moment of its writing
         process.send_signal(signal.SIGKILL)
         killed_while_writing += process.wait() == -signal.SIGKILL
-        for name in names:
-            if (out / name).exists():
-                assert (out / name).read_bytes() in allowed[name], (attempt, name)
+        if out.exists():
+            whole = [run for run, files in runs.items()
+                     if all((out / name).read_bytes() == data for name, data in files.items())]
+            assert whole and sorted(p.name for p in out.iterdir()) == names, attempt
+    subprocess.run([*command, str(out)], check=True, capture_output=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new", "old", "out"]
     assert killed_while_writing >= 6
 
 

@@ -85,6 +85,8 @@ def test_dask_local_cluster_gives_the_local_pools_results():
     with scenario_executor(2, "local") as dask:
         distributed = montecarlo.run_montecarlo(job, 4, dask, 2)
     pd.testing.assert_frame_equal(local.table(), distributed.table())
+    assert distributed.table()["scenario"].tolist() == [0, 1, 2, 3]
+    assert distributed.table()["energy_j"].gt(0).all()
 
 
 def test_the_budget_verdict_follows_each_scenarios_battery():
@@ -110,7 +112,7 @@ def test_command_writes_its_files_and_says_how_likely(tmp_path, capsys):
     args = ["montecarlo", str(FIG2), "--scenarios", "4", "--workers", "1", "--seed", "5",
             "-o", str(out)]
     assert main(args) == 0
-    assert {p.name for p in out.iterdir()} == FILES
+    assert {p.name for p in out.iterdir()} == FILES | {".gliderplan-run"}
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenarios"] == 4 and summary["budget_held"] == 4
     low, high = summary["probability_interval_95"]
@@ -232,6 +234,15 @@ def test_montecarlo_mission_is_the_command_as_one_call(tmp_path):
     assert [r["scenario"] for r in run.result.rows] == [0, 1, 2]
     assert json.loads((tmp_path / "mc" / "summary.json").read_text()) == run.summary
     assert run.summary["scenarios"] == 3 and run.summary["seed"] == 7
+    # what was flown: every scenario flies Fig. 2 to its exit at 2500 s, within budget, on
+    # energy of its own draws; the file and the summary say what the runs did
+    table = pd.read_parquet(tmp_path / "mc" / "scenarios.parquet")
+    pd.testing.assert_frame_equal(table, run.result.table())
+    assert (table["end_state"] == "s3").all() and (table["ended"] == "exit").all()
+    assert (table["duration_s"] == 2500.0).all() and table["held"].all()
+    assert table["energy_j"].gt(0).all() and table["energy_j"].nunique() == 3
+    assert run.summary["ended"] == {"exit": 3} and run.summary["budget_held"] == 3
+    assert run.summary["energy_j"]["p50"] == pytest.approx(table["energy_j"].median())
 
 
 def test_montecarlo_puts_every_glider_in_the_water_at_the_start(tmp_path, capsys,

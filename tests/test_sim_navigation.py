@@ -108,3 +108,66 @@ def test_import_slocum_translates_current_correction(tmp_path):
     out = tmp_path / "nsb3.mission"
     assert main(["import-slocum", str(nsb3), "-o", str(out)]) == 0
     assert "\ncurrent_correction on\n" in out.read_text()  # nsb3.mi:10 sets it to 1
+
+
+def test_a_held_heading_is_not_corrected_and_both_runtimes_fly_it_alike(tmp_path):
+    """`heading(deg)` (Slocum's set_heading): in a current across it the glider keeps its
+    compass heading and is carried off with the current, where a nav toward a point east
+    of the start heads upstream; the C runtime commands the same heading over the pty and
+    the same glider flies the same track."""
+    import pandas as pd
+
+    from gliderplan.cli.main import main
+    from gliderplan.planner.routing import transit_mission
+
+    # a transit surfacing every hour: the fixes measure the current
+    text = transit_mission([(39.1, -73.4)], 4 * 3600.0, surface_every_s=3600.0)
+    goto = "goto_list(1000, (3906.0000, -7324.0000))"  # 30' of longitude east
+    tracks = {}
+    for name, route, runtime in (("held", "heading(90)", "python"),
+                                 ("held_c", "heading(90)", "c"), ("nav", goto, "python")):
+        mission = tmp_path / f"{name}.mission"
+        mission.write_text(text.replace(goto, route))
+        out = tmp_path / name
+        assert main(["sim", str(mission), "--runtime", runtime, "--currents", "0.1,0",
+                     "--start", "39.1,-73.9", "--seed", "3", "-o", str(out)]) == 0
+        tracks[name] = pd.read_parquet(out / "timeseries.parquet")
+    held, nav = tracks["held"], tracks["nav"]
+    for column in ("lat_deg", "lon_deg", "depth_m"):
+        assert held[column].equals(tracks["held_c"][column]), column
+    north_m = {k: offset_m(39.1, -73.9, t["lat_deg"].iloc[-1], t["lon_deg"].iloc[-1])[0]
+               for k, t in (("held", held), ("nav", nav))}
+    drift_m = 0.1 * 14400.0
+    assert north_m["held"] == pytest.approx(drift_m, rel=0.05)  # carried the whole way
+    # the correction heads upstream under water once a fix has measured the current (the
+    # drift at the surface and on the first dive stay): about 0.55 of the held's
+    assert north_m["nav"] < 0.7 * north_m["held"]
+
+
+def test_the_surfacing_forecast_holds_the_heading_as_the_sim_flies_it(tmp_path, capsys):
+    """A held heading in a current across it: the forecast surfacings lie where the
+    simulated glider surfaces, within their 90 % ellipses."""
+    import json
+
+    import numpy as np
+    import pandas as pd
+
+    from gliderplan.cli.main import main
+    from gliderplan.planner.routing import transit_mission
+
+    text = transit_mission([(39.1, -73.4)], 4 * 3600.0, surface_every_s=3600.0)
+    mission = tmp_path / "held.mission"
+    mission.write_text(text.replace("goto_list(1000, (3906.0000, -7324.0000))",
+                                    "heading(270)"))
+    common = ["--currents", "0.1,0", "--start", "39.1,-73.9"]
+    assert main(["forecast", str(mission), "--duration", "4h", "--json", *common]) == 0
+    surfacings = json.loads(capsys.readouterr().out)["surfacings"]
+    assert main(["sim", str(mission), *common, "-o", str(tmp_path / "run")]) == 0
+    track = pd.read_parquet(tmp_path / "run" / "timeseries.parquet")
+    assert len(surfacings) >= 3
+    for s in surfacings[:3]:
+        lat = float(np.interp(s["time_s"], track["time_s"], track["lat_deg"]))
+        lon = float(np.interp(s["time_s"], track["time_s"], track["lon_deg"]))
+        west_m = -offset_m(39.1, -73.9, lat, lon)[1]
+        assert west_m > 0.5 * 0.2 * s["time_s"]  # flew west, its heading, not drifted
+        assert math.hypot(*offset_m(s["lat"], s["lon"], lat, lon)) < s["ellipse_m"][0]

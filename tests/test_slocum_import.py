@@ -244,7 +244,65 @@ YO_MA = ("behavior_name=yo\n<start:b_arg>\n b_arg: d_target_depth(m) 20\n"
          " b_arg: c_pitch_value(X) 0.45\n b_arg: num_half_cycles_to_do(nodim) -1\n<end:b_arg>\n")
 
 
+SET_HEADING_MI = ("behavior: surface\n b_arg: start_when(enum) 9\n b_arg: when_secs(sec) 3600\n"
+                  " b_arg: end_action(enum) 2\n b_arg: gps_wait_time(s) 120\n"
+                  "behavior: set_heading\n b_arg: args_from_file(enum) 10\n"
+                  "behavior: goto_list\n b_arg: args_from_file(enum) 10\n"
+                  "behavior: yo\n b_arg: args_from_file(enum) 10\n")
+
+
+def _set_heading_ma(mode: str, value: str) -> str:
+    return (f"behavior_name=set_heading\n<start:b_arg>\n b_arg: use_heading(bool) {mode}\n"
+            f" b_arg: heading_value(X) {value}\n<end:b_arg>\n")
+
+
+def test_set_heading_is_a_heading_held_uncorrected_by_both_runtimes(tmp_path, capsys):
+    # set_heading above the goto list: it commands the heading, the list is left out
+    path = _mission(tmp_path, SET_HEADING_MI, yo10_ma=YO_MA,
+                    goto_l10_ma=GOTO_MA.format(legs=-1),
+                    set_he10_ma=_set_heading_ma("1", "4.712389"))
+    out = tmp_path / "h.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert re.search(r"m\.mi:8: warning: goto_list: only the first route behavior \(\S*m\.mi:6\)",
+                     err), err
+    text = out.read_text()
+    assert "flightroute heading(270.0000011)" in text
+    assert "# use_heading 1, heading_value 4.712389 rad: 270.0000011 deg held" in text
+    assert main(["check", str(out)]) == 0
+    tracks = {}
+    for runtime in ("python", "c"):
+        assert main(["sim", str(out), "--runtime", runtime, "--start", "54.5,7.5",
+                     "--duration", "6h", "--currents", "0.1,0", "-o",
+                     str(tmp_path / runtime)]) == 0
+        tracks[runtime] = pd.read_parquet(tmp_path / runtime / "timeseries.parquet")
+    for column in ("lat_deg", "lon_deg"):
+        assert tracks["python"][column].equals(tracks["c"][column]), column
+    end = tracks["python"].iloc[-1]
+    north_m = (end["lat_deg"] - 54.5) * METRES_PER_DEGREE
+    west_m = (7.5 - end["lon_deg"]) * METRES_PER_DEGREE * np.cos(np.radians(54.5))
+    assert north_m == pytest.approx(0.1 * 6 * 3600.0, rel=0.05)  # carried, not corrected
+    assert west_m > 2000.0  # flew west, its heading
+
+
+def test_a_fin_held_is_left_out_and_says_why(tmp_path, capsys):
+    mi = SET_HEADING_MI.replace("behavior: goto_list\n b_arg: args_from_file(enum) 10\n", "")
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA, set_he10_ma=_set_heading_ma("4", "0.2"))
+    out = tmp_path / "f.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "set_he10.ma:3: warning: set_heading: not translated: use_heading 4 " \
+           "(set_he10.ma:3), heading_value 0.2 (set_he10.ma:4): a fin angle held (HM_FIN) " \
+           "turns the glider" in err
+    text = out.read_text()
+    assert "flightroute noheading" in text and "# not translated: use_heading 4" in text
+
+
 @pytest.mark.parametrize("mi, mafiles, message", [
+    ("behavior: set_heading\n b_arg: use_heading(bool) 7\n b_arg: heading_value(X) 1\n", {},
+     "m.mi:2: use_heading 7 is no mode of set_heading"),
+    ("behavior: set_heading\n b_arg: use_heading(bool) 1\n", {},
+     "m.mi:1: set_heading needs use_heading and heading_value"),
     ("behavior: yo\n  b_arg: args_from_file(enum) 10\nbehavior: loiter_about\n",
      {"yo10_ma": YO_MA}, "m.mi:3: unknown behavior 'loiter_about'"),
     ("behavior: yo\n  b_arg: args_from_file(enum) 10\n  b_arg: start_when(enum)\n",

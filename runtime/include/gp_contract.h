@@ -77,14 +77,17 @@
 #define GP_MAX_PAYLOAD 240  /**< [bytes] of one frame's payload */
 #define GP_MAX_WIRE 250  /**< [bytes] of COBS before the delimiter that a receiver accepts */
 #define GP_PLAN_PIECE 200  /**< [bytes] of plan file per PLAN frame */
-/** [bytes] of a plan sent over the link (PLAN's `total` is a u16) */
-#define GP_MAX_LINK_PLAN 65535
-/** [bytes] of one Iridium SBD mobile-terminated message, the way a plan reaches a glider at the surface (Iridium Short Burst Data Service Developers Guide: MT payload <= 1890 bytes) */
-#define GP_SBD_MT_MESSAGE_BYTES 1890
-#define GP_SBD_MO_SHORT_BYTES 340  /**< [bytes] of one short message up, glider to shore */
-#define GP_SBD_MT_SHORT_BYTES 270  /**< [bytes] of one short message down, shore to glider */
 #define GP_COMMAND_MAX_SIZE 46  /**< [bytes] of a COMMAND payload that carries every field */
+/** [bytes] of HELLO's mission hash (raw SHA-256 of the mission) */
+#define GP_MISSION_HASH_BYTES 32
+/** [bytes] of HELLO before the mission's name: protocol, n_sensors, read_mask, hash, name_len */
+#define GP_HELLO_FIXED_BYTES 39
 #define GP_NO_STATE 0xFFu  /**< COMMAND's `state` once exited; `from`/`to` of no state */
+#define GP_BAUD 115200  /**< 8N1: 10 bits per byte on the line */
+/** [ms] a frame unanswered this long is sent again (science computer's frames, runtime's HELLO) */
+#define GP_RETRANSMIT_MS 200
+/** [s] the watchdog: the runtime releases the glider after this long without a valid frame */
+#define GP_LINK_TIMEOUT_S 10.0
 
 /* ---- the sensor array: GP_SENSOR_<NAME> is the index of sensor NAME */
 
@@ -131,6 +134,7 @@ enum {
     GP_FLAG_CLIMBING = 4u,  /**< else diving */
     GP_FLAG_HEADING = 8u,  /**< `heading_rad` is valid */
     GP_FLAG_ENVELOPE = 16u,  /**< the envelope guard held this command at the vehicle's rating */
+    GP_FLAG_HEADING_HOLD = 32u,  /**< `heading_rad` is held as it is, uncorrected for the current */
 };
 
 /* ---- SENSORS's flags */
@@ -219,6 +223,8 @@ typedef enum {
     GP_UF_PROFILE_PITCH = 8,  /**< field 3 */
     GP_UF_PROFILE_BALLAST = 9,  /**< field 4 */
     GP_UF_PROFILE_SPEED = 10,  /**< field 5 */
+    /** `profile ... THRUST_W`: field 6, appended where the line has none */
+    GP_UF_PROFILE_THRUST = 11,
 } gp_update_field;
 
 /** UPDATE_STATUS's `status`: what became of a plan update (docs/plan-update.md). */
@@ -256,6 +262,10 @@ typedef enum {
     GP_LIMIT_BALLAST = 3,  /**< |pumped volume| above the pump's max_ballast */
     GP_LIMIT_BAND = 4,  /**< a yo band thinner than min_yo_band: it would turn all the time */
     GP_LIMIT_INFLECTION = 5,  /**< a yo turned again sooner than its pump can move a full stroke */
+    GP_LIMIT_SPEED = 6,  /**< a propelled speed outside the propulsion's range (0: the motor off) */
+    GP_LIMIT_THRUST = 7,  /**< a thruster's commanded power outside its range (0: off) */
+    /** the pump's energy over the last hour above its rated mean power */
+    GP_LIMIT_PUMP_ENERGY = 8,
 } gp_envelope_limit;
 
 #endif /* GP_CONTRACT_H */

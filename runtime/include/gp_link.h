@@ -21,8 +21,8 @@ typedef struct {
     const char *clock_path;      /**< NULL: the clock is left alone; else gets kHz */
     const char *key_path;        /**< NULL: no key, plans over the link are refused */
     const char *suspend_path;    /**< NULL: never sleeps; else gets "mem" between ticks */
-    double link_timeout_s;       /**< default 10 */
-    int retransmit_ms;           /**< default 200 */
+    double link_timeout_s;       /**< default GP_LINK_TIMEOUT_S */
+    int retransmit_ms;           /**< default GP_RETRANSMIT_MS */
     int naive_tracker;
 } gp_args;
 

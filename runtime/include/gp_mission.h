@@ -46,6 +46,7 @@ typedef enum {
     GP_ROUTE_WAYPOINTS = 2,
     GP_ROUTE_SWEEP = 3,
     GP_ROUTE_GOTO_LIST = 4,
+    GP_ROUTE_HEADING = 5,        /**< a compass heading held, uncorrected for the current */
 } gp_route_kind;
 
 /**
@@ -80,7 +81,8 @@ typedef struct {
 typedef struct {
     uint8_t kind;          /**< gp_route_kind */
     uint8_t n_points;
-    double param;          /**< sweep: line spacing [m]; goto_list: radius [m]; else unused */
+    double param;          /**< sweep: line spacing [m]; goto_list: radius [m];
+                                heading: the heading held [rad]; else unused */
     const double (*points)[2];  /**< (lat, lon) DDMM.MMMM; nav has one point */
 } gp_route;
 
@@ -120,6 +122,8 @@ typedef struct {
     double max_budget_j;          /**< the battery less its reserve [J] */
     double min_pitch_rad, max_pitch_rad;  /**< commanded pitch, open range [rad] */
     double max_speed_mps;         /**< the vehicle's fastest glide [m/s] */
+    double min_propelled_mps, max_propelled_mps;  /**< a level profile's speeds [m/s] */
+    double min_thrust_w, max_thrust_w;  /**< a yo's thruster command, where on [W] */
     const gp_state_bounds *states;  /**< one per state */
 } gp_plan_bounds;
 
@@ -129,6 +133,12 @@ typedef struct {
     double max_pitch_rad;        /**< largest |pitch| [rad] */
     double min_yo_band_m;        /**< thinnest yo band [m] */
     double min_inflection_s;     /**< shortest time between two turns of a yo [s] */
+    double min_speed_mps, max_speed_mps;  /**< a propelled speed: 0 (off) or within [m/s] */
+    double min_thrust_w, max_thrust_w;    /**< a thruster's command: 0 (off) or within [W] */
+    double max_turn_rate_rad_s;  /**< the fastest the vehicle turns [rad/s]; INFINITY: any */
+    double max_pump_power_w;     /**< the pump's mean power over an hour [W]; INFINITY: any */
+    double pump_out_j_per_cc, pump_out_j_per_cc_m;  /**< pumping out at z: (a + b z) [J/cc] */
+    double pump_in_j_per_cc, pump_in_j_per_cc_m;    /**< pumping in: max(0, a + b z) [J/cc] */
     uint8_t action;              /**< gp_envelope_action */
 } gp_envelope;
 

@@ -1,7 +1,8 @@
 /**
  * @file gp_route.h
- * @brief Flight routes (docs/pilot.md): nav, noheading, waypoints, Slocum's looping
- *        goto list, and the area sweep of a convex hull turned into lawn-mower waypoints.
+ * @brief Flight routes (docs/pilot.md): nav, noheading, a heading held (Slocum's
+ *        set_heading), waypoints, Slocum's looping goto list, and the area sweep of a
+ *        convex hull turned into lawn-mower waypoints.
  */
 #ifndef GP_ROUTE_H
 #define GP_ROUTE_H
@@ -47,6 +48,7 @@ void gp_route_fill(gp_route_state *rs, const gp_route *route);
  * @brief Heading to fly from the current position (DDMM.MMMM readings). A waypoint within
  *        the radius is reached: `reached` counts it, and the route flies on to the next
  *        (a list that does not loop counts its last once, then holds the heading to it).
+ *        A heading route holds its heading, with or without a position fix.
  * @param heading_rad true heading, clockwise from north, [0, 2 pi)
  * @return 1 if the heading is valid, 0 (noheading, no position fix)
  */

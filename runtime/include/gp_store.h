@@ -32,7 +32,9 @@
 #include "gp_runtime.h"
 
 #define GP_PATH_MAX 1024
-#define GP_CHECKPOINT_MAGIC "GPCKPT05"
+#define GP_CHECKPOINT_MAGIC "GPCKPT06"
+/** The envelope guard's figures a checkpoint keeps (gp_envelope_memory's doubles). */
+#define GP_ENVELOPE_MEMORY_FIGURES 6
 /** Header to first slot, slot to slot: a flash page, so a torn write stays in its slot. */
 #define GP_CHECKPOINT_SLOT_BYTES 4096
 /** The journal after the slots: four flash pages, 341 Fig. 2 ticks between records. */
@@ -49,7 +51,7 @@
      + 8 * GP_MAX_VARIABLES + 8 * GP_N_SENSORS                                           \
      + 4 + 4 + 8 * 3 + 8 * 3 + 16 * GP_TRACK_WINDOW  /* pilot */                         \
      + 2 + 4                                   /* route: waypoint, waypoints reached */  \
-     + 3 + 8                                   /* envelope: flags, last turn */          \
+     + 5 + 8 * GP_ENVELOPE_MEMORY_FIGURES      /* envelope: flags, figures */            \
      + 1 + GP_COMMAND_MAX_SIZE                 /* last COMMAND */                        \
      + 4)                                      /* CRC-32 */
 

@@ -37,7 +37,7 @@ static const char *shown(const char *text, char *out, size_t cap)
 int gp_args_parse(int argc, char **argv, gp_args *out, char *error, size_t cap)
 {
     char quoted[65];
-    *out = (gp_args){.link_timeout_s = 10.0, .retransmit_ms = 200};
+    *out = (gp_args){.link_timeout_s = GP_LINK_TIMEOUT_S, .retransmit_ms = GP_RETRANSMIT_MS};
     for (int i = 1; i < argc; i++) {
         const char *option = argv[i];
         const char *value = i + 1 < argc ? argv[i + 1] : NULL;

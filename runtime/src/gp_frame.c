@@ -368,20 +368,20 @@ size_t gp_hello_pack(const gp_mission *mission, uint8_t *p)
     p[1] = GP_N_SENSORS;
     put_u32(p + 2, mission->read_mask);
     const char *hash = mission->hash;
-    for (int i = 0; i < 32; i++) {
+    for (int i = 0; i < GP_MISSION_HASH_BYTES; i++) {
         int hi = hash ? hex_digit(hash[2 * i]) : -1;
         int lo = hi >= 0 ? hex_digit(hash[2 * i + 1]) : -1;
         p[6 + i] = (hi < 0 || lo < 0) ? 0 : (uint8_t)(hi * 16 + lo);
     }
     size_t name_len = mission->name ? strlen(mission->name) : 0;
-    if (name_len > GP_MAX_PAYLOAD - 39) {
-        name_len = GP_MAX_PAYLOAD - 39;
+    if (name_len > GP_MAX_PAYLOAD - GP_HELLO_FIXED_BYTES) {
+        name_len = GP_MAX_PAYLOAD - GP_HELLO_FIXED_BYTES;
     }
-    p[38] = (uint8_t)name_len;
+    p[GP_HELLO_FIXED_BYTES - 1] = (uint8_t)name_len;
     if (name_len > 0) {
-        memcpy(p + 39, mission->name, name_len);
+        memcpy(p + GP_HELLO_FIXED_BYTES, mission->name, name_len);
     }
-    return 39 + name_len;
+    return GP_HELLO_FIXED_BYTES + name_len;
 }
 
 gp_frame_error gp_plan_piece_unpack(const gp_frame *frame, uint16_t *offset, uint16_t *total,

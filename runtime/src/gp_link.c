@@ -580,15 +580,19 @@ static int on_sensors(link_state *s, const gp_frame *frame)
     return -1;
 }
 
-/* What became of a plan sent over the link: on stderr, and appended to the state
- * directory's plans.log (`time_s accepted|rejected seq message`), which outlives a
- * restart as the event log does. */
-static void note_plan(link_state *s, int accepted, const char *status)
+enum { WHOLE_PLAN, PLAN_UPDATE };  /* what note_plan tells of */
+
+/* What became of a plan, or a plan update, sent over the link: on stderr, and appended
+ * to the state directory's plans.log (`time_s accepted|rejected seq [update: ]message`),
+ * which outlives a restart as the event log does. `seq` is the plan in force once
+ * accepted, 0 if not. */
+static void note_plan(link_state *s, int update, int accepted, const char *message)
 {
+    static const char *const said[2][2] = {{"rejected", "accepted"}, {"refused", "applied"}};
     char line[ERROR_LEN];
-    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
-    snprintf(line, sizeof line, "plan over the link %s (seq %lu): %.300s",
-             accepted ? "accepted" : "rejected", (unsigned long)(accepted ? plan.seq : 0), status);
+    unsigned long seq = accepted ? (unsigned long)plan.seq : 0;
+    snprintf(line, sizeof line, "plan%s over the link %s (seq %lu): %.300s",
+             update == PLAN_UPDATE ? " update" : "", said[update][accepted != 0], seq, message);
     say(s, line);
     char path[GP_PATH_MAX];
     if (!s->args->state_dir || gp_path_join(s->args->state_dir, "plans.log", path) < 0) {
@@ -598,10 +602,11 @@ static void note_plan(link_state *s, int accepted, const char *status)
     if (fd < 0) {
         return;
     }
-    int n = snprintf(line, sizeof line, "%.17g %s %lu %.300s\n", isnan(time_s) ? 0 : time_s,
-                     accepted ? "accepted" : "rejected",
-                     (unsigned long)(accepted ? plan.seq : 0), status);
-    if (n > 0 && write(fd, line, (size_t)n) == n) {
+    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
+    int n = snprintf(line, sizeof line, "%.17g %s %lu %s%.300s\n", isnan(time_s) ? 0 : time_s,
+                     said[WHOLE_PLAN][accepted != 0], seq, update == PLAN_UPDATE ? "update: " : "",
+                     message);
+    if (n > 0 && (size_t)n < sizeof line && write(fd, line, (size_t)n) == n) {
         fsync(fd);
     }
     close(fd);
@@ -647,35 +652,8 @@ static void on_plan(link_state *s, const gp_frame *frame)
         }
     }
     snprintf(status, sizeof status, "%s", accepted ? "ok" : error);
-    note_plan(s, accepted, status);
+    note_plan(s, WHOLE_PLAN, accepted, status);
     send_frame(s, GP_MSG_PLAN_STATUS, gp_plan_status_pack(accepted, status, outgoing(s)));
-}
-
-/* What became of a plan update sent over the link: on stderr and in plans.log, as plans. */
-static void note_update(link_state *s, gp_update_status status, const char *message)
-{
-    int applied = status == GP_UPDATE_APPLIED || status == GP_UPDATE_DUPLICATE;
-    char line[ERROR_LEN];
-    unsigned long seq = applied ? (unsigned long)plan.seq : 0;
-    snprintf(line, sizeof line, "plan update over the link %s (seq %lu): %.300s",
-             applied ? "applied" : "refused", seq, message);
-    say(s, line);
-    char path[GP_PATH_MAX];
-    if (!s->args->state_dir || gp_path_join(s->args->state_dir, "plans.log", path) < 0) {
-        return;
-    }
-    int fd = open(path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        return;
-    }
-    double time_s = runtime.sensors[GP_SENSOR_MISSIONTIME];
-    int n = snprintf(line, sizeof line, "%.17g %s %lu update: %.300s\n",
-                     isnan(time_s) ? 0 : time_s, applied ? "accepted" : "rejected", seq,
-                     message);
-    if (n > 0 && write(fd, line, (size_t)n) == n) {
-        fsync(fd);
-    }
-    close(fd);
 }
 
 /* Make the update in update_rx (`len` bytes) the plan in force, or say why not. The new
@@ -705,7 +683,8 @@ static void apply_update(link_state *s, size_t len)
     } else if (status == GP_UPDATE_APPLIED) {
         adopt_plan(s, plan_text, new_len);
     }
-    note_update(s, status, message);
+    note_plan(s, PLAN_UPDATE, status == GP_UPDATE_APPLIED || status == GP_UPDATE_DUPLICATE,
+              message);
     uint32_t seq = s->has_plan && plan_auth ? auth.last_seq : 0;
     send_frame(s, GP_MSG_UPDATE_STATUS,
                gp_update_status_pack((uint8_t)status, seq, message, outgoing(s)));
@@ -725,7 +704,7 @@ static void on_update(link_state *s, const gp_frame *frame)
         char message[GP_UPDATE_MESSAGE_LEN];
         snprintf(message, sizeof message, "the update has %u bytes, more than %d",
                  (unsigned)total, GP_MAX_UPDATE_BYTES);
-        note_update(s, GP_UPDATE_MALFORMED, message);
+        note_plan(s, PLAN_UPDATE, 0, message);
         send_frame(s, GP_MSG_UPDATE_STATUS,
                    gp_update_status_pack(GP_UPDATE_MALFORMED, plan_auth ? auth.last_seq : 0,
                                          message, outgoing(s)));

@@ -782,7 +782,9 @@ enum { COMPUTER_LINE = 4, BUDGET_LINE = 5, PREDICTED_LINE = 6 };
 /* A mission table without bounds holds a plan to the contract's. */
 static const gp_plan_bounds contract_bounds = {
     .board = NULL, .max_budget_j = GP_MAX_PLAN_ENERGY_J, .min_pitch_rad = 0,
-    .max_pitch_rad = HALF_PI, .max_speed_mps = GP_MAX_PLAN_SPEED_MPS, .states = NULL,
+    .max_pitch_rad = HALF_PI, .max_speed_mps = GP_MAX_PLAN_SPEED_MPS,
+    .min_propelled_mps = 0, .max_propelled_mps = GP_MAX_PLAN_SPEED_MPS,
+    .min_thrust_w = 0, .max_thrust_w = GP_MAX_PLAN_THRUST_W, .states = NULL,
 };
 
 static int refuse(char error[GP_PLAN_ERROR_LEN], int line, const char *format, ...)
@@ -834,11 +836,23 @@ static int check_state(const gp_plan_state *ps, const gp_state *state,
                               "BALLAST_CC 0 fly it level on a propeller, and the vehicle has "
                               "none", state->name, k);
             }
-            continue;  /* no glide: its speed is the contract's to bound */
+            if (above(b->min_propelled_mps, p->speed_mps)
+                || above(p->speed_mps, b->max_propelled_mps)) {
+                return refuse(error, ps->line, "state %.32s: profile %d: SPEED_MPS %g outside "
+                              "the vehicle's propulsion (%g-%g m/s)", state->name, k,
+                              p->speed_mps, b->min_propelled_mps, b->max_propelled_mps);
+            }
+            continue;  /* no glide */
         }
         if (p->thrust_w > 0 && !(mission->unplanned_speed_mps > 0)) {
             return refuse(error, ps->line, "state %.32s: profile %d: THRUST_W %g on a vehicle "
                           "without a thruster", state->name, k, p->thrust_w);
+        }
+        if (p->thrust_w > 0 && (above(b->min_thrust_w, p->thrust_w)
+                                || above(p->thrust_w, b->max_thrust_w))) {
+            return refuse(error, ps->line, "state %.32s: profile %d: THRUST_W %g outside the "
+                          "vehicle's thruster (%g-%g W)", state->name, k, p->thrust_w,
+                          b->min_thrust_w, b->max_thrust_w);
         }
         if (!(b->min_pitch_rad < p->pitch_rad && p->pitch_rad < b->max_pitch_rad)) {
             return refuse(error, ps->line, "state %.32s: profile %d: PITCH_RAD %g outside the "

@@ -179,7 +179,7 @@ void gp_route_fill(gp_route_state *rs, const gp_route *route)
                                              rs->waypoints);
         return;
     }
-    if (route->kind == GP_ROUTE_NOHEADING) {
+    if (route->kind == GP_ROUTE_NOHEADING || route->kind == GP_ROUTE_HEADING) {
         return;
     }
     for (int i = 0; i < route->n_points && i < GP_MAX_ROUTE_POINTS; i++) {
@@ -206,6 +206,10 @@ int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, do
                   double *heading_rad)
 {
     *heading_rad = 0.0;
+    if (route->kind == GP_ROUTE_HEADING) {  /* a compass needs no position fix */
+        *heading_rad = route->param;
+        return 1;
+    }
     if (route->kind == GP_ROUTE_NOHEADING || rs->n_waypoints == 0
         || !isfinite(lat_ddmm) || !isfinite(lon_ddmm)) {
         return 0;

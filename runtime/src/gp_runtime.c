@@ -62,7 +62,9 @@ static gp_envelope_breach fly(gp_runtime *rt, const gp_mission *mission, const g
     int heading_valid = gp_route_step(&rt->route, &state->route, rt->sensors[GP_SENSOR_LAT],
                                       rt->sensors[GP_SENSOR_LON], &heading);
     cmd->profile = now.profile;
-    cmd->flags = (uint8_t)(vertical.flags | (heading_valid ? GP_FLAG_HEADING : 0));
+    int holds = heading_valid && state->route.kind == GP_ROUTE_HEADING;
+    cmd->flags = (uint8_t)(vertical.flags | (heading_valid ? GP_FLAG_HEADING : 0)
+                           | (holds ? GP_FLAG_HEADING_HOLD : 0));
     cmd->depth_target_m = (float)vertical.depth_target_m;
     cmd->pitch_rad = (float)vertical.pitch_rad;
     cmd->ballast_cc = (float)vertical.ballast_cc;
@@ -72,7 +74,8 @@ static gp_envelope_breach fly(gp_runtime *rt, const gp_mission *mission, const g
     cmd->sensor_power = now.sensor_power;
     int yo = profile->kind == GP_PROFILE_YO || profile->kind == GP_PROFILE_THERMOTRACKYO;
     return gp_envelope_hold(&mission->envelope, mission->max_ballast_cc, &rt->envelope, entered,
-                            yo ? in.args : NULL, rt->sensors[GP_SENSOR_MISSIONTIME], cmd);
+                            yo ? in.args : NULL, rt->sensors[GP_SENSOR_MISSIONTIME],
+                            rt->sensors[GP_SENSOR_DEPTH], cmd);
 }
 
 /* The mission has ended on a guard: the glider surfaces and holds there. */

@@ -16,9 +16,14 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "gp_contract.h"
+
 #define WRITE_WAIT_MS 1000  /* [ms] the longest a frame waits for room on the line */
 #define DRAIN_NAP_MS 10     /* [ms] between looks at the output queue */
 #define HUNG_UP_NAP_MS 50  /* [ms] the longest wait on a line nobody holds */
+
+/* termios names its speeds: the contract's line speed is the one set below. */
+_Static_assert(GP_BAUD == 115200, "make_raw sets B115200: set the contract's GP_BAUD");
 
 /* Raw 115200 8N1, no flow control; reads return what is there (VMIN = VTIME = 0). */
 static int make_raw(int fd)

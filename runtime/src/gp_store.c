@@ -80,10 +80,14 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
     put(&w, pilot->window, sizeof pilot->window[0] * n_window);
     put(&w, &rt->route.next, 2);
     put(&w, &rt->route.reached, 4);
-    const uint8_t envelope_head[3] = {rt->envelope.turned, rt->envelope.climbing,
-                                      rt->envelope.held};
+    const gp_envelope_memory *guard = &rt->envelope;
+    const uint8_t envelope_head[5] = {guard->turned, guard->climbing, guard->held,
+                                      guard->headed, guard->pumped};
     put(&w, envelope_head, sizeof envelope_head);
-    put(&w, &rt->envelope.last_turn_s, 8);
+    const double envelope_figures[GP_ENVELOPE_MEMORY_FIGURES] = {
+        guard->last_turn_s, guard->heading_rad, guard->heading_s, guard->ballast_cc,
+        guard->pump_s, guard->pump_j};
+    put(&w, envelope_figures, sizeof envelope_figures);
     uint8_t *command_len = w.at++;  /* the last COMMAND as the link sends it whole */
     *command_len = (uint8_t)gp_command_pack(&rt->last_command, NULL, w.at);
     w.at += *command_len;
@@ -157,12 +161,22 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     get(&r, pilot->window, sizeof pilot->window[0] * pilot->n_window);
     get(&r, &loaded.route.next, 2);
     get(&r, &loaded.route.reached, 4);
-    uint8_t envelope_head[3];
+    uint8_t envelope_head[5];
+    double envelope_figures[GP_ENVELOPE_MEMORY_FIGURES];
     get(&r, envelope_head, sizeof envelope_head);
-    loaded.envelope.turned = envelope_head[0];
-    loaded.envelope.climbing = envelope_head[1];
-    loaded.envelope.held = envelope_head[2];
-    get(&r, &loaded.envelope.last_turn_s, 8);
+    get(&r, envelope_figures, sizeof envelope_figures);
+    gp_envelope_memory *guard = &loaded.envelope;
+    guard->turned = envelope_head[0];
+    guard->climbing = envelope_head[1];
+    guard->held = envelope_head[2];
+    guard->headed = envelope_head[3];
+    guard->pumped = envelope_head[4];
+    guard->last_turn_s = envelope_figures[0];
+    guard->heading_rad = envelope_figures[1];
+    guard->heading_s = envelope_figures[2];
+    guard->ballast_cc = envelope_figures[3];
+    guard->pump_s = envelope_figures[4];
+    guard->pump_j = envelope_figures[5];
     uint8_t command_len;
     get(&r, &command_len, 1);
     gp_frame command = {GP_MSG_COMMAND, 0, 0, command_len, r.at};

@@ -15,7 +15,7 @@
 #define MIN_UPDATE_BYTES (GP_UPDATE_HEADER_BYTES + TAG_BYTES)
 #define VARINT_BYTES 8        /* 56 bits: a line or a mantissa fits with room */
 #define NUMBER_TEXT 48        /* gp_update_decimal_text's longest text and its NUL */
-#define LINE_ROOM 512         /* a line of 255 bytes with five fields made 38 bytes longer */
+#define LINE_ROOM 512         /* a line of 255 bytes with six fields made 38 bytes longer */
 #define MAX_MANTISSA 999999999999999LL  /* GP_UPDATE_MAX_DIGITS nines */
 
 typedef struct {
@@ -25,16 +25,19 @@ typedef struct {
     int8_t exponent;
 } change;
 
-/* Each field's line keyword and the field's place after it (contract.UPDATE_FIELD_LINES). */
+/* Each field's line keyword, the field's place after it (contract.UPDATE_FIELD_LINES) and
+ * whether a line may leave it out (contract.UPDATE_OPTIONAL_FIELDS: then appended). */
 static const struct {
     const char *keyword;
     uint8_t place;
+    uint8_t optional;
 } FIELD_LINES[] = {
-    [GP_UF_STATE_CLOCK] = {"state", 2},      [GP_UF_STATE_CYCLE] = {"state", 3},
-    [GP_UF_POWER_SLEEP] = {"power", 1},      [GP_UF_POWER_CYCLES] = {"power", 2},
-    [GP_UF_SENSOR_PERIOD] = {"sensor", 2},   [GP_UF_SENSOR_ON] = {"sensor", 3},
-    [GP_UF_PROFILE_SHARE] = {"profile", 2},  [GP_UF_PROFILE_PITCH] = {"profile", 3},
-    [GP_UF_PROFILE_BALLAST] = {"profile", 4}, [GP_UF_PROFILE_SPEED] = {"profile", 5},
+    [GP_UF_STATE_CLOCK] = {"state", 2, 0},      [GP_UF_STATE_CYCLE] = {"state", 3, 0},
+    [GP_UF_POWER_SLEEP] = {"power", 1, 0},      [GP_UF_POWER_CYCLES] = {"power", 2, 0},
+    [GP_UF_SENSOR_PERIOD] = {"sensor", 2, 0},   [GP_UF_SENSOR_ON] = {"sensor", 3, 0},
+    [GP_UF_PROFILE_SHARE] = {"profile", 2, 0},  [GP_UF_PROFILE_PITCH] = {"profile", 3, 0},
+    [GP_UF_PROFILE_BALLAST] = {"profile", 4, 0}, [GP_UF_PROFILE_SPEED] = {"profile", 5, 0},
+    [GP_UF_PROFILE_THRUST] = {"profile", 6, 1},
 };
 #define N_FIELD_CODES ((int)(sizeof FIELD_LINES / sizeof FIELD_LINES[0]))
 
@@ -193,15 +196,26 @@ static void put(writer *w, const char *bytes, size_t n)
     w->len += n;
 }
 
-/* `line` (`len` bytes, no LF) with field `place` set to `value`, in `room` (LINE_ROOM).
+/* `line` (`len` bytes, no LF) with field `place` set to `value`, in `room` (LINE_ROOM);
+ * an `optional` field the line leaves out (it ends one field before) is appended.
  * @return the new length, or -1 if the line has no such field */
-static long set_field(const char *line, size_t len, int place, const char *value, char *room)
+static long set_field(const char *line, size_t len, int place, int optional,
+                      const char *value, char *room)
 {
     size_t start = 0;
     for (int field = 0; field < place; field++) {
         const char *space = memchr(line + start, ' ', len - start);
         if (!space) {
-            return -1;
+            size_t n = strlen(value);
+            if (!optional || field != place - 1 || len + 1 + n >= LINE_ROOM) {
+                return -1;
+            }
+            char copy[LINE_ROOM];
+            memcpy(copy, line, len);
+            memcpy(room, copy, len);
+            room[len] = ' ';
+            memcpy(room + len + 1, value, n);
+            return (long)(len + 1 + n);
         }
         start = (size_t)(space - line) + 1;
     }
@@ -209,7 +223,7 @@ static long set_field(const char *line, size_t len, int place, const char *value
     size_t stop = space ? (size_t)(space - line) : len;
     size_t n = strlen(value);
     if (start + n + (len - stop) >= LINE_ROOM) {
-        return -1;  /* cannot happen: LINE_ROOM holds five longest values on a 255-byte line */
+        return -1;  /* cannot happen: LINE_ROOM holds six longest values on a 255-byte line */
     }
     char copy[LINE_ROOM];
     memcpy(copy, line, len);
@@ -265,7 +279,8 @@ static gp_update_status make_plan(verdict *v, const char *held, size_t held_len,
             char value[NUMBER_TEXT];
             gp_update_decimal_text(c->mantissa, c->exponent, value);
             long made = keyword_is(line, len, FIELD_LINES[c->field].keyword)
-                            ? set_field(line, len, FIELD_LINES[c->field].place, value, room)
+                            ? set_field(line, len, FIELD_LINES[c->field].place,
+                                        FIELD_LINES[c->field].optional, value, room)
                             : -1;
             if (made < 0) {
                 return say(v, GP_UPDATE_MALFORMED, "change %d: line %lu is no '%s' line with "

@@ -6,6 +6,9 @@
     X(test_envelope_should_pass_a_command_within_the_rating)                \
     X(test_envelope_should_name_each_limit_a_command_breaks)                \
     X(test_envelope_should_stop_a_yo_turning_faster_than_its_pump)          \
+    X(test_envelope_should_hold_speed_and_thrust_to_the_propulsion_s_range) \
+    X(test_envelope_should_turn_a_heading_no_faster_than_the_vehicle)       \
+    X(test_envelope_should_stop_a_pump_working_past_its_energy_per_hour)    \
     X(test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates)  \
     X(test_envelope_check_should_refuse_no_envelope)                        \
     X(test_envelope_should_say_what_it_did_in_the_simulator_s_words)        \
@@ -35,11 +38,13 @@
     X(test_ddmm_should_equal_the_fmod_definition)                           \
     X(test_nav_should_head_to_its_point)                                    \
     X(test_noheading_and_missing_fix_should_give_no_heading)                \
+    X(test_heading_should_be_held_with_or_without_a_fix_and_reach_nothing)  \
     X(test_waypoints_should_advance_within_50_m_and_hold_the_last)          \
     X(test_goto_list_should_loop_with_its_radius_and_report_the_distance)   \
     X(test_sweep_should_mow_a_square_in_alternating_lines)                  \
     X(test_sweep_should_clip_lines_to_a_triangle)                           \
     X(test_sweep_should_stop_at_256_waypoints)                              \
+    X(test_sweep_should_read_every_corner_a_route_holds)                    \
     X(test_plan_should_accept_a_good_plan)                                  \
     X(test_plan_should_read_a_yos_thrust_and_a_level_profile)               \
     X(test_plan_should_reject_bad_files_naming_the_line)                    \
@@ -97,6 +102,7 @@
     X(test_update_should_refuse_forged_stale_and_replayed_updates_and_other_plans) \
     X(test_update_should_refuse_malformed_updates_naming_the_change)        \
     X(test_update_should_refuse_a_plan_the_reader_refuses)                  \
+    X(test_update_should_set_a_thrusters_power_within_its_rating)           \
     X(test_update_decimal_text_should_write_plan_numbers)                   \
     X(test_random_updates_should_never_crash_the_applier)                   \
     X(test_signed_plan_should_refuse_unsigned_tampered_replayed_and_foreign_plans) \

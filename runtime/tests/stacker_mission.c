@@ -5,6 +5,8 @@
  */
 #include <stddef.h>
 
+#include <math.h>
+
 #include "gp_mission.h"
 
 #define MISSIONTIME GP_SENSOR_MISSIONTIME
@@ -42,7 +44,10 @@ const gp_mission gp_mission_table = {
     .reserve_j = 1.17e6,  /* 15 % of the 7.8 MJ pack Fig. 2 flies without annotations */
     /* the shallow Slocum's envelope (its vehicle file): 100 m, 2 x its 26 deg, its 3 m
      * nominal top, a full stroke of 466 cc at 42.09 cc/s; surface on a breach */
-    .envelope = {100.0, 0.9075712110370514, 3.0, 11.07, GP_ENVELOPE_SURFACE},
+    .envelope = {.max_depth_m = 100.0, .max_pitch_rad = 0.9075712110370514,
+                 .min_yo_band_m = 3.0, .min_inflection_s = 11.07,
+                 .max_turn_rate_rad_s = INFINITY, .max_pump_power_w = INFINITY,
+                 .action = GP_ENVELOPE_SURFACE},
     .clocks_mhz = clocks_mhz,
     .n_clocks = 2,
     .sensor_names = sensor_names,

@@ -28,8 +28,8 @@ void test_args_should_parse_every_option(void)
     CHECK_INT(parse(3, argv, &args, error), 0);
     CHECK(args.plan_path == NULL && args.state_dir == NULL && args.clock_path == NULL
           && args.suspend_path == NULL && args.key_path == NULL);
-    CHECK_NEAR(args.link_timeout_s, 10, 0);
-    CHECK_INT(args.retransmit_ms, 200);
+    CHECK_NEAR(args.link_timeout_s, GP_LINK_TIMEOUT_S, 0);
+    CHECK_INT(args.retransmit_ms, GP_RETRANSMIT_MS);
     CHECK_INT(args.naive_tracker, 0);
 }
 

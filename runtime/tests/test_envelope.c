@@ -7,7 +7,12 @@
 #include "gp_runtime.h"
 #include "gp_test.h"
 
-static const gp_envelope SURFACE = {100.0, 0.9, 3.0, 11.0, GP_ENVELOPE_SURFACE};
+static const gp_envelope SURFACE = {
+    .max_depth_m = 100.0, .max_pitch_rad = 0.9, .min_yo_band_m = 3.0, .min_inflection_s = 11.0,
+    .min_speed_mps = 0.5, .max_speed_mps = 1.5, .min_thrust_w = 1.0, .max_thrust_w = 9.0,
+    .max_turn_rate_rad_s = 0.15, .max_pump_power_w = 2.0,
+    .pump_out_j_per_cc = 1.0, .pump_out_j_per_cc_m = 0.01, .pump_in_j_per_cc = 0.5,
+    .pump_in_j_per_cc_m = -0.001, .action = GP_ENVELOPE_SURFACE};
 
 static gp_command command(double depth_m, double pitch_rad, double ballast_cc, int climbing)
 {
@@ -25,7 +30,7 @@ void test_envelope_should_pass_a_command_within_the_rating(void)
     gp_envelope_memory memory = {0};
     gp_command cmd = command(10.0, -0.454, -233.0, 0);
     double band[2] = {5.0, 10.0};
-    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 0.0, &cmd);
+    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 0.0, NAN, &cmd);
     CHECK_INT(b.limit, GP_LIMIT_NONE);
     CHECK_INT(cmd.flags & GP_FLAG_ENVELOPE, 0);
     CHECK(gp_envelope_check(&SURFACE) == NULL);
@@ -44,7 +49,7 @@ void test_envelope_should_name_each_limit_a_command_breaks(void)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         gp_envelope_memory memory = {0};
         gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, cases[i].band, 0.0,
-                                                &cases[i].cmd);
+                                                NAN, &cases[i].cmd);
         CHECK_INT(b.limit, cases[i].limit);
         CHECK(fabs(b.value - cases[i].value) < 1e-6 || (isnan(b.value) && isnan(cases[i].value)));
         CHECK(gp_envelope_ends(&SURFACE, &b));
@@ -52,13 +57,13 @@ void test_envelope_should_name_each_limit_a_command_breaks(void)
     gp_envelope_memory memory = {0};
     gp_command cmd = command(10.0, -0.454, -233.0, 0);
     double deep[2] = {5.0, 3000.0}, thin[2] = {5.0, 6.0}, upside_down[2] = {5.0, -1000.0};
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, deep, 0, &cmd).limit,
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, deep, 0, NAN, &cmd).limit,
               GP_LIMIT_DEPTH);
-    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, thin, 0, &cmd);
+    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, thin, 0, NAN, &cmd);
     CHECK_INT(b.limit, GP_LIMIT_BAND);
     CHECK_NEAR(b.value, 1.0, 1e-12);
     CHECK_NEAR(b.bound, 3.0, 1e-12);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, upside_down, 0, &cmd).limit,
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, upside_down, 0, NAN, &cmd).limit,
               GP_LIMIT_DEPTH);
 }
 
@@ -67,19 +72,19 @@ void test_envelope_should_stop_a_yo_turning_faster_than_its_pump(void)
     gp_envelope_memory memory = {0};
     double band[2] = {5.0, 10.0};
     gp_command dive = command(10.0, -0.454, -233.0, 0), climb = command(5.0, 0.454, 233.0, 1);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 0.0, &dive).limit, 0);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 4.0, &climb).limit, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 0.0, NAN, &dive).limit, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 4.0, NAN, &climb).limit, 0);
     dive = command(10.0, -0.454, -233.0, 0);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 40.0, &dive).limit, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 40.0, NAN, &dive).limit, 0);
     climb = command(5.0, 0.454, 233.0, 1);
-    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 44.0, &climb);
+    gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 44.0, NAN, &climb);
     CHECK_INT(b.limit, GP_LIMIT_INFLECTION);
     CHECK_NEAR(b.value, 4.0, 1e-12);
     /* a new profile turns afresh: its first turn is never too soon */
     dive = command(10.0, -0.454, -233.0, 0);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 45.0, &dive).limit, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, 45.0, NAN, &dive).limit, 0);
     climb = command(5.0, 0.454, 233.0, 1);
-    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 46.0, &climb).limit, 0);
+    CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, 46.0, NAN, &climb).limit, 0);
 }
 
 void test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates(void)
@@ -88,7 +93,7 @@ void test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates(void)
     clamp.action = GP_ENVELOPE_CLAMP;
     gp_envelope_memory memory = {0};
     gp_command cmd = command(812.0, -1.2, -560.0, 0);
-    gp_envelope_breach b = gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, &cmd);
+    gp_envelope_breach b = gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
     CHECK_INT(b.limit, GP_LIMIT_DEPTH);
     CHECK(!gp_envelope_ends(&clamp, &b));
     CHECK_NEAR(cmd.depth_target_m, 100.0, 0);
@@ -97,24 +102,169 @@ void test_envelope_clamp_should_hold_values_at_the_edge_and_end_on_rates(void)
     CHECK(cmd.flags & GP_FLAG_ENVELOPE);
     CHECK(memory.held);
     cmd = command(NAN, 0.454, 233.0, 1);
-    b = gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, &cmd);
+    b = gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
     CHECK(gp_envelope_ends(&clamp, &b));  /* a NaN has no edge */
     double thin[2] = {5.0, 5.5};
     cmd = command(5.5, -0.454, -233.0, 0);
-    b = gp_envelope_hold(&clamp, 233.0, &memory, 1, thin, 0.0, &cmd);
+    b = gp_envelope_hold(&clamp, 233.0, &memory, 1, thin, 0.0, NAN, &cmd);
     CHECK_INT(b.limit, GP_LIMIT_BAND);
     CHECK(gp_envelope_ends(&clamp, &b));
 }
 
+static gp_command propelled(double speed_mps, double thrust_w)
+{
+    gp_command cmd = command(10.0, 0.0, 0.0, 0);
+    cmd.speed_mps = (float)speed_mps;
+    cmd.thrust_w = (float)thrust_w;
+    return cmd;
+}
+
+void test_envelope_should_hold_speed_and_thrust_to_the_propulsion_s_range(void)
+{
+    struct { double speed, thrust; uint8_t limit; double bound; float held; } cases[] = {
+        {0.0, 0.0, GP_LIMIT_NONE, 0.0, 0.0f},     /* the motor off */
+        {1.5, 9.0, GP_LIMIT_NONE, 0.0, 1.5f},     /* the top of both ranges */
+        {2.5, 0.0, GP_LIMIT_SPEED, 1.5, 1.5f},    /* above the table's top */
+        {0.2, 0.0, GP_LIMIT_SPEED, 0.5, 0.5f},    /* below the slowest it runs */
+        {-1.0, 0.0, GP_LIMIT_SPEED, 0.5, 0.0f},   /* astern: held off */
+        {1.0, 20.0, GP_LIMIT_THRUST, 9.0, 9.0f},  /* the thruster past its command range */
+        {NAN, 0.0, GP_LIMIT_SPEED, 0.5, 0.0f},    /* no side: never held */
+    };
+    gp_envelope clamp = SURFACE;
+    clamp.action = GP_ENVELOPE_CLAMP;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        gp_envelope_memory memory = {0};
+        gp_command cmd = propelled(cases[i].speed, cases[i].thrust);
+        gp_envelope_breach b = gp_envelope_hold(&SURFACE, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
+        CHECK_INT(b.limit, cases[i].limit);
+        CHECK_INT(gp_envelope_ends(&SURFACE, &b), cases[i].limit != GP_LIMIT_NONE);
+        if (cases[i].limit != GP_LIMIT_NONE) {
+            CHECK_NEAR(b.bound, cases[i].bound, 0);
+        }
+        memory = (gp_envelope_memory){0};
+        cmd = propelled(cases[i].speed, cases[i].thrust);
+        b = gp_envelope_hold(&clamp, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
+        if (cases[i].limit == GP_LIMIT_SPEED && !isnan(cases[i].speed)) {
+            CHECK(!gp_envelope_ends(&clamp, &b));
+            CHECK_NEAR(cmd.speed_mps, cases[i].held, 0);
+            CHECK(cmd.flags & GP_FLAG_ENVELOPE);
+        } else if (cases[i].limit == GP_LIMIT_THRUST) {
+            CHECK_NEAR(cmd.thrust_w, cases[i].held, 0);
+        }
+    }
+    gp_envelope glider = SURFACE;  /* no propulsion: any speed at all is out of range */
+    glider.min_speed_mps = glider.max_speed_mps = 0.0;
+    gp_envelope_memory memory = {0};
+    gp_command cmd = propelled(0.3, 0.0);
+    CHECK_INT(gp_envelope_hold(&glider, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd).limit,
+              GP_LIMIT_SPEED);
+}
+
+static gp_command headed(double heading_rad)
+{
+    gp_command cmd = command(10.0, -0.454, -233.0, 0);
+    cmd.heading_rad = (float)heading_rad;
+    cmd.flags |= GP_FLAG_HEADING;
+    return cmd;
+}
+
+void test_envelope_should_turn_a_heading_no_faster_than_the_vehicle(void)
+{
+    static const uint8_t actions[] = {GP_ENVELOPE_FAULT, GP_ENVELOPE_SURFACE, GP_ENVELOPE_CLAMP};
+    for (size_t a = 0; a < sizeof actions; a++) {  /* a turn is flown under every action */
+        gp_envelope envelope = SURFACE;
+        envelope.action = actions[a];
+        gp_envelope_memory memory = {0};
+        gp_command cmd = headed(1.0);  /* the first heading: taken as it is */
+        CHECK_INT(gp_envelope_hold(&envelope, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd).limit, 0);
+        CHECK_NEAR(cmd.heading_rad, 1.0f, 0);
+        cmd = headed(1.5);  /* steering within 0.15 rad/s x 4 s: untouched */
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 4.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 1.5f, 0);
+        for (int tick = 3; tick < 8; tick++) {  /* a waypoint behind: 0.6 rad a tick */
+            cmd = headed(4.5);
+            gp_envelope_breach b = gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL,
+                                                    4.0 * (tick - 1), NAN, &cmd);
+            CHECK_INT(b.limit, GP_LIMIT_NONE);
+            CHECK_INT(cmd.flags & GP_FLAG_ENVELOPE, 0);
+            CHECK_NEAR(cmd.heading_rad, fmin(1.5 + 0.6 * (tick - 2), 4.5), 1e-6);
+        }
+        /* across north, the short way: from 0.2 rad to 6.0 rad turns left through 0 */
+        memory = (gp_envelope_memory){0};
+        cmd = headed(0.2);
+        gp_envelope_hold(&envelope, 233.0, &memory, 1, NULL, 0.0, NAN, &cmd);
+        cmd = headed(6.0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 1.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 0.05f, 1e-6);
+        cmd = headed(6.0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 2.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 0.2 - 0.3 + 2.0 * 3.14159265358979323846, 1e-5);
+        /* no heading (noheading, no fix) forgets the last one */
+        cmd = command(10.0, -0.454, -233.0, 0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 3.0, NAN, &cmd);
+        CHECK_INT(memory.headed, 0);
+        cmd = headed(3.0);
+        gp_envelope_hold(&envelope, 233.0, &memory, 0, NULL, 4.0, NAN, &cmd);
+        CHECK_NEAR(cmd.heading_rad, 3.0f, 0);
+    }
+}
+
+void test_envelope_should_stop_a_pump_working_past_its_energy_per_hour(void)
+{
+    /* 2 W: 7200 J an hour. A turn at 40 m moves 466 cc out at 1.4 J/cc (652.4 J), one at
+     * the top 466 cc in at 0.5 J/cc (233 J): turning every 20 s pays back 40 J a leg */
+    gp_envelope_memory memory = {0};
+    double band[2] = {5.0, 40.0};
+    double t = 0.0;
+    int climbing = 0, ticks = 0;
+    gp_envelope_breach b = {0};
+    gp_command cmd = command(40.0, -0.454, -233.0, 0);
+    gp_envelope_hold(&SURFACE, 233.0, &memory, 1, band, t, 40.0, &cmd);
+    while (b.limit == GP_LIMIT_NONE && ticks < 100) {
+        t += 20.0;
+        climbing = !climbing;
+        cmd = command(climbing ? 5.0 : 40.0, climbing ? 0.454 : -0.454,
+                      climbing ? 233.0 : -233.0, climbing);
+        b = gp_envelope_hold(&SURFACE, 233.0, &memory, 0, band, t, climbing ? 40.0 : 5.0, &cmd);
+        ticks++;
+    }
+    CHECK_INT(b.limit, GP_LIMIT_PUMP_ENERGY);
+    CHECK_NEAR(b.bound, 7200.0, 0);
+    CHECK(b.value > 7200.0);
+    CHECK_INT(ticks, 18);  /* 9 pairs of turns: 9 x (652.4 + 233 - 80) - ... > 7200 J */
+    /* the clamp action cannot hold energy spent: it ends the flight */
+    gp_envelope clamp = SURFACE;
+    clamp.action = GP_ENVELOPE_CLAMP;
+    CHECK(gp_envelope_ends(&clamp, &b));
+    /* the same turns an hour apart are paid back: no breach */
+    memory = (gp_envelope_memory){0};
+    for (int i = 0; i < 40; i++) {
+        climbing = i % 2;
+        cmd = command(5.0, 0.454, climbing ? 233.0 : -233.0, climbing);
+        CHECK_INT(gp_envelope_hold(&SURFACE, 233.0, &memory, 1, NULL, 600.0 * i, 40.0, &cmd).limit,
+                  GP_LIMIT_NONE);
+    }
+}
+
 void test_envelope_check_should_refuse_no_envelope(void)
 {
-    gp_envelope bad[] = {
-        {0.0, 0.9, 3.0, 11.0, GP_ENVELOPE_SURFACE},
-        {100.0, 1.6, 3.0, 11.0, GP_ENVELOPE_SURFACE},
-        {100.0, 0.9, 100.0, 11.0, GP_ENVELOPE_SURFACE},
-        {100.0, 0.9, 3.0, NAN, GP_ENVELOPE_SURFACE},
-        {100.0, 0.9, 3.0, 11.0, 3},
-    };
+    gp_envelope bad[12];
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        bad[i] = SURFACE;
+    }
+    bad[0].max_depth_m = 0.0;
+    bad[1].max_pitch_rad = 1.6;
+    bad[2].min_yo_band_m = 100.0;
+    bad[3].min_inflection_s = NAN;
+    bad[4].action = 3;
+    bad[5].max_speed_mps = 0.1;          /* below its minimum */
+    bad[6].min_thrust_w = -1.0;
+    bad[7].max_speed_mps = INFINITY;     /* a range is finite */
+    bad[8].max_turn_rate_rad_s = 0.0;
+    bad[9].max_pump_power_w = NAN;
+    bad[10].pump_in_j_per_cc_m = NAN;
+    bad[11].pump_out_j_per_cc = INFINITY;
+    CHECK(gp_envelope_check(&SURFACE) == NULL);
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         CHECK(gp_envelope_check(&bad[i]) != NULL);
     }

@@ -222,7 +222,8 @@ static const gp_mission *fig2_with_bounds(void)
         {NULL, 0, least_cc}, {s2_duties, 1, least_cc}, {NULL, 0, least_cc}};
     static const gp_plan_bounds bounds = {
         .board = "ts7800", .max_budget_j = 200000, .min_pitch_rad = 0.1, .max_pitch_rad = 1.5,
-        .max_speed_mps = 0.5, .states = states};
+        .max_speed_mps = 0.5, .min_propelled_mps = 0.4, .max_propelled_mps = 1.5,
+        .min_thrust_w = 1, .max_thrust_w = 9, .states = states};
     static gp_mission mission;
     mission = gp_mission_table;
     mission.bounds = &bounds;
@@ -278,6 +279,27 @@ void test_plan_should_be_held_to_its_missions_bounds(void)
                                          "profile 0 1 0.454 230 0.6 4.5"),
                            &hybrid, NULL, &plan, error), 0);
     CHECK_INT(gp_plan_read(text, variant("profile 0 1 0.454 230 0.31", "profile 0 1 0 0 1.2"),
+                           &hybrid, NULL, &plan, error), 0);
+    /* ... held to its rating: the propulsion's speeds, the thruster's power command */
+    static const struct {
+        const char *to, *error;
+    } rated[] = {
+        {"profile 0 1 0 0 1.6", "line 12: state s1: profile 0: SPEED_MPS 1.6 outside the "
+         "vehicle's propulsion (0.4-1.5 m/s)"},
+        {"profile 0 1 0 0 0.3", "line 12: state s1: profile 0: SPEED_MPS 0.3 outside the "
+         "vehicle's propulsion (0.4-1.5 m/s)"},
+        {"profile 0 1 0.454 230 0.6 12", "line 12: state s1: profile 0: THRUST_W 12 outside "
+         "the vehicle's thruster (1-9 W)"},
+        {"profile 0 1 0.454 230 0.6 0.5", "line 12: state s1: profile 0: THRUST_W 0.5 outside "
+         "the vehicle's thruster (1-9 W)"},
+    };
+    for (size_t i = 0; i < sizeof rated / sizeof rated[0]; i++) {
+        CHECK_INT(gp_plan_read(text, variant("profile 0 1 0.454 230 0.31", rated[i].to),
+                               &hybrid, NULL, &plan, error), -1);
+        CHECK_CONTAINS(error, rated[i].error);
+    }
+    CHECK_INT(gp_plan_read(text, variant("profile 0 1 0.454 230 0.31",
+                                         "profile 0 1 0.454 230 0.6 9"),
                            &hybrid, NULL, &plan, error), 0);
 }
 

@@ -91,6 +91,20 @@ void test_noheading_and_missing_fix_should_give_no_heading(void)
     CHECK_INT(gp_route_step(&rs, &nav, NAN, -6300, &heading), 0);
 }
 
+void test_heading_should_be_held_with_or_without_a_fix_and_reach_nothing(void)
+{
+    gp_route route = {GP_ROUTE_HEADING, 0, 4.0, NULL};  /* [rad] */
+    gp_route_state rs;
+    double heading;
+    gp_route_enter(&rs, &route);
+    CHECK_INT(gp_route_step(&rs, &route, 4400, -6300, &heading), 1);
+    CHECK_NEAR(heading, 4.0, 0.0);
+    CHECK_INT(gp_route_step(&rs, &route, NAN, NAN, &heading), 1);  /* a compass, no fix */
+    CHECK_NEAR(heading, 4.0, 0.0);
+    CHECK_INT(rs.reached, 0);
+    CHECK_INT(isnan(gp_route_distance_m(&rs, &route, 4400, -6300)), 1);
+}
+
 void test_waypoints_should_advance_within_50_m_and_hold_the_last(void)
 {
     double points[2][2];
@@ -206,4 +220,27 @@ void test_sweep_should_stop_at_256_waypoints(void)
     static double out[GP_MAX_SWEEP_WAYPOINTS][2];
     CHECK_INT(gp_sweep_waypoints((const double(*)[2])corners, 3, 1.0, out), GP_MAX_SWEEP_WAYPOINTS);
     CHECK_INT(gp_sweep_waypoints((const double(*)[2])corners, 3, 0.0, out), 0);
+}
+
+/* As many corners as a route holds (the checker's limit for a sweep): every one is read.
+ * A regular polygon of radius 1000 m: each line's ends lie on its edges, between the
+ * inscribed circle (radius 1000 cos(pi/n)) and the circle through the corners. */
+void test_sweep_should_read_every_corner_a_route_holds(void)
+{
+    double corners[GP_MAX_ROUTE_POINTS][2];
+    for (int k = 0; k < GP_MAX_ROUTE_POINTS; k++) {
+        double angle = 2 * PI * k / GP_MAX_ROUTE_POINTS;
+        local_point(44.0, -63.0, 1000 * sin(angle), 1000 * cos(angle), corners[k]);
+    }
+    static double out[GP_MAX_SWEEP_WAYPOINTS][2];
+    uint16_t n = gp_sweep_waypoints((const double(*)[2])corners, GP_MAX_ROUTE_POINTS, 200, out);
+    CHECK_INT(n, 20);  /* 10 lines across 2000 m */
+    double origin[2] = {gp_ddmm_to_deg(corners[0][0]), gp_ddmm_to_deg(corners[0][1])};
+    double inscribed = 1000 * cos(PI / GP_MAX_ROUTE_POINTS);
+    for (int i = 0; i < n; i++) {
+        double north, east;
+        to_local(origin, out[i], &north, &east);
+        double radius = hypot(east + 1000, north);  /* the centre is 1000 m west of corner 0 */
+        CHECK(radius >= inscribed - 0.05 && radius <= 1000.05);
+    }
 }

@@ -51,7 +51,10 @@ static void sample_runtime(gp_runtime *rt)
     rt->route_resume[0] = 2;  /* the caller's waypoint, for its return */
     rt->reached_resume[0] = 70000;  /* and the waypoints it had reached: past a u16 */
     rt->route.reached = 1;  /* s2 flies no route: 0, or 1 for a list's last */
-    rt->envelope = (gp_envelope_memory){796.0, 1, 1, 0};  /* its last turn, a climb */
+    /* its last turn, a climb; its heading commanded at 796 s; the pump owes 420 J */
+    rt->envelope = (gp_envelope_memory){.last_turn_s = 796.0, .heading_rad = 2.5,
+                                        .heading_s = 796.0, .ballast_cc = 230.0, .pump_s = 796.0, .pump_j = 420.0,
+                                        .turned = 1, .climbing = 1, .headed = 1, .pumped = 1};
     rt->profile = 0;
     rt->last_command.tick = 81;
     rt->last_command.pitch_rad = 0.454f;
@@ -67,7 +70,7 @@ void test_checkpoint_should_round_trip_what_is_in_use(void)
     sample_runtime(&rt);
     rt.sensors[5] = 3;  /* Fig. 2 does not read the altitude: not kept */
     size_t len = gp_checkpoint_encode(&gp_mission_table, &rt, 42, record);
-    CHECK(len < 200);  /* the whole runtime state is 1.9 KiB */
+    CHECK(len < 256);  /* the whole runtime state is 1.9 KiB */
     uint32_t seq = 0;
     CHECK(gp_checkpoint_decode(&gp_mission_table, record, len, &seq, &back) == NULL);
     CHECK_INT(seq, 42);

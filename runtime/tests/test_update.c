@@ -286,7 +286,7 @@ void test_update_should_refuse_malformed_updates_naming_the_change(void)
         const char *said;
     } CASES[] = {
         {{0}, 0, 1, GP_UPDATE_MALFORMED, "change 1: the update ends before it"},
-        {{11, 21, 2, 0}, 4, 1, GP_UPDATE_MALFORMED, "change 1: no field has code 11"},
+        {{12, 21, 2, 0}, 4, 1, GP_UPDATE_MALFORMED, "change 1: no field has code 12"},
         {{6, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x01}, 10, 1, GP_UPDATE_MALFORMED,
          "change 1: line: a number longer than 8 bytes"},
         {{6, 0x81, 0x80, 0x08, 2, 0}, 6, 1, GP_UPDATE_MALFORMED,
@@ -341,6 +341,77 @@ void test_update_should_refuse_a_plan_the_reader_refuses(void)
     CHECK_INT(apply(u, len, &auth, message, &new_len), GP_UPDATE_BAD_PLAN);
     CHECK_CONTAINS(message, "clock 400 MHz");
     CHECK_INT(plan.seq, 3);
+}
+
+/* Fig. 2 on a hybrid: a thruster of 1-9 W, the bounds the code generator writes. */
+static const gp_mission *fig2_hybrid(void)
+{
+    static const gp_plan_bounds bounds = {
+        .board = NULL, .max_budget_j = GP_MAX_PLAN_ENERGY_J, .min_pitch_rad = 0,
+        .max_pitch_rad = 1.5707963267948966, .max_speed_mps = GP_MAX_PLAN_SPEED_MPS,
+        .min_propelled_mps = 0.4, .max_propelled_mps = 0.84, .min_thrust_w = 1,
+        .max_thrust_w = 9, .states = NULL};
+    static gp_mission hybrid;
+    hybrid = gp_mission_table;
+    hybrid.unplanned_speed_mps = 0.45;
+    hybrid.bounds = &bounds;
+    return &hybrid;
+}
+
+void test_update_should_set_a_thrusters_power_within_its_rating(void)
+{
+    gp_plan_auth auth;
+    uint8_t u[GP_MAX_UPDATE_BYTES];
+    char message[GP_UPDATE_MESSAGE_LEN];
+    size_t new_len = 0;
+    const gp_mission *hybrid = fig2_hybrid();
+    /* the line leaves THRUST_W out (off): the change appends it */
+    static const test_change ON = {GP_UF_PROFILE_THRUST, PROFILE_S2_LINE, 45, -1};
+    hold_plan_3(&auth);
+    expected_len = signed_variant("profile 0 1 0.4 200 0.3", "profile 0 1 0.4 200 0.3 4.5", 4,
+                                  expected);
+    size_t len = make_update(3, 4, held, held_len, expected, expected_len, &ON, 1, KEY, u);
+    CHECK_INT(gp_update_apply(u, len, held, held_len, &auth, hybrid, out, &new_len, &plan,
+                              message), GP_UPDATE_APPLIED);
+    CHECK(new_len == expected_len && memcmp(out, expected, expected_len) == 0);
+    CHECK_NEAR(plan.states[1].profiles[0].thrust_w, 4.5, 0);
+
+    /* from the plan it makes, a change of the field now on the line, and its speed */
+    memcpy(held, out, new_len);
+    held_len = new_len;
+    auth.last_seq = 4;
+    memcpy(auth.last_tag, plan.tag, sizeof plan.tag);
+    static const test_change MORE[] = {{GP_UF_PROFILE_SPEED, PROFILE_S2_LINE, 42, -2},
+                                       {GP_UF_PROFILE_THRUST, PROFILE_S2_LINE, 9, 0}};
+    expected_len = signed_variant("profile 0 1 0.4 200 0.3", "profile 0 1 0.4 200 0.42 9", 5,
+                                  expected);
+    len = make_update(4, 5, held, held_len, expected, expected_len, MORE, 2, KEY, u);
+    CHECK_INT(gp_update_apply(u, len, held, held_len, &auth, hybrid, out, &new_len, &plan,
+                              message), GP_UPDATE_APPLIED);
+    CHECK(new_len == expected_len && memcmp(out, expected, expected_len) == 0);
+    CHECK_NEAR(plan.states[1].profiles[0].thrust_w, 9, 0);
+    CHECK_NEAR(plan.states[1].profiles[0].speed_mps, 0.42, 0);
+
+    /* beyond the thruster's rating: refused, the plan in force stays */
+    static const test_change OVER = {GP_UF_PROFILE_THRUST, PROFILE_S2_LINE, 12, 0};
+    expected_len = signed_variant("profile 0 1 0.4 200 0.3", "profile 0 1 0.4 200 0.42 12", 6,
+                                  expected);
+    auth.last_seq = 5;
+    memcpy(auth.last_tag, plan.tag, sizeof plan.tag);
+    memcpy(held, out, new_len);
+    held_len = new_len;
+    len = make_update(5, 6, held, held_len, expected, expected_len, &OVER, 1, KEY, u);
+    CHECK_INT(gp_update_apply(u, len, held, held_len, &auth, hybrid, out, &new_len, &plan,
+                              message), GP_UPDATE_BAD_PLAN);
+    CHECK_CONTAINS(message, "THRUST_W 12 outside the vehicle's thruster (1-9 W)");
+    CHECK_INT(plan.seq, 5);
+    /* on a glider without a thruster any thrust is refused */
+    hold_plan_3(&auth);
+    expected_len = signed_variant("profile 0 1 0.4 200 0.3", "profile 0 1 0.4 200 0.3 4.5", 4,
+                                  expected);
+    len = make_update(3, 4, held, held_len, expected, expected_len, &ON, 1, KEY, u);
+    CHECK_INT(apply(u, len, &auth, message, &new_len), GP_UPDATE_BAD_PLAN);
+    CHECK_CONTAINS(message, "THRUST_W 4.5 on a vehicle without a thruster");
 }
 
 void test_update_decimal_text_should_write_plan_numbers(void)
