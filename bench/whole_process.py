@@ -74,5 +74,24 @@ def median_of(commands: dict[str, list[str]], runs: int, exit_code: int = 0,
             for name, found in times.items()}
 
 
+# The real Slocum missions the benches fly, from the shared Slocum logs beside the
+# repository (read in place, imported with `gliderplan import-slocum`).
+SLOCUM = Path(__file__).resolve().parents[2] / "shared" / "data" / "slocum-missions"
+IMPORTED = {"nsb3": SLOCUM / "nsb3" / "nsb3.mi", "helgo": SLOCUM / "helgo" / "helgo.mi"}
+
+
+def import_slocum(name: str, directory: Path) -> Path | None:
+    """The shared Slocum mission `name` (of IMPORTED) imported into `directory` as
+    NAME.mission (its missing .ma files allowed); None if the logs are not here."""
+    source = IMPORTED[name]
+    if not source.is_file():
+        print(f"  {name}: {source.name} not found among the shared Slocum missions: skipped")
+        return None
+    out = directory / f"{name}.mission"
+    subprocess.run(gliderplan("import-slocum", str(source), "--allow-missing-mafiles", "-o",
+                              str(out)), check=True, env=ENV, capture_output=True)
+    return out
+
+
 def load_average() -> str:
     return "load average " + " ".join(f"{x:.1f}" for x in os.getloadavg())

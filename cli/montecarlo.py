@@ -153,8 +153,9 @@ def _replanned(name: str, s: dict) -> str:
     return (f"{name}: the budget held in {rate('hold_rate')} of {s['scenarios']} scenarios "
             f"with replanning at each surfacing, {rate('hold_rate_static')} with the plan "
             f"alone; both from {s['plan_flown']}\n"
-            f"  quality as flown {s['quality']:.4f} with replanning, {s['quality_static']:.4f} "
-            f"alone\n"
+            + (f"  quality as flown {s['quality']:.4f} with replanning, "
+               f"{s['quality_static']:.4f} alone\n" if s["quality"] is not None else
+               "  no quality as flown: the mission weighs no sensor\n") +
             f"  link: {link['surfacings_per_mission']:.0f} surfacings a mission; up "
             f"{link['up_bytes_per_day']:,.0f} B/day ({link['up_bytes_per_mission']:,.0f} a "
             f"mission), down {link['down_bytes_per_day']:,.0f} B/day "

@@ -33,9 +33,11 @@ class Terminated(KeyboardInterrupt):
     status is then 143."""
 
 
-@dataclass
+@dataclass(eq=False)
 class Deferral:
-    """A stretch of work that a first stop signal does not cut (`deferred`)."""
+    """A stretch of work that a first stop signal does not cut (`deferred`). Compared by
+    identity: runs in threads leave their blocks in any order, and one must never take
+    another's equal-looking deferral out of the list."""
 
     armed: bool = True  # deferring now (`arm`: from a later point of the block on)
     requested: bool = False  # a stop signal arrived while armed: mark the result partial

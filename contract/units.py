@@ -60,3 +60,8 @@ def to_model_unit(value: float, unit: str, dimension: str) -> float:
 def accepted_units(dimension: str) -> str:
     """The units of a dimension, as a human-readable list for error messages."""
     return ", ".join(repr(u) for u in UNITS[dimension])
+
+
+def finite_or_none(value: float) -> float | None:
+    """`value`, or None (JSON's null) where it is NaN or infinite: JSON has no such number."""
+    return value if math.isfinite(value) else None

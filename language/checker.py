@@ -33,6 +33,7 @@ from gliderplan.language.registry import (
     SENSOR_BY_NAME,
     ParamSpec,
     cannot_fly,
+    turn_rate_rad_s,
 )
 from gliderplan.language.units import UnitProblem, normalise
 
@@ -476,7 +477,20 @@ class _Checker:
             coords.append((lat, lon))
         if None in params or any(None in c for c in coords):
             return None
+        if name == "turn":
+            self.turn_rated(params[0], scalars[0].span)
         return ir.Route(name, tuple(params), tuple(coords))
+
+    def turn_rated(self, rate_deg_s: float, span: ast.Span) -> None:
+        """An error for a turn faster than the vehicle's rated `max_turn_rate`: the
+        envelope would slew it to that rate in flight, so the spiral would not be flown."""
+        envelope = self.envelope()
+        if envelope is not None and turn_rate_rad_s(abs(rate_deg_s)) > \
+                envelope.max_turn_rate_rad_s:
+            rated = math.degrees(envelope.max_turn_rate_rad_s)
+            self.error(f"turn rate {rate_deg_s:g} deg/s is beyond the vehicle's rated "
+                       f"{rated:.3g} deg/s", span,
+                       f"the rating of vehicle {self.vehicle_spec} (its file's [envelope])")
 
     def profile(self, invocation: ast.Invocation, alternatives: tuple[ast.Invocation, ...]
                 ) -> ir.Profile | None:

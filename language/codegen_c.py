@@ -25,7 +25,13 @@ from gliderplan.contract import FlightLimits
 from gliderplan.contract.c_header import sensor_index
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
-from gliderplan.language.registry import PROFILES, SENSOR_BY_NAME, SENSORS, held_heading_rad
+from gliderplan.language.registry import (
+    PROFILES,
+    SENSOR_BY_NAME,
+    SENSORS,
+    held_heading_rad,
+    turn_rate_rad_s,
+)
 
 _ACTIONS = {None: "GP_ACT_NONE", "goto": "GP_ACT_GOTO", "call": "GP_ACT_CALL",
             "return": "GP_ACT_RETURN", "exit": "GP_ACT_EXIT"}
@@ -34,7 +40,8 @@ _PROFILE_KINDS = {"yo": "GP_PROFILE_YO", "thermotrackyo": "GP_PROFILE_THERMOTRAC
                   "cruise": "GP_PROFILE_CRUISE", "altitude": "GP_PROFILE_ALTITUDE"}
 _ROUTE_KINDS = {"nav": "GP_ROUTE_NAV", "noheading": "GP_ROUTE_NOHEADING",
                 "waypoints": "GP_ROUTE_WAYPOINTS", "sweep": "GP_ROUTE_SWEEP",
-                "goto_list": "GP_ROUTE_GOTO_LIST", "heading": "GP_ROUTE_HEADING"}
+                "goto_list": "GP_ROUTE_GOTO_LIST", "heading": "GP_ROUTE_HEADING",
+                "turn": "GP_ROUTE_TURN"}
 _HEADING_ROUTES = frozenset({"nav", "waypoints", "sweep", "goto_list"})
 # Sensors every compiled mission reads: the state timers and the plan's schedule run on
 # missiontime, every profile turns on depth (pitch is commanded, never read).
@@ -75,6 +82,8 @@ def _sensors_read(mission: ir.CheckedMission) -> int:
                 names.add("altitude")
         if state.route.kind in _HEADING_ROUTES:
             names |= {"lat", "lon"}
+        if state.route.kind == "turn":  # it turns from the heading measured at entry
+            names.add("heading")
     return sum(1 << SENSOR_BY_NAME[name].index for name in names)
 
 
@@ -219,9 +228,12 @@ def _route_points(route: ir.Route) -> tuple[tuple[float, float], ...]:
 
 def _route_param(route: ir.Route) -> float:
     """The route's scalar parameter (sweep: line spacing [m], goto_list: radius [m],
-    heading: the heading held [rad], as the Python pilot holds it); 0 when it has none."""
+    heading: the heading held [rad], as the Python pilot holds it; turn: the turn rate
+    [rad/s]); 0 when it has none."""
     if route.kind == "heading":
         return held_heading_rad(route.params[0])
+    if route.kind == "turn":
+        return turn_rate_rad_s(route.params[0])
     return route.params[0] if route.kind in ("sweep", "goto_list") else 0.0
 
 

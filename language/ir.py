@@ -193,7 +193,7 @@ def variables_read(expr: Expr) -> frozenset[str]:
 class Route:
     """`kind` from the route registry; params SI/DDMM.MMMM as the registry says."""
 
-    kind: str  # nav | noheading | heading | waypoints | sweep | goto_list
+    kind: str  # nav | noheading | heading | turn | waypoints | sweep | goto_list
     params: tuple[float, ...] = ()
     points: tuple[tuple[float, float], ...] = ()  # (lat, lon) DDMM.MMMM
 

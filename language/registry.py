@@ -147,6 +147,14 @@ ROUTES: dict[str, RouteInfo] = {
             "hold a compass heading (true, clockwise from north), uncorrected for the "
             "current: Slocum's set_heading",
         ),
+        RouteInfo(
+            "turn",
+            (ParamSpec("rate", unit="deg/s", low=-180.0, high=180.0),),
+            0,
+            0,
+            "turn steadily from the heading at the state's entry, positive clockwise (a "
+            "spiral): Slocum's set_heading holding its fin",
+        ),
         RouteInfo("waypoints", (), 1, MAX_ROUTE_POINTS,
                   "fly a list of (lat, lon) waypoints in order"),
         RouteInfo(
@@ -172,6 +180,12 @@ def held_heading_rad(heading_deg: float) -> float:
     """[rad] the heading a `heading(deg)` route holds: the runtime is given this value
     (codegen_c) and the Python pilot holds it, so both fly the same number."""
     return math.radians(heading_deg)
+
+
+def turn_rate_rad_s(rate_deg_s: float) -> float:
+    """[rad/s] the rate a `turn(deg/s)` route turns at: the runtime is given this value
+    (codegen_c) and the Python pilot turns at it, so both fly the same number."""
+    return math.radians(rate_deg_s)
 
 
 def cannot_fly(kind: str, thrust: object, vehicle: object) -> tuple[str, str, bool] | None:

@@ -51,10 +51,15 @@ FLIGHT_SENSORS = ("missiontime", "depth", "pitch", "lat", "lon")
 # behaviors that command the heading: the first in priority order is the route flown
 ROUTE_BEHAVIORS = ("goto_list", "goto_wpt", "set_heading")
 # set_heading's use_heading modes without a translation, and why
+_NO_ROLL_FIT = ("the shared Slocum logs command no roll (c_roll and c_battroll stay 0: "
+                "the fin steers), so no turn rate per roll is fitted")
 HEADING_MODES_LEFT_OUT = {
-    2: "a roll held (HM_ROLL)", 3: "a battery roll held (HM_BATTROLL)",
-    4: "a fin angle held (HM_FIN)",
-    5: "a heading relative to the measured current's direction (HM_CURRENT)"}
+    2: f"a roll held (HM_ROLL): {_NO_ROLL_FIT}",
+    3: f"a battery roll held (HM_BATTROLL): {_NO_ROLL_FIT}",
+    5: "a heading relative to the measured current's direction (HM_CURRENT): the runtime "
+       "has no heading that follows the current's"}
+HM_FIN = 4  # use_heading: a fin angle held, flown as a turn at the vehicle's fin_turn_rate
+FIN_LIMIT_RAD = 0.43  # the Slocum fin's stop: c_fin never beyond it in the shared logs
 # surface's start_when modes translated that read when_secs: when they surface
 WHEN_SECS_MODES = {9: "when_secs after it last reached the surface",
                    12: "when_secs after it last left the surface"}
@@ -366,8 +371,8 @@ class _Translator:
 
     def set_heading(self, behavior: Behavior, comment: list[str]) -> tuple[str, list[str]]:
         """use_heading 1 (HM_HEADING): heading_value [rad] held as `heading(deg)`, the
-        current correction leaving it alone as the Slocum's does; the other modes turn
-        the glider by its roll or fin, which gliderplan's flight model does not fly."""
+        current correction leaving it alone as the Slocum's does; 4 (HM_FIN) a steady turn
+        (`fin_hold`); the others are left out (HEADING_MODES_LEFT_OUT says why)."""
         mode = behavior.args.get("use_heading")
         value = behavior.args.get("heading_value")
         if mode is None or value is None:
@@ -375,6 +380,8 @@ class _Translator:
                                   "use_heading and heading_value")
         self.route_never = self.route_reaches = ("set_heading holds a heading: it reaches "
                                                  "no waypoint")
+        if mode.value == HM_FIN:
+            return self.fin_hold(behavior, value, comment)
         if mode.value != 1:
             why = HEADING_MODES_LEFT_OUT.get(int(mode.value)) \
                 if mode.value == int(mode.value) else None
@@ -384,8 +391,7 @@ class _Translator:
                                       "fin, 5 relative to the current)")
             return "noheading", comment + self.leave_out(
                 behavior, ["use_heading", "heading_value"],
-                f"{why} turns the glider at a rate gliderplan's flight model does not "
-                "have: no heading is flown")
+                f"{why}: no heading is flown")
         degrees = math.degrees(value.value) % 360.0
         degrees = 0.0 if degrees >= 360.0 else degrees  # a tiny negative rounds up to 360
         comment.append(f"use_heading 1, heading_value {value.text} rad: {_number(degrees)} "
@@ -393,6 +399,30 @@ class _Translator:
         comment += self.leave_out(behavior, ["stop_when", "when_secs", "end_action"],
                                   "the heading is held for the whole survey")
         return f"heading({_number(degrees)})", comment
+
+    def fin_hold(self, behavior: Behavior, fin: Arg, comment: list[str]
+                 ) -> tuple[str, list[str]]:
+        """use_heading 4 (HM_FIN): heading_value [rad] of fin held, flown as `turn(deg/s)`
+        at the rate the vehicle's `fin_turn_rate` gives that fin (a spiral)."""
+        from gliderplan.power_models.vehicle import load_vehicle
+
+        if not abs(fin.value) <= FIN_LIMIT_RAD:
+            raise SlocumFileError(f"{fin.where}: heading_value {fin.text} rad is no fin angle "
+                                  f"of use_heading 4: the fin stops at +-{FIN_LIMIT_RAD} rad")
+        vehicle = load_vehicle(self.hardware.vehicle)
+        if math.isnan(vehicle.fin_turn_rate_per_s):
+            return "noheading", comment + self.leave_out(
+                behavior, ["use_heading", "heading_value"],
+                f"a fin angle held (HM_FIN): vehicle {self.hardware.vehicle} gives no "
+                "fin_turn_rate to turn it into a turn rate: no heading is flown")
+        rate_deg_s = math.degrees(vehicle.fin_turn_rate_per_s * fin.value)
+        comment.append(f"use_heading 4, heading_value {fin.text} rad of fin: a steady turn "
+                       f"of {_number(rate_deg_s)} deg/s (the vehicle's fin_turn_rate "
+                       f"{_number(vehicle.fin_turn_rate_per_s)} 1/s) from the heading at "
+                       "entry, uncorrected for the current")
+        comment += self.leave_out(behavior, ["stop_when", "when_secs", "end_action"],
+                                  "the fin is held for the whole survey")
+        return f"turn({_number(rate_deg_s)})", comment
 
     # ---- yo
     def yo(self, behavior: Behavior | None) -> tuple[str, list[str], tuple[str, str] | None]:

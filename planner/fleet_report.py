@@ -7,7 +7,6 @@ montecarlo` (the missions and plans as written, the tracks from the report).
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Iterable
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
@@ -17,7 +16,7 @@ import numpy as np
 
 from gliderplan.contract.errors import GliderplanError, UsageError
 from gliderplan.contract.files import OutputFolder, output_folder
-from gliderplan.contract.units import J_PER_WH
+from gliderplan.contract.units import J_PER_WH, finite_or_none
 from gliderplan.language.fleet import Fleet
 from gliderplan.planner.fleet import TARGET_IMPROVEMENT, FleetPlan, GliderPlan
 from gliderplan.planner.fleet_capacity import hours
@@ -193,7 +192,8 @@ def report_json(plan: FleetPlan) -> dict:
             "gliders": [{"name": plan.fleet.gliders[b.glider].name,
                          "parts": list(range(b.first, b.stop)),
                          "feasible": b.feasible} for b in base.blocks]},
-        "separation": {**plan.separation, "closest_m": _finite(plan.separation["closest_m"])},
+        "separation": {**plan.separation,
+                       "closest_m": finite_or_none(plan.separation["closest_m"])},
         "limiting_glider": limiting,
         "lines": [{"index": p.index, "kind": p.kind, "length_m": p.length_m,
                    "a_m": list(p.a), "b_m": list(p.b)} for p in fleet.parts],
@@ -332,7 +332,3 @@ def _polish_text(polish: dict | None) -> str:
     return (f"; {polish['accepted']} cut{'s' if polish['accepted'] != 1 else ''} moved by one "
             f"line on the mapping error itself ({polish['mapping_error_before']:.3f} -> "
             f"{polish['mapping_error_after']:.3f})")
-
-
-def _finite(value: float) -> float | None:
-    return value if math.isfinite(value) else None

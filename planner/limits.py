@@ -56,6 +56,16 @@ def unplanned(mission: CheckedMission, vehicle: Vehicle) -> tuple[float, tuple[i
     return speed, flown
 
 
+def propulsion_rating(vehicle: Vehicle) -> dict[str, tuple[float, float]]:
+    """FlightLimits' bounds from `vehicle`'s propulsion (none without one): the speeds
+    [m s-1] it flies and its thruster's power command [W]."""
+    propulsion = vehicle.propulsion
+    return {} if propulsion is None else {
+        "propelled_speed_mps": (propulsion.min_speed_mps, propulsion.max_speed_mps),
+        **({"thrust_range_w": (propulsion.min_command_w, propulsion.max_command_w)}
+           if propulsion.is_thruster else {})}
+
+
 def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[float, ...],
                    board: str | None = None) -> FlightLimits:
     """The limits of `mission` flown by `vehicle` on a board of `clocks_mhz` [MHz] named
@@ -86,11 +96,6 @@ def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[
         return float(vehicle.trim_offset_cc(*yo_band(profile, args)))
 
     speed, flown = unplanned(mission, vehicle)
-    propulsion = vehicle.propulsion
-    rated = {} if propulsion is None else {
-        "propelled_speed_mps": (propulsion.min_speed_mps, propulsion.max_speed_mps),
-        **({"thrust_range_w": (propulsion.min_command_w, propulsion.max_command_w)}
-           if propulsion.is_thruster else {})}
     return FlightLimits(
         vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, clocks_mhz, board=board,
         max_budget_j=usable_budget_j(mission.battery.energy_j, mission.battery.reserve_fraction),
@@ -106,4 +111,4 @@ def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[
         min_ballast_cc=tuple(tuple(least_ballast_cc(p) for p in state.profiles)
                              for state in mission.states),
         unplanned_speed_mps=speed, unplanned_profiles=flown, envelope=vehicle.envelope,
-        **rated)
+        **propulsion_rating(vehicle))

@@ -775,4 +775,17 @@ def replan_mission(mission: ir.CheckedMission, plan_path: str | Path,
         contents[files[-1]] = json.dumps(run.to_json(), indent=2) + "\n"
         interrupts.raise_if_stopped()  # an interrupted replan sends nothing
         write_files_atomically(contents)  # together or not at all
+        for stale in _other_chain_files(out, names):  # an earlier chain's: not to be sent
+            stale.unlink(missing_ok=True)
     return run
+
+
+def _other_chain_files(out: Path, names: list[Path]) -> list[Path]:
+    """The updates an earlier replan wrote under `out` (`out`, or `out`.1, .2, ...) that
+    are not this one's `names`: left beside the new chain they would read as part of it."""
+    earlier = [out] if out.is_file() else []
+    n = 1
+    while (member := out.with_name(f"{out.name}.{n}")).is_file():
+        earlier.append(member)
+        n += 1
+    return [path for path in earlier if path not in names]

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gliderplan.contract.units import finite_or_none
 from gliderplan.planner.routing import (
     TRANSIT_BAND_M,
     TRANSIT_PITCH_RAD,
@@ -66,17 +67,13 @@ class PacedRoute:
         gains = self.gains()
         return {"pitch_rad": self.pace.pitch_rad, "pace_speed_mps": self.pace.speed_mps,
                 "power_w": self.pace.power_w, "nominal_pitch_rad": self.nominal.pitch_rad,
-                "straight_nominal_s": _finite(self.straight_s),
-                "straight_nominal_j": _finite(self.straight_j), "planned_j": self.planned_j,
+                "straight_nominal_s": finite_or_none(self.straight_s),
+                "straight_nominal_j": finite_or_none(self.straight_j), "planned_j": self.planned_j,
                 "time_gain": gains["time"], "energy_gain": gains["energy"]}
 
 
 def _saved(planned: float, straight: float) -> float:
     return 1.0 - planned / straight if math.isfinite(straight) else 1.0
-
-
-def _finite(x: float) -> float | None:
-    return x if math.isfinite(x) else None
 
 
 def paces(transit_speed_mps: float, waypoints: list[tuple[float, float]]

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gliderplan.contract.units import finite_or_none
 from gliderplan.sim.currents import CurrentField
 from gliderplan.sim.geo import EARTH_RADIUS_M
 
@@ -71,15 +72,13 @@ class RoutePlan:
         return [p for leg in self.legs for p in leg.route]
 
     def to_json(self) -> dict:
-        return {"straight_s": _finite(self.straight_s), "planned_s": self.planned_s,
+        return {"straight_s": finite_or_none(self.straight_s), "planned_s": self.planned_s,
                 "gain": self.gain,
-                "legs": [{"waypoint": list(leg.waypoint), "straight_s": _finite(leg.straight_s),
+                "legs": [{"waypoint": list(leg.waypoint),
+                          "straight_s": finite_or_none(leg.straight_s),
                           "planned_s": leg.planned_s, "route": [list(p) for p in leg.route]}
                          for leg in self.legs]}
 
-
-def _finite(x: float) -> float | None:
-    return x if math.isfinite(x) else None
 
 
 def ground_speed(north_mps: np.ndarray, east_mps: np.ndarray, course_rad: np.ndarray,

@@ -199,7 +199,8 @@ def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s:
     (lat, lon) [deg] (None: as the sim puts it in the water) through its waypoints at
     its yos' speed (`yo_speed_mps`) in `currents`; a goto list as the Slocum flies it
     (sim.pilot.Waypoints: within its radius, looping); a mission without waypoints holds
-    its first `heading` route's heading."""
+    its first `heading` route's heading, or else, on a `turn` route, goes nowhere through
+    the water (a spiral circles back within v / rate, some tens of metres) and drifts."""
     from gliderplan.contract import WAYPOINT_RADIUS_M
     from gliderplan.language.registry import held_heading_rad
     from gliderplan.planner.occupancy import mission_occupancy
@@ -222,8 +223,11 @@ def mission_surfacings(mission: ir.CheckedMission, vehicle: Vehicle, duration_s:
     lat, lon = start if start is not None else sim_start(mission, RunConfig())
     lists = [s.route for s in mission.states if s.route.kind == "goto_list"]
     held = [s.route for s in mission.states if s.route.kind == "heading"]
-    voyage = Voyage(lat, lon, epoch_s, tuple(route_points_deg(mission)),
-                    yo_speed_mps(mission, vehicle), schedule[-1][0], schedule[-1][1],
+    points = tuple(route_points_deg(mission))
+    spirals = not (points or held) and any(s.route.kind == "turn" for s in mission.states)
+    voyage = Voyage(lat, lon, epoch_s, points,
+                    0.0 if spirals else yo_speed_mps(mission, vehicle), schedule[-1][0],
+                    schedule[-1][1],
                     currents, capture_m=lists[0].params[0] if lists else WAYPOINT_RADIUS_M,
                     loops=bool(lists), schedule=tuple(schedule),
                     corrects=mission.current_correction,

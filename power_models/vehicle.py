@@ -21,6 +21,7 @@ So u* = (P / 2c)^(1/3): a hungrier hotel load makes the best glider faster.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -112,6 +113,8 @@ class Vehicle:
     bottom_turn_s: float = 0.0  # the same at the bottom
     dive_pitch_error_rad: float = 0.0  # |flown| - |commanded| pitch of a dive (servo deadband)
     climb_pitch_error_rad: float = 0.0  # the same for a climb
+    # [rad/s per rad of fin] the turn a held fin gives (power_models.fin_turn); NaN: unknown
+    fin_turn_rate_per_s: float = math.nan
     hotel_includes: tuple[str, ...] = ()  # devices ("ctd", "computer", ...) in the hotel load
     devices: tuple[Device, ...] = ()  # devices with figures of their own (the file's [devices])
     base_drift_w: float = 0.0  # sd [W] of the hotel load between deployments (another year)

@@ -35,6 +35,8 @@ FIGURES: dict[str, tuple[str, str, dict]] = {
         "nominal_pitch_rad", "angle", {"positive": True, "maximum": math.pi / 2 * 0.999}
     ),
     "nominal_min_depth": ("nominal_min_depth_m", "length", {}),
+    "fin_turn_rate": ("fin_turn_rate_per_s", "frequency",
+                      {"default": math.nan, "minimum": -math.inf}),
     "nominal_max_depth": ("nominal_max_depth_m", "length", {"positive": True}),
     "flight.water_density": ("rho_kg_m3", "density", {"positive": True}),
     "flight.gravity": ("g_m_s2", "acceleration", {"positive": True}),

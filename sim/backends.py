@@ -12,7 +12,6 @@ import logging
 import multiprocessing
 import os
 import signal
-import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 
@@ -102,19 +101,14 @@ def gather(executor: cf.Executor | None, work: Callable, tasks: Sequence[tuple],
     return False
 
 
-@contextmanager
-def _spawned_ignoring_interrupt() -> Iterator[None]:
-    """Processes started inside ignore Ctrl-C, as the pool's workers do (`halt`): an
-    ignored signal stays ignored across exec, where Dask spawns its workers (a worker that
-    took the terminal's Ctrl-C died printing its traceback); the parent closes them."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, before)
+def _workers_ignoring_interrupt() -> None:
+    """Dask's workers are started by a fork server whose first preload ignores Ctrl-C
+    (`sim.worker_signals`): they inherit that, while this process keeps taking it."""
+    import dask
+    from distributed.utils import get_mp_context
+
+    dask.config.set({"distributed.worker.multiprocessing-method": "forkserver"})
+    get_mp_context().set_forkserver_preload(["gliderplan.sim.worker_signals", "distributed"])
 
 
 @contextmanager
@@ -154,9 +148,9 @@ def scenario_executor(workers: int, scheduler: str | None = None
                 # threshold sends every large array to mmap, a page fault per page each run).
                 environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ"))
                 environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+                _workers_ignoring_interrupt()
                 with dask.config.set({"distributed.worker.profile.enabled": False,
-                                      "distributed.nanny.pre-spawn-environ": environ}), \
-                        _spawned_ignoring_interrupt():
+                                      "distributed.nanny.pre-spawn-environ": environ}):
                     # its workers' own logs (a heartbeat that failed as the cluster
                     # closed on a stop) are not the user's concern: a task's error comes
                     # back to us with its future

@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 from importlib import resources
 from pathlib import Path
 
-from gliderplan.contract import MAX_VARIABLES, N_SENSORS, FlightLimits
+from gliderplan.contract import MAX_VARIABLES, N_SENSORS, FlightLimits, TransitionKind
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
 from gliderplan.language.semantics import MissionFault
@@ -278,6 +278,7 @@ class CStep:
         self._tick = library.gps_step_tick
         self._fields = [name for name, _ in _Command._fields_]
         self.envelope_notes: list[str] = []  # what the envelope guard did, in its words
+        self.superseded: list[tuple[int, int, int, int]] = []  # as the Python executor's
 
     def step(self, tick: int, mask: int, values: list[float]) -> Command:
         """Answer one SENSORS frame: `values` holds all sensors [registry units], of which
@@ -290,6 +291,10 @@ class CStep:
             raise self._fault()
         if self._report.envelope.limit and self.note_envelope(self._report):
             raise MissionFault(f"tick {tick}: {self.envelope_notes[-1]}")
+        r = self._report
+        self.superseded = [(t.kind, t.from_state, t.to_state, t.depth)
+                           for t in r.transitions[:max(r.n_transitions - 1, 0)]
+                           if t.kind != TransitionKind.START]
         c = self._command
         return Command(c.tick, c.state, c.stack_depth, c.transition, c.from_state, c.to_state,
                        c.profile, c.flags, c.depth_target_m, c.pitch_rad, c.ballast_cc,

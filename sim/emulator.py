@@ -63,6 +63,8 @@ class CRuntime:
     a runtime that ended while its last COMMAND was lost ends the run as it ended.
     `report()` counts all of it."""
 
+    superseded: tuple = ()  # a COMMAND carries one transition: the trace is events.log's
+
     def __init__(self, binary: Path, mission: ir.CheckedMission, plan_path: str | None,
                  naive_tracker: bool, work_dir: Path, key_path: str | None = None,
                  state_dir: str | Path | None = None,

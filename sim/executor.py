@@ -43,9 +43,10 @@ if TYPE_CHECKING:
 # COMMAND's `transition` of each kind the reference semantics reports.
 _KIND_CODES = {name: kind for kind, name in TRANSITION_NAMES.items()}
 _F32 = struct.Struct(f"<{N_SENSORS}f")
-_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _WPTREACHED, _ENERGY, _ALTITUDE = (
+(_DEPTH, _LAT, _LON, _TEMP, _HALFCYCLE, _WPTDIST, _WPTREACHED, _ENERGY, _ALTITUDE,
+ _HEADING) = (
     SENSOR_BY_NAME[n].index for n in ("depth", "lat", "lon", "temp", "halfcycle", "wptdist",
-                                      "wptreached", "energy_left", "altitude"))
+                                      "wptreached", "energy_left", "altitude", "heading"))
 _SURFACE_PITCH_F32 = struct.unpack("<f", struct.pack("<f", SURFACE_PITCH_RAD))[0]
 
 
@@ -88,6 +89,10 @@ class PythonRuntime:
         # what the guard did: "missiontime T s, state S: <limit>; <action>", as the C
         # runtime says it
         self.envelope_notes: list[str] = []
+        # the transitions (kind, from, to, depth codes) a step made before its COMMAND's:
+        # an event's, on the tick the envelope ended the mission after it
+        self.superseded: list[tuple[int, int, int, int]] = []
+        self.tick_transition: semantics.Transition | None = None
         self.reserve_j = mission.battery.reserve_j
         self.robust = robust_tracker
         self.index = mission.state_index
@@ -140,6 +145,8 @@ class PythonRuntime:
         self.routine = None
         route = self.state.route
         self.route = pilot.ROUTE_ROUTINES[route.kind](route.params, route.points)
+        if isinstance(self.route, pilot.Turn):
+            self.route.enter(self.s[_HEADING])
 
     def _follow(self, kind: str, state: str | None) -> None:
         """Enter the state a transition leads to. A call keeps the caller's waypoint and
@@ -161,6 +168,7 @@ class PythonRuntime:
         """Answer one SENSORS frame: `values` holds all sensors [registry units], of which
         those in `mask` arrive, through binary32 as on the link."""
         s = self.s
+        self.superseded = []
         carried = _F32.unpack(_F32.pack(*values))
         for first, stop in _runs(mask):
             s[first:stop] = carried[first:stop]
@@ -191,6 +199,7 @@ class PythonRuntime:
         return self._command(tick, transition)
 
     def _command(self, tick: int, transition: semantics.Transition | None) -> Command:
+        self.tick_transition = transition
         kind, src, dst = TransitionKind.NONE, NO_STATE, NO_STATE
         if transition is not None:
             kind = _KIND_CODES[transition.kind]
@@ -229,7 +238,8 @@ class PythonRuntime:
         speed = pilot.propelled_speed(args, speed, self.unplanned_speed_mps) \
             if PROFILES[profile.kind].propelled else 0.0
         thrust = thrust if profile.kind in pilot.ASSISTED else 0.0
-        heading, valid = self.route.heading(s[_LAT], s[_LON])
+        heading, valid = self.route.turned(t_in) if isinstance(self.route, pilot.Turn) \
+            else self.route.heading(s[_LAT], s[_LON])
         flags = ((FLAG_SURFACE if surface else 0) | (FLAG_CLIMBING if ballast_cmd > 0.0 else 0)
                  | (FLAG_HEADING if valid else 0)
                  | (FLAG_HEADING_HOLD if valid and self.route.holds else 0))
@@ -271,6 +281,11 @@ class PythonRuntime:
         if fault:
             raise semantics.MissionFault(f"tick {tick}: {self.envelope_notes[-1]}")
         if ends:
+            fired = self.tick_transition  # an event's, before the end: both are the tick's
+            if fired is not None and fired.kind != "start":
+                self.superseded = [(_KIND_CODES[fired.kind], self.index[fired.from_state],
+                                    self.index[fired.to_state] if fired.to_state
+                                    else NO_STATE, fired.stack_depth)]
             machine = self.machine
             self.machine = semantics.Machine(None, (), machine.variables)
             return self._command(tick, semantics.Transition(self.s[0], "envelope",

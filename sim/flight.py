@@ -159,16 +159,17 @@ def _fly_step(mission: ir.CheckedMission, science, config: RunConfig,  # noqa: A
 def flown_limits(mission: ir.CheckedMission, vehicle: Vehicle,
                  clocks_mhz: tuple[float, ...]) -> FlightLimits:
     """The limits of `vehicle` (a scenario's may differ from the mission's) on a board of
-    `clocks_mhz` [MHz]: its pump, and what it flies without a plan (the alternatives and
-    the `auto` speed the compiler gives the C runtime); no other bound beyond the
+    `clocks_mhz` [MHz]: its pump, its propulsion's speeds and thruster power (a plan or
+    an update beyond them is refused), and what it flies without a plan (the alternatives
+    and the `auto` speed the compiler gives the C runtime); no other bound beyond the
     contract's."""
     from gliderplan.contract import FlightLimits
-    from gliderplan.planner.limits import unplanned
+    from gliderplan.planner.limits import propulsion_rating, unplanned
 
     speed, flown = unplanned(mission, vehicle)
     return FlightLimits(vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, clocks_mhz,
                         unplanned_speed_mps=speed, unplanned_profiles=flown,
-                        envelope=vehicle.envelope)
+                        envelope=vehicle.envelope, **propulsion_rating(vehicle))
 
 
 def _surfacing(shore: ShoreLoop, deliver, gauge, glider,  # noqa: ANN001, ANN202

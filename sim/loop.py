@@ -40,6 +40,10 @@ PROGRESS_TICKS = 50_000  # report progress this often on long runs
 
 
 class Runtime(Protocol):
+    # the transitions (kind, from, to, stack depth codes) the last step made before its
+    # COMMAND's (an event's, on the tick the envelope ended the mission)
+    superseded: list[tuple[int, int, int, int]]
+
     def step(self, tick: int, mask: int, values: list[float]) -> Command: ...
 
 
@@ -251,10 +255,12 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
             time_s = tick * tick_s
             if tick == 0:
                 trace.append(start(mission, time_s)[1])
-            if cmd.transition > TransitionKind.START:
-                trace.append(Transition(
-                    time_s, TRANSITION_NAMES[cmd.transition], names[cmd.from_state],
-                    "" if cmd.to_state == NO_STATE else names[cmd.to_state], cmd.stack_depth))
+            # an event's transition on the tick the envelope ended the mission, then the end
+            for kind, src, dst, depth in (*runtime.superseded, (
+                    cmd.transition, cmd.from_state, cmd.to_state, cmd.stack_depth)):
+                if kind > TransitionKind.START:
+                    trace.append(Transition(time_s, TRANSITION_NAMES[kind], names[src],
+                                            "" if dst == NO_STATE else names[dst], depth))
             last_state = cmd.state
             state_c.append(cmd.state)
             stack_c.append(cmd.stack_depth)

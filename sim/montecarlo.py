@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gliderplan.contract import SBD_MO_SHORT_BYTES, SBD_MT_SHORT_BYTES
+from gliderplan.contract.units import finite_or_none
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
@@ -326,8 +327,9 @@ def replanning(table, complete: bool = True) -> dict:  # noqa: ANN001
         "hold_rate": rate(held), "hold_rate_interval_95": interval(held),
         "hold_rate_static": rate(held_static),
         "hold_rate_static_interval_95": interval(held_static),
-        "quality": float(table["quality"].mean()),
-        "quality_static": float(table["quality_static"].mean()),
+        # None where the mission weighs no sensor (no quality to speak of)
+        "quality": finite_or_none(float(table["quality"].mean())),
+        "quality_static": finite_or_none(float(table["quality_static"].mean())),
         "update_bytes_max": int(table["update_bytes_max"].max()),
         "link": {
             "surfacings_per_mission": float(table["surfacings"].mean()),

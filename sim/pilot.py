@@ -1,6 +1,6 @@
 """The runtime's library routines in Python, exactly as docs/pilot.md specifies them:
 flight profiles (yo, thermotrackyo, surface, hover; on a propeller cruise, altitude),
-routes (nav, noheading, heading, waypoints, sweep, goto_list) and the plan's schedule (sensor
+routes (nav, noheading, heading, turn, waypoints, sweep, goto_list) and the plan's schedule (sensor
 power windows, profile alternation).
 
 Each routine is a small object with the pilot's memory (leg, tracked band, waypoint
@@ -22,7 +22,7 @@ from gliderplan.contract import (
     WAYPOINT_RADIUS_M,
     YO_ALTITUDE_ARG,
 )
-from gliderplan.language.registry import held_heading_rad
+from gliderplan.language.registry import held_heading_rad, turn_rate_rad_s
 from gliderplan.sim.geo import bearing_rad, ddmm_to_degrees, offset_m
 
 if TYPE_CHECKING:  # the plan reader pulls in the planner (cvxpy): only when a plan is flown
@@ -271,6 +271,34 @@ class Heading:
         return math.nan
 
 
+class Turn:
+    """turn(deg/s): the heading measured at the state's entry, advanced at a steady rate
+    (positive clockwise), held as it is like `heading`'s: a spiral, Slocum's set_heading
+    holding its fin. No heading measured at entry: no heading. Its heading depends on
+    the time since entry (`turned`), not on the position. Nothing to reach or resume."""
+
+    k = 0
+    reached = 0
+    holds = True
+
+    def __init__(self, params: tuple[float, ...], points: tuple[tuple[float, float], ...]):
+        self.rate_rad_s = turn_rate_rad_s(params[0])
+        self.from_rad = math.nan  # the heading measured at entry, set by `enter`
+
+    def distance_m(self, lat_ddmm: float, lon_ddmm: float) -> float:
+        return math.nan
+
+    def enter(self, heading_rad: float) -> None:
+        self.from_rad = heading_rad
+
+    def turned(self, t_in_s: float) -> tuple[float, bool]:
+        """(heading [rad], valid) `t_in_s` after entry, as the runtime's gp_route_turn."""
+        if not (math.isfinite(self.from_rad) and math.isfinite(t_in_s)):
+            return 0.0, False
+        heading = math.fmod(self.from_rad + self.rate_rad_s * t_in_s, 2.0 * math.pi)
+        return (heading + 2.0 * math.pi if heading < 0.0 else heading), True
+
+
 class Waypoints:
     """Toward points[k]; k advances (one per tick) within `radius_m`; after the last,
     hold the heading to it (a goto list starts again from the first). `reached` counts
@@ -407,7 +435,7 @@ def _clip(hull: list[tuple[float, float]], y: float) -> tuple[float, float] | No
     return (min(xs), max(xs)) if xs else None
 
 
-ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "heading": Heading,
+ROUTE_ROUTINES = {"nav": Nav, "noheading": NoHeading, "heading": Heading, "turn": Turn,
                   "waypoints": Waypoints, "sweep": Sweep, "goto_list": GotoList}
 
 

@@ -52,6 +52,24 @@ def _sim(mission: Path, out: Path, runtime: str, capsys) -> tuple[int, str, dict
         (out / "summary.json").read_text()), said
 
 
+def _flown_alike(mission: Path, tmp_path: Path, capsys, code: int, ended: str,
+                 runtimes: tuple[str, ...] = ("c",)) -> tuple[tuple, dict[str, tuple]]:
+    """`mission` flown by the Python reference and each of `runtimes` (the board binary
+    over the pty: "c"; the step in the C flight: "step"): the same exit `code`, the same
+    transitions at the same times, an end starting with `ended` and the envelope's same
+    words in each; the reference's flight and the others' (by runtime) are returned."""
+    python = _sim(mission, tmp_path / "py", "python", capsys)
+    others = {}
+    for runtime in runtimes:
+        others[runtime] = other = _sim(mission, tmp_path / runtime, runtime, capsys)
+        assert python[0] == other[0] == code, (runtime, python[3], other[3])
+        assert python[1] == other[1], runtime
+        assert python[2]["ended"].startswith(ended), runtime
+        assert other[2]["ended"].startswith(ended), runtime
+        assert python[2]["envelope"] == other[2]["envelope"], runtime
+    return python, others
+
+
 @needs_cc
 @pytest.mark.parametrize(("action", "assignment", "ended", "says"), [
     ("surface", "set bottom = 3000", "envelope",
@@ -68,13 +86,8 @@ def _sim(mission: Path, out: Path, runtime: str, capsys) -> tuple[int, str, dict
 def test_both_runtimes_hold_a_variable_to_the_rating_alike(tmp_path, capsys, action,
                                                             assignment, ended, says):
     mission = _mission(tmp_path, action, assignment)
-    python = _sim(mission, tmp_path / "py", "python", capsys)
-    for runtime in ("c", "step"):  # the board binary, the step in the C flight
-        c = _sim(mission, tmp_path / runtime, runtime, capsys)
-        assert python[0] == c[0] == ExitCode.ENVELOPE, runtime
-        assert python[1] == c[1], runtime  # the same transitions at the same times
-        assert python[2]["ended"] == c[2]["ended"] == ended, runtime
-        assert python[2]["envelope"] == c[2]["envelope"], runtime
+    python, _ = _flown_alike(mission, tmp_path, capsys, ExitCode.ENVELOPE, ended, ("c", "step"))
+    assert python[2]["ended"] == ended
     assert says in python[2]["envelope"][-1]
     assert says in python[3] and "outside its rating" in python[3]
 
@@ -129,12 +142,8 @@ end
 def test_both_runtimes_hold_a_cruise_to_the_rating_alike(tmp_path, capsys, assignment, code,
                                                          ended, envelope):
     mission = _cruise(tmp_path, assignment)
-    python = _sim(mission, tmp_path / "py", "python", capsys)
-    c = _sim(mission, tmp_path / "c", "c", capsys)
-    assert python[0] == c[0] == code, (python[3], c[3])
-    assert python[1] == c[1]
-    assert python[2]["ended"] == c[2]["ended"] == ended
-    assert python[2]["envelope"] == c[2]["envelope"] == envelope
+    python, _ = _flown_alike(mission, tmp_path, capsys, code, ended)
+    assert python[2]["ended"] == ended and python[2]["envelope"] == envelope
 
 
 @pytest.mark.parametrize(("text", "problem"), [
@@ -180,6 +189,29 @@ end
     err = capsys.readouterr().err
     assert f"m.mission:{where}: error: {message}" in err
     assert "the rating of vehicle slocum_g2_shallow (its file's [envelope])" in err
+
+
+@pytest.mark.parametrize(("rate", "code"), [("-9", ExitCode.BAD_INPUT), ("8.8", ExitCode.OK)])
+def test_check_refuses_a_turn_faster_than_the_vehicle_s_rated_turn_rate(tmp_path, capsys,
+                                                                          rate, code):
+    # the shallow Slocum's max_turn_rate: 0.154 rad/s, 8.82 deg/s, either way
+    mission = tmp_path / "m.mission"
+    mission.write_text(f"""mission m
+vehicle slocum_g2_shallow
+
+state s1
+begin
+  flightroute turn({rate})
+  flightprofile yo(5, 20, .454, .454)
+  sensors missiontime, depth
+  events
+    case missiontime >= 100 exit
+end
+""")
+    assert main(["check", str(mission)]) == code
+    err = capsys.readouterr().err
+    assert ("m.mission:6:20: error: turn rate -9 deg/s is beyond the vehicle's rated 8.82 "
+            "deg/s" in err) == (code == ExitCode.BAD_INPUT), err
 
 
 def test_check_passes_the_shipped_examples_within_their_vehicles_ratings(capsys):
@@ -253,12 +285,9 @@ end
 def test_both_runtimes_hold_a_speed_past_the_propulsion_s_table_alike(tmp_path, capsys, action,
                                                                      ended, what):
     mission = _fast_cruise(tmp_path, action)
-    python = _sim(mission, tmp_path / "py", "python", capsys)
-    c = _sim(mission, tmp_path / "c", "c", capsys)
-    assert python[0] == c[0] == ExitCode.ENVELOPE, (python[3], c[3])
-    assert python[1] == c[1]
-    assert python[2]["ended"].startswith(ended) and c[2]["ended"].startswith(ended)
-    assert python[2]["envelope"] == c[2]["envelope"] == [
+    python, others = _flown_alike(mission, tmp_path, capsys, ExitCode.ENVELOPE, ended)
+    c = others["c"]
+    assert python[2]["envelope"] == [
         "envelope: missiontime 300 s, state s1 (line 9): speed 3 m/s beyond the vehicle's "
         f"1.55556 m/s; {what}"]  # the table's top: 1400 rpm at 1 m/s per 900 rpm
     assert python[2]["energy_j"] == pytest.approx(c[2]["energy_j"], rel=1e-9)
@@ -294,12 +323,7 @@ end
 def test_both_runtimes_stop_a_pump_working_past_its_energy_per_hour_alike(
         tmp_path, capsys, action, ended, what):
     mission = _yo_with_pump(tmp_path, action, 1.0)  # the yo pumps ~2.4 W on average
-    python = _sim(mission, tmp_path / "py", "python", capsys)
-    c = _sim(mission, tmp_path / "c", "c", capsys)
-    assert python[0] == c[0] == ExitCode.ENVELOPE, (python[3], c[3])
-    assert python[1] == c[1]
-    assert python[2]["ended"].startswith(ended) and c[2]["ended"].startswith(ended)
-    assert python[2]["envelope"] == c[2]["envelope"]
+    python, _ = _flown_alike(mission, tmp_path, capsys, ExitCode.ENVELOPE, ended)
     note = python[2]["envelope"][0]
     assert "state s1 (line 8): pump energy within an hour" in note
     assert "beyond the vehicle's 3600 J" in note and note.endswith(what)
@@ -362,10 +386,8 @@ def _track_turns_rad(out: Path) -> np.ndarray:
 def test_both_runtimes_turn_the_heading_at_the_rated_rate_under_every_action(
         tmp_path, capsys, action):
     mission = _zigzag(tmp_path, action)
-    python = _sim(mission, tmp_path / "py", "python", capsys)
-    c = _sim(mission, tmp_path / "c", "c", capsys)
-    assert python[0] == c[0] == ExitCode.OK, (python[3], c[3])  # a turn is flown, not refused
-    assert python[1] == c[1] and python[2]["envelope"] == c[2]["envelope"] == []
+    python, _ = _flown_alike(mission, tmp_path, capsys, ExitCode.OK, "")  # flown, not refused
+    assert python[2]["envelope"] == []
     turns = _track_turns_rad(tmp_path / "py")
     assert np.array_equal(turns, _track_turns_rad(tmp_path / "c"))
     # each swap asks a half turn at once; the glider turns 0.154 rad/s x 4 s a tick

@@ -419,6 +419,18 @@ def test_a_deferred_stop_waits_for_the_writing_and_a_second_one_does_not():
     assert not later.requested
 
 
+def test_runs_in_threads_leave_their_deferred_blocks_in_any_order():
+    """Two flights in threads (the runtime's line-noise test flies four side by side):
+    the first to finish must not take the other's deferral, equal as it looks, out of the
+    list; the other then arms its own and leaves as usual."""
+    first, second = interrupts.deferred(armed=False), interrupts.deferred(armed=False)
+    first_deferral = first.__enter__()
+    second.__enter__()
+    second.__exit__(None, None, None)
+    first_deferral.arm()
+    first.__exit__(None, None, None)  # raised ValueError when deferrals compared equal
+
+
 def test_a_fleet_monte_carlo_stopped_keeps_whole_scenarios_and_gives_no_probability(
         fleet_plan, tmp_path, monkeypatch, capsys):
     """One worker flies alpha, bravo, charlie of scenario 0, then of 1...: stopped in

@@ -96,6 +96,22 @@ def test_replan_writes_an_update_the_glider_applies_to_the_plan_it_holds(tmp_pat
     assert {"figures", "changes", "shadow_price", "battery_usable", "quality"} <= set(report)
 
 
+def test_an_earlier_chain_s_updates_are_not_left_beside_the_new_one(tmp_path, signed):
+    """A longer chain written before under the same name (u1.1, u1.2) would read as part of
+    the new single update: it is removed once the new one is in place; other files stay."""
+    plan, key = signed
+    reports = write(tmp_path, telemetry(plan, (3, 6, 9), dvl=1.3))
+    out = tmp_path / "u1"
+    for name in ("u1.1", "u1.2", "u1.4", "u1.notes"):
+        (tmp_path / name).write_bytes(b"from an earlier replan")
+    assert main(["replan", SHORT, "--plan", str(plan), "--telemetry", str(reports), "--key",
+                 str(key), "-o", str(out)]) == ExitCode.OK
+    assert out.is_file() and len(out.read_bytes()) <= 270
+    assert not (tmp_path / "u1.1").exists() and not (tmp_path / "u1.2").exists()
+    # not a member of the chain (u1.3 is missing): the file is not this command's to remove
+    assert (tmp_path / "u1.4").exists() and (tmp_path / "u1.notes").exists()
+
+
 def test_a_hungrier_device_is_found_and_the_plan_spends_less_on_it(tmp_path, signed, short):
     plan, _ = signed
     held = plan.read_bytes()

@@ -217,3 +217,24 @@ def test_a_bad_drift_is_one_clear_error(tmp_path, text, said):
     path.write_text(text)
     with pytest.raises(ScenarioFileError, match=said):
         read_spec(path)
+
+
+def test_a_mission_that_weighs_no_sensor_has_no_quality_and_its_summary_is_json():
+    """Without a weighted sensor the flown quality is no number: the summary says null
+    (JSON has no NaN), not NaN, with and without replanning."""
+    import pandas as pd
+
+    from gliderplan.sim.montecarlo import LINK_COLUMNS, replanning
+
+    table = pd.DataFrame({"held": [True, False], "held_static": [True, True],
+                          "duration_s": [86400.0, 86400.0], "quality": [math.nan] * 2,
+                          "quality_static": [math.nan] * 2,
+                          **{name: [1, 2] for name in LINK_COLUMNS}})
+    said = replanning(table)
+    assert said["quality"] is None and said["quality_static"] is None
+    assert said["hold_rate"] == 0.5
+    assert json.loads(json.dumps(said, allow_nan=False))["quality"] is None
+    from gliderplan.cli.montecarlo import _replanned
+
+    said.update(scenarios=2, plan_flown="the plan given")
+    assert "no quality as flown: the mission weighs no sensor" in _replanned("m", said)

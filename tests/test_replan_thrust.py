@@ -187,9 +187,12 @@ def test_the_c_runtime_flies_the_replanned_thrust_and_the_energy_follows(held):
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="the C runtime needs a C compiler")
-def test_the_runtime_refuses_an_update_beyond_the_rating(held, tmp_path):
-    """The compiled runtime's own plan check, as `replan` would send it."""
+@pytest.mark.parametrize("built_by", ["compile", "sim"])
+def test_the_runtime_refuses_an_update_beyond_the_rating(held, tmp_path, built_by):
+    """The compiled runtime's own plan check, as `replan` would send it: the runtime
+    `compile` builds and the one the simulator builds for its flight alike."""
     from gliderplan.sim.emulator import start_c_runtime
+    from gliderplan.sim.flight import flown_limits
 
     mission, path, key = held
     data = path.read_bytes()
@@ -199,6 +202,8 @@ def test_the_runtime_refuses_an_update_beyond_the_rating(held, tmp_path):
     made = changed_plan(data, (change,), 2, KEY)
     update = PlanUpdate(1, 2, plan_hash(data), plan_hash(made), (change,)).pack(KEY)
     limits = plan_board_limits(mission, read_plan_bytes(data, mission))
+    if built_by == "sim":
+        limits = flown_limits(mission, load_vehicle(mission.vehicle), limits.clocks_mhz)
     runtime = start_c_runtime(mission, str(path), limits, key_path=str(key),
                               state_dir=str(tmp_path))
     try:

@@ -384,6 +384,44 @@ def random_missions(draw) -> str:
             + "\n".join(states))
 
 
+# a return on the tick the pump's energy guard ends the mission: both are in the trace
+_RETURN_AS_THE_PUMP_GUARD_ENDS = (
+    'mission random\n'
+    'var a = 900\n'
+    'var b = 10\n'
+    'var top = 4\n'
+    'var bottom = 25\n'
+    'state s0\n'
+    'begin\n'
+    '  flightroute noheading\n'
+    '  flightprofile yo(0, 3, .3, .3)\n'
+    '  sensors missiontime, depth, pitch, lat, lon, temp, oxygen\n'
+    '  events\n'
+    '    case missiontime >= 1800 exit\n'
+    '    case missiontime >= 60 call s1\n'
+    '    case missiontime >= 60 goto s2\n'
+    '    case missiontime >= 60 set a = a + 1 \n'
+    'end\n'
+    '\n'
+    'state s1\n'
+    'begin\n'
+    '  flightroute noheading\n'
+    '  flightprofile yo(0, 4, .3, .3)\n'
+    '  sensors missiontime, depth, pitch, lat, lon, temp, oxygen\n'
+    '  events\n'
+    '    case missiontime >= 1800 exit\n'
+    '    case missiontime >= 60 return\n'
+    'end\n'
+    '\n'
+    'state s2\n'
+    'begin\n'
+    '  flightroute noheading\n'
+    '  flightprofile yo(top, bottom, .454, .454)\n'
+    '  sensors missiontime, depth, pitch, lat, lon, temp, oxygen\n'
+    '  events\n'
+    '    case missiontime >= 1800 exit\n'
+    '    case missiontime >= 60 goto s0\n'
+    'end\n')
 _SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return on the tick the climb surfaces
     "mission random\nstate s0\nbegin\n  flightroute noheading\n  flightprofile yo(0, 10, .3, .3)\n"
     "  sensors missiontime, depth\n  events\n    case missiontime >= 1800 exit\n"
@@ -399,6 +437,8 @@ _SURFACED_ON_THE_RUN_S_LAST_TICK = (  # a return on the tick the climb surfaces
        seed=st.integers(0, 2**31), tick_s=st.sampled_from([4.0, 2.0, 3.7]),
        start_s=st.floats(9e8, 2e9), rigid=st.booleans(),
        floor=st.sampled_from([None, 12.0, 30.0, 55.0]))
+@example(source=_RETURN_AS_THE_PUMP_GUARD_ENDS, ocean="bench", noise="none",
+         current=(0.0, 0.0), seed=0, tick_s=4.0, start_s=9e8, rigid=False, floor=None)
 @example(source=_SURFACED_ON_THE_RUN_S_LAST_TICK, ocean="bench", noise="none",
          current=(0.0, 0.0), seed=0, tick_s=4.0, start_s=9e8, rigid=True, floor=None)
 def test_the_c_flight_flies_random_missions_as_the_reference(source, ocean, noise,

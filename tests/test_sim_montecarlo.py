@@ -288,3 +288,36 @@ def test_the_budget_is_the_battery_less_its_reserve_times_the_share_drawn(tmp_pa
     table = run.result.table()
     assert table["budget_j"].to_numpy() == pytest.approx(
         3.672e6 * table["drawn_usable_fraction_1"].to_numpy())
+
+
+STARTING_DASK = """
+import os, signal, sys
+import distributed
+from gliderplan.contract import interrupts
+from gliderplan.sim.backends import scenario_executor
+
+class Interrupted(distributed.LocalCluster):  # the user's Ctrl-C while the workers start
+    def __init__(self, *args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        super().__init__(*args, **kwargs)
+
+distributed.LocalCluster = Interrupted
+with interrupts.handling():
+    try:
+        with scenario_executor(2, "local") as executor:
+            print("started:", executor.submit(sum, (1, 2)).result())
+    except KeyboardInterrupt:
+        print("stopped:", interrupts.stopped())
+        sys.exit(130)
+print("the Ctrl-C was lost")
+"""
+
+
+def test_a_ctrl_c_while_dask_s_workers_start_stops_the_run_and_no_worker_takes_it():
+    """A Ctrl-C while the local cluster starts is kept until it has started, then stops
+    the run (it used to be ignored there, and the run went on to its end); the workers,
+    which must not take it, print no traceback."""
+    run = subprocess.run([sys.executable, "-c", STARTING_DASK], capture_output=True,
+                         text=True, timeout=300)
+    assert (run.returncode, run.stdout) == (130, "stopped: True\n"), run.stderr
+    assert "Traceback" not in run.stderr

@@ -5,6 +5,8 @@ not through the importer); bad files stop with one line naming file and line."""
 
 from __future__ import annotations
 
+import itertools
+import math
 import os
 import re
 import shutil
@@ -22,7 +24,7 @@ from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.language.slocum import import_mission
 from gliderplan.language.slocum_files import SlocumFileError
 from gliderplan.language.slocum_sampling import yo_phases
-from gliderplan.power_models import load_sensor
+from gliderplan.power_models import load_sensor, load_vehicle
 from gliderplan.sim.geo import ddmm_to_degrees
 from gliderplan.sim.science import NOISE_PRESETS
 
@@ -285,17 +287,50 @@ def test_set_heading_is_a_heading_held_uncorrected_by_both_runtimes(tmp_path, ca
     assert west_m > 2000.0  # flew west, its heading
 
 
-def test_a_fin_held_is_left_out_and_says_why(tmp_path, capsys):
+def test_a_fin_held_is_a_spiral_at_the_fin_s_turn_rate_in_both_runtimes(tmp_path, capsys):
+    """use_heading 4 (HM_FIN): 0.3 rad of fin held is a `turn` at the vehicle's
+    fin_turn_rate times the fin; the Python reference and the C runtime (over the pty and
+    as the in-process step) fly the same spiral, whose course turns
+    clockwise at that rate under water (no current: the course is the heading)."""
     mi = SET_HEADING_MI.replace("behavior: goto_list\n b_arg: args_from_file(enum) 10\n", "")
-    path = _mission(tmp_path, mi, yo10_ma=YO_MA, set_he10_ma=_set_heading_ma("4", "0.2"))
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA, set_he10_ma=_set_heading_ma("4", "0.3"))
     out = tmp_path / "f.mission"
     assert main(["import-slocum", str(path), "-o", str(out)]) == 0
-    err = capsys.readouterr().err
-    assert "set_he10.ma:3: warning: set_heading: not translated: use_heading 4 " \
-           "(set_he10.ma:3), heading_value 0.2 (set_he10.ma:4): a fin angle held (HM_FIN) " \
-           "turns the glider" in err
+    rate_rad_s = load_vehicle("slocum_g2_shallow").fin_turn_rate_per_s * 0.3
     text = out.read_text()
-    assert "flightroute noheading" in text and "# not translated: use_heading 4" in text
+    route = re.search(r"flightroute turn\((\S+)\)", text)
+    assert route and float(route[1]) == pytest.approx(math.degrees(rate_rad_s), rel=1e-6)
+    assert "# use_heading 4, heading_value 0.3 rad of fin: a steady turn" in text
+    assert main(["check", str(out)]) == 0
+    tracks = {}
+    for runtime in ("python", "c", "step"):
+        assert main(["sim", str(out), "--runtime", runtime, "--start", "54.5,7.5",
+                     "--duration", "1h", "-o", str(tmp_path / runtime)]) == 0
+        tracks[runtime] = pd.read_parquet(tmp_path / runtime / "timeseries.parquet")
+    for runtime, column in itertools.product(("c", "step"), ("lat_deg", "lon_deg", "depth_m")):
+        assert tracks["python"][column].equals(tracks[runtime][column]), (runtime, column)
+    track = tracks["python"]
+    north = np.diff(track["lat_deg"].to_numpy()) * METRES_PER_DEGREE
+    east = np.diff(track["lon_deg"].to_numpy()) * METRES_PER_DEGREE * np.cos(np.radians(54.5))
+    under = (track["depth_m"].to_numpy()[1:] > 2.0) & (np.hypot(north, east) > 0.0)
+    course = np.unwrap(np.arctan2(east[under], north[under]))
+    seconds = np.diff(track["time_s"].to_numpy())[under]
+    turned = np.diff(course) / seconds[1:]
+    assert np.median(turned) == pytest.approx(rate_rad_s, rel=0.02)
+    assert course[-1] - course[0] > 2.0 * math.pi  # more than a full circle: a spiral
+
+
+def test_a_roll_held_is_left_out_and_says_why(tmp_path, capsys):
+    mi = SET_HEADING_MI.replace("behavior: goto_list\n b_arg: args_from_file(enum) 10\n", "")
+    path = _mission(tmp_path, mi, yo10_ma=YO_MA, set_he10_ma=_set_heading_ma("2", "0.2"))
+    out = tmp_path / "r.mission"
+    assert main(["import-slocum", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "set_he10.ma:3: warning: set_heading: not translated: use_heading 2 " \
+           "(set_he10.ma:3), heading_value 0.2 (set_he10.ma:4): a roll held (HM_ROLL): the " \
+           "shared Slocum logs command no roll" in err
+    text = out.read_text()
+    assert "flightroute noheading" in text and "# not translated: use_heading 2" in text
 
 
 @pytest.mark.parametrize("mi, mafiles, message", [
@@ -303,6 +338,10 @@ def test_a_fin_held_is_left_out_and_says_why(tmp_path, capsys):
      "m.mi:2: use_heading 7 is no mode of set_heading"),
     ("behavior: set_heading\n b_arg: use_heading(bool) 1\n", {},
      "m.mi:1: set_heading needs use_heading and heading_value"),
+    ("behavior: set_heading\n b_arg: use_heading(bool) 4\n b_arg: heading_value(X) 0.5\n",
+     {}, "m.mi:3: heading_value 0.5 rad is no fin angle of use_heading 4"),
+    ("behavior: set_heading\n b_arg: use_heading(bool) 4\n b_arg: heading_value(X) -0.44\n",
+     {}, "m.mi:3: heading_value -0.44 rad is no fin angle of use_heading 4"),
     ("behavior: yo\n  b_arg: args_from_file(enum) 10\nbehavior: loiter_about\n",
      {"yo10_ma": YO_MA}, "m.mi:3: unknown behavior 'loiter_about'"),
     ("behavior: yo\n  b_arg: args_from_file(enum) 10\n  b_arg: start_when(enum)\n",

@@ -47,6 +47,7 @@ typedef enum {
     GP_ROUTE_SWEEP = 3,
     GP_ROUTE_GOTO_LIST = 4,
     GP_ROUTE_HEADING = 5,        /**< a compass heading held, uncorrected for the current */
+    GP_ROUTE_TURN = 6,           /**< a steady turn from the heading at entry (a spiral) */
 } gp_route_kind;
 
 /**
@@ -82,7 +83,8 @@ typedef struct {
     uint8_t kind;          /**< gp_route_kind */
     uint8_t n_points;
     double param;          /**< sweep: line spacing [m]; goto_list: radius [m];
-                                heading: the heading held [rad]; else unused */
+                                heading: the heading held [rad];
+                                turn: the turn rate [rad/s], positive clockwise; else unused */
     const double (*points)[2];  /**< (lat, lon) DDMM.MMMM; nav has one point */
 } gp_route;
 

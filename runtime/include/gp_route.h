@@ -1,7 +1,7 @@
 /**
  * @file gp_route.h
- * @brief Flight routes (docs/pilot.md): nav, noheading, a heading held (Slocum's
- *        set_heading), waypoints, Slocum's looping goto list, and the area sweep of a
+ * @brief Flight routes (docs/pilot.md): nav, noheading, a heading held or a steady
+ *        turn (Slocum's set_heading), waypoints, Slocum's looping goto list, and the area sweep of a
  *        convex hull turned into lawn-mower waypoints.
  */
 #ifndef GP_ROUTE_H
@@ -19,6 +19,7 @@ typedef struct {
     uint16_t next;                          /**< index of the waypoint flown to */
     uint16_t n_waypoints;
     uint32_t reached;                       /**< waypoints reached since entry (`wptreached`) */
+    double turn_from_rad;                   /**< turn: the heading measured at entry */
     double waypoints[GP_MAX_SWEEP_WAYPOINTS][2];  /**< (lat, lon) [deg] */
 } gp_route_state;
 
@@ -53,6 +54,15 @@ void gp_route_fill(gp_route_state *rs, const gp_route *route);
  * @return 1 if the heading is valid, 0 (noheading, no position fix)
  */
 int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, double lon_ddmm,
+                  double *heading_rad);
+
+/**
+ * @brief Heading of a turn route `t_in_s` [s] after its entry: the heading measured at
+ *        entry advanced at the route's rate, so a vehicle following it flies a spiral.
+ * @param heading_rad true heading, clockwise from north, [0, 2 pi)
+ * @return 1 if the heading is valid, 0 (no heading measured at entry)
+ */
+int gp_route_turn(const gp_route_state *rs, const gp_route *route, double t_in_s,
                   double *heading_rad);
 
 /**

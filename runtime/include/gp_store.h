@@ -32,7 +32,7 @@
 #include "gp_runtime.h"
 
 #define GP_PATH_MAX 1024
-#define GP_CHECKPOINT_MAGIC "GPCKPT06"
+#define GP_CHECKPOINT_MAGIC "GPCKPT07"
 /** The envelope guard's figures a checkpoint keeps (gp_envelope_memory's doubles). */
 #define GP_ENVELOPE_MEMORY_FIGURES 6
 /** Header to first slot, slot to slot: a flash page, so a torn write stays in its slot. */
@@ -50,7 +50,7 @@
                                                /* routes, events, log, entry           */ \
      + 8 * GP_MAX_VARIABLES + 8 * GP_N_SENSORS                                           \
      + 4 + 4 + 8 * 3 + 8 * 3 + 16 * GP_TRACK_WINDOW  /* pilot */                         \
-     + 2 + 4                                   /* route: waypoint, waypoints reached */  \
+     + 2 + 4 + 8                               /* route: waypoint, reached, turn from */ \
      + 5 + 8 * GP_ENVELOPE_MEMORY_FIGURES      /* envelope: flags, figures */            \
      + 1 + GP_COMMAND_MAX_SIZE                 /* last COMMAND */                        \
      + 4)                                      /* CRC-32 */

@@ -202,6 +202,18 @@ double gp_route_distance_m(const gp_route_state *rs, const gp_route *route, doub
     return length_m(north, east);
 }
 
+int gp_route_turn(const gp_route_state *rs, const gp_route *route, double t_in_s,
+                  double *heading_rad)
+{
+    *heading_rad = 0.0;
+    if (!isfinite(rs->turn_from_rad) || !isfinite(t_in_s)) {
+        return 0;
+    }
+    double heading = fmod(rs->turn_from_rad + route->param * t_in_s, 2.0 * GP_PI);
+    *heading_rad = heading < 0.0 ? heading + 2.0 * GP_PI : heading;
+    return 1;
+}
+
 int gp_route_step(gp_route_state *rs, const gp_route *route, double lat_ddmm, double lon_ddmm,
                   double *heading_rad)
 {

@@ -20,6 +20,7 @@ static void enter_state(gp_runtime *rt, const gp_mission *mission)
     rt->profile = GP_NO_PROFILE;
     if (rt->machine.state < mission->n_states) {
         gp_route_enter(&rt->route, &mission->states[rt->machine.state].route);
+        rt->route.turn_from_rad = rt->sensors[GP_SENSOR_HEADING];
     }
 }
 
@@ -59,10 +60,14 @@ static gp_envelope_breach fly(gp_runtime *rt, const gp_mission *mission, const g
     gp_pilot_step(&rt->pilot, &in, rt->sensors[GP_SENSOR_DEPTH], rt->sensors[GP_SENSOR_TEMP],
                   rt->sensors[GP_SENSOR_ALTITUDE], &vertical);
     double heading;
-    int heading_valid = gp_route_step(&rt->route, &state->route, rt->sensors[GP_SENSOR_LAT],
-                                      rt->sensors[GP_SENSOR_LON], &heading);
+    int heading_valid = state->route.kind == GP_ROUTE_TURN
+        ? gp_route_turn(&rt->route, &state->route,
+                        rt->sensors[GP_SENSOR_MISSIONTIME] - rt->entry_time_s, &heading)
+        : gp_route_step(&rt->route, &state->route, rt->sensors[GP_SENSOR_LAT],
+                        rt->sensors[GP_SENSOR_LON], &heading);
     cmd->profile = now.profile;
-    int holds = heading_valid && state->route.kind == GP_ROUTE_HEADING;
+    int holds = heading_valid && (state->route.kind == GP_ROUTE_HEADING
+                                  || state->route.kind == GP_ROUTE_TURN);
     cmd->flags = (uint8_t)(vertical.flags | (heading_valid ? GP_FLAG_HEADING : 0)
                            | (holds ? GP_FLAG_HEADING_HOLD : 0));
     cmd->depth_target_m = (float)vertical.depth_target_m;

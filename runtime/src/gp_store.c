@@ -80,6 +80,7 @@ size_t gp_checkpoint_encode(const gp_mission *mission, const gp_runtime *rt, uin
     put(&w, pilot->window, sizeof pilot->window[0] * n_window);
     put(&w, &rt->route.next, 2);
     put(&w, &rt->route.reached, 4);
+    put(&w, &rt->route.turn_from_rad, 8);
     const gp_envelope_memory *guard = &rt->envelope;
     const uint8_t envelope_head[5] = {guard->turned, guard->climbing, guard->held,
                                       guard->headed, guard->pumped};
@@ -161,6 +162,7 @@ const char *gp_checkpoint_decode(const gp_mission *mission, const uint8_t *recor
     get(&r, pilot->window, sizeof pilot->window[0] * pilot->n_window);
     get(&r, &loaded.route.next, 2);
     get(&r, &loaded.route.reached, 4);
+    get(&r, &loaded.route.turn_from_rad, 8);
     uint8_t envelope_head[5];
     double envelope_figures[GP_ENVELOPE_MEMORY_FIGURES];
     get(&r, envelope_head, sizeof envelope_head);

@@ -39,6 +39,7 @@
     X(test_nav_should_head_to_its_point)                                    \
     X(test_noheading_and_missing_fix_should_give_no_heading)                \
     X(test_heading_should_be_held_with_or_without_a_fix_and_reach_nothing)  \
+    X(test_turn_should_advance_from_the_entry_heading_at_its_rate)  \
     X(test_waypoints_should_advance_within_50_m_and_hold_the_last)          \
     X(test_goto_list_should_loop_with_its_radius_and_report_the_distance)   \
     X(test_sweep_should_mow_a_square_in_alternating_lines)                  \

@@ -105,6 +105,21 @@ void test_heading_should_be_held_with_or_without_a_fix_and_reach_nothing(void)
     CHECK_INT(isnan(gp_route_distance_m(&rs, &route, 4400, -6300)), 1);
 }
 
+void test_turn_should_advance_from_the_entry_heading_at_its_rate(void)
+{
+    gp_route route = {GP_ROUTE_TURN, 0, -0.02, NULL};  /* [rad/s], anticlockwise */
+    gp_route_state rs;
+    double heading;
+    gp_route_enter(&rs, &route);
+    rs.turn_from_rad = 0.5;
+    CHECK_INT(gp_route_turn(&rs, &route, 0.0, &heading), 1);
+    CHECK_NEAR(heading, 0.5, 1e-12);
+    CHECK_INT(gp_route_turn(&rs, &route, 100.0, &heading), 1);  /* past north: wrapped */
+    CHECK_NEAR(heading, 0.5 - 2.0 + 2.0 * 3.14159265358979323846, 1e-12);
+    rs.turn_from_rad = NAN;  /* no heading measured at entry: none to turn from */
+    CHECK_INT(gp_route_turn(&rs, &route, 10.0, &heading), 0);
+}
+
 void test_waypoints_should_advance_within_50_m_and_hold_the_last(void)
 {
     double points[2][2];

@@ -51,6 +51,7 @@ static void sample_runtime(gp_runtime *rt)
     rt->route_resume[0] = 2;  /* the caller's waypoint, for its return */
     rt->reached_resume[0] = 70000;  /* and the waypoints it had reached: past a u16 */
     rt->route.reached = 1;  /* s2 flies no route: 0, or 1 for a list's last */
+    rt->route.turn_from_rad = 1.25;  /* the heading a turn route turns from */
     /* its last turn, a climb; its heading commanded at 796 s; the pump owes 420 J */
     rt->envelope = (gp_envelope_memory){.last_turn_s = 796.0, .heading_rad = 2.5,
                                         .heading_s = 796.0, .ballast_cc = 230.0, .pump_s = 796.0, .pump_j = 420.0,
@@ -79,6 +80,7 @@ void test_checkpoint_should_round_trip_what_is_in_use(void)
     CHECK(memcmp(&expected, &back, offsetof(gp_runtime, route)) == 0);
     CHECK_INT(back.route.next, 0);
     CHECK_INT(back.route.reached, 1);
+    CHECK_NEAR(back.route.turn_from_rad, 1.25, 0);
     CHECK_INT(back.reached_resume[0], 70000);
     CHECK_NEAR(back.pilot.window[1].temp_c, 11.5, 0);
     CHECK(back.last_command.pitch_rad == rt.last_command.pitch_rad);
