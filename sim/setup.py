@@ -114,9 +114,10 @@ class FlightSetup:
 
 def flight_setup(mission: CheckedMission, options: FlightOptions = FlightOptions(), *,
                  plan: Plan | None = None, vehicle: Vehicle | None = None) -> FlightSetup:
-    """The set-up of a flight of `mission` with `options`: the plan read from
-    `options.plan_path` (or `plan`, one made in memory), the vehicle (`vehicle`, default
-    the mission's) ballasted for the water. Raises a GliderplanError naming the option or
+    """The set-up of a flight of `mission` with `options`: the plan `plan` (one made in
+    memory, or the one in `options.plan_path` already read), else read from
+    `options.plan_path`; the vehicle (`vehicle`, default the mission's) ballasted for
+    the water. Raises a GliderplanError naming the option or
     file that cannot be used, before anything is flown."""
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim.export import parse_utc
@@ -169,7 +170,7 @@ def flight_setup(mission: CheckedMission, options: FlightOptions = FlightOptions
     field_notes: list[str] = []
     if o.currents is not None:
         config, field_notes = with_currents(mission, config, o.currents, vehicle)
-    if o.plan_path is not None:
+    if plan is None and o.plan_path is not None:
         plan = load_plan(o.plan_path, mission)
     refuse_unflyable_yos(mission, vehicle, plan)
     key = None
