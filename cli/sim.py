@@ -139,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     mission = load_mission(args)
     lat, lon, start_utc = parse_start(args.start) if args.start else (None, None, None)
     duration_s = parse_duration_s(args.duration) if args.duration else None
-    ticks = (duration_s or mission.horizon_s or DEFAULT_HORIZON_S) / max(args.tick, 1e-9)
+    ticks = mission.run_limit_s(duration_s) / max(args.tick, 1e-9)
     from gliderplan.cli.progress import ProgressBar
 
     progress = ProgressBar(lambda done, total: f"{done / 86400:.2f} of {total / 86400:.2f} d "

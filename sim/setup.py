@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
+from gliderplan.contract import TICK_S
 from gliderplan.contract.errors import UsageError
 from gliderplan.language.ir import CheckedMission
 from gliderplan.planner.planfile import Plan, load_plan
@@ -43,7 +43,7 @@ class FlightOptions:
     a directory): the glider flies its temperature, salinity and in-situ density
     (TEOS-10), ballasted for the mean density over the depths the mission flies, as
     `gliderplan forecast` flies it
-    (`planner.rates.band_density`, `Vehicle.ballasted_for`); default: the bench preset's
+    (`planner.rates.ballasted_in`); default: the bench preset's
     temperatures in uniform water of the vehicle's reference density. `noise`: a key of
     `science.NOISE_PRESETS`. `tracker`: "robust" or "naive" (the paper's first).
     `currents`: the text of `sim --currents` (N,E [m/s], a NetCDF field, flight logs:
@@ -139,8 +139,7 @@ def flight_setup(mission: CheckedMission, options: FlightOptions = FlightOptions
         start = parse_utc(o.start_utc) if o.start_utc else None
     except ValueError as err:
         raise UsageError(f"--start: {err}") from None
-    duration = o.duration_s if o.duration_s is not None else \
-        mission.horizon_s or DEFAULT_HORIZON_S
+    duration = mission.run_limit_s(o.duration_s)
     fault_spec = None
     if o.faults is not None:
         from gliderplan.sim.faults import parse_faults
@@ -211,22 +210,21 @@ def check_state_dir(state_dir: Path, runtime: str) -> None:
 def flown_water(mission: CheckedMission, vehicle: Vehicle, given: Water, spec: str
                 ) -> tuple[Vehicle, DensityProfile, str]:
     """(the vehicle ballasted for the water, the in-situ density it flies through, what
-    that is): the ocean's density profile (TEOS-10, `sim.ocean.density_profile_of`, as
-    `gliderplan forecast` takes it) and its mean over the depths the mission flies (over
-    the floor's median, where the water has one)."""
-    from gliderplan.planner.forecast import WATER_DEPTHS_M
-    from gliderplan.planner.rates import band_density
-    from gliderplan.sim.ocean import density_profile_of
+    that is): the ocean's density profile (TEOS-10, `sim.ocean.density_profile_of`) and
+    its mean over the depths the mission flies (over the floor's median, where the water
+    has one), as `gliderplan forecast` takes them (`planner.rates.ballasted_in`)."""
+    from gliderplan.planner.rates import ballasted_in
+    from gliderplan.sim.ocean import WATER_DEPTHS_M, density_profile_of
 
-    density = density_profile_of(given.ocean, WATER_DEPTHS_M)
+    density = density_profile_of(given.ocean)
     floor_m = None if given.floor is None else given.floor.median_m
-    rho = band_density(mission, density, vehicle, floor_m)
+    ballasted, rho = ballasted_in(mission, density, vehicle, floor_m)
     note = (f"water: {spec}: in-situ density (TEOS-10) {density.rho_kg_m3.min():.1f}-"
             f"{density.rho_kg_m3.max():.1f} kg/m3 over 0-{WATER_DEPTHS_M[-1]:.0f} m, flown "
             f"at each depth; the glider ballasted for {rho:.1f} kg/m3, its mean over the "
             f"depths the mission flies (trimmed in {vehicle.flight.rho_kg_m3:.1f} kg/m3 as "
             "calibrated)")
-    return vehicle.ballasted_for(rho), density, note
+    return ballasted, density, note
 
 
 def with_currents(mission: CheckedMission, config: RunConfig, spec: str, vehicle: Vehicle

@@ -259,13 +259,12 @@ def test_the_water_given_is_flown_at_its_density_with_the_glider_ballasted_for_i
     assert said.startswith("water: bench: in-situ density (TEOS-10) 1021.0-1030.1 kg/m3")
     # ballasted as `gliderplan forecast` ballasts it: one definition of the band's density
     from gliderplan.language import check_file
-    from gliderplan.planner.forecast import WATER_DEPTHS_M
     from gliderplan.planner.rates import band_density
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim.ocean import density_profile_of, load_ocean
 
     checked = check_file(str(mission)).checked()
-    rho = band_density(checked, density_profile_of(load_ocean("bench"), WATER_DEPTHS_M),
+    rho = band_density(checked, density_profile_of(load_ocean("bench")),
                        load_vehicle(checked.vehicle))
     assert 1024.5 < rho < 1025.5  # the survey's 5-40 m of the bench water, not the 1024.3
     assert f"flown at each depth; the glider ballasted for {rho:.1f} kg/m3" in said
