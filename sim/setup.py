@@ -1,9 +1,12 @@
 """One flight's set-up, built once from a mission, its plan and the user's options: the
 vehicle (ballasted for the water), the water and its floor, the run's configuration
 (tick, duration, seed, noise, start, currents), the plan and its budget, the runtime and
-the faults injected into it. `gliderplan sim`, `montecarlo` (each scenario draws its
-world around it), `plan --confidence`, `plan --occupancy-from-sim` and the report fly
-what `flight_setup` builds."""
+the faults injected into it. `gliderplan sim` (its replanning shore too), `montecarlo`
+(each scenario draws its world around it), `plan --confidence`,
+`plan --occupancy-from-sim`, the report, `fleet sim`, `fleet montecarlo` and `route`'s
+simulated transit fly what `flight_setup` builds; `forecast`, which flies no flight,
+ballasts the glider for its water and takes its run limit as the set-up does
+(`planner.rates.ballasted_in`, `CheckedMission.run_limit_s`)."""
 
 from __future__ import annotations
 
