@@ -17,7 +17,8 @@ with -o, writes each glider's mission and plan, fleet.json, the map (fleet.png,
 fleet.geojson, fleet.kml) and the fleet page (fleet.html). `sim` flies every glider once
 in one ocean (a run directory per glider, with trajectory.nc); `montecarlo` flies the
 fleet in N drawn scenarios and gives the probability that the whole survey is finished.
-Without --plan, both plan the fleet first (with --seed) and write that plan into -o.
+Without --plan, both plan the fleet (with --seed) once -o is found fit to take the run
+(a folder that is not is refused before the planning) and write that plan into -o.
 """
 
 from __future__ import annotations
@@ -217,8 +218,9 @@ def _fly(args: argparse.Namespace) -> int:
         raise UsageError(f"--workers {args.workers}: must be at least 1")
     # on Dask by default: a LocalCluster of the workers (one worker: this process)
     scheduler = args.scheduler or ("local" if args.workers > 1 else None)
-    # without --plan, the fleet is planned now and the plan written into -o DIR/plan
-    plan = _planned(args, fleet) if args.plan is None else load_plan_dir(args.plan, fleet)
+    # without --plan, the fleet is planned once -o DIR is claimed, into DIR/plan
+    plan = (lambda: _planned(args, fleet)) if args.plan is None \
+        else load_plan_dir(args.plan, fleet)
     inputs = (args.fleet, args.scenario_file)
     if args.action == "sim":
         current = _current(args.current)

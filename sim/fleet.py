@@ -51,6 +51,8 @@ SIM_FILES = ("fleet_sim.json", *MAP_FILES, PLAN_DIR)  # and a folder per glider
 MONTECARLO_FILES = ("scenarios.parquet", "summary.json", "mapping_error.png", *MAP_FILES,
                     PLAN_DIR)
 Progress = Callable[[float, float], None]
+# the plan a fleet run flies: stored (`fleet plan -o`), or the planner that makes it
+PlanToFly = StoredPlan | Callable[[], FleetPlan]
 
 
 # ---- judging a flight as a survey --------------------------------------------------------
@@ -147,11 +149,13 @@ def _fly_one(task: dict) -> dict:
 
 
 @contextmanager
-def _run_folder(output_dir: str | Path, command: str, fleet: Fleet,
-                plan: FleetPlan | StoredPlan, force: bool, recognised: tuple[str, ...],
+def _run_folder(output_dir: str | Path, command: str, fleet: Fleet, plan: PlanToFly,
+                force: bool, recognised: tuple[str, ...],
                 inputs: Iterable) -> Iterator[tuple[OutputFolder, StoredPlan]]:
     """The run's folder (contract.files.output_folder) and the stored plan to fly: `plan`
-    as stored (`fleet plan -o`), or made now and written into the folder's plan/."""
+    as stored (`fleet plan -o`), or made now by `plan()` and written into the folder's
+    plan/. The folder is claimed first: one that cannot take the run is refused before
+    minutes of planning."""
     names = (*recognised, *(g.name for g in fleet.gliders))
     stored_in = plan.directory if isinstance(plan, StoredPlan) else None
     with output_folder(output_dir, command=command, force=force, recognised=names,
@@ -159,12 +163,12 @@ def _run_folder(output_dir: str | Path, command: str, fleet: Fleet,
         if isinstance(plan, StoredPlan):
             yield folder, plan
         else:
-            write_plan_dir(plan, folder.sub(PLAN_DIR))
+            write_plan_dir(plan(), folder.sub(PLAN_DIR))
             stored = load_plan_dir(folder.path / PLAN_DIR, fleet)
             yield folder, replace(stored, directory=folder.final(PLAN_DIR))
 
 
-def fly_fleet(fleet: Fleet, plan: FleetPlan | StoredPlan, output_dir, *, workers: int = 1,
+def fly_fleet(fleet: Fleet, plan: PlanToFly, output_dir, *, workers: int = 1,
               scheduler: str | None = "local", seed: int = 0, ocean: str | None = None,
               current: tuple[float, float] = (0.0, 0.0), runtime: str = "python",
               lose: tuple[str, float] | None = None, progress: Progress | None = None,
@@ -172,7 +176,8 @@ def fly_fleet(fleet: Fleet, plan: FleetPlan | StoredPlan, output_dir, *, workers
     """Fly every glider of `plan` once (`gliderplan fleet sim`); write OUTPUT/GLIDER/ (its
     run files, trajectory.nc) and OUTPUT/fleet_sim.json, the map and the fleet page, a
     folder written whole (contract.files.output_folder: `force`, and `inputs`, the files
-    read, refused inside it); a plan made now (a FleetPlan) is written into OUTPUT/plan.
+    read, refused inside it); a plan made now (`plan()`, called once the folder is
+    claimed) is written into OUTPUT/plan.
     `ocean` as `run_mission`'s (default: uniform water, as the plans assume); `current`
     (north, east) [m/s] is the whole ocean's; each glider's sensor noise is
     seeded from `seed` and its place in the fleet. Returns fleet_sim.json's content.
@@ -439,7 +444,7 @@ def replan_after_loss(fleet: Fleet, stored: StoredPlan, lose: tuple[str, float],
 
 # ---- Monte Carlo ---------------------------------------------------------------------------
 
-def montecarlo_fleet(fleet: Fleet, plan: FleetPlan | StoredPlan, output_dir, *,
+def montecarlo_fleet(fleet: Fleet, plan: PlanToFly, output_dir, *,
                      scenarios: int, workers: int = 1, scheduler: str | None = "local",
                      seed: int = 0, scenario_file=None, lose: tuple[str, float] | None = None,
                      progress: Progress | None = None, force: bool = False,

@@ -190,8 +190,9 @@ class ShoreLoop:
             event["status"] = "not sent"
             self.log.refusals.append(str(err))
             return ()
-        if not chain.updates:
+        if not chain.updates:  # what changed rounds to what the vehicle holds
             self.log.unchanged += 1
+            event["status"] = "unchanged"
             return ()
         for plan_file in chain.plan_files:
             self.sent[read_plan_bytes(plan_file).seq] = plan_file

@@ -15,6 +15,7 @@ from gliderplan.contract.files import output_folder
 from gliderplan.planner.planfile import Plan
 
 if TYPE_CHECKING:  # numpy and pandas: loaded when a run starts
+    from gliderplan.planner.speed import Leg
     from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.energy import FlightCheck, RunEnergy
     from gliderplan.sim.loop import RunRecord
@@ -83,7 +84,8 @@ def run_mission(setup: FlightSetup, output_dir: str | Path, *, netcdf: bool = Fa
     shipped one), and the plan update goes down to the runtime, which applies it (the C
     runtime over its link). The vehicle holds the options' key, or without one a key made
     for the run, with which the plan is signed; summary.json's `replanning` says what
-    crossed the link, and replans.csv what each surfacing did.
+    crossed the link, and replans.csv what each surfacing did. With the options'
+    `currents`, the shore replans in them (`shore_water`).
 
     Raises a GliderplanError (a missing or bad file, a runtime that cannot be built, a
     folder that cannot be written); KeyboardInterrupt if nothing was flown, or on a second
@@ -197,11 +199,28 @@ def run_mission(setup: FlightSetup, output_dir: str | Path, *, netcdf: bool = Fa
                      currents=config.currents)
 
 
+def shore_water(setup: FlightSetup) -> dict[str, tuple[Leg, ...]]:
+    """The water the shore replans in: the set-up's current on each state's route from
+    where and when the glider is put in (planner.water.route_legs), the water
+    `plan --currents --start` plans in, so that a replan chooses the speeds and thrusts
+    for the current flown, not for still water."""
+    from gliderplan.planner.water import route_legs
+    from gliderplan.sim.currents import UniformCurrent
+    from gliderplan.sim.loop import start_position
+
+    mission, config = setup.mission, setup.config
+    field = config.currents or UniformCurrent(config.current.north_mps,
+                                              config.current.east_mps)
+    return route_legs(mission, field, start_position(mission, config), config.start_epoch_s)
+
+
 def _shore(setup: FlightSetup, every: str, confidence: float | None,
            scenario_file: str | Path | None):  # noqa: ANN202
     """The shore of a run with replanning, and the plan and key the vehicle holds (the plan
     signed with a key made for the run when none is given; for the C runtime, which reads
-    both from files, they are kept in a temporary directory for the run)."""
+    both from files, they are kept in a temporary directory for the run). It replans in
+    the currents the options give (`shore_water`), else in still water, the plan's speeds
+    kept."""
     import secrets
 
     from gliderplan.planner.planfile import read_plan_data
@@ -221,8 +240,9 @@ def _shore(setup: FlightSetup, every: str, confidence: float | None,
     else:
         key = secrets.token_bytes(32)
         held = sign_plan(held, key, 1)
+    legs = None if setup.options.currents is None else shore_water(setup)
     shore = ShoreLoop(setup.mission, held, key, tick_s=setup.config.tick_s,
-                      confidence=confidence, spec=read_spec(scenario_file))
+                      confidence=confidence, spec=read_spec(scenario_file), legs=legs)
     if key_path is None and setup.runtime == "c":  # files for the runtime, removed after the run
         import tempfile
 

@@ -191,18 +191,24 @@ end
     assert "the rating of vehicle slocum_g2_shallow (its file's [envelope])" in err
 
 
-@pytest.mark.parametrize(("rate", "code"), [("-9", ExitCode.BAD_INPUT), ("8.8", ExitCode.OK)])
-def test_check_refuses_a_turn_faster_than_the_vehicle_s_rated_turn_rate(tmp_path, capsys,
-                                                                          rate, code):
+@pytest.mark.parametrize(("vehicle", "rate", "code", "rated"), [
     # the shallow Slocum's max_turn_rate: 0.154 rad/s, 8.82 deg/s, either way
+    ("slocum_g2_shallow", "-9", ExitCode.BAD_INPUT, "8.82"),
+    ("slocum_g2_shallow", "8.8", ExitCode.OK, "8.82"),
+    # the propeller AUV's: its autopilot's 30 deg/s (issue 28)
+    ("lauv", "40", ExitCode.BAD_INPUT, "30"), ("lauv", "-29", ExitCode.OK, "30")])
+def test_check_refuses_a_turn_faster_than_the_vehicle_s_rated_turn_rate(tmp_path, capsys,
+                                                                          vehicle, rate, code,
+                                                                          rated):
+    profile = "cruise(10, 1)" if vehicle == "lauv" else "yo(5, 20, .454, .454)"
     mission = tmp_path / "m.mission"
     mission.write_text(f"""mission m
-vehicle slocum_g2_shallow
+vehicle {vehicle}
 
 state s1
 begin
   flightroute turn({rate})
-  flightprofile yo(5, 20, .454, .454)
+  flightprofile {profile}
   sensors missiontime, depth
   events
     case missiontime >= 100 exit
@@ -210,8 +216,8 @@ end
 """)
     assert main(["check", str(mission)]) == code
     err = capsys.readouterr().err
-    assert ("m.mission:6:20: error: turn rate -9 deg/s is beyond the vehicle's rated 8.82 "
-            "deg/s" in err) == (code == ExitCode.BAD_INPUT), err
+    assert (f"m.mission:6:20: error: turn rate {rate} deg/s is beyond the vehicle's rated "
+            f"{rated} deg/s" in err) == (code == ExitCode.BAD_INPUT), err
 
 
 def test_check_passes_the_shipped_examples_within_their_vehicles_ratings(capsys):
@@ -254,9 +260,7 @@ LAUV = ROOT / "power_models" / "data" / "vehicle_lauv.toml"
 
 def _fast_cruise(tmp_path: Path, action: str) -> Path:
     """A cruise on the propeller AUV whose speed a variable sets past its table at 300 s."""
-    vehicle = tmp_path / f"lauv_{action}.toml"
-    vehicle.write_text(LAUV.read_text().replace("\n[flight]", f'\n[envelope]\naction = "{action}"'
-                                                "\n\n[flight]", 1))
+    vehicle = _vehicle_with(tmp_path, "lauv", LAUV, "", action)
     mission = tmp_path / f"speed_{action}.mission"
     mission.write_text(f"""mission fast
 vehicle "{vehicle}"
@@ -338,9 +342,11 @@ def test_a_pump_within_its_energy_per_hour_flies_on(tmp_path, capsys):
     assert summary["envelope"] == [] and summary["ended"] == "exit"
 
 
-def _zigzag(tmp_path: Path, action: str) -> Path:
-    """Two states whose waypoints lie either side of the glider, swapped every 60 s."""
-    vehicle = _vehicle_with(tmp_path, "g2", G2, "", action)
+def _zigzag(tmp_path: Path, action: str, name: str = "g2", base: Path = G2,
+            profile: str = "yo(5, 20, .454, .454)") -> Path:
+    """Two states whose waypoints lie either side of the vehicle (a copy of `base` with
+    `action`, flying `profile`), swapped every 60 s."""
+    vehicle = _vehicle_with(tmp_path, name, base, "", action)
     mission = tmp_path / f"zigzag_{action}.mission"
     mission.write_text(f"""mission zigzag
 vehicle "{vehicle}"
@@ -350,7 +356,7 @@ var next = 60
 state east
 begin
   flightroute nav(3910.5, -7340.0)
-  flightprofile yo(5, 20, .454, .454)
+  flightprofile {profile}
   sensors missiontime, depth
   events
     case missiontime >= 1200 exit
@@ -360,7 +366,7 @@ end
 state west
 begin
   flightroute nav(3910.5, -7355.0)
-  flightprofile yo(5, 20, .454, .454)
+  flightprofile {profile}
   sensors missiontime, depth
   events
     case missiontime >= 1200 exit
@@ -402,6 +408,19 @@ def test_without_a_turn_rate_the_same_swaps_turn_at_once(tmp_path, capsys):
     code, _, _, said = _sim(mission, tmp_path / "py", "python", capsys)
     assert code == ExitCode.OK, said
     assert _track_turns_rad(tmp_path / "py").max() > 2 * 0.154 * 4.0  # the test above bites
+
+
+def test_the_propeller_auv_turns_no_faster_than_its_autopilot_s_heading_rate(tmp_path,
+                                                                             capsys):
+    """Issue 28: the LAUV had no turn rate, and turned any half turn within a tick. Its
+    autopilot's heading-rate limit, 30 deg/s, holds its turns to 2.09 rad a tick of 4 s:
+    each swap's half turn takes two."""
+    mission = _zigzag(tmp_path, "surface", "lauv", LAUV, "cruise(10, 1)")
+    code, _, summary, said = _sim(mission, tmp_path / "py", "python", capsys)
+    assert code == ExitCode.OK and summary["envelope"] == [], said
+    turns = _track_turns_rad(tmp_path / "py")
+    rated = math.radians(30.0) * 4.0
+    assert 0.9 * rated < turns.max() <= rated * 1.001  # the track's bearing: to 1e-3
 
 
 def _fastest_mps(out: Path) -> float:

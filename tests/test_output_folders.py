@@ -408,3 +408,56 @@ def test_a_fleet_monte_carlo_replaces_the_previous_one_whole(fleet_plan, tmp_pat
         assert BUSY in capsys.readouterr().err
     assert json.loads((out / "summary.json").read_text()) == summary
 
+
+
+@pytest.fixture
+def planning(monkeypatch) -> list[str]:
+    """The fleets planned while a command runs (each call of the fleet planner)."""
+    import gliderplan.planner.fleet as fleet_planner
+
+    calls: list[str] = []
+    real = fleet_planner.plan_fleet
+
+    def recorded(fleet, **kwargs):
+        calls.append(fleet.name)
+        return real(fleet, **kwargs)
+
+    monkeypatch.setattr(fleet_planner, "plan_fleet", recorded)
+    return calls
+
+
+@pytest.mark.parametrize("command", [["sim"], ["montecarlo", "--scenarios", "1"]])
+@pytest.mark.parametrize("folder", ["another's files", "a file", "being written"])
+def test_a_fleet_run_refuses_its_folder_before_it_plans(command, folder, planning, tmp_path,
+                                                        capsys):
+    """Issues 24 and 29: without --plan, `fleet sim` and `fleet montecarlo` planned the
+    fleet first, and only then found that -o could not take the run."""
+    out = tmp_path / "out"
+    expected = {"another's files": "not a gliderplan run's folder (it holds notes.txt)",
+                "a file": f"-o {out}: not a directory", "being written": BUSY}[folder]
+    if folder == "a file":
+        out.write_text("mine\n")
+    else:
+        out.mkdir()
+        (out / "notes.txt").write_text("mine\n")
+    with open(tmp_path / ".out.lock", "w") as lock:
+        if folder == "being written":
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        capsys.readouterr()
+        code = main(["fleet", *command, str(FLEET), "--scenario-file", CALM, "--workers", "1",
+                     "-o", str(out)])
+    assert code == ExitCode.USAGE
+    err = capsys.readouterr().err
+    assert expected in err and "Traceback" not in err
+    assert planning == []
+
+
+def test_a_fleet_run_plans_into_the_folder_it_claimed(planning, tmp_path):
+    out = tmp_path / "mc"
+    assert main(["fleet", "montecarlo", str(FLEET), "--scenario-file", CALM, "--scenarios",
+                 "1", "--workers", "1", "-o", str(out)]) == 0
+    assert planning == ["smallBox"]
+    marker = json.loads((out / RUN_MARKER).read_text())
+    assert marker["command"] == "fleet montecarlo" and "plan" in marker["files"]
+    assert json.loads((out / "summary.json").read_text())["plan"] == str(out / "plan")
+    assert {"fleet.json", "alpha.plan", "alpha.mission"} <= set(contents(out / "plan"))

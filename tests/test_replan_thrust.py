@@ -12,8 +12,11 @@ import shutil
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
+from test_sim_currents import START, write_field
 
+from gliderplan.cli.main import main
 from gliderplan.contract import TICK_S, UpdateField, UpdateStatus
 from gliderplan.language import check_source
 from gliderplan.planner.make import make_plan
@@ -213,3 +216,34 @@ def test_the_runtime_refuses_an_update_beyond_the_rating(held, tmp_path, built_b
     assert status == UpdateStatus.BAD_PLAN and seq == 1
     assert "THRUST_W 12 outside the vehicle's thruster (1-9 W)" in message
     assert Path(path).read_bytes() == data
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="the C runtime needs a C compiler")
+@pytest.mark.parametrize("current", ["field", "uniform"])
+def test_sim_replans_in_the_current_it_flies(held, tmp_path, current):
+    """Issue 25: `sim --replan-every surfacing --currents` replanned in still water, so a
+    plan made in still water kept its slow speed and its thruster off against a head
+    current. The shore replans in the water flown: the plan the vehicle ends with flies
+    the speed and thrust `plan --currents` chooses for it (the runtime keeps the plan in
+    force in its state directory)."""
+    mission, still, key = held
+    source = tmp_path / "hybrid_replan.mission"
+    source.write_text(MISSION)
+    spec = str(write_field(tmp_path / "head.nc", east=HEAD.east_mps, north=HEAD.north_mps)) \
+        if current == "field" else f"{HEAD.north_mps},{HEAD.east_mps}"
+    water = [f"--currents={spec}", "--start", START]
+    assert main(["plan", str(source), *water, "-o", str(tmp_path / "aware.plan")]) == 0
+    aware = _transit((tmp_path / "aware.plan").read_bytes(), mission)
+    assert _transit(still.read_bytes(), mission).thrust_w == 0.0 < aware.thrust_w
+    vehicle = tmp_path / "vehicle"
+    assert main(["sim", str(source), "--plan", str(still), "--key", str(key), *water,
+                 "--replan-every", "surfacing", "--runtime", "c", "--state-dir", str(vehicle),
+                 "-o", str(tmp_path / "run")]) == 0
+    flown = _transit((vehicle / "plan").read_bytes(), mission)
+    assert flown.thrust_w == aware.thrust_w
+    assert math.isclose(flown.speed_mps, aware.speed_mps, rel_tol=1e-6)
+    # once the vehicle flies it, a replan that rounds to it sends nothing and says so
+    surfacings = pd.read_csv(tmp_path / "run" / "replans.csv")
+    assert len(surfacings) > 1
+    assert list(surfacings.status) == ["updated"] + ["unchanged"] * (len(surfacings) - 1)
+    assert surfacings.update_bytes.notna().tolist() == [True] + [False] * (len(surfacings) - 1)
