@@ -35,6 +35,7 @@ from gliderplan.planner.planfile import read_plan_bytes
 from gliderplan.planner.replan import Replanner, stated_confidence
 from gliderplan.planner.speed import Leg
 from gliderplan.planner.update import UpdateError, apply_update, make_updates
+from gliderplan.power_models.battery import drawn_budget_j
 from gliderplan.power_models.posterior import DischargeCurve
 from gliderplan.power_models.telemetry import (
     J_PER_AH,
@@ -135,7 +136,7 @@ class ShoreLoop:
         state = np.minimum(columns["state"][rows].astype(np.intp), len(self.names))
         self.state_s += np.bincount(state, minlength=len(self.names) + 1) * self.tick_s
         self.counted = rows.stop
-        depth = used_j / (self.replanner.plan.budget_j * self.usable_truth)
+        depth = used_j / drawn_budget_j(self.replanner.plan.budget_j, self.usable_truth)
         volts = self.curve.voltage(depth) + self.rng.normal(0.0, self.curve.noise_v)
         current = int(columns["state"][rows.stop - 1]) if rows.stop else -1
         return SurfacingReport(

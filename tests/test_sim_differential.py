@@ -298,7 +298,7 @@ def test_the_c_flight_flies_the_water_s_density_as_the_reference(name, ocean, fl
     # the water's in-situ density at each depth (sim --ocean): a rigid hull's speed then
     # changes with depth too
     from gliderplan.sim.ocean import density_profile_of, load_water
-    from gliderplan.sim.run import flown_water
+    from gliderplan.sim.setup import flown_water
 
     mission = check_file(str(REPO / name)).mission
     vehicle = load_vehicle(mission.vehicle)
@@ -498,8 +498,10 @@ def test_the_c_flight_flies_monte_carlo_scenarios_as_the_reference(name, index, 
     from gliderplan.sim.scenarios import draw_scenario, read_spec
 
     mission = check_file(str(REPO / "examples" / name)).mission
-    job = Job(mission, None, load_vehicle(mission.vehicle), read_spec(), 1.0, 0, days * 86400.0)
-    scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
-    config = RunConfig(duration_s=job.duration_s, seed=scenario.seed, noise=scenario.noise,
+    from gliderplan.sim.setup import FlightOptions, flight_setup
+
+    job = Job(flight_setup(mission, FlightOptions(duration_s=days * 86400.0)), read_spec())
+    scenario = draw_scenario(job.spec, job.setup.vehicle, index, scenario_seed(job, index))
+    config = RunConfig(duration_s=days * 86400.0, seed=scenario.seed, noise=scenario.noise,
                        current=scenario.current)
     flown_alike(mission, config, scenario.ocean, vehicle=scenario.vehicle)
