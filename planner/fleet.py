@@ -403,8 +403,14 @@ def polish(fleet: Fleet, arcs: assign.Arcs, assignment: assign.Assignment,
             samples[key] = track.samples(spacing)
         return samples[key]
 
+    errors: dict[tuple, float] = {}  # a trial rejected once comes round again next pass
+
     def error_of(blocks) -> float:
-        return mapping_error(combined([sampled(b) for b in blocks]), grid, fleet.field)[0]
+        key = tuple((b.glider, b.first, b.stop, b.entry_last) for b in blocks)
+        if key not in errors:
+            errors[key] = mapping_error(combined([sampled(b) for b in blocks]), grid,
+                                        fleet.field)[0]
+        return errors[key]
 
     blocks = sorted(assignment.blocks, key=lambda b: b.first)
     best = before = error_of(blocks)
