@@ -108,17 +108,15 @@ def simulated_day_s() -> float:
     """Seconds the Python executor takes to fly the first day of sim_month.mission (the
     median of RUNS_IN_PROCESS)."""
     from gliderplan.language import check_file
-    from gliderplan.power_models import load_vehicle
-    from gliderplan.sim import ocean
     from gliderplan.sim.flight import fly
-    from gliderplan.sim.loop import RunConfig
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     mission = check_file(str(MONTH)).checked()
-    vehicle = load_vehicle(mission.vehicle)
+    setup = flight_setup(mission, FlightOptions(noise="none", duration_s=86400.0))
     seconds = []
     for _ in range(RUNS_IN_PROCESS):
         start = time.perf_counter()
-        fly(mission, ocean.bench(), RunConfig(duration_s=86400.0, seed=0), vehicle)
+        fly(mission, setup.water.ocean, setup.config, setup.vehicle)
         seconds.append(time.perf_counter() - start)
     return statistics.median(seconds)
 

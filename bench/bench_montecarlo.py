@@ -33,18 +33,16 @@ import argparse
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
 from whole_process import Timing, gliderplan, import_slocum, load_average, run_once
 
-from gliderplan.contract import TICK_S
 from gliderplan.language import check_file
-from gliderplan.power_models import load_vehicle
-from gliderplan.sim import montecarlo, ocean
+from gliderplan.sim import FlightOptions, FlightSetup, flight_setup, montecarlo
 from gliderplan.sim.backends import scenario_executor
 from gliderplan.sim.flight import fly
-from gliderplan.sim.loop import RunConfig
 from gliderplan.sim.scenarios import read_spec
 
 TARGET_MIN = 3.0  # 1,000 scenarios of 30 days on 2 cores
@@ -53,14 +51,13 @@ CORES = 2
 BASELINE_SCENARIOS = 2  # the start-up's run: the parent flies one, a worker the other
 
 
-def step_limit(mission, days: float) -> float:  # noqa: ANN001
+def step_limit(setup: FlightSetup) -> float:
     """Section 1: simulated days per CPU second of the C step in this process."""
-    vehicle = load_vehicle(mission.vehicle)
-    config = RunConfig(tick_s=TICK_S, duration_s=days * 86400.0, seed=0)
-    fly(mission, ocean.bench(), RunConfig(tick_s=TICK_S, duration_s=3600.0, seed=0),
-        vehicle)  # warm-up: imports, the build's cache
+    mission, ocean, vehicle = setup.mission, setup.water.ocean, setup.vehicle
+    fly(mission, ocean, replace(setup.config, duration_s=3600.0), vehicle,
+        runtime="step")  # warm-up: imports, the build's cache
     start_cpu, start = time.process_time(), time.perf_counter()
-    record = fly(mission, ocean.bench(), config, vehicle)
+    record = fly(mission, ocean, setup.config, vehicle, runtime="step")
     cpu, wall = time.process_time() - start_cpu, time.perf_counter() - start
     ticks = len(record.columns["time_s"])
     flown_days = record.columns["time_s"][-1] / 86400.0
@@ -167,12 +164,11 @@ def main(argv: list[str] | None = None) -> int:
         if path is None:
             return 1
         mission = check_file(str(path)).mission
-        limit = step_limit(mission, args.days)
+        setup = flight_setup(mission, FlightOptions(duration_s=args.days * 86400.0))
+        limit = step_limit(setup)
         if args.whole:
             ok = whole_command(path, Path(tmp), args.whole, args.days, limit)
-    budget_j = mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
-    job = montecarlo.Job(mission, None, load_vehicle(mission.vehicle), read_spec(),
-                         budget_j, 0, args.days * 86400.0)
+    job = montecarlo.Job(setup, read_spec())
     same = True
     if args.scenarios:
         same = backends(job, args.scenarios, not args.no_dask)

@@ -48,10 +48,10 @@ from whole_process import gliderplan, load_average, median_of
 
 from gliderplan.language import check_file, semantics
 from gliderplan.language.registry import SENSORS
-from gliderplan.power_models import load_vehicle
-from gliderplan.sim import compiled, ocean
+from gliderplan.sim import compiled
 from gliderplan.sim.flight import fly
-from gliderplan.sim.loop import RunConfig, RunRecord
+from gliderplan.sim.loop import RunRecord
+from gliderplan.sim.setup import FlightOptions, flight_setup
 
 BENCH = Path(__file__).resolve().parent
 MISSION = BENCH.parent / "tests" / "missions" / "sim_month.mission"
@@ -64,11 +64,11 @@ SENSORS_WIRE_BYTES, COMMAND_WIRE_BYTES = 35, 21
 def timed_run(mission, days: float, tick_s: float, runtime: str
               ) -> tuple[RunRecord, float, float, float]:
     """(record, wall [s], CPU of this process [s], CPU of processes it waited for [s])."""
-    config = RunConfig(tick_s=tick_s, duration_s=days * 86400.0, seed=0)
-    vehicle = load_vehicle(mission.vehicle)
+    setup = flight_setup(mission, FlightOptions(noise="none", tick_s=tick_s,
+                                                duration_s=days * 86400.0, runtime=runtime))
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu, start = time.process_time(), time.perf_counter()
-    record = fly(mission, ocean.bench(), config, vehicle, runtime=runtime)
+    record = fly(mission, setup.water.ocean, setup.config, setup.vehicle, runtime=runtime)
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     runtime_cpu = (after.ru_utime - children.ru_utime) + (after.ru_stime - children.ru_stime)

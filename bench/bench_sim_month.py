@@ -30,10 +30,9 @@ import numpy as np
 from whole_process import IMPORTED, gliderplan, import_slocum, load_average, median_of
 
 from gliderplan.language import check_file
-from gliderplan.power_models import load_vehicle
-from gliderplan.sim import ocean
 from gliderplan.sim.flight import fly
-from gliderplan.sim.loop import RunConfig, RunRecord
+from gliderplan.sim.loop import RunRecord
+from gliderplan.sim.setup import FlightOptions, flight_setup
 
 REPO = Path(__file__).resolve().parents[1]
 SURVEY = REPO / "examples" / "survey_month.mission"
@@ -44,10 +43,10 @@ PER_DAY_GOAL = 1.5  # an imported mission's cost per simulated day, over the sur
 
 def timed_run(mission, days: float, tick_s: float, runtime: str) -> tuple[RunRecord, float]:
     """A flight and its wall time [s]."""
-    config = RunConfig(tick_s=tick_s, duration_s=days * 86400.0, seed=0)
-    vehicle = load_vehicle(mission.vehicle)
+    setup = flight_setup(mission, FlightOptions(noise="none", tick_s=tick_s,
+                                                duration_s=days * 86400.0, runtime=runtime))
     start = time.perf_counter()
-    record = fly(mission, ocean.bench(), config, vehicle, runtime=runtime)
+    record = fly(mission, setup.water.ocean, setup.config, setup.vehicle, runtime=runtime)
     return record, time.perf_counter() - start
 
 

@@ -28,7 +28,6 @@ from gliderplan.cli.common import (
     parse_start,
     refuse_unpaired,
     seed,
-    start_epoch_s,
 )
 from gliderplan.cli.main import print_json
 from gliderplan.contract import ExitCode
@@ -81,21 +80,22 @@ def run(args: argparse.Namespace) -> int:
     from gliderplan.cli.progress import ProgressBar
     from gliderplan.cli.sim import parse_duration_s
     from gliderplan.sim.montecarlo import montecarlo_mission
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     refuse_unpaired(args, {"--confidence": ("--replan",), "--key": ("--replan",)})
     mission = load_mission(args)
     lat, lon, when = parse_start(args.start) if args.start else (None, None, None)
     progress = ProgressBar(lambda done, total: f"{done:.0f} of {total:.0f} scenarios")
+    options = FlightOptions(
+        plan_path=args.plan, seed=args.seed, tracker=args.tracker,
+        duration_s=parse_duration_s(args.duration) if args.duration else None,
+        start_utc=when, start_position=None if lat is None else (lat, lon), key_path=args.key)
     try:
         run_ = montecarlo_mission(
-            mission, args.output, scenarios=args.scenarios, plan_path=args.plan,
-            workers=args.workers, scheduler=args.scheduler, seed=args.seed,
-            scenario_file=args.scenario_file,
-            duration_s=parse_duration_s(args.duration) if args.duration else None,
-            tracker=args.tracker, progress=progress, replan=args.replan,
-            confidence=args.confidence, key_path=args.key,
-            start=None if lat is None else (lat, lon), start_epoch_s=start_epoch_s(when),
-            force=args.force, mission_path=args.mission)
+            flight_setup(mission, options), args.output, scenarios=args.scenarios,
+            workers=args.workers, scheduler=args.scheduler,
+            scenario_file=args.scenario_file, progress=progress, replan=args.replan,
+            confidence=args.confidence, force=args.force, mission_path=args.mission)
     finally:
         progress.finish()
     summary = run_.summary

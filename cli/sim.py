@@ -132,28 +132,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from gliderplan.sim.run import run_mission
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     refuse_unpaired(args, {"--confidence": ("--replan-every",),
                            "--scenario-file": ("--replan-every",)})
     mission = load_mission(args)
     lat, lon, start_utc = parse_start(args.start) if args.start else (None, None, None)
     duration_s = parse_duration_s(args.duration) if args.duration else None
-    ticks = (duration_s or mission.horizon_s or DEFAULT_HORIZON_S) / max(args.tick, 1e-9)
+    ticks = mission.run_limit_s(duration_s) / max(args.tick, 1e-9)
     from gliderplan.cli.progress import ProgressBar
 
     progress = ProgressBar(lambda done, total: f"{done / 86400:.2f} of {total / 86400:.2f} d "
                            "simulated") if ticks > LONG_RUN_TICKS else None
     try:
-        result = run_mission(
-            mission, args.output, plan_path=args.plan, runtime=args.runtime, ocean=args.ocean,
-            noise=args.noise, tracker=args.tracker, currents=args.currents,
-            seed=args.seed, tick_s=args.tick, duration_s=duration_s, start_utc=start_utc,
-            start_position=None if lat is None else (lat, lon),
-            netcdf=args.netcdf, progress=progress, key_path=args.key,
-            state_dir=args.state_dir, faults=args.faults, floor=args.floor,
-            replan_every=args.replan_every, confidence=args.confidence,
-            scenario_file=args.scenario_file,
-            force=args.force, mission_path=args.mission)
+        options = FlightOptions(
+            plan_path=args.plan, runtime=args.runtime, ocean=args.ocean, noise=args.noise,
+            tracker=args.tracker, currents=args.currents, seed=args.seed, tick_s=args.tick,
+            duration_s=duration_s, start_utc=start_utc,
+            start_position=None if lat is None else (lat, lon), floor=args.floor,
+            faults=args.faults, key_path=args.key, state_dir=args.state_dir)
+        result = run_mission(flight_setup(mission, options), args.output, netcdf=args.netcdf,
+                             progress=progress, replan_every=args.replan_every,
+                             confidence=args.confidence, scenario_file=args.scenario_file,
+                             force=args.force, mission_path=args.mission)
     finally:
         if progress is not None:
             progress.finish()

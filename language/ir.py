@@ -13,7 +13,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, is_dataclass
 from functools import cached_property
 
-from gliderplan.contract import DEFAULT_STACK_DEPTH, NO_BOARD
+from gliderplan.contract import DEFAULT_HORIZON_S, DEFAULT_STACK_DEPTH, NO_BOARD
 from gliderplan.language.registry import PROFILES
 
 # ---- expressions (no spans: the checker has reported everything by now) ----------
@@ -387,6 +387,13 @@ class CheckedMission:
 
     def state(self, name: str) -> State:
         return self.states[self.state_index[name]]
+
+    def run_limit_s(self, duration_s: float | None = None) -> float:
+        """How long [s] a flight or a forecast of the mission runs: `duration_s` when
+        given, else the mission's horizon, else DEFAULT_HORIZON_S (30 days)."""
+        if duration_s is not None:
+            return duration_s
+        return self.horizon_s if self.horizon_s is not None else DEFAULT_HORIZON_S
 
     @cached_property
     def state_index(self) -> dict[str, int]:

@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 import cvxpy as cp
 import numpy as np
 
-from gliderplan.contract import DEFAULT_HORIZON_S, MAX_SCENARIOS
+from gliderplan.contract import MAX_SCENARIOS
 from gliderplan.contract.errors import UsageError
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
@@ -239,6 +239,7 @@ def plan_mission_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
     from gliderplan.planner.plan import plan_mission, prepare
     from gliderplan.sim import montecarlo
     from gliderplan.sim.scenarios import draw_scenario, read_spec
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     if not 0.0 < confidence < 1.0 or not 0.0 < risk < 1.0:
         raise ValueError("confidence and risk must lie strictly between 0 and 1")
@@ -252,13 +253,14 @@ def plan_mission_at_confidence(mission: ir.CheckedMission, hardware: Hardware,
                          f"the {MAX_SCENARIOS:,} a run may fly: ask for less confidence, or "
                          "give --scenarios and read the confidence it reaches")
     spec = spec or read_spec()
-    job = montecarlo.Job(mission, nominal, hardware.vehicle, spec, hardware.budget_j, seed,
-                         mission.horizon_s or DEFAULT_HORIZON_S)
+    setup = flight_setup(mission, FlightOptions(seed=seed), plan=nominal,
+                         vehicle=hardware.vehicle)
+    job = montecarlo.Job(setup, spec)
     result = montecarlo.run_montecarlo(job, count, executor, workers, progress)
     if result.interrupted:
         raise KeyboardInterrupt
     rows = result.rows
-    vehicles = [draw_scenario(spec, hardware.vehicle, r["scenario"],
+    vehicles = [draw_scenario(spec, setup.vehicle, r["scenario"],
                               montecarlo.scenario_seed(job, r["scenario"])).vehicle for r in rows]
     scenario_times = [{s.name: r[f"time_{s.name}_s"] for s in mission.states} for r in rows]
     return plan_at_confidence(mission, hardware, scenario_times, vehicles,

@@ -38,7 +38,7 @@ from gliderplan.contract import DEFAULT_HORIZON_S, RUNTIME_CYCLES_PER_TICK, TICK
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.occupancy import DEFAULT_HORIZON_NOTE, Occupancy, mission_occupancy
-from gliderplan.planner.rates import altimeter_note, band_density, floored_args, yo_band
+from gliderplan.planner.rates import altimeter_note, ballasted_in, floored_args, yo_band
 from gliderplan.power_models import load_board, load_vehicle
 from gliderplan.power_models.deployments import DEFAULT_DRIFT_W, DRIFT_SOURCE
 from gliderplan.power_models.devices import gliding_power_w, held_instruments
@@ -51,9 +51,6 @@ if TYPE_CHECKING:
     from gliderplan.planner.surfacings import Surfacing
     from gliderplan.sim.currents import CurrentField
     from gliderplan.sim.ocean import SeaFloor
-
-WATER_DEPTHS_M = np.arange(0.0, 1001.0, 5.0)  # where a given ocean's density is taken [m]
-
 
 @dataclass(frozen=True)
 class StateBill:
@@ -268,14 +265,14 @@ def water(spec: str | None, floor: SeaFloor | None = None
     science logs give the floor they saw); Nones without them."""
     if spec is None:
         return None, None, floor, None if floor is None else floor.describe()
-    from gliderplan.sim.ocean import density_profile_of, load_water
+    from gliderplan.sim.ocean import WATER_DEPTHS_M, density_profile_of, load_water
 
     given = load_water(spec, floor)
-    profile = density_profile_of(given.ocean, WATER_DEPTHS_M)
+    profile = density_profile_of(given.ocean)
     return profile, (f"{spec}: in-situ density (TEOS-10) {profile.rho_kg_m3.min():.1f}-"
-                     f"{profile.rho_kg_m3.max():.1f} kg/m3 over 0-1000 m, the glider "
-                     "ballasted for its mean over the depths the mission flies, as its trim "
-                     "was in its calibration water"), given.floor, given.floor_note
+                     f"{profile.rho_kg_m3.max():.1f} kg/m3 over 0-{WATER_DEPTHS_M[-1]:.0f} m, "
+                     "the glider ballasted for its mean over the depths the mission flies, "
+                     "as its trim was in its calibration water"), given.floor, given.floor_note
 
 
 def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
@@ -294,10 +291,8 @@ def forecast_mission(mission: ir.CheckedMission, *, vehicle: str | None = None,
     glider = load_vehicle(spec)
     floor_m = None if floor is None else floor.median_m
     if ocean is not None:
-        glider = glider.ballasted_for(band_density(mission, ocean, glider, floor_m))
-    horizon = duration_s if duration_s is not None else mission.horizon_s
-    occupancy = mission_occupancy(mission, horizon if horizon is not None
-                                  else DEFAULT_HORIZON_S)
+        glider, _ = ballasted_in(mission, ocean, glider, floor_m)
+    occupancy = mission_occupancy(mission, mission.run_limit_s(duration_s))
     computer = computer_draw(mission)
     bills = bill_states(mission, glider, occupancy, ocean, floor_m, computer)
     rng = np.random.default_rng(seed)

@@ -14,7 +14,7 @@ from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.speed import STILL_WATER, Leg
 from gliderplan.power_models import load_battery, load_board, load_vehicle
-from gliderplan.power_models.battery import energy_to_j
+from gliderplan.power_models.battery import energy_to_j, usable_budget_j
 from gliderplan.power_models.board import Board, board_spec
 from gliderplan.power_models.catalog import preset_names
 from gliderplan.power_models.devices import sensor_on
@@ -52,8 +52,8 @@ class Hardware:
 
     @property
     def budget_j(self) -> float:
-        """Usable energy [J] = (1 - reserve) x battery."""
-        return (1.0 - self.reserve_fraction) * self.battery_j
+        """Usable energy [J] = (1 - reserve) x battery (power_models.battery.usable_budget_j)."""
+        return usable_budget_j(self.battery_j, self.reserve_fraction)
 
     def clocks(self, state: ir.State) -> tuple[Board, ...]:
         """The board at each clock a state may run at: its `computer clock` (one, or all

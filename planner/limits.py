@@ -12,6 +12,7 @@ from gliderplan.contract import MAX_PLAN_SPEED_MPS, FlightLimits
 from gliderplan.language import ir
 from gliderplan.language.ir import CheckedMission
 from gliderplan.language.registry import SENSOR_BY_NAME, cannot_fly
+from gliderplan.power_models.battery import usable_budget_j
 
 if TYPE_CHECKING:
     from gliderplan.power_models.vehicle import Vehicle
@@ -97,7 +98,7 @@ def vehicle_limits(mission: CheckedMission, vehicle: Vehicle, clocks_mhz: tuple[
     speed, flown = unplanned(mission, vehicle)
     return FlightLimits(
         vehicle.unplanned_ballast_cc, vehicle.max_ballast_cc, clocks_mhz, board=board,
-        max_budget_j=mission.battery.energy_j - mission.battery.reserve_j,
+        max_budget_j=usable_budget_j(mission.battery.energy_j, mission.battery.reserve_fraction),
         pitch_range_rad=(low, high),
         max_speed_mps=fastest,
         duty_bounds=tuple(

@@ -163,12 +163,8 @@ def mission_occupancy(mission: ir.CheckedMission, horizon_s: float | None = None
     `rates.transit_speeds`) is timed at its speed, any other at NOMINAL_SPEED_MPS."""
     speeds = transit_speeds or {}
     notes: list[str] = []
-    horizon = horizon_s if horizon_s is not None else mission.horizon_s
-    if horizon is None:
-        horizon = DEFAULT_HORIZON_S
-        horizon_defaulted = True
-    else:
-        horizon_defaulted = False
+    horizon = mission.run_limit_s(horizon_s)
+    horizon_defaulted = horizon_s is None and mission.horizon_s is None
     machine, _ = start(mission)
     now = 0.0
     trace: list[Visit] = []

@@ -115,7 +115,7 @@ def band_density(mission: ir.CheckedMission, ocean: DensityProfile, vehicle: Veh
     mission turns (its arguments as written, at the variables' initial values; the
     vehicle's nominal where they are variables; over a sea floor `floor_m` [m], where the
     altimeter turns it, and never below the floor): the water a pilot ballasts the glider
-    for. `gliderplan forecast` and `sim --ocean` ballast with it (`Vehicle.ballasted_for`)."""
+    for (`ballasted_in`)."""
     deepest = vehicle.nominal_max_depth_m
     initial = {v.name: v.initial for v in mission.variables}
     for state in mission.states:
@@ -127,6 +127,15 @@ def band_density(mission: ir.CheckedMission, ocean: DensityProfile, vehicle: Veh
     if floor_m is not None:
         deepest = min(deepest, floor_m)
     return float(np.mean(ocean.at(np.linspace(0.0, deepest, 50))))
+
+
+def ballasted_in(mission: ir.CheckedMission, ocean: DensityProfile, vehicle: Vehicle,
+                 floor_m: float | None = None) -> tuple[Vehicle, float]:
+    """(`vehicle` ballasted for `ocean`, the density [kg m-3] it is ballasted for: the
+    mean over the depths the mission flies, `band_density`): the glider `sim --ocean`
+    flies and `forecast --ocean` bills, whose trim was for its calibration water."""
+    rho = band_density(mission, ocean, vehicle, floor_m)
+    return vehicle.ballasted_for(rho), rho
 
 
 def _profile_args(profile: ir.Profile, variables: dict[str, float]) -> tuple[float, ...]:

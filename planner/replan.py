@@ -65,6 +65,7 @@ from gliderplan.planner.planfile import (
 )
 from gliderplan.planner.rates import ProfileRates
 from gliderplan.planner.speed import Leg
+from gliderplan.power_models.battery import drawn_budget_j
 from gliderplan.power_models.posterior import (
     COMPONENT_GROUPS,
     MODEL_NOISE,
@@ -468,7 +469,7 @@ class Replanner:
             chance.m_dev.value = mean @ dev * unit
             chance.s_dev.value = root @ dev * unit
         budget = self.plan.budget_j
-        left_mean = belief.usable_mean * budget - used_j
+        left_mean = drawn_budget_j(budget, belief.usable_mean) - used_j
         left_sd = belief.usable_sd * budget
         # what no figure explains in the intervals to come (each MODEL_NOISE of its energy,
         # independent), at the plan's own energy for the time left

@@ -15,7 +15,7 @@ integrated along them with the same step (`STEP_M`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -227,20 +227,19 @@ def flown_track(points: list[tuple[float, float]], field: CurrentField,
     `transit_mission` at `pitch_rad` along `points` from `start` at `epoch_s` in `field`
     for `duration_s`."""
     from gliderplan.language import check_source
-    from gliderplan.power_models import load_vehicle
-    from gliderplan.sim import ocean
     from gliderplan.sim.energy import account
     from gliderplan.sim.flight import fly
-    from gliderplan.sim.loop import RunConfig
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     mission = check_source(transit_mission(points, duration_s, pitch_rad=pitch_rad),
                            "<route>").checked()
-    config = RunConfig(duration_s=duration_s, currents=field, start_lat_deg=start[0],
-                       start_lon_deg=start[1], start_epoch_s=epoch_s)
-    vehicle = load_vehicle(mission.vehicle)
-    record = fly(mission, ocean.bench(), config, vehicle)
+    # the field and the epoch as given, not as `sim --currents`, `--start` read them
+    setup = flight_setup(mission, FlightOptions(noise="none", duration_s=duration_s,
+                                                start_position=start))
+    config = replace(setup.config, currents=field, start_epoch_s=epoch_s)
+    record = fly(mission, setup.water.ocean, config, setup.vehicle, runtime=setup.runtime)
     c = record.columns
-    per_tick = account(record, mission, vehicle, None).per_tick_j.values()
+    per_tick = account(record, mission, setup.vehicle, None).per_tick_j.values()
     return (np.asarray(c["time_s"]), np.asarray(c["lat_deg"]), np.asarray(c["lon_deg"]),
             np.cumsum(sum(per_tick)))
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gliderplan.contract import DEFAULT_HORIZON_S, TICK_S
+from gliderplan.contract import TICK_S
 from gliderplan.language import ir
 from gliderplan.planner.hardware import Hardware
 from gliderplan.planner.inputs import build_inputs
@@ -108,18 +108,16 @@ def flown_once(mission: ir.CheckedMission, hardware: Hardware, seed: int) -> Fly
     ocean, the CTD's noise) from `seed`, to the mission's horizon (else 30 days)."""
     from gliderplan.sim.energy import account
     from gliderplan.sim.flight import fly
-    from gliderplan.sim.loop import RunConfig
-    from gliderplan.sim.ocean import load_ocean
-    from gliderplan.sim.science import NOISE_PRESETS
-
-    config = RunConfig(duration_s=mission.horizon_s or DEFAULT_HORIZON_S, seed=seed,
-                       noise=NOISE_PRESETS["ctd"])
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     def fly_plan(plan: Plan) -> Flown:
-        record = fly(mission, load_ocean("bench"), config, hardware.vehicle, plan)
+        setup = flight_setup(mission, FlightOptions(seed=seed), plan=plan,
+                             vehicle=hardware.vehicle)
+        record = fly(mission, setup.water.ocean, setup.config, setup.vehicle, plan,
+                     runtime=setup.runtime)
         if record.ended == "interrupted":
             raise KeyboardInterrupt
-        used = account(record, mission, hardware.vehicle, plan)
+        used = account(record, mission, setup.vehicle, plan)
         return Flown(dict(used.time_by_state_s), record.visits(),
                      _read_by_profiles(mission, record.entry_variables or {}))
 
@@ -133,10 +131,12 @@ def flown_in_scenarios(mission: ir.CheckedMission, hardware: Hardware, scenarios
     (Monte Carlo, sim/montecarlo.py): the mean time and visits per state, the mean of the
     variables on entry over the scenarios that entered the state."""
     from gliderplan.sim import montecarlo
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     def fly_plan(plan: Plan) -> Flown:
-        job = montecarlo.Job(mission, plan, hardware.vehicle, spec, hardware.budget_j, seed,
-                             mission.horizon_s or DEFAULT_HORIZON_S)
+        setup = flight_setup(mission, FlightOptions(seed=seed), plan=plan,
+                             vehicle=hardware.vehicle)
+        job = montecarlo.Job(setup, spec)
         result = montecarlo.run_montecarlo(job, scenarios, executor, workers, progress)
         if result.interrupted:
             raise KeyboardInterrupt

@@ -36,6 +36,19 @@ def energy_to_j(value: float, unit: str, volts: float | None = None) -> float:
     raise ValueError(f"unit {unit!r} is not an energy or a charge (use one of {accepted})")
 
 
+def usable_budget_j(energy_j: float, reserve_fraction: float) -> float:
+    """The energy [J] a plan may spend of a pack of `energy_j` [J] that keeps
+    `reserve_fraction` [1] unused: (1 - reserve) x energy. The one definition: the planner's
+    budget, the limit `check` proves a plan against, a run without a plan."""
+    return (1.0 - reserve_fraction) * energy_j
+
+
+def drawn_budget_j(budget_j: float, usable_share: float) -> float:
+    """A plan's budget [J] when the pack holds `usable_share` [1] of its rating (a drawn
+    Monte Carlo scenario, the truth a replanning shore does not know): budget x share."""
+    return budget_j * usable_share
+
+
 @dataclass(frozen=True)
 class Battery:
     """A battery pack. Energy [J], voltage [V], usable fraction [1]."""

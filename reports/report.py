@@ -12,6 +12,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -29,6 +30,9 @@ from gliderplan.contract.units import J_PER_WH
 from gliderplan.language.ir import CheckedMission
 from gliderplan.reports import charts
 from gliderplan.reports.html import Section, Table, esc, facts_html, page
+
+if TYPE_CHECKING:
+    from gliderplan.planner.planfile import Plan
 
 SWEEP_POINTS = 20  # budgets on the Pareto curve
 QUALITY_TOLERANCE = 1e-4  # [1] a plan this close to the curve's quality is on it
@@ -72,31 +76,68 @@ def _regular(path: Path, what: str) -> None:
 # ---- the plan ------------------------------------------------------------------------
 
 def _plan_report(mission: CheckedMission, model, plan_path: Path | None, out: OutputFolder
-                 ) -> tuple[dict, Path, list[Path]]:
-    """(the planner's JSON report of the plan, the plan file, files written): the plan
-    given with its report beside it (PLAN.json), or the plan made now, written to the
-    folder `out` (the file where it is written now; the files where they will be)."""
+                 ) -> tuple[Plan, dict, Path, list[Path]]:
+    """(the plan as its file holds it, the planner's JSON report of it, the plan file,
+    files written): the plan given with its report beside it (PLAN.json), or the plan
+    made now, written to the folder `out` (the file where it is written now; the files
+    where they will be). The report flies and draws this plan: its file is read once."""
     from gliderplan.planner.plan import solve_plan
-    from gliderplan.planner.planfile import load_plan, write_plan_bytes
+    from gliderplan.planner.planfile import load_plan, read_plan_bytes, write_plan_bytes
     from gliderplan.planner.report import report_json
 
     if plan_path is not None:
-        load_plan(plan_path, mission)  # a sane plan for this mission, or a clear error
+        plan = load_plan(plan_path, mission)  # a sane plan for this mission, or a clear error
         report = _json(Path(f"{plan_path}.json"), "the plan's report, written beside it by "
                        "`gliderplan plan -o PLAN`")
         if report.get("hash") != mission.hash or not isinstance(report.get("states"), list):
             raise UsageError(f"{plan_path}.json: not the report of a plan for this mission")
+        differs = _differs(report, plan)
+        if differs:
+            raise UsageError(f"{plan_path}.json: not the report of {plan_path} ({differs} "
+                             "differ): plan again with `gliderplan plan -o PLAN`, which "
+                             "writes both")
         if "budgeted_energy_j" not in report:
             raise UsageError(f"{plan_path}.json: made by an older gliderplan (no "
                              "budgeted_energy_j, the plan's place on the Pareto curve): plan "
                              "again with `gliderplan plan -o PLAN`")
-        return report, plan_path, []
+        return plan, report, plan_path, []
     result = solve_plan(model)
     name = f"{mission.name}.plan"
     report = report_json(result)
-    files = [out.write(name, write_plan_bytes(result.plan)),
+    data = write_plan_bytes(result.plan)
+    files = [out.write(name, data),
              out.write(f"{name}.json", json.dumps(report, indent=2) + "\n")]
-    return report, out.path / name, files
+    return read_plan_bytes(data, mission), report, out.path / name, files
+
+
+def _differs(report: dict, plan: Plan) -> str:
+    """What of a plan's JSON report is not the plan's own figure as its file writes it
+    (9 significant digits): its budget, prediction, states, their times and sensor
+    schedules ("" when nothing)."""
+    from gliderplan.planner.planfile import number
+
+    def figures(entry: object, keys: tuple[str, ...]) -> tuple:
+        if not isinstance(entry, dict):
+            return ()
+        return tuple(number(float(v)) if isinstance(v := entry.get(k), (int, float))
+                     and not isinstance(v, bool) else v for k in keys)
+
+    states = report["states"]
+    if [s.get("name") if isinstance(s, dict) else None for s in states] != \
+            [s.name for s in plan.states]:
+        return "the states"
+    wrong = [what for what, given, own in (
+        ("budget_j", figures(report, ("budget_j",)), (number(plan.budget_j),)),
+        ("energy_j", figures(report, ("energy_j",)), (number(plan.predicted_j),)),
+        *((f"{s.name}'s time_s", figures(r, ("time_s",)), (number(s.time_s),))
+          for r, s in zip(states, plan.states, strict=True)),
+        *((f"{s.name}'s sensors",
+           tuple(figures(x, ("name", "period_s", "on_s")) for x in r.get("sensors")
+                 if isinstance(r.get("sensors"), list)),
+           tuple((x.name, number(x.period_s), number(x.on_s)) for x in s.sensors))
+          for r, s in zip(states, plan.states, strict=True)))
+        if given != own]
+    return ", ".join(wrong[:3])
 
 
 def _energy_frame(report: dict) -> pd.DataFrame:
@@ -254,7 +295,6 @@ def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_
     from gliderplan.planner.compare import compare_boards
     from gliderplan.planner.hardware import load_hardware
     from gliderplan.planner.plan import prepare
-    from gliderplan.planner.planfile import load_plan
     from gliderplan.planner.sensitivity import sensitivity
     from gliderplan.planner.sweep import pareto
     from gliderplan.reports import sbc
@@ -275,7 +315,7 @@ def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_
         hardware = in_water(hardware, mission, currents, start, epoch)
     _, model = prepare(mission, hardware)
     comparison = compare_boards(mission)  # before anything is written: it may refuse
-    report, plan_file, written = _plan_report(
+    plan, report, plan_file, written = _plan_report(
         mission, model, Path(plan_path) if plan_path else None, folder)
     shown_plan = Path(plan_path) if plan_path else folder.final(plan_file.name)
     frontier = pareto(model, sweep_points)
@@ -283,10 +323,12 @@ def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_
     run_path = Path(run_dir) if run_dir else folder.final("run")
     run_origin = "the run given"
     if flown is None:
-        from gliderplan.sim import run_mission
+        from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
-        run_mission(mission, folder.path / "run", plan_path=plan_file, plots=False,
-                    currents=currents, start_utc=start_utc, start_position=start)
+        options = FlightOptions(plan_path=plan_file, currents=currents, start_utc=start_utc,
+                                start_position=start)
+        run_mission(flight_setup(mission, options, plan=plan), folder.path / "run",
+                    plots=False)
         interrupts.raise_if_stopped()  # a flight cut short is no flight to report
         flown = _read_run(mission, folder.path / "run")
         run_origin = ("flown now on the simulated glider (Python executor, bench ocean) "
@@ -306,7 +348,7 @@ def _write_report(mission: CheckedMission, folder: OutputFolder, plan_path, run_
     }
     if carlo is not None:
         tables["montecarlo.csv"] = carlo[0]
-    speeds = speed_frame(mission, hardware, load_plan(plan_file, mission))
+    speeds = speed_frame(mission, hardware, plan)
     vehicles = None
     if len(speeds):
         from gliderplan.planner.vehicles import compare_vehicles, crossovers, flies_on

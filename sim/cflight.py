@@ -33,7 +33,14 @@ from gliderplan.power_models.segments import MIN_PUMPED_CC
 from gliderplan.sim import vehicle as glider_model
 from gliderplan.sim.cstep import CStep, Report, fault_message, step_library
 from gliderplan.sim.energy import DEVICE_BITS, Billing
-from gliderplan.sim.loop import COLUMN_TYPES, PROGRESS_TICKS, RunConfig, RunRecord
+from gliderplan.sim.loop import (
+    COLUMN_TYPES,
+    PROGRESS_TICKS,
+    RunConfig,
+    RunRecord,
+    Surfaced,
+    SurfacingHook,
+)
 from gliderplan.sim.ocean import MeasuredProfile, Thermocline
 from gliderplan.sim.science import (
     BATTERY_V,
@@ -45,7 +52,7 @@ from gliderplan.sim.science import (
 WAVES = 8  # GPS_WAVES
 DEVICES = 8  # GPS_DEVICES
 TRACE = 1024  # GPS_TRACE
-RAN, ENDED, FAULT, NEED_NOISE, NEED_PITCH, TRACE_FULL, DONE, ENVELOPE = range(8)
+RAN, ENDED, FAULT, NEED_NOISE, NEED_PITCH, TRACE_FULL, DONE, ENVELOPE, SURFACED = range(9)
 
 _double, _int, _uint, _pointer = ctypes.c_double, ctypes.c_int32, ctypes.c_uint32, \
     ctypes.c_void_p
@@ -103,6 +110,8 @@ def _declare(library: ctypes.CDLL) -> ctypes.CDLL:
             ("gps_flight_set", None, [_pointer, _pointer]),
             ("gps_flight_noise_at", None, [_pointer, _pointer]),
             ("gps_flight_report", None, [_pointer, _pointer]),
+            ("gps_flight_stop_at_surfacings", None, [_pointer]),
+            ("gps_flight_surfaced", None, [_pointer, _pointer]),
             ("gps_flight_take_trace", _int, [_pointer, _pointer]),
             ("gps_fly", _int, [_pointer, _int])):
         function = getattr(library, name)
@@ -250,15 +259,19 @@ class CFlight:
     # ---- flying ------------------------------------------------------------------------
 
     def fly(self, progress: Callable[[float, float], None] | None = None,
-            keep_interrupted: bool = False) -> RunRecord:
+            keep_interrupted: bool = False,
+            on_surfacing: SurfacingHook | None = None) -> RunRecord:
         """Fly until the mission exits (or its energy guard ends it), the runtime refuses
         an event or the run's duration ends. KeyboardInterrupt goes through, but with
-        `keep_interrupted` it ends the flight, as `sim.loop.simulate`'s."""
+        `keep_interrupted` it ends the flight, and `on_surfacing` is called at each
+        surfacing, as `sim.loop.simulate`'s: the loop stops there and goes on after it."""
         library, context = self.library, self.step.context
         names = tuple(s.name for s in self.mission.states)
         trace: list[Transition] = []
         ended = "duration"
         report_at = PROGRESS_TICKS  # the tick past which progress is reported next
+        if on_surfacing is not None:
+            library.gps_flight_stop_at_surfacings(context)
         try:
             while True:
                 status = library.gps_fly(context, PROGRESS_TICKS)
@@ -277,6 +290,8 @@ class CFlight:
                     trace += self._take_trace(names)
                 elif status == ENVELOPE:
                     self.step.note_envelope(self._report())
+                elif status == SURFACED:
+                    on_surfacing(self._surfaced())
                 elif status != RAN:
                     break
             report = self._report()
@@ -307,6 +322,14 @@ class CFlight:
                          first_grounded_s=first_grounded,
                          entry_variables=self.step.entry_variables,
                          events_fired=self.step.events_fired)
+
+    def _surfaced(self) -> Surfaced:
+        """The glider at a surfacing, before the next tick (as `sim.loop.simulate` says it)."""
+        values = (_double * 4)()
+        self.library.gps_flight_surfaced(self.step.context, values)
+        tick = int(self._status()[0])
+        return Surfaced(int(values[1]), values[0], values[2], values[3],
+                        {k: v[:tick] for k, v in self.columns.items()})
 
     def _report(self) -> Report:
         """The report of the last tick flown."""

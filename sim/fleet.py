@@ -116,17 +116,18 @@ def _fly_one(task: dict) -> dict:
     """Fly one glider with `run_mission` into a scratch directory; return its files and
     what the survey needs of the flight (a worker's task: plain data in and out)."""
     from gliderplan.language import check_source
-    from gliderplan.sim import run_mission
+    from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
     mission = check_source(task["mission_text"], task["mission_name"]).checked()
     with tempfile.TemporaryDirectory(prefix="gliderplan-fleet-") as scratch:
         plan_path = Path(scratch) / "glider.plan"
         plan_path.write_bytes(task["plan_bytes"])
-        result = run_mission(mission, Path(scratch) / "run", plan_path=plan_path,
-                             runtime=task["runtime"], ocean=task["ocean"],
-                             currents="{!r},{!r}".format(*task["current"]),
-                             seed=task["seed"],
-                             duration_s=task["duration_s"], start_utc=task["start_utc"],
+        options = FlightOptions(plan_path=plan_path, runtime=task["runtime"],
+                                ocean=task["ocean"],
+                                currents="{!r},{!r}".format(*task["current"]),
+                                seed=task["seed"], duration_s=task["duration_s"],
+                                start_utc=task["start_utc"])
+        result = run_mission(flight_setup(mission, options), Path(scratch) / "run",
                              netcdf=True)
         if result.interrupted:  # the part flown, which run_mission keeps: no flight here
             raise KeyboardInterrupt
@@ -456,11 +457,10 @@ def montecarlo_fleet(fleet: Fleet, plan: PlanToFly, output_dir, *,
     summary says `complete` false and gives no finish probability (those that finished
     are not the sample asked for); KeyboardInterrupt if none."""
     from gliderplan.language import check_file
-    from gliderplan.planner.planfile import load_plan
-    from gliderplan.power_models import load_vehicle
     from gliderplan.sim import montecarlo
     from gliderplan.sim.backends import check_run_size, gather, scenario_executor
     from gliderplan.sim.scenarios import read_spec
+    from gliderplan.sim.setup import FlightOptions, flight_setup
 
     check_run_size(scenarios, workers)
     spec = read_spec(scenario_file)
@@ -470,14 +470,12 @@ def montecarlo_fleet(fleet: Fleet, plan: PlanToFly, output_dir, *,
         jobs = {}
         for glider in stored.gliders:
             mission = check_file(str(glider.mission_path)).checked()
-            flown_plan = load_plan(glider.plan_path, mission)
             g = fleet.glider(glider.name)
             duration = fleet.period_s - g.start_offset_s
             if lose is not None and lose[0] == glider.name:
                 duration = lose[1] - g.start_offset_s
-            jobs[glider.name] = montecarlo.Job(mission, flown_plan,
-                                               load_vehicle(mission.vehicle), spec,
-                                               flown_plan.budget_j, seed, duration)
+            options = FlightOptions(plan_path=glider.plan_path, seed=seed, duration_s=duration)
+            jobs[glider.name] = montecarlo.Job(flight_setup(mission, options), spec)
         # one scenario of one glider per task: a flight of days takes far longer than
         # sending it (montecarlo.BATCH_S), progress is seen, and a stop keeps each one
         # that finished

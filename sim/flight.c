@@ -37,6 +37,8 @@ enum {
     GPS_TRACE_FULL = 5,   /**< take the transitions */
     GPS_DONE = 6,         /**< the run's last tick is flown */
     GPS_ENVELOPE = 7,     /**< the envelope guard held a command: take its words */
+    GPS_SURFACED = 8,     /**< surfaced since the last tick (gps_flight_stop_at_surfacings):
+                               the shore's turn before the next tick (gps_flight_surfaced) */
 };
 
 /** The vehicle, the water and the battery: constant over a run (sim/vehicle.py,
@@ -111,6 +113,8 @@ typedef struct {
     double measured_north_mps, measured_east_mps;  /* the current dead reckoning flies with */
     int32_t ticks_since_fix;
     int32_t surfacings, grounded_ticks;
+    int32_t surfacings_seen;            /* by the caller, when it stops at surfacings */
+    uint8_t stops_at_surfacings;
     double first_grounded_s;
     int8_t phase;
     uint8_t inflection, grounded;
@@ -632,6 +636,7 @@ void gps_flight_start(gps_flight *f, const gps_physics *p, const gps_columns *co
     f->n_trace = 0;
     f->pending = 0;
     f->n_pitches = f->next_pitch = 0;
+    f->stops_at_surfacings = 0;
     memset(f->device_was_on, 0, sizeof f->device_was_on);
 }
 
@@ -709,6 +714,10 @@ int gps_fly(gps_flight *f, int32_t ticks)
         }
         gp_command *cmd = &f->command;
         if (!f->pending) {
+            if (f->stops_at_surfacings && f->surfacings != f->surfacings_seen) {
+                f->surfacings_seen = f->surfacings;  /* as sim/loop.py's on_surfacing */
+                return GPS_SURFACED;
+            }
             if (f->normal_at >= GPS_NOISE_BLOCK || (p->spikes && f->spike_at >= GPS_NOISE_BLOCK)) {
                 return GPS_NEED_NOISE;
             }
@@ -804,8 +813,26 @@ void gps_flight_set(gps_flight *f, const double *v)
     f->surface_time_s = -1.0;
     f->turning_to = f->turn_left_s = 0.0;
     f->phase = GPS_GLIDE;
-    f->surfacings = f->grounded_ticks = 0;
+    f->surfacings = f->grounded_ticks = f->surfacings_seen = 0;
     f->sensor_power = 0;
+}
+
+/** @brief From now on gps_fly returns GPS_SURFACED before the first tick after each
+ *         surfacing, with that tick not begun. */
+void gps_flight_stop_at_surfacings(gps_flight *f)
+{
+    f->stops_at_surfacings = 1;
+}
+
+/** @brief At a surfacing (GPS_SURFACED): the coulomb counter's reading before the next
+ *         tick [J], the tick before which it was last brought up to date, the true lat,
+ *         lon [deg]. */
+void gps_flight_surfaced(gps_flight *f, double *out)
+{
+    out[0] = gauge(f, f->tick);
+    out[1] = f->counted;
+    out[2] = f->lat_deg;
+    out[3] = f->lon_deg;
 }
 
 /** @brief Which blocks of random numbers are used up: out[0] the normals, out[1] the

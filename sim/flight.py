@@ -80,7 +80,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
 
             hook = _surfacing(shore, PythonVehicle(executor, shore.held, shore.key, mission,
                                                    _reader(mission, vehicle, plan)).deliver,
-                              gauge, science.glider, mission)
+                              mission)
         record = simulate(mission, executor, science, config, progress, gauge=gauge,
                           on_surfacing=hook, keep_interrupted=keep_interrupted)
         record.entry_variables = executor.entry_variables
@@ -110,8 +110,7 @@ def fly(mission: ir.CheckedMission, ocean: Ocean, config: RunConfig, vehicle: Ve
                                  config.tick_s)
     c_runtime = start_c_runtime(mission, plan_path, limits, naive_tracker=not robust_tracker,
                                 key_path=key_path, state_dir=state_dir, faults=schedule)
-    hook = None if shore is None else _surfacing(shore, c_runtime.deliver_update, gauge,
-                                                 science.glider, mission)
+    hook = None if shore is None else _surfacing(shore, c_runtime.deliver_update, mission)
     try:
         record = simulate(mission, c_runtime, science, config, progress, gauge=gauge,
                           on_surfacing=hook, keep_interrupted=keep_interrupted)
@@ -131,7 +130,8 @@ def _fly_step(mission: ir.CheckedMission, science, config: RunConfig,  # noqa: A
               progress: Callable[[float, float], None] | None, gauge,  # noqa: ANN001
               shore: ShoreLoop | None, keep_interrupted: bool) -> RunRecord:
     """The compiled runtime's step in this process: in the C loop where it models the
-    flight, else (and with the shore in the loop) in the Python loop."""
+    flight (stopping at each surfacing for the shore, if in the loop), else in the Python
+    loop."""
     from gliderplan.planner.planfile import write_plan_bytes
     from gliderplan.sim.cflight import CFlight, flies_in_c, flight_context_bytes
     from gliderplan.sim.cstep import CStep
@@ -140,14 +140,11 @@ def _fly_step(mission: ir.CheckedMission, science, config: RunConfig,  # noqa: A
         None if plan is None else write_plan_bytes(plan)
     step = CStep(mission, held, limits, naive_tracker=not robust_tracker,
                  context_bytes=flight_context_bytes())
-    if shore is None and flies_in_c(science):
+    hook = None if shore is None else _surfacing(shore, step.update_plan(shore.key), mission)
+    if flies_in_c(science):
         record = CFlight(mission, step, science, gauge.billing, mission.battery.energy_j,
-                         config).fly(progress, keep_interrupted)
+                         config).fly(progress, keep_interrupted, hook)
     else:
-        hook = None
-        if shore is not None:
-            hook = _surfacing(shore, step.update_plan(shore.key), gauge, science.glider,
-                              mission)
         record = simulate(mission, step, science, config, progress, gauge=gauge,
                           on_surfacing=hook, keep_interrupted=keep_interrupted)
         record.entry_variables, record.events_fired = step.entry_variables, step.events_fired
@@ -172,11 +169,10 @@ def flown_limits(mission: ir.CheckedMission, vehicle: Vehicle,
                         envelope=vehicle.envelope, **propulsion_rating(vehicle))
 
 
-def _surfacing(shore: ShoreLoop, deliver, gauge, glider,  # noqa: ANN001, ANN202
-               mission: ir.CheckedMission):
+def _surfacing(shore: ShoreLoop, deliver, mission: ir.CheckedMission):  # noqa: ANN001, ANN202
     from gliderplan.sim.replanning import surfacing_hook
 
-    return surfacing_hook(shore, deliver, gauge, glider, mission.battery.energy_j)
+    return surfacing_hook(shore, deliver, mission.battery.energy_j)
 
 
 def _reader(mission: ir.CheckedMission, vehicle: Vehicle, plan: Plan | None):  # noqa: ANN202

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
@@ -190,14 +190,28 @@ class Gauge(Protocol):
     """The battery's coulomb counter (sim.energy.BatteryGauge)."""
 
     reserve_j: float
+    counted: int  # the ticks billed: the reading is of the ticks before this one
 
     def reading(self, tick: int, columns: Columns) -> float: ...
 
 
+@dataclass(frozen=True)
+class Surfaced:
+    """The glider at a surfacing, before the next tick is flown: the coulomb counter's
+    reading `left_j` [J] and the tick `read_tick` before which it was last brought up to
+    date, the true position [deg] and the columns of every tick flown (arrays, one row a
+    tick)."""
+
+    read_tick: int
+    left_j: float
+    lat_deg: float
+    lon_deg: float
+    columns: Mapping[str, np.ndarray]
+
+
 class SurfacingHook(Protocol):
-    def __call__(self, tick: int, columns: Columns) -> None:
-        """The glider has surfaced: `tick` is the next tick to fly, every tick before it
-        is in `columns` (the shore's turn: telemetry up, a plan update down)."""
+    def __call__(self, surfaced: Surfaced) -> None:
+        """The glider has surfaced (the shore's turn: telemetry up, a plan update down)."""
         ...
 
 
@@ -210,8 +224,8 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     with `keep_interrupted` it ends the run, which the record says ("interrupted"): the
     caller writes the part flown and marks it partial (never a result of its own).
     `gauge` gives the science computer its `energy_left` reading (NaN without one).
-    `on_surfacing` is called once per surfacing, before the first tick flown after the
-    loop sees the glider at the surface."""
+    `on_surfacing` (with a `gauge`) is called once per surfacing, before the first tick
+    flown after the loop sees the glider at the surface."""
     names = tuple(s.name for s in mission.states)
     glider = science.glider
     tick_s = config.tick_s
@@ -234,10 +248,11 @@ def simulate(mission: ir.CheckedMission, runtime: Runtime, science: ScienceCompu
     surfaced = glider.surfacings
     try:
         while tick <= last_tick:
+            energy_left = math.nan if gauge is None else gauge.reading(tick, columns)
             if on_surfacing is not None and glider.surfacings != surfaced:
                 surfaced = glider.surfacings
-                on_surfacing(tick, columns)
-            energy_left = math.nan if gauge is None else gauge.reading(tick, columns)
+                on_surfacing(Surfaced(gauge.counted, energy_left, glider.lat_deg,
+                                      glider.lon_deg, columns.arrays()))
             science.energy_left_j = energy_left
             mask, values = readings(tick)
             depth_c.append(glider.depth_m)

@@ -15,24 +15,20 @@ import concurrent.futures as cf
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gliderplan.contract import (
-    DEFAULT_HORIZON_S,
-    SBD_MO_SHORT_BYTES,
-    SBD_MT_SHORT_BYTES,
-    TICK_S,
-)
+from gliderplan.contract import SBD_MO_SHORT_BYTES, SBD_MT_SHORT_BYTES
 from gliderplan.contract.units import finite_or_none
 from gliderplan.language import ir
 from gliderplan.language.registry import SENSOR_BY_NAME
 from gliderplan.planner.planfile import Plan
-from gliderplan.power_models.vehicle import Vehicle
+from gliderplan.power_models.battery import drawn_budget_j
 from gliderplan.sim.energy import RunEnergy, account, check_flight
-from gliderplan.sim.loop import DEFAULT_START_EPOCH_S, RunConfig, RunRecord
+from gliderplan.sim.loop import RunRecord
 from gliderplan.sim.scenarios import ScenarioSpec, draw_scenario
+from gliderplan.sim.setup import FlightSetup
 
 BATCH_S = 0.1  # a batch of scenarios takes at least this long [s], so sending it is cheap
 BATCHES_PER_WORKER = 4  # at least this many batches per worker, so the ends even out
@@ -44,23 +40,15 @@ QUANTILES = (0.05, 0.5, 0.95)
 class Job:
     """Everything a worker needs to fly scenarios of one run (pickled once per batch)."""
 
-    mission: ir.CheckedMission
-    plan: Plan | None  # the schedules flown and their prediction (None: sensors always on)
-    vehicle: Vehicle  # the nominal vehicle the scenarios draw around
+    # the nominal flight the scenarios draw around: mission, plan, vehicle, budget, tick,
+    # duration, tracker, start; its seed is the run's
+    setup: FlightSetup
     spec: ScenarioSpec
-    budget_j: float  # the plan's budget (else the mission's usable battery energy) [J]
-    seed: int
-    duration_s: float  # a run ends here if the mission has not exited [s]
-    tick_s: float = TICK_S
-    robust_tracker: bool = True
     # replanning (`montecarlo --replan`): the signed plan the vehicle holds, its key, the
     # confidence the shore replans at (None: the plan's own)
     held: bytes | None = None
     key: bytes | None = None
     confidence: float | None = None
-    # where the glider is put in the water (lat, lon) [deg] (None: as sim puts it)
-    start: tuple[float, float] | None = None
-    start_epoch_s: float = DEFAULT_START_EPOCH_S  # UTC of missiontime 0 [s since 1970]
 
     @property
     def replan(self) -> bool:
@@ -69,7 +57,7 @@ class Job:
 
 def scenario_seed(job: Job, index: int) -> np.random.SeedSequence:
     """Child `index` of the run's seed: what `SeedSequence(seed).spawn(n)[index]` is."""
-    return np.random.SeedSequence(job.seed, spawn_key=(index,))
+    return np.random.SeedSequence(job.setup.config.seed, spawn_key=(index,))
 
 
 def fly_scenario(job: Job, index: int, runtime: str | None = None) -> dict:
@@ -79,24 +67,23 @@ def fly_scenario(job: Job, index: int, runtime: str | None = None) -> dict:
     (`held_static`, `quality_static`, ...)."""
     from gliderplan.sim.flight import fly
 
-    scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
-    lat, lon = job.start or (None, None)
-    config = RunConfig(tick_s=job.tick_s, duration_s=job.duration_s, seed=scenario.seed,
-                       noise=scenario.noise, current=scenario.current, start_lat_deg=lat,
-                       start_lon_deg=lon, start_epoch_s=job.start_epoch_s)
-    record = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
-                 robust_tracker=job.robust_tracker, runtime=runtime)
+    setup = job.setup
+    scenario = draw_scenario(job.spec, setup.vehicle, index, scenario_seed(job, index))
+    config = replace(setup.config, seed=scenario.seed, noise=scenario.noise,
+                     current=scenario.current)
+    record = fly(setup.mission, scenario.ocean, config, scenario.vehicle, setup.plan,
+                 robust_tracker=setup.robust_tracker, runtime=runtime)
     row = _row(job, scenario, record)
     if not job.replan:
         return row
     from gliderplan.sim.replanning import ShoreLoop
 
-    shore = ShoreLoop(job.mission, job.held, job.key, tick_s=job.tick_s,
+    shore = ShoreLoop(setup.mission, job.held, job.key, tick_s=config.tick_s,
                       usable_truth=scenario.usable_fraction, seed=scenario.seed,
                       confidence=job.confidence, spec=job.spec.model())
-    replanned = fly(job.mission, scenario.ocean, config, scenario.vehicle, job.plan,
-                    robust_tracker=job.robust_tracker, runtime=runtime, shore=shore)
-    link = shore.log.summary(max(float(replanned.columns["time_s"][-1]), job.tick_s))
+    replanned = fly(setup.mission, scenario.ocean, config, scenario.vehicle, setup.plan,
+                    robust_tracker=setup.robust_tracker, runtime=runtime, shore=shore)
+    link = shore.log.summary(max(float(replanned.columns["time_s"][-1]), config.tick_s))
     return {**_row(job, scenario, replanned),
             **{f"{k}_static": row[k] for k in STATIC_COLUMNS},
             **{k: link[k] for k in LINK_COLUMNS}}
@@ -112,12 +99,13 @@ LINK_COLUMNS = ("surfacings", "updates_applied", "updates_refused", "replans_lea
 
 def _row(job: Job, scenario, record: RunRecord) -> dict:  # noqa: ANN001
     """The results table's row of one flight of a scenario."""
-    energy = account(record, job.mission, scenario.vehicle, job.plan)
-    check = check_flight(energy, job.plan)
-    budget = job.budget_j * scenario.usable_fraction
+    mission, plan = job.setup.mission, job.setup.plan
+    energy = account(record, mission, scenario.vehicle, plan)
+    check = check_flight(energy, plan)
+    budget = drawn_budget_j(job.setup.budget_j, scenario.usable_fraction)
     spent = np.cumsum(sum(energy.per_tick_j.values()))
     over = np.flatnonzero(spent > budget)
-    component, excess = _most_overrun(energy, job.plan)
+    component, excess = _most_overrun(energy, plan)
     names = record.state_names
     return {
         "scenario": scenario.index,
@@ -129,13 +117,13 @@ def _row(job: Job, scenario, record: RunRecord) -> dict:  # noqa: ANN001
         "duration_s": float(record.columns["time_s"][-1]) if len(spent) else 0.0,
         "ended": record.ended,
         "end_state": _end_state(record),
-        "quality": flown_quality(job.mission, record),
+        "quality": flown_quality(mission, record),
         "plan_check": check.verdict,
         "overran_component": component,
         "overran_j": excess,
         **{f"time_{name}_s": energy.time_by_state_s.get(name, 0.0) for name in names},
         **{f"visits_{name}": n for name, n in record.visits().items()},
-        **entry_arguments(job.mission, record),
+        **entry_arguments(mission, record),
         **{f"energy_{k}_j": v for k, v in energy.by_component_j().items()},
         **{f"drawn_{k}": v for k, v in scenario.drawn.items()},
     }
@@ -377,33 +365,28 @@ class MonteCarloRun:
     stopped: bool = False
 
 
-def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int,
-                       plan_path=None, workers: int = 1, scheduler: str | None = None,
-                       seed: int = 0, scenario_file=None, duration_s: float | None = None,
-                       tracker: str = "robust",
+def montecarlo_mission(setup: FlightSetup, output_dir, *, scenarios: int,
+                       workers: int = 1, scheduler: str | None = None, scenario_file=None,
                        progress: Callable[[int, int], None] | None = None,
                        replan: bool = False, confidence: float | None = None,
-                       key_path=None, start: tuple[float, float] | None = None,
-                       start_epoch_s: float = DEFAULT_START_EPOCH_S,
                        force: bool = False, mission_path=None) -> MonteCarloRun:
-    """Fly `mission` (and the plan in `plan_path`: its budget and prediction; without one
-    every sensor a state logs is on and the budget is the mission's usable battery) in
-    `scenarios` scenarios drawn from `scenario_file` (default: the shipped one) from
-    `seed`, on `workers` processes or the Dask `scheduler` ("local" or "tcp://HOST:PORT"),
-    each run ending at `duration_s` [s] (default: the mission's horizon, else 30 days);
-    write MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`), a
-    folder written whole (contract.files.output_folder: `force` replaces one holding other
-    files than a gliderplan run's; `mission_path`, the mission's file, is refused inside).
+    """Fly the mission of `setup` (sim.setup.flight_setup: its plan's budget and
+    prediction, or without one every sensor a state logs on and the budget the mission's
+    usable battery; its seed, duration, tracker and start) in `scenarios` scenarios drawn
+    from `scenario_file` (default: the shipped one) from the set-up's seed, on `workers`
+    processes or the Dask `scheduler` ("local" or "tcp://HOST:PORT"); write
+    MONTECARLO_FILES into `output_dir` (the pipeline of `gliderplan montecarlo`), a folder
+    written whole (contract.files.output_folder: `force` replaces one holding other files
+    than a gliderplan run's; `mission_path`, the mission's file, is refused inside, as
+    every file the run reads).
     `replan`: each scenario is flown twice, with the plan alone and with the shore in the
     loop replanning the rest at each surfacing at `confidence` (default: the plan's own),
     its prior the scenario file without its drift (sim/replanning.py), both from the plan
     at that confidence (a plan that states another, or none, is replanned before launch:
-    `plan_at_confidence`); the vehicle holds
-    `key_path`'s key (the plan signed with it) or one made for the run. The summary
-    then holds `hold_rate`, `hold_rate_static`, `quality`, `quality_static`,
-    `update_bytes_max` and what the link carried (`replanning`). `start`: (lat, lon)
-    [deg] where each glider is put in the water (default: as sim puts it), at
-    `start_epoch_s`.
+    `plan_at_confidence`); the vehicle holds the set-up's key (the plan signed with it)
+    or one made for the run. The summary then holds `hold_rate`, `hold_rate_static`,
+    `quality`, `quality_static`, `update_bytes_max` and what the link carried
+    (`replanning`).
     Raises KeyboardInterrupt if no scenario finished, or on a second stop while the files
     are written: an interrupted run keeps and writes those that did, marked partial and
     with no probability nor hold rate (`MonteCarloRun.result.interrupted`, summary.json's
@@ -414,11 +397,8 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     from gliderplan.contract import interrupts
     from gliderplan.contract.errors import UsageError
     from gliderplan.contract.files import output_folder
-    from gliderplan.planner.planfile import load_plan
-    from gliderplan.power_models import load_vehicle
     from gliderplan.sim import plots
     from gliderplan.sim.backends import check_run_size, scenario_executor
-    from gliderplan.sim.flight import refuse_unflyable_yos
     from gliderplan.sim.outputs import parquet_bytes
     from gliderplan.sim.scenarios import read_spec
 
@@ -426,34 +406,26 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
     out = Path(output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: not a directory")
-    duration = duration_s if duration_s is not None else mission.horizon_s or DEFAULT_HORIZON_S
-    RunConfig(duration_s=duration)  # a run too long to hold: refused here, not in a worker
     spec = read_spec(scenario_file)
-    plan = None if plan_path is None else load_plan(plan_path, mission)
-    vehicle = load_vehicle(mission.vehicle)
-    refuse_unflyable_yos(mission, vehicle, plan)
-    budget_j = plan.budget_j if plan is not None else \
-        mission.battery.energy_j * (1.0 - mission.battery.reserve_fraction)
+    mission, plan_path = setup.mission, setup.options.plan_path
     held = key = None
     launched = {}
     if replan:  # both flights planned at one confidence: the plan alone, and replanned
         from gliderplan.planner.planfile import read_plan_bytes
         from gliderplan.sim.replanning import plan_at_confidence
 
-        held, key = _vehicle_plan(plan_path, key_path)
+        held, key = _vehicle_plan(plan_path, setup.key)
         held, confidence, how = plan_at_confidence(mission, held, key, confidence=confidence,
                                                    spec=spec.model())
-        plan = read_plan_bytes(held, mission)
+        setup = replace(setup, plan=read_plan_bytes(held, mission))
         launched = {"confidence": confidence, "plan_flown": how}
-    job = Job(mission, plan, vehicle, spec, budget_j, seed, duration,
-              robust_tracker=tracker == "robust", held=held, key=key, confidence=confidence,
-              start=start, start_epoch_s=start_epoch_s)
+    job = Job(setup, spec, held=held, key=key, confidence=confidence)
     # Stopped while scenarios fly, the run keeps those that finished; once they are all
     # flown a stop waits while they are written (a second one abandons the writing and
     # leaves the folder's previous run).
     with interrupts.deferred(armed=False) as writing, \
             output_folder(out, command="montecarlo", force=force, recognised=MONTECARLO_FILES,
-                          inputs=(mission_path, plan_path, scenario_file, key_path)) as folder:
+                          inputs=(mission_path, *setup.inputs, scenario_file)) as folder:
         with scenario_executor(workers, scheduler) as executor:
             result = run_montecarlo(job, scenarios, executor, workers, progress)
             writing.arm()
@@ -464,8 +436,9 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
         table = result.table()
         meta = {"mission": mission.name, "mission_hash": mission.hash,
                 "plan": None if plan_path is None else str(plan_path),
-                "scenario_file": spec.source, "seed": seed, "run_limit_s": duration,
-                "budget_j": budget_j, "workers": workers,
+                "scenario_file": spec.source, "seed": setup.config.seed,
+                "run_limit_s": setup.config.duration_s, "budget_j": setup.budget_j,
+                "workers": workers,
                 "usable_share_drawn_from": spec.battery["usable_fraction_1"].text(),
                 "scheduler": scheduler or ("local pool" if workers > 1 else "none"),
                 "replan": replan, **launched}
@@ -476,7 +449,7 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
             "summary.json": json.dumps(stated, indent=2) + "\n",
             "energy.png": plots.energy_histogram_png(
                 table["energy_j"].to_numpy(float), table["budget_j"].to_numpy(float),
-                budget_j, stated["probability_budget_holds"], requested=scenarios),
+                setup.budget_j, stated["probability_budget_holds"], requested=scenarios),
             "exhaustion.png": plots.exhaustion_png(
                 table["exhausted_s"].to_numpy(float), table["duration_s"].to_numpy(float)),
         }
@@ -487,20 +460,19 @@ def montecarlo_mission(mission: ir.CheckedMission, output_dir, *, scenarios: int
                          stopped=writing.requested)
 
 
-def _vehicle_plan(plan_path, key_path) -> tuple[bytes, bytes]:  # noqa: ANN001
-    """The signed plan file the vehicle holds and its key: `key_path`'s (the plan must be
-    signed with it), or a key made for the run, which signs the plan."""
+def _vehicle_plan(plan_path, key: bytes | None) -> tuple[bytes, bytes]:  # noqa: ANN001
+    """The signed plan file the vehicle holds and its key: `key` (the plan must be signed
+    with it), or a key made for the run, which signs the plan."""
     import secrets
 
     from gliderplan.contract.errors import UsageError
     from gliderplan.planner.planfile import read_plan_data
-    from gliderplan.planner.signing import check_signature, read_key, sign_plan
+    from gliderplan.planner.signing import check_signature, sign_plan
 
     if plan_path is None:
         raise UsageError("--replan: replanning changes a plan: give --plan")
     held = read_plan_data(plan_path)
-    if key_path is not None:
-        key = read_key(key_path)
+    if key is not None:
         check_signature(held, key, str(plan_path))
         return held, key
     key = secrets.token_bytes(32)

@@ -256,6 +256,7 @@ def _floats(values: tuple) -> tuple[float, ...]:
 
 
 PRESETS = ("bench", "sea-trial", "uniform")
+WATER_DEPTHS_M = np.arange(0.0, 1001.0, 5.0)  # where a given ocean's density is taken [m]
 
 
 def load_ocean(spec: str) -> Ocean:
@@ -366,8 +367,8 @@ def load_water(spec: str, floor: SeaFloor | Bathymetry | None = None) -> Water:
     return Water(load_ocean(spec), floor, NO_FLOOR_NOTE if floor is None else floor.describe())
 
 
-def density_profile_of(ocean: Ocean, depths_m: np.ndarray, latitude_deg: float = 45.0
-                       ) -> DensityProfile:
+def density_profile_of(ocean: Ocean, depths_m: np.ndarray = WATER_DEPTHS_M,
+                       latitude_deg: float = 45.0) -> DensityProfile:
     """The in-situ density [kg m-3] of `ocean` at `depths_m` [m] (TEOS-10), averaged over
     its casts or waves (a forecast flies through it for days): the water the flight
     model flies in."""

@@ -5,7 +5,8 @@ sends the plan update down; the vehicle applies it and says so in its next repor
 `ShoreLoop` is the shore; `PythonVehicle` is the Python executor's side of the link (the
 update applied as the runtime applies it, planner.update.apply_update); the C runtime
 applies its own over the serial link (sim/emulator.py). `surfacing_hook` wires the two
-into `sim.loop.simulate`'s surfacing hook. The loop counts the bytes each way.
+into a flight's surfacing hook (the Python loop's, `sim.loop.simulate`, or the C loop's,
+`sim.cflight.CFlight.fly`). The loop counts the bytes each way.
 
 The glider's report is made from what the simulator flew: the coulomb counter's reading
 (the battery gauge), the battery's voltage (the truth's depth of discharge through the
@@ -17,7 +18,7 @@ last update's verdict.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,6 +35,7 @@ from gliderplan.planner.planfile import read_plan_bytes
 from gliderplan.planner.replan import Replanner, stated_confidence
 from gliderplan.planner.speed import Leg
 from gliderplan.planner.update import UpdateError, apply_update, make_updates
+from gliderplan.power_models.battery import drawn_budget_j
 from gliderplan.power_models.posterior import DischargeCurve
 from gliderplan.power_models.telemetry import (
     J_PER_AH,
@@ -46,7 +48,7 @@ from gliderplan.power_models.telemetry import (
 )
 from gliderplan.sim.energy import DEVICE_BITS
 from gliderplan.sim.geo import degrees_to_ddmm
-from gliderplan.sim.loop import Columns
+from gliderplan.sim.loop import Surfaced, SurfacingHook
 
 MAX_UPDATES = 2  # a replan's changes may take this many updates at one surfacing
 LAUNCH_UPDATES = 64  # before launch the plan goes on by cable: no message limit to keep
@@ -122,22 +124,21 @@ class ShoreLoop:
 
     # -- the glider's side of the report
 
-    def report(self, tick: int, columns: Columns, used_j: float, lat_deg: float,
-               lon_deg: float) -> SurfacingReport:
+    def report(self, tick: int, columns: Mapping[str, np.ndarray], used_j: float,
+               lat_deg: float, lon_deg: float) -> SurfacingReport:
         """What the glider sends up at a surfacing: its counter's last reading `used_j` [J],
-        taken before tick `tick`, and what it flew up to then."""
-        arrays = columns.arrays()
-        rows = slice(self.counted, min(tick, len(arrays["state"])))
-        power = arrays["sensor_power"][rows].astype(np.int64)
+        taken before tick `tick`, and what it flew up to then (`columns`: a row a tick)."""
+        rows = slice(self.counted, min(tick, len(columns["state"])))
+        power = columns["sensor_power"][rows].astype(np.int64)
         for device in SENSOR_DEVICES:
             self.on_s[device] += float(np.count_nonzero(power & DEVICE_BITS[device])) \
                 * self.tick_s
-        state = np.minimum(arrays["state"][rows].astype(np.intp), len(self.names))
+        state = np.minimum(columns["state"][rows].astype(np.intp), len(self.names))
         self.state_s += np.bincount(state, minlength=len(self.names) + 1) * self.tick_s
         self.counted = rows.stop
-        depth = used_j / (self.replanner.plan.budget_j * self.usable_truth)
+        depth = used_j / drawn_budget_j(self.replanner.plan.budget_j, self.usable_truth)
         volts = self.curve.voltage(depth) + self.rng.normal(0.0, self.curve.noise_v)
-        current = int(arrays["state"][rows.stop - 1]) if rows.stop else -1
+        current = int(columns["state"][rows.stop - 1]) if rows.stop else -1
         return SurfacingReport(
             tick * self.tick_s, used_j / J_PER_AH, float(volts), degrees_to_ddmm(lat_deg),
             degrees_to_ddmm(lon_deg),
@@ -156,8 +157,8 @@ class ShoreLoop:
 
     # -- the shore's side
 
-    def at_surfacing(self, tick: int, columns: Columns, used_j: float, lat_deg: float,
-                     lon_deg: float) -> tuple[bytes, ...]:
+    def at_surfacing(self, tick: int, columns: Mapping[str, np.ndarray], used_j: float,
+                     lat_deg: float, lon_deg: float) -> tuple[bytes, ...]:
         """The glider's report goes up; the updates to send down come back (none when the
         replan changes nothing, or no update can carry it)."""
         report = self.report(tick, columns, used_j, lat_deg, lon_deg)
@@ -254,18 +255,18 @@ class PythonVehicle:
 
 
 def surfacing_hook(shore: ShoreLoop, deliver: Callable[[bytes], tuple[UpdateStatus, int, str]],
-                   gauge, glider, battery_j: float):  # noqa: ANN001, ANN201
-    """`sim.loop.simulate`'s surfacing hook: the counter's last reading (`gauge`, of a battery
-    of `battery_j` [J]: the report is of when it was read out) and the glider's position into
-    the shore's report, each update it sends delivered to the vehicle and its verdict noted
-    for the next report."""
+                   battery_j: float) -> SurfacingHook:
+    """The flight's surfacing hook (`sim.loop.simulate`'s, `sim.cflight.CFlight.fly`'s): the
+    counter's last reading (of a battery of `battery_j` [J]: the report is of when it was
+    read out) and the glider's position into the shore's report, each update it sends
+    delivered to the vehicle and its verdict noted for the next report."""
 
-    def surfaced(tick: int, columns: Columns) -> None:
-        used = battery_j - gauge.reading(tick, columns)
+    def surfaced(at: Surfaced) -> None:
+        used = battery_j - at.left_j
         if not math.isfinite(used):
             return
-        read = gauge.counted  # the counter was last read out before this tick: the report
-        for update in shore.at_surfacing(read, columns, used, glider.lat_deg, glider.lon_deg):
+        for update in shore.at_surfacing(at.read_tick, at.columns, used, at.lat_deg,
+                                         at.lon_deg):
             shore.acknowledged(*deliver(update))
 
     return surfaced

@@ -18,7 +18,7 @@ from gliderplan.language import check_file
 from gliderplan.planner import make_plan
 from gliderplan.power_models import load_vehicle
 from gliderplan.power_models.devices import base_power_w, sensor_on
-from gliderplan.sim import run_mission
+from gliderplan.sim import FlightOptions, flight_setup, run_mission
 from gliderplan.sim.montecarlo import montecarlo_mission
 from gliderplan.sim.scenarios import (
     ScenarioFileError,
@@ -52,8 +52,8 @@ def signed(tmp_path_factory, short):
 
 def test_sim_replans_at_each_surfacing_and_counts_the_link(tmp_path, signed, short):
     plan, key = signed
-    result = run_mission(short, tmp_path / "run", plan_path=plan, key_path=key,
-                         replan_every="surfacing", duration_s=86400.0, plots=False)
+    setup = flight_setup(short, FlightOptions(plan_path=plan, key_path=key, duration_s=86400.0))
+    result = run_mission(setup, tmp_path / "run", replan_every="surfacing", plots=False)
     link = result.replanning
     assert link["surfacings"] == result.record.surfacings >= 8
     assert link["updates_applied"] >= 1 and link["updates_refused"] == 0
@@ -102,8 +102,8 @@ def test_the_c_runtimes_apply_the_updates_the_python_executor_does(tmp_path, sig
 
 def test_montecarlo_replan_reports_both_side_by_side(tmp_path, signed, short, capsys):
     plan, key = signed
-    run = montecarlo_mission(short, tmp_path / "mc", scenarios=4, plan_path=plan,
-                             key_path=key, replan=True, duration_s=86400.0,
+    setup = flight_setup(short, FlightOptions(plan_path=plan, key_path=key, duration_s=86400.0))
+    run = montecarlo_mission(setup, tmp_path / "mc", scenarios=4, replan=True,
                              scenario_file="hungry_dvl")
     s = run.summary
     assert {"hold_rate", "hold_rate_static", "quality", "quality_static",
@@ -149,8 +149,9 @@ def test_a_plan_made_on_the_model_is_planned_at_the_confidence_before_launch(tmp
     assert after.budget_j == before.budget_j and after.states != before.states
     again = Replanner(short, launched, confidence=0.95, spec=prior).at_launch(launched)
     assert again.status == "unchanged"  # what the shore would plan at 0.95 at launch
-    run = montecarlo_mission(short, tmp_path / "mc", scenarios=1, plan_path=model_plan,
-                             key_path=key, replan=True, duration_s=3 * 3600.0)
+    setup = flight_setup(short, FlightOptions(plan_path=model_plan, key_path=key,
+                                              duration_s=3 * 3600.0))
+    run = montecarlo_mission(setup, tmp_path / "mc", scenarios=1, replan=True)
     assert run.summary["confidence"] == 0.95 and run.summary["plan_flown"] == how
 
 
@@ -163,8 +164,9 @@ def test_replanning_holds_the_budget_where_a_hungrier_device_breaks_the_plan_alo
     drift = tmp_path / "hungrier.toml"
     drift.write_text('kind = "scenarios"\nbase = "default"\n[drift]\n'
                      '"devices.dvl.on_power" = 1.6\n')
-    run = montecarlo_mission(short, tmp_path / "mc", scenarios=40, plan_path=plan,
-                             key_path=key, replan=True, scenario_file=drift, workers=2)
+    run = montecarlo_mission(flight_setup(short, FlightOptions(plan_path=plan, key_path=key)),
+                             tmp_path / "mc", scenarios=40, replan=True, scenario_file=drift,
+                             workers=2)
     s = run.summary
     assert s["hold_rate_static"] < 0.95 <= s["hold_rate"]
 

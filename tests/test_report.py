@@ -320,3 +320,31 @@ def test_results_of_another_mission_are_refused(tmp_path):
     run = gliderplan("report", ANNOTATED, "--montecarlo", str(tmp_path / "mc"),
                      "-o", str(tmp_path / "out"))
     assert run.returncode == 2 and "another mission" in run.stderr
+
+
+def test_two_plans_of_one_mission_make_two_reports_of_their_own(tmp_path):
+    """Each page reads the plan it was given and that plan's JSON: the mission's own
+    1.2 kWh less 15 % (1,020 Wh), or a 1 kWh pack less 15 % (850 Wh). A JSON that is
+    not its plan's, or none, is refused in one line."""
+    own, less = tmp_path / "own.plan", tmp_path / "less.plan"
+    assert gliderplan("plan", ANNOTATED, "-o", str(own)).returncode == 0
+    assert gliderplan("plan", ANNOTATED, "--battery", "1kWh", "-o", str(less)
+                      ).returncode == 0
+    run = tmp_path / "run"
+    assert gliderplan("sim", ANNOTATED, "--plan", str(own), "-o", str(run)).returncode == 0
+    for plan, usable, other in ((own, "1,020 Wh usable", "850 Wh usable"),
+                                (less, "850 Wh usable", "1,020 Wh usable")):
+        out = tmp_path / plan.stem
+        assert gliderplan("report", ANNOTATED, "--plan", str(plan), "--run", str(run),
+                          "-o", str(out)).returncode == 0
+        page = (out / "report.html").read_text()
+        assert usable in page and other not in page
+    shutil.copy(f"{own}.json", f"{less}.json")  # the other plan's report beside it
+    swapped = gliderplan("report", ANNOTATED, "--plan", str(less), "-o", str(tmp_path / "x"))
+    assert swapped.returncode == 2 and "Traceback" not in swapped.stderr
+    assert f"{less}.json: not the report of {less} (budget_j" in swapped.stderr
+    Path(f"{less}.json").unlink()
+    missing = gliderplan("report", ANNOTATED, "--plan", str(less), "-o", str(tmp_path / "y"))
+    assert missing.returncode == 2 and "Traceback" not in missing.stderr
+    assert f"{less}.json" in missing.stderr and "no such file" in missing.stderr
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()

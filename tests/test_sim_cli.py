@@ -259,13 +259,12 @@ def test_the_water_given_is_flown_at_its_density_with_the_glider_ballasted_for_i
     assert said.startswith("water: bench: in-situ density (TEOS-10) 1021.0-1030.1 kg/m3")
     # ballasted as `gliderplan forecast` ballasts it: one definition of the band's density
     from gliderplan.language import check_file
-    from gliderplan.planner.forecast import WATER_DEPTHS_M
     from gliderplan.planner.rates import band_density
     from gliderplan.power_models import load_vehicle
     from gliderplan.sim.ocean import density_profile_of, load_ocean
 
     checked = check_file(str(mission)).checked()
-    rho = band_density(checked, density_profile_of(load_ocean("bench"), WATER_DEPTHS_M),
+    rho = band_density(checked, density_profile_of(load_ocean("bench")),
                        load_vehicle(checked.vehicle))
     assert 1024.5 < rho < 1025.5  # the survey's 5-40 m of the bench water, not the 1024.3
     assert f"flown at each depth; the glider ballasted for {rho:.1f} kg/m3" in said
@@ -365,12 +364,13 @@ def test_ctrl_c_before_the_first_tick_writes_nothing(tmp_path, capsys, monkeypat
 def test_run_mission_is_the_sim_command_as_one_call(tmp_path):
     from gliderplan.language import check_file
     from gliderplan.planner import make_plan
-    from gliderplan.sim import run_mission
+    from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
     annotated = check_file(str(REPO / "examples" / "fig2_annotated.mission")).checked()
     plan_path = tmp_path / "fig2.plan"
     make_plan(annotated, output=plan_path)
-    result = run_mission(annotated, tmp_path / "run", plan_path=plan_path, seed=3)
+    result = run_mission(flight_setup(annotated, FlightOptions(plan_path=plan_path, seed=3)),
+                         tmp_path / "run")
     assert {p.name for p in result.files} == FILES and all(p.is_file() for p in result.files)
     assert [t.kind for t in result.record.trace] == ["start", "call", "return", "goto", "exit"]
     assert result.check.verdict in ("pass", "over prediction") and not result.interrupted

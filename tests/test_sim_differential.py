@@ -181,17 +181,21 @@ def test_a_propelled_plan_is_flown_the_same_by_both_runtimes_and_holds(vehicle, 
 # ---- the C flight against the Python reference ---------------------------------------
 
 def flown_alike(mission, config: RunConfig, ocean="bench", plan=None, vehicle=None,
-                rigid: bool = False):
+                rigid: bool = False, shore=None):
     """Fly `mission` on the Python reference and in the C flight (in `ocean`, a preset name
     or an Ocean; `vehicle`: default the mission's, whose calibrated hull is compressible:
-    its speed changes with depth; `rigid`: with the hull made incompressible); the two
+    its speed changes with depth; `rigid`: with the hull made incompressible; `shore`:
+    makes the shore each flight has in the loop, whose logs must be the same too); the two
     flights must be the same (the flight is returned)."""
     vehicle = vehicle or load_vehicle(mission.vehicle)
     if rigid:
         vehicle = replace(vehicle, flight=replace(vehicle.flight, compressibility_per_pa=0.0))
     water = load_ocean(ocean) if isinstance(ocean, str) else ocean
-    reference = fly(mission, water, config, vehicle, plan, runtime="python")
-    flown = fly(mission, water, config, vehicle, plan, runtime="step")
+    shores = (shore(), shore()) if shore else (None, None)
+    reference = fly(mission, water, config, vehicle, plan, runtime="python", shore=shores[0])
+    flown = fly(mission, water, config, vehicle, plan, runtime="step", shore=shores[1])
+    if shore:
+        assert shores[1].log == shores[0].log
     assert flown.trace == reference.trace
     assert (flown.ended, flown.surfacings, flown.events_fired, flown.grounded_ticks) == \
         (reference.ended, reference.surfacings, reference.events_fired,
@@ -294,7 +298,7 @@ def test_the_c_flight_flies_the_water_s_density_as_the_reference(name, ocean, fl
     # the water's in-situ density at each depth (sim --ocean): a rigid hull's speed then
     # changes with depth too
     from gliderplan.sim.ocean import density_profile_of, load_water
-    from gliderplan.sim.run import flown_water
+    from gliderplan.sim.setup import flown_water
 
     mission = check_file(str(REPO / name)).mission
     vehicle = load_vehicle(mission.vehicle)
@@ -452,6 +456,35 @@ def test_the_c_flight_flies_random_missions_as_the_reference(source, ocean, nois
     flown_alike(result.mission, config, ocean, rigid=rigid)
 
 
+def test_the_c_flight_flies_the_shore_s_updates_as_the_reference(tmp_path):
+    """With the shore in the loop the C flight stops at each surfacing for its report and
+    replan, and flies the updates the runtime applies from the next tick: the same flight,
+    reports and updates as the reference's."""
+    from gliderplan.planner import make_plan
+    from gliderplan.planner.planfile import read_plan_bytes
+    from gliderplan.sim.replanning import ShoreLoop
+    from gliderplan.sim.scenarios import read_spec
+
+    mission = check_file(str(REPO / "tests" / "missions" / "replan_short.mission")).mission
+    key = bytes(range(32))
+    key_file = tmp_path / "vehicle.key"
+    key_file.write_text(key.hex() + "\n")
+    key_file.chmod(0o600)
+    make_plan(mission, output=tmp_path / "held.plan", sign=key_file, seq=5)
+    held = (tmp_path / "held.plan").read_bytes()
+    config = RunConfig(duration_s=86400.0, seed=3, noise=NOISE_PRESETS["ctd"])
+    shores = []
+
+    def shore():  # a truth hungrier than the model: the replans change the plan
+        shores.append(ShoreLoop(mission, held, key, tick_s=config.tick_s, usable_truth=0.9,
+                                seed=5, spec=read_spec()))
+        return shores[-1]
+
+    flown = flown_alike(mission, config, plan=read_plan_bytes(held, mission), shore=shore)
+    assert flown.surfacings == shores[1].log.surfacings >= 6
+    assert shores[1].log.applied >= 2
+
+
 # (mission, scenario, days): the survey's whole flight; 10 days of the month's scenario 1
 # cross the end of a block of random numbers (the spikes' stream)
 MONTE_CARLO_CASES = [("thermocline_survey.mission", 0, 1.5), ("thermocline_survey.mission", 1, 1.5),
@@ -465,8 +498,10 @@ def test_the_c_flight_flies_monte_carlo_scenarios_as_the_reference(name, index, 
     from gliderplan.sim.scenarios import draw_scenario, read_spec
 
     mission = check_file(str(REPO / "examples" / name)).mission
-    job = Job(mission, None, load_vehicle(mission.vehicle), read_spec(), 1.0, 0, days * 86400.0)
-    scenario = draw_scenario(job.spec, job.vehicle, index, scenario_seed(job, index))
-    config = RunConfig(duration_s=job.duration_s, seed=scenario.seed, noise=scenario.noise,
+    from gliderplan.sim.setup import FlightOptions, flight_setup
+
+    job = Job(flight_setup(mission, FlightOptions(duration_s=days * 86400.0)), read_spec())
+    scenario = draw_scenario(job.spec, job.setup.vehicle, index, scenario_seed(job, index))
+    config = RunConfig(duration_s=days * 86400.0, seed=scenario.seed, noise=scenario.noise,
                        current=scenario.current)
     flown_alike(mission, config, scenario.ocean, vehicle=scenario.vehicle)

@@ -216,14 +216,14 @@ def test_heavy_line_noise_flies_the_fault_free_flight_or_fails_the_link_cleanly(
     from concurrent.futures import ThreadPoolExecutor
 
     from gliderplan.language import check_file
-    from gliderplan.sim.run import run_mission
+    from gliderplan.sim import FlightOptions, flight_setup, run_mission
 
     mission = check_file(str(SHORT)).mission
 
     def fly_seed(seed: int, faults: str | None) -> str:
         run = tmp_path / f"{seed}-{'faulted' if faults else 'fault-free'}"
-        return run_mission(mission, run, runtime="c", seed=seed, faults=faults,
-                           plots=False).record.ended
+        setup = flight_setup(mission, FlightOptions(runtime="c", seed=seed, faults=faults))
+        return run_mission(setup, run, plots=False).record.ended
 
     fly_seed(0, None)  # builds the runtime once, before the runs share the build cache
     seeds = range(1, 21)

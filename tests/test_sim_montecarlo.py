@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ import pytest
 from gliderplan.cli.main import main
 from gliderplan.language import check_file
 from gliderplan.power_models import load_vehicle
-from gliderplan.sim import montecarlo
+from gliderplan.sim import FlightOptions, flight_setup, montecarlo
 from gliderplan.sim.backends import scenario_executor
 from gliderplan.sim.scenarios import (
     ScenarioFileError,
@@ -35,8 +36,8 @@ FILES = {"scenarios.parquet", "summary.json", "energy.png", "exhaustion.png"}
 
 def _job(seed: int = 7, budget_j: float = 60e3) -> montecarlo.Job:
     mission = check_file(str(FIG2)).mission
-    return montecarlo.Job(mission, None, load_vehicle(mission.vehicle), read_spec(),
-                          budget_j, seed, 2600.0)
+    setup = flight_setup(mission, FlightOptions(seed=seed, duration_s=2600.0))
+    return montecarlo.Job(replace(setup, budget_j=budget_j), read_spec())
 
 
 def test_a_scenario_is_its_seed_and_index_whatever_else_was_drawn():
@@ -227,7 +228,8 @@ def test_montecarlo_mission_is_the_command_as_one_call(tmp_path):
     from gliderplan.sim.montecarlo import montecarlo_mission
 
     mission = check_file(str(FIG2)).checked()
-    run = montecarlo_mission(mission, tmp_path / "mc", scenarios=3, seed=7, duration_s=2600.0)
+    setup = flight_setup(mission, FlightOptions(seed=7, duration_s=2600.0))
+    run = montecarlo_mission(setup, tmp_path / "mc", scenarios=3)
     assert {p.name for p in run.files} == FILES and all(p.is_file() for p in run.files)
     assert [r["scenario"] for r in run.result.rows] == [0, 1, 2]
     assert json.loads((tmp_path / "mc" / "summary.json").read_text()) == run.summary
@@ -264,6 +266,28 @@ def test_montecarlo_puts_every_glider_in_the_water_at_the_start(tmp_path, capsys
     assert main(["montecarlo", fig2, "--scenarios", "2", "--start", "39.3",
                  "-o", str(tmp_path / "bad")]) == 2
     assert "not an ISO 8601 time" in capsys.readouterr().err
+
+
+def test_the_budget_is_the_battery_less_its_reserve_times_the_share_drawn(tmp_path):
+    """Fig. 2 carries 1.2 kWh and keeps 15 % in reserve: a plan may spend 1.02 kWh
+    (3.672 MJ), the planner, `check` and a run without a plan alike; a scenario whose pack
+    holds 90 % of its rating may spend 0.9 of that."""
+    from gliderplan.planner.hardware import load_hardware
+    from gliderplan.planner.limits import flight_limits
+    from gliderplan.power_models.battery import drawn_budget_j, usable_budget_j
+
+    assert usable_budget_j(1.2 * 3.6e6, 0.15) == pytest.approx(3.672e6)
+    assert drawn_budget_j(3.672e6, 0.9) == pytest.approx(3.3048e6)
+    mission = check_file(str(FIG2)).mission
+    assert load_hardware(mission).budget_j == pytest.approx(3.672e6)
+    assert flight_limits(mission).max_budget_j == pytest.approx(3.672e6)
+    setup = flight_setup(mission, FlightOptions(seed=2, duration_s=600.0))
+    assert setup.budget_j == pytest.approx(3.672e6)
+    run = montecarlo.montecarlo_mission(setup, tmp_path, scenarios=3)
+    assert run.summary["budget_j"] == pytest.approx(3.672e6)
+    table = run.result.table()
+    assert table["budget_j"].to_numpy() == pytest.approx(
+        3.672e6 * table["drawn_usable_fraction_1"].to_numpy())
 
 
 STARTING_DASK = """
