@@ -52,6 +52,24 @@ class CodegenError(GliderplanError):
     """The mission uses something the C runtime cannot hold (the message says what and where)."""
 
 
+def envelope_figures(envelope: contract.Envelope) -> tuple[tuple[str, float], ...]:
+    """`gp_envelope`'s fields but its action, in its order: (C name, value [the units its
+    names carry])."""
+    return (("max_depth_m", envelope.max_depth_m), ("max_pitch_rad", envelope.max_pitch_rad),
+            ("min_yo_band_m", envelope.min_yo_band_m),
+            ("min_inflection_s", envelope.min_inflection_s),
+            ("min_speed_mps", envelope.speed_range_mps[0]),
+            ("max_speed_mps", envelope.speed_range_mps[1]),
+            ("min_thrust_w", envelope.thrust_range_w[0]),
+            ("max_thrust_w", envelope.thrust_range_w[1]),
+            ("max_turn_rate_rad_s", envelope.max_turn_rate_rad_s),
+            ("max_pump_power_w", envelope.max_pump_power_w),
+            ("pump_out_j_per_cc", envelope.pump.out_j_per_cc),
+            ("pump_out_j_per_cc_m", envelope.pump.out_j_per_cc_m),
+            ("pump_in_j_per_cc", envelope.pump.in_j_per_cc),
+            ("pump_in_j_per_cc_m", envelope.pump.in_j_per_cc_m))
+
+
 def generate_c(mission: ir.CheckedMission, limits: FlightLimits, prefix: str = "") -> str:
     """The C source of the mission's tables, ready to compile with the runtime.
 
@@ -420,20 +438,8 @@ class _MissionWriter:
         """The vehicle's rating (contract.Envelope) as `gp_mission.envelope`."""
         env = self.limits.envelope
         return ["    .envelope = {",
-                f"        .max_depth_m = {c_double(env.max_depth_m)},",
-                f"        .max_pitch_rad = {c_double(env.max_pitch_rad)},",
-                f"        .min_yo_band_m = {c_double(env.min_yo_band_m)},",
-                f"        .min_inflection_s = {c_double(env.min_inflection_s)},",
-                f"        .min_speed_mps = {c_double(env.speed_range_mps[0])},",
-                f"        .max_speed_mps = {c_double(env.speed_range_mps[1])},",
-                f"        .min_thrust_w = {c_double(env.thrust_range_w[0])},",
-                f"        .max_thrust_w = {c_double(env.thrust_range_w[1])},",
-                f"        .max_turn_rate_rad_s = {c_double(env.max_turn_rate_rad_s)},",
-                f"        .max_pump_power_w = {c_double(env.max_pump_power_w)},",
-                f"        .pump_out_j_per_cc = {c_double(env.pump.out_j_per_cc)},",
-                f"        .pump_out_j_per_cc_m = {c_double(env.pump.out_j_per_cc_m)},",
-                f"        .pump_in_j_per_cc = {c_double(env.pump.in_j_per_cc)},",
-                f"        .pump_in_j_per_cc_m = {c_double(env.pump.in_j_per_cc_m)},",
+                *(f"        .{name} = {c_double(value)}," for name, value in
+                  envelope_figures(env)),
                 f"        .action = GP_ENVELOPE_{env.action.name},",
                 "    },"]
 

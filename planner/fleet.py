@@ -54,6 +54,7 @@ from gliderplan.planner.fleet_mapping import (
     combined,
     evaluation_grid,
     mapping_error,
+    one_blas_thread,
     revisit_table,
     sample_spacing,
 )
@@ -240,14 +241,8 @@ def plan_fleet(fleet: Fleet, *, seed: int = 0, scenario_file=None,
     FleetError, located in the fleet file, for a glider that cannot reach the survey, a
     fleet that cannot sweep it at its confidence, a vehicle that cannot fly the yo, or
     gliders planned closer than the separation."""
-    import scipy.linalg  # noqa: F401  (its own BLAS: loaded before the limit, to be held by it)
-    from threadpoolctl import threadpool_limits
-
-    # The fleet's matrices are small (the mapping error's at most some 800 samples; the
-    # planner's a few dozen variables): one BLAS thread solves them as fast, where
-    # threads that wait on each other for a busy core cost a fifth more CPU
-    # (bench/README.md, "Fleet").
-    with threadpool_limits(1, user_api="blas"):
+    # the planner's matrices are a few dozen variables, the mapping error's small too
+    with one_blas_thread():
         return _plan_fleet(fleet, seed, scenario_file, time_limit_s, solver, require_sweep,
                            progress)
 
@@ -408,8 +403,14 @@ def polish(fleet: Fleet, arcs: assign.Arcs, assignment: assign.Assignment,
             samples[key] = track.samples(spacing)
         return samples[key]
 
+    errors: dict[tuple, float] = {}  # a trial rejected once comes round again next pass
+
     def error_of(blocks) -> float:
-        return mapping_error(combined([sampled(b) for b in blocks]), grid, fleet.field)[0]
+        key = tuple((b.glider, b.first, b.stop, b.entry_last) for b in blocks)
+        if key not in errors:
+            errors[key] = mapping_error(combined([sampled(b) for b in blocks]), grid,
+                                        fleet.field)[0]
+        return errors[key]
 
     blocks = sorted(assignment.blocks, key=lambda b: b.first)
     best = before = error_of(blocks)

@@ -21,6 +21,8 @@ average away and for the sensor's own error).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,6 +93,18 @@ def evaluation_grid(fleet: Fleet, points: int = GRID_POINTS, times: int = GRID_T
         step /= 1.4  # a thin region: a finer grid until enough points fall inside
     t = (np.arange(times) + 0.5) * fleet.period_s / times
     return Grid(gx.ravel()[inside], gy.ravel()[inside], t)
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """Hold BLAS to one thread within: the mapping error's matrices are small (at most
+    some MAX_SAMPLES samples), one thread solves them as fast, where threads that wait
+    on each other for a busy core cost a fifth more CPU (bench/README.md, "Fleet")."""
+    import scipy.linalg  # noqa: F401  (its own BLAS: loaded before the limit, to be held by it)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1, user_api="blas"):
+        yield
 
 
 def _covariance(t1, x1, y1, t2, x2, y2, scales: FieldScales) -> np.ndarray:

@@ -5,7 +5,9 @@ mission binaries) and cached like them (`runtime.build.cache_dir`):
 - the step library: the runtime's step sources (runtime/src: the tick, the event
   system, the pilot, the routes, the plan reader) and the simulator's C side
   (sim/flight.c), keyed by their sources, the compiler and its flags;
-- a mission's tables (language/codegen_c.py), keyed by the generated source.
+- a mission's tables (language/codegen_c.py), keyed by the generated source. The
+  vehicle's rating is not in them but given to the step at init: the scenarios of a Monte
+  Carlo draw a vehicle each, and fly one build of the mission's tables.
 The library steps the mission through ctypes: a SENSORS frame's readings in, the
 COMMAND out, with nothing between them but a function call. The serial link's closed
 loop (sim/emulator.py, `sim --runtime c`) runs the same tick in the board binary.
@@ -20,12 +22,21 @@ import os
 import struct
 import tempfile
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
-from gliderplan.contract import MAX_VARIABLES, N_SENSORS, FlightLimits, TransitionKind
+from gliderplan.contract import (
+    MAX_VARIABLES,
+    N_SENSORS,
+    Envelope,
+    EnvelopeAction,
+    FlightLimits,
+    TransitionKind,
+)
 from gliderplan.contract.errors import GliderplanError
 from gliderplan.language import ir
+from gliderplan.language.codegen_c import envelope_figures
 from gliderplan.language.semantics import MissionFault
 from gliderplan.runtime.protocol import Command
 
@@ -41,6 +52,11 @@ STEP_SOURCES = ("gp_crc.c", "gp_envelope.c", "gp_machine.c", "gp_pilot.c", "gp_p
 SIM_SOURCES = ("step.c", "flight.c")  # the simulator's side: the step's context, the loop
 LIBRARY_NAME = "gpstep"
 FAULTS = {3: "overflow", 4: "underflow", 5: "bad table"}  # gp_step_result of a refusal
+# the envelope compiled into a mission's tables, one the check accepts: the step flies
+# the flight's own (`CStep`'s limits), so that the tables do not depend on the vehicle's
+# rating
+TABLES_ENVELOPE = Envelope(max_depth_m=1.0, max_pitch_rad=1.0, min_yo_band_m=0.0,
+                           min_inflection_s=0.0, action=EnvelopeAction.FAULT)
 
 
 class StepBuildError(GliderplanError):
@@ -158,8 +174,8 @@ def _declare(library: ctypes.CDLL) -> ctypes.CDLL:
     pointer, size = ctypes.c_void_p, ctypes.c_size_t
     library.gps_step_size.restype, library.gps_step_size.argtypes = size, []
     library.gps_step_init.restype = ctypes.c_int
-    library.gps_step_init.argtypes = [pointer, pointer, ctypes.c_char_p, size, ctypes.c_int,
-                                      ctypes.c_char_p]
+    library.gps_step_init.argtypes = [pointer, pointer, pointer, ctypes.c_char_p, size,
+                                      ctypes.c_int, ctypes.c_char_p]
     library.gps_step_tick.restype = None
     library.gps_step_tick.argtypes = [pointer, ctypes.c_uint32, ctypes.c_uint32, pointer,
                                       pointer, pointer]
@@ -184,10 +200,11 @@ def _declare(library: ctypes.CDLL) -> ctypes.CDLL:
 
 def mission_tables(mission: ir.CheckedMission, limits: FlightLimits) -> int:
     """The address of the mission's compiled tables (a `gp_mission`), built with `limits`
-    (the vehicle's ballast and pump, the board's clocks) or found in the cache."""
+    (the vehicle's ballast and pump, the board's clocks) but its envelope, which the step
+    is given (`TABLES_ENVELOPE` in its place), or found in the cache."""
     from gliderplan.language.codegen_c import generate_c
 
-    return _tables_address(generate_c(mission, limits))
+    return _tables_address(generate_c(mission, replace(limits, envelope=TABLES_ENVELOPE)))
 
 
 @functools.cache
@@ -233,6 +250,17 @@ class _Breach(ctypes.Structure):
                 ("bound", ctypes.c_double)]
 
 
+class _Envelope(ctypes.Structure):
+    """gp_envelope (runtime/include/gp_mission.h)."""
+
+    _fields_ = [*((name, ctypes.c_double) for name, _ in envelope_figures(TABLES_ENVELOPE)),
+                ("action", ctypes.c_uint8)]
+
+    @classmethod
+    def of(cls, envelope: Envelope) -> _Envelope:
+        return cls(*(value for _, value in envelope_figures(envelope)), envelope.action)
+
+
 class Report(ctypes.Structure):
     """gp_tick_report: a tick's transitions, a refused event, a command outside the
     envelope."""
@@ -257,7 +285,8 @@ class CStep:
                  limits: FlightLimits, naive_tracker: bool = False,
                  tables: int | None = None, context_bytes: int = 0) -> None:
         """`tables`: the address of the mission's compiled tables, if already built
-        (a batch of missions in one shared object); else they are built here.
+        (a batch of missions in one shared object); else they are built here. Either
+        way the runtime holds the commands to `limits.envelope`.
         `context_bytes`: room for a context that begins with the step's (a flight's)."""
         self.mission = mission
         self.library = library = step_library()
@@ -265,7 +294,9 @@ class CStep:
                                                        context_bytes))
         self._tables = tables if tables is not None else mission_tables(mission, limits)
         error = ctypes.create_string_buffer(PLAN_ERROR_LEN)
-        if library.gps_step_init(self.context, self._tables, plan_bytes,
+        envelope = _Envelope.of(limits.envelope)  # copied into the context
+        if library.gps_step_init(self.context, self._tables, ctypes.byref(envelope),
+                                 plan_bytes,
                                  0 if plan_bytes is None else len(plan_bytes),
                                  int(naive_tracker), error) < 0:
             from gliderplan.planner.planfile import PlanRejected

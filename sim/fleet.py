@@ -520,32 +520,38 @@ def _montecarlo_summary(fleet: Fleet, stored: StoredPlan, rows: dict, common: li
     `complete` (interrupted): no finish probability nor interval."""
     import pandas as pd
 
-    from gliderplan.planner.fleet_mapping import combined, evaluation_grid, mapping_error
+    from gliderplan.planner.fleet_mapping import (
+        combined,
+        evaluation_grid,
+        mapping_error,
+        one_blas_thread,
+    )
     from gliderplan.sim.montecarlo import QUANTILES, wilson_interval
 
     grid = evaluation_grid(fleet)
     spacing = sample_spacing(fleet)
     records, finished, errors = [], 0, []
-    for index in common:
-        outcomes = []
-        for glider in stored.gliders:
-            row = rows[glider.name][index]
-            outcomes.append(_outcome_of_row(fleet, glider, row, spacing))
-        done = all(o.swept and o.held for o in outcomes)
-        finished += done
-        error, _ = mapping_error(combined([o.samples for o in outcomes]), grid, fleet.field)
-        errors.append(error)
-        for o in outcomes:
-            row = rows[o.name][index]
-            records.append({"scenario": index, "glider": o.name, "energy_j": o.energy_j,
-                            "budget_j": o.budget_j, "held": o.held, "ended": o.ended,
-                            "swept": o.swept, "segments_done": o.segments_done,
-                            "lines_swept": o.lines_swept, "fleet_finished": done,
-                            "mapping_error": error,
-                            "current_mps": row.get("drawn_current_speed_mps", math.nan),
-                            "current_toward_deg": row.get("drawn_current_direction_deg",
-                                                          math.nan),
-                            "duration_s": row["duration_s"]})
+    with one_blas_thread():  # a mapping error per scenario: small matrices
+        for index in common:
+            outcomes = []
+            for glider in stored.gliders:
+                row = rows[glider.name][index]
+                outcomes.append(_outcome_of_row(fleet, glider, row, spacing))
+            done = all(o.swept and o.held for o in outcomes)
+            finished += done
+            error, _ = mapping_error(combined([o.samples for o in outcomes]), grid, fleet.field)
+            errors.append(error)
+            for o in outcomes:
+                row = rows[o.name][index]
+                records.append({"scenario": index, "glider": o.name, "energy_j": o.energy_j,
+                                "budget_j": o.budget_j, "held": o.held, "ended": o.ended,
+                                "swept": o.swept, "segments_done": o.segments_done,
+                                "lines_swept": o.lines_swept, "fleet_finished": done,
+                                "mapping_error": error,
+                                "current_mps": row.get("drawn_current_speed_mps", math.nan),
+                                "current_toward_deg": row.get("drawn_current_direction_deg",
+                                                              math.nan),
+                                "duration_s": row["duration_s"]})
     table = pd.DataFrame(records)
     n = len(common)
     low, high = wilson_interval(finished, n)

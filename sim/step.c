@@ -20,25 +20,30 @@ size_t gps_step_size(void)
 }
 
 /**
- * @brief A runtime before its first tick, for `mission`, flying the plan `plan_text`
- *        (`plan_len` bytes; NULL: none), read by the runtime's own reader.
- * @param error what is wrong with the mission's tables or the plan (GP_PLAN_ERROR_LEN)
+ * @brief A runtime before its first tick, for `mission` held to `envelope` (a flight's
+ *        vehicle's rating: a scenario's drawn vehicle flies the same tables, compiled
+ *        once), flying the plan `plan_text` (`plan_len` bytes; NULL: none), read by the
+ *        runtime's own reader.
+ * @param error what is wrong with the mission's tables, the envelope or the plan
+ *        (GP_PLAN_ERROR_LEN)
  * @return 0, or -1 with `error` set
  */
-int gps_step_init(gps_step *s, const gp_mission *mission, const char *plan_text,
-                  size_t plan_len, int naive_tracker, char *error)
+int gps_step_init(gps_step *s, const gp_mission *mission, const gp_envelope *envelope,
+                  const char *plan_text, size_t plan_len, int naive_tracker, char *error)
 {
     memset(s, 0, sizeof *s);
-    const char *wrong = gp_mission_check(mission);
+    s->flown = *mission;
+    s->flown.envelope = *envelope;
+    s->mission = &s->flown;
+    const char *wrong = gp_mission_check(s->mission);
     if (wrong) {
         snprintf(error, GP_PLAN_ERROR_LEN, "%s", wrong);
         return -1;
     }
-    if (plan_text && gp_plan_read(plan_text, plan_len, mission, NULL, &s->plan, error) < 0) {
+    if (plan_text && gp_plan_read(plan_text, plan_len, s->mission, NULL, &s->plan, error) < 0) {
         return -1;
     }
     gp_runtime_init(&s->runtime);
-    s->mission = mission;
     s->options = (gp_run_options){plan_text ? &s->plan : NULL, (uint8_t)(naive_tracker != 0)};
     return 0;
 }

@@ -21,7 +21,9 @@ typedef struct {
     gp_runtime runtime;
     gp_plan plan;
     gp_run_options options;
-    const gp_mission *mission;
+    const gp_mission *mission;              /**< &flown */
+    gp_mission flown;                       /**< the tables' mission with the flight's
+                                                 envelope (its vehicle's rating) */
     uint32_t suspends;                      /**< ticks after which the board slept */
     uint8_t entered[GP_MAX_STATES];         /**< the state was entered */
     double entry_vars[GP_MAX_STATES][GP_MAX_VARIABLES];  /**< its variables then */

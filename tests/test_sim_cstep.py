@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import shutil
 import zlib
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -42,6 +43,42 @@ def test_the_shared_objects_are_built_once(tmp_path, monkeypatch):
     cstep._tables_address.cache_clear()
     cstep.mission_tables(mission, flight_limits(mission))  # from the cache
     assert sorted(p.name for p in tmp_path.glob("*/*/*.so")) == built
+
+
+def test_vehicles_of_other_ratings_fly_one_build_of_the_tables(tmp_path, monkeypatch):
+    """A Monte Carlo's scenarios draw a vehicle each: its rating goes to the step at
+    init, the mission's tables are built once."""
+    from gliderplan.sim import cstep
+
+    monkeypatch.setenv("GLIDERPLAN_CACHE_DIR", str(tmp_path))
+    mission = check_file(str(REPO / "examples" / "fig2.mission")).mission
+    nominal = flight_limits(mission)
+    drawn = replace(nominal, envelope=replace(nominal.envelope, max_pitch_rad=0.3,
+                                              max_pump_power_w=5.0))
+    cstep._tables_address.cache_clear()
+    assert cstep.mission_tables(mission, nominal) == cstep.mission_tables(mission, drawn)
+    assert len(list(tmp_path.glob("*/*/libmission.so"))) == 1
+
+
+def _first_command(limits):
+    from gliderplan.contract import SENSORS
+    from gliderplan.sim.cstep import CStep
+
+    mission = check_file(str(REPO / "examples" / "fig2.mission")).mission
+    step = CStep(mission, None, limits)
+    return step.step(0, 1, [0.0] * len(SENSORS)), step
+
+
+def test_the_step_holds_commands_to_the_flights_envelope():
+    from gliderplan.contract import EnvelopeAction
+
+    mission = check_file(str(REPO / "examples" / "fig2.mission")).mission
+    nominal = flight_limits(mission)
+    free, free_step = _first_command(nominal)
+    held, held_step = _first_command(replace(nominal, envelope=replace(
+        nominal.envelope, max_pitch_rad=0.3, action=EnvelopeAction.CLAMP)))
+    assert free.pitch_rad == pytest.approx(0.454) and not free_step.envelope_notes
+    assert held.pitch_rad == pytest.approx(0.3) and held_step.envelope_notes
 
 
 def test_the_step_reports_what_the_runtime_holds():
