@@ -141,6 +141,21 @@ def test_the_report_has_the_keys_tools_read(example):
         assert {"name", "energy_j", "budget_j"} <= set(glider)
 
 
+def test_a_slow_machine_gets_the_same_plan(example, monkeypatch):
+    """The polish is bounded by its tries, not by the clock: a machine so loaded that
+    every reading of the clock is five seconds on plans the example as an idle one."""
+    from types import SimpleNamespace
+
+    from gliderplan.planner import fleet as fleet_planner
+
+    clock = iter(range(0, 10 ** 6, 5))
+    monkeypatch.setattr(fleet_planner, "time", SimpleNamespace(perf_counter=lambda: next(clock)))
+    slow = plan_fleet(check_fleet_file(EXAMPLE).checked())
+    assert example.polish.tried > 0
+    assert (slow.polish.tried, slow.polish.after) == (example.polish.tried, example.polish.after)
+    assert [(g.name, g.parts) for g in slow.gliders] == [(g.name, g.parts) for g in example.gliders]
+
+
 @pytest.mark.parametrize("seed", [2, 4])
 def test_generated_fleets_beat_the_equal_split_or_say_why_not(seed):
     plan = plan_fleet(check_fleet_source(generated_fleet(seed), "g.fleet").checked())
