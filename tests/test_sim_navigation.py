@@ -144,9 +144,9 @@ def test_a_held_heading_is_not_corrected_and_both_runtimes_fly_it_alike(tmp_path
     assert north_m["nav"] < 0.7 * north_m["held"]
 
 
-def test_the_surfacing_forecast_holds_the_heading_as_the_sim_flies_it(tmp_path, capsys):
-    """A held heading in a current across it: the forecast surfacings lie where the
-    simulated glider surfaces, within their 90 % ellipses."""
+def _forecast_against_flight(tmp_path, capsys, route: str) -> list[tuple[dict, float, float]]:
+    """A 4-hour transit flown on `route` in a 0.1 m/s northward current from 39.1 N, 73.9 W:
+    the first three forecast surfacings, each with where the simulated glider was then."""
     import json
 
     import numpy as np
@@ -156,18 +156,23 @@ def test_the_surfacing_forecast_holds_the_heading_as_the_sim_flies_it(tmp_path, 
     from gliderplan.planner.routing import transit_mission
 
     text = transit_mission([(39.1, -73.4)], 4 * 3600.0, surface_every_s=3600.0)
-    mission = tmp_path / "held.mission"
-    mission.write_text(text.replace("goto_list(1000, (3906.0000, -7324.0000))",
-                                    "heading(270)"))
+    mission = tmp_path / "route.mission"
+    mission.write_text(text.replace("goto_list(1000, (3906.0000, -7324.0000))", route))
     common = ["--currents", "0.1,0", "--start", "39.1,-73.9"]
     assert main(["forecast", str(mission), "--duration", "4h", "--json", *common]) == 0
     surfacings = json.loads(capsys.readouterr().out)["surfacings"]
     assert main(["sim", str(mission), *common, "-o", str(tmp_path / "run")]) == 0
     track = pd.read_parquet(tmp_path / "run" / "timeseries.parquet")
     assert len(surfacings) >= 3
-    for s in surfacings[:3]:
-        lat = float(np.interp(s["time_s"], track["time_s"], track["lat_deg"]))
-        lon = float(np.interp(s["time_s"], track["time_s"], track["lon_deg"]))
+    return [(s, float(np.interp(s["time_s"], track["time_s"], track["lat_deg"])),
+             float(np.interp(s["time_s"], track["time_s"], track["lon_deg"])))
+            for s in surfacings[:3]]
+
+
+def test_the_surfacing_forecast_holds_the_heading_as_the_sim_flies_it(tmp_path, capsys):
+    """A held heading in a current across it: the forecast surfacings lie where the
+    simulated glider surfaces, within their 90 % ellipses."""
+    for s, lat, lon in _forecast_against_flight(tmp_path, capsys, "heading(270)"):
         west_m = -offset_m(39.1, -73.9, lat, lon)[1]
         assert west_m > 0.5 * 0.2 * s["time_s"]  # flew west, its heading, not drifted
         assert math.hypot(*offset_m(s["lat"], s["lon"], lat, lon)) < s["ellipse_m"][0]
@@ -177,26 +182,7 @@ def test_the_surfacing_forecast_of_a_spiral_drifts_with_the_current_as_the_sim_f
         tmp_path, capsys):
     """A `turn` route (a fin held): the glider circles within some tens of metres, so the
     forecast surfacings drift with the current, where the simulated glider surfaces."""
-    import json
-
-    import numpy as np
-    import pandas as pd
-
-    from gliderplan.cli.main import main
-    from gliderplan.planner.routing import transit_mission
-
-    text = transit_mission([(39.1, -73.4)], 4 * 3600.0, surface_every_s=3600.0)
-    mission = tmp_path / "spiral.mission"
-    mission.write_text(text.replace("goto_list(1000, (3906.0000, -7324.0000))", "turn(1)"))
-    common = ["--currents", "0.1,0", "--start", "39.1,-73.9"]
-    assert main(["forecast", str(mission), "--duration", "4h", "--json", *common]) == 0
-    surfacings = json.loads(capsys.readouterr().out)["surfacings"]
-    assert main(["sim", str(mission), *common, "-o", str(tmp_path / "run")]) == 0
-    track = pd.read_parquet(tmp_path / "run" / "timeseries.parquet")
-    assert len(surfacings) >= 3
-    for s in surfacings[:3]:
-        lat = float(np.interp(s["time_s"], track["time_s"], track["lat_deg"]))
-        lon = float(np.interp(s["time_s"], track["time_s"], track["lon_deg"]))
+    for s, lat, lon in _forecast_against_flight(tmp_path, capsys, "turn(1)"):
         north_m, east_m = offset_m(39.1, -73.9, lat, lon)
         assert north_m > 0.9 * 0.1 * s["time_s"]  # carried by the current
         assert abs(east_m) < 200.0  # circled, went nowhere through the water

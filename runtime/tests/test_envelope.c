@@ -292,17 +292,31 @@ static const gp_state deep_states[] = {
 };
 static const double deep_initial[] = {10.0};
 
-void test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating(void)
+/* The test mission's envelope and limits with the one state `states` and its variable
+ * `bottom` at 10 m. */
+static gp_mission one_state_mission(const gp_state *states)
 {
     gp_mission mission = gp_mission_table;
-    mission.states = deep_states;
+    mission.states = states;
     mission.n_states = 1;
     mission.var_initial = deep_initial;
     mission.n_vars = 1;
+    return mission;
+}
+
+/* A runtime before its first tick with all the energy it could want. */
+static void start_runtime(gp_runtime *rt)
+{
+    gp_runtime_init(rt);
+    rt->sensors[GP_SENSOR_ENERGY_LEFT] = 1e9;
+}
+
+void test_runtime_should_surface_when_a_variable_takes_the_yo_past_the_rating(void)
+{
+    gp_mission mission = one_state_mission(deep_states);
     CHECK(gp_mission_check(&mission) == NULL);
     static gp_runtime rt;
-    gp_runtime_init(&rt);
-    rt.sensors[GP_SENSOR_ENERGY_LEFT] = 1e9;
+    start_runtime(&rt);
     gp_run_options options = {NULL, 0};
     gp_command cmd;
     gp_tick_report report;
@@ -350,15 +364,10 @@ static const gp_state at_once_states[] = {
 
 void test_runtime_should_report_start_event_and_envelope_on_one_tick(void)
 {
-    gp_mission mission = gp_mission_table;
-    mission.states = at_once_states;
-    mission.n_states = 1;
-    mission.var_initial = deep_initial;
-    mission.n_vars = 1;
+    gp_mission mission = one_state_mission(at_once_states);
     CHECK(gp_mission_check(&mission) == NULL);
     static gp_runtime rt;
-    gp_runtime_init(&rt);
-    rt.sensors[GP_SENSOR_ENERGY_LEFT] = 1e9;
+    start_runtime(&rt);
     rt.sensors[GP_SENSOR_DEPTH] = 7.0;
     gp_run_options options = {NULL, 0};
     gp_command cmd;
